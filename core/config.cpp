@@ -1,0 +1,50 @@
+#include "core/config.h"
+
+#include "core/error.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <type_traits>
+
+namespace pvs {
+
+const char* to_string(BakeMode mode) {
+    switch (mode) {
+        case BakeMode::kSampled: return "sampled";
+        case BakeMode::kConservative: return "conservative";
+    }
+    return "?";
+}
+
+void validate(const BakeConfig& config) {
+    BakeConfig copy = config;
+    visit_options(copy, [](const OptionSpec& spec, auto& field) {
+        using T = std::decay_t<decltype(field)>;
+        if constexpr (!std::is_same_v<T, bool>) {
+            const double v = double(field);
+            if (!std::isfinite(v) || v < spec.min || v > spec.max) {
+                throw bad_input(fmt::format("option {} ({}): {} is outside [{}, {}]{}", spec.flag, spec.key, v,
+                                            spec.min, spec.max, *spec.units ? fmt::format(" {}", spec.units) : ""));
+            }
+        }
+    });
+}
+
+std::vector<std::pair<std::string, std::string>> resolved_parameters(const BakeConfig& config) {
+    std::vector<std::pair<std::string, std::string>> out;
+    out.emplace_back("mode", to_string(config.mode));
+    out.emplace_back("verify.enabled", config.verify.enabled ? "true" : "false");
+    BakeConfig copy = config;
+    visit_options(copy, [&](const OptionSpec& spec, auto& field) {
+        using T = std::decay_t<decltype(field)>;
+        if constexpr (std::is_same_v<T, bool>) {
+            out.emplace_back(spec.key, field ? "true" : "false");
+        } else {
+            out.emplace_back(spec.key, fmt::format("{}", field));
+        }
+    });
+    return out;
+}
+
+}  // namespace pvs

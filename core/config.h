@@ -1,0 +1,109 @@
+// pvsbake core: BakeConfig, every knob of a bake in one place (after Recast's rcConfig).
+//
+// Every field states its units, limits and default. Each stage takes its own part. The options are
+// declared once, in visit_options(): the same declaration drives the command line, --help, validation,
+// and the resolved parameters written into the bake file and the report, so a bake can be repeated.
+#pragma once
+
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace pvs {
+
+enum class BakeMode { kSampled, kConservative };
+
+const char* to_string(BakeMode mode);
+
+struct RunConfig {
+    int threads = 0;  // [Limit: >= 0] worker threads; 0 = every core
+};
+
+struct CellConfig {
+    double cell_size_m = 2.0;  // [Limit: > 0] [Units: m] edge of a uniform grid cell
+};
+
+// Ray sampling from eye points in each cell: the sampled (aggressive) PVS and the verifier share it.
+struct SampleConfig {
+    uint32_t eyes_per_cell = 16;   // [Limit: >= 1] stratified random eye points per cell
+    uint32_t rays_per_eye = 1024;  // [Limit: >= 1] stratified directions over the sphere per eye
+    uint64_t ray_budget = 0;       // [Limit: >= 0] rays for the whole run; 0 = no cap. When the cells
+                                   // would take more, rays per eye shrink evenly (never below 16)
+    uint64_t seed = 1;             // [Limit: any] the same seed gives the same rays for any thread count
+};
+
+struct SampledPvsConfig {
+    SampleConfig rays;
+    double guard_band_deg = 0.0;  // [Limit: 0..45] [Units: degrees] also list an object when a sampled ray
+                                  // passed within this angle of its bounds; 0 = off
+};
+
+struct VerifyConfig {
+    bool enabled = true;           // run verification after a bake
+    SampleConfig rays{16, 1024, 60'000'000, 0x5eed5eedULL};
+    uint32_t max_misses_reported = 1000;  // [Limit: >= 0] misses kept in the report and the file
+};
+
+struct BakeConfig {
+    BakeMode mode = BakeMode::kSampled;
+    RunConfig run;
+    CellConfig cells;
+    SampledPvsConfig sampled;
+    VerifyConfig verify;
+};
+
+// One declared option: flag on the command line, key in the bake file, units, limits, help.
+struct OptionSpec {
+    const char* flag;   // "--cell-size"
+    const char* key;    // "cells.cell_size_m"
+    const char* units;  // "m", "rays", "" ...
+    const char* help;
+    double min = -std::numeric_limits<double>::infinity();
+    double max = std::numeric_limits<double>::infinity();
+};
+
+// Calls v(spec, field) for every numeric or boolean option of the bake; fields are double, int,
+// uint32_t, uint64_t or bool. The mode is an enum and is handled by its own option.
+template <class Config, class Visitor>
+void visit_options(Config& c, Visitor&& v) {
+    constexpr double kInf = std::numeric_limits<double>::infinity();
+    v(OptionSpec{"--threads", "run.threads", "threads", "worker threads, 0 = every core", 0, 4096},
+      c.run.threads);
+    v(OptionSpec{"--cell-size", "cells.cell_size_m", "m", "edge of a grid cell", 0.01, 1e4},
+      c.cells.cell_size_m);
+    v(OptionSpec{"--eyes", "sampled.eyes_per_cell", "eyes", "sampled mode: eye points per cell", 1, 1e6},
+      c.sampled.rays.eyes_per_cell);
+    v(OptionSpec{"--rays", "sampled.rays_per_eye", "rays", "sampled mode: rays per eye point", 1, 1e8},
+      c.sampled.rays.rays_per_eye);
+    v(OptionSpec{"--ray-budget", "sampled.ray_budget", "rays",
+                 "sampled mode: rays for the whole bake, 0 = no cap (rays per eye shrink to fit)", 0, kInf},
+      c.sampled.rays.ray_budget);
+    v(OptionSpec{"--seed", "sampled.seed", "", "sampled mode: random seed", 0, kInf}, c.sampled.rays.seed);
+    v(OptionSpec{"--guard-band", "sampled.guard_band_deg", "degrees",
+                 "sampled mode: also list objects a ray passed within this angle of, 0 = off", 0, 45},
+      c.sampled.guard_band_deg);
+    v(OptionSpec{"--verify-eyes", "verify.eyes_per_cell", "eyes", "verification: eye points per cell", 1, 1e6},
+      c.verify.rays.eyes_per_cell);
+    v(OptionSpec{"--verify-rays-per-eye", "verify.rays_per_eye", "rays", "verification: rays per eye point",
+                 1, 1e8},
+      c.verify.rays.rays_per_eye);
+    v(OptionSpec{"--verify-rays", "verify.ray_budget", "rays",
+                 "verification: rays for the whole run, 0 = no cap (rays per eye shrink to fit)", 0, kInf},
+      c.verify.rays.ray_budget);
+    v(OptionSpec{"--verify-seed", "verify.seed", "", "verification: random seed (differs from the bake's)", 0,
+                 kInf},
+      c.verify.rays.seed);
+    v(OptionSpec{"--max-misses", "verify.max_misses_reported", "misses",
+                 "verification: misses kept in the report and the file", 0, 1e7},
+      c.verify.max_misses_reported);
+}
+
+// Throws pvs::Error (bad input) naming the option when a value is outside its limits.
+void validate(const BakeConfig& config);
+
+// The resolved options as (key, value) text pairs, in declaration order, mode first.
+std::vector<std::pair<std::string, std::string>> resolved_parameters(const BakeConfig& config);
+
+}  // namespace pvs

@@ -1,0 +1,72 @@
+// pvsbake io: the bake file (HDF5), format version 1. docs/FORMAT.md documents every group, dataset and
+// attribute; this header is the in-memory form.
+//
+// Conventions: glTF axes (right-handed, +Y up), metres. Grid index order x fastest (core/cell_set.h).
+// PVS rows: object i is bit (i % 8) of byte (i / 8). Identical rows are stored once; each cell points
+// to its row. A bake whose mode is not conservative is labelled aggressive in the file.
+// write_bake_file() writes the file whole or not at all. read_bake_file() validates everything it reads
+// (sizes consistent, indices in range) and throws pvs::Error (kBadInput) naming the file and the
+// dataset when something is wrong; it refuses a newer major format version.
+#pragma once
+
+#include "core/cell_set.h"
+#include "core/math.h"
+#include "core/pvs_set.h"
+
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace pvs {
+
+constexpr int kBakeFormatMajor = 1;
+constexpr int kBakeFormatMinor = 0;
+
+struct ObjectRecord {
+    std::string name;
+    Aabb bounds;
+    uint32_t triangle_count = 0;
+    uint32_t flags = 0;  // core/world.h ObjectFlags
+};
+
+// A ray that saw an object the PVS of its cell does not list.
+struct Miss {
+    uint32_t cell = 0;
+    uint32_t object = 0;
+    glm::vec3 eye{0.0f};
+    glm::vec3 direction{0.0f};  // unit
+    float distance_m = 0.0f;    // from eye to where the ray touched the object
+};
+
+struct VerificationRecord {
+    bool ran = false;
+    std::vector<std::pair<std::string, double>> figures;  // rays, misses, overestimation ...
+    std::vector<uint32_t> cell_sampled_visible;  // per cell: objects the rays saw (empty if not ran)
+    std::vector<Miss> misses;                    // the first max_misses_reported
+};
+
+using NamedValues = std::vector<std::pair<std::string, double>>;
+using NamedStrings = std::vector<std::pair<std::string, std::string>>;
+
+struct BakeData {
+    int format_major = kBakeFormatMajor;
+    int format_minor = kBakeFormatMinor;
+    std::string tool_version;
+    std::string world_path;   // as given on the command line
+    std::string world_hash;   // content hash of the world file (hex)
+    std::string mode;         // "sampled" or "conservative"
+    bool conservative = false;  // false = aggressive: may miss visible objects
+    NamedStrings parameters;  // every resolved option (core/config.h resolved_parameters)
+    std::vector<ObjectRecord> objects;
+    CellSet cells;
+    PvsSet pvs;               // cells.size() rows of objects.size() bits
+    NamedValues figures;      // counts and figures of the bake
+    NamedValues timings_s;    // seconds per stage
+    VerificationRecord verification;
+};
+
+void write_bake_file(const std::string& path, const BakeData& bake);
+BakeData read_bake_file(const std::string& path);
+
+}  // namespace pvs

@@ -1,0 +1,34 @@
+// Helpers shared by the tests: temporary folders, the real worlds when present, CI sizing.
+#pragma once
+
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+
+namespace pvs::test {
+
+// A fresh folder under the system temp dir, removed when the object dies.
+class TempDir {
+public:
+    TempDir();
+    ~TempDir();
+    const std::filesystem::path& path() const { return path_; }
+    std::string file(const std::string& name) const { return (path_ / name).string(); }
+
+private:
+    std::filesystem::path path_;
+};
+
+// ../shared/worlds/<name> when it exists, else "" (tests then GTEST_SKIP: the folder is optional).
+std::string shared_world(const std::string& name);
+
+// The committed sample world (samples/town.glb).
+std::string sample_world();
+
+// True under CI (CI=true): long checks run smaller there and full size in bench/.
+bool in_ci();
+
+std::string read_file(const std::string& path);
+void write_file(const std::string& path, const std::string& bytes);
+
+}  // namespace pvs::test
