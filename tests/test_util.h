@@ -22,7 +22,7 @@ private:
 // ../shared/worlds/<name> when it exists, else "" (tests then GTEST_SKIP: the folder is optional).
 std::string shared_world(const std::string& name);
 
-// The committed sample world (samples/town.glb).
+// The committed sample world (samples/rooms.glb).
 std::string sample_world();
 
 // True under CI (CI=true): long checks run smaller there and full size in bench/.

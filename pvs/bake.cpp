@@ -1,0 +1,107 @@
+// The bake driver: wires the stages and gathers the figures of a bake.
+#include "pvs/bake.h"
+
+#include "cells/grid.h"
+#include "core/error.h"
+#include "pvs/embree_scene.h"
+#include "pvs/ray_sampler.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+
+#ifndef PVSBAKE_VERSION
+#define PVSBAKE_VERSION "0.0.0"
+#endif
+
+namespace pvs {
+
+const char* tool_version() { return PVSBAKE_VERSION; }
+
+std::vector<ObjectRecord> object_records(const World& world) {
+    std::vector<ObjectRecord> out;
+    out.reserve(world.objects.size());
+    for (const WorldObject& o : world.objects) out.push_back(ObjectRecord{o.name, o.bounds, o.triangle_count, o.flags});
+    return out;
+}
+
+void store_verification(const VerifyResult& result, VerificationRecord& record) {
+    record.ran = true;
+    record.figures = result.figures();
+    record.cell_sampled_visible = result.cell_sampled_visible;
+    record.misses = result.misses;
+}
+
+BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, const std::string& world_path,
+                    const std::string& world_hash) {
+    validate(config);
+    if (config.mode != BakeMode::kSampled) {
+        throw bad_input("bake: --mode conservative is not available yet; use --mode sampled");
+    }
+    BakeData bake;
+    bake.tool_version = tool_version();
+    bake.world_path = world_path;
+    bake.world_hash = world_hash;
+    bake.mode = to_string(config.mode);
+    bake.conservative = config.mode == BakeMode::kConservative;
+    bake.parameters = resolved_parameters(config);
+    bake.objects = object_records(world);
+
+    // Until the view volume lands (cells/eyes.h), cells cover the world bounds.
+    bake.cells = build_uniform_grid(ctx, config.cells, world.bounds);
+    RayScene scene(ctx, world, BuildQuality::kMedium, config.run.threads);
+
+    SampledPvs sampled = bake_sampled_pvs(ctx, config.sampled, world, scene, bake.cells);
+    bake.pvs = std::move(sampled.pvs);
+
+    uint64_t listed = 0, listed_max = 0;
+    for (uint32_t c = 0; c < bake.cells.size(); ++c) {
+        const uint64_t n = bake.pvs.count(c);
+        listed += n;
+        listed_max = std::max(listed_max, n);
+    }
+    const double n_cells = std::max<double>(1.0, double(bake.cells.size()));
+    bake.figures = {
+        {"objects", double(world.objects.size())},
+        {"triangles", double(world.triangles.size())},
+        {"cells", double(bake.cells.size())},
+        {"pvs_objects_mean", double(listed) / n_cells},
+        {"pvs_objects_max", double(listed_max)},
+        {"pvs_share_of_objects_mean", double(listed) / n_cells / std::max<double>(1.0, double(world.objects.size()))},
+        {"sampled_rays", double(sampled.rays)},
+        {"sampled_rays_per_eye", double(sampled.rays_per_eye)},
+        {"sampled_eyes_per_cell", double(config.sampled.rays.eyes_per_cell)},
+        {"sampled_rays_per_second", sampled.seconds > 0 ? double(sampled.rays) / sampled.seconds : 0.0},
+        {"degenerate_triangles_dropped", double(world.stats.degenerate_triangles_dropped)},
+    };
+
+    if (config.verify.enabled) {
+        if (config.verify.rays.seed == config.sampled.rays.seed) {
+            ctx.warn("verify: the verification seed equals the bake's: it will only replay the bake's own rays");
+        }
+        const VerifyResult result = verify_pvs(ctx, config.verify, world, scene, bake.cells, bake.pvs);
+        log_verify_summary(ctx, result, world);
+        store_verification(result, bake.verification);
+    }
+    return bake;
+}
+
+void check_bake_matches_world(Context& ctx, const BakeData& bake, const World& world, const std::string& world_hash) {
+    if (bake.objects.size() != world.objects.size()) {
+        throw bad_input(fmt::format("the bake lists {} objects but the world {} has {}: not the world it was baked from",
+                                    bake.objects.size(), world.source_path, world.objects.size()));
+    }
+    for (size_t i = 0; i < world.objects.size(); ++i) {
+        if (bake.objects[i].name != world.objects[i].name) {
+            throw bad_input(fmt::format("object {} is '{}' in the bake but '{}' in the world {}: not the world it was "
+                                        "baked from",
+                                        i, bake.objects[i].name, world.objects[i].name, world.source_path));
+        }
+    }
+    if (!bake.world_hash.empty() && bake.world_hash != world_hash) {
+        ctx.warn(fmt::format("the world file {} changed since the bake (hash {} then, {} now); objects still match",
+                             world.source_path, bake.world_hash, world_hash));
+    }
+}
+
+}  // namespace pvs

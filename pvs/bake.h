@@ -1,0 +1,32 @@
+// pvsbake pvs: the bake driver, the chain of stages from a loaded World to BakeData:
+//   cells (cells/grid) -> Embree scene -> PVS (sampled mode today) -> verification -> BakeData.
+// Each stage is a function over plain data; this file only wires them and gathers figures.
+#pragma once
+
+#include "core/config.h"
+#include "core/context.h"
+#include "core/world.h"
+#include "io/bake_file.h"
+#include "pvs/verify.h"
+
+#include <string>
+
+namespace pvs {
+
+const char* tool_version();
+
+// Object records for the bake file.
+std::vector<ObjectRecord> object_records(const World& world);
+
+// Runs the bake of `world` (already loaded from world_path, whose content hash is world_hash).
+BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, const std::string& world_path,
+                    const std::string& world_hash);
+
+// Copies a verification's figures, per-cell sampled counts and misses into the bake's record.
+void store_verification(const VerifyResult& result, VerificationRecord& record);
+
+// Checks that a bake was made from this world (same objects, in the same order). Throws pvs::Error
+// (bad input) naming the first difference. A different content hash only warns.
+void check_bake_matches_world(Context& ctx, const BakeData& bake, const World& world, const std::string& world_hash);
+
+}  // namespace pvs

@@ -1,0 +1,295 @@
+// The pvsbake command line: options declared once (core/config.h visit_options) drive parsing, --help,
+// validation and the parameters stored in the bake.
+#include "pvs/cli.h"
+
+#include "core/error.h"
+#include "io/atomic_file.h"
+#include "io/bake_file.h"
+#include "io/file_hash.h"
+#include "io/gltf_loader.h"
+#include "pvs/bake.h"
+#include "pvs/embree_scene.h"
+#include "pvs/report.h"
+#include "pvs/verify.h"
+
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+#include <omp.h>
+
+#include <cmath>
+#include <filesystem>
+#include <string_view>
+#include <type_traits>
+
+namespace pvs {
+
+namespace {
+
+// Binds the declared options whose key starts with one of `prefixes` to CLI11 options of `app`.
+void bind_options(CLI::App& app, BakeConfig& config, std::initializer_list<std::string_view> prefixes) {
+    visit_options(config, [&](const OptionSpec& spec, auto& field) {
+        const std::string_view key(spec.key);
+        bool wanted = false;
+        for (std::string_view p : prefixes) wanted |= key.substr(0, p.size()) == p;
+        if (!wanted) return;
+        std::string help = spec.help;
+        if (*spec.units) help += fmt::format(" [{}]", spec.units);
+        CLI::Option* opt = app.add_option(spec.flag, field, help)->capture_default_str();
+        if (std::isfinite(spec.min) && std::isfinite(spec.max)) {
+            opt->check(CLI::Range(spec.min, spec.max));
+        } else if (std::isfinite(spec.min)) {
+            opt->check(CLI::Range(spec.min, 1.8e19));
+        }
+    });
+}
+
+struct CommonOptions {
+    bool quiet = false;
+    bool verbose = false;
+    std::string report_path;
+};
+
+void add_common(CLI::App& app, CommonOptions& common) {
+    app.add_flag("-q,--quiet", common.quiet, "no progress and no info lines (warnings and errors still print)");
+    app.add_flag("-v,--verbose", common.verbose, "debug lines, stage timings");
+}
+
+Context make_context(const CommonOptions& common, std::FILE* log) {
+    Context::Options o;
+    o.quiet = common.quiet;
+    o.level = common.verbose ? LogLevel::kDebug : LogLevel::kInfo;
+    o.sink = log;
+    return Context(o);
+}
+
+void set_threads(int threads) {
+    if (threads > 0) omp_set_num_threads(threads);
+}
+
+void write_report(const std::string& path, const BakeData& bake, const Context& ctx) {
+    if (path.empty()) return;
+    write_file_atomically(path, bake_report_json(bake, ctx.warnings()));
+}
+
+// bake WORLD -o OUT.h5
+int run_bake(Context& ctx, const BakeConfig& config, const std::string& world_path, const std::string& out_path,
+             const std::string& report_path) {
+    ScopedTimer total(ctx, "total");
+    set_threads(config.run.threads);
+    World world = [&] {
+        ScopedTimer t(ctx, "load");
+        return load_world(ctx, world_path);
+    }();
+    ctx.info(fmt::format("world {}: {} objects, {} triangles, bounds ({:.2f}, {:.2f}, {:.2f}) - ({:.2f}, {:.2f}, {:.2f})",
+                         world_path, world.objects.size(), world.triangles.size(), world.bounds.min.x,
+                         world.bounds.min.y, world.bounds.min.z, world.bounds.max.x, world.bounds.max.y,
+                         world.bounds.max.z));
+    const std::string hash = hash_file_hex(world_path);
+    BakeData bake = bake_world(ctx, config, world, world_path, hash);
+    bake.timings_s = ctx.timings();
+    {
+        ScopedTimer t(ctx, "write");
+        write_bake_file(out_path, bake);
+    }
+    write_report(report_path, bake, ctx);
+    ctx.info(fmt::format("wrote {} ({}, {} cells, mean PVS {:.1f} of {} objects)", out_path, pvs_kind(bake),
+                         bake.cells.size(), bake.figures.size() > 3 ? bake.figures[3].second : 0.0,
+                         bake.objects.size()));
+    const bool misses = bake.verification.ran && !bake.verification.misses.empty();
+    return misses && bake.conservative ? kExitMisses : kExitOk;
+}
+
+// verify WORLD BAKE.h5
+int run_verify(Context& ctx, const BakeConfig& config, const std::string& world_path, const std::string& bake_path,
+               const std::string& report_path, bool write_back) {
+    set_threads(config.run.threads);
+    BakeData bake = read_bake_file(bake_path);
+    World world = [&] {
+        ScopedTimer t(ctx, "load");
+        return load_world(ctx, world_path);
+    }();
+    const std::string hash = hash_file_hex(world_path);
+    check_bake_matches_world(ctx, bake, world, hash);
+    ctx.info(fmt::format("verifying {} ({}) against {}", bake_path, pvs_kind(bake), world_path));
+    RayScene scene(ctx, world, BuildQuality::kMedium, config.run.threads);
+    const VerifyResult result = verify_pvs(ctx, config.verify, world, scene, bake.cells, bake.pvs);
+    log_verify_summary(ctx, result, world);
+    store_verification(result, bake.verification);
+    if (write_back) write_bake_file(bake_path, bake);
+    write_report(report_path, bake, ctx);
+    return result.missed_pairs > 0 ? kExitMisses : kExitOk;
+}
+
+double figure_or(const NamedValues& values, const std::string& key, double fallback) {
+    for (const auto& [k, v] : values)
+        if (k == key) return v;
+    return fallback;
+}
+
+int run_info(const std::string& bake_path, bool json, std::ostream& out) {
+    const BakeData bake = read_bake_file(bake_path);
+    if (json) {
+        out << bake_report_json(bake, {});
+        return kExitOk;
+    }
+    out << fmt::format("bake file   {} (format {}.{}, pvsbake {})\n", bake_path, bake.format_major, bake.format_minor,
+                       bake.tool_version);
+    out << fmt::format("world       {} (hash {})\n", bake.world_path, bake.world_hash);
+    out << fmt::format("PVS         {}\n", pvs_kind(bake));
+    out << fmt::format("objects     {}, triangles {}\n", bake.objects.size(),
+                       uint64_t(figure_or(bake.figures, "triangles", 0)));
+    const CellSet& cells = bake.cells;
+    out << fmt::format("cells       {} ({} {} x {} x {} of {} m from ({:.2f}, {:.2f}, {:.2f}))\n", cells.size(),
+                       cells.kind == CellSet::Kind::kGrid ? "grid" : "octree", cells.dims.x, cells.dims.y,
+                       cells.dims.z, cells.cell_size_m, cells.origin.x, cells.origin.y, cells.origin.z);
+    out << "parameters\n";
+    for (const auto& [k, v] : bake.parameters) out << fmt::format("  {:<32} {}\n", k, v);
+    out << "figures\n";
+    for (const auto& [k, v] : bake.figures) out << fmt::format("  {:<32} {:g}\n", k, v);
+    out << "timings (s)\n";
+    for (const auto& [k, v] : bake.timings_s) out << fmt::format("  {:<32} {:.3f}\n", k, v);
+    if (bake.verification.ran) {
+        out << "verification\n";
+        for (const auto& [k, v] : bake.verification.figures) out << fmt::format("  {:<32} {:g}\n", k, v);
+        for (const Miss& m : bake.verification.misses) {
+            out << fmt::format("  miss: cell {} object '{}' eye ({:.3f}, {:.3f}, {:.3f}) dir ({:.4f}, {:.4f}, {:.4f}) "
+                               "at {:.3f} m\n",
+                               m.cell, bake.objects[m.object].name, m.eye.x, m.eye.y, m.eye.z, m.direction.x,
+                               m.direction.y, m.direction.z, m.distance_m);
+        }
+    } else {
+        out << "verification: not run (pvsbake verify WORLD BAKE.h5)\n";
+    }
+    return kExitOk;
+}
+
+int run_query(const std::string& bake_path, const std::vector<double>& xyz, bool json, std::ostream& out) {
+    const BakeData bake = read_bake_file(bake_path);
+    const glm::vec3 p{static_cast<float>(xyz[0]), static_cast<float>(xyz[1]), static_cast<float>(xyz[2])};
+    if (!is_finite(p)) throw bad_input("query: the point must be three finite numbers");
+    const int32_t cell = bake.cells.find(p);
+    std::vector<uint32_t> visible;
+    if (cell >= 0) {
+        for (uint32_t o = 0; o < bake.objects.size(); ++o)
+            if (bake.pvs.test(uint32_t(cell), o)) visible.push_back(o);
+    }
+    if (json) {
+        nlohmann::ordered_json j;
+        j["point"] = {p.x, p.y, p.z};
+        j["pvs_kind"] = pvs_kind(bake);
+        if (cell < 0) {
+            j["cell"] = nullptr;
+        } else {
+            const Aabb& b = bake.cells.cells[cell].bounds;
+            j["cell"] = cell;
+            j["cell_bounds"] = {b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z};
+            j["visible_count"] = visible.size();
+            nlohmann::ordered_json names = nlohmann::ordered_json::array();
+            for (uint32_t o : visible) names.push_back(bake.objects[o].name);
+            j["visible"] = names;
+        }
+        out << j.dump(2) << "\n";
+        return kExitOk;
+    }
+    if (cell < 0) {
+        out << fmt::format("no cell holds ({}, {}, {})\n", p.x, p.y, p.z);
+        return kExitOk;
+    }
+    const Aabb& b = bake.cells.cells[cell].bounds;
+    out << fmt::format("cell {} ({:.2f}, {:.2f}, {:.2f}) - ({:.2f}, {:.2f}, {:.2f}) sees {} of {} objects ({})\n", cell,
+                       b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z, visible.size(), bake.objects.size(),
+                       pvs_kind(bake));
+    for (uint32_t o : visible) out << bake.objects[o].name << "\n";
+    return kExitOk;
+}
+
+}  // namespace
+
+int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log) {
+    CLI::App app{"pvsbake: bake, verify and inspect potentially-visible sets (PVS) of glTF 2.0 worlds.\n"
+                 "Units are metres; axes are glTF's (+Y up)."};
+    app.require_subcommand(1);
+    app.set_version_flag("--version", tool_version());
+
+    BakeConfig config;
+    CommonOptions common;
+    std::string world_path, out_path, bake_path, mode = "sampled";
+    bool no_verify = false, no_write = false, json = false;
+    std::vector<double> point;
+
+    CLI::App* bake = app.add_subcommand("bake", "bake the PVS of a world into an HDF5 bake file, then verify it");
+    bake->add_option("world", world_path, "the world, glTF 2.0 (.gltf or .glb)")->required();
+    bake->add_option("-o,--output", out_path, "the bake file to write (HDF5)")->required();
+    bake->add_option("--report", common.report_path, "also write a JSON report here");
+    bake->add_option("--mode", mode,
+                     "sampled: the union of what sample rays saw (AGGRESSIVE: may miss small or grazing objects)")
+        ->check(CLI::IsMember({"sampled"}))
+        ->capture_default_str();
+    bake->add_flag("--no-verify", no_verify, "skip verification by ray sampling");
+    bind_options(*bake, config, {"run.", "cells.", "sampled.", "verify."});
+    add_common(*bake, common);
+
+    CLI::App* verify = app.add_subcommand(
+        "verify", "check a bake against its world with Embree rays: exit 3 and the misses when a ray sees an "
+                  "object the PVS leaves out");
+    verify->add_option("world", world_path, "the world the bake was made from")->required();
+    verify->add_option("bake", bake_path, "the bake file; its verification group is updated")->required();
+    verify->add_option("--report", common.report_path, "also write a JSON report here");
+    verify->add_flag("--no-write", no_write, "leave the bake file as it is");
+    bind_options(*verify, config, {"run.", "verify."});
+    add_common(*verify, common);
+
+    CLI::App* info = app.add_subcommand("info", "what a bake file holds: world, counts, parameters, figures");
+    info->add_option("bake", bake_path, "the bake file")->required();
+    info->add_flag("--json", json, "print JSON (the same shape as the bake report)");
+
+    CLI::App* query = app.add_subcommand("query", "the cell holding a point and the objects its PVS lists");
+    query->add_option("bake", bake_path, "the bake file")->required();
+    query->add_option("point", point, "X Y Z in metres")->expected(3)->required();
+    query->add_flag("--json", json, "print JSON");
+
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::CallForHelp& e) {
+        out << app.help(e.get_name().empty() ? "" : "", CLI::AppFormatMode::Normal);
+        return kExitOk;
+    } catch (const CLI::ParseError& e) {
+        if (e.get_exit_code() == 0) {
+            std::ostringstream o, err;
+            app.exit(e, o, err);
+            out << o.str();
+            return kExitOk;
+        }
+        if (log) std::fprintf(log, "error: %s (see pvsbake %s--help)\n", e.what(),
+                              app.get_subcommands().empty() ? "" : (app.get_subcommands()[0]->get_name() + " ").c_str());
+        return kExitBadInput;
+    }
+
+    Context ctx = make_context(common, log);
+    try {
+        config.verify.enabled = !no_verify;
+        if (bake->parsed()) {
+            validate(config);
+            return run_bake(ctx, config, world_path, out_path, common.report_path);
+        }
+        if (verify->parsed()) {
+            validate(config);
+            return run_verify(ctx, config, world_path, bake_path, common.report_path, !no_write);
+        }
+        if (info->parsed()) return run_info(bake_path, json, out);
+        if (query->parsed()) return run_query(bake_path, point, json, out);
+    } catch (const Error& e) {
+        ctx.error(e.what());
+        return exit_status(e.kind());
+    } catch (const std::bad_alloc&) {
+        ctx.error("out of memory (try a larger --cell-size or fewer rays)");
+        return kExitFailure;
+    } catch (const std::exception& e) {
+        ctx.error(fmt::format("internal error: {}", e.what()));
+        return kExitFailure;
+    }
+    return kExitFailure;
+}
+
+}  // namespace pvs

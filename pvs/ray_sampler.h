@@ -1,0 +1,53 @@
+// pvsbake pvs: ray sampling from eye points of each cell (ALGORITHMS.md section 5), and the sampled PVS.
+//
+// The sampled PVS is AGGRESSIVE: the union of what the rays saw. It is tight and fast but can miss
+// small or grazing objects that no ray happened to touch. Files and reports label it so.
+// Determinism: eye points and directions depend only on (seed, cell, eye), so the result is the same
+// for any thread count.
+#pragma once
+
+#include "core/cell_set.h"
+#include "core/config.h"
+#include "core/context.h"
+#include "core/pvs_set.h"
+#include "core/world.h"
+#include "pvs/embree_scene.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace pvs {
+
+// The rays of one cell and what they touched. Ray r of eye e has index e * rays_per_eye + r.
+struct CellRays {
+    uint32_t rays_per_eye = 0;
+    std::vector<glm::vec3> eyes;
+    std::vector<glm::vec3> directions;  // eyes.size() * rays_per_eye
+    std::vector<RayTouch> touches;
+};
+
+// Rays per eye after fitting `cells` cells into the config's ray budget (never below kMinRaysPerEye,
+// never above config.rays_per_eye).
+constexpr uint32_t kMinRaysPerEye = 16;
+uint32_t rays_per_eye_within_budget(const SampleConfig& config, size_t cells);
+
+// Draws the cell's eye points and directions and traces them.
+void trace_cell(const RayScene& scene, const CellSet& cells, uint32_t cell, const SampleConfig& config,
+                uint32_t rays_per_eye, CellRays& out);
+
+// Objects every PVS lists whatever the rays say: those marked pvs_always_visible, and those whose
+// bounds meet the cell's eye region (an eye may stand inside them).
+void add_always_listed(const World& world, const CellSet& cells, PvsSet& pvs);
+
+struct SampledPvs {
+    PvsSet pvs;
+    uint64_t rays = 0;
+    uint32_t rays_per_eye = 0;
+    double seconds = 0.0;
+};
+
+// The sampled (aggressive) PVS: for every cell, every object a ray touched, plus add_always_listed().
+SampledPvs bake_sampled_pvs(Context& ctx, const SampledPvsConfig& config, const World& world,
+                            const RayScene& scene, const CellSet& cells);
+
+}  // namespace pvs

@@ -1,0 +1,44 @@
+#!/usr/bin/env bash
+# Sets up everything pvsbake needs on Debian 12 (run as root) and builds it (Release) into build/.
+# Idempotent: packages already installed are not fetched again, and the build is incremental.
+#   scripts/setup.sh            install what is missing, configure, build
+#   BUILD_DIR=... BUILD_TYPE=... scripts/setup.sh   another folder or build type
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+# Why each package is here: README.md, "Dependencies".
+PACKAGES=(
+  g++ cmake ninja-build pkg-config
+  libembree-dev       # Embree 3: ray tracing for verification and the sampled PVS
+  libglm-dev          # vectors and matrices
+  libtinygltf-dev     # glTF 2.0 parsing
+  libhdf5-dev hdf5-tools  # the bake file (and h5dump to read it)
+  libgtest-dev        # tests
+  libcli11-dev        # command line parsing and --help
+  nlohmann-json3-dev  # JSON reports
+  libfmt-dev          # message formatting
+  libxxhash-dev       # content hash of the world in the bake file
+)
+
+missing=()
+for p in "${PACKAGES[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "setup: installing ${missing[*]}"
+  if [ "$(id -u)" -ne 0 ]; then
+    echo "setup: installing packages needs root (run as root, or install: ${missing[*]})" >&2
+    exit 1
+  fi
+  export DEBIAN_FRONTEND=noninteractive
+  apt-get update -qq
+  apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+BUILD_DIR=${BUILD_DIR:-build}
+BUILD_TYPE=${BUILD_TYPE:-Release}
+if [ ! -f "$BUILD_DIR/build.ninja" ]; then
+  cmake -S . -B "$BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE="$BUILD_TYPE" >/dev/null
+fi
+cmake --build "$BUILD_DIR" -j "$(nproc)"
+echo "setup: built $BUILD_DIR/pvs/pvsbake"
