@@ -77,14 +77,7 @@ int run_bake(Context& ctx, const BakeConfig& config, const std::string& world_pa
              const std::string& report_path) {
     ScopedTimer total(ctx, "total");
     set_threads(config.run.threads);
-    World world = [&] {
-        ScopedTimer t(ctx, "load");
-        return load_world(ctx, world_path);
-    }();
-    ctx.info(fmt::format("world {}: {} objects, {} triangles, bounds ({:.2f}, {:.2f}, {:.2f}) - ({:.2f}, {:.2f}, {:.2f})",
-                         world_path, world.objects.size(), world.triangles.size(), world.bounds.min.x,
-                         world.bounds.min.y, world.bounds.min.z, world.bounds.max.x, world.bounds.max.y,
-                         world.bounds.max.z));
+    const World world = load_world(ctx, world_path);
     const std::string hash = hash_file_hex(world_path);
     BakeData bake = bake_world(ctx, config, world, world_path, hash);
     bake.timings_s = ctx.timings();
@@ -105,10 +98,7 @@ int run_verify(Context& ctx, const BakeConfig& config, const std::string& world_
                const std::string& report_path, bool write_back) {
     set_threads(config.run.threads);
     BakeData bake = read_bake_file(bake_path);
-    World world = [&] {
-        ScopedTimer t(ctx, "load");
-        return load_world(ctx, world_path);
-    }();
+    const World world = load_world(ctx, world_path);
     const std::string hash = hash_file_hex(world_path);
     check_bake_matches_world(ctx, bake, world, hash);
     ctx.info(fmt::format("verifying {} ({}) against {}", bake_path, pvs_kind(bake), world_path));
@@ -249,6 +239,14 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
     query->add_option("point", point, "X Y Z in metres")->expected(3)->required();
     query->add_flag("--json", json, "print JSON");
 
+    if (argc >= 2 && argv[1][0] != '-') {
+        bool known = false;
+        for (const CLI::App* sub : app.get_subcommands({})) known |= sub->get_name() == argv[1];
+        if (!known) {
+            if (log) std::fprintf(log, "error: unknown subcommand '%s' (use bake, verify, info or query; see pvsbake --help)\n", argv[1]);
+            return kExitBadInput;
+        }
+    }
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {

@@ -1,0 +1,176 @@
+// The command line end to end, in-process: bake, info, query, verify, and bad input.
+#include "io/bake_file.h"
+#include "pvs/cli.h"
+#include "tests/test_util.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace pvs {
+namespace {
+
+struct CliRun {
+    int status = -1;
+    std::string out;
+    std::string log;
+};
+
+CliRun run(std::vector<std::string> args) {
+    args.insert(args.begin(), "pvsbake");
+    std::vector<const char*> argv;
+    for (const std::string& a : args) argv.push_back(a.c_str());
+    std::ostringstream out;
+    std::FILE* log = std::tmpfile();
+    CliRun r;
+    r.status = run_cli(int(argv.size()), argv.data(), out, log);
+    std::fflush(log);
+    std::rewind(log);
+    char buf[4096];
+    size_t n;
+    while ((n = std::fread(buf, 1, sizeof buf, log)) > 0) r.log.append(buf, n);
+    std::fclose(log);
+    r.out = out.str();
+    return r;
+}
+
+bool contains(const std::string& hay, const std::string& needle) { return hay.find(needle) != std::string::npos; }
+
+// Small sampling so the whole bake of the sample world takes a fraction of a second.
+const std::vector<std::string> kFast = {"--eyes", "4", "--rays", "256", "--verify-eyes", "4", "--verify-rays-per-eye",
+                                        "256"};
+
+std::vector<std::string> with(std::vector<std::string> a, const std::vector<std::string>& b) {
+    a.insert(a.end(), b.begin(), b.end());
+    return a;
+}
+
+TEST(Cli, BakeInfoQueryOnTheSampleWorld) {
+    test::TempDir dir;
+    const std::string out = dir.file("rooms.h5"), report = dir.file("rooms.json");
+    const CliRun bake = run(with({"bake", test::sample_world(), "-o", out, "--report", report}, kFast));
+    ASSERT_EQ(bake.status, 0) << bake.log;
+    ASSERT_TRUE(std::filesystem::exists(out));
+    const auto j = nlohmann::json::parse(test::read_file(report));
+    EXPECT_EQ(j["objects"], 149);
+    EXPECT_EQ(j["triangles"], 1788);
+    EXPECT_GT(j["cells"].get<int>(), 100);
+    EXPECT_FALSE(j["conservative"].get<bool>());
+    EXPECT_TRUE(contains(j["pvs_kind"].get<std::string>(), "aggressive"));
+    EXPECT_TRUE(j["timings_s"].contains("sampled_pvs"));
+    EXPECT_TRUE(j["verification"]["ran"].get<bool>());
+    EXPECT_TRUE(j["verification"]["figures"].contains("overestimation_mean"));
+    // No file left behind but the two outputs.
+    EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.path()), {}), 2);
+
+    const CliRun info = run({"info", out});
+    ASSERT_EQ(info.status, 0) << info.log;
+    EXPECT_TRUE(contains(info.out, "objects     149")) << info.out;
+    EXPECT_TRUE(contains(info.out, "aggressive"));
+    const CliRun info_json = run({"info", out, "--json"});
+    ASSERT_EQ(info_json.status, 0);
+    EXPECT_EQ(nlohmann::json::parse(info_json.out)["objects"], 149);
+
+    // The spawn point of room (0, 0) sees that room's floor; a room behind two walls it does not.
+    const CliRun q = run({"query", out, "4", "1.6", "4", "--json"});
+    ASSERT_EQ(q.status, 0) << q.log;
+    const auto qj = nlohmann::json::parse(q.out);
+    ASSERT_FALSE(qj["cell"].is_null());
+    const auto names = qj["visible"].get<std::vector<std::string>>();
+    EXPECT_NE(std::find(names.begin(), names.end(), "floor_0_0"), names.end());
+    EXPECT_EQ(std::find(names.begin(), names.end(), "floor_3_3"), names.end());
+    const CliRun outside = run({"query", out, "500", "0", "0", "--json"});
+    ASSERT_EQ(outside.status, 0);
+    EXPECT_TRUE(nlohmann::json::parse(outside.out)["cell"].is_null());
+}
+
+TEST(Cli, VerifyNamesTheObjectAnEditedBakeDropped) {
+    test::TempDir dir;
+    const std::string good = dir.file("good.h5"), edited = dir.file("edited.h5"), report = dir.file("v.json");
+    ASSERT_EQ(run(with({"bake", test::sample_world(), "-o", good, "--no-verify"}, kFast)).status, 0);
+    BakeData bake = read_bake_file(good);
+    // Drop floor_0_0 (seen from everywhere in its room) from every PVS.
+    uint32_t floor = UINT32_MAX;
+    for (uint32_t o = 0; o < bake.objects.size(); ++o)
+        if (bake.objects[o].name == "floor_0_0") floor = o;
+    ASSERT_NE(floor, UINT32_MAX);
+    for (uint32_t c = 0; c < bake.cells.size(); ++c) bake.pvs.clear(c, floor);
+    write_bake_file(edited, bake);
+
+    const CliRun v = run({"verify", test::sample_world(), edited, "--report", report, "--verify-eyes", "4",
+                          "--verify-rays-per-eye", "256"});
+    EXPECT_EQ(v.status, kExitMisses) << v.log;
+    EXPECT_TRUE(contains(v.log, "floor_0_0")) << v.log;
+    const auto j = nlohmann::json::parse(test::read_file(report));
+    bool named = false;
+    for (const auto& m : j["verification"]["misses"]) named |= m["object_name"] == "floor_0_0";
+    EXPECT_TRUE(named);
+    // The misses are also written into the bake file's verification group.
+    const BakeData after = read_bake_file(edited);
+    ASSERT_TRUE(after.verification.ran);
+    ASSERT_FALSE(after.verification.misses.empty());
+    bool in_file = false;
+    for (const Miss& m : after.verification.misses) in_file |= m.object == floor;
+    EXPECT_TRUE(in_file);
+}
+
+TEST(Cli, BadInputGetsStatusTwoAClearMessageAndNoOutput) {
+    test::TempDir dir;
+    const std::string out = dir.file("out.h5");
+    test::write_file(dir.file("notgltf.glb"), "this is not a glTF file at all");
+    struct Case {
+        std::vector<std::string> args;
+        std::string says;
+    };
+    const std::vector<Case> cases = {
+        {{"bake", dir.file("missing.glb"), "-o", out}, "missing.glb"},
+        {{"bake", dir.file("notgltf.glb"), "-o", out}, "notgltf.glb"},
+        {{"bake", test::sample_world(), "-o", out, "--cell-size", "-1"}, "--cell-size"},
+        {{"bake", test::sample_world(), "-o", out, "--cell-size", "0.01"}, "--cell-size"},
+        {{"bake", test::sample_world(), "-o", out, "--mode", "fast"}, "--mode"},
+        {{"bake", test::sample_world()}, "--output"},
+        {{"info", dir.file("notgltf.glb")}, "notgltf.glb"},
+        {{"info", dir.file("missing.h5")}, "missing.h5"},
+        {{"query", dir.file("missing.h5"), "1", "2"}, "point"},
+        {{"frobnicate"}, "frobnicate"},
+    };
+    for (const Case& c : cases) {
+        const CliRun r = run(c.args);
+        EXPECT_EQ(r.status, kExitBadInput) << c.args[0] << " " << c.args.back() << "\n" << r.log;
+        EXPECT_TRUE(contains(r.log, c.says)) << "expected '" << c.says << "' in: " << r.log;
+        size_t error_lines = 0;
+        for (size_t at = r.log.find("error:"); at != std::string::npos; at = r.log.find("error:", at + 1)) ++error_lines;
+        EXPECT_EQ(error_lines, 1u) << "one error line: " << r.log;
+        EXPECT_FALSE(std::filesystem::exists(out));
+    }
+    EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.path()), {}), 1);  // notgltf.glb only
+}
+
+TEST(Cli, UnwritableOutputFailsAndLeavesNothing) {
+    test::TempDir dir;
+    const std::string out = dir.file("no/such/folder/out.h5");
+    const CliRun r = run(with({"bake", test::sample_world(), "-o", out, "--no-verify"}, kFast));
+    EXPECT_NE(r.status, 0);
+    EXPECT_TRUE(contains(r.log, "out.h5")) << r.log;
+    EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.path()), {}), 0);
+}
+
+TEST(Cli, HelpOnEverySubcommandAndTheRealBinary) {
+    for (const char* sub : {"bake", "verify", "info", "query"}) {
+        const CliRun r = run({sub, "--help"});
+        EXPECT_EQ(r.status, 0) << sub;
+        EXPECT_TRUE(contains(r.out, "--help")) << r.out;
+    }
+    const CliRun bake_help = run({"bake", "--help"});
+    EXPECT_TRUE(contains(bake_help.out, "--cell-size")) << bake_help.out;
+    EXPECT_TRUE(contains(bake_help.out, "[m]"));  // units in the help text
+    EXPECT_EQ(std::system((std::string(PVSBAKE_BINARY) + " --help > /dev/null").c_str()), 0);
+}
+
+}  // namespace
+}  // namespace pvs
