@@ -35,7 +35,7 @@ struct SampleConfig {
 };
 
 struct SampledPvsConfig {
-    SampleConfig rays;
+    SampleConfig rays{16, 1024, 250'000'000, 1};  // a big world's rays per eye shrink to fit 250 M
     double guard_band_deg = 0.0;  // [Limit: 0..45] [Units: degrees] also list an object when a sampled ray
                                   // passed within this angle of its bounds; 0 = off
 };

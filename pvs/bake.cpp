@@ -72,6 +72,7 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
         {"sampled_rays_per_eye", double(sampled.rays_per_eye)},
         {"sampled_eyes_per_cell", double(config.sampled.rays.eyes_per_cell)},
         {"sampled_rays_per_second", sampled.seconds > 0 ? double(sampled.rays) / sampled.seconds : 0.0},
+        {"sampled_guard_band_added", double(sampled.guard_band_added)},
         {"degenerate_triangles_dropped", double(world.stats.degenerate_triangles_dropped)},
     };
 

@@ -142,11 +142,17 @@ int run_info(const std::string& bake_path, bool json, std::ostream& out) {
     if (bake.verification.ran) {
         out << "verification\n";
         for (const auto& [k, v] : bake.verification.figures) out << fmt::format("  {:<32} {:g}\n", k, v);
-        for (const Miss& m : bake.verification.misses) {
+        constexpr size_t kMissesShown = 20;
+        for (size_t i = 0; i < bake.verification.misses.size() && i < kMissesShown; ++i) {
+            const Miss& m = bake.verification.misses[i];
             out << fmt::format("  miss: cell {} object '{}' eye ({:.3f}, {:.3f}, {:.3f}) dir ({:.4f}, {:.4f}, {:.4f}) "
                                "at {:.3f} m\n",
                                m.cell, bake.objects[m.object].name, m.eye.x, m.eye.y, m.eye.z, m.direction.x,
                                m.direction.y, m.direction.z, m.distance_m);
+        }
+        if (bake.verification.misses.size() > kMissesShown) {
+            out << fmt::format("  ... {} more misses stored (pvsbake info --json lists them)\n",
+                               bake.verification.misses.size() - kMissesShown);
         }
     } else {
         out << "verification: not run (pvsbake verify WORLD BAKE.h5)\n";

@@ -35,7 +35,7 @@ void see_through_filter(const RTCFilterFunctionNArguments* args) {
         const unsigned prim = RTCHitN_primID(args->hit, args->N, i);
         const float t = RTCRayN_tfar(args->ray, args->N, i);  // the candidate hit's distance
         const unsigned id = RTCRayN_id(args->ray, args->N, i);
-        tc->touches->push_back(RayTouch{tc->ray_base + id, tc->see_through_object[prim], t});
+        tc->touches->push_back(RayTouch{tc->ray_base + id, tc->see_through_object[prim], t, false});
         args->valid[i] = 0;  // reject: sight goes on through
     }
 }
@@ -77,7 +77,8 @@ struct RayScene::Impl {
         touches.resize(w);
         for (uint32_t i = 0; i < n; ++i) {
             if (rays[i].hit.geomID == kOpaqueGeom) {
-                touches.push_back(RayTouch{ray_base + i, object_of[kOpaqueGeom][rays[i].hit.primID], rays[i].ray.tfar});
+                touches.push_back(
+                    RayTouch{ray_base + i, object_of[kOpaqueGeom][rays[i].hit.primID], rays[i].ray.tfar, true});
             }
         }
     }

@@ -23,6 +23,7 @@ struct RayTouch {
     uint32_t ray = 0;     // index of the ray in the batch passed to trace()
     uint32_t object = 0;  // World object index
     float t = 0.0f;       // distance from the origin, metres
+    bool stops = false;   // an opaque triangle: the ray ends here
 };
 
 enum class BuildQuality { kLow, kMedium, kHigh };

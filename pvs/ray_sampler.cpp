@@ -8,6 +8,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <limits>
 
 namespace pvs {
 
@@ -65,6 +67,130 @@ void add_always_listed(const World& world, const CellSet& cells, PvsSet& pvs) {
     }
 }
 
+namespace {
+
+constexpr float kPi = 3.14159265358979323846f;
+constexpr float kTwoPi = 2.0f * kPi;
+
+// Direction bins: rows by cos(polar) = y (equal area), columns by azimuth atan2(z, x); each bin lists its
+// rays, so a cone query only looks at the rays near its axis.
+struct DirectionBins {
+    int rows = 1, cols = 2;
+    std::vector<uint32_t> first;  // rows * cols + 1 offsets into ray_of
+    std::vector<uint32_t> ray_of;
+
+    void build(const glm::vec3* dirs, uint32_t count) {
+        rows = std::max(1, int(std::sqrt(double(count) / 4.0)));
+        cols = 2 * rows;
+        const size_t bins = size_t(rows) * size_t(cols);
+        first.assign(bins + 1, 0);
+        std::vector<uint32_t> bin(count);
+        for (uint32_t r = 0; r < count; ++r) {
+            bin[r] = uint32_t(bin_of(dirs[r]));
+            ++first[bin[r] + 1];
+        }
+        for (size_t b = 0; b < bins; ++b) first[b + 1] += first[b];
+        ray_of.resize(count);
+        std::vector<uint32_t> fill(first.begin(), first.end() - 1);
+        for (uint32_t r = 0; r < count; ++r) ray_of[fill[bin[r]]++] = r;
+    }
+    int row_of(float y) const { return std::clamp(int((1.0f - y) * 0.5f * float(rows)), 0, rows - 1); }
+    int col_of(float phi) const {
+        float u = phi / kTwoPi;
+        u -= std::floor(u);
+        return std::clamp(int(u * float(cols)), 0, cols - 1);
+    }
+    size_t bin_of(glm::vec3 d) const { return size_t(row_of(d.y)) * size_t(cols) + size_t(col_of(std::atan2(d.z, d.x))); }
+};
+
+// Does the ray (eye, dir) come within angle atan(tan_band) of the box before `reach`? Tested as: the ray
+// segment [0, reach] meets the box grown by reach * tan_band (a cylinder around the ray holds the cone).
+bool ray_passes_near(glm::vec3 eye, glm::vec3 dir, float reach, const Aabb& box, float tan_band) {
+    const float grow = std::isfinite(reach) ? reach * tan_band : 0.0f;
+    const float limit = std::isfinite(reach) ? reach : std::numeric_limits<float>::max();
+    float t0 = 0.0f, t1 = limit;
+    for (int a = 0; a < 3; ++a) {
+        const float lo = box.min[a] - grow, hi = box.max[a] + grow;
+        if (std::fabs(dir[a]) < 1e-12f) {
+            if (eye[a] < lo || eye[a] > hi) return false;
+            continue;
+        }
+        float ta = (lo - eye[a]) / dir[a], tb = (hi - eye[a]) / dir[a];
+        if (ta > tb) std::swap(ta, tb);
+        t0 = std::max(t0, ta);
+        t1 = std::min(t1, tb);
+        if (t0 > t1) return false;
+    }
+    return true;
+}
+
+// True when a ray within `half` of `axis` (the candidates) passes near the box before it stops.
+bool cone_reaches(const DirectionBins& bins, const glm::vec3* dirs, const float* reach, glm::vec3 axis, float half,
+                  float near, glm::vec3 eye, const Aabb& box, float tan_band) {
+    const float polar = std::acos(std::clamp(axis.y, -1.0f, 1.0f));
+    const float lo = std::max(0.0f, polar - half), hi = std::min(kPi, polar + half);
+    const int r0 = bins.row_of(std::cos(lo)), r1 = bins.row_of(std::cos(hi));
+    int c0 = 0, c1 = bins.cols - 1;
+    if (polar - half > 0.0f && polar + half < kPi) {
+        const float dphi = std::asin(std::min(1.0f, std::sin(half) / std::sin(polar)));
+        const float phi = std::atan2(axis.z, axis.x);
+        if (2.0f * dphi < kTwoPi) {
+            c0 = bins.col_of(phi - dphi);
+            c1 = bins.col_of(phi + dphi);
+        }
+    }
+    const float cos_half = std::cos(half);
+    for (int r = r0; r <= r1; ++r) {
+        for (int c = c0;; c = (c + 1) % bins.cols) {
+            const size_t b = size_t(r) * size_t(bins.cols) + size_t(c);
+            for (uint32_t k = bins.first[b]; k < bins.first[b + 1]; ++k) {
+                const uint32_t ray = bins.ray_of[k];
+                if (reach[ray] >= near && glm::dot(dirs[ray], axis) >= cos_half &&
+                    ray_passes_near(eye, dirs[ray], reach[ray], box, tan_band)) {
+                    return true;
+                }
+            }
+            if (c == c1) break;
+        }
+    }
+    return false;
+}
+
+}  // namespace
+
+uint32_t add_guard_band(const World& world, const CellRays& rays, float guard_band_rad, uint64_t* row) {
+    uint32_t added = 0;
+    const float tan_band = std::tan(guard_band_rad);
+    DirectionBins bins;
+    std::vector<float> reach(rays.rays_per_eye);
+    for (uint32_t e = 0; e < rays.eyes.size(); ++e) {
+        const glm::vec3* dirs = rays.directions.data() + size_t(e) * rays.rays_per_eye;
+        bins.build(dirs, rays.rays_per_eye);
+        std::fill(reach.begin(), reach.end(), std::numeric_limits<float>::infinity());
+        for (const RayTouch& t : rays.touches) {
+            if (t.stops && t.ray / rays.rays_per_eye == e) reach[t.ray % rays.rays_per_eye] = t.t;
+        }
+        const glm::vec3 eye = rays.eyes[e];
+        for (uint32_t o = 0; o < world.objects.size(); ++o) {
+            if ((row[o >> 6] >> (o & 63)) & 1u) continue;
+            const Aabb& box = world.objects[o].bounds;
+            const glm::vec3 v = box.center() - eye;
+            const float dist = glm::length(v);
+            const float radius = 0.5f * glm::length(box.size());
+            bool listed = dist <= radius;
+            if (!listed) {
+                const float half = std::min(kPi, std::asin(std::min(1.0f, radius / dist)) + guard_band_rad);
+                listed = cone_reaches(bins, dirs, reach.data(), v / dist, half, dist - radius, eye, box, tan_band);
+            }
+            if (listed) {
+                row[o >> 6] |= uint64_t(1) << (o & 63);
+                ++added;
+            }
+        }
+    }
+    return added;
+}
+
 SampledPvs bake_sampled_pvs(Context& ctx, const SampledPvsConfig& config, const World& world,
                             const RayScene& scene, const CellSet& cells) {
     ScopedTimer timer(ctx, "sampled_pvs");
@@ -76,6 +202,11 @@ SampledPvs bake_sampled_pvs(Context& ctx, const SampledPvsConfig& config, const 
     ctx.info(fmt::format("sampled PVS (aggressive): {} cells x {} eyes x {} rays = {:.1f} M rays", cells.size(),
                          config.rays.eyes_per_cell, result.rays_per_eye,
                          double(rays_per_cell) * double(cells.size()) * 1e-6));
+    const float guard_band_rad = float(config.guard_band_deg) * kPi / 180.0f;
+    if (guard_band_rad > 0.0f) {
+        ctx.info(fmt::format("sampled PVS: guard band {} degrees (lists objects rays passed near)",
+                             config.guard_band_deg));
+    }
     ctx.progress_begin("sampled PVS", cells.size(), "cells");
 #pragma omp parallel
     {
@@ -84,6 +215,11 @@ SampledPvs bake_sampled_pvs(Context& ctx, const SampledPvsConfig& config, const 
         for (int64_t c = 0; c < int64_t(cells.size()); ++c) {
             trace_cell(scene, cells, uint32_t(c), config.rays, result.rays_per_eye, rays);
             for (const RayTouch& t : rays.touches) result.pvs.set(uint32_t(c), t.object);
+            if (guard_band_rad > 0.0f) {
+                const uint32_t added = add_guard_band(world, rays, guard_band_rad, result.pvs.row(uint32_t(c)));
+#pragma omp atomic
+                result.guard_band_added += added;
+            }
             ctx.progress_advance();
         }
     }

@@ -39,8 +39,16 @@ void trace_cell(const RayScene& scene, const CellSet& cells, uint32_t cell, cons
 // bounds meet the cell's eye region (an eye may stand inside them).
 void add_always_listed(const World& world, const CellSet& cells, PvsSet& pvs);
 
+// The guard band (SampledPvsConfig::guard_band_deg): lists, in the cell's row, every object whose bounding
+// sphere comes within `guard_band_rad` of a ray of the cell before the ray stops. Rays are binned per eye
+// by direction (equal-area bins in (cos polar, azimuth), about two rays per bin) keeping the farthest
+// reach per bin; an object is listed when a bin its widened cone covers reaches its sphere. Returns how
+// many objects it added.
+uint32_t add_guard_band(const World& world, const CellRays& rays, float guard_band_rad, uint64_t* row);
+
 struct SampledPvs {
     PvsSet pvs;
+    uint64_t guard_band_added = 0;  // (cell, object) pairs listed by the guard band alone
     uint64_t rays = 0;
     uint32_t rays_per_eye = 0;
     double seconds = 0.0;

@@ -201,3 +201,33 @@ TEST(Verify, SameSeedSameFiguresForOneAndTwoThreads) {
 
 }  // namespace
 }  // namespace pvs
+
+namespace pvs {
+namespace {
+
+TEST(GuardBand, ListsWhatRaysPassedCloseToAndNothingFar) {
+    Context ctx = quiet_context();
+    WallScene s = make_wall_scene(true, false);
+    // Hidden just behind the wall, beside the doorway's edge: the steepest sight line through the doorway
+    // reaches z = 0.5625 at x = 0.2 (eye at x = -1.5, z = -0.5), short of the box; rays pass within 10 cm.
+    const uint32_t peeking = add_box(s.world, "peeking", Aabb::of({0.12f, -0.25f, 0.62f}, {0.2f, 0.25f, 0.9f}));
+    RayScene scene(ctx, s.world);
+    CellRays rays;
+    const SampleConfig sc{16, 2048, 0, 5};
+    trace_cell(scene, kCell, 0, sc, sc.rays_per_eye, rays);
+    PvsSet seen = PvsSet::make(1, uint32_t(s.world.objects.size()));
+    for (const RayTouch& t : rays.touches) seen.set(0, t.object);
+    ASSERT_FALSE(seen.test(0, peeking));  // hidden by construction
+
+    PvsSet band = seen;
+    const uint32_t added = add_guard_band(s.world, rays, 5.0f * 3.14159265f / 180.0f, band.row(0));
+    EXPECT_TRUE(band.test(0, peeking));
+    EXPECT_FALSE(band.test(0, s.far_behind));  // 4 m aside: far outside a 5 degree band
+    EXPECT_GE(added, 1u);
+    // Nothing the rays saw is dropped.
+    for (uint32_t o = 0; o < s.world.objects.size(); ++o)
+        if (seen.test(0, o)) EXPECT_TRUE(band.test(0, o));
+}
+
+}  // namespace
+}  // namespace pvs
