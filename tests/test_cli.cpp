@@ -174,3 +174,40 @@ TEST(Cli, HelpOnEverySubcommandAndTheRealBinary) {
 
 }  // namespace
 }  // namespace pvs
+
+namespace pvs {
+namespace {
+
+// The real levels (../shared/worlds) when present: a quick bake that info and query read back.
+TEST(Cli, BakesTheRealWorldsWhenPresent) {
+    int baked = 0;
+    for (const char* name : {"oa_dm4.glb", "ctf_inyard.glb"}) {
+        const std::string world = test::shared_world(name);
+        if (world.empty()) continue;
+        test::TempDir dir;
+        const std::string out = dir.file("bake.h5");
+        const CliRun bake = run({"bake", world, "-o", out, "--cell-size", "4", "--eyes", "2", "--rays", "128",
+                                 "--verify-eyes", "2", "--verify-rays-per-eye", "64"});
+        ASSERT_EQ(bake.status, 0) << bake.log;
+        const CliRun info = run({"info", out, "--json"});
+        ASSERT_EQ(info.status, 0) << info.log;
+        const auto j = nlohmann::json::parse(info.out);
+        EXPECT_EQ(j["objects"], std::string(name) == "oa_dm4.glb" ? 445 : 2636);
+        EXPECT_TRUE(j["verification"]["ran"].get<bool>());
+        // A spawn point of oa_dm4 and of ctf_inyard (their pvs_view_seed nodes).
+        const std::vector<std::string> spawn = std::string(name) == "oa_dm4.glb"
+                                                   ? std::vector<std::string>{"9.7536", "0.8128", "24.384"}
+                                                   : std::vector<std::string>{"-4.8768", "2.6416", "8.128"};
+        const CliRun q = run({"query", out, spawn[0], spawn[1], spawn[2], "--json"});
+        ASSERT_EQ(q.status, 0) << q.log;
+        const auto qj = nlohmann::json::parse(q.out);
+        ASSERT_FALSE(qj["cell"].is_null());
+        EXPECT_GT(qj["visible_count"].get<int>(), 0);
+        EXPECT_LT(qj["visible_count"].get<int>(), j["objects"].get<int>());  // something is culled
+        ++baked;
+    }
+    if (baked == 0) GTEST_SKIP() << "../shared/worlds is absent";
+}
+
+}  // namespace
+}  // namespace pvs
