@@ -6,6 +6,7 @@
 // directions traced by
 //   stream     RayScene::trace: rtcIntersect1M coherent streams of 256, see-through filter (what we use)
 //   intersect1 RayScene::trace_reference: one rtcIntersect1 per ray, same filter (same answer)
+//   repeated1  RayScene::trace_repeated: rtcIntersect1 restarted past each see-through hit (same answer)
 //   occluded1  a plain rtcOccluded1 loop (a cheaper question: is anything hit at all?)
 // all parallel over eyes with OpenMP. Prints one JSON object: medians of the repeats in M rays/s, and
 // ratios to occluded1 taken in the same run.
@@ -80,8 +81,8 @@ int main(int argc, char** argv) {
         const auto t0 = std::chrono::steady_clock::now();
         pvs::RayScene scene(ctx, world, quality, threads);
         const double build_s = seconds_since(t0);
-        std::vector<double> stream, single, occluded;
-        uint64_t touches_stream = 0, touches_single = 0;
+        std::vector<double> stream, single, repeated, occluded;
+        uint64_t touches_stream = 0, touches_single = 0, touches_repeated = 0;
         for (int r = 0; r < repeats; ++r) {
             auto t = std::chrono::steady_clock::now();
             uint64_t n = 0;
@@ -112,6 +113,20 @@ int main(int argc, char** argv) {
             single.push_back(rays / seconds_since(t) * 1e-6);
             touches_single = n;
             t = std::chrono::steady_clock::now();
+            n = 0;
+#pragma omp parallel reduction(+ : n)
+            {
+                std::vector<pvs::RayTouch> touches;
+#pragma omp for schedule(dynamic, 8)
+                for (int64_t e = 0; e < int64_t(eyes); ++e) {
+                    touches.clear();
+                    scene.trace_repeated(eye_points[e], dirs.data() + size_t(e) * kRaysPerEye, kRaysPerEye, touches);
+                    n += touches.size();
+                }
+            }
+            repeated.push_back(rays / seconds_since(t) * 1e-6);
+            touches_repeated = n;
+            t = std::chrono::steady_clock::now();
             uint64_t hits = 0;
 #pragma omp parallel for schedule(dynamic, 8) reduction(+ : hits)
             for (int64_t e = 0; e < int64_t(eyes); ++e) {
@@ -123,11 +138,13 @@ int main(int argc, char** argv) {
         q["build_s"] = build_s;
         q["stream_mrays_s"] = median(stream);
         q["intersect1_mrays_s"] = median(single);
+        q["repeated1_mrays_s"] = median(repeated);
         q["occluded1_mrays_s"] = median(occluded);
         q["stream_over_occluded1"] = median(stream) / median(occluded);
         q["stream_over_intersect1"] = median(stream) / median(single);
         q["touches_stream"] = touches_stream;
         q["touches_intersect1"] = touches_single;
+        q["touches_repeated1"] = touches_repeated;
         out[name] = q;
     }
     std::cout << out.dump(2) << std::endl;

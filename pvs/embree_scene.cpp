@@ -10,6 +10,7 @@
 #include <xmmintrin.h>
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 namespace pvs {
@@ -26,10 +27,12 @@ struct TraceContext {
     std::vector<RayTouch>* touches;
     const uint32_t* see_through_object;  // primID -> object
     uint32_t ray_base;
+    bool pass_through = true;  // false: accept see-through hits like opaque ones (trace_repeated)
 };
 
 void see_through_filter(const RTCFilterFunctionNArguments* args) {
     const auto* tc = reinterpret_cast<const TraceContext*>(args->context);
+    if (!tc->pass_through) return;
     for (unsigned i = 0; i < args->N; ++i) {
         if (args->valid[i] != -1) continue;
         const unsigned prim = RTCHitN_primID(args->hit, args->N, i);
@@ -209,6 +212,43 @@ void RayScene::trace_reference(glm::vec3 origin, const glm::vec3* directions, ui
         const size_t first = touches.size();
         rtcIntersect1(impl_->scene, &tc.rtc, &rh);
         impl_->finish(&rh, 1, i, first, touches);
+    }
+}
+
+void RayScene::trace_repeated(glm::vec3 origin, const glm::vec3* directions, uint32_t count,
+                              std::vector<RayTouch>& touches) const {
+    ScopedFtz ftz;
+    for (uint32_t i = 0; i < count; ++i) {
+        float tnear = 0.0f;
+        for (int surfaces = 0; surfaces < 1024; ++surfaces) {
+            RTCRayHit rh;
+            rh.ray.org_x = origin.x;
+            rh.ray.org_y = origin.y;
+            rh.ray.org_z = origin.z;
+            rh.ray.dir_x = directions[i].x;
+            rh.ray.dir_y = directions[i].y;
+            rh.ray.dir_z = directions[i].z;
+            rh.ray.tnear = tnear;
+            rh.ray.tfar = std::numeric_limits<float>::infinity();
+            rh.ray.time = 0.0f;
+            rh.ray.mask = 0xffffffffu;
+            rh.ray.id = 0;
+            rh.ray.flags = 0;
+            rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+            rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+            TraceContext tc;
+            rtcInitIntersectContext(&tc.rtc);
+            tc.touches = nullptr;
+            tc.see_through_object = nullptr;
+            tc.ray_base = 0;
+            tc.pass_through = false;  // the filter accepts: every surface stops this query
+            rtcIntersect1(impl_->scene, &tc.rtc, &rh);
+            if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) break;
+            const bool opaque = rh.hit.geomID == kOpaqueGeom;
+            touches.push_back(RayTouch{i, impl_->object_of[rh.hit.geomID][rh.hit.primID], rh.ray.tfar, opaque});
+            if (opaque) break;
+            tnear = std::nextafter(rh.ray.tfar, std::numeric_limits<float>::infinity());
+        }
     }
 }
 

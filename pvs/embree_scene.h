@@ -45,6 +45,11 @@ public:
     void trace_reference(glm::vec3 origin, const glm::vec3* directions, uint32_t count,
                          std::vector<RayTouch>& touches) const;
 
+    // The alternative to the filter, for the benchmark: one rtcIntersect1 per surface, restarting past each
+    // see-through hit until an opaque one (or nothing) is hit. Same answer.
+    void trace_repeated(glm::vec3 origin, const glm::vec3* directions, uint32_t count,
+                        std::vector<RayTouch>& touches) const;
+
     // Benchmark baseline: plain rtcOccluded1 per ray (opaque-only answer: is anything hit?). Returns the
     // number of rays that hit something.
     uint64_t occluded_baseline(glm::vec3 origin, const glm::vec3* directions, uint32_t count) const;

@@ -231,3 +231,27 @@ TEST(GuardBand, ListsWhatRaysPassedCloseToAndNothingFar) {
 
 }  // namespace
 }  // namespace pvs
+
+namespace pvs {
+namespace {
+
+TEST(Verify, RepeatedQueriesGiveTheFiltersAnswer) {
+    Context ctx = quiet_context();
+    WallScene s = make_wall_scene(false, true);
+    add_box(s.world, "second_glass", Aabb::of({1.5f, -1, -1}, {1.52f, 1, 1}), false);
+    RayScene scene(ctx, s.world);
+    std::vector<glm::vec3> dirs;
+    sample_sphere_directions(4000, 9, 1, dirs);
+    std::vector<RayTouch> filtered, repeated;
+    scene.trace(glm::vec3(-2.0f, 0.0f, 0.0f), dirs.data(), uint32_t(dirs.size()), filtered);
+    scene.trace_repeated(glm::vec3(-2.0f, 0.0f, 0.0f), dirs.data(), uint32_t(dirs.size()), repeated);
+    auto key = [](const std::vector<RayTouch>& v) {
+        std::set<std::pair<uint32_t, uint32_t>> out;
+        for (const RayTouch& t : v) out.insert({t.ray, t.object});
+        return out;
+    };
+    EXPECT_EQ(key(filtered), key(repeated));
+}
+
+}  // namespace
+}  // namespace pvs
