@@ -42,13 +42,20 @@ void sample_sphere_directions(uint32_t count, uint64_t seed, uint64_t stream, st
     constexpr float kTwoPi = 6.28318530717958647692f;
     // A random rotation of phi per stream keeps strata boundaries from lining up across eyes.
     const float phi0 = rng.uniform() * kTwoPi;
-    for (uint32_t i = 0; i < count; ++i) {
-        const uint32_t iu = i % a, iv = i / a;
-        const float z = 1.0f - 2.0f * ((float(iu) + rng.uniform()) / float(a));
-        const float phi = phi0 + kTwoPi * ((float(iv) + rng.uniform()) / float(b));
-        const float r = std::sqrt(std::max(0.0f, 1.0f - z * z));
-        out.emplace_back(r * std::cos(phi), z, r * std::sin(phi));
-    }
+    // Strata are emitted in 4 x 4 tiles, so consecutive rays (Embree's packets of 8 or 16) point close
+    // together: coherent streams trace faster. The set of strata is the same as in row order.
+    constexpr uint32_t kTile = 4;
+    const size_t first = out.size();
+    out.reserve(first + count);
+    for (uint32_t tv = 0; tv < b; tv += kTile)
+        for (uint32_t tu = 0; tu < a; tu += kTile)
+            for (uint32_t iv = tv; iv < std::min(b, tv + kTile); ++iv)
+                for (uint32_t iu = tu; iu < std::min(a, tu + kTile); ++iu) {
+                    if (iv * a + iu >= count) continue;
+                    const float z = 1.0f - 2.0f * ((float(iu) + rng.uniform()) / float(a));
+                    const float phi = phi0 + kTwoPi * ((float(iv) + rng.uniform()) / float(b));
+                    const float r = std::sqrt(std::max(0.0f, 1.0f - z * z));
+                    out.emplace_back(r * std::cos(phi), z, r * std::sin(phi));
+                }
 }
-
 }  // namespace pvs
