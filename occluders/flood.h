@@ -1,0 +1,35 @@
+// pvsbake occluders: flood of free space from view seeds, and leak finding (after Quake's vis and its
+// point file).
+//
+// Conventions: voxels as in occluders/voxels.h; 6-connected (face neighbours). The flood starts at the
+// voxels of the seeds (points known to be in playable space) and spreads through voxels not blocked
+// (not touched by an opaque triangle). What it reaches is the reachable free space; what it never
+// reaches is sealed off from every seed by opaque voxels. If it reaches the grid's border layer (the
+// grid is padded, so the border is outside the world's bounds) the level LEAKS: the result says so and
+// gives the leak path, voxel centres from a seed to the border, and the flood still covers all it reached.
+// Note: a voxel seal is not a visibility proof (a crack narrower than a voxel is sealed in voxels);
+// occluders built on "unreached" space must be checked against the triangles.
+#pragma once
+
+#include "core/context.h"
+#include "occluders/voxels.h"
+
+#include <vector>
+
+namespace pvs {
+
+struct FloodResult {
+    BitVolume reached;
+    uint64_t reached_count = 0;
+    bool leaked = false;
+    std::vector<glm::vec3> leak_path;  // seed to border, at the turns of the voxel path (empty if sealed)
+    uint32_t seeds_used = 0;
+    uint32_t seeds_moved = 0;    // seeds inside a blocked voxel, moved to the nearest free one
+    uint32_t seeds_dropped = 0;  // seeds outside the grid or with no free voxel near
+};
+
+// `max_seed_move_voxels`: how far a seed inside a blocked voxel may move to a free one.
+FloodResult flood_free_space(Context& ctx, const VoxelGrid& grid, const BitVolume& blocked,
+                             const std::vector<glm::vec3>& seeds, int max_seed_move_voxels = 4);
+
+}  // namespace pvs

@@ -1,0 +1,179 @@
+// Conservative voxelization (against an independent clipping reference) and the flood of free space.
+#include "core/error.h"
+#include "core/random.h"
+#include "occluders/flood.h"
+#include "occluders/voxels.h"
+#include "tests/world_builder.h"
+
+#include <gtest/gtest.h>
+
+#include <vector>
+
+namespace pvs {
+namespace {
+
+Context quiet_context() { return Context(Context::Options{LogLevel::kError, true, nullptr}); }
+
+// Reference: clip the triangle by the box's six closed half-spaces (Sutherland-Hodgman); it overlaps
+// the box when something is left.
+bool reference_overlap(glm::vec3 center, glm::vec3 half, glm::vec3 a, glm::vec3 b, glm::vec3 c) {
+    std::vector<glm::dvec3> poly = {glm::dvec3(a), glm::dvec3(b), glm::dvec3(c)};
+    for (int axis = 0; axis < 3; ++axis) {
+        for (int side = -1; side <= 1; side += 2) {
+            const double limit = double(center[axis]) + side * double(half[axis]);
+            std::vector<glm::dvec3> out;
+            for (size_t i = 0; i < poly.size(); ++i) {
+                const glm::dvec3 p = poly[i], q = poly[(i + 1) % poly.size()];
+                const double dp = side * (p[axis] - limit), dq = side * (q[axis] - limit);  // <= 0 inside
+                if (dp <= 0) out.push_back(p);
+                if ((dp < 0 && dq > 0) || (dp > 0 && dq < 0)) out.push_back(p + (q - p) * (dp / (dp - dq)));
+            }
+            poly = out;
+            if (poly.empty()) return false;
+        }
+    }
+    return true;
+}
+
+TEST(TriangleBox, MatchesTheClippingReferenceOnRandomCases) {
+    Rng rng(1, 2);
+    int overlaps = 0, disagreements = 0;
+    for (int i = 0; i < 200000; ++i) {
+        auto r = [&] { return glm::vec3(rng.uniform(), rng.uniform(), rng.uniform()) * 4.0f - 2.0f; };
+        const glm::vec3 a = r(), b = r() * 0.5f + a * 0.5f, c = r();
+        const glm::vec3 half = glm::vec3(0.1f) + glm::vec3(rng.uniform(), rng.uniform(), rng.uniform()) * 0.5f;
+        const bool fast = triangle_box_overlap(glm::vec3(0.0f), half, a, b, c);
+        const bool slow = reference_overlap(glm::vec3(0.0f), half, a, b, c);
+        overlaps += slow;
+        disagreements += fast != slow;
+    }
+    EXPECT_GT(overlaps, 20000);
+    EXPECT_EQ(disagreements, 0);
+}
+
+TEST(TriangleBox, TouchingCountsAsOverlap) {
+    // A triangle lying exactly on the box's face, and one touching it at a vertex.
+    EXPECT_TRUE(triangle_box_overlap(glm::vec3(0), glm::vec3(1), {1, -2, -2}, {1, 2, -2}, {1, 0, 2}));
+    EXPECT_TRUE(triangle_box_overlap(glm::vec3(0), glm::vec3(1), {1, 1, 1}, {3, 1, 1}, {3, 3, 3}));
+    EXPECT_FALSE(triangle_box_overlap(glm::vec3(0), glm::vec3(1), {1.01f, -2, -2}, {1.01f, 2, -2}, {1.01f, 0, 2}));
+}
+
+// A closed room: a 10 x 4 x 10 m hollow box of 0.2 m walls and a 0.6 m ceiling (six wall objects), optionally with a hole.
+World room(bool hole) {
+    World w;
+    const float t = 0.2f;
+    test::add_box(w, "floor", Aabb::of({0, 0, 0}, {10, t, 10}));
+    test::add_box(w, "ceiling", Aabb::of({0, 3.4f, 0}, {10, 4, 10}));  // 0.6 m thick
+    test::add_box(w, "west", Aabb::of({0, 0, 0}, {t, 4, 10}));
+    test::add_box(w, "east", Aabb::of({10 - t, 0, 0}, {10, 4, 10}));
+    test::add_box(w, "south", Aabb::of({0, 0, 0}, {10, 4, t}));
+    if (!hole) {
+        test::add_box(w, "north", Aabb::of({0, 0, 10 - t}, {10, 4, 10}));
+    } else {  // a 1 m square hole at x in [4.5, 5.5], y in [1.5, 2.5]
+        test::add_box(w, "north_a", Aabb::of({0, 0, 10 - t}, {4.5f, 4, 10}));
+        test::add_box(w, "north_b", Aabb::of({5.5f, 0, 10 - t}, {10, 4, 10}));
+        test::add_box(w, "north_c", Aabb::of({4.5f, 0, 10 - t}, {5.5f, 1.5f, 10}));
+        test::add_box(w, "north_d", Aabb::of({4.5f, 2.5f, 10 - t}, {5.5f, 4, 10}));
+    }
+    return w;
+}
+
+TEST(Voxelize, MarksTheShellAndNothingInside) {
+    Context ctx = quiet_context();
+    const World w = room(false);
+    const VoxelGrid g = make_voxel_grid(w.bounds, 0.25, 2);
+    BitVolume touched, up;
+    voxelize_opaque(ctx, w, g, touched, &up);
+    // A voxel in the middle of the room is free; one inside the floor slab is touched.
+    const glm::ivec3 mid = g.voxel_of({5, 2, 5});
+    EXPECT_FALSE(touched.get(g.index(mid.x, mid.y, mid.z)));
+    const glm::ivec3 in_floor = g.voxel_of({5, 0.1f, 5});
+    EXPECT_TRUE(touched.get(g.index(in_floor.x, in_floor.y, in_floor.z)));
+    // The floor's top face faces up; the ceiling's bottom face does not.
+    const glm::ivec3 floor_top = g.voxel_of({5, 0.21f, 5});
+    const glm::ivec3 ceiling_bottom = g.voxel_of({5, 3.3f, 5});  // [3.25, 3.5]: only the bottom face
+    EXPECT_TRUE(up.get(g.index(floor_top.x, floor_top.y, floor_top.z)));
+    EXPECT_TRUE(touched.get(g.index(ceiling_bottom.x, ceiling_bottom.y, ceiling_bottom.z)));
+    EXPECT_FALSE(up.get(g.index(ceiling_bottom.x, ceiling_bottom.y, ceiling_bottom.z)));
+    // Only voxels near a surface are touched: every touched voxel's box is within one voxel of a wall.
+    uint64_t n = 0;
+    for (uint64_t i = 0; i < g.count(); ++i) {
+        if (!touched.get(i)) continue;
+        ++n;
+        const glm::vec3 p = g.voxel_center(g.coords(i));
+        const bool near_surface = p.x < 0.2f + 0.25f || p.x > 9.8f - 0.25f || p.y < 0.2f + 0.25f ||
+                                  p.y > 3.4f - 0.25f || p.z < 0.2f + 0.25f || p.z > 9.8f - 0.25f;
+        EXPECT_TRUE(near_surface) << p.x << " " << p.y << " " << p.z;
+        if (!near_surface) break;
+    }
+    EXPECT_GT(n, 0u);
+}
+
+TEST(Flood, StaysInASealedRoom) {
+    Context ctx = quiet_context();
+    const World w = room(false);
+    const VoxelGrid g = make_voxel_grid(w.bounds, 0.25, 2);
+    BitVolume touched;
+    voxelize_opaque(ctx, w, g, touched);
+    const FloodResult f = flood_free_space(ctx, g, touched, {{5, 2, 5}});
+    EXPECT_FALSE(f.leaked);
+    EXPECT_TRUE(f.leak_path.empty());
+    // Reached space is the room's free interior (9.6 x 3.6 x 9.6 m less the voxels touching the walls).
+    const double volume = double(f.reached_count) * 0.25 * 0.25 * 0.25;
+    EXPECT_GT(volume, 8.6 * 2.6 * 8.6);
+    EXPECT_LE(volume, 9.6 * 3.6 * 9.6);
+    const glm::ivec3 outside = g.voxel_of({-0.3f, 2, 5});
+    EXPECT_FALSE(f.reached.get(g.index(outside.x, outside.y, outside.z)));
+}
+
+TEST(Flood, FindsTheLeakAndItsPathLeavesThroughTheHole) {
+    Context ctx = quiet_context();
+    const World w = room(true);
+    const VoxelGrid g = make_voxel_grid(w.bounds, 0.25, 2);
+    BitVolume touched;
+    voxelize_opaque(ctx, w, g, touched);
+    const FloodResult f = flood_free_space(ctx, g, touched, {{5, 2, 5}});
+    ASSERT_TRUE(f.leaked);
+    ASSERT_GE(f.leak_path.size(), 2u);
+    EXPECT_NEAR(f.leak_path.front().x, 5.0f, 0.25f);
+    EXPECT_FALSE(g.bounds().contains(f.leak_path.back() + glm::vec3(0, 0, 0)) &&
+                 w.bounds.contains(f.leak_path.back()));  // ends outside the world's bounds
+    // Where the path crosses the north wall's plane (z = 9.9), it is inside the hole.
+    bool crossed = false;
+    for (size_t k = 0; k + 1 < f.leak_path.size(); ++k) {
+        const glm::vec3 p = f.leak_path[k], q = f.leak_path[k + 1];
+        if ((p.z - 9.9f) * (q.z - 9.9f) > 0) continue;
+        const float u = (9.9f - p.z) / (q.z - p.z);
+        const glm::vec3 x = p + u * (q - p);
+        EXPECT_GT(x.x, 4.5f);
+        EXPECT_LT(x.x, 5.5f);
+        EXPECT_GT(x.y, 1.5f);
+        EXPECT_LT(x.y, 2.5f);
+        crossed = true;
+    }
+    EXPECT_TRUE(crossed);
+}
+
+TEST(Flood, MovesASeedOutOfSolidAndDropsOneOutside) {
+    Context ctx = quiet_context();
+    const World w = room(false);
+    const VoxelGrid g = make_voxel_grid(w.bounds, 0.25, 2);
+    BitVolume touched;
+    voxelize_opaque(ctx, w, g, touched);
+    const FloodResult f = flood_free_space(ctx, g, touched, {{5, 0.1f, 5}, {500, 0, 0}});
+    EXPECT_EQ(f.seeds_used, 1u);
+    EXPECT_EQ(f.seeds_moved, 1u);
+    EXPECT_EQ(f.seeds_dropped, 1u);
+    EXPECT_FALSE(f.leaked);
+    EXPECT_GT(f.reached_count, 1000u);
+}
+
+TEST(VoxelGrid, RefusesAGridTooLarge) {
+    EXPECT_THROW(make_voxel_grid(Aabb::of({0, 0, 0}, {1000, 1000, 1000}), 0.01, 1), Error);
+    const double s = default_voxel_size(Aabb::of({0, 0, 0}, {1000, 1000, 1000}), 0.1, 100'000'000);
+    EXPECT_GT(s, 0.1);
+    EXPECT_NO_THROW(make_voxel_grid(Aabb::of({0, 0, 0}, {1000, 1000, 1000}), s, 1));
+}
+
+}  // namespace
+}  // namespace pvs
