@@ -9,13 +9,54 @@
 
 namespace pvs {
 
-Aabb eye_region(const CellSet& cells, uint32_t cell) { return cells.cells[cell].bounds; }
+namespace {
+
+// Voxels of `mask` whose centres lie in `box` (indices into the mask).
+void voxels_in(const VoxelMask& mask, const Aabb& box, std::vector<uint64_t>& out) {
+    out.clear();
+    if (mask.empty()) return;
+    glm::ivec3 lo, hi;
+    for (int a = 0; a < 3; ++a) {
+        lo[a] = std::max(0, int(std::floor((box.min[a] - mask.origin[a]) / mask.voxel_size_m - 0.5f)));
+        hi[a] = std::min(mask.dims[a] - 1, int(std::ceil((box.max[a] - mask.origin[a]) / mask.voxel_size_m - 0.5f)));
+    }
+    for (int z = lo.z; z <= hi.z; ++z)
+        for (int y = lo.y; y <= hi.y; ++y)
+            for (int x = lo.x; x <= hi.x; ++x) {
+                const uint64_t i = uint64_t(x) + uint64_t(mask.dims.x) * (uint64_t(y) + uint64_t(mask.dims.y) * uint64_t(z));
+                const glm::vec3 c = mask.origin + (glm::vec3(x, y, z) + 0.5f) * mask.voxel_size_m;
+                if (mask.get(i) && box.contains(c)) out.push_back(i);
+            }
+}
+
+}  // namespace
 
 void sample_eye_points(const CellSet& cells, uint32_t cell, uint32_t count, uint64_t seed,
                        std::vector<glm::vec3>& out) {
     if (count == 0) return;
-    const Aabb region = eye_region(cells, cell);
+    const Aabb region = cells.cells[cell].bounds;
     Rng rng(seed, 0x4559450000000000ULL ^ cell);
+    std::vector<uint64_t> voxels;
+    const VoxelMask* mask = &cells.eyes;
+    voxels_in(cells.eyes, region, voxels);
+    if (voxels.empty()) {
+        mask = &cells.view;
+        voxels_in(cells.view, region, voxels);
+    }
+    if (!voxels.empty()) {
+        const uint64_t n = voxels.size();
+        for (uint32_t k = 0; k < count; ++k) {
+            // Run k of the cell's voxels: [k n / count, (k + 1) n / count).
+            const uint64_t a = uint64_t(k) * n / count, b = std::max(a + 1, uint64_t(k + 1) * n / count);
+            const uint64_t i = voxels[std::min<uint64_t>(n - 1, a + uint64_t(rng.uniform() * float(b - a)))];
+            const uint64_t x = i % uint64_t(mask->dims.x), yz = i / uint64_t(mask->dims.x);
+            const glm::vec3 v(float(x), float(yz % uint64_t(mask->dims.y)), float(yz / uint64_t(mask->dims.y)));
+            const glm::vec3 jitter(rng.uniform(), rng.uniform(), rng.uniform());
+            const glm::vec3 p = mask->origin + (v + jitter) * mask->voxel_size_m;
+            out.push_back(glm::clamp(p, region.min, region.max));
+        }
+        return;
+    }
     uint32_t k = 1;
     while (k * k * k < count) ++k;
     const uint32_t strata = k * k * k;

@@ -1,11 +1,15 @@
 // pvsbake cells: where eyes can be. The ONE place that decides it: the sampled PVS, the verifier and
 // (later) occluder ranking all draw their eye points here.
 //
-// Today an eye may be anywhere in its cell's box (there is no view volume yet). The view-cell issue
-// replaces eye_region() with cell ∩ view volume, never inside solid, and every user follows.
+// With a view volume (CellSet::eyes, cells/view_volume.h) an eye is drawn in the free voxels of the view
+// volume whose centres lie in the cell: never inside solid, never outside reachable space. A cell with no
+// such voxel (it only holds the walls' side of the view region) draws from its `view` voxels; without a
+// view volume, from the whole cell box.
 //
-// Sampling is stratified: the region is split into about `count` strata along its axes (a k x k x k
-// grid, shuffled) and one jittered point is drawn in each. The points depend only on (seed, cell).
+// Sampling is stratified: without voxels the box is split into about `count` strata (a k x k x k grid,
+// shuffled) with one jittered point in each; with voxels the cell's voxels (in index order) are split
+// into `count` runs and a uniform point is drawn in a random voxel of each run. The points depend only
+// on (seed, cell).
 #pragma once
 
 #include "core/cell_set.h"
@@ -14,9 +18,6 @@
 #include <vector>
 
 namespace pvs {
-
-// The box eye points of a cell are drawn from.
-Aabb eye_region(const CellSet& cells, uint32_t cell);
 
 // Appends `count` stratified random eye points of the cell to `out`.
 void sample_eye_points(const CellSet& cells, uint32_t cell, uint32_t count, uint64_t seed,

@@ -14,8 +14,12 @@ namespace pvs {
 // The largest grid build_uniform_grid() accepts, in cells (a clear error beyond it).
 constexpr uint64_t kMaxGridCells = 50'000'000;
 
-// A grid over `region` (the world bounds until the view volume lands). Throws pvs::Error (bad input)
+// A grid over `region` (the bounds of the view volume). Throws pvs::Error (bad input)
 // naming --cell-size when the grid would exceed kMaxGridCells or the region is empty.
 CellSet build_uniform_grid(Context& ctx, const CellConfig& config, const Aabb& region);
+
+// Drops the cells no voxel of `view` overlaps (with volume: a voxel only touching a cell's face does not
+// count), renumbers the rest in grid order and stores the masks in the set. Returns the cells dropped.
+uint64_t clip_grid_to_view(Context& ctx, CellSet& cells, const VoxelMask& view, const VoxelMask& eyes);
 
 }  // namespace pvs

@@ -4,7 +4,8 @@
 //   grid_index = ix + dims.x * (iy + dims.y * iz).
 // Grid cells are half-open for lookup: a point on the face between two cells belongs to the cell with
 // the larger index along that axis, except on the grid's max face, which belongs to the last cell.
-// Cells dropped from the grid (no view volume in them) have grid_to_cell == -1.
+// Cells dropped from the grid (no view volume in them) have grid_to_cell == -1. With a view volume, a
+// point outside it has no cell even inside a cell's box.
 #pragma once
 
 #include "core/math.h"
@@ -14,6 +15,38 @@
 #include <vector>
 
 namespace pvs {
+
+// A set of voxels (bit per voxel, x fastest) over a box: where eyes can be. Empty = no mask.
+struct VoxelMask {
+    glm::vec3 origin{0.0f};
+    float voxel_size_m = 0.0f;
+    glm::ivec3 dims{0};
+    std::vector<uint64_t> bits;  // ceil(dims.x * dims.y * dims.z / 64) words
+
+    bool empty() const { return bits.empty(); }
+    uint64_t count() const { return uint64_t(dims.x) * uint64_t(dims.y) * uint64_t(dims.z); }
+    bool get(uint64_t i) const { return (bits[i >> 6] >> (i & 63)) & 1u; }
+    // Is p in a voxel of the mask? Voxels are closed boxes: a point on a face of a set voxel is in.
+    bool contains(glm::vec3 p) const {
+        if (empty() || !is_finite(p)) return false;
+        const glm::vec3 rel = (p - origin) / voxel_size_m;
+        int lo[3], hi[3];
+        for (int a = 0; a < 3; ++a) {
+            if (!(rel[a] >= 0.0f) || rel[a] > float(dims[a])) return false;
+            const float f = std::floor(rel[a]);
+            hi[a] = std::min(int(f), dims[a] - 1);
+            lo[a] = rel[a] == f ? std::min(std::max(int(f) - 1, 0), hi[a]) : hi[a];  // on a face: both sides
+        }
+        for (int z = lo[2]; z <= hi[2]; ++z)
+            for (int y = lo[1]; y <= hi[1]; ++y)
+                for (int x = lo[0]; x <= hi[0]; ++x)
+                    if (get(uint64_t(x) + uint64_t(dims.x) * (uint64_t(y) + uint64_t(dims.y) * uint64_t(z)))) return true;
+        return false;
+    }
+    bool operator==(const VoxelMask& o) const {
+        return origin == o.origin && voxel_size_m == o.voxel_size_m && dims == o.dims && bits == o.bits;
+    }
+};
 
 struct Cell {
     Aabb bounds;
@@ -28,12 +61,17 @@ struct CellSet {
     glm::ivec3 dims{0};          // grid cells along x, y, z
     std::vector<int32_t> grid_to_cell;  // dims.x*dims.y*dims.z entries; -1 = no cell there
     std::vector<Cell> cells;
+    // The view volume (cells/view_volume.h), when one was built: `view` is where a lookup finds a cell
+    // (the view region, up to the walls), `eyes` where eye points are drawn (free space only).
+    VoxelMask view;
+    VoxelMask eyes;
 
     size_t size() const { return cells.size(); }
 
-    // The cell holding p, or -1 when p is outside every cell. O(1).
+    // The cell holding p, or -1 when p is outside every cell or outside the view volume. O(1).
     int32_t find(glm::vec3 p) const {
         if (kind != Kind::kGrid || cell_size_m <= 0.0f || !is_finite(p)) return -1;
+        if (!view.empty() && !view.contains(p)) return -1;
         int idx[3];
         for (int a = 0; a < 3; ++a) {
             const float rel = (p[a] - origin[a]) / cell_size_m;

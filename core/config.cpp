@@ -35,6 +35,18 @@ std::vector<std::pair<std::string, std::string>> resolved_parameters(const BakeC
     std::vector<std::pair<std::string, std::string>> out;
     out.emplace_back("mode", to_string(config.mode));
     out.emplace_back("verify.enabled", config.verify.enabled ? "true" : "false");
+    out.emplace_back("view.use_world_seeds", config.view.use_world_seeds ? "true" : "false");
+    out.emplace_back("view.use_world_boxes", config.view.use_world_boxes ? "true" : "false");
+    std::string boxes, seeds;
+    for (const Aabb& b : config.view.boxes) {
+        boxes += fmt::format("{}{},{},{},{},{},{}", boxes.empty() ? "" : ";", b.min.x, b.min.y, b.min.z, b.max.x,
+                             b.max.y, b.max.z);
+    }
+    for (const glm::vec3& p : config.view.seeds) {
+        seeds += fmt::format("{}{},{},{}", seeds.empty() ? "" : ";", p.x, p.y, p.z);
+    }
+    out.emplace_back("view.boxes", boxes);
+    out.emplace_back("view.seeds", seeds);
     BakeConfig copy = config;
     visit_options(copy, [&](const OptionSpec& spec, auto& field) {
         using T = std::decay_t<decltype(field)>;

@@ -5,6 +5,8 @@
 // and the resolved parameters written into the bake file and the report, so a bake can be repeated.
 #pragma once
 
+#include "core/math.h"
+
 #include <cstdint>
 #include <limits>
 #include <string>
@@ -24,6 +26,21 @@ struct RunConfig {
 struct CellConfig {
     double cell_size_m = 2.0;  // [Limit: > 0] [Units: m] edge of a uniform grid cell
 };
+
+// Where eyes can be (cells/view_volume.h): explicit boxes, the flood of free space from view seeds, and a
+// play height above floors, combined by intersection; none given = the world bounds.
+struct ViewVolumeConfig {
+    double voxel_size_m = 0.0;         // [Limit: >= 0] [Units: m] 0 = automatic (kDefaultVoxelSizeM, coarser
+                                       // when the grid would pass max_voxels)
+    uint64_t max_voxels = 200'000'000; // [Limit: >= 1000] voxels the automatic size may use (2 bytes each)
+    double play_height_m = 0.0;        // [Limit: >= 0] [Units: m] keep only space up to this height above
+                                       // upward-facing opaque surfaces; 0 = off
+    bool use_world_seeds = true;       // flood from the world's pvs_view_seed nodes
+    bool use_world_boxes = true;       // limit to the world's pvs_view_volume boxes
+    std::vector<Aabb> boxes;           // --view-box, metres
+    std::vector<glm::vec3> seeds;      // --view-seed, metres
+};
+constexpr double kDefaultVoxelSizeM = 0.25;
 
 // Ray sampling from eye points in each cell: the sampled (aggressive) PVS and the verifier share it.
 struct SampleConfig {
@@ -49,6 +66,7 @@ struct VerifyConfig {
 struct BakeConfig {
     BakeMode mode = BakeMode::kSampled;
     RunConfig run;
+    ViewVolumeConfig view;
     CellConfig cells;
     SampledPvsConfig sampled;
     VerifyConfig verify;
@@ -71,6 +89,14 @@ void visit_options(Config& c, Visitor&& v) {
     constexpr double kInf = std::numeric_limits<double>::infinity();
     v(OptionSpec{"--threads", "run.threads", "threads", "worker threads, 0 = every core", 0, 4096},
       c.run.threads);
+    v(OptionSpec{"--voxel-size", "view.voxel_size_m", "m",
+                 "voxel edge for the view volume, 0 = automatic (0.25 m, coarser for huge worlds)", 0, 100},
+      c.view.voxel_size_m);
+    v(OptionSpec{"--max-voxels", "view.max_voxels", "voxels", "voxels the automatic voxel size may use", 1000, 1e10},
+      c.view.max_voxels);
+    v(OptionSpec{"--play-height", "view.play_height_m", "m",
+                 "eyes only up to this height above upward-facing floors, 0 = anywhere", 0, 1e4},
+      c.view.play_height_m);
     v(OptionSpec{"--cell-size", "cells.cell_size_m", "m", "edge of a grid cell", 0.01, 1e4},
       c.cells.cell_size_m);
     v(OptionSpec{"--eyes", "sampled.eyes_per_cell", "eyes", "sampled mode: eye points per cell", 1, 1e6},

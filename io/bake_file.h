@@ -63,6 +63,7 @@ struct BakeData {
     PvsSet pvs;               // cells.size() rows of objects.size() bits
     NamedValues figures;      // counts and figures of the bake
     NamedValues timings_s;    // seconds per stage
+    std::vector<glm::vec3> leak_path;  // view volume flood: seed to outside, when the level leaks
     VerificationRecord verification;
 };
 

@@ -2,6 +2,7 @@
 #include "pvs/bake.h"
 
 #include "cells/grid.h"
+#include "cells/view_volume.h"
 #include "core/error.h"
 #include "pvs/embree_scene.h"
 #include "pvs/ray_sampler.h"
@@ -47,8 +48,10 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
     bake.parameters = resolved_parameters(config);
     bake.objects = object_records(world);
 
-    // Until the view volume lands (cells/eyes.h), cells cover the world bounds.
-    bake.cells = build_uniform_grid(ctx, config.cells, world.bounds);
+    const ViewVolume view = build_view_volume(ctx, config.view, world);
+    bake.cells = build_uniform_grid(ctx, config.cells, view.view_bounds);
+    const uint64_t cells_dropped = clip_grid_to_view(ctx, bake.cells, view.view, view.eyes);
+    bake.leak_path = view.leak_path;
     RayScene scene(ctx, world, BuildQuality::kMedium, config.run.threads);
 
     SampledPvs sampled = bake_sampled_pvs(ctx, config.sampled, world, scene, bake.cells);
@@ -65,6 +68,18 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
         {"objects", double(world.objects.size())},
         {"triangles", double(world.triangles.size())},
         {"cells", double(bake.cells.size())},
+        {"cells_dropped_outside_view_volume", double(cells_dropped)},
+        {"cell_size_mean_m", double(config.cells.cell_size_m)},
+        {"cell_size_max_m", double(config.cells.cell_size_m)},
+        {"view_volume_m3", view.view_volume_m3},
+        {"view_eye_space_m3", view.eye_volume_m3},
+        {"world_bounds_m3", view.world_bounds_m3},
+        {"view_volume_share_of_bounds", view.view_volume_m3 / std::max(1e-9, view.world_bounds_m3)},
+        {"view_voxel_size_m", view.voxelized ? double(view.view.voxel_size_m) : 0.0},
+        {"view_flooded", view.flooded ? 1.0 : 0.0},
+        {"view_leaked", view.leaked ? 1.0 : 0.0},
+        {"view_leak_path_points", double(view.leak_path.size())},
+        {"view_seeds_used", double(view.seeds_used)},
         {"pvs_objects_mean", double(listed) / n_cells},
         {"pvs_objects_max", double(listed_max)},
         {"pvs_share_of_objects_mean", double(listed) / n_cells / std::max<double>(1.0, double(world.objects.size()))},

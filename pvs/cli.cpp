@@ -2,6 +2,7 @@
 // validation and the parameters stored in the bake.
 #include "pvs/cli.h"
 
+#include "cells/view_volume.h"
 #include "core/error.h"
 #include "io/atomic_file.h"
 #include "io/bake_file.h"
@@ -44,6 +45,27 @@ void bind_options(CLI::App& app, BakeConfig& config, std::initializer_list<std::
     });
 }
 
+// "1.5,2,-3" -> {1.5, 2, -3}; exactly `count` finite numbers or a bad-input error naming the option.
+std::vector<double> parse_numbers(const std::string& text, size_t count, const char* option) {
+    std::vector<double> out;
+    size_t at = 0;
+    while (at <= text.size()) {
+        const size_t comma = std::min(text.find(',', at), text.size());
+        const std::string item = text.substr(at, comma - at);
+        char* end = nullptr;
+        const double v = std::strtod(item.c_str(), &end);
+        if (item.empty() || end != item.c_str() + item.size() || !std::isfinite(v)) {
+            throw bad_input(fmt::format("{} {}: '{}' is not a number", option, text, item));
+        }
+        out.push_back(v);
+        at = comma + 1;
+    }
+    if (out.size() != count) {
+        throw bad_input(fmt::format("{} {}: wants {} comma-separated numbers, got {}", option, text, count, out.size()));
+    }
+    return out;
+}
+
 struct CommonOptions {
     bool quiet = false;
     bool verbose = false;
@@ -72,6 +94,12 @@ void write_report(const std::string& path, const BakeData& bake, const Context& 
     write_file_atomically(path, bake_report_json(bake, ctx.warnings()));
 }
 
+double figure_or(const NamedValues& values, const std::string& key, double fallback) {
+    for (const auto& [k, v] : values)
+        if (k == key) return v;
+    return fallback;
+}
+
 // bake WORLD -o OUT.h5
 int run_bake(Context& ctx, const BakeConfig& config, const std::string& world_path, const std::string& out_path,
              const std::string& report_path) {
@@ -85,10 +113,14 @@ int run_bake(Context& ctx, const BakeConfig& config, const std::string& world_pa
         ScopedTimer t(ctx, "write");
         write_bake_file(out_path, bake);
     }
+    if (!bake.leak_path.empty()) {
+        const std::string leak_file = out_path + ".leak.obj";
+        write_file_atomically(leak_file, leak_path_obj(bake.leak_path));
+        ctx.warn(fmt::format("the leak path is in {} (load it over the world in a viewer)", leak_file));
+    }
     write_report(report_path, bake, ctx);
     ctx.info(fmt::format("wrote {} ({}, {} cells, mean PVS {:.1f} of {} objects)", out_path, pvs_kind(bake),
-                         bake.cells.size(), bake.figures.size() > 3 ? bake.figures[3].second : 0.0,
-                         bake.objects.size()));
+                         bake.cells.size(), figure_or(bake.figures, "pvs_objects_mean", 0.0), bake.objects.size()));
     const bool misses = bake.verification.ran && !bake.verification.misses.empty();
     return misses && bake.conservative ? kExitMisses : kExitOk;
 }
@@ -109,12 +141,6 @@ int run_verify(Context& ctx, const BakeConfig& config, const std::string& world_
     if (write_back) write_bake_file(bake_path, bake);
     write_report(report_path, bake, ctx);
     return result.missed_pairs > 0 ? kExitMisses : kExitOk;
-}
-
-double figure_or(const NamedValues& values, const std::string& key, double fallback) {
-    for (const auto& [k, v] : values)
-        if (k == key) return v;
-    return fallback;
 }
 
 int run_info(const std::string& bake_path, bool json, std::ostream& out) {
@@ -223,7 +249,16 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
         ->check(CLI::IsMember({"sampled"}))
         ->capture_default_str();
     bake->add_flag("--no-verify", no_verify, "skip verification by ray sampling");
-    bind_options(*bake, config, {"run.", "cells.", "sampled.", "verify."});
+    std::vector<std::string> view_boxes, view_seeds;
+    bool no_world_seeds = false, no_world_boxes = false;
+    bake->add_option("--view-box", view_boxes,
+                     "a box where eyes can be: minx,miny,minz,maxx,maxy,maxz [m]; repeat for more")
+        ->type_name("BOX");
+    bake->add_option("--view-seed", view_seeds, "a point in the playable space: x,y,z [m]; repeat for more")
+        ->type_name("POINT");
+    bake->add_flag("--no-world-seeds", no_world_seeds, "ignore the world's pvs_view_seed nodes");
+    bake->add_flag("--no-world-boxes", no_world_boxes, "ignore the world's pvs_view_volume nodes");
+    bind_options(*bake, config, {"run.", "view.", "cells.", "sampled.", "verify."});
     add_common(*bake, common);
 
     CLI::App* verify = app.add_subcommand(
@@ -274,6 +309,19 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
     try {
         config.verify.enabled = !no_verify;
         if (bake->parsed()) {
+            for (const std::string& text : view_boxes) {
+                const std::vector<double> v = parse_numbers(text, 6, "--view-box");
+                config.view.boxes.push_back(Aabb::of(glm::vec3(v[0], v[1], v[2]), glm::vec3(v[3], v[4], v[5])));
+                if (config.view.boxes.back().is_empty()) {
+                    throw bad_input(fmt::format("--view-box {}: min must not exceed max", text));
+                }
+            }
+            for (const std::string& text : view_seeds) {
+                const std::vector<double> v = parse_numbers(text, 3, "--view-seed");
+                config.view.seeds.emplace_back(v[0], v[1], v[2]);
+            }
+            config.view.use_world_seeds = !no_world_seeds;
+            config.view.use_world_boxes = !no_world_boxes;
             validate(config);
             return run_bake(ctx, config, world_path, out_path, common.report_path);
         }

@@ -40,6 +40,9 @@ std::string bake_report_json(const BakeData& bake, const std::vector<std::string
     j["parameters"] = params;
     j["timings_s"] = values_json(bake.timings_s);
     j["figures"] = values_json(bake.figures);
+    nlohmann::ordered_json leak = nlohmann::ordered_json::array();
+    for (const glm::vec3& p : bake.leak_path) leak.push_back({p.x, p.y, p.z});
+    j["leak_path"] = leak;
     nlohmann::ordered_json ver;
     ver["ran"] = bake.verification.ran;
     if (bake.verification.ran) {

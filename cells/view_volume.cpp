@@ -1,0 +1,175 @@
+// The view volume: voxelize, flood from the seeds, intersect with boxes and the play height band, grow
+// by one voxel.
+#include "cells/view_volume.h"
+
+#include "core/error.h"
+#include "occluders/flood.h"
+#include "occluders/voxels.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+
+namespace pvs {
+
+namespace {
+
+VoxelMask to_mask(const VoxelGrid& grid, BitVolume&& bits) {
+    VoxelMask m;
+    m.origin = grid.origin;
+    m.voxel_size_m = grid.voxel_size_m;
+    m.dims = grid.dims;
+    m.bits = std::move(bits.words);
+    return m;
+}
+
+// Grows the set by one voxel along each axis in turn (x, then y, then z): the 26-neighbourhood.
+BitVolume dilate(const VoxelGrid& g, const BitVolume& in) {
+    BitVolume a = in, b;
+    const glm::ivec3 step(1, g.dims.x, g.dims.x * g.dims.y);
+    for (int axis = 0; axis < 3; ++axis) {
+        b = a;
+        const uint64_t stride = uint64_t(step[axis]);
+        for (int z = 0; z < g.dims.z; ++z)
+            for (int y = 0; y < g.dims.y; ++y)
+                for (int x = 0; x < g.dims.x; ++x) {
+                    const uint64_t i = g.index(x, y, z);
+                    if (!a.get(i)) continue;
+                    const int c = axis == 0 ? x : (axis == 1 ? y : z);
+                    if (c > 0) b.set(i - stride);
+                    if (c + 1 < g.dims[axis]) b.set(i + stride);
+                }
+        std::swap(a, b);
+    }
+    return a;
+}
+
+}  // namespace
+
+std::string leak_path_obj(const std::vector<glm::vec3>& path) {
+    std::string out = "# pvsbake leak path: from a view seed to outside the world (metres, +Y up)\n";
+    for (const glm::vec3& p : path) out += fmt::format("v {} {} {}\n", p.x, p.y, p.z);
+    if (path.size() >= 2) {
+        out += "l";
+        for (size_t i = 1; i <= path.size(); ++i) out += fmt::format(" {}", i);
+        out += "\n";
+    }
+    return out;
+}
+
+ViewVolume build_view_volume(Context& ctx, const ViewVolumeConfig& config, const World& world) {
+    ScopedTimer timer(ctx, "view_volume");
+    ViewVolume vv;
+    vv.world_bounds_m3 = world.bounds.volume();
+    std::vector<Aabb> boxes = config.boxes;
+    if (config.use_world_boxes) boxes.insert(boxes.end(), world.view_volume_boxes.begin(), world.view_volume_boxes.end());
+    std::vector<glm::vec3> seeds = config.seeds;
+    if (config.use_world_seeds) seeds.insert(seeds.end(), world.view_seeds.begin(), world.view_seeds.end());
+    const bool play = config.play_height_m > 0.0;
+    if (boxes.empty() && seeds.empty() && !play) {
+        ctx.warn("view volume: no view seeds, view boxes or play height: eyes may be anywhere in the world's "
+                 "bounds, so the bake is larger and slower than it needs to be (add pvs_view_seed nodes or "
+                 "--view-seed)");
+        vv.sources = {"world_bounds"};
+        vv.view_bounds = world.bounds;
+        vv.eye_volume_m3 = vv.view_volume_m3 = vv.world_bounds_m3;
+        return vv;
+    }
+    for (const Aabb& b : boxes) {
+        if (b.is_empty() || !is_finite(b.min) || !is_finite(b.max)) {
+            throw bad_input("view volume: a view box is empty or not finite (--view-box wants min x,y,z then max x,y,z)");
+        }
+    }
+    vv.voxelized = true;
+    const double size = config.voxel_size_m > 0.0
+                            ? config.voxel_size_m
+                            : default_voxel_size(world.bounds, kDefaultVoxelSizeM, config.max_voxels);
+    const VoxelGrid grid = make_voxel_grid(world.bounds, size, 2);
+    ctx.info(fmt::format("view volume: {} m voxels, {} x {} x {} = {:.1f} M voxels", grid.voxel_size_m, grid.dims.x,
+                         grid.dims.y, grid.dims.z, double(grid.count()) * 1e-6));
+    BitVolume touched, upward;
+    voxelize_opaque(ctx, world, grid, touched, play ? &upward : nullptr);
+
+    // Start from every free voxel, then intersect.
+    BitVolume eyes;
+    eyes.reset(grid.count());
+    for (size_t w = 0; w < eyes.words.size(); ++w) eyes.words[w] = ~touched.words[w];
+    const uint64_t tail = grid.count() % 64;
+    if (tail) eyes.words.back() &= (uint64_t(1) << tail) - 1;
+
+    if (!seeds.empty()) {
+        vv.sources.push_back("flood");
+        const FloodResult flood = flood_free_space(ctx, grid, touched, seeds);
+        vv.flooded = true;
+        vv.leaked = flood.leaked;
+        vv.leak_path = flood.leak_path;
+        vv.seeds_used = flood.seeds_used;
+        vv.seeds_moved = flood.seeds_moved;
+        vv.seeds_dropped = flood.seeds_dropped;
+        for (size_t w = 0; w < eyes.words.size(); ++w) eyes.words[w] &= flood.reached.words[w];
+        if (flood.seeds_used == 0) {
+            throw bad_input("view volume: none of the view seeds is in free space inside the world");
+        }
+        if (flood.leaked) {
+            const glm::vec3 a = flood.leak_path.front(), b = flood.leak_path.back();
+            ctx.warn(fmt::format("view volume: the level LEAKS: free space connects a view seed at ({:.2f}, {:.2f}, "
+                                 "{:.2f}) to outside the world at ({:.2f}, {:.2f}, {:.2f}) ({} turns); the view "
+                                 "volume includes the outside it reached",
+                                 a.x, a.y, a.z, b.x, b.y, b.z, flood.leak_path.size()));
+        }
+    }
+    if (!boxes.empty()) {
+        vv.sources.push_back("boxes");
+        BitVolume in_box;
+        in_box.reset(grid.count());
+        for (const Aabb& b : boxes) {
+            const glm::ivec3 lo = grid.voxel_of(b.min), hi = grid.voxel_of(b.max);
+            for (int z = lo.z; z <= hi.z; ++z)
+                for (int y = lo.y; y <= hi.y; ++y)
+                    for (int x = lo.x; x <= hi.x; ++x)
+                        if (b.contains(grid.voxel_center({x, y, z}))) in_box.set(grid.index(x, y, z));
+        }
+        for (size_t w = 0; w < eyes.words.size(); ++w) eyes.words[w] &= in_box.words[w];
+    }
+    if (play) {
+        vv.sources.push_back("play_height");
+        // Per column, walking up: an upward-facing voxel is a floor; any other touched voxel is solid in
+        // between; a free voxel is kept while it is within the play height above the last floor.
+        const int reach = int(std::floor(config.play_height_m / grid.voxel_size_m));
+        for (int z = 0; z < grid.dims.z; ++z)
+            for (int x = 0; x < grid.dims.x; ++x) {
+                int last_floor = -1 << 30;
+                for (int y = 0; y < grid.dims.y; ++y) {
+                    const uint64_t i = grid.index(x, y, z);
+                    if (upward.get(i)) {
+                        last_floor = y;
+                    } else if (touched.get(i)) {
+                        last_floor = -1 << 30;
+                    } else if (y - last_floor > reach) {
+                        eyes.clear(i);
+                    }
+                }
+            }
+    }
+    BitVolume view = dilate(grid, eyes);
+    const double voxel_m3 = double(grid.voxel_size_m) * grid.voxel_size_m * grid.voxel_size_m;
+    const uint64_t n_eyes = eyes.count(), n_view = view.count();
+    if (n_eyes == 0) {
+        throw bad_input("view volume: empty (the view boxes, seeds and play height leave no free space)");
+    }
+    vv.eye_volume_m3 = double(n_eyes) * voxel_m3;
+    vv.view_volume_m3 = double(n_view) * voxel_m3;
+    for (uint64_t i = 0; i < grid.count(); ++i) {
+        if (view.get(i)) vv.view_bounds.extend(grid.voxel_box(grid.coords(i)));
+    }
+    vv.eyes = to_mask(grid, std::move(eyes));
+    vv.view = to_mask(grid, std::move(view));
+    ctx.info(fmt::format("view volume ({}): {:.0f} m3 of eye space, {:.0f} m3 with the walls, {:.1f}% of the world's "
+                         "bounds ({:.0f} m3){}",
+                         fmt::join(vv.sources, " & "), vv.eye_volume_m3, vv.view_volume_m3,
+                         100.0 * vv.view_volume_m3 / std::max(1e-9, vv.world_bounds_m3), vv.world_bounds_m3,
+                         vv.leaked ? "; LEAKS" : (vv.flooded ? "; sealed" : "")));
+    return vv;
+}
+
+}  // namespace pvs

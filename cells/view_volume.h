@@ -1,0 +1,53 @@
+// pvsbake cells: the view volume, where a player's eye can be (ALGORITHMS.md sections 1 and 6).
+//
+// Sources, combined by INTERSECTION (each one only ever removes space):
+//   - explicit boxes: the world's pvs_view_volume nodes and --view-box;
+//   - reachable space: the flood of free voxels (no opaque triangle touches them) from the view seeds
+//     (the world's pvs_view_seed nodes and --view-seed); a flood that reaches the world's bounds LEAKS:
+//     reported with its path, and the bake carries on with all the flood reached;
+//   - play height: only space up to --play-height above an upward-facing opaque surface.
+// None given: the world bounds, with a warning (the bake is larger and slower than it needs to be).
+//
+// Conventions: voxels as in occluders/voxels.h. Two masks come out:
+//   eyes  - the free voxels left after the intersection: eye points are drawn here (never in a voxel an
+//           opaque triangle touches, so never inside solid);
+//   view  - eyes grown by one voxel (26 neighbours): the view region, reaching up to the walls, which the
+//           cells cover and where a lookup finds a cell. Conservative for eyes: a point a player can reach
+//           is in `view` whenever it is within one voxel of free reachable space.
+#pragma once
+
+#include "core/cell_set.h"
+#include "core/config.h"
+#include "core/context.h"
+#include "core/world.h"
+
+#include <string>
+#include <vector>
+
+namespace pvs {
+
+struct ViewVolume {
+    bool voxelized = false;  // false: no source given, the view volume is the world bounds
+    std::vector<std::string> sources;  // "boxes", "flood", "play_height", or "world_bounds"
+    VoxelMask eyes;
+    VoxelMask view;
+    Aabb view_bounds;        // bounds of `view` (or the world bounds)
+    double eye_volume_m3 = 0.0;
+    double view_volume_m3 = 0.0;
+    double world_bounds_m3 = 0.0;
+    // The flood, when seeds were given.
+    bool flooded = false;
+    bool leaked = false;
+    std::vector<glm::vec3> leak_path;
+    uint32_t seeds_used = 0;
+    uint32_t seeds_moved = 0;
+    uint32_t seeds_dropped = 0;
+};
+
+ViewVolume build_view_volume(Context& ctx, const ViewVolumeConfig& config, const World& world);
+
+// The leak path as a Wavefront OBJ polyline ("v x y z" lines and one "l 1 2 ..."), which VTK, Blender and
+// most viewers load over the world.
+std::string leak_path_obj(const std::vector<glm::vec3>& path);
+
+}  // namespace pvs
