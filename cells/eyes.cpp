@@ -31,11 +31,26 @@ void voxels_in(const VoxelMask& mask, const Aabb& box, std::vector<uint64_t>& ou
 
 }  // namespace
 
-void sample_eye_points(const CellSet& cells, uint32_t cell, uint32_t count, uint64_t seed,
-                       std::vector<glm::vec3>& out) {
+bool mask_meets_box(const VoxelMask& mask, const Aabb& box) {
+    const float s = mask.voxel_size_m;
+    glm::ivec3 lo, hi;
+    for (int a = 0; a < 3; ++a) {
+        lo[a] = std::max(0, int(std::floor((box.min[a] - mask.origin[a]) / s)));
+        hi[a] = std::min(mask.dims[a] - 1, int(std::ceil((box.max[a] - mask.origin[a]) / s)) - 1);
+    }
+    for (int z = lo.z; z <= hi.z; ++z)
+        for (int y = lo.y; y <= hi.y; ++y)
+            for (int x = lo.x; x <= hi.x; ++x)
+                if (mask.get(uint64_t(x) + uint64_t(mask.dims.x) * (uint64_t(y) + uint64_t(mask.dims.y) * uint64_t(z)))) {
+                    return true;
+                }
+    return false;
+}
+
+void sample_eye_points_in(const CellSet& cells, const Aabb& region, uint64_t stream, uint32_t count, uint64_t seed,
+                          std::vector<glm::vec3>& out) {
     if (count == 0) return;
-    const Aabb region = cells.cells[cell].bounds;
-    Rng rng(seed, 0x4559450000000000ULL ^ cell);
+    Rng rng(seed, 0x4559450000000000ULL ^ stream);
     std::vector<uint64_t> voxels;
     const VoxelMask* mask = &cells.eyes;
     voxels_in(cells.eyes, region, voxels);

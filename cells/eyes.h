@@ -19,9 +19,19 @@
 
 namespace pvs {
 
+// Appends `count` stratified random eye points of `box` (a cell, or an octree node being considered)
+// under the view volume masks of `cells`; `stream` is a number unique to the box.
+void sample_eye_points_in(const CellSet& cells, const Aabb& box, uint64_t stream, uint32_t count, uint64_t seed,
+                          std::vector<glm::vec3>& out);
+
 // Appends `count` stratified random eye points of the cell to `out`.
-void sample_eye_points(const CellSet& cells, uint32_t cell, uint32_t count, uint64_t seed,
-                       std::vector<glm::vec3>& out);
+inline void sample_eye_points(const CellSet& cells, uint32_t cell, uint32_t count, uint64_t seed,
+                              std::vector<glm::vec3>& out) {
+    sample_eye_points_in(cells, cells.cells[cell].bounds, cell, count, seed, out);
+}
+
+// Does any voxel of `mask` meet the box's open interior? (A voxel only touching a face does not count.)
+bool mask_meets_box(const VoxelMask& mask, const Aabb& box);
 
 // Appends `count` directions stratified over the whole sphere (equal-area strata in (cos theta, phi),
 // one jittered direction per stratum). Unit length.

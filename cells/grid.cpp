@@ -1,6 +1,7 @@
 // Uniform grid of view cells over a region.
 #include "cells/grid.h"
 
+#include "cells/eyes.h"
 #include "core/error.h"
 
 #include <fmt/format.h>
@@ -67,18 +68,7 @@ uint64_t clip_grid_to_view(Context& ctx, CellSet& cells, const VoxelMask& view, 
     for (size_t g = 0; g < cells.grid_to_cell.size(); ++g) {
         const int32_t c = cells.grid_to_cell[g];
         if (c < 0) continue;
-        const Aabb& box = cells.cells[size_t(c)].bounds;
-        // Voxels whose open interior meets the cell's open interior.
-        glm::ivec3 lo, hi;
-        for (int a = 0; a < 3; ++a) {
-            lo[a] = std::max(0, int(std::floor((box.min[a] - view.origin[a]) / s)));
-            hi[a] = std::min(view.dims[a] - 1, int(std::ceil((box.max[a] - view.origin[a]) / s)) - 1);
-        }
-        bool any = false;
-        for (int z = lo.z; z <= hi.z && !any; ++z)
-            for (int y = lo.y; y <= hi.y && !any; ++y)
-                for (int x = lo.x; x <= hi.x && !any; ++x)
-                    any = view.get(uint64_t(x) + uint64_t(view.dims.x) * (uint64_t(y) + uint64_t(view.dims.y) * uint64_t(z)));
+        const bool any = mask_meets_box(view, cells.cells[size_t(c)].bounds);
         if (!any) {
             cells.grid_to_cell[g] = -1;
             ++dropped;

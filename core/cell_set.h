@@ -50,7 +50,16 @@ struct VoxelMask {
 
 struct Cell {
     Aabb bounds;
-    int32_t parent = -1;  // octree parent (index into CellSet::nodes), -1 for grid cells
+    int32_t parent = -1;  // octree parent (index into CellSet::nodes), -1 for grid cells and roots
+};
+
+// An octree node. Children are 8 consecutive nodes from first_child, octant bits x = 1, y = 2, z = 4
+// (bit set: the child's min corner is the parent's centre on that axis).
+struct OctreeNode {
+    Aabb bounds;
+    int32_t first_child = -1;  // -1: a leaf
+    int32_t cell = -1;         // a leaf's cell; -1 when the leaf holds no view volume
+    int32_t parent = -1;
 };
 
 struct CellSet {
@@ -59,8 +68,10 @@ struct CellSet {
     glm::vec3 origin{0.0f};      // grid min corner, metres
     float cell_size_m = 0.0f;    // grid cell edge, metres
     glm::ivec3 dims{0};          // grid cells along x, y, z
-    std::vector<int32_t> grid_to_cell;  // dims.x*dims.y*dims.z entries; -1 = no cell there
+    std::vector<int32_t> grid_to_cell;  // dims.x*dims.y*dims.z entries; -1 = no cell there. For an
+                                        // octree: the root grid, each entry a root node (or -1)
     std::vector<Cell> cells;
+    std::vector<OctreeNode> nodes;      // octree only
     // The view volume (cells/view_volume.h), when one was built: `view` is where a lookup finds a cell
     // (the view region, up to the walls), `eyes` where eye points are drawn (free space only).
     VoxelMask view;
@@ -68,9 +79,10 @@ struct CellSet {
 
     size_t size() const { return cells.size(); }
 
-    // The cell holding p, or -1 when p is outside every cell or outside the view volume. O(1).
+    // The cell holding p, or -1 when p is outside every cell or outside the view volume. O(1) on a grid,
+    // O(depth) on an octree.
     int32_t find(glm::vec3 p) const {
-        if (kind != Kind::kGrid || cell_size_m <= 0.0f || !is_finite(p)) return -1;
+        if (cell_size_m <= 0.0f || !is_finite(p)) return -1;
         if (!view.empty() && !view.contains(p)) return -1;
         int idx[3];
         for (int a = 0; a < 3; ++a) {
@@ -79,7 +91,13 @@ struct CellSet {
             idx[a] = std::min(int(std::floor(rel)), dims[a] - 1);
         }
         const size_t g = size_t(idx[0]) + size_t(dims.x) * (size_t(idx[1]) + size_t(dims.y) * size_t(idx[2]));
-        return grid_to_cell[g];
+        if (kind == Kind::kGrid) return grid_to_cell[g];
+        int32_t n = grid_to_cell[g];
+        while (n >= 0 && nodes[size_t(n)].first_child >= 0) {
+            const glm::vec3 c = nodes[size_t(n)].bounds.center();
+            n = nodes[size_t(n)].first_child + (p.x >= c.x ? 1 : 0) + (p.y >= c.y ? 2 : 0) + (p.z >= c.z ? 4 : 0);
+        }
+        return n >= 0 ? nodes[size_t(n)].cell : -1;
     }
 };
 

@@ -17,7 +17,13 @@ const char* to_string(BakeMode mode) {
     return "?";
 }
 
+const char* to_string(CellKind kind) { return kind == CellKind::kOctree ? "octree" : "grid"; }
+
 void validate(const BakeConfig& config) {
+    if (config.cells.root_cell_size_m < config.cells.min_cell_size_m) {
+        throw bad_input(fmt::format("option --root-cell-size ({} m) must not be below --min-cell-size ({} m)",
+                                    config.cells.root_cell_size_m, config.cells.min_cell_size_m));
+    }
     BakeConfig copy = config;
     visit_options(copy, [](const OptionSpec& spec, auto& field) {
         using T = std::decay_t<decltype(field)>;
@@ -34,6 +40,7 @@ void validate(const BakeConfig& config) {
 std::vector<std::pair<std::string, std::string>> resolved_parameters(const BakeConfig& config) {
     std::vector<std::pair<std::string, std::string>> out;
     out.emplace_back("mode", to_string(config.mode));
+    out.emplace_back("cells.kind", to_string(config.cells.kind));
     out.emplace_back("verify.enabled", config.verify.enabled ? "true" : "false");
     out.emplace_back("view.use_world_seeds", config.view.use_world_seeds ? "true" : "false");
     out.emplace_back("view.use_world_boxes", config.view.use_world_boxes ? "true" : "false");

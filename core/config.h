@@ -23,9 +23,20 @@ struct RunConfig {
     int threads = 0;  // [Limit: >= 0] worker threads; 0 = every core
 };
 
+enum class CellKind { kGrid, kOctree };
+
 struct CellConfig {
-    double cell_size_m = 2.0;  // [Limit: > 0] [Units: m] edge of a uniform grid cell
+    CellKind kind = CellKind::kGrid;
+    double cell_size_m = 2.0;        // [Limit: > 0] [Units: m] grid: edge of a cell
+    double min_cell_size_m = 1.0;    // [Limit: > 0] [Units: m] octree: never split below this edge
+    double root_cell_size_m = 8.0;   // [Limit: >= min] [Units: m] octree: edge of the root cells (rounded to
+                                     // min_cell_size_m times a power of two)
+    double split_threshold = 0.2;    // [Limit: 0..1] octree: split when a child's PVS differs from its parent's
+                                     // by more than this share of the parent's PVS size
+    uint32_t max_cells = 0;          // [Limit: >= 0] octree: stop splitting at this many cells; 0 = no limit
 };
+
+const char* to_string(CellKind kind);
 
 // Where eyes can be (cells/view_volume.h): explicit boxes, the flood of free space from view seeds, and a
 // play height above floors, combined by intersection; none given = the world bounds.
@@ -97,8 +108,20 @@ void visit_options(Config& c, Visitor&& v) {
     v(OptionSpec{"--play-height", "view.play_height_m", "m",
                  "eyes only up to this height above upward-facing floors, 0 = anywhere", 0, 1e4},
       c.view.play_height_m);
-    v(OptionSpec{"--cell-size", "cells.cell_size_m", "m", "edge of a grid cell", 0.01, 1e4},
+    v(OptionSpec{"--cell-size", "cells.cell_size_m", "m", "grid: edge of a cell", 0.01, 1e4},
       c.cells.cell_size_m);
+    v(OptionSpec{"--min-cell-size", "cells.min_cell_size_m", "m", "octree: never split below this cell edge", 0.01,
+                 1e4},
+      c.cells.min_cell_size_m);
+    v(OptionSpec{"--root-cell-size", "cells.root_cell_size_m", "m",
+                 "octree: edge of the root cells (min cell size times a power of two)", 0.01, 1e5},
+      c.cells.root_cell_size_m);
+    v(OptionSpec{"--split-threshold", "cells.split_threshold", "share",
+                 "octree: split where a child's PVS differs from its parent's by more than this share", 0, 1},
+      c.cells.split_threshold);
+    v(OptionSpec{"--max-cells", "cells.max_cells", "cells", "octree: stop splitting at this many cells, 0 = no limit",
+                 0, 1e9},
+      c.cells.max_cells);
     v(OptionSpec{"--eyes", "sampled.eyes_per_cell", "eyes", "sampled mode: eye points per cell", 1, 1e6},
       c.sampled.rays.eyes_per_cell);
     v(OptionSpec{"--rays", "sampled.rays_per_eye", "rays", "sampled mode: rays per eye point", 1, 1e8},

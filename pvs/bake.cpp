@@ -2,6 +2,7 @@
 #include "pvs/bake.h"
 
 #include "cells/grid.h"
+#include "cells/octree.h"
 #include "cells/view_volume.h"
 #include "core/error.h"
 #include "pvs/embree_scene.h"
@@ -10,6 +11,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <chrono>
 
 #ifndef PVSBAKE_VERSION
 #define PVSBAKE_VERSION "0.0.0"
@@ -49,13 +51,42 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
     bake.objects = object_records(world);
 
     const ViewVolume view = build_view_volume(ctx, config.view, world);
-    bake.cells = build_uniform_grid(ctx, config.cells, view.view_bounds);
-    const uint64_t cells_dropped = clip_grid_to_view(ctx, bake.cells, view.view, view.eyes);
-    bake.leak_path = view.leak_path;
     RayScene scene(ctx, world, BuildQuality::kMedium, config.run.threads);
-
-    SampledPvs sampled = bake_sampled_pvs(ctx, config.sampled, world, scene, bake.cells);
+    bake.leak_path = view.leak_path;
+    uint64_t cells_dropped = 0;
+    OctreeStats octree;
+    SampledPvs sampled;
+    if (config.cells.kind == CellKind::kGrid) {
+        bake.cells = build_uniform_grid(ctx, config.cells, view.view_bounds);
+        cells_dropped = clip_grid_to_view(ctx, bake.cells, view.view, view.eyes);
+        sampled = bake_sampled_pvs(ctx, config.sampled, world, scene, bake.cells);
+    } else {
+        // The octree asks the sampled mode for the PVS of every box it considers; the leaves' rows are
+        // the bake's rows. The ray budget does not apply: boxes are not known in advance.
+        ScopedTimer t(ctx, "sampled_pvs");
+        const auto start = std::chrono::steady_clock::now();
+        CellSet masks;
+        masks.view = view.view;
+        masks.eyes = view.eyes;
+        sampled.rays_per_eye = config.sampled.rays.rays_per_eye;
+        const RegionPvsOracle oracle = [&](const std::vector<Aabb>& boxes, const std::vector<uint64_t>& streams,
+                                           PvsSet& rows) {
+            sample_box_rows(config.sampled, world, scene, masks, boxes, streams, sampled.rays_per_eye, rows,
+                            sampled.guard_band_added, &ctx);
+            sampled.rays += uint64_t(boxes.size()) * config.sampled.rays.eyes_per_cell * sampled.rays_per_eye;
+        };
+        bake.cells = build_octree(ctx, config.cells, masks, view.view_bounds, uint32_t(world.objects.size()), oracle,
+                                  sampled.pvs, octree);
+        add_always_listed(world, bake.cells, sampled.pvs);
+        sampled.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    }
     bake.pvs = std::move(sampled.pvs);
+    double edge_sum = 0.0, edge_max = 0.0;
+    for (const Cell& c : bake.cells.cells) {
+        edge_sum += c.bounds.size().x;
+        edge_max = std::max(edge_max, double(c.bounds.size().x));
+    }
+    const double edge_mean = bake.cells.size() ? edge_sum / double(bake.cells.size()) : 0.0;
 
     uint64_t listed = 0, listed_max = 0;
     for (uint32_t c = 0; c < bake.cells.size(); ++c) {
@@ -69,8 +100,13 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
         {"triangles", double(world.triangles.size())},
         {"cells", double(bake.cells.size())},
         {"cells_dropped_outside_view_volume", double(cells_dropped)},
-        {"cell_size_mean_m", double(config.cells.cell_size_m)},
-        {"cell_size_max_m", double(config.cells.cell_size_m)},
+        {"cells_octree", config.cells.kind == CellKind::kOctree ? 1.0 : 0.0},
+        {"cell_size_mean_m", edge_mean},
+        {"cell_size_max_m", edge_max},
+        {"octree_splits_by_visibility", double(octree.splits)},
+        {"octree_merged_back", double(octree.merged)},
+        {"octree_boxes_evaluated", double(octree.evaluated)},
+        {"octree_depth", double(octree.depth)},
         {"view_volume_m3", view.view_volume_m3},
         {"view_eye_space_m3", view.eye_volume_m3},
         {"world_bounds_m3", view.world_bounds_m3},

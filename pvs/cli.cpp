@@ -249,6 +249,12 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
         ->check(CLI::IsMember({"sampled"}))
         ->capture_default_str();
     bake->add_flag("--no-verify", no_verify, "skip verification by ray sampling");
+    std::string cells_kind = "grid";
+    bake->add_option("--cells", cells_kind,
+                     "grid: uniform cells of --cell-size; octree: split where visibility changes, down to "
+                     "--min-cell-size")
+        ->check(CLI::IsMember({"grid", "octree"}))
+        ->capture_default_str();
     std::vector<std::string> view_boxes, view_seeds;
     bool no_world_seeds = false, no_world_boxes = false;
     bake->add_option("--view-box", view_boxes,
@@ -320,6 +326,7 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
                 const std::vector<double> v = parse_numbers(text, 3, "--view-seed");
                 config.view.seeds.emplace_back(v[0], v[1], v[2]);
             }
+            config.cells.kind = cells_kind == "octree" ? CellKind::kOctree : CellKind::kGrid;
             config.view.use_world_seeds = !no_world_seeds;
             config.view.use_world_boxes = !no_world_boxes;
             validate(config);

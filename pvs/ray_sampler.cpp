@@ -22,15 +22,15 @@ uint32_t rays_per_eye_within_budget(const SampleConfig& config, size_t cells) {
     return std::max(rays, std::min(config.rays_per_eye, kMinRaysPerEye));
 }
 
-void trace_cell(const RayScene& scene, const CellSet& cells, uint32_t cell, const SampleConfig& config,
-                uint32_t rays_per_eye, CellRays& out) {
+void trace_region(const RayScene& scene, const CellSet& cells, const Aabb& box, uint64_t stream_id,
+                  const SampleConfig& config, uint32_t rays_per_eye, CellRays& out) {
     out.rays_per_eye = rays_per_eye;
     out.eyes.clear();
     out.directions.clear();
     out.touches.clear();
-    sample_eye_points(cells, cell, config.eyes_per_cell, config.seed, out.eyes);
+    sample_eye_points_in(cells, box, stream_id, config.eyes_per_cell, config.seed, out.eyes);
     for (uint32_t e = 0; e < out.eyes.size(); ++e) {
-        const uint64_t stream = (uint64_t(cell) << 20) ^ e;
+        const uint64_t stream = (stream_id << 20) ^ e;
         sample_sphere_directions(rays_per_eye, config.seed, stream, out.directions);
         const size_t first = out.touches.size();
         scene.trace(out.eyes[e], out.directions.data() + size_t(e) * rays_per_eye, rays_per_eye, out.touches);
@@ -191,6 +191,25 @@ uint32_t add_guard_band(const World& world, const CellRays& rays, float guard_ba
     return added;
 }
 
+void sample_box_rows(const SampledPvsConfig& config, const World& world, const RayScene& scene, const CellSet& masks,
+                     const std::vector<Aabb>& boxes, const std::vector<uint64_t>& streams, uint32_t rays_per_eye,
+                     PvsSet& rows, uint64_t& guard_band_added, Context* progress) {
+    const float guard_band_rad = float(config.guard_band_deg) * kPi / 180.0f;
+    uint64_t added_total = 0;
+#pragma omp parallel reduction(+ : added_total)
+    {
+        CellRays rays;
+#pragma omp for schedule(dynamic, 4)
+        for (int64_t b = 0; b < int64_t(boxes.size()); ++b) {
+            trace_region(scene, masks, boxes[size_t(b)], streams[size_t(b)], config.rays, rays_per_eye, rays);
+            for (const RayTouch& t : rays.touches) rows.set(uint32_t(b), t.object);
+            if (guard_band_rad > 0.0f) added_total += add_guard_band(world, rays, guard_band_rad, rows.row(uint32_t(b)));
+            if (progress) progress->progress_advance();
+        }
+    }
+    guard_band_added += added_total;
+}
+
 SampledPvs bake_sampled_pvs(Context& ctx, const SampledPvsConfig& config, const World& world,
                             const RayScene& scene, const CellSet& cells) {
     ScopedTimer timer(ctx, "sampled_pvs");
@@ -202,27 +221,19 @@ SampledPvs bake_sampled_pvs(Context& ctx, const SampledPvsConfig& config, const 
     ctx.info(fmt::format("sampled PVS (aggressive): {} cells x {} eyes x {} rays = {:.1f} M rays", cells.size(),
                          config.rays.eyes_per_cell, result.rays_per_eye,
                          double(rays_per_cell) * double(cells.size()) * 1e-6));
-    const float guard_band_rad = float(config.guard_band_deg) * kPi / 180.0f;
-    if (guard_band_rad > 0.0f) {
+    if (config.guard_band_deg > 0.0) {
         ctx.info(fmt::format("sampled PVS: guard band {} degrees (lists objects rays passed near)",
                              config.guard_band_deg));
     }
-    ctx.progress_begin("sampled PVS", cells.size(), "cells");
-#pragma omp parallel
-    {
-        CellRays rays;
-#pragma omp for schedule(dynamic, 4)
-        for (int64_t c = 0; c < int64_t(cells.size()); ++c) {
-            trace_cell(scene, cells, uint32_t(c), config.rays, result.rays_per_eye, rays);
-            for (const RayTouch& t : rays.touches) result.pvs.set(uint32_t(c), t.object);
-            if (guard_band_rad > 0.0f) {
-                const uint32_t added = add_guard_band(world, rays, guard_band_rad, result.pvs.row(uint32_t(c)));
-#pragma omp atomic
-                result.guard_band_added += added;
-            }
-            ctx.progress_advance();
-        }
+    std::vector<Aabb> boxes;
+    std::vector<uint64_t> streams;
+    for (uint32_t c = 0; c < cells.size(); ++c) {
+        boxes.push_back(cells.cells[c].bounds);
+        streams.push_back(c);
     }
+    ctx.progress_begin("sampled PVS", cells.size(), "cells");
+    sample_box_rows(config, world, scene, cells, boxes, streams, result.rays_per_eye, result.pvs,
+                    result.guard_band_added, &ctx);
     ctx.progress_end();
     add_always_listed(world, cells, result.pvs);
     result.rays = rays_per_cell * cells.size();

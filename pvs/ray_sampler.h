@@ -31,9 +31,15 @@ struct CellRays {
 constexpr uint32_t kMinRaysPerEye = 16;
 uint32_t rays_per_eye_within_budget(const SampleConfig& config, size_t cells);
 
-// Draws the cell's eye points and directions and traces them.
-void trace_cell(const RayScene& scene, const CellSet& cells, uint32_t cell, const SampleConfig& config,
-                uint32_t rays_per_eye, CellRays& out);
+// Draws the eye points of `box` (under the view volume masks of `cells`) and their directions, and traces
+// them; `stream` is a number unique to the box (the cell index for cells).
+void trace_region(const RayScene& scene, const CellSet& cells, const Aabb& box, uint64_t stream,
+                  const SampleConfig& config, uint32_t rays_per_eye, CellRays& out);
+
+inline void trace_cell(const RayScene& scene, const CellSet& cells, uint32_t cell, const SampleConfig& config,
+                       uint32_t rays_per_eye, CellRays& out) {
+    trace_region(scene, cells, cells.cells[cell].bounds, cell, config, rays_per_eye, out);
+}
 
 // Objects every PVS lists whatever the rays say: those marked pvs_always_visible, and those whose
 // bounds meet the cell's eye region (an eye may stand inside them).
@@ -53,6 +59,12 @@ struct SampledPvs {
     uint32_t rays_per_eye = 0;
     double seconds = 0.0;
 };
+
+// The sampled rows of arbitrary boxes (cells, or octree nodes being considered): every object a ray from
+// the box touched, plus the guard band. rows: boxes.size() rows. Parallel over boxes.
+void sample_box_rows(const SampledPvsConfig& config, const World& world, const RayScene& scene, const CellSet& masks,
+                     const std::vector<Aabb>& boxes, const std::vector<uint64_t>& streams, uint32_t rays_per_eye,
+                     PvsSet& rows, uint64_t& guard_band_added, Context* progress);
 
 // The sampled (aggressive) PVS: for every cell, every object a ray touched, plus add_always_listed().
 SampledPvs bake_sampled_pvs(Context& ctx, const SampledPvsConfig& config, const World& world,
