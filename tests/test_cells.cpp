@@ -14,7 +14,7 @@ Context quiet_context() { return Context(Context::Options{LogLevel::kError, true
 
 TEST(Grid, CoversTheRegionWithWholeCells) {
     Context ctx = quiet_context();
-    const CellSet g = build_uniform_grid(ctx, CellConfig{2.0}, Aabb::of({0, 0, 0}, {5, 2, 4}));
+    const CellSet g = build_uniform_grid(ctx, CellConfig{CellKind::kGrid, 2.0}, Aabb::of({0, 0, 0}, {5, 2, 4}));
     EXPECT_EQ(g.dims, glm::ivec3(3, 1, 2));
     ASSERT_EQ(g.size(), 6u);
     EXPECT_EQ(g.cells[0].bounds, Aabb::of({0, 0, 0}, {2, 2, 2}));
@@ -24,7 +24,7 @@ TEST(Grid, CoversTheRegionWithWholeCells) {
 
 TEST(Grid, LookupAtBordersAndCorners) {
     Context ctx = quiet_context();
-    const CellSet g = build_uniform_grid(ctx, CellConfig{1.0}, Aabb::of({-2, 0, 0}, {2, 1, 2}));
+    const CellSet g = build_uniform_grid(ctx, CellConfig{CellKind::kGrid, 1.0}, Aabb::of({-2, 0, 0}, {2, 1, 2}));
     ASSERT_EQ(g.dims, glm::ivec3(4, 1, 2));
     EXPECT_EQ(g.find({-2, 0, 0}), 0);          // the min corner
     EXPECT_EQ(g.find({-1.5f, 0.5f, 0.5f}), 0);
@@ -40,7 +40,7 @@ TEST(Grid, LookupAtBordersAndCorners) {
 TEST(Grid, RefusesAGridTooLargeToHold) {
     Context ctx = quiet_context();
     try {
-        build_uniform_grid(ctx, CellConfig{0.01}, Aabb::of({0, 0, 0}, {1000, 1000, 1000}));
+        build_uniform_grid(ctx, CellConfig{CellKind::kGrid, 0.01}, Aabb::of({0, 0, 0}, {1000, 1000, 1000}));
         FAIL() << "expected an error";
     } catch (const Error& e) {
         EXPECT_EQ(e.kind(), ErrorKind::kBadInput);
@@ -50,7 +50,7 @@ TEST(Grid, RefusesAGridTooLargeToHold) {
 
 TEST(Eyes, StratifiedInsideTheCellAndDeterministic) {
     Context ctx = quiet_context();
-    const CellSet g = build_uniform_grid(ctx, CellConfig{2.0}, Aabb::of({0, 0, 0}, {4, 2, 2}));
+    const CellSet g = build_uniform_grid(ctx, CellConfig{CellKind::kGrid, 2.0}, Aabb::of({0, 0, 0}, {4, 2, 2}));
     std::vector<glm::vec3> a, b, other;
     sample_eye_points(g, 1, 27, 42, a);
     sample_eye_points(g, 1, 27, 42, b);

@@ -134,7 +134,7 @@ TEST(ViewVolume, GridIsClippedAndEyesStayInFreeReachableSpace) {
     Context ctx = quiet_context();
     const World w = two_rooms(false, false);  // room B sealed off: it holds no cell
     const ViewVolume vv = build_view_volume(ctx, flood_from({{3, 1.5f, 3}}), w);
-    CellSet cells = build_uniform_grid(ctx, CellConfig{1.0}, vv.view_bounds);
+    CellSet cells = build_uniform_grid(ctx, CellConfig{CellKind::kGrid, 1.0}, vv.view_bounds);
     clip_grid_to_view(ctx, cells, vv.view, vv.eyes);
     EXPECT_LE(cells.size(), 7u * 4u * 7u);
     for (const Cell& c : cells.cells) EXPECT_LT(c.bounds.min.x, 6.3f);
