@@ -455,18 +455,39 @@ TEST(BakeFile, GridWithDroppedCellsStillFindsCells) {
 TEST(BakeFile, OctreeCellsWithParents) {
     test::TempDir dir;
     BakeData bake = make_bake(10, {0, 0, 0}, 0, 0, 2);
-    bake.cells.kind = CellSet::Kind::kOctree;
-    for (int i = 0; i < 9; ++i) {
-        bake.cells.cells.push_back(
-            Cell{Aabb::of(glm::vec3(float(i)), glm::vec3(float(i + 1))), i == 0 ? -1 : (i - 1) / 8});
+    // One root grid cell holding node 0, split into eight leaves (nodes 1..8); the last leaf is empty.
+    CellSet& cells = bake.cells;
+    cells.kind = CellSet::Kind::kOctree;
+    cells.origin = glm::vec3(0.0f);
+    cells.cell_size_m = 2.0f;
+    cells.dims = glm::ivec3(1);
+    cells.grid_to_cell = {0};
+    cells.cells.clear();
+    cells.nodes.push_back(OctreeNode{Aabb::of(glm::vec3(0.0f), glm::vec3(2.0f)), 1, -1, -1});
+    for (int o = 0; o < 8; ++o) {
+        const glm::vec3 lo(o & 1 ? 1.0f : 0.0f, o & 2 ? 1.0f : 0.0f, o & 4 ? 1.0f : 0.0f);
+        cells.nodes.push_back(OctreeNode{Aabb::of(lo, lo + 1.0f), -1, o < 7 ? o : -1, 0});
+        if (o < 7) cells.cells.push_back(Cell{Aabb::of(lo, lo + 1.0f), 0});
     }
-    bake.pvs = PvsSet::make(9, 10);
+    bake.pvs = PvsSet::make(7, 10);
     bake.pvs.set(3, 9);
-    bake.verification.cell_sampled_visible.assign(9, 1);
+    bake.verification.cell_sampled_visible.assign(7, 1);
     const std::string path = dir.file("octree.h5");
     write_bake_file(path, bake);
-    expect_same(bake, read_bake_file(path));
+    const BakeData back = read_bake_file(path);
+    expect_same(bake, back);
     EXPECT_EQ(string_attr(path, "/cells", "kind"), "octree");
+    ASSERT_EQ(back.cells.nodes.size(), 9u);
+    for (size_t i = 0; i < 9; ++i) {
+        EXPECT_EQ(back.cells.nodes[i].bounds, cells.nodes[i].bounds);
+        EXPECT_EQ(back.cells.nodes[i].first_child, cells.nodes[i].first_child);
+        EXPECT_EQ(back.cells.nodes[i].cell, cells.nodes[i].cell);
+        EXPECT_EQ(back.cells.nodes[i].parent, cells.nodes[i].parent);
+    }
+    // Lookups descend the stored tree.
+    EXPECT_EQ(back.cells.find({0.5f, 0.5f, 0.5f}), 0);
+    EXPECT_EQ(back.cells.find({1.5f, 0.5f, 1.5f}), 5);
+    EXPECT_EQ(back.cells.find({1.5f, 1.5f, 1.5f}), -1);  // the empty leaf
 }
 
 TEST(BakeFile, VoxelMasksAroundByteAndWordEdges) {

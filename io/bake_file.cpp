@@ -1,0 +1,1317 @@
+// pvsbake io: writes and reads the HDF5 bake file, format 1.0 (layout in docs/FORMAT.md), with the HDF5 C
+// API only (the runtime loader must depend on libhdf5 alone). The writer dedupes PVS rows, writes to an
+// AtomicOutput temporary file and commits it once the file is fully closed; the reader validates every
+// shape and index before it builds a BakeData, and turns every failure into a pvs::Error naming the file.
+#include "io/bake_file.h"
+
+#include "core/error.h"
+#include "io/atomic_file.h"
+
+#include <fmt/format.h>
+#include <hdf5.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstddef>
+#include <cstring>
+#include <filesystem>
+#include <new>
+#include <stdexcept>
+#include <unordered_map>
+#include <unordered_set>
+#include <utility>
+
+#include <fcntl.h>
+#include <unistd.h>
+
+namespace pvs {
+namespace {
+
+constexpr const char* kFormatName = "pvsbake";
+constexpr const char* kConservativeNote = "conservative";
+constexpr const char* kAggressiveNote = "aggressive (sampled: may miss visible objects)";
+// Chunk size for the large datasets (FACTS.md: keep chunks at 32-128 KiB; one random row read inflates a
+// whole chunk). Level 6 was measured against level 1 on a 20,000 x 3,000 PVS: see docs/FORMAT.md.
+constexpr size_t kChunkBytes = 64 * 1024;
+constexpr unsigned kGzipLevel = 6;
+constexpr const char* kBoundsColumns = "min_x, min_y, min_z, max_x, max_y, max_z";
+
+// ---------------------------------------------------------------------------------------------------------
+// HDF5 plumbing: handles, error messages, quiet error stack.
+
+// Owns one HDF5 identifier and closes it with the matching H5?close.
+class Handle {
+public:
+    using Closer = herr_t (*)(hid_t);
+    Handle() = default;
+    Handle(hid_t id, Closer closer) : id_(id), closer_(closer) {}
+    Handle(Handle&& o) noexcept : id_(std::exchange(o.id_, H5I_INVALID_HID)), closer_(o.closer_) {}
+    Handle& operator=(Handle&& o) noexcept {
+        if (this != &o) {
+            reset();
+            id_ = std::exchange(o.id_, H5I_INVALID_HID);
+            closer_ = o.closer_;
+        }
+        return *this;
+    }
+    Handle(const Handle&) = delete;
+    Handle& operator=(const Handle&) = delete;
+    ~Handle() { reset(); }
+
+    hid_t get() const { return id_; }
+    // Closes now and reports the result (a file's close is where its last bytes reach the disk).
+    herr_t close() {
+        const herr_t r = id_ >= 0 ? closer_(id_) : 0;
+        id_ = H5I_INVALID_HID;
+        return r;
+    }
+
+private:
+    void reset() {
+        if (id_ >= 0) closer_(id_);
+        id_ = H5I_INVALID_HID;
+    }
+    hid_t id_ = H5I_INVALID_HID;
+    Closer closer_ = nullptr;
+};
+
+// Turns off HDF5's automatic printing of its error stack while alive; failures become our messages.
+class QuietHdf5 {
+public:
+    QuietHdf5() {
+        H5Eget_auto2(H5E_DEFAULT, &func_, &data_);
+        H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+    }
+    ~QuietHdf5() { H5Eset_auto2(H5E_DEFAULT, func_, data_); }
+    QuietHdf5(const QuietHdf5&) = delete;
+    QuietHdf5& operator=(const QuietHdf5&) = delete;
+
+private:
+    H5E_auto2_t func_ = nullptr;
+    void* data_ = nullptr;
+};
+
+herr_t innermost_error(unsigned n, const H5E_error2_t* err, void* out) {
+    if (n == 0 && err->desc != nullptr) *static_cast<std::string*>(out) = err->desc;
+    return 0;
+}
+
+// The description of the deepest entry of HDF5's current error stack (where the failure started), then
+// clears the stack.
+std::string hdf5_detail() {
+    std::string detail;
+    H5Ewalk2(H5E_DEFAULT, H5E_WALK_UPWARD, innermost_error, &detail);
+    H5Eclear2(H5E_DEFAULT);
+    return detail;
+}
+
+// Names the file in every message and throws pvs::Error of one kind: kIo while writing, kBadInput while
+// reading (a file we cannot read is a bad input).
+class Site {
+public:
+    Site(std::string path, ErrorKind kind, std::string prefix)
+        : path_(std::move(path)), kind_(kind), prefix_(std::move(prefix)) {}
+
+    [[noreturn]] void fail(const std::string& what) const {
+        throw Error(kind_, fmt::format("{}: {}{}", path_, prefix_, what));
+    }
+    // An HDF5 call failed: adds what HDF5 said.
+    [[noreturn]] void fail_hdf5(const std::string& what) const {
+        const std::string detail = hdf5_detail();
+        fail(detail.empty() ? what : fmt::format("{} ({})", what, detail));
+    }
+    Handle handle(hid_t id, Handle::Closer closer, const std::string& what) const {
+        if (id < 0) fail_hdf5(what);
+        return Handle(id, closer);
+    }
+    void check(herr_t r, const std::string& what) const {
+        if (r < 0) fail_hdf5(what);
+    }
+
+private:
+    std::string path_;
+    ErrorKind kind_;
+    std::string prefix_;
+};
+
+// Where an object sits in the file, for messages: "/pvs/rows".
+std::string at(const std::string& group, const std::string& name) {
+    return group == "/" ? "/" + name : group + "/" + name;
+}
+
+// A fixed-length UTF-8 string type of `bytes` bytes, each string NUL-terminated inside it. Fixed, not
+// variable-length: variable-length strings live in HDF5's global heap, and HDF5 1.10.8 reads a damaged
+// global heap out of bounds (segfaults in H5HG_read when a fuzzed file is read); fixed-length strings are
+// plain bytes in the dataset or attribute, so damage can only garble them. A C reader also gets them as
+// one n x bytes buffer.
+Handle string_type(const Site& site, size_t bytes) {
+    Handle t = site.handle(H5Tcopy(H5T_C_S1), H5Tclose, "cannot copy the string type");
+    site.check(H5Tset_size(t.get(), std::max<size_t>(bytes, 1)), "cannot size the string type");
+    site.check(H5Tset_strpad(t.get(), H5T_STR_NULLTERM), "cannot set the string padding");
+    site.check(H5Tset_cset(t.get(), H5T_CSET_UTF8), "cannot set UTF-8 on the string type");
+    return t;
+}
+
+Handle file_access_list(const Site& site) {
+    Handle fapl = site.handle(H5Pcreate(H5P_FILE_ACCESS), H5Pclose, "cannot create a file access list");
+    // STRONG: H5Fclose closes every object still open in the file, so the file is complete once closed.
+    site.check(H5Pset_fclose_degree(fapl.get(), H5F_CLOSE_STRONG), "cannot set the file close degree");
+    // File locking stays at the library default (Debian's build ignores file systems without locks): an
+    // explicit H5Pset_file_locking makes H5Fopen fail with "file locking flag values don't match" when
+    // the same process already has the file open with the default settings.
+    return fapl;
+}
+
+// Group creation list that remembers the order links and attributes were created in, so that
+// `h5dump --sort_by=creation_order` shows them in the writer's order (by name is h5dump's default).
+// No modification times in object headers (HDF5 stores them by default): the same bake gives the same bytes.
+Handle ordered_group_list(const Site& site) {
+    Handle gcpl = site.handle(H5Pcreate(H5P_GROUP_CREATE), H5Pclose, "cannot create a group creation list");
+    const unsigned order = H5P_CRT_ORDER_TRACKED | H5P_CRT_ORDER_INDEXED;
+    site.check(H5Pset_link_creation_order(gcpl.get(), order), "cannot track link order");
+    site.check(H5Pset_attr_creation_order(gcpl.get(), order), "cannot track attribute order");
+    site.check(H5Pset_obj_track_times(gcpl.get(), false), "cannot turn off object times");
+    return gcpl;
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Writing.
+
+class Writer {
+public:
+    explicit Writer(const Site& site) : site_(site) {}
+
+    Handle group(hid_t loc, const std::string& where, const std::string& name) {
+        Handle gcpl = ordered_group_list(site_);
+        return site_.handle(H5Gcreate2(loc, name.c_str(), H5P_DEFAULT, gcpl.get(), H5P_DEFAULT), H5Gclose,
+                            "cannot create group " + at(where, name));
+    }
+
+    void attr(hid_t loc, const std::string& name, hid_t file_type, hid_t mem_type, size_t count,
+              const void* value) {
+        Handle space;
+        if (count == 1) {
+            space = site_.handle(H5Screate(H5S_SCALAR), H5Sclose, "cannot create a dataspace");
+        } else {
+            const hsize_t dims[1] = {count};
+            space = site_.handle(H5Screate_simple(1, dims, nullptr), H5Sclose, "cannot create a dataspace");
+        }
+        Handle a =
+            site_.handle(H5Acreate2(loc, name.c_str(), file_type, space.get(), H5P_DEFAULT, H5P_DEFAULT),
+                         H5Aclose, "cannot create attribute " + name);
+        site_.check(H5Awrite(a.get(), mem_type, value), "cannot write attribute " + name);
+    }
+    void string_attr(hid_t loc, const std::string& name, const std::string& value) {
+        Handle t = string_type(site_, value.size() + 1);
+        attr(loc, name, t.get(), t.get(), 1, value.c_str());
+    }
+    void int_attr(hid_t loc, const std::string& name, int32_t value) {
+        attr(loc, name, H5T_STD_I32LE, H5T_NATIVE_INT32, 1, &value);
+    }
+    void u32_attr(hid_t loc, const std::string& name, uint32_t value) {
+        attr(loc, name, H5T_STD_U32LE, H5T_NATIVE_UINT32, 1, &value);
+    }
+    void u64_attr(hid_t loc, const std::string& name, uint64_t value) {
+        attr(loc, name, H5T_STD_U64LE, H5T_NATIVE_UINT64, 1, &value);
+    }
+
+    // A dataset of the given shape. compress: chunked (~kChunkBytes per chunk, whole rows) and deflated.
+    // A dataset with a zero dimension is written contiguous and empty (HDF5 refuses zero chunk sizes).
+    Handle dataset(hid_t loc, const std::string& where, const std::string& name, hid_t file_type,
+                   hid_t mem_type, std::vector<hsize_t> dims, const void* data, bool compress = false) {
+        const std::string full = at(where, name);
+        Handle space = site_.handle(H5Screate_simple(int(dims.size()), dims.data(), nullptr), H5Sclose,
+                                    "cannot create the dataspace of " + full);
+        Handle dcpl = site_.handle(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, "cannot create a dataset list");
+        site_.check(H5Pset_obj_track_times(dcpl.get(), false), "cannot turn off object times");
+        const bool empty = std::any_of(dims.begin(), dims.end(), [](hsize_t d) { return d == 0; });
+        if (compress && !empty) {
+            hsize_t inner = H5Tget_size(file_type);
+            for (size_t i = 1; i < dims.size(); ++i) inner *= dims[i];
+            std::vector<hsize_t> chunk = dims;
+            chunk[0] = std::clamp<hsize_t>(kChunkBytes / std::max<hsize_t>(inner, 1), 1, dims[0]);
+            site_.check(H5Pset_chunk(dcpl.get(), int(chunk.size()), chunk.data()), "cannot chunk " + full);
+            // Shuffle groups the bytes of multi-byte integers before deflate: grid_to_cell (a mostly
+            // increasing int32 index) shrank from 27,970 to 1,068 bytes on a 20,000-cell grid. The PVS rows
+            // are bytes, where shuffle does nothing, so they go without it.
+            if (H5Tget_class(file_type) == H5T_INTEGER && H5Tget_size(file_type) > 1) {
+                site_.check(H5Pset_shuffle(dcpl.get()), "cannot set shuffle on " + full);
+            }
+            site_.check(H5Pset_deflate(dcpl.get(), kGzipLevel), "cannot set gzip on " + full);
+        }
+        Handle ds = site_.handle(
+            H5Dcreate2(loc, name.c_str(), file_type, space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT),
+            H5Dclose, "cannot create dataset " + full);
+        if (!empty) {
+            site_.check(H5Dwrite(ds.get(), mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data),
+                        "cannot write dataset " + full);
+        }
+        return ds;
+    }
+
+    void string_dataset(hid_t loc, const std::string& where, const std::string& name,
+                        const std::vector<std::string>& values) {
+        size_t longest = 0;
+        for (const std::string& s : values) longest = std::max(longest, s.size());
+        const size_t stride = longest + 1;
+        std::vector<char> buf(values.size() * stride, '\0');
+        for (size_t i = 0; i < values.size(); ++i) values[i].copy(&buf[i * stride], values[i].size());
+        Handle t = string_type(site_, stride);
+        // Padding compresses well: a long string list (object names) is chunked and deflated.
+        dataset(loc, where, name, t.get(), t.get(), {values.size()}, buf.data(), buf.size() > kChunkBytes);
+    }
+
+    // A group holding one attribute per name (for a quick look) and the ordered pair of datasets
+    // names/values (the authoritative copy: attributes cannot keep a duplicate or an empty name).
+    void named_values(hid_t loc, const std::string& where, const std::string& name, const NamedValues& values,
+                      const char* units) {
+        Handle g = group(loc, where, name);
+        const std::string full = at(where, name);
+        std::vector<std::string> names;
+        std::vector<double> numbers;
+        std::unordered_set<std::string> seen;
+        for (const auto& [n, v] : values) {
+            names.push_back(n);
+            numbers.push_back(v);
+            if (!n.empty() && seen.insert(n).second)
+                attr(g.get(), n, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1, &v);
+        }
+        string_dataset(g.get(), full, "names", names);
+        Handle ds = dataset(g.get(), full, "values", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, {numbers.size()},
+                            numbers.data());
+        if (units != nullptr) string_attr(ds.get(), "units", units);
+    }
+
+    const Site& site() const { return site_; }
+
+private:
+    const Site& site_;
+};
+
+// A miss as it is laid out in memory for HDF5 (the file type is the packed little-endian twin).
+struct MissRecord {
+    uint32_t cell;
+    uint32_t object;
+    float eye[3];
+    float direction[3];
+    float distance_m;
+};
+
+// The compound type of /verification/misses: native (in memory) or packed little-endian (on file).
+Handle miss_type(const Site& site, bool on_file) {
+    const hsize_t three[1] = {3};
+    const hid_t u32 = on_file ? H5T_STD_U32LE : H5T_NATIVE_UINT32;
+    const hid_t f32 = on_file ? H5T_IEEE_F32LE : H5T_NATIVE_FLOAT;
+    Handle vec3 = site.handle(H5Tarray_create2(f32, 1, three), H5Tclose, "cannot create the float[3] type");
+    const size_t size = on_file ? 36 : sizeof(MissRecord);
+    Handle t = site.handle(H5Tcreate(H5T_COMPOUND, size), H5Tclose, "cannot create the miss type");
+    const size_t off_cell = on_file ? 0 : offsetof(MissRecord, cell);
+    const size_t off_object = on_file ? 4 : offsetof(MissRecord, object);
+    const size_t off_eye = on_file ? 8 : offsetof(MissRecord, eye);
+    const size_t off_direction = on_file ? 20 : offsetof(MissRecord, direction);
+    const size_t off_distance = on_file ? 32 : offsetof(MissRecord, distance_m);
+    bool ok = H5Tinsert(t.get(), "cell", off_cell, u32) >= 0;
+    ok = ok && H5Tinsert(t.get(), "object", off_object, u32) >= 0;
+    ok = ok && H5Tinsert(t.get(), "eye", off_eye, vec3.get()) >= 0;
+    ok = ok && H5Tinsert(t.get(), "direction", off_direction, vec3.get()) >= 0;
+    ok = ok && H5Tinsert(t.get(), "distance_m", off_distance, f32) >= 0;
+    if (!ok) site.fail_hdf5("cannot build the miss type");
+    return t;
+}
+
+uint32_t bytes_per_row(uint32_t objects) {
+    return (objects + 7) / 8;
+}
+
+// Byte j of a PVS row from its 64-bit words (object i is bit i % 8 of byte i / 8, on any endianness).
+uint8_t row_byte(const uint64_t* words, uint32_t j) {
+    return uint8_t(words[j / 8] >> (8 * (j % 8)));
+}
+
+// The mask of the valid bits of a row's last byte (0xff when the object count is a multiple of 8).
+uint8_t last_byte_mask(uint32_t objects) {
+    return objects % 8 == 0 ? uint8_t(0xff) : uint8_t((1u << (objects % 8)) - 1);
+}
+
+// dims.x * dims.y * dims.z, or UINT64_MAX when a dimension is negative or the product passes 2^48 (a grid
+// or voxel mask that large could not be held in memory anyway; the limit keeps the product from wrapping).
+uint64_t volume_of(glm::ivec3 d) {
+    if (d.x < 0 || d.y < 0 || d.z < 0) return UINT64_MAX;
+    constexpr uint64_t kLimit = uint64_t(1) << 48;
+    uint64_t v = 1;
+    for (int a = 0; a < 3; ++a) {
+        if (d[a] != 0 && v > kLimit / uint64_t(d[a])) return UINT64_MAX;
+        v *= uint64_t(d[a]);
+    }
+    return v;
+}
+
+// The writer refuses what the reader would refuse: a file it writes is always readable.
+void check_writable(const std::string& path, const BakeData& bake) {
+    auto bad = [&](const std::string& what) {
+        throw internal_error(fmt::format("{}: cannot write the bake file: {}", path, what));
+    };
+    const size_t cells = bake.cells.size();
+    const size_t objects = bake.objects.size();
+    if (cells > UINT32_MAX || objects > UINT32_MAX) bad("more than 2^32 cells or objects");
+    const PvsSet& pvs = bake.pvs;
+    if (pvs.cell_count != cells || pvs.object_count != objects || pvs.words_per_row != (objects + 63) / 64 ||
+        pvs.words.size() != size_t(pvs.cell_count) * pvs.words_per_row) {
+        bad(fmt::format(
+            "the PVS is {} cells x {} objects ({} words) but the bake has {} cells and {} objects",
+            pvs.cell_count, pvs.object_count, pvs.words.size(), cells, objects));
+    }
+    const uint64_t grid_size = volume_of(bake.cells.dims);
+    if (grid_size == UINT64_MAX) bad("grid dims negative or too large");
+    if (grid_size != bake.cells.grid_to_cell.size()) {
+        bad("grid_to_cell does not have dims.x * dims.y * dims.z entries");
+    }
+    for (const auto& [mask, name] :
+         {std::pair{&bake.cells.view, "view"}, std::pair{&bake.cells.eyes, "eyes"}}) {
+        const uint64_t voxels = volume_of(mask->dims);
+        if (voxels == UINT64_MAX) bad(fmt::format("the {} mask's dims are negative or too large", name));
+        if (!mask->bits.empty() && mask->bits.size() != (voxels + 63) / 64) {
+            bad(fmt::format("the {} mask has {} words for {} voxels", name, mask->bits.size(), voxels));
+        }
+    }
+    for (int32_t c : bake.cells.grid_to_cell) {
+        if (c < -1 || int64_t(c) >= int64_t(cells)) bad(fmt::format("grid_to_cell entry {} out of range", c));
+    }
+    for (const Cell& c : bake.cells.cells) {
+        if (c.parent < -1 || int64_t(c.parent) >= int64_t(cells))
+            bad(fmt::format("cell parent {} out of range", c.parent));
+    }
+    const VerificationRecord& v = bake.verification;
+    if (!v.cell_sampled_visible.empty() && v.cell_sampled_visible.size() != cells) {
+        bad("verification cell_sampled_visible does not have one entry per cell");
+    }
+    for (const Miss& m : v.misses) {
+        if (m.cell >= cells || m.object >= objects)
+            bad("a verification miss names a cell or object out of range");
+    }
+    // Strings are stored NUL-terminated (fixed-length HDF5 strings): a NUL inside would cut them short.
+    auto check_text = [&](const std::string& s, const std::string& what) {
+        if (s.find('\0') != std::string::npos) bad(what + " contains a NUL byte");
+    };
+    for (size_t i = 0; i < objects; ++i)
+        check_text(bake.objects[i].name, fmt::format("the name of object {}", i));
+    for (size_t i = 0; i < bake.parameters.size(); ++i) {
+        check_text(bake.parameters[i].first + bake.parameters[i].second, fmt::format("parameter {}", i));
+    }
+    for (size_t i = 0; i < bake.figures.size(); ++i)
+        check_text(bake.figures[i].first, fmt::format("figure {}", i));
+    for (size_t i = 0; i < bake.timings_s.size(); ++i) {
+        check_text(bake.timings_s[i].first, fmt::format("timing {}", i));
+    }
+    for (size_t i = 0; i < v.figures.size(); ++i) {
+        check_text(v.figures[i].first, fmt::format("verification figure {}", i));
+    }
+    check_text(bake.tool_version, "tool_version");
+    check_text(bake.world_path, "world_path");
+    check_text(bake.world_hash, "world_hash");
+    check_text(bake.mode, "mode");
+}
+
+void write_bounds(Writer& w, hid_t loc, const std::string& where, const std::vector<Aabb>& boxes) {
+    std::vector<float> flat;
+    flat.reserve(boxes.size() * 6);
+    for (const Aabb& b : boxes) {
+        flat.insert(flat.end(), {b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z});
+    }
+    Handle ds =
+        w.dataset(loc, where, "bounds", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, {boxes.size(), 6}, flat.data());
+    w.string_attr(ds.get(), "columns", kBoundsColumns);
+}
+
+void write_root(Writer& w, hid_t root, const BakeData& bake) {
+    w.string_attr(root, "format", kFormatName);
+    w.int_attr(root, "format_major", kBakeFormatMajor);
+    w.int_attr(root, "format_minor", kBakeFormatMinor);
+    w.string_attr(root, "tool_version", bake.tool_version);
+    w.string_attr(root, "world_path", bake.world_path);
+    w.string_attr(root, "world_hash", bake.world_hash);
+    w.string_attr(root, "mode", bake.mode);
+    w.int_attr(root, "conservative", bake.conservative ? 1 : 0);
+    w.string_attr(root, "pvs_kind", bake.conservative ? kConservativeNote : kAggressiveNote);
+}
+
+void write_parameters(Writer& w, hid_t root, const NamedStrings& parameters) {
+    Handle g = w.group(root, "/", "parameters");
+    std::vector<std::string> keys, values;
+    std::unordered_set<std::string> seen;
+    for (const auto& [k, v] : parameters) {
+        keys.push_back(k);
+        values.push_back(v);
+        if (!k.empty() && seen.insert(k).second) w.string_attr(g.get(), k, v);
+    }
+    w.string_dataset(g.get(), "/parameters", "keys", keys);
+    w.string_dataset(g.get(), "/parameters", "values", values);
+}
+
+void write_objects(Writer& w, hid_t root, const std::vector<ObjectRecord>& objects) {
+    Handle g = w.group(root, "/", "objects");
+    std::vector<std::string> names;
+    std::vector<Aabb> bounds;
+    std::vector<uint32_t> triangles, flags;
+    for (const ObjectRecord& o : objects) {
+        names.push_back(o.name);
+        bounds.push_back(o.bounds);
+        triangles.push_back(o.triangle_count);
+        flags.push_back(o.flags);
+    }
+    w.string_dataset(g.get(), "/objects", "name", names);
+    write_bounds(w, g.get(), "/objects", bounds);
+    w.dataset(g.get(), "/objects", "triangle_count", H5T_STD_U32LE, H5T_NATIVE_UINT32, {objects.size()},
+              triangles.data());
+    w.dataset(g.get(), "/objects", "flags", H5T_STD_U32LE, H5T_NATIVE_UINT32, {objects.size()}, flags.data());
+}
+
+const char* kind_name(CellSet::Kind kind) {
+    return kind == CellSet::Kind::kOctree ? "octree" : "grid";
+}
+
+// A voxel mask as a group: origin, voxel_size_m, dims, and the bits as bytes (voxel i, x fastest, is bit
+// i % 8 of byte i / 8, as in PVS rows); no bytes = no mask.
+void write_mask(Writer& w, hid_t cells_group, const std::string& name, const VoxelMask& mask) {
+    const std::string where = at("/cells", name);
+    Handle g = w.group(cells_group, "/cells", name);
+    const float origin[3] = {mask.origin.x, mask.origin.y, mask.origin.z};
+    w.attr(g.get(), "origin", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, 3, origin);
+    w.attr(g.get(), "voxel_size_m", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, 1, &mask.voxel_size_m);
+    const int32_t dims[3] = {mask.dims.x, mask.dims.y, mask.dims.z};
+    w.attr(g.get(), "dims", H5T_STD_I32LE, H5T_NATIVE_INT32, 3, dims);
+    std::vector<uint8_t> bytes;
+    if (!mask.empty()) {
+        const uint64_t voxels = volume_of(mask.dims);
+        bytes.resize(size_t((voxels + 7) / 8));
+        for (size_t j = 0; j < bytes.size(); ++j) bytes[j] = uint8_t(mask.bits[j / 8] >> (8 * (j % 8)));
+        if (voxels % 8 != 0) bytes.back() &= uint8_t((1u << (voxels % 8)) - 1);
+    }
+    Handle ds =
+        w.dataset(g.get(), where, "bits", H5T_STD_U8LE, H5T_NATIVE_UINT8, {bytes.size()}, bytes.data(),
+                  /*compress=*/true);
+    w.string_attr(
+        ds.get(), "bit_order",
+        "voxel i = ix + dims[0] * (iy + dims[1] * iz) is bit (i % 8) of byte (i / 8); no bytes = no mask");
+}
+
+void write_cells(Writer& w, hid_t root, const CellSet& cells) {
+    Handle g = w.group(root, "/", "cells");
+    w.string_attr(g.get(), "kind", kind_name(cells.kind));
+    w.int_attr(g.get(), "kind_code", int32_t(cells.kind));
+    const float origin[3] = {cells.origin.x, cells.origin.y, cells.origin.z};
+    w.attr(g.get(), "origin", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, 3, origin);
+    w.attr(g.get(), "cell_size_m", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, 1, &cells.cell_size_m);
+    const int32_t dims[3] = {cells.dims.x, cells.dims.y, cells.dims.z};
+    w.attr(g.get(), "dims", H5T_STD_I32LE, H5T_NATIVE_INT32, 3, dims);
+    w.u32_attr(g.get(), "cell_count", uint32_t(cells.size()));
+
+    Handle g2c = w.dataset(g.get(), "/cells", "grid_to_cell", H5T_STD_I32LE, H5T_NATIVE_INT32,
+                           {cells.grid_to_cell.size()}, cells.grid_to_cell.data(), /*compress=*/true);
+    w.string_attr(g2c.get(), "index", "ix + dims[0] * (iy + dims[1] * iz); -1 = no cell there");
+    std::vector<Aabb> bounds;
+    std::vector<int32_t> parents;
+    for (const Cell& c : cells.cells) {
+        bounds.push_back(c.bounds);
+        parents.push_back(c.parent);
+    }
+    write_bounds(w, g.get(), "/cells", bounds);
+    Handle p = w.dataset(g.get(), "/cells", "parent", H5T_STD_I32LE, H5T_NATIVE_INT32, {parents.size()},
+                         parents.data());
+    w.string_attr(p.get(), "meaning", "octree: the parent node (index into /cells/octree); -1 = none (grid cells, roots)");
+    if (cells.kind == CellSet::Kind::kOctree) {
+        Handle o = w.group(g.get(), "/cells", "octree");
+        w.string_attr(o.get(), "layout",
+                      "grid_to_cell holds the root node of each root-grid cell; a node's 8 children are consecutive "
+                      "from first_child (octant bits x = 1, y = 2, z = 4), always after the node");
+        std::vector<Aabb> node_bounds;
+        std::vector<int32_t> first_child, cell, parent;
+        for (const OctreeNode& n : cells.nodes) {
+            node_bounds.push_back(n.bounds);
+            first_child.push_back(n.first_child);
+            cell.push_back(n.cell);
+            parent.push_back(n.parent);
+        }
+        write_bounds(w, o.get(), "/cells/octree", node_bounds);
+        w.dataset(o.get(), "/cells/octree", "first_child", H5T_STD_I32LE, H5T_NATIVE_INT32, {first_child.size()},
+                  first_child.data(), true);
+        w.dataset(o.get(), "/cells/octree", "cell", H5T_STD_I32LE, H5T_NATIVE_INT32, {cell.size()}, cell.data(), true);
+        w.dataset(o.get(), "/cells/octree", "parent", H5T_STD_I32LE, H5T_NATIVE_INT32, {parent.size()}, parent.data(),
+                  true);
+    }
+    write_mask(w, g.get(), "view", cells.view);
+    write_mask(w, g.get(), "eyes", cells.eyes);
+}
+
+hsize_t storage_size(const Site& site, hid_t ds, const std::string& name) {
+    site.check(H5Dflush(ds), "cannot flush " + name);  // chunks still in the cache have no size yet
+    return H5Dget_storage_size(ds);
+}
+
+void write_pvs(Writer& w, hid_t root, const BakeData& bake) {
+    const PvsSet& pvs = bake.pvs;
+    const uint32_t cells = pvs.cell_count;
+    const uint32_t row_bytes = bytes_per_row(pvs.object_count);
+    const uint8_t mask = last_byte_mask(pvs.object_count);
+
+    // Dedupe: each distinct row is stored once, in the order of the first cell that has it.
+    std::unordered_map<std::string, uint32_t> row_index;
+    std::vector<uint8_t> rows;
+    std::vector<uint32_t> cell_row(cells);
+    std::string key(row_bytes, '\0');
+    for (uint32_t c = 0; c < cells; ++c) {
+        const uint64_t* words = pvs.row(c);
+        for (uint32_t j = 0; j < row_bytes; ++j) key[j] = char(row_byte(words, j));
+        if (row_bytes > 0) key[row_bytes - 1] = char(uint8_t(key[row_bytes - 1]) & mask);
+        const auto [it, inserted] = row_index.try_emplace(key, uint32_t(row_index.size()));
+        if (inserted) rows.insert(rows.end(), key.begin(), key.end());
+        cell_row[c] = it->second;
+    }
+    const uint32_t unique_rows = uint32_t(row_index.size());
+
+    Handle g = w.group(root, "/", "pvs");
+    Handle rows_ds = w.dataset(g.get(), "/pvs", "rows", H5T_STD_U8LE, H5T_NATIVE_UINT8,
+                               {unique_rows, row_bytes}, rows.data(), /*compress=*/true);
+    w.string_attr(rows_ds.get(), "bit_order", "object i is bit (i % 8) of byte (i / 8); bit 0 = 1");
+    Handle cell_row_ds =
+        w.dataset(g.get(), "/pvs", "cell_row", H5T_STD_U32LE, H5T_NATIVE_UINT32, {cells}, cell_row.data());
+    const uint64_t stored = storage_size(w.site(), rows_ds.get(), "/pvs/rows") +
+                            storage_size(w.site(), cell_row_ds.get(), "/pvs/cell_row");
+    w.u32_attr(g.get(), "object_count", pvs.object_count);
+    w.u32_attr(g.get(), "cell_count", cells);
+    w.u32_attr(g.get(), "unique_rows", unique_rows);
+    w.u32_attr(g.get(), "bytes_per_row", row_bytes);
+    w.u64_attr(g.get(), "bytes_raw", uint64_t(cells) * row_bytes);
+    w.u64_attr(g.get(), "bytes_stored", stored);
+}
+
+void write_leak_path(Writer& w, hid_t root, const std::vector<glm::vec3>& path) {
+    std::vector<float> flat;
+    for (const glm::vec3& p : path) flat.insert(flat.end(), {p.x, p.y, p.z});
+    Handle ds =
+        w.dataset(root, "/", "leak_path", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, {path.size(), 3}, flat.data());
+    w.string_attr(ds.get(), "meaning",
+                  "view volume flood from a seed to the outside, when the level leaks; empty = sealed");
+}
+
+void write_verification(Writer& w, hid_t root, const VerificationRecord& v) {
+    Handle g = w.group(root, "/", "verification");
+    w.int_attr(g.get(), "ran", v.ran ? 1 : 0);
+    w.named_values(g.get(), "/verification", "figures", v.figures, nullptr);
+    w.dataset(g.get(), "/verification", "cell_sampled_visible", H5T_STD_U32LE, H5T_NATIVE_UINT32,
+              {v.cell_sampled_visible.size()}, v.cell_sampled_visible.data());
+    std::vector<MissRecord> misses;
+    for (const Miss& m : v.misses) {
+        misses.push_back({m.cell,
+                          m.object,
+                          {m.eye.x, m.eye.y, m.eye.z},
+                          {m.direction.x, m.direction.y, m.direction.z},
+                          m.distance_m});
+    }
+    Handle file_type = miss_type(w.site(), true);
+    Handle mem_type = miss_type(w.site(), false);
+    w.dataset(g.get(), "/verification", "misses", file_type.get(), mem_type.get(), {misses.size()},
+              misses.data());
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Reading.
+
+// HDF5 1.10.8 trusts what a file says about its types and sizes: a damaged element size or compound member
+// offset makes H5Dread copy out of bounds, and a damaged dimension makes us allocate gigabytes. So the
+// reader checks every stored type (numbers of 1-8 bytes, IEEE floats, compound members inside their
+// record) and refuses a dataset larger than the file could hold even at gzip's best ratio (~1032:1).
+class Reader {
+public:
+    Reader(const Site& site, uint64_t file_bytes)
+        : site_(site), max_bytes_(file_bytes * 1100 + (1u << 20)), max_chunks_(file_bytes / 16 + 1024) {}
+
+    [[noreturn]] void fail(const std::string& what) const { site_.fail(what); }
+
+    bool has_attr(hid_t loc, const std::string& name) const {
+        const htri_t r = H5Aexists(loc, name.c_str());
+        if (r < 0) site_.fail_hdf5("cannot look for attribute " + name);
+        return r > 0;
+    }
+    Handle open_attr(hid_t loc, const std::string& where, const std::string& name) const {
+        if (!has_attr(loc, name)) fail(fmt::format("{} has no attribute '{}'", where, name));
+        return site_.handle(H5Aopen(loc, name.c_str(), H5P_DEFAULT), H5Aclose,
+                            fmt::format("cannot open attribute '{}' of {}", name, where));
+    }
+    Handle open_group(hid_t loc, const std::string& where) const {
+        const std::string name = where.substr(where.rfind('/') + 1);
+        const htri_t r = H5Lexists(loc, name.c_str(), H5P_DEFAULT);
+        if (r <= 0) fail(fmt::format("missing group {}", where));
+        return site_.handle(H5Gopen2(loc, name.c_str(), H5P_DEFAULT), H5Gclose, "cannot open group " + where);
+    }
+    Handle open_dataset(hid_t loc, const std::string& where, const std::string& name) const {
+        const htri_t r = H5Lexists(loc, name.c_str(), H5P_DEFAULT);
+        if (r <= 0) fail(fmt::format("missing dataset {}", at(where, name)));
+        return site_.handle(H5Dopen2(loc, name.c_str(), H5P_DEFAULT), H5Dclose,
+                            "cannot open dataset " + at(where, name));
+    }
+
+    // Dimensions of an attribute's or a dataset's space; a scalar has none.
+    std::vector<hsize_t> dims_of(hid_t space, const std::string& full) const {
+        Handle s(space, H5Sclose);
+        if (space < 0) site_.fail_hdf5("cannot read the shape of " + full);
+        const int rank = H5Sget_simple_extent_ndims(space);
+        if (rank < 0) site_.fail_hdf5("cannot read the shape of " + full);
+        std::vector<hsize_t> dims(size_t(rank), 0);
+        if (rank > 0 && H5Sget_simple_extent_dims(space, dims.data(), nullptr) < 0) {
+            site_.fail_hdf5("cannot read the shape of " + full);
+        }
+        return dims;
+    }
+    std::vector<hsize_t> dataset_dims(hid_t ds, const std::string& full) const {
+        return dims_of(H5Dget_space(ds), full);
+    }
+
+    // Fails unless the dataset's storage fits its shape: chunks no larger than the dataset's maximum
+    // dimensions (HDF5 itself enforces that when it creates a dataset, but trusts a damaged file: a
+    // chunk dimension damaged to 14,286,849 made H5Dread copy out of bounds), and contiguous storage of
+    // exactly the dataset's bytes (or none yet).
+    void check_storage(hid_t ds, uint64_t stored_element_bytes, const std::string& full) const {
+        Handle space = site_.handle(H5Dget_space(ds), H5Sclose, "cannot read the shape of " + full);
+        const int rank = H5Sget_simple_extent_ndims(space.get());
+        hsize_t dims[H5S_MAX_RANK], max_dims[H5S_MAX_RANK];
+        if (rank < 0 || rank > H5S_MAX_RANK || H5Sget_simple_extent_dims(space.get(), dims, max_dims) < 0) {
+            site_.fail_hdf5("cannot read the shape of " + full);
+        }
+        for (int i = 0; i < rank; ++i) {
+            if (max_dims[i] != H5S_UNLIMITED && dims[i] > max_dims[i]) {
+                fail(full + " is larger than its maximum size (damaged file?)");
+            }
+        }
+        Handle dcpl = site_.handle(H5Dget_create_plist(ds), H5Pclose, "cannot read the layout of " + full);
+        const H5D_layout_t layout = H5Pget_layout(dcpl.get());
+        if (layout == H5D_CHUNKED) {
+            hsize_t chunk[H5S_MAX_RANK];
+            if (H5Pget_chunk(dcpl.get(), H5S_MAX_RANK, chunk) != rank) {
+                fail(full + " has a damaged chunk layout");
+            }
+            uint64_t chunk_bytes = stored_element_bytes;
+            uint64_t chunks = 1;
+            for (int i = 0; i < rank; ++i) {
+                if (chunk[i] == 0 || (max_dims[i] != H5S_UNLIMITED && chunk[i] > max_dims[i])) {
+                    fail(full + " has a damaged chunk layout");
+                }
+                chunk_bytes *= chunk[i];
+                if (chunk_bytes > (uint64_t(1) << 32)) fail(full + " has a damaged chunk layout");
+                // HDF5 spends about 2.5 KB of memory on each chunk a read touches, and each stored chunk
+                // takes well over 16 bytes of the file: a layout with more chunks than that is damaged.
+                chunks *= (dims[i] + chunk[i] - 1) / chunk[i];
+                if (chunks > max_chunks_)
+                    fail(full + " has more chunks than the file can hold (damaged file?)");
+            }
+        } else if (layout == H5D_CONTIGUOUS) {
+            uint64_t bytes = stored_element_bytes;
+            for (int i = 0; i < rank; ++i) bytes *= dims[i];
+            const hsize_t stored = H5Dget_storage_size(ds);
+            if (stored_element_bytes != 0 && stored != 0 && stored != bytes) {
+                fail(fmt::format("{} stores {} bytes for {} bytes of data (damaged file?)", full, stored,
+                                 bytes));
+            }
+        } else if (layout != H5D_COMPACT) {
+            fail(full + " has an unknown storage layout");
+        }
+    }
+    void check_storage(hid_t ds, const std::string& full) const {
+        Handle t = site_.handle(H5Dget_type(ds), H5Tclose, "cannot read the type of " + full);
+        const size_t bytes = H5Tget_size(t.get());
+        if (bytes == 0) site_.fail_hdf5("cannot read the type of " + full);
+        // A variable-length element's size on file is not its size in memory: check the chunks only.
+        const bool variable = H5Tget_class(t.get()) == H5T_VLEN || H5Tis_variable_str(t.get()) > 0;
+        check_storage(ds, variable ? 0 : bytes, full);
+    }
+
+    // Fails unless `count` elements of `element_bytes` each could come from this file.
+    void check_budget(uint64_t count, uint64_t element_bytes, const std::string& full) const {
+        if (element_bytes != 0 && count > max_bytes_ / element_bytes) {
+            fail(fmt::format("{} claims {} elements of {} bytes, more than the file can hold (damaged file?)",
+                             full, count, element_bytes));
+        }
+    }
+
+    // Fails unless t is a sound integer (1, 2, 4 or 8 bytes) or IEEE float type; returns its class.
+    H5T_class_t check_number_type(hid_t t, const std::string& full) const {
+        const H5T_class_t c = H5Tget_class(t);
+        if (c == H5T_INTEGER) {
+            const size_t size = H5Tget_size(t);
+            const size_t precision = H5Tget_precision(t);
+            const int offset = H5Tget_offset(t);
+            if ((size == 1 || size == 2 || size == 4 || size == 8) && precision > 0 && offset >= 0 &&
+                size_t(offset) + precision <= 8 * size) {
+                return c;
+            }
+            fail(full + " has a damaged integer type");
+        }
+        if (c == H5T_FLOAT) {
+            for (hid_t ieee : {H5T_IEEE_F32LE, H5T_IEEE_F32BE, H5T_IEEE_F64LE, H5T_IEEE_F64BE}) {
+                if (H5Tequal(t, ieee) > 0) return c;
+            }
+            fail(full + " has a float type that is not IEEE single or double");
+        }
+        fail(full + " is not a number");
+    }
+    // Takes ownership of type_id.
+    H5T_class_t number_type(hid_t type_id, const std::string& full) const {
+        Handle t = site_.handle(type_id, H5Tclose, "cannot read the type of " + full);
+        return check_number_type(t.get(), full);
+    }
+
+    // The stored type of /verification/misses: a compound whose members all lie inside its record, with
+    // the members this reader needs (more are allowed: a later minor version may add some).
+    void check_miss_type(hid_t type_id, const std::string& full) const {
+        Handle t = site_.handle(type_id, H5Tclose, "cannot read the type of " + full);
+        if (H5Tget_class(t.get()) != H5T_COMPOUND) fail(full + " is not a compound dataset");
+        const size_t record = H5Tget_size(t.get());
+        const int members = H5Tget_nmembers(t.get());
+        if (record == 0 || record > 4096 || members < 0) fail(full + " has a damaged compound type");
+        for (unsigned i = 0; i < unsigned(members); ++i) {
+            Handle m =
+                site_.handle(H5Tget_member_type(t.get(), i), H5Tclose, "cannot read the type of " + full);
+            size_t bytes = H5Tget_size(m.get());
+            if (H5Tget_class(m.get()) == H5T_ARRAY) {
+                Handle base =
+                    site_.handle(H5Tget_super(m.get()), H5Tclose, "cannot read the type of " + full);
+                check_number_type(base.get(), full);
+                hsize_t dims[H5S_MAX_RANK];
+                const int rank = H5Tget_array_ndims(m.get());
+                if (rank < 0 || rank > H5S_MAX_RANK || H5Tget_array_dims2(m.get(), dims) != rank) {
+                    fail(full + " has a damaged array member");
+                }
+                uint64_t n = 1;
+                for (int d = 0; d < rank; ++d) n *= dims[d];
+                if (n * H5Tget_size(base.get()) != bytes) fail(full + " has a damaged array member");
+            } else if (H5Tget_class(m.get()) == H5T_INTEGER || H5Tget_class(m.get()) == H5T_FLOAT) {
+                check_number_type(m.get(), full);
+            }
+            if (bytes == 0 || H5Tget_member_offset(t.get(), i) + bytes > record) {
+                fail(full + " has a compound member outside its record (damaged type)");
+            }
+        }
+        for (const char* name : {"cell", "object", "eye", "direction", "distance_m"}) {
+            if (H5Tget_member_index(t.get(), name) < 0)
+                fail(fmt::format("{} has no member '{}'", full, name));
+        }
+    }
+
+    // A numeric attribute with exactly `count` values (a scalar when count is 1).
+    template <class T>
+    std::vector<T> numeric_attr(hid_t loc, const std::string& where, const std::string& name, hid_t mem_type,
+                                size_t count) const {
+        const std::string full = fmt::format("attribute '{}' of {}", name, where);
+        Handle a = open_attr(loc, where, name);
+        number_type(H5Aget_type(a.get()), full);
+        size_t n = 1;
+        for (hsize_t d : dims_of(H5Aget_space(a.get()), full)) n *= size_t(d);
+        if (n != count) fail(fmt::format("{} has {} values, expected {}", full, n, count));
+        std::vector<T> out(count);
+        site_.check(H5Aread(a.get(), mem_type, out.data()), "cannot read " + full);
+        return out;
+    }
+    int64_t int_attr(hid_t loc, const std::string& where, const std::string& name) const {
+        return numeric_attr<int64_t>(loc, where, name, H5T_NATIVE_INT64, 1)[0];
+    }
+
+    // Strings of a dataset or an attribute, variable-length or fixed-length.
+    std::vector<std::string> strings(hid_t obj, bool is_attr, const std::string& full, size_t count) const {
+        const hid_t stored_type = is_attr ? H5Aget_type(obj) : H5Dget_type(obj);
+        Handle ftype = site_.handle(stored_type, H5Tclose, "cannot read the type of " + full);
+        if (H5Tget_class(ftype.get()) != H5T_STRING) fail(full + " is not text");
+        const htri_t variable = H5Tis_variable_str(ftype.get());
+        if (variable < 0) site_.fail_hdf5("cannot read the type of " + full);
+        Handle mtype = site_.handle(H5Tcopy(H5T_C_S1), H5Tclose, "cannot copy the string type");
+        site_.check(H5Tset_cset(mtype.get(), H5Tget_cset(ftype.get())), "cannot set the string encoding");
+        check_budget(count, sizeof(std::string), full);
+        std::vector<std::string> out(count);
+        if (count == 0) return out;
+        auto read = [&](void* buf) {
+            const herr_t r = is_attr ? H5Aread(obj, mtype.get(), buf)
+                                     : H5Dread(obj, mtype.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, buf);
+            return r;
+        };
+        if (variable > 0) {
+            // Variable-length strings (this writer never stores them; other tools may) are read through the
+            // global heap, which HDF5 does not check: a damaged one can still crash HDF5 here.
+            check_budget(count, sizeof(char*), full);
+            site_.check(H5Tset_size(mtype.get(), H5T_VARIABLE), "cannot make a string type");
+            std::vector<char*> ptrs(count, nullptr);
+            const herr_t r = read(ptrs.data());
+            std::string err;
+            if (r < 0) err = hdf5_detail();
+            for (size_t i = 0; i < count; ++i) {
+                if (ptrs[i] != nullptr) out[i] = ptrs[i];
+                H5free_memory(ptrs[i]);
+            }
+            if (r < 0) fail(fmt::format("cannot read {} ({})", full, err));
+        } else {
+            const size_t size = H5Tget_size(ftype.get());
+            if (size == 0) site_.fail_hdf5("cannot read the type of " + full);
+            check_budget(count, size, full);
+            site_.check(H5Tset_size(mtype.get(), size), "cannot make a string type");
+            site_.check(H5Tset_strpad(mtype.get(), H5Tget_strpad(ftype.get())), "cannot make a string type");
+            std::vector<char> buf(size * count);
+            site_.check(read(buf.data()), "cannot read " + full);
+            for (size_t i = 0; i < count; ++i) {
+                const char* s = buf.data() + i * size;
+                out[i].assign(s, strnlen(s, size));
+            }
+        }
+        return out;
+    }
+    std::string string_attr(hid_t loc, const std::string& where, const std::string& name) const {
+        const std::string full = fmt::format("attribute '{}' of {}", name, where);
+        Handle a = open_attr(loc, where, name);
+        size_t n = 1;
+        for (hsize_t d : dims_of(H5Aget_space(a.get()), full)) n *= size_t(d);
+        if (n != 1) fail(full + " is not a single string");
+        return strings(a.get(), true, full, 1)[0];
+    }
+    std::vector<std::string> string_dataset(hid_t loc, const std::string& where, const std::string& name,
+                                            int64_t expected) const {
+        const std::string full = at(where, name);
+        Handle ds = open_dataset(loc, where, name);
+        const std::vector<hsize_t> dims = dataset_dims(ds.get(), full);
+        if (dims.size() != 1) fail(full + " is not one-dimensional");
+        if (expected >= 0 && dims[0] != hsize_t(expected)) {
+            fail(fmt::format("{} has {} entries, expected {}", full, dims[0], expected));
+        }
+        check_storage(ds.get(), full);
+        return strings(ds.get(), false, full, size_t(dims[0]));
+    }
+
+    // A numeric dataset whose shape must equal `expected` (a -1 entry accepts any size on that axis, and
+    // `expected` then receives the actual size).
+    template <class T>
+    std::vector<T> numeric_dataset(hid_t loc, const std::string& where, const std::string& name,
+                                   hid_t mem_type, std::vector<int64_t>& expected,
+                                   H5T_class_t want = H5T_NO_CLASS) const {
+        const std::string full = at(where, name);
+        Handle ds = open_dataset(loc, where, name);
+        const H5T_class_t c = number_type(H5Dget_type(ds.get()), full);
+        if (want != H5T_NO_CLASS && c != want) {
+            fail(fmt::format("{} holds {} where {} are expected", full,
+                             c == H5T_FLOAT ? "floats" : "integers",
+                             want == H5T_FLOAT ? "floats" : "integers"));
+        }
+        const std::vector<hsize_t> dims = dataset_dims(ds.get(), full);
+        bool ok = dims.size() == expected.size();
+        for (size_t i = 0; ok && i < dims.size(); ++i)
+            ok = expected[i] < 0 || dims[i] == hsize_t(expected[i]);
+        if (!ok) fail(fmt::format("{} has shape {} but {} was expected", full, shape(dims), shape(expected)));
+        uint64_t n = 1;
+        for (size_t i = 0; i < dims.size(); ++i) {
+            expected[i] = int64_t(dims[i]);
+            check_budget(dims[i], 1, full);
+            n *= dims[i];
+        }
+        check_budget(n, std::max(sizeof(T), H5Tget_size(mem_type)), full);
+        std::vector<T> out(static_cast<size_t>(n));
+        check_storage(ds.get(), full);
+        if (n > 0) {
+            site_.check(H5Dread(ds.get(), mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, out.data()),
+                        "cannot read " + full);
+        }
+        return out;
+    }
+    template <class T>
+    std::vector<T> numeric_dataset(hid_t loc, const std::string& where, const std::string& name,
+                                   hid_t mem_type, std::vector<int64_t>&& expected,
+                                   H5T_class_t want = H5T_NO_CLASS) const {
+        std::vector<int64_t> e = std::move(expected);
+        return numeric_dataset<T>(loc, where, name, mem_type, e, want);
+    }
+
+    NamedValues named_values(hid_t loc, const std::string& where) const {
+        Handle g = open_group(loc, where);
+        const std::vector<std::string> names = string_dataset(g.get(), where, "names", -1);
+        const std::vector<double> values =
+            numeric_dataset<double>(g.get(), where, "values", H5T_NATIVE_DOUBLE, {int64_t(names.size())});
+        NamedValues out;
+        for (size_t i = 0; i < names.size(); ++i) out.emplace_back(names[i], values[i]);
+        return out;
+    }
+
+    const Site& site() const { return site_; }
+
+private:
+    template <class D>
+    static std::string shape(const std::vector<D>& dims) {
+        std::string s = "[";
+        for (size_t i = 0; i < dims.size(); ++i) {
+            if (i > 0) s += " x ";
+            s += int64_t(dims[i]) < 0 ? std::string("any") : std::to_string(int64_t(dims[i]));
+        }
+        return s + "]";
+    }
+
+    const Site& site_;
+    uint64_t max_bytes_;
+    uint64_t max_chunks_;
+};
+
+std::vector<Aabb> read_bounds(const Reader& r, hid_t loc, const std::string& where, int64_t count) {
+    const std::vector<float> flat =
+        r.numeric_dataset<float>(loc, where, "bounds", H5T_NATIVE_FLOAT, {count, 6}, H5T_FLOAT);
+    std::vector<Aabb> out(static_cast<size_t>(count));
+    for (size_t i = 0; i < out.size(); ++i) {
+        const float* b = &flat[i * 6];
+        out[i] = Aabb::of({b[0], b[1], b[2]}, {b[3], b[4], b[5]});
+    }
+    return out;
+}
+
+void read_root(const Reader& r, hid_t root, BakeData& bake) {
+    const Site& site = r.site();
+    if (!r.has_attr(root, "format")) site.fail("not a pvsbake bake file (no 'format' attribute)");
+    std::string format;
+    try {
+        format = r.string_attr(root, "/", "format");
+    } catch (const Error&) {
+        site.fail("not a pvsbake bake file ('format' is not text)");
+    }
+    if (format != kFormatName) site.fail(fmt::format("not a pvsbake bake file (format is '{}')", format));
+    const int64_t major = r.int_attr(root, "/", "format_major");
+    const int64_t minor = r.int_attr(root, "/", "format_minor");
+    if (major > kBakeFormatMajor) {
+        site.fail(fmt::format("bake format {}.{} is newer than this tool reads ({}.x); use a newer pvsbake",
+                              major, minor, kBakeFormatMajor));
+    }
+    if (major < kBakeFormatMajor || minor < 0 || minor > INT32_MAX) {
+        site.fail(fmt::format("bake format {}.{} is not one this tool reads ({}.x)", major, minor,
+                              kBakeFormatMajor));
+    }
+    bake.format_major = int(major);
+    bake.format_minor = int(minor);
+    bake.tool_version = r.string_attr(root, "/", "tool_version");
+    bake.world_path = r.string_attr(root, "/", "world_path");
+    bake.world_hash = r.string_attr(root, "/", "world_hash");
+    bake.mode = r.string_attr(root, "/", "mode");
+    const int64_t conservative = r.int_attr(root, "/", "conservative");
+    if (conservative != 0 && conservative != 1) site.fail("root attribute 'conservative' is not 0 or 1");
+    bake.conservative = conservative == 1;
+}
+
+void read_parameters(const Reader& r, hid_t root, BakeData& bake) {
+    Handle g = r.open_group(root, "/parameters");
+    const std::vector<std::string> keys = r.string_dataset(g.get(), "/parameters", "keys", -1);
+    const std::vector<std::string> values =
+        r.string_dataset(g.get(), "/parameters", "values", int64_t(keys.size()));
+    for (size_t i = 0; i < keys.size(); ++i) bake.parameters.emplace_back(keys[i], values[i]);
+}
+
+void read_objects(const Reader& r, hid_t root, BakeData& bake) {
+    Handle g = r.open_group(root, "/objects");
+    const std::vector<std::string> names = r.string_dataset(g.get(), "/objects", "name", -1);
+    const int64_t n = int64_t(names.size());
+    if (n > int64_t(UINT32_MAX)) r.fail("/objects/name has more than 2^32 entries");
+    const std::vector<Aabb> bounds = read_bounds(r, g.get(), "/objects", n);
+    const std::vector<uint32_t> triangles = r.numeric_dataset<uint32_t>(g.get(), "/objects", "triangle_count",
+                                                                        H5T_NATIVE_UINT32, {n}, H5T_INTEGER);
+    const std::vector<uint32_t> flags =
+        r.numeric_dataset<uint32_t>(g.get(), "/objects", "flags", H5T_NATIVE_UINT32, {n}, H5T_INTEGER);
+    bake.objects.resize(size_t(n));
+    for (size_t i = 0; i < size_t(n); ++i) {
+        bake.objects[i] = ObjectRecord{names[i], bounds[i], triangles[i], flags[i]};
+    }
+}
+
+VoxelMask read_mask(const Reader& r, hid_t cells_group, const std::string& where) {
+    Handle g = r.open_group(cells_group, where);
+    VoxelMask mask;
+    const std::vector<float> origin = r.numeric_attr<float>(g.get(), where, "origin", H5T_NATIVE_FLOAT, 3);
+    mask.origin = {origin[0], origin[1], origin[2]};
+    mask.voxel_size_m = r.numeric_attr<float>(g.get(), where, "voxel_size_m", H5T_NATIVE_FLOAT, 1)[0];
+    const std::vector<int32_t> dims = r.numeric_attr<int32_t>(g.get(), where, "dims", H5T_NATIVE_INT32, 3);
+    mask.dims = {dims[0], dims[1], dims[2]};
+    const uint64_t voxels = volume_of(mask.dims);
+    if (voxels == UINT64_MAX) r.fail(where + " attribute dims is negative or too large");
+    std::vector<int64_t> shape = {-1};
+    const std::vector<uint8_t> bytes =
+        r.numeric_dataset<uint8_t>(g.get(), where, "bits", H5T_NATIVE_UINT8, shape, H5T_INTEGER);
+    if (bytes.empty()) return mask;  // no mask
+    if (uint64_t(bytes.size()) != (voxels + 7) / 8) {
+        r.fail(fmt::format("{}/bits has {} bytes, expected 0 or {} for {} voxels", where, bytes.size(),
+                           (voxels + 7) / 8, voxels));
+    }
+    if (voxels % 8 != 0 && (bytes.back() >> (voxels % 8)) != 0) {
+        r.fail(fmt::format("{}/bits sets bits beyond voxel {}", where, voxels - 1));
+    }
+    mask.bits.assign(size_t((voxels + 63) / 64), 0);
+    for (size_t j = 0; j < bytes.size(); ++j) mask.bits[j / 8] |= uint64_t(bytes[j]) << (8 * (j % 8));
+    return mask;
+}
+
+void read_cells(const Reader& r, hid_t root, BakeData& bake) {
+    const std::string where = "/cells";
+    Handle g = r.open_group(root, where);
+    CellSet& cells = bake.cells;
+    const int64_t kind = r.int_attr(g.get(), where, "kind_code");
+    if (kind != int64_t(CellSet::Kind::kGrid) && kind != int64_t(CellSet::Kind::kOctree)) {
+        r.fail(fmt::format("/cells attribute kind_code is {}, expected 0 (grid) or 1 (octree)", kind));
+    }
+    cells.kind = CellSet::Kind(kind);
+    const std::string kind_text = r.string_attr(g.get(), where, "kind");
+    if (kind_text != kind_name(cells.kind)) {
+        r.fail(fmt::format("/cells attribute kind '{}' disagrees with kind_code {}", kind_text, kind));
+    }
+    const std::vector<float> origin = r.numeric_attr<float>(g.get(), where, "origin", H5T_NATIVE_FLOAT, 3);
+    cells.origin = {origin[0], origin[1], origin[2]};
+    cells.cell_size_m = r.numeric_attr<float>(g.get(), where, "cell_size_m", H5T_NATIVE_FLOAT, 1)[0];
+    const std::vector<int32_t> dims = r.numeric_attr<int32_t>(g.get(), where, "dims", H5T_NATIVE_INT32, 3);
+    cells.dims = {dims[0], dims[1], dims[2]};
+    const uint64_t grid_size = volume_of(cells.dims);
+    if (grid_size == UINT64_MAX) r.fail("/cells attribute dims is negative or too large");
+
+    std::vector<int64_t> bounds_shape = {-1, 6};
+    const std::vector<float> flat =
+        r.numeric_dataset<float>(g.get(), where, "bounds", H5T_NATIVE_FLOAT, bounds_shape, H5T_FLOAT);
+    const int64_t count = bounds_shape[0];
+    if (count > int64_t(INT32_MAX)) r.fail("/cells/bounds has more than 2^31 cells");
+    const std::vector<int32_t> parents =
+        r.numeric_dataset<int32_t>(g.get(), where, "parent", H5T_NATIVE_INT32, {count}, H5T_INTEGER);
+    // Octree nodes (validated so a lookup always terminates inside the arrays: children after parents).
+    int64_t nodes = 0;
+    if (cells.kind == CellSet::Kind::kOctree) {
+        const std::string ow = "/cells/octree";
+        Handle o = r.open_group(g.get(), ow);
+        std::vector<int64_t> node_shape = {-1, 6};
+        const std::vector<float> nb =
+            r.numeric_dataset<float>(o.get(), ow, "bounds", H5T_NATIVE_FLOAT, node_shape, H5T_FLOAT);
+        nodes = node_shape[0];
+        if (nodes > int64_t(INT32_MAX)) r.fail("/cells/octree/bounds has more than 2^31 nodes");
+        const std::vector<int32_t> first_child =
+            r.numeric_dataset<int32_t>(o.get(), ow, "first_child", H5T_NATIVE_INT32, {nodes}, H5T_INTEGER);
+        const std::vector<int32_t> node_cell =
+            r.numeric_dataset<int32_t>(o.get(), ow, "cell", H5T_NATIVE_INT32, {nodes}, H5T_INTEGER);
+        const std::vector<int32_t> node_parent =
+            r.numeric_dataset<int32_t>(o.get(), ow, "parent", H5T_NATIVE_INT32, {nodes}, H5T_INTEGER);
+        cells.nodes.resize(size_t(nodes));
+        for (int64_t i = 0; i < nodes; ++i) {
+            const float* b = &nb[size_t(i) * 6];
+            OctreeNode& n = cells.nodes[size_t(i)];
+            n.bounds = Aabb::of({b[0], b[1], b[2]}, {b[3], b[4], b[5]});
+            n.first_child = first_child[size_t(i)];
+            n.cell = node_cell[size_t(i)];
+            n.parent = node_parent[size_t(i)];
+            if (n.first_child != -1 && (n.first_child <= i || int64_t(n.first_child) + 8 > nodes)) {
+                r.fail(fmt::format("/cells/octree/first_child[{}] = {} is not -1 or a node after it with 8 children "
+                                   "below {}",
+                                   i, n.first_child, nodes));
+            }
+            if (n.cell < -1 || n.cell >= count) {
+                r.fail(fmt::format("/cells/octree/cell[{}] = {} is not -1 or a cell index below {}", i, n.cell, count));
+            }
+            if (n.parent < -1 || n.parent >= nodes) {
+                r.fail(fmt::format("/cells/octree/parent[{}] = {} is not -1 or a node index below {}", i, n.parent,
+                                   nodes));
+            }
+        }
+    }
+    cells.cells.resize(size_t(count));
+    const int64_t parent_limit = cells.kind == CellSet::Kind::kOctree ? nodes : 0;
+    for (size_t i = 0; i < cells.cells.size(); ++i) {
+        const float* b = &flat[i * 6];
+        cells.cells[i].bounds = Aabb::of({b[0], b[1], b[2]}, {b[3], b[4], b[5]});
+        if (parents[i] < -1 || parents[i] >= parent_limit) {
+            r.fail(fmt::format("/cells/parent[{}] = {} is not -1 or an octree node index below {}", i, parents[i],
+                               parent_limit));
+        }
+        cells.cells[i].parent = parents[i];
+    }
+    if (r.has_attr(g.get(), "cell_count") && r.int_attr(g.get(), where, "cell_count") != count) {
+        r.fail(fmt::format("/cells attribute cell_count disagrees with /cells/bounds ({} cells)", count));
+    }
+    cells.grid_to_cell = r.numeric_dataset<int32_t>(g.get(), where, "grid_to_cell", H5T_NATIVE_INT32,
+                                                    {int64_t(grid_size)}, H5T_INTEGER);
+    const int64_t target = cells.kind == CellSet::Kind::kOctree ? nodes : count;
+    for (size_t i = 0; i < cells.grid_to_cell.size(); ++i) {
+        const int32_t c = cells.grid_to_cell[i];
+        if (c < -1 || c >= target) {
+            r.fail(fmt::format("/cells/grid_to_cell[{}] = {} is not -1 or a {} index below {}", i, c,
+                               cells.kind == CellSet::Kind::kOctree ? "root node" : "cell", target));
+        }
+    }
+    cells.view = read_mask(r, g.get(), "/cells/view");
+    cells.eyes = read_mask(r, g.get(), "/cells/eyes");
+}
+
+void read_pvs(const Reader& r, hid_t root, BakeData& bake) {
+    const std::string where = "/pvs";
+    Handle g = r.open_group(root, where);
+    const uint32_t objects = uint32_t(bake.objects.size());
+    const uint32_t cells = uint32_t(bake.cells.size());
+    if (r.int_attr(g.get(), where, "object_count") != objects) {
+        r.fail(fmt::format("/pvs attribute object_count disagrees with /objects ({} objects)", objects));
+    }
+    if (r.int_attr(g.get(), where, "cell_count") != cells) {
+        r.fail(fmt::format("/pvs attribute cell_count disagrees with /cells ({} cells)", cells));
+    }
+    const uint32_t row_bytes = bytes_per_row(objects);
+    std::vector<int64_t> rows_shape = {-1, row_bytes};
+    const std::vector<uint8_t> rows =
+        r.numeric_dataset<uint8_t>(g.get(), where, "rows", H5T_NATIVE_UINT8, rows_shape, H5T_INTEGER);
+    const int64_t unique_rows = rows_shape[0];
+    if (unique_rows > int64_t(cells)) {
+        r.fail(fmt::format("/pvs/rows has {} rows, more than the {} cells", unique_rows, cells));
+    }
+    if (r.has_attr(g.get(), "unique_rows") && r.int_attr(g.get(), where, "unique_rows") != unique_rows) {
+        r.fail(fmt::format("/pvs attribute unique_rows disagrees with /pvs/rows ({} rows)", unique_rows));
+    }
+    const uint8_t mask = last_byte_mask(objects);
+    for (int64_t i = 0; row_bytes > 0 && i < unique_rows; ++i) {
+        if (rows[size_t(i) * row_bytes + row_bytes - 1] & ~mask) {
+            r.fail(fmt::format("/pvs/rows row {} sets bits beyond object {}", i, objects - 1));
+        }
+    }
+    const std::vector<uint32_t> cell_row =
+        r.numeric_dataset<uint32_t>(g.get(), where, "cell_row", H5T_NATIVE_UINT32, {cells}, H5T_INTEGER);
+    bake.pvs = PvsSet::make(cells, objects);
+    for (uint32_t c = 0; c < cells; ++c) {
+        if (int64_t(cell_row[c]) >= unique_rows) {
+            r.fail(fmt::format("/pvs/cell_row[{}] = {} is not below the {} rows of /pvs/rows", c, cell_row[c],
+                               unique_rows));
+        }
+        const uint8_t* bytes = rows.data() + size_t(cell_row[c]) * row_bytes;
+        uint64_t* words = bake.pvs.row(c);
+        for (uint32_t j = 0; j < row_bytes; ++j) words[j / 8] |= uint64_t(bytes[j]) << (8 * (j % 8));
+    }
+}
+
+void read_leak_path(const Reader& r, hid_t root, BakeData& bake) {
+    std::vector<int64_t> shape = {-1, 3};
+    const std::vector<float> flat =
+        r.numeric_dataset<float>(root, "/", "leak_path", H5T_NATIVE_FLOAT, shape, H5T_FLOAT);
+    for (size_t i = 0; i + 2 < flat.size(); i += 3)
+        bake.leak_path.emplace_back(flat[i], flat[i + 1], flat[i + 2]);
+}
+
+void read_verification(const Reader& r, hid_t root, BakeData& bake) {
+    const std::string where = "/verification";
+    Handle g = r.open_group(root, where);
+    VerificationRecord& v = bake.verification;
+    const int64_t ran = r.int_attr(g.get(), where, "ran");
+    if (ran != 0 && ran != 1) r.fail("/verification attribute ran is not 0 or 1");
+    v.ran = ran == 1;
+    v.figures = r.named_values(g.get(), where + "/figures");
+    const int64_t cells = int64_t(bake.cells.size());
+    std::vector<int64_t> shape = {-1};
+    v.cell_sampled_visible = r.numeric_dataset<uint32_t>(g.get(), where, "cell_sampled_visible",
+                                                         H5T_NATIVE_UINT32, shape, H5T_INTEGER);
+    if (shape[0] != 0 && shape[0] != cells) {
+        r.fail(
+            fmt::format("/verification/cell_sampled_visible has {} entries, expected 0 or {} (one per cell)",
+                        shape[0], cells));
+    }
+
+    const std::string full = where + "/misses";
+    Handle ds = r.open_dataset(g.get(), where, "misses");
+    r.check_miss_type(H5Dget_type(ds.get()), full);
+    const std::vector<hsize_t> dims = r.dataset_dims(ds.get(), full);
+    if (dims.size() != 1) r.fail(full + " is not one-dimensional");
+    r.check_budget(dims[0], 64, full);
+    r.check_storage(ds.get(), full);
+    std::vector<MissRecord> misses(static_cast<size_t>(dims[0]));
+    if (!misses.empty()) {
+        Handle mem_type = miss_type(r.site(), false);
+        r.site().check(H5Dread(ds.get(), mem_type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, misses.data()),
+                       "cannot read " + full);
+    }
+    for (size_t i = 0; i < misses.size(); ++i) {
+        const MissRecord& m = misses[i];
+        if (m.cell >= bake.cells.size() || m.object >= bake.objects.size()) {
+            r.fail(fmt::format("{}[{}] names cell {} and object {}, out of range ({} cells, {} objects)",
+                               full, i, m.cell, m.object, bake.cells.size(), bake.objects.size()));
+        }
+        v.misses.push_back(Miss{m.cell,
+                                m.object,
+                                {m.eye[0], m.eye[1], m.eye[2]},
+                                {m.direction[0], m.direction[1], m.direction[2]},
+                                m.distance_m});
+    }
+}
+
+}  // namespace
+
+void write_bake_file(const std::string& path, const BakeData& bake) {
+    check_writable(path, bake);
+    const std::filesystem::path folder = std::filesystem::path(path).parent_path();
+    std::error_code ec;
+    if (!folder.empty() && !std::filesystem::is_directory(folder, ec)) {
+        throw io_error(fmt::format("{}: cannot write: folder {} does not exist", path, folder.string()));
+    }
+
+    QuietHdf5 quiet;
+    AtomicOutput out(path);
+    {
+        const Site site(path, ErrorKind::kIo, "cannot write the bake file: ");
+        Handle fapl = file_access_list(site);
+        Handle fcpl = site.handle(H5Pcreate(H5P_FILE_CREATE), H5Pclose, "cannot create a file creation list");
+        const unsigned order = H5P_CRT_ORDER_TRACKED | H5P_CRT_ORDER_INDEXED;
+        site.check(H5Pset_link_creation_order(fcpl.get(), order), "cannot track link order");
+        site.check(H5Pset_attr_creation_order(fcpl.get(), order), "cannot track attribute order");
+        site.check(H5Pset_obj_track_times(fcpl.get(), false), "cannot turn off object times");
+        Handle file = site.handle(H5Fcreate(out.temp_path().c_str(), H5F_ACC_TRUNC, fcpl.get(), fapl.get()),
+                                  H5Fclose, "cannot create " + out.temp_path());
+        {
+            Writer w(site);
+            Handle root = site.handle(H5Gopen2(file.get(), "/", H5P_DEFAULT), H5Gclose, "cannot open /");
+            write_root(w, root.get(), bake);
+            write_parameters(w, root.get(), bake.parameters);
+            write_objects(w, root.get(), bake.objects);
+            write_cells(w, root.get(), bake.cells);
+            write_pvs(w, root.get(), bake);
+            write_leak_path(w, root.get(), bake.leak_path);
+            w.named_values(root.get(), "/", "figures", bake.figures, nullptr);
+            w.named_values(root.get(), "/", "timings", bake.timings_s, "s");
+            write_verification(w, root.get(), bake.verification);
+        }
+        site.check(file.close(), "cannot finish writing " + out.temp_path());
+    }
+    out.commit();
+}
+
+BakeData read_bake_file(const std::string& path) {
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) {
+        if (errno == ENOENT) throw bad_input(path + ": no such file");
+        throw io_error(fmt::format("{}: cannot read: {}", path, std::strerror(errno)));
+    }
+    ::close(fd);
+    std::error_code ec;
+    if (std::filesystem::is_directory(path, ec)) throw bad_input(path + ": is a folder, not a bake file");
+
+    QuietHdf5 quiet;
+    if (H5Fis_hdf5(path.c_str()) <= 0) {
+        H5Eclear2(H5E_DEFAULT);
+        throw bad_input(path + ": not an HDF5 file");
+    }
+    const Site site(path, ErrorKind::kBadInput, "");
+    const uint64_t file_bytes = std::filesystem::file_size(path, ec);
+    const Reader r(site, ec ? 0 : file_bytes);
+    BakeData bake;
+    try {
+        Handle fapl = file_access_list(site);
+        Handle file = site.handle(H5Fopen(path.c_str(), H5F_ACC_RDONLY, fapl.get()), H5Fclose,
+                                  "cannot open the HDF5 file (truncated or damaged?)");
+        Handle root = site.handle(H5Gopen2(file.get(), "/", H5P_DEFAULT), H5Gclose, "cannot open /");
+        read_root(r, root.get(), bake);
+        read_parameters(r, root.get(), bake);
+        read_objects(r, root.get(), bake);
+        read_cells(r, root.get(), bake);
+        read_pvs(r, root.get(), bake);
+        read_leak_path(r, root.get(), bake);
+        bake.figures = r.named_values(root.get(), "/figures");
+        bake.timings_s = r.named_values(root.get(), "/timings");
+        read_verification(r, root.get(), bake);
+    } catch (const std::bad_alloc&) {
+        site.fail("a dataset is too large to load (damaged file?)");
+    } catch (const std::length_error&) {
+        site.fail("a dataset is too large to load (damaged file?)");
+    }
+    return bake;
+}
+
+}  // namespace pvs
