@@ -63,7 +63,6 @@ uint64_t clip_grid_to_view(Context& ctx, CellSet& cells, const VoxelMask& view, 
     if (view.empty()) return 0;
     std::vector<Cell> kept;
     kept.reserve(cells.cells.size());
-    const float s = view.voxel_size_m;
     uint64_t dropped = 0;
     for (size_t g = 0; g < cells.grid_to_cell.size(); ++g) {
         const int32_t c = cells.grid_to_cell[g];
