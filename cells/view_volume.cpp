@@ -164,6 +164,8 @@ ViewVolume build_view_volume(Context& ctx, const ViewVolumeConfig& config, const
     }
     vv.eyes = to_mask(grid, std::move(eyes));
     vv.view = to_mask(grid, std::move(view));
+    vv.grid = grid;
+    vv.touched = std::move(touched);
     ctx.info(fmt::format("view volume ({}): {:.0f} m3 of eye space, {:.0f} m3 with the walls, {:.1f}% of the world's "
                          "bounds ({:.0f} m3){}",
                          fmt::join(vv.sources, " & "), vv.eye_volume_m3, vv.view_volume_m3,

@@ -20,6 +20,7 @@
 #include "core/config.h"
 #include "core/context.h"
 #include "core/world.h"
+#include "occluders/voxels.h"
 
 #include <string>
 #include <vector>
@@ -31,6 +32,8 @@ struct ViewVolume {
     std::vector<std::string> sources;  // "boxes", "flood", "play_height", or "world_bounds"
     VoxelMask eyes;
     VoxelMask view;
+    VoxelGrid grid;          // the voxels of the masks (when voxelized)
+    BitVolume touched;       // voxels an opaque triangle touches (for occluder synthesis)
     Aabb view_bounds;        // bounds of `view` (or the world bounds)
     double eye_volume_m3 = 0.0;
     double view_volume_m3 = 0.0;
