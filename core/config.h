@@ -53,6 +53,18 @@ struct ViewVolumeConfig {
 };
 constexpr double kDefaultVoxelSizeM = 0.25;
 
+// Occluder synthesis (occluders/, pvs/occluder_synthesis.h).
+struct OccluderConfig {
+    uint32_t max_occluders = 512;        // [Limit: >= 1] boxes kept at most
+    double min_occluder_volume_m3 = 0.5; // [Limit: >= 0] [Units: m3] smaller boxes are dropped
+    double min_added_share = 0.05;       // [Limit: 0..1] keep a box only while this share of it is new
+    uint32_t probe_eyes = 2048;          // [Limit: >= 0] eye points of the sight probe (0 = off)
+    uint32_t probe_rays_per_eye = 4096;  // [Limit: >= 1] directions over the sphere per probe eye
+    uint32_t check_eyes = 4096;          // [Limit: >= 1] eye points of the ray check of every box
+    uint32_t check_rays_per_eye = 4;     // [Limit: >= 1] rays from each eye point to each box
+    uint64_t check_seed = 7;
+};
+
 // Ray sampling from eye points in each cell: the sampled (aggressive) PVS and the verifier share it.
 struct SampleConfig {
     uint32_t eyes_per_cell = 16;   // [Limit: >= 1] stratified random eye points per cell
@@ -79,6 +91,7 @@ struct BakeConfig {
     RunConfig run;
     ViewVolumeConfig view;
     CellConfig cells;
+    OccluderConfig occluders;
     SampledPvsConfig sampled;
     VerifyConfig verify;
 };
@@ -122,6 +135,20 @@ void visit_options(Config& c, Visitor&& v) {
     v(OptionSpec{"--max-cells", "cells.max_cells", "cells", "octree: stop splitting at this many cells, 0 = no limit",
                  0, 1e9},
       c.cells.max_cells);
+    v(OptionSpec{"--max-occluders", "occluders.max_occluders", "boxes", "occluders: boxes kept at most", 1, 1e7},
+      c.occluders.max_occluders);
+    v(OptionSpec{"--min-occluder-volume", "occluders.min_occluder_volume_m3", "m3",
+                 "occluders: drop boxes smaller than this", 0, 1e12},
+      c.occluders.min_occluder_volume_m3);
+    v(OptionSpec{"--occluder-probe-eyes", "occluders.probe_eyes", "eyes",
+                 "occluders: eye points whose rays over the sphere carve seen voxels out of the solid, 0 = off", 0, 1e7},
+      c.occluders.probe_eyes);
+    v(OptionSpec{"--occluder-probe-rays", "occluders.probe_rays_per_eye", "rays",
+                 "occluders: rays per probe eye", 1, 1e8},
+      c.occluders.probe_rays_per_eye);
+    v(OptionSpec{"--occluder-check-eyes", "occluders.check_eyes", "eyes",
+                 "occluders: eye points whose rays check every box against the triangles", 1, 1e7},
+      c.occluders.check_eyes);
     v(OptionSpec{"--eyes", "sampled.eyes_per_cell", "eyes", "sampled mode: eye points per cell", 1, 1e6},
       c.sampled.rays.eyes_per_cell);
     v(OptionSpec{"--rays", "sampled.rays_per_eye", "rays", "sampled mode: rays per eye point", 1, 1e8},

@@ -9,7 +9,9 @@
 #include "io/file_hash.h"
 #include "io/gltf_loader.h"
 #include "pvs/bake.h"
+#include "io/gltf_writer.h"
 #include "pvs/embree_scene.h"
+#include "pvs/occluder_synthesis.h"
 #include "pvs/report.h"
 #include "pvs/verify.h"
 
@@ -19,6 +21,7 @@
 #include <omp.h>
 
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <string_view>
 #include <type_traits>
@@ -26,6 +29,19 @@
 namespace pvs {
 
 namespace {
+
+// Peak resident memory of this process (VmHWM), MiB; 0 when unknown.
+double peak_memory_mb() {
+    std::FILE* f = std::fopen("/proc/self/status", "r");
+    if (!f) return 0.0;
+    char line[256];
+    double kb = 0.0;
+    while (std::fgets(line, sizeof line, f)) {
+        if (std::strncmp(line, "VmHWM:", 6) == 0) kb = std::strtod(line + 6, nullptr);
+    }
+    std::fclose(f);
+    return kb / 1024.0;
+}
 
 // Binds the declared options whose key starts with one of `prefixes` to CLI11 options of `app`.
 void bind_options(CLI::App& app, BakeConfig& config, std::initializer_list<std::string_view> prefixes) {
@@ -66,6 +82,35 @@ std::vector<double> parse_numbers(const std::string& text, size_t count, const c
     return out;
 }
 
+// The view volume options, shared by bake and occluders.
+struct ViewArgs {
+    std::vector<std::string> boxes, seeds;
+    bool no_world_seeds = false, no_world_boxes = false;
+};
+
+void add_view_options(CLI::App& app, ViewArgs& args) {
+    app.add_option("--view-box", args.boxes, "a box where eyes can be: minx,miny,minz,maxx,maxy,maxz [m]; repeat for more")
+        ->type_name("BOX");
+    app.add_option("--view-seed", args.seeds, "a point in the playable space: x,y,z [m]; repeat for more")
+        ->type_name("POINT");
+    app.add_flag("--no-world-seeds", args.no_world_seeds, "ignore the world's pvs_view_seed nodes");
+    app.add_flag("--no-world-boxes", args.no_world_boxes, "ignore the world's pvs_view_volume nodes");
+}
+
+void apply_view_args(const ViewArgs& args, ViewVolumeConfig& view) {
+    for (const std::string& text : args.boxes) {
+        const std::vector<double> v = parse_numbers(text, 6, "--view-box");
+        view.boxes.push_back(Aabb::of(glm::vec3(v[0], v[1], v[2]), glm::vec3(v[3], v[4], v[5])));
+        if (view.boxes.back().is_empty()) throw bad_input(fmt::format("--view-box {}: min must not exceed max", text));
+    }
+    for (const std::string& text : args.seeds) {
+        const std::vector<double> v = parse_numbers(text, 3, "--view-seed");
+        view.seeds.emplace_back(v[0], v[1], v[2]);
+    }
+    view.use_world_seeds = !args.no_world_seeds;
+    view.use_world_boxes = !args.no_world_boxes;
+}
+
 struct CommonOptions {
     bool quiet = false;
     bool verbose = false;
@@ -92,6 +137,73 @@ void set_threads(int threads) {
 void write_report(const std::string& path, const BakeData& bake, const Context& ctx) {
     if (path.empty()) return;
     write_file_atomically(path, bake_report_json(bake, ctx.warnings()));
+}
+
+// occluders WORLD -o boxes.glb
+int run_occluders(Context& ctx, const BakeConfig& config, const std::string& world_path, const std::string& out_path,
+                  const std::string& report_path) {
+    ScopedTimer total(ctx, "total");
+    set_threads(config.run.threads);
+    const World world = load_world(ctx, world_path);
+    const ViewVolume view = build_view_volume(ctx, config.view, world);
+    RayScene scene(ctx, world, BuildQuality::kMedium, config.run.threads);
+    OccluderFigures figures;
+    const std::vector<Occluder> boxes = synthesize_occluders(ctx, config.occluders, world, view, scene, figures);
+    SceneDesc glb;
+    glb.materials.push_back(SceneMaterial{"occluder", {0.9f, 0.3f, 0.2f, 0.5f}, SceneMaterial::Alpha::kBlend, true});
+    uint32_t written = 0;
+    for (size_t i = 0; i < boxes.size(); ++i) {
+        if (!boxes[i].proven) continue;
+        glb.nodes.push_back(make_box_node(fmt::format("occluder_{}", i), boxes[i].box, 0));
+        ++written;
+    }
+    if (!view.leak_path.empty()) {
+        write_file_atomically(out_path + ".leak.obj", leak_path_obj(view.leak_path));
+    }
+    if (glb.nodes.empty()) {
+        ctx.warn("occluders: no box passed; writing an empty scene");
+        SceneNode marker;
+        marker.name = "no_occluders";
+        glb.nodes.push_back(marker);
+    }
+    write_glb(glb, out_path);
+    if (!report_path.empty()) {
+        nlohmann::ordered_json j;
+        j["tool"] = "pvsbake";
+        j["version"] = tool_version();
+        j["world"] = world_path;
+        j["objects"] = world.objects.size();
+        j["triangles"] = world.triangles.size();
+        j["view_voxel_size_m"] = view.voxelized ? view.grid.voxel_size_m : 0.0f;
+        j["solid_m3"] = figures.solid_m3;
+        j["boxes_grown"] = figures.grown;
+        j["boxes_kept"] = figures.kept;
+        j["boxes_rejected_by_ray_check"] = figures.rejected_by_rays;
+        j["boxes_written"] = written;
+        j["covered_m3"] = figures.covered_m3;
+        j["covered_share_of_solid"] = figures.solid_m3 > 0 ? figures.covered_m3 / figures.solid_m3 : 0.0;
+        j["check_rays"] = figures.check_rays;
+        j["probe_rays"] = figures.probe_rays;
+        j["probe_rays_into_solid"] = figures.probe_rays_into_solid;
+        j["probe_carved_voxels"] = figures.probe_carved_voxels;
+        nlohmann::ordered_json t = nlohmann::ordered_json::object();
+        for (const auto& [k, v] : ctx.timings()) t[k] = v;
+        j["timings_s"] = t;
+        j["peak_memory_mb"] = peak_memory_mb();
+        nlohmann::ordered_json arr = nlohmann::ordered_json::array();
+        for (const Occluder& o : boxes) {
+            arr.push_back({{"min", {o.box.min.x, o.box.min.y, o.box.min.z}},
+                           {"max", {o.box.max.x, o.box.max.y, o.box.max.z}},
+                           {"voxel_size_m", o.voxel_size_m},
+                           {"proven", o.proven},
+                           {"objects", o.objects}});
+        }
+        j["boxes"] = arr;
+        j["warnings"] = ctx.warnings();
+        write_file_atomically(report_path, j.dump(2) + "\n");
+    }
+    ctx.info(fmt::format("wrote {} ({} boxes)", out_path, written));
+    return kExitOk;
 }
 
 double figure_or(const NamedValues& values, const std::string& key, double fallback) {
@@ -255,15 +367,8 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
                      "--min-cell-size")
         ->check(CLI::IsMember({"grid", "octree"}))
         ->capture_default_str();
-    std::vector<std::string> view_boxes, view_seeds;
-    bool no_world_seeds = false, no_world_boxes = false;
-    bake->add_option("--view-box", view_boxes,
-                     "a box where eyes can be: minx,miny,minz,maxx,maxy,maxz [m]; repeat for more")
-        ->type_name("BOX");
-    bake->add_option("--view-seed", view_seeds, "a point in the playable space: x,y,z [m]; repeat for more")
-        ->type_name("POINT");
-    bake->add_flag("--no-world-seeds", no_world_seeds, "ignore the world's pvs_view_seed nodes");
-    bake->add_flag("--no-world-boxes", no_world_boxes, "ignore the world's pvs_view_volume nodes");
+    ViewArgs view_args;
+    add_view_options(*bake, view_args);
     bind_options(*bake, config, {"run.", "view.", "cells.", "sampled.", "verify."});
     add_common(*bake, common);
 
@@ -276,6 +381,16 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
     verify->add_flag("--no-write", no_write, "leave the bake file as it is");
     bind_options(*verify, config, {"run.", "verify."});
     add_common(*verify, common);
+
+    CLI::App* occ = app.add_subcommand(
+        "occluders", "synthesize occluder boxes inside the world's opaque solid and write them as glTF (.glb)");
+    occ->add_option("world", world_path, "the world, glTF 2.0 (.gltf or .glb)")->required();
+    occ->add_option("-o,--output", out_path, "the boxes, as a .glb to open over the world")->required();
+    occ->add_option("--report", common.report_path, "also write a JSON report here");
+    ViewArgs occ_view_args;
+    add_view_options(*occ, occ_view_args);
+    bind_options(*occ, config, {"run.", "view.", "occluders."});
+    add_common(*occ, common);
 
     CLI::App* info = app.add_subcommand("info", "what a bake file holds: world, counts, parameters, figures");
     info->add_option("bake", bake_path, "the bake file")->required();
@@ -290,7 +405,7 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
         bool known = false;
         for (const CLI::App* sub : app.get_subcommands({})) known |= sub->get_name() == argv[1];
         if (!known) {
-            if (log) std::fprintf(log, "error: unknown subcommand '%s' (use bake, verify, info or query; see pvsbake --help)\n", argv[1]);
+            if (log) std::fprintf(log, "error: unknown subcommand '%s' (use bake, verify, occluders, info or query; see pvsbake --help)\n", argv[1]);
             return kExitBadInput;
         }
     }
@@ -315,26 +430,19 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
     try {
         config.verify.enabled = !no_verify;
         if (bake->parsed()) {
-            for (const std::string& text : view_boxes) {
-                const std::vector<double> v = parse_numbers(text, 6, "--view-box");
-                config.view.boxes.push_back(Aabb::of(glm::vec3(v[0], v[1], v[2]), glm::vec3(v[3], v[4], v[5])));
-                if (config.view.boxes.back().is_empty()) {
-                    throw bad_input(fmt::format("--view-box {}: min must not exceed max", text));
-                }
-            }
-            for (const std::string& text : view_seeds) {
-                const std::vector<double> v = parse_numbers(text, 3, "--view-seed");
-                config.view.seeds.emplace_back(v[0], v[1], v[2]);
-            }
             config.cells.kind = cells_kind == "octree" ? CellKind::kOctree : CellKind::kGrid;
-            config.view.use_world_seeds = !no_world_seeds;
-            config.view.use_world_boxes = !no_world_boxes;
+            apply_view_args(view_args, config.view);
             validate(config);
             return run_bake(ctx, config, world_path, out_path, common.report_path);
         }
         if (verify->parsed()) {
             validate(config);
             return run_verify(ctx, config, world_path, bake_path, common.report_path, !no_write);
+        }
+        if (occ->parsed()) {
+            apply_view_args(occ_view_args, config.view);
+            validate(config);
+            return run_occluders(ctx, config, world_path, out_path, common.report_path);
         }
         if (info->parsed()) return run_info(bake_path, json, out);
         if (query->parsed()) return run_query(bake_path, point, json, out);

@@ -43,6 +43,11 @@ void see_through_filter(const RTCFilterFunctionNArguments* args) {
     }
 }
 
+// See-through triangles never block an occlusion query.
+void reject_all_filter(const RTCFilterFunctionNArguments* args) {
+    for (unsigned i = 0; i < args->N; ++i) args->valid[i] = 0;
+}
+
 void embree_error(void* user, RTCError code, const char* message) {
     auto* ctx = static_cast<Context*>(user);
     ctx->error(fmt::format("Embree error {}: {}", int(code), message ? message : ""));
@@ -134,7 +139,10 @@ RayScene::RayScene(Context& ctx, const World& world, BuildQuality quality, int t
                 ++k;
             }
         }
-        if (!want_opaque) rtcSetGeometryIntersectFilterFunction(geom, see_through_filter);
+        if (!want_opaque) {
+            rtcSetGeometryIntersectFilterFunction(geom, see_through_filter);
+            rtcSetGeometryOccludedFilterFunction(geom, reject_all_filter);
+        }
         rtcCommitGeometry(geom);
         const unsigned id = rtcAttachGeometry(impl_->scene, geom);
         rtcReleaseGeometry(geom);
@@ -249,6 +257,34 @@ void RayScene::trace_repeated(glm::vec3 origin, const glm::vec3* directions, uin
             if (opaque) break;
             tnear = std::nextafter(rh.ray.tfar, std::numeric_limits<float>::infinity());
         }
+    }
+}
+
+void RayScene::occluded_opaque(const glm::vec3* origins, const glm::vec3* directions, const float* tfar,
+                               uint32_t count, uint8_t* blocked) const {
+    ScopedFtz ftz;
+    RTCRay rays[kStreamSize];
+    for (uint32_t base = 0; base < count; base += kStreamSize) {
+        const uint32_t n = std::min(kStreamSize, count - base);
+        for (uint32_t i = 0; i < n; ++i) {
+            RTCRay& r = rays[i];
+            r.org_x = origins[base + i].x;
+            r.org_y = origins[base + i].y;
+            r.org_z = origins[base + i].z;
+            r.dir_x = directions[base + i].x;
+            r.dir_y = directions[base + i].y;
+            r.dir_z = directions[base + i].z;
+            r.tnear = 0.0f;
+            r.tfar = tfar[base + i];
+            r.time = 0.0f;
+            r.mask = 0xffffffffu;
+            r.id = i;
+            r.flags = 0;
+        }
+        RTCIntersectContext ictx;
+        rtcInitIntersectContext(&ictx);
+        rtcOccluded1M(impl_->scene, &ictx, rays, n, sizeof(RTCRay));
+        for (uint32_t i = 0; i < n; ++i) blocked[base + i] = rays[i].tfar < 0.0f ? 1 : 0;
     }
 }
 

@@ -50,7 +50,12 @@ public:
     void trace_repeated(glm::vec3 origin, const glm::vec3* directions, uint32_t count,
                         std::vector<RayTouch>& touches) const;
 
-    // Benchmark baseline: plain rtcOccluded1 per ray (opaque-only answer: is anything hit?). Returns the
+    // Is each segment origins[i] + t * directions[i], t in [0, tfar[i]], blocked by an OPAQUE triangle?
+    // (See-through triangles never block.) Writes 1 (blocked) or 0 into blocked[i]. Thread-safe.
+    void occluded_opaque(const glm::vec3* origins, const glm::vec3* directions, const float* tfar, uint32_t count,
+                         uint8_t* blocked) const;
+
+    // Benchmark baseline: plain rtcOccluded1 per ray (is any opaque triangle hit?). Returns the
     // number of rays that hit something.
     uint64_t occluded_baseline(glm::vec3 origin, const glm::vec3* directions, uint32_t count) const;
 

@@ -1,0 +1,445 @@
+// Occluder synthesis by greedy box growth in the solid voxels, then sort and cut (after Andújar et al.,
+// "Integrating Occlusion Culling and Levels of Detail through Hardly-Visible Sets", 2000, and the
+// occluder-skin idea of the largest boxes of inner voxels). The algorithm is described in boxes.h.
+//
+// Speed: "is this layer all solid" is O(1) with a 3D summed-area table of the NON-solid voxels. Its sums
+// are kept modulo 2^16 (2 bytes a voxel instead of 4): a box whose count is not 0 modulo 2^16 surely has
+// a non-solid voxel, and a box of fewer than 2^16 voxels whose count is 0 modulo 2^16 is surely all
+// solid. A larger box whose count is 0 modulo 2^16 is split in two along its longest axis and each half
+// checked again, so the answer is exact (no hashing, no probability). Seeds are found by a scan in
+// blocks of 64 voxels with stale upper bounds of the cube sizes they hold (two levels), so each seed size
+// costs a scan of one byte per 4096 voxels; the cube sizes of covered voxels are set to 0.
+#include "occluders/boxes.h"
+
+#include "core/error.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstring>
+
+namespace pvs {
+
+namespace {
+
+constexpr uint64_t kWrap = uint64_t(1) << 16;            // the summed-area table's modulus
+constexpr uint64_t kBlock = 64;                          // voxels per first-level block of the seed scan
+constexpr uint64_t kParallelVoxels = uint64_t(1) << 21;  // smaller grids build their table on one thread
+
+void validate(const BoxConfig& config) {
+    if (config.max_boxes < 1) {
+        throw bad_input(fmt::format("grow_boxes: --max-occluders must be >= 1 (got {})", config.max_boxes));
+    }
+    if (!(config.min_box_volume_m3 >= 0.0) || !std::isfinite(config.min_box_volume_m3)) {
+        throw bad_input(fmt::format("grow_boxes: --min-occluder-volume must be >= 0 m3 and finite (got {})",
+                                    config.min_box_volume_m3));
+    }
+    if (!(config.min_added_share >= 0.0 && config.min_added_share <= 1.0)) {
+        throw bad_input(
+            fmt::format("grow_boxes: min_added_share must be in 0..1 (got {})", config.min_added_share));
+    }
+}
+
+void check_input(const char* function, const VoxelGrid& grid, const BitVolume& solid) {
+    if (grid.dims.x < 0 || grid.dims.y < 0 || grid.dims.z < 0) {
+        throw internal_error(fmt::format("{}: negative grid dims {} x {} x {}", function, grid.dims.x,
+                                         grid.dims.y, grid.dims.z));
+    }
+    if (uint64_t(solid.words.size()) * 64 < grid.count()) {
+        throw internal_error(fmt::format("{}: the solid volume holds {} bits for a grid of {} voxels",
+                                         function, uint64_t(solid.words.size()) * 64, grid.count()));
+    }
+}
+
+double volume_m3(const VoxelGrid& grid, uint64_t voxels) {
+    const double s = double(grid.voxel_size_m);
+    return double(voxels) * s * s * s;
+}
+
+// Does this box (volume `volume`) add enough over the boxes kept before it?
+bool adds_enough(uint64_t added, uint64_t volume, double share) {
+    return added > 0 && double(added) >= share * double(volume);
+}
+
+uint64_t solid_count(const VoxelGrid& grid, const BitVolume& solid) {
+    const uint64_t n = grid.count(), full = n / 64;
+    uint64_t c = 0;
+    for (uint64_t w = 0; w < full; ++w) c += uint64_t(__builtin_popcountll(solid.words[w]));
+    if (n % 64) c += uint64_t(__builtin_popcountll(solid.words[full] & ((uint64_t(1) << (n % 64)) - 1)));
+    return c;
+}
+
+// ---- the fast path ------------------------------------------------------------------------------------
+
+// 3D summed-area table of non-solid voxels modulo 2^16: sums at (x, y, z) for x in 0..dims.x (and so on)
+// count the non-solid voxels of [0, x) x [0, y) x [0, z).
+struct EmptySums {
+    glm::ivec3 dims{0};
+    uint64_t sx = 0, sxy = 0;  // strides of y and z
+    std::vector<uint16_t> sums;
+
+    uint32_t at(int x, int y, int z) const {
+        return sums[uint64_t(x) + sx * uint64_t(y) + sxy * uint64_t(z)];
+    }
+
+    // Non-solid voxels of lo..hi (inclusive), modulo 2^16.
+    uint32_t count_mod(glm::ivec3 lo, glm::ivec3 hi) const {
+        const glm::ivec3 a = lo, b = hi + 1;
+        const uint32_t c = at(b.x, b.y, b.z) - at(a.x, b.y, b.z) - at(b.x, a.y, b.z) - at(b.x, b.y, a.z) +
+                           at(a.x, a.y, b.z) + at(a.x, b.y, a.z) + at(b.x, a.y, a.z) - at(a.x, a.y, a.z);
+        return c & uint32_t(kWrap - 1);
+    }
+
+    // Exact: is every voxel of lo..hi solid?
+    bool all_solid(glm::ivec3 lo, glm::ivec3 hi) const {
+        if (count_mod(lo, hi) != 0) return false;
+        const glm::ivec3 n = hi - lo + 1;
+        if (uint64_t(n.x) * uint64_t(n.y) * uint64_t(n.z) < kWrap) return true;
+        // 0 modulo 2^16 but big enough to hold 2^16 non-solid voxels: check the halves.
+        const int axis = n.x >= n.y && n.x >= n.z ? 0 : (n.y >= n.z ? 1 : 2);
+        glm::ivec3 hi0 = hi, lo1 = lo;
+        hi0[axis] = lo[axis] + n[axis] / 2 - 1;
+        lo1[axis] = hi0[axis] + 1;
+        return all_solid(lo, hi0) && all_solid(lo1, hi);
+    }
+};
+
+EmptySums build_empty_sums(const VoxelGrid& grid, const BitVolume& solid) {
+    EmptySums t;
+    t.dims = grid.dims;
+    const int nx = grid.dims.x, ny = grid.dims.y, nz = grid.dims.z;
+    t.sx = uint64_t(nx) + 1;
+    t.sxy = t.sx * (uint64_t(ny) + 1);
+    t.sums.assign(t.sxy * (uint64_t(nz) + 1), 0);
+    uint16_t* s = t.sums.data();
+    const uint64_t sx = t.sx, sxy = t.sxy;
+    const bool parallel = grid.count() >= kParallelVoxels;
+    // Along x: running counts of each row. Rows are independent.
+#pragma omp parallel for schedule(static) if (parallel)
+    for (int64_t r = 0; r < int64_t(ny) * nz; ++r) {
+        const int y = int(r % ny), z = int(r / ny);
+        const uint64_t src = grid.index(0, y, z);
+        uint16_t* row = s + sx * uint64_t(y + 1) + sxy * uint64_t(z + 1);
+        uint16_t run = 0;
+        for (int x = 0; x < nx; ++x) {
+            run = uint16_t(run + (solid.get(src + uint64_t(x)) ? 0 : 1));
+            row[x + 1] = run;
+        }
+    }
+    // Along y, then along z: add the previous row (slice) to each row (slice).
+#pragma omp parallel for schedule(static) if (parallel)
+    for (int z = 1; z <= nz; ++z) {
+        for (int y = 2; y <= ny; ++y) {
+            uint16_t* row = s + sx * uint64_t(y) + sxy * uint64_t(z);
+            const uint16_t* prev = row - sx;
+            for (uint64_t x = 0; x < sx; ++x) row[x] = uint16_t(row[x] + prev[x]);
+        }
+    }
+#pragma omp parallel for schedule(static) if (parallel)
+    for (int y = 1; y <= ny; ++y) {
+        for (int z = 2; z <= nz; ++z) {
+            uint16_t* row = s + sx * uint64_t(y) + sxy * uint64_t(z);
+            const uint16_t* prev = row - sxy;
+            for (uint64_t x = 0; x < sx; ++x) row[x] = uint16_t(row[x] + prev[x]);
+        }
+    }
+    return t;
+}
+
+// For every voxel, the edge of the largest all-solid cube with the voxel as its min corner, capped at
+// kMaxSeedCube (0 for non-solid voxels):
+//   cube(p) = solid(p) ? 1 + min over the 7 voxels p + e, e in {0, 1}^3 \ {0}, of cube(p + e) : 0
+// (the cube of edge k at p is p and the seven cubes of edge k - 1 at the p + e). Capping commutes with
+// the recurrence, so the capped values are exact up to the cap. Sequential: rows (y, z) on one
+// anti-diagonal y + z could run in parallel, but a fork and join per diagonal (hundreds of them) cost
+// more than they save, and far more on a loaded machine.
+std::vector<uint8_t> build_seed_cubes(const VoxelGrid& grid, const BitVolume& solid) {
+    const int nx = grid.dims.x, ny = grid.dims.y, nz = grid.dims.z;
+    std::vector<uint8_t> cube(grid.count(), 0);
+    for (int d = ny - 1 + nz - 1; d >= 0; --d) {
+        const int z_lo = std::max(0, d - (ny - 1)), z_hi = std::min(nz - 1, d);
+        for (int z = z_lo; z <= z_hi; ++z) {
+            const int y = d - z;
+            const uint64_t base = grid.index(0, y, z);
+            uint8_t* c = cube.data() + base;
+            if (y + 1 >= ny || z + 1 >= nz) {
+                for (int x = 0; x < nx; ++x) c[x] = solid.get(base + uint64_t(x)) ? 1 : 0;
+                continue;
+            }
+            const uint8_t* cy = cube.data() + grid.index(0, y + 1, z);
+            const uint8_t* cz = cube.data() + grid.index(0, y, z + 1);
+            const uint8_t* cyz = cube.data() + grid.index(0, y + 1, z + 1);
+            c[nx - 1] = solid.get(base + uint64_t(nx - 1)) ? 1 : 0;
+            for (int x = nx - 2; x >= 0; --x) {
+                if (!solid.get(base + uint64_t(x))) {
+                    c[x] = 0;
+                    continue;
+                }
+                const uint8_t m =
+                    std::min({c[x + 1], cy[x], cy[x + 1], cz[x], cz[x + 1], cyz[x], cyz[x + 1]});
+                c[x] = m >= kMaxSeedCube ? uint8_t(kMaxSeedCube) : uint8_t(m + 1);
+            }
+        }
+    }
+    return cube;
+}
+
+// Grows the box from the cube of edge `edge` at `seed`: one layer at a time, round-robin over
+// +x, -x, +y, -y, +z, -z, while the layer is inside the grid and all solid.
+VoxelBox grow_from(const EmptySums& sums, glm::ivec3 seed, int edge) {
+    VoxelBox b{seed, seed + (edge - 1)};
+    for (bool grew = true; grew;) {
+        grew = false;
+        for (int dir = 0; dir < 6; ++dir) {
+            const int axis = dir / 2;
+            glm::ivec3 lo = b.lo, hi = b.hi;
+            if (dir % 2 == 0) {
+                if (b.hi[axis] + 1 >= sums.dims[axis]) continue;
+                lo[axis] = hi[axis] = b.hi[axis] + 1;
+            } else {
+                if (b.lo[axis] == 0) continue;
+                lo[axis] = hi[axis] = b.lo[axis] - 1;
+            }
+            if (!sums.all_solid(lo, hi)) continue;
+            b.lo = glm::min(b.lo, lo);
+            b.hi = glm::max(b.hi, hi);
+            grew = true;
+        }
+    }
+    return b;
+}
+
+// Bits lo..hi (inclusive) of a bit volume: how many are set, and set them.
+uint64_t count_bits(const BitVolume& bits, uint64_t lo, uint64_t hi) {
+    const uint64_t w0 = lo >> 6, w1 = hi >> 6;
+    const uint64_t m0 = ~uint64_t(0) << (lo & 63), m1 = ~uint64_t(0) >> (63 - (hi & 63));
+    if (w0 == w1) return uint64_t(__builtin_popcountll(bits.words[w0] & m0 & m1));
+    uint64_t c = uint64_t(__builtin_popcountll(bits.words[w0] & m0)) +
+                 uint64_t(__builtin_popcountll(bits.words[w1] & m1));
+    for (uint64_t w = w0 + 1; w < w1; ++w) c += uint64_t(__builtin_popcountll(bits.words[w]));
+    return c;
+}
+
+void set_bits(BitVolume& bits, uint64_t lo, uint64_t hi) {
+    const uint64_t w0 = lo >> 6, w1 = hi >> 6;
+    const uint64_t m0 = ~uint64_t(0) << (lo & 63), m1 = ~uint64_t(0) >> (63 - (hi & 63));
+    if (w0 == w1) {
+        bits.words[w0] |= m0 & m1;
+        return;
+    }
+    bits.words[w0] |= m0;
+    bits.words[w1] |= m1;
+    for (uint64_t w = w0 + 1; w < w1; ++w) bits.words[w] = ~uint64_t(0);
+}
+
+uint8_t block_max(const uint8_t* v, uint64_t n) {
+    uint8_t m = 0;
+    for (uint64_t i = 0; i < n; ++i) m = std::max(m, v[i]);
+    return m;
+}
+
+}  // namespace
+
+std::vector<VoxelBox> grow_boxes(Context& ctx, const VoxelGrid& grid, const BitVolume& solid,
+                                 const BoxConfig& config, BoxStats* stats) {
+    ScopedTimer timer(ctx, "boxes");
+    validate(config);
+    check_input("grow_boxes", grid, solid);
+    BoxStats st;
+    std::vector<VoxelBox> kept;
+    const uint64_t n = grid.count();
+    if (n == 0) {
+        if (stats) *stats = st;
+        return kept;
+    }
+    st.solid_voxels = solid_count(grid, solid);
+
+    // 1. Seeds and the summed-area table.
+    std::vector<VoxelBox> grown;  // those of at least min_box_volume_m3, in grown order
+    {
+        const EmptySums sums = build_empty_sums(grid, solid);
+        std::vector<uint8_t> cube = build_seed_cubes(grid, solid);
+        std::array<uint64_t, kMaxSeedCube + 1> sizes{};
+        for (uint8_t c : cube) ++sizes[c];
+        // Upper bounds of the cube sizes in blocks of 64 voxels (l1) and of 64 blocks (l2). They only go
+        // stale upward (covering sets cube sizes to 0) and are made exact again when scanned.
+        const uint64_t n1 = (n + kBlock - 1) / kBlock, n2 = (n1 + kBlock - 1) / kBlock;
+        std::vector<uint8_t> l1(n1), l2(n2);
+        for (uint64_t b = 0; b < n1; ++b)
+            l1[b] = block_max(&cube[b * kBlock], std::min(kBlock, n - b * kBlock));
+        for (uint64_t g = 0; g < n2; ++g)
+            l2[g] = block_max(&l1[g * kBlock], std::min(kBlock, n1 - g * kBlock));
+
+        // 2. and 3. Growth from the seeds in order, until the stop rule.
+        const uint64_t cap = uint64_t(kGrowFactor) * config.max_boxes;
+        bool stop = false;
+        ctx.progress_begin("boxes", 0, "boxes");
+        for (int s = kMaxSeedCube; s >= 1 && !stop; --s) {
+            if (sizes[size_t(s)] == 0) continue;
+            for (uint64_t g = 0; g < n2 && !stop; ++g) {
+                if (l2[g] < s) continue;
+                const uint64_t b_end = std::min(n1, (g + 1) * kBlock);
+                for (uint64_t b = g * kBlock; b < b_end && !stop; ++b) {
+                    if (l1[b] < s) continue;
+                    const uint64_t i_end = std::min(n, (b + 1) * kBlock);
+                    for (uint64_t i = b * kBlock; i < i_end && !stop; ++i) {
+                        if (cube[i] != s) continue;
+                        const VoxelBox box = grow_from(sums, grid.coords(i), s);
+                        ++st.grown;
+                        // Cover: no voxel of the box seeds again.
+                        for (int z = box.lo.z; z <= box.hi.z; ++z) {
+                            for (int y = box.lo.y; y <= box.hi.y; ++y) {
+                                std::memset(&cube[grid.index(box.lo.x, y, z)], 0,
+                                            size_t(box.hi.x - box.lo.x + 1));
+                            }
+                        }
+                        if (volume_m3(grid, box.volume()) >= config.min_box_volume_m3) {
+                            ctx.progress_advance(1);
+                            grown.push_back(box);
+                            stop = grown.size() >= cap;
+                        }
+                    }
+                    l1[b] = block_max(&cube[b * kBlock], i_end - b * kBlock);
+                }
+                l2[g] = block_max(&l1[g * kBlock], b_end - g * kBlock);
+            }
+        }
+        ctx.progress_end();
+    }  // frees the table and the cubes before the cut
+
+    // 4. Sort and cut.
+    std::stable_sort(grown.begin(), grown.end(),
+                     [](const VoxelBox& a, const VoxelBox& b) { return a.volume() > b.volume(); });
+    BitVolume cover;
+    cover.reset(n);
+    for (const VoxelBox& box : grown) {
+        if (kept.size() >= config.max_boxes) break;
+        const uint64_t volume = box.volume();
+        if (volume_m3(grid, volume) < config.min_box_volume_m3) continue;
+        uint64_t covered = 0;
+        for (int z = box.lo.z; z <= box.hi.z; ++z) {
+            for (int y = box.lo.y; y <= box.hi.y; ++y) {
+                covered += count_bits(cover, grid.index(box.lo.x, y, z), grid.index(box.hi.x, y, z));
+            }
+        }
+        if (!adds_enough(volume - covered, volume, config.min_added_share)) continue;
+        kept.push_back(box);
+        st.covered_voxels += volume - covered;
+        for (int z = box.lo.z; z <= box.hi.z; ++z) {
+            for (int y = box.lo.y; y <= box.hi.y; ++y) {
+                set_bits(cover, grid.index(box.lo.x, y, z), grid.index(box.hi.x, y, z));
+            }
+        }
+    }
+    st.kept = uint32_t(kept.size());
+    st.seconds = timer.seconds();
+    ctx.debug(fmt::format(
+        "boxes: {} solid voxels, {} boxes grown, {} kept covering {} voxels ({:.1f}%) in {:.3f} s",
+        st.solid_voxels, st.grown, st.kept, st.covered_voxels,
+        st.solid_voxels ? 100.0 * double(st.covered_voxels) / double(st.solid_voxels) : 0.0, st.seconds));
+    if (stats) *stats = st;
+    return kept;
+}
+
+// ---- the reference ------------------------------------------------------------------------------------
+
+std::vector<VoxelBox> grow_boxes_reference(const VoxelGrid& grid, const BitVolume& solid,
+                                           const BoxConfig& config) {
+    validate(config);
+    check_input("grow_boxes_reference", grid, solid);
+    const glm::ivec3 dims = grid.dims;
+    auto is_solid = [&](glm::ivec3 p) { return grid.inside(p) && solid.get(grid.index(p.x, p.y, p.z)); };
+    auto all_solid = [&](glm::ivec3 lo, glm::ivec3 hi) {
+        for (int z = lo.z; z <= hi.z; ++z)
+            for (int y = lo.y; y <= hi.y; ++y)
+                for (int x = lo.x; x <= hi.x; ++x)
+                    if (!is_solid({x, y, z})) return false;
+        return true;
+    };
+
+    // Seeds: the cube at each voxel grows while its next shell (the voxels whose largest offset from
+    // the corner is k) is solid; ordered by edge, then index.
+    struct Seed {
+        int edge;
+        uint64_t index;
+    };
+    std::vector<Seed> seeds;
+    for (uint64_t i = 0; i < grid.count(); ++i) {
+        const glm::ivec3 p = grid.coords(i);
+        int k = 0;
+        while (k < kMaxSeedCube) {
+            bool shell_solid = true;
+            for (int dz = 0; dz <= k && shell_solid; ++dz) {
+                for (int dy = 0; dy <= k && shell_solid; ++dy) {
+                    const bool whole_row = dz == k || dy == k;  // else only dx == k is on the shell
+                    for (int dx = whole_row ? 0 : k; dx <= k && shell_solid; ++dx) {
+                        shell_solid = is_solid(p + glm::ivec3(dx, dy, dz));
+                    }
+                }
+            }
+            if (!shell_solid) break;
+            ++k;
+        }
+        if (k > 0) seeds.push_back({k, i});
+    }
+    std::sort(seeds.begin(), seeds.end(), [](const Seed& a, const Seed& b) {
+        return a.edge != b.edge ? a.edge > b.edge : a.index < b.index;
+    });
+
+    // Growth.
+    std::vector<bool> covered(grid.count(), false);
+    std::vector<VoxelBox> grown;
+    const size_t cap = size_t(kGrowFactor) * config.max_boxes;
+    for (const Seed& seed : seeds) {
+        if (grown.size() >= cap) break;
+        if (covered[seed.index]) continue;
+        const glm::ivec3 p = grid.coords(seed.index);
+        VoxelBox b{p, p + (seed.edge - 1)};
+        bool grew = true;
+        while (grew) {
+            grew = false;
+            for (int dir = 0; dir < 6; ++dir) {
+                const int axis = dir / 2;
+                const int side = dir % 2 == 0 ? b.hi[axis] + 1 : b.lo[axis] - 1;  // the layer's coordinate
+                if (side < 0 || side >= dims[axis]) continue;
+                VoxelBox layer = b;
+                layer.lo[axis] = layer.hi[axis] = side;
+                if (!all_solid(layer.lo, layer.hi)) continue;
+                (dir % 2 == 0 ? b.hi : b.lo)[axis] = side;
+                grew = true;
+            }
+        }
+        for (int z = b.lo.z; z <= b.hi.z; ++z)
+            for (int y = b.lo.y; y <= b.hi.y; ++y)
+                for (int x = b.lo.x; x <= b.hi.x; ++x) covered[grid.index(x, y, z)] = true;
+        if (volume_m3(grid, b.volume()) >= config.min_box_volume_m3) grown.push_back(b);
+    }
+
+    // Sort and cut.
+    std::stable_sort(grown.begin(), grown.end(),
+                     [](const VoxelBox& a, const VoxelBox& b) { return a.volume() > b.volume(); });
+    std::vector<bool> kept_cover(grid.count(), false);
+    std::vector<VoxelBox> kept;
+    for (const VoxelBox& b : grown) {
+        if (kept.size() >= config.max_boxes) break;
+        if (volume_m3(grid, b.volume()) < config.min_box_volume_m3) continue;
+        uint64_t added = 0;
+        for (int z = b.lo.z; z <= b.hi.z; ++z)
+            for (int y = b.lo.y; y <= b.hi.y; ++y)
+                for (int x = b.lo.x; x <= b.hi.x; ++x) added += kept_cover[grid.index(x, y, z)] ? 0 : 1;
+        if (!adds_enough(added, b.volume(), config.min_added_share)) continue;
+        kept.push_back(b);
+        for (int z = b.lo.z; z <= b.hi.z; ++z)
+            for (int y = b.lo.y; y <= b.hi.y; ++y)
+                for (int x = b.lo.x; x <= b.hi.x; ++x) kept_cover[grid.index(x, y, z)] = true;
+    }
+    return kept;
+}
+
+Aabb box_bounds(const VoxelGrid& grid, const VoxelBox& box) {
+    return Aabb::of(grid.voxel_box(box.lo).min, grid.voxel_box(box.hi).max);
+}
+
+}  // namespace pvs

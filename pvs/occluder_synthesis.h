@@ -1,0 +1,40 @@
+// pvsbake pvs: occluder synthesis, from a world and its view volume to few large boxes inside the opaque
+// solid (ALGORITHMS.md sections 1 and 2):
+//   solid (occluders/solid.h: voxels sight from the eye space never reaches) -> SIGHT PROBE (rays over the
+//   sphere from eye points; every solid voxel a ray passes before its first opaque hit, and its 26
+//   neighbours, is carved out: sight got there through a crack narrower than a voxel) -> boxes (occluders/boxes.h:
+//   greedy growth, sort and cut) -> RAY CHECK against the real triangles (Embree): from eye points spread
+//   over the view volume, segments to points on each box's faces; a box any segment reaches before an
+//   opaque triangle is rejected. This catches boxes sealed off only by a crack narrower than a voxel when
+//   the sampled sight lines pass the crack; it is a sampled check, not a proof (see the closing note).
+#pragma once
+
+#include "cells/view_volume.h"
+#include "core/config.h"
+#include "core/context.h"
+#include "core/occluder.h"
+#include "core/world.h"
+#include "pvs/embree_scene.h"
+
+#include <vector>
+
+namespace pvs {
+
+struct OccluderFigures {
+    double solid_m3 = 0.0;
+    double covered_m3 = 0.0;        // solid inside some kept box (before the ray check)
+    uint32_t grown = 0;
+    uint32_t kept = 0;
+    uint32_t rejected_by_rays = 0;  // boxes a sight line reached
+    uint64_t probe_rays = 0;
+    uint64_t probe_rays_into_solid = 0;  // probe rays that passed a solid voxel (through a crack)
+    uint64_t probe_rays_escaped = 0;     // probe rays no opaque triangle stopped
+    uint64_t probe_carved_voxels = 0;
+    uint64_t check_rays = 0;
+    double seconds = 0.0;
+};
+
+std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& config, const World& world,
+                                           const ViewVolume& view, const RayScene& scene, OccluderFigures& figures);
+
+}  // namespace pvs
