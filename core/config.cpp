@@ -42,6 +42,7 @@ std::vector<std::pair<std::string, std::string>> resolved_parameters(const BakeC
     out.emplace_back("mode", to_string(config.mode));
     out.emplace_back("cells.kind", to_string(config.cells.kind));
     out.emplace_back("verify.enabled", config.verify.enabled ? "true" : "false");
+    out.emplace_back("occluders.enabled", config.occluders.enabled ? "true" : "false");
     out.emplace_back("view.use_world_seeds", config.view.use_world_seeds ? "true" : "false");
     out.emplace_back("view.use_world_boxes", config.view.use_world_boxes ? "true" : "false");
     std::string boxes, seeds;

@@ -55,6 +55,7 @@ constexpr double kDefaultVoxelSizeM = 0.25;
 
 // Occluder synthesis (occluders/, pvs/occluder_synthesis.h).
 struct OccluderConfig {
+    bool enabled = true;                 // synthesize occluders in a bake (--no-occluders to skip)
     uint32_t max_occluders = 512;        // [Limit: >= 1] boxes kept at most
     double min_occluder_volume_m3 = 0.5; // [Limit: >= 0] [Units: m3] smaller boxes are dropped
     double min_added_share = 0.05;       // [Limit: 0..1] keep a box only while this share of it is new

@@ -594,6 +594,32 @@ void write_leak_path(Writer& w, hid_t root, const std::vector<glm::vec3>& path) 
                   "view volume flood from a seed to the outside, when the level leaks; empty = sealed");
 }
 
+void write_occluders(Writer& w, hid_t root, const std::vector<Occluder>& occluders) {
+    Handle g = w.group(root, "/", "occluders");
+    w.u32_attr(g.get(), "count", uint32_t(occluders.size()));
+    w.string_attr(g.get(), "meaning",
+                  "synthesized occluder boxes inside the opaque solid; only proven ones (proven = 1) may be used by a "
+                  "conservative bake");
+    std::vector<Aabb> boxes;
+    std::vector<float> voxel;
+    std::vector<uint8_t> proven;
+    std::vector<uint32_t> offsets = {0}, objects;
+    for (const Occluder& o : occluders) {
+        boxes.push_back(o.box);
+        voxel.push_back(o.voxel_size_m);
+        proven.push_back(o.proven ? 1 : 0);
+        objects.insert(objects.end(), o.objects.begin(), o.objects.end());
+        offsets.push_back(uint32_t(objects.size()));
+    }
+    write_bounds(w, g.get(), "/occluders", boxes);
+    w.dataset(g.get(), "/occluders", "voxel_size_m", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, {voxel.size()}, voxel.data());
+    w.dataset(g.get(), "/occluders", "proven", H5T_STD_U8LE, H5T_NATIVE_UINT8, {proven.size()}, proven.data());
+    w.dataset(g.get(), "/occluders", "object_offsets", H5T_STD_U32LE, H5T_NATIVE_UINT32, {offsets.size()},
+              offsets.data());
+    w.dataset(g.get(), "/occluders", "objects", H5T_STD_U32LE, H5T_NATIVE_UINT32, {objects.size()}, objects.data(),
+              true);
+}
+
 void write_verification(Writer& w, hid_t root, const VerificationRecord& v) {
     Handle g = w.group(root, "/", "verification");
     w.int_attr(g.get(), "ran", v.ran ? 1 : 0);
@@ -1188,6 +1214,45 @@ void read_leak_path(const Reader& r, hid_t root, BakeData& bake) {
         bake.leak_path.emplace_back(flat[i], flat[i + 1], flat[i + 2]);
 }
 
+void read_occluders(const Reader& r, hid_t root, BakeData& bake) {
+    if (H5Lexists(root, "occluders", H5P_DEFAULT) <= 0) return;  // a bake made without occluders
+    const std::string where = "/occluders";
+    Handle g = r.open_group(root, where);
+    std::vector<int64_t> shape = {-1, 6};
+    const std::vector<float> flat = r.numeric_dataset<float>(g.get(), where, "bounds", H5T_NATIVE_FLOAT, shape, H5T_FLOAT);
+    const int64_t n = shape[0];
+    const std::vector<float> voxel = r.numeric_dataset<float>(g.get(), where, "voxel_size_m", H5T_NATIVE_FLOAT, {n}, H5T_FLOAT);
+    const std::vector<uint8_t> proven =
+        r.numeric_dataset<uint8_t>(g.get(), where, "proven", H5T_NATIVE_UINT8, {n}, H5T_INTEGER);
+    const std::vector<uint32_t> offsets =
+        r.numeric_dataset<uint32_t>(g.get(), where, "object_offsets", H5T_NATIVE_UINT32, {n + 1}, H5T_INTEGER);
+    std::vector<int64_t> objects_shape = {-1};
+    const std::vector<uint32_t> objects =
+        r.numeric_dataset<uint32_t>(g.get(), where, "objects", H5T_NATIVE_UINT32, objects_shape, H5T_INTEGER);
+    if (offsets.empty() || offsets[0] != 0 || offsets.back() != objects.size()) {
+        r.fail("/occluders/object_offsets does not start at 0 and end at the size of /occluders/objects");
+    }
+    for (int64_t i = 0; i < n; ++i) {
+        if (offsets[size_t(i) + 1] < offsets[size_t(i)]) r.fail(fmt::format("/occluders/object_offsets[{}] decreases", i + 1));
+        if (proven[size_t(i)] > 1) r.fail(fmt::format("/occluders/proven[{}] is not 0 or 1", i));
+    }
+    for (size_t k = 0; k < objects.size(); ++k) {
+        if (objects[k] >= bake.objects.size()) {
+            r.fail(fmt::format("/occluders/objects[{}] = {} is not an object index below {}", k, objects[k],
+                               bake.objects.size()));
+        }
+    }
+    for (int64_t i = 0; i < n; ++i) {
+        Occluder o;
+        const float* b = &flat[size_t(i) * 6];
+        o.box = Aabb::of({b[0], b[1], b[2]}, {b[3], b[4], b[5]});
+        o.voxel_size_m = voxel[size_t(i)];
+        o.proven = proven[size_t(i)] != 0;
+        o.objects.assign(objects.begin() + offsets[size_t(i)], objects.begin() + offsets[size_t(i) + 1]);
+        bake.occluders.push_back(std::move(o));
+    }
+}
+
 void read_verification(const Reader& r, hid_t root, BakeData& bake) {
     const std::string where = "/verification";
     Handle g = r.open_group(root, where);
@@ -1264,6 +1329,7 @@ void write_bake_file(const std::string& path, const BakeData& bake) {
             write_cells(w, root.get(), bake.cells);
             write_pvs(w, root.get(), bake);
             write_leak_path(w, root.get(), bake.leak_path);
+            write_occluders(w, root.get(), bake.occluders);
             w.named_values(root.get(), "/", "figures", bake.figures, nullptr);
             w.named_values(root.get(), "/", "timings", bake.timings_s, "s");
             write_verification(w, root.get(), bake.verification);
@@ -1303,6 +1369,7 @@ BakeData read_bake_file(const std::string& path) {
         read_cells(r, root.get(), bake);
         read_pvs(r, root.get(), bake);
         read_leak_path(r, root.get(), bake);
+        read_occluders(r, root.get(), bake);
         bake.figures = r.named_values(root.get(), "/figures");
         bake.timings_s = r.named_values(root.get(), "/timings");
         read_verification(r, root.get(), bake);

@@ -11,6 +11,7 @@
 
 #include "core/cell_set.h"
 #include "core/math.h"
+#include "core/occluder.h"
 #include "core/pvs_set.h"
 
 #include <cstdint>
@@ -64,6 +65,7 @@ struct BakeData {
     NamedValues figures;      // counts and figures of the bake
     NamedValues timings_s;    // seconds per stage
     std::vector<glm::vec3> leak_path;  // view volume flood: seed to outside, when the level leaks
+    std::vector<Occluder> occluders;   // synthesized boxes (only proven ones may occlude)
     VerificationRecord verification;
 };
 

@@ -6,6 +6,7 @@
 #include "cells/view_volume.h"
 #include "core/error.h"
 #include "pvs/embree_scene.h"
+#include "pvs/occluder_synthesis.h"
 #include "pvs/ray_sampler.h"
 
 #include <fmt/format.h>
@@ -53,6 +54,12 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
     const ViewVolume view = build_view_volume(ctx, config.view, world);
     RayScene scene(ctx, world, BuildQuality::kMedium, config.run.threads);
     bake.leak_path = view.leak_path;
+    OccluderFigures occ;
+    if (config.occluders.enabled) {
+        bake.occluders = synthesize_occluders(ctx, config.occluders, world, view, scene, occ);
+    }
+    uint32_t occluders_proven = 0;
+    for (const Occluder& o : bake.occluders) occluders_proven += o.proven;
     uint64_t cells_dropped = 0;
     OctreeStats octree;
     SampledPvs sampled;
@@ -116,6 +123,13 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
         {"view_leaked", view.leaked ? 1.0 : 0.0},
         {"view_leak_path_points", double(view.leak_path.size())},
         {"view_seeds_used", double(view.seeds_used)},
+        {"occluder_solid_m3", occ.solid_m3},
+        {"occluder_boxes", double(bake.occluders.size())},
+        {"occluder_boxes_proven", double(occluders_proven)},
+        {"occluder_covered_share_of_solid", occ.solid_m3 > 0 ? occ.covered_m3 / occ.solid_m3 : 0.0},
+        {"occluder_covered_share_of_solid_near_view", occ.near_m3 > 0 ? occ.near_covered_m3 / occ.near_m3 : 0.0},
+        {"occluder_probe_rays_into_solid", double(occ.probe_rays_into_solid)},
+        {"occluder_seconds", occ.seconds},
         {"pvs_objects_mean", double(listed) / n_cells},
         {"pvs_objects_max", double(listed_max)},
         {"pvs_share_of_objects_mean", double(listed) / n_cells / std::max<double>(1.0, double(world.objects.size()))},

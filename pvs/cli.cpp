@@ -182,6 +182,8 @@ int run_occluders(Context& ctx, const BakeConfig& config, const std::string& wor
         j["boxes_written"] = written;
         j["covered_m3"] = figures.covered_m3;
         j["covered_share_of_solid"] = figures.solid_m3 > 0 ? figures.covered_m3 / figures.solid_m3 : 0.0;
+        j["solid_near_view_m3"] = figures.near_m3;
+        j["covered_share_of_solid_near_view"] = figures.near_m3 > 0 ? figures.near_covered_m3 / figures.near_m3 : 0.0;
         j["check_rays"] = figures.check_rays;
         j["probe_rays"] = figures.probe_rays;
         j["probe_rays_into_solid"] = figures.probe_rays_into_solid;
@@ -361,6 +363,8 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
         ->check(CLI::IsMember({"sampled"}))
         ->capture_default_str();
     bake->add_flag("--no-verify", no_verify, "skip verification by ray sampling");
+    bool no_occluders = false;
+    bake->add_flag("--no-occluders", no_occluders, "skip occluder synthesis");
     std::string cells_kind = "grid";
     bake->add_option("--cells", cells_kind,
                      "grid: uniform cells of --cell-size; octree: split where visibility changes, down to "
@@ -369,7 +373,7 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
         ->capture_default_str();
     ViewArgs view_args;
     add_view_options(*bake, view_args);
-    bind_options(*bake, config, {"run.", "view.", "cells.", "sampled.", "verify."});
+    bind_options(*bake, config, {"run.", "view.", "cells.", "occluders.", "sampled.", "verify."});
     add_common(*bake, common);
 
     CLI::App* verify = app.add_subcommand(
@@ -432,6 +436,7 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
         if (bake->parsed()) {
             config.cells.kind = cells_kind == "octree" ? CellKind::kOctree : CellKind::kGrid;
             apply_view_args(view_args, config.view);
+            config.occluders.enabled = !no_occluders;
             validate(config);
             return run_bake(ctx, config, world_path, out_path, common.report_path);
         }

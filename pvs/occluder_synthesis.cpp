@@ -227,12 +227,39 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
         }
         out.push_back(std::move(o));
     }
+    // Coverage of the solid near the view region by the proven boxes.
+    {
+        BitVolume covered;
+        covered.reset(grid.count());
+        for (size_t b = 0; b < boxes.size(); ++b) {
+            if (rejected[b]) continue;
+            const VoxelBox& vb = boxes[b];
+            for (int z = vb.lo.z; z <= vb.hi.z; ++z)
+                for (int y = vb.lo.y; y <= vb.hi.y; ++y)
+                    for (int x = vb.lo.x; x <= vb.hi.x; ++x) covered.set(grid.index(x, y, z));
+        }
+        BitVolume near;
+        if (!view.view.empty()) {
+            BitVolume region;
+            region.words = view.view.bits;
+            near = dilate(grid, region, int(std::ceil(kNearViewM / grid.voxel_size_m)));
+        }
+        uint64_t n = 0, c = 0;
+        for (size_t w = 0; w < solid.solid.words.size(); ++w) {
+            const uint64_t s_near = solid.solid.words[w] & (near.words.empty() ? ~uint64_t(0) : near.words[w]);
+            n += uint64_t(__builtin_popcountll(s_near));
+            c += uint64_t(__builtin_popcountll(s_near & covered.words[w]));
+        }
+        figures.near_m3 = double(n) * voxel_m3;
+        figures.near_covered_m3 = double(c) * voxel_m3;
+    }
     figures.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    ctx.info(fmt::format("occluders: {} boxes cover {:.0f} of {:.0f} m3 of solid ({:.1f}%); the ray check ({:.1f} M "
-                         "rays) rejected {}; {:.2f} s",
+    ctx.info(fmt::format("occluders: {} boxes cover {:.0f} of {:.0f} m3 of solid ({:.1f}%), {:.1f}% of the {:.0f} m3 "
+                         "within {} m of the view region; the ray check ({:.1f} M rays) rejected {}; {:.2f} s",
                          figures.kept, figures.covered_m3, figures.solid_m3,
                          figures.solid_m3 > 0 ? 100.0 * figures.covered_m3 / figures.solid_m3 : 0.0,
-                         double(figures.check_rays) * 1e-6, figures.rejected_by_rays, figures.seconds));
+                         figures.near_m3 > 0 ? 100.0 * figures.near_covered_m3 / figures.near_m3 : 0.0, figures.near_m3,
+                         kNearViewM, double(figures.check_rays) * 1e-6, figures.rejected_by_rays, figures.seconds));
     return out;
 }
 

@@ -20,9 +20,14 @@
 
 namespace pvs {
 
+// The distance from the view region within which solid counts as "near" (the occluders that matter most).
+constexpr double kNearViewM = 4.0;
+
 struct OccluderFigures {
     double solid_m3 = 0.0;
     double covered_m3 = 0.0;        // solid inside some kept box (before the ray check)
+    double near_m3 = 0.0;            // solid within kNearViewM of the view region
+    double near_covered_m3 = 0.0;    // ... inside some proven box
     uint32_t grown = 0;
     uint32_t kept = 0;
     uint32_t rejected_by_rays = 0;  // boxes a sight line reached

@@ -854,3 +854,28 @@ TEST(BakeFileWrite, InconsistentBakeLeavesTheOldFileUntouched) {
 
 }  // namespace
 }  // namespace pvs
+
+namespace pvs {
+namespace {
+
+TEST(BakeFile, OccludersRoundTrip) {
+    test::TempDir dir;
+    BakeData bake = make_bake(10, {2, 1, 2}, 0, 0, 3);
+    bake.occluders.push_back(Occluder{Aabb::of({0, 0, 0}, {1, 2, 3}), 0.25f, true, {1, 4, 9}});
+    bake.occluders.push_back(Occluder{Aabb::of({-5, 0, 0}, {-4, 1, 1}), 0.25f, false, {}});
+    bake.occluders.push_back(Occluder{Aabb::of({7, 7, 7}, {8.5f, 9, 10}), 0.1f, true, {0}});
+    const std::string path = dir.file("occ.h5");
+    write_bake_file(path, bake);
+    const BakeData back = read_bake_file(path);
+    expect_same(bake, back);
+    ASSERT_EQ(back.occluders.size(), 3u);
+    for (size_t i = 0; i < 3; ++i) {
+        EXPECT_EQ(back.occluders[i].box, bake.occluders[i].box);
+        EXPECT_EQ(back.occluders[i].voxel_size_m, bake.occluders[i].voxel_size_m);
+        EXPECT_EQ(back.occluders[i].proven, bake.occluders[i].proven);
+        EXPECT_EQ(back.occluders[i].objects, bake.occluders[i].objects);
+    }
+}
+
+}  // namespace
+}  // namespace pvs

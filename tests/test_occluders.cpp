@@ -1,6 +1,10 @@
 // Occluder synthesis: boxes fill the sealed solid, the sight probe carves what a crack lets eyes see,
 // and no proven box ever stands where a ray from the eye space reaches.
+#include "cells/eyes.h"
 #include "cells/view_volume.h"
+#include "core/random.h"
+#include "io/gltf_loader.h"
+#include "tests/test_util.h"
 #include "pvs/embree_scene.h"
 #include "pvs/occluder_synthesis.h"
 #include "tests/world_builder.h"
@@ -114,6 +118,65 @@ TEST(Occluders, ASlitKeepsItsSightLine) {
         }
     }
     EXPECT_GT(lines, 10);
+}
+
+}  // namespace
+}  // namespace pvs
+
+namespace pvs {
+namespace {
+
+// The property on the real levels: no point inside a proven box is visible from any eye point of the
+// view volume (independent eyes and targets, not the ones synthesis used).
+void expect_boxes_unseen(const std::string& world_path, uint32_t eyes_n, uint32_t targets_per_box) {
+    Context ctx = quiet_context();
+    const World w = load_world(ctx, world_path);
+    const ViewVolume view = build_view_volume(ctx, ViewVolumeConfig{}, w);
+    RayScene scene(ctx, w);
+    OccluderFigures f;
+    const std::vector<Occluder> boxes = synthesize_occluders(ctx, OccluderConfig{}, w, view, scene, f);
+    ASSERT_FALSE(boxes.empty());
+    CellSet masks;
+    masks.eyes = view.eyes;
+    std::vector<glm::vec3> eyes;
+    sample_eye_points_in(masks, view.view_bounds, 99, eyes_n, 12345, eyes);
+    Rng rng(4, 5);
+    uint64_t rays = 0, seen = 0;
+    std::vector<glm::vec3> origins, dirs;
+    std::vector<float> tfar;
+    for (const Occluder& o : boxes) {
+        if (!o.proven) continue;
+        origins.clear();
+        dirs.clear();
+        tfar.clear();
+        for (const glm::vec3& e : eyes) {
+            for (uint32_t k = 0; k < targets_per_box; ++k) {
+                const glm::vec3 p = o.box.min + o.box.size() * glm::vec3(rng.uniform(), rng.uniform(), rng.uniform());
+                origins.push_back(e);
+                dirs.push_back(glm::normalize(p - e));
+                tfar.push_back(glm::length(p - e));
+            }
+        }
+        std::vector<uint8_t> blocked(origins.size());
+        scene.occluded_opaque(origins.data(), dirs.data(), tfar.data(), uint32_t(origins.size()), blocked.data());
+        rays += origins.size();
+        for (uint8_t b : blocked) seen += !b;
+    }
+    EXPECT_EQ(seen, 0u) << "of " << rays << " rays into proven boxes";
+    EXPECT_GT(rays, 100000u);
+}
+
+TEST(OccludersProperty, NoProvenBoxIsSeenInTheRealLevels) {
+    int ran = 0;
+    for (const char* name : {"oa_dm4.glb", "ctf_inyard.glb"}) {
+        const std::string path = test::shared_world(name);
+        if (path.empty()) continue;
+        if (test::in_ci() && std::string(name) == "ctf_inyard.glb") continue;  // the benchmark runs it full size
+        SCOPED_TRACE(name);
+        expect_boxes_unseen(path, test::in_ci() ? 256 : 1024, 4);
+        ++ran;
+    }
+    if (ran == 0) GTEST_SKIP() << "../shared/worlds is absent";
 }
 
 }  // namespace

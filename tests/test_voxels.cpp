@@ -177,3 +177,26 @@ TEST(VoxelGrid, RefusesAGridTooLarge) {
 
 }  // namespace
 }  // namespace pvs
+
+namespace pvs {
+namespace {
+
+TEST(Dilate, GrowsBySoManyVoxelsInTheChebyshevMetric) {
+    VoxelGrid g;
+    g.voxel_size_m = 1.0f;
+    g.dims = glm::ivec3(11, 9, 7);
+    BitVolume in;
+    in.reset(g.count());
+    in.set(g.index(5, 4, 3));
+    for (int r : {0, 1, 2, 3}) {
+        const BitVolume out = dilate(g, in, r);
+        for (uint64_t i = 0; i < g.count(); ++i) {
+            const glm::ivec3 c = g.coords(i);
+            const int d = std::max({std::abs(c.x - 5), std::abs(c.y - 4), std::abs(c.z - 3)});
+            EXPECT_EQ(out.get(i), d <= r) << r << " at " << c.x << "," << c.y << "," << c.z;
+        }
+    }
+}
+
+}  // namespace
+}  // namespace pvs
