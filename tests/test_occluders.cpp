@@ -181,3 +181,80 @@ TEST(OccludersProperty, NoProvenBoxIsSeenInTheRealLevels) {
 
 }  // namespace
 }  // namespace pvs
+
+namespace pvs {
+namespace {
+
+// A closed octahedron (8 outward triangles), rotated about y, as one object.
+void add_octahedron(World& w, const std::string& name, glm::vec3 c, float r, float angle) {
+    const uint32_t base = uint32_t(w.positions.size());
+    const float ca = std::cos(angle), sa = std::sin(angle);
+    const glm::vec3 pts[6] = {{r, 0, 0}, {-r, 0, 0}, {0, r, 0}, {0, -r, 0}, {0, 0, r}, {0, 0, -r}};
+    for (const glm::vec3& p : pts) w.positions.push_back(c + glm::vec3(ca * p.x + sa * p.z, p.y, -sa * p.x + ca * p.z));
+    static const uint32_t kFaces[8][3] = {{0, 2, 4}, {4, 2, 1}, {1, 2, 5}, {5, 2, 0},
+                                          {4, 3, 0}, {1, 3, 4}, {5, 3, 1}, {0, 3, 5}};
+    WorldObject o;
+    o.name = name;
+    o.first_triangle = uint32_t(w.triangles.size());
+    o.triangle_count = 8;
+    o.flags = kObjectHasOpaque;
+    for (const auto& f : kFaces) {
+        w.triangles.push_back(Triangle{{base + f[0], base + f[1], base + f[2]}});
+        w.triangle_opaque.push_back(1);
+        w.triangle_double_sided.push_back(0);
+        for (int k = 0; k < 3; ++k) o.bounds.extend(w.positions[base + f[k]]);
+    }
+    w.bounds.extend(o.bounds);
+    w.objects.push_back(o);
+}
+
+TEST(OccludersProperty, RandomClosedMeshesHideNothingTheyShouldNot) {
+    Context ctx = quiet_context();
+    for (uint64_t seed = 1; seed <= (test::in_ci() ? 2u : 5u); ++seed) {
+        SCOPED_TRACE(seed);
+        Rng rng(seed, 9);
+        World w;
+        // An open ground with random closed boxes and rotated octahedra standing on it; the eyes are the
+        // free space above the ground (view box), so the solid is the inside of the closed meshes.
+        test::add_box(w, "ground", Aabb::of({0, -0.5f, 0}, {20, 0, 20}));
+        for (int i = 0; i < 12; ++i) {
+            const glm::vec3 lo(1 + 16 * rng.uniform(), 0, 1 + 16 * rng.uniform());
+            const glm::vec3 size(0.5f + 3 * rng.uniform(), 0.5f + 3 * rng.uniform(), 0.5f + 3 * rng.uniform());
+            test::add_box(w, "box" + std::to_string(i), Aabb::of(lo, lo + size));
+            add_octahedron(w, "oct" + std::to_string(i), {2 + 16 * rng.uniform(), 1.5f, 2 + 16 * rng.uniform()},
+                           0.8f + 1.5f * rng.uniform(), 6.28f * rng.uniform());
+        }
+        ViewVolumeConfig vc;
+        vc.voxel_size_m = 0.1;
+        vc.boxes = {Aabb::of({0, 0, 0}, {20, 4, 20})};
+        const ViewVolume view = build_view_volume(ctx, vc, w);
+        RayScene scene(ctx, w);
+        OccluderConfig oc;
+        oc.min_occluder_volume_m3 = 0.01;
+        OccluderFigures f;
+        const std::vector<Occluder> boxes = synthesize_occluders(ctx, oc, w, view, scene, f);
+        ASSERT_FALSE(boxes.empty());
+        CellSet masks;
+        masks.eyes = view.eyes;
+        std::vector<glm::vec3> eyes;
+        sample_eye_points_in(masks, view.view_bounds, seed, 512, 777, eyes);
+        uint64_t seen = 0, rays = 0;
+        for (const Occluder& o : boxes) {
+            if (!o.proven) continue;
+            for (const glm::vec3& e : eyes) {
+                const glm::vec3 p = o.box.min + o.box.size() * glm::vec3(rng.uniform(), rng.uniform(), rng.uniform());
+                const glm::vec3 d = glm::normalize(p - e);
+                const float t = glm::length(p - e);
+                uint8_t blocked = 0;
+                scene.occluded_opaque(&e, &d, &t, 1, &blocked);
+                seen += !blocked;
+                ++rays;
+            }
+        }
+        EXPECT_EQ(seen, 0u) << "of " << rays;
+        EXPECT_GT(rays, 1000u);
+    }
+}
+
+}  // namespace
+}  // namespace pvs
