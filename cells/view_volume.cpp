@@ -23,27 +23,6 @@ VoxelMask to_mask(const VoxelGrid& grid, BitVolume&& bits) {
     return m;
 }
 
-// Grows the set by one voxel along each axis in turn (x, then y, then z): the 26-neighbourhood.
-BitVolume dilate(const VoxelGrid& g, const BitVolume& in) {
-    BitVolume a = in, b;
-    const glm::ivec3 step(1, g.dims.x, g.dims.x * g.dims.y);
-    for (int axis = 0; axis < 3; ++axis) {
-        b = a;
-        const uint64_t stride = uint64_t(step[axis]);
-        for (int z = 0; z < g.dims.z; ++z)
-            for (int y = 0; y < g.dims.y; ++y)
-                for (int x = 0; x < g.dims.x; ++x) {
-                    const uint64_t i = g.index(x, y, z);
-                    if (!a.get(i)) continue;
-                    const int c = axis == 0 ? x : (axis == 1 ? y : z);
-                    if (c > 0) b.set(i - stride);
-                    if (c + 1 < g.dims[axis]) b.set(i + stride);
-                }
-        std::swap(a, b);
-    }
-    return a;
-}
-
 }  // namespace
 
 std::string leak_path_obj(const std::vector<glm::vec3>& path) {
@@ -151,7 +130,7 @@ ViewVolume build_view_volume(Context& ctx, const ViewVolumeConfig& config, const
                 }
             }
     }
-    BitVolume view = dilate(grid, eyes);
+    BitVolume view = dilate(grid, eyes, 1);
     const double voxel_m3 = double(grid.voxel_size_m) * grid.voxel_size_m * grid.voxel_size_m;
     const uint64_t n_eyes = eyes.count(), n_view = view.count();
     if (n_eyes == 0) {

@@ -110,6 +110,39 @@ struct Voxelizer {
 
 }  // namespace
 
+BitVolume dilate(const VoxelGrid& g, const BitVolume& in, int radius) {
+    BitVolume a = in;
+    if (radius <= 0) return a;
+    BitVolume b;
+    const uint64_t step[3] = {1, uint64_t(g.dims.x), uint64_t(g.dims.x) * uint64_t(g.dims.y)};
+    for (int axis = 0; axis < 3; ++axis) {
+        b.reset(g.count());
+        const int n = g.dims[axis];
+        const int u_axis = axis == 0 ? 1 : 0, v_axis = axis == 2 ? 1 : 2;
+        // Every line along `axis`: a voxel is set when a set voxel lies within `radius` of it. Two sweeps
+        // (forward and backward) track the distance to the nearest set voxel on each side.
+        for (int v = 0; v < g.dims[v_axis]; ++v)
+            for (int u = 0; u < g.dims[u_axis]; ++u) {
+                glm::ivec3 c(0);
+                c[u_axis] = u;
+                c[v_axis] = v;
+                const uint64_t base = g.index(c.x, c.y, c.z);
+                int since = radius + 1;
+                for (int k = 0; k < n; ++k) {
+                    since = a.get(base + uint64_t(k) * step[axis]) ? 0 : since + 1;
+                    if (since <= radius) b.set(base + uint64_t(k) * step[axis]);
+                }
+                since = radius + 1;
+                for (int k = n - 1; k >= 0; --k) {
+                    since = a.get(base + uint64_t(k) * step[axis]) ? 0 : since + 1;
+                    if (since <= radius) b.set(base + uint64_t(k) * step[axis]);
+                }
+            }
+        std::swap(a, b);
+    }
+    return a;
+}
+
 void voxelize_opaque(Context& ctx, const World& world, const VoxelGrid& grid, BitVolume& touched, BitVolume* upward,
                      float min_up_cos) {
     ScopedTimer timer(ctx, "voxelize");

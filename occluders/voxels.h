@@ -77,6 +77,10 @@ double default_voxel_size(const Aabb& bounds, double preferred_m, uint64_t max_v
 // Does the triangle overlap the closed box (center, half size)? Exact separating-axis test (13 axes).
 bool triangle_box_overlap(glm::vec3 box_center, glm::vec3 box_half, glm::vec3 a, glm::vec3 b, glm::vec3 c);
 
+// The set grown by `radius` voxels in the Chebyshev metric (the 26-neighbourhood applied `radius`
+// times): separable, one pass per axis, O(voxels) whatever the radius.
+BitVolume dilate(const VoxelGrid& grid, const BitVolume& in, int radius);
+
 // Marks every voxel an opaque triangle touches. When `upward` is given, also marks the voxels touched by
 // opaque triangles facing up (normal.y >= min_up_cos; floors a player can stand on). Parallel (OpenMP).
 void voxelize_opaque(Context& ctx, const World& world, const VoxelGrid& grid, BitVolume& touched,
