@@ -83,8 +83,10 @@ int main(int argc, char** argv) {
         const double build_s = seconds_since(t0);
         std::vector<double> stream, single, repeated, occluded;
         uint64_t touches_stream = 0, touches_single = 0, touches_repeated = 0;
-        for (int r = 0; r < repeats; ++r) {
-            auto t = std::chrono::steady_clock::now();
+        // Times one way of tracing every eye's rays; returns M rays/s and records the touches seen.
+        using TraceFn = void (pvs::RayScene::*)(glm::vec3, const glm::vec3*, uint32_t, std::vector<pvs::RayTouch>&) const;
+        auto measure = [&](TraceFn fn, uint64_t& touches_seen) {
+            const auto t = std::chrono::steady_clock::now();
             uint64_t n = 0;
 #pragma omp parallel reduction(+ : n)
             {
@@ -92,41 +94,18 @@ int main(int argc, char** argv) {
 #pragma omp for schedule(dynamic, 8)
                 for (int64_t e = 0; e < int64_t(eyes); ++e) {
                     touches.clear();
-                    scene.trace(eye_points[e], dirs.data() + size_t(e) * kRaysPerEye, kRaysPerEye, touches);
+                    (scene.*fn)(eye_points[e], dirs.data() + size_t(e) * kRaysPerEye, kRaysPerEye, touches);
                     n += touches.size();
                 }
             }
-            stream.push_back(rays / seconds_since(t) * 1e-6);
-            touches_stream = n;
-            t = std::chrono::steady_clock::now();
-            n = 0;
-#pragma omp parallel reduction(+ : n)
-            {
-                std::vector<pvs::RayTouch> touches;
-#pragma omp for schedule(dynamic, 8)
-                for (int64_t e = 0; e < int64_t(eyes); ++e) {
-                    touches.clear();
-                    scene.trace_reference(eye_points[e], dirs.data() + size_t(e) * kRaysPerEye, kRaysPerEye, touches);
-                    n += touches.size();
-                }
-            }
-            single.push_back(rays / seconds_since(t) * 1e-6);
-            touches_single = n;
-            t = std::chrono::steady_clock::now();
-            n = 0;
-#pragma omp parallel reduction(+ : n)
-            {
-                std::vector<pvs::RayTouch> touches;
-#pragma omp for schedule(dynamic, 8)
-                for (int64_t e = 0; e < int64_t(eyes); ++e) {
-                    touches.clear();
-                    scene.trace_repeated(eye_points[e], dirs.data() + size_t(e) * kRaysPerEye, kRaysPerEye, touches);
-                    n += touches.size();
-                }
-            }
-            repeated.push_back(rays / seconds_since(t) * 1e-6);
-            touches_repeated = n;
-            t = std::chrono::steady_clock::now();
+            touches_seen = n;
+            return rays / seconds_since(t) * 1e-6;
+        };
+        for (int r = 0; r < repeats; ++r) {
+            stream.push_back(measure(&pvs::RayScene::trace, touches_stream));
+            single.push_back(measure(&pvs::RayScene::trace_reference, touches_single));
+            repeated.push_back(measure(&pvs::RayScene::trace_repeated, touches_repeated));
+            const auto t = std::chrono::steady_clock::now();
             uint64_t hits = 0;
 #pragma omp parallel for schedule(dynamic, 8) reduction(+ : hits)
             for (int64_t e = 0; e < int64_t(eyes); ++e) {

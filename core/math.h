@@ -49,6 +49,25 @@ struct Aabb {
     bool operator==(const Aabb& o) const { return min == o.min && max == o.max; }
 };
 
+// The parameter interval [t0, t1] (t0 >= 0) where the ray o + t d meets the closed box, clipped to
+// [0, t_max]. False when it misses. Axis-parallel rays (|d_a| < 1e-12) need o inside the slab.
+inline bool ray_box_interval(glm::vec3 o, glm::vec3 d, const Aabb& b, float t_max, float& t0, float& t1) {
+    t0 = 0.0f;
+    t1 = t_max;
+    for (int a = 0; a < 3; ++a) {
+        if (std::fabs(d[a]) < 1e-12f) {
+            if (o[a] < b.min[a] || o[a] > b.max[a]) return false;
+            continue;
+        }
+        float ta = (b.min[a] - o[a]) / d[a], tb = (b.max[a] - o[a]) / d[a];
+        if (ta > tb) std::swap(ta, tb);
+        t0 = std::max(t0, ta);
+        t1 = std::min(t1, tb);
+        if (t0 > t1) return false;
+    }
+    return true;
+}
+
 inline bool is_finite(glm::vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
 }  // namespace pvs

@@ -53,6 +53,28 @@ void embree_error(void* user, RTCError code, const char* message) {
     ctx->error(fmt::format("Embree error {}: {}", int(code), message ? message : ""));
 }
 
+void init_ray(RTCRay& r, glm::vec3 origin, glm::vec3 direction, float tnear, float tfar, unsigned id) {
+    r.org_x = origin.x;
+    r.org_y = origin.y;
+    r.org_z = origin.z;
+    r.dir_x = direction.x;
+    r.dir_y = direction.y;
+    r.dir_z = direction.z;
+    r.tnear = tnear;
+    r.tfar = tfar;
+    r.time = 0.0f;
+    r.mask = 0xffffffffu;
+    r.id = id;
+    r.flags = 0;
+}
+
+void init_rayhit(RTCRayHit& rh, glm::vec3 origin, glm::vec3 direction, float tnear, unsigned id) {
+    init_ray(rh.ray, origin, direction, tnear, std::numeric_limits<float>::infinity(), id);
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+}
+
 struct ScopedFtz {
     ScopedFtz() : csr_(_mm_getcsr()) {
         _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
@@ -163,24 +185,7 @@ void RayScene::trace(glm::vec3 origin, const glm::vec3* directions, uint32_t cou
     RTCRayHit rays[kStreamSize];
     for (uint32_t base = 0; base < count; base += kStreamSize) {
         const uint32_t n = std::min(kStreamSize, count - base);
-        for (uint32_t i = 0; i < n; ++i) {
-            RTCRayHit& rh = rays[i];
-            rh.ray.org_x = origin.x;
-            rh.ray.org_y = origin.y;
-            rh.ray.org_z = origin.z;
-            rh.ray.dir_x = directions[base + i].x;
-            rh.ray.dir_y = directions[base + i].y;
-            rh.ray.dir_z = directions[base + i].z;
-            rh.ray.tnear = 0.0f;
-            rh.ray.tfar = std::numeric_limits<float>::infinity();
-            rh.ray.time = 0.0f;
-            rh.ray.mask = 0xffffffffu;
-            rh.ray.id = i;
-            rh.ray.flags = 0;
-            rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-            rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
-            rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-        }
+        for (uint32_t i = 0; i < n; ++i) init_rayhit(rays[i], origin, directions[base + i], 0.0f, i);
         TraceContext tc;
         rtcInitIntersectContext(&tc.rtc);
         tc.rtc.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
@@ -198,20 +203,7 @@ void RayScene::trace_reference(glm::vec3 origin, const glm::vec3* directions, ui
     ScopedFtz ftz;
     for (uint32_t i = 0; i < count; ++i) {
         RTCRayHit rh;
-        rh.ray.org_x = origin.x;
-        rh.ray.org_y = origin.y;
-        rh.ray.org_z = origin.z;
-        rh.ray.dir_x = directions[i].x;
-        rh.ray.dir_y = directions[i].y;
-        rh.ray.dir_z = directions[i].z;
-        rh.ray.tnear = 0.0f;
-        rh.ray.tfar = std::numeric_limits<float>::infinity();
-        rh.ray.time = 0.0f;
-        rh.ray.mask = 0xffffffffu;
-        rh.ray.id = 0;
-        rh.ray.flags = 0;
-        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-        rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+        init_rayhit(rh, origin, directions[i], 0.0f, 0);
         TraceContext tc;
         rtcInitIntersectContext(&tc.rtc);
         tc.touches = &touches;
@@ -230,20 +222,7 @@ void RayScene::trace_repeated(glm::vec3 origin, const glm::vec3* directions, uin
         float tnear = 0.0f;
         for (int surfaces = 0; surfaces < 1024; ++surfaces) {
             RTCRayHit rh;
-            rh.ray.org_x = origin.x;
-            rh.ray.org_y = origin.y;
-            rh.ray.org_z = origin.z;
-            rh.ray.dir_x = directions[i].x;
-            rh.ray.dir_y = directions[i].y;
-            rh.ray.dir_z = directions[i].z;
-            rh.ray.tnear = tnear;
-            rh.ray.tfar = std::numeric_limits<float>::infinity();
-            rh.ray.time = 0.0f;
-            rh.ray.mask = 0xffffffffu;
-            rh.ray.id = 0;
-            rh.ray.flags = 0;
-            rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-            rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+            init_rayhit(rh, origin, directions[i], tnear, 0);
             TraceContext tc;
             rtcInitIntersectContext(&tc.rtc);
             tc.touches = nullptr;
@@ -266,21 +245,7 @@ void RayScene::occluded_opaque(const glm::vec3* origins, const glm::vec3* direct
     RTCRay rays[kStreamSize];
     for (uint32_t base = 0; base < count; base += kStreamSize) {
         const uint32_t n = std::min(kStreamSize, count - base);
-        for (uint32_t i = 0; i < n; ++i) {
-            RTCRay& r = rays[i];
-            r.org_x = origins[base + i].x;
-            r.org_y = origins[base + i].y;
-            r.org_z = origins[base + i].z;
-            r.dir_x = directions[base + i].x;
-            r.dir_y = directions[base + i].y;
-            r.dir_z = directions[base + i].z;
-            r.tnear = 0.0f;
-            r.tfar = tfar[base + i];
-            r.time = 0.0f;
-            r.mask = 0xffffffffu;
-            r.id = i;
-            r.flags = 0;
-        }
+        for (uint32_t i = 0; i < n; ++i) init_ray(rays[i], origins[base + i], directions[base + i], 0.0f, tfar[base + i], i);
         RTCIntersectContext ictx;
         rtcInitIntersectContext(&ictx);
         rtcOccluded1M(impl_->scene, &ictx, rays, n, sizeof(RTCRay));
@@ -295,18 +260,7 @@ uint64_t RayScene::occluded_baseline(glm::vec3 origin, const glm::vec3* directio
     rtcInitIntersectContext(&ictx);
     for (uint32_t i = 0; i < count; ++i) {
         RTCRay r;
-        r.org_x = origin.x;
-        r.org_y = origin.y;
-        r.org_z = origin.z;
-        r.dir_x = directions[i].x;
-        r.dir_y = directions[i].y;
-        r.dir_z = directions[i].z;
-        r.tnear = 0.0f;
-        r.tfar = std::numeric_limits<float>::infinity();
-        r.time = 0.0f;
-        r.mask = 0xffffffffu;
-        r.id = 0;
-        r.flags = 0;
+        init_ray(r, origin, directions[i], 0.0f, std::numeric_limits<float>::infinity(), 0);
         rtcOccluded1(impl_->scene, &ictx, &r);
         hits += r.tfar < 0.0f;
     }

@@ -19,29 +19,14 @@ namespace {
 
 // Entry distance of the ray into the box, or -1 when it misses; 0 when the origin is inside.
 float entry_distance(glm::vec3 o, glm::vec3 d, const Aabb& b) {
-    float t0 = 0.0f, t1 = std::numeric_limits<float>::max();
-    for (int a = 0; a < 3; ++a) {
-        if (std::fabs(d[a]) < 1e-12f) {
-            if (o[a] < b.min[a] || o[a] > b.max[a]) return -1.0f;
-            continue;
-        }
-        float ta = (b.min[a] - o[a]) / d[a], tb = (b.max[a] - o[a]) / d[a];
-        if (ta > tb) std::swap(ta, tb);
-        t0 = std::max(t0, ta);
-        t1 = std::min(t1, tb);
-        if (t0 > t1) return -1.0f;
-    }
-    return t0;
+    float t0, t1;
+    return ray_box_interval(o, d, b, std::numeric_limits<float>::max(), t0, t1) ? t0 : -1.0f;
 }
 
 // Distance at which the ray leaves the box (the box holds the origin).
-float entry_distance_far(glm::vec3 o, glm::vec3 d, const Aabb& b) {
-    float t1 = std::numeric_limits<float>::max();
-    for (int a = 0; a < 3; ++a) {
-        if (std::fabs(d[a]) < 1e-12f) continue;
-        t1 = std::min(t1, std::max((b.min[a] - o[a]) / d[a], (b.max[a] - o[a]) / d[a]));
-    }
-    return std::max(0.0f, t1);
+float exit_distance(glm::vec3 o, glm::vec3 d, const Aabb& b) {
+    float t0, t1;
+    return ray_box_interval(o, d, b, std::numeric_limits<float>::max(), t0, t1) ? t1 : 0.0f;
 }
 
 // Eye points for the check, spread over the eye space (or, with none, over free voxels of the grid).
@@ -91,7 +76,7 @@ void carve_seen_solid(Context& ctx, const OccluderConfig& config, const VoxelGri
                 if (t.stops) stop[t.ray] = t.t;
             for (size_t r = 0; r < dirs.size(); ++r) {
                 // March to the stop (or out of the grid), looking for solid voxels.
-                const float exit = entry_distance_far(eyes[size_t(e)], dirs[r], gb);
+                const float exit = exit_distance(eyes[size_t(e)], dirs[r], gb);
                 const float end = std::min(stop[r], exit);
                 escaped += !std::isfinite(stop[r]);
                 bool hit_solid = false;

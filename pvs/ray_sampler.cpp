@@ -108,20 +108,8 @@ struct DirectionBins {
 bool ray_passes_near(glm::vec3 eye, glm::vec3 dir, float reach, const Aabb& box, float tan_band) {
     const float grow = std::isfinite(reach) ? reach * tan_band : 0.0f;
     const float limit = std::isfinite(reach) ? reach : std::numeric_limits<float>::max();
-    float t0 = 0.0f, t1 = limit;
-    for (int a = 0; a < 3; ++a) {
-        const float lo = box.min[a] - grow, hi = box.max[a] + grow;
-        if (std::fabs(dir[a]) < 1e-12f) {
-            if (eye[a] < lo || eye[a] > hi) return false;
-            continue;
-        }
-        float ta = (lo - eye[a]) / dir[a], tb = (hi - eye[a]) / dir[a];
-        if (ta > tb) std::swap(ta, tb);
-        t0 = std::max(t0, ta);
-        t1 = std::min(t1, tb);
-        if (t0 > t1) return false;
-    }
-    return true;
+    float t0, t1;
+    return ray_box_interval(eye, dir, Aabb::of(box.min - grow, box.max + grow), limit, t0, t1);
 }
 
 // True when a ray within `half` of `axis` (the candidates) passes near the box before it stops.

@@ -129,6 +129,43 @@ TEST(Occluders, ASlitKeepsItsSightLine) {
 namespace pvs {
 namespace {
 
+// Aims a ray from every eye at `per_box` random points of every proven box; returns how many arrive
+// (no opaque triangle before the point) and adds the rays shot to `rays`. Reports the first few.
+uint64_t count_seen(const RayScene& scene, const std::vector<Occluder>& boxes, const std::vector<glm::vec3>& eyes,
+                    uint32_t per_box, Rng& rng, uint64_t& rays) {
+    uint64_t seen = 0;
+    std::vector<glm::vec3> origins, dirs;
+    std::vector<float> tfar;
+    for (const Occluder& o : boxes) {
+        if (!o.proven) continue;
+        origins.clear();
+        dirs.clear();
+        tfar.clear();
+        for (const glm::vec3& e : eyes) {
+            for (uint32_t k = 0; k < per_box; ++k) {
+                const glm::vec3 p = o.box.min + o.box.size() * glm::vec3(rng.uniform(), rng.uniform(), rng.uniform());
+                origins.push_back(e);
+                dirs.push_back(glm::normalize(p - e));
+                tfar.push_back(glm::length(p - e));
+            }
+        }
+        std::vector<uint8_t> blocked(origins.size());
+        scene.occluded_opaque(origins.data(), dirs.data(), tfar.data(), uint32_t(origins.size()), blocked.data());
+        rays += origins.size();
+        for (size_t i = 0; i < blocked.size(); ++i) {
+            if (blocked[i]) continue;
+            if (++seen <= 5) {
+                ADD_FAILURE() << "seen: eye (" << origins[i].x << ", " << origins[i].y << ", " << origins[i].z
+                              << ") direction (" << dirs[i].x << ", " << dirs[i].y << ", " << dirs[i].z << ") reaches "
+                              << tfar[i] << " m into box (" << o.box.min.x << ", " << o.box.min.y << ", "
+                              << o.box.min.z << ")-(" << o.box.max.x << ", " << o.box.max.y << ", " << o.box.max.z
+                              << ")";
+            }
+        }
+    }
+    return seen;
+}
+
 // Eye points the map compiler calls playable: random points of the bounds whose BSP leaf (the world's
 // .vis.json) has a cluster, kept when they are also in the eye space `eyes`. Both filters matter: the
 // compiler's playable space includes the outside of a level it found leaking (oa_dm4: about 40% of its
@@ -183,36 +220,8 @@ void expect_boxes_unseen(const std::string& world_path, uint32_t eyes_n, uint32_
                 eyes.size(), compiler_eyes.size(), outside);
     eyes.insert(eyes.end(), compiler_eyes.begin(), compiler_eyes.end());
     Rng rng(4, 5);
-    uint64_t rays = 0, seen = 0;
-    std::vector<glm::vec3> origins, dirs;
-    std::vector<float> tfar;
-    for (const Occluder& o : boxes) {
-        if (!o.proven) continue;
-        origins.clear();
-        dirs.clear();
-        tfar.clear();
-        for (const glm::vec3& e : eyes) {
-            for (uint32_t k = 0; k < targets_per_box; ++k) {
-                const glm::vec3 p = o.box.min + o.box.size() * glm::vec3(rng.uniform(), rng.uniform(), rng.uniform());
-                origins.push_back(e);
-                dirs.push_back(glm::normalize(p - e));
-                tfar.push_back(glm::length(p - e));
-            }
-        }
-        std::vector<uint8_t> blocked(origins.size());
-        scene.occluded_opaque(origins.data(), dirs.data(), tfar.data(), uint32_t(origins.size()), blocked.data());
-        rays += origins.size();
-        for (size_t i = 0; i < blocked.size(); ++i) {
-            if (blocked[i]) continue;
-            if (++seen <= 5) {
-                ADD_FAILURE() << "seen: eye (" << origins[i].x << ", " << origins[i].y << ", " << origins[i].z
-                              << ") direction (" << dirs[i].x << ", " << dirs[i].y << ", " << dirs[i].z << ") reaches "
-                              << tfar[i] << " m into box (" << o.box.min.x << ", " << o.box.min.y << ", "
-                              << o.box.min.z << ")-(" << o.box.max.x << ", " << o.box.max.y << ", " << o.box.max.z
-                              << ")";
-            }
-        }
-    }
+    uint64_t rays = 0;
+    const uint64_t seen = count_seen(scene, boxes, eyes, targets_per_box, rng, rays);
     EXPECT_EQ(seen, 0u) << "of " << rays << " rays into proven boxes";
     EXPECT_GT(rays, 100000u);
 }
@@ -289,19 +298,8 @@ TEST(OccludersProperty, RandomClosedMeshesHideNothingTheyShouldNot) {
         masks.eyes = view.eyes;
         std::vector<glm::vec3> eyes;
         sample_eye_points_in(masks, view.view_bounds, seed, 512, 777, eyes);
-        uint64_t seen = 0, rays = 0;
-        for (const Occluder& o : boxes) {
-            if (!o.proven) continue;
-            for (const glm::vec3& e : eyes) {
-                const glm::vec3 p = o.box.min + o.box.size() * glm::vec3(rng.uniform(), rng.uniform(), rng.uniform());
-                const glm::vec3 d = glm::normalize(p - e);
-                const float t = glm::length(p - e);
-                uint8_t blocked = 0;
-                scene.occluded_opaque(&e, &d, &t, 1, &blocked);
-                seen += !blocked;
-                ++rays;
-            }
-        }
+        uint64_t rays = 0;
+        const uint64_t seen = count_seen(scene, boxes, eyes, 1, rng, rays);
         EXPECT_EQ(seen, 0u) << "of " << rays;
         EXPECT_GT(rays, 1000u);
     }
