@@ -51,6 +51,15 @@ World field_and_maze() {
     return w;
 }
 
+// The sampled mode as the octree's oracle (the objects must outlive the oracle).
+RegionPvsOracle sampled_oracle(const SampledPvsConfig& sc, const World& w, const RayScene& scene, const CellSet& masks) {
+    return [&sc, &w, &scene, &masks](const std::vector<Aabb>& boxes, const std::vector<uint64_t>& streams,
+                                     PvsSet& rows) {
+        uint64_t guard = 0;
+        sample_box_rows(sc, w, scene, masks, boxes, streams, sc.rays.rays_per_eye, rows, guard, nullptr);
+    };
+}
+
 TEST(Octree, TheMazeGetsTheSmallCells) {
     Context ctx = quiet_context();
     const World w = field_and_maze();
@@ -58,11 +67,7 @@ TEST(Octree, TheMazeGetsTheSmallCells) {
     SampledPvsConfig sc;
     sc.rays = SampleConfig{8, 512, 0, 3};
     const CellSet masks = under_the_roof();
-    const RegionPvsOracle oracle = [&](const std::vector<Aabb>& boxes, const std::vector<uint64_t>& streams,
-                                       PvsSet& rows) {
-        uint64_t guard = 0;
-        sample_box_rows(sc, w, scene, masks, boxes, streams, sc.rays.rays_per_eye, rows, guard, nullptr);
-    };
+    const RegionPvsOracle oracle = sampled_oracle(sc, w, scene, masks);
     CellConfig cc;
     cc.kind = CellKind::kOctree;
     cc.min_cell_size_m = 1.0;
@@ -102,11 +107,7 @@ TEST(Octree, NeverSplitsBelowTheMinimumAndStopsAtTheBudget) {
     SampledPvsConfig sc;
     sc.rays = SampleConfig{4, 256, 0, 3};
     CellSet masks;
-    const RegionPvsOracle oracle = [&](const std::vector<Aabb>& boxes, const std::vector<uint64_t>& streams,
-                                       PvsSet& rows) {
-        uint64_t guard = 0;
-        sample_box_rows(sc, w, scene, masks, boxes, streams, sc.rays.rays_per_eye, rows, guard, nullptr);
-    };
+    const RegionPvsOracle oracle = sampled_oracle(sc, w, scene, masks);
     CellConfig cc;
     cc.kind = CellKind::kOctree;
     cc.min_cell_size_m = 2.0;
