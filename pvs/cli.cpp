@@ -223,6 +223,7 @@ int run_bake(Context& ctx, const BakeConfig& config, const std::string& world_pa
     const std::string hash = hash_file_hex(world_path);
     BakeData bake = bake_world(ctx, config, world, world_path, hash);
     bake.timings_s = ctx.timings();
+    bake.figures.emplace_back("peak_memory_mb", peak_memory_mb());
     {
         ScopedTimer t(ctx, "write");
         write_bake_file(out_path, bake);
