@@ -1,0 +1,336 @@
+// Conservative depth cube map: occluder boxes written where they cover whole pixels, occludee boxes tested
+// against every pixel they touch. Conventions and the safety argument: depth_cube.h.
+//
+// After: P. Wonka, M. Wimmer, D. Schmalstieg. Visibility Preprocessing with Occluder Fusion for Urban
+// Walkthroughs. EGWR 2000 (the from-point test on shrunk occluders); H. Zhang et al. Visibility Culling
+// using Hierarchical Occlusion Maps, SIGGRAPH 1997 (conservative depth comparisons on an occlusion map).
+#include "pvs/depth_cube.h"
+
+#include "core/error.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+namespace pvs {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr float kInfF = std::numeric_limits<float>::infinity();
+// Widening of the occludee's projected rectangle, relative to max(1, |u|): covers rounding of Δu / d.
+constexpr double kRectPad = 1e-9;
+
+// The pixel grid: edge k of R along u or v. THE definition, shared by kernel and reference.
+inline double grid(int k, int r) {
+    return -1.0 + 2.0 * double(k) / double(r);
+}
+
+// Round a non-negative double up to a float (larger stored depth is the safe side).
+inline float float_up(double x) {
+    float f = float(x);
+    if (double(f) < x) f = std::nextafter(f, kInfF);
+    return f;
+}
+
+// The box relative to the eye, in face f's axes (double; differences of floats are exact in practice).
+struct FaceBox {
+    double d_min, d_max;  // depth range along the face axis
+    double u_lo, u_hi;    // Δ[ua] range
+    double v_lo, v_hi;    // Δ[va] range
+};
+
+FaceBox face_box(const Aabb& box, glm::vec3 eye, int face) {
+    const int a = face / 2, ua = (a + 1) % 3, va = (a + 2) % 3;
+    const double lo = double(box.min[a]) - double(eye[a]), hi = double(box.max[a]) - double(eye[a]);
+    FaceBox fb;
+    if (face % 2 == 0) {
+        fb.d_min = lo;
+        fb.d_max = hi;
+    } else {
+        fb.d_min = -hi;
+        fb.d_max = -lo;
+    }
+    fb.u_lo = double(box.min[ua]) - double(eye[ua]);
+    fb.u_hi = double(box.max[ua]) - double(eye[ua]);
+    fb.v_lo = double(box.min[va]) - double(eye[va]);
+    fb.v_hi = double(box.max[va]) - double(eye[va]);
+    return fb;
+}
+
+// Distance from 0 to the interval [lo, hi].
+inline double dist_to_zero(double lo, double hi) {
+    return std::max({0.0, lo, -hi});
+}
+
+// Interval of ray depths t with lo <= t * c <= hi (c is the ray direction's component); empty as [inf, -inf].
+inline void slab(double lo, double hi, double c, double& enter, double& exit) {
+    if (c > 0.0) {
+        enter = lo / c;
+        exit = hi / c;
+    } else if (c < 0.0) {
+        enter = hi / c;
+        exit = lo / c;
+    } else if (lo <= 0.0 && 0.0 <= hi) {
+        enter = -kInf;
+        exit = kInf;
+    } else {
+        enter = kInf;
+        exit = -kInf;
+    }
+}
+
+inline bool box_usable(const Aabb& box) {
+    return !box.is_empty() && is_finite(box.min) && is_finite(box.max);
+}
+
+inline bool meets_near_cube(const Aabb& box, glm::vec3 eye) {
+    for (int k = 0; k < 3; ++k) {
+        if (double(box.max[k]) - double(eye[k]) < -kCubeNearPlane_m) return false;
+        if (double(box.min[k]) - double(eye[k]) > kCubeNearPlane_m) return false;
+    }
+    return true;
+}
+
+// The occludee's per-face rule (depth_cube.h): lower depth bound and the touched pixel range on the face.
+struct OccludeeFace {
+    bool touched = false;
+    double limit = 0.0;  // stored depth must be < limit
+    int i0 = 0, i1 = -1, j0 = 0, j1 = -1;
+};
+
+// Smallest pixel index i in [0, r - 1] whose closed span [g(i), g(i + 1)] reaches up to lo (g(i + 1) >= lo).
+int first_pixel_reaching(double lo, int r) {
+    int i = std::clamp(int(std::floor((lo + 1.0) * 0.5 * r)), 0, r - 1);
+    while (i > 0 && grid(i, r) >= lo) --i;
+    while (i < r - 1 && grid(i + 1, r) < lo) ++i;
+    return i;
+}
+
+// Largest pixel index i in [0, r - 1] with g(i) <= hi.
+int last_pixel_reaching(double hi, int r) {
+    int i = std::clamp(int(std::floor((hi + 1.0) * 0.5 * r)), 0, r - 1);
+    while (i < r - 1 && grid(i + 1, r) <= hi) ++i;
+    while (i > 0 && grid(i, r) > hi) --i;
+    return i;
+}
+
+inline double pad_low(double x) {
+    return std::clamp(x - kRectPad * std::max(1.0, std::abs(x)), -1.0, 1.0);
+}
+inline double pad_high(double x) {
+    return std::clamp(x + kRectPad * std::max(1.0, std::abs(x)), -1.0, 1.0);
+}
+
+OccludeeFace occludee_face(const Aabb& box, glm::vec3 eye, int face, int r) {
+    OccludeeFace of;
+    const FaceBox fb = face_box(box, eye, face);
+    const double lower = std::max(
+        {fb.d_min, dist_to_zero(fb.u_lo, fb.u_hi), dist_to_zero(fb.v_lo, fb.v_hi), kCubeNearPlane_m});
+    if (lower > fb.d_max) return of;  // no part of the box in this face's cone
+    // Bounding rectangle of the projection of the box restricted to depths [lower, d_max] (a product set,
+    // so each extreme is reached at a corner: pick the depth that pushes u outward).
+    const double u0 = fb.u_lo >= 0.0 ? fb.u_lo / fb.d_max : fb.u_lo / lower;
+    const double u1 = fb.u_hi >= 0.0 ? fb.u_hi / lower : fb.u_hi / fb.d_max;
+    const double v0 = fb.v_lo >= 0.0 ? fb.v_lo / fb.d_max : fb.v_lo / lower;
+    const double v1 = fb.v_hi >= 0.0 ? fb.v_hi / lower : fb.v_hi / fb.d_max;
+    of.i0 = first_pixel_reaching(pad_low(u0), r);
+    of.i1 = last_pixel_reaching(pad_high(u1), r);
+    of.j0 = first_pixel_reaching(pad_low(v0), r);
+    of.j1 = last_pixel_reaching(pad_high(v1), r);
+    of.touched = of.i0 <= of.i1 && of.j0 <= of.j1;
+    of.limit = lower * (1.0 - kCubeDepthSlack);
+    return of;
+}
+
+}  // namespace
+
+DepthCube::DepthCube(int resolution) : resolution_(resolution) {
+    if (resolution < kMinCubeResolution || resolution > kMaxCubeResolution) {
+        throw bad_input("DepthCube: resolution " + std::to_string(resolution) + " is outside [" +
+                        std::to_string(kMinCubeResolution) + ", " + std::to_string(kMaxCubeResolution) +
+                        "] pixels per face edge");
+    }
+    depth_.assign(size_t(6) * resolution_ * resolution_, kInfF);
+    for (auto* v : {&col_enter_, &col_exit_, &row_enter_, &row_exit_, &corner_prev_, &corner_cur_}) {
+        v->resize(size_t(resolution_) + 1);
+    }
+}
+
+void DepthCube::clear(glm::vec3 eye) {
+    eye_ = eye;
+    std::fill(depth_.begin(), depth_.end(), kInfF);
+}
+
+size_t DepthCube::covered_pixel_count() const {
+    return size_t(std::count_if(depth_.begin(), depth_.end(), [](float d) { return d < kInfF; }));
+}
+
+void DepthCube::add_occluder(const Aabb& box) {
+    if (!box_usable(box) || box.contains(eye_)) return;
+    const int r = resolution_;
+    for (int face = 0; face < 6; ++face) {
+        const FaceBox fb = face_box(box, eye_, face);
+        const double d_lo = std::max(fb.d_min, kCubeNearPlane_m);  // clip to d >= near (safe: a sub-box)
+        if (d_lo > fb.d_max) continue;
+        // Candidate vertices: the bounding rectangle of the projection of box ∩ {d >= d_lo}; a pixel whose
+        // four corners hit lies inside it. One vertex of slack each side absorbs rounding; the test at the
+        // vertices decides, so extra candidates change nothing.
+        const double u0 = fb.u_lo >= 0.0 ? fb.u_lo / fb.d_max : fb.u_lo / d_lo;
+        const double u1 = fb.u_hi >= 0.0 ? fb.u_hi / d_lo : fb.u_hi / fb.d_max;
+        const double v0 = fb.v_lo >= 0.0 ? fb.v_lo / fb.d_max : fb.v_lo / d_lo;
+        const double v1 = fb.v_hi >= 0.0 ? fb.v_hi / d_lo : fb.v_hi / fb.d_max;
+        if (u0 > 1.0 || u1 < -1.0 || v0 > 1.0 || v1 < -1.0) continue;
+        const auto vertex_lo = [r](double x) {
+            return std::max(0, int(std::floor((std::max(x, -1.0) + 1.0) * 0.5 * r)) - 1);
+        };
+        const auto vertex_hi = [r](double x) {
+            return std::min(r, int(std::ceil((std::min(x, 1.0) + 1.0) * 0.5 * r)) + 1);
+        };
+        const int iv0 = vertex_lo(u0), iv1 = vertex_hi(u1), jv0 = vertex_lo(v0), jv1 = vertex_hi(v1);
+        if (iv1 - iv0 < 1 || jv1 - jv0 < 1) continue;  // fewer than two vertices: no whole pixel
+
+        // Separable slab test: a corner ray (u, v, 1) (depth-parameterized) enters at
+        // max(d_lo, enter_u(u), enter_v(v)) and leaves at min(d_max, exit_u(u), exit_v(v)).
+        for (int iv = iv0; iv <= iv1; ++iv)
+            slab(fb.u_lo, fb.u_hi, grid(iv, r), col_enter_[iv], col_exit_[iv]);
+        for (int jv = jv0; jv <= jv1; ++jv)
+            slab(fb.v_lo, fb.v_hi, grid(jv, r), row_enter_[jv], row_exit_[jv]);
+
+        float* const face_depth = depth_.data() + size_t(face) * r * r;
+        for (int jv = jv0; jv <= jv1; ++jv) {
+            // Corner depths of this vertex row (+inf where the corner ray does not certainly hit).
+            const double re = std::max(d_lo, row_enter_[jv]), rx = std::min(fb.d_max, row_exit_[jv]);
+            for (int iv = iv0; iv <= iv1; ++iv) {
+                const double enter = std::max(re, col_enter_[iv]);
+                const double exit = std::min(rx, col_exit_[iv]);
+                const double hit_depth = enter * (1.0 + kCubeDepthSlack);
+                corner_cur_[iv] = exit >= hit_depth ? hit_depth : kInf;
+            }
+            if (jv > jv0) {
+                float* const row = face_depth + size_t(jv - 1) * r;
+                for (int i = iv0; i < iv1; ++i) {
+                    const double d =
+                        std::max({corner_prev_[i], corner_prev_[i + 1], corner_cur_[i], corner_cur_[i + 1]});
+                    if (d < kInf) row[i] = std::min(row[i], float_up(d));
+                }
+            }
+            std::swap(corner_prev_, corner_cur_);
+        }
+    }
+}
+
+bool DepthCube::is_hidden(const Aabb& box) const {
+    if (!box_usable(box) || meets_near_cube(box, eye_)) return false;
+    const int r = resolution_;
+    for (int face = 0; face < 6; ++face) {
+        const OccludeeFace of = occludee_face(box, eye_, face, r);
+        if (!of.touched) continue;
+        const float* const face_depth = depth_.data() + size_t(face) * r * r;
+        for (int j = of.j0; j <= of.j1; ++j) {
+            const float* const row = face_depth + size_t(j) * r;
+            for (int i = of.i0; i <= of.i1; ++i) {
+                if (!(double(row[i]) < of.limit)) return false;
+            }
+        }
+    }
+    return true;
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Reference: every pixel of every face, every occluder, four corner rays with a textbook slab test.
+
+namespace {
+
+// Textbook ray-box slab test over the ray eye + t * dir, t in [near, inf). Returns the entry t, or +inf
+// when the ray does not certainly pass through the box (exit < entry * (1 + slack)). With |dir[a]| = 1 on
+// the face axis, t is the depth.
+double reference_corner_depth(const Aabb& box, glm::vec3 eye, glm::dvec3 dir) {
+    double t_enter = kCubeNearPlane_m, t_exit = kInf;
+    for (int k = 0; k < 3; ++k) {
+        const double lo = double(box.min[k]) - double(eye[k]), hi = double(box.max[k]) - double(eye[k]);
+        if (dir[k] == 0.0) {
+            if (lo > 0.0 || hi < 0.0) return kInf;
+            continue;
+        }
+        const double t1 = lo / dir[k], t2 = hi / dir[k];
+        t_enter = std::max(t_enter, std::min(t1, t2));
+        t_exit = std::min(t_exit, std::max(t1, t2));
+    }
+    const double hit_depth = t_enter * (1.0 + kCubeDepthSlack);
+    return t_exit >= hit_depth ? hit_depth : kInf;
+}
+
+glm::dvec3 reference_direction(int face, double u, double v) {
+    const int a = face / 2;
+    glm::dvec3 dir(0.0);
+    dir[a] = face % 2 == 0 ? 1.0 : -1.0;
+    dir[(a + 1) % 3] = u;
+    dir[(a + 2) % 3] = v;
+    return dir;
+}
+
+}  // namespace
+
+bool is_hidden_reference(const std::vector<Aabb>& occluders, glm::vec3 eye, const Aabb& box, int resolution) {
+    const int r = resolution;
+    if (!box_usable(box)) return false;
+    // Visible when the box meets the closed near cube around the eye.
+    bool near = true;
+    for (int k = 0; k < 3; ++k) {
+        near = near && box.min[k] - double(eye[k]) <= kCubeNearPlane_m &&
+               box.max[k] - double(eye[k]) >= -kCubeNearPlane_m;
+    }
+    if (near) return false;
+
+    for (int face = 0; face < 6; ++face) {
+        const int a = face / 2, ua = (a + 1) % 3, va = (a + 2) % 3;
+        const double s = face % 2 == 0 ? 1.0 : -1.0;
+        // Depth range and side ranges, straight from the definitions.
+        const double da = s * (double(box.min[a]) - double(eye[a])),
+                     db = s * (double(box.max[a]) - double(eye[a]));
+        const double d_min = std::min(da, db), d_max = std::max(da, db);
+        const double ulo = double(box.min[ua]) - double(eye[ua]), uhi = double(box.max[ua]) - double(eye[ua]);
+        const double vlo = double(box.min[va]) - double(eye[va]), vhi = double(box.max[va]) - double(eye[va]);
+        // Nearest depth of the box's part inside the face's cone |Δu| <= d, |Δv| <= d.
+        double lower = std::max(d_min, kCubeNearPlane_m);
+        if (ulo > 0.0) lower = std::max(lower, ulo);
+        if (uhi < 0.0) lower = std::max(lower, -uhi);
+        if (vlo > 0.0) lower = std::max(lower, vlo);
+        if (vhi < 0.0) lower = std::max(lower, -vhi);
+        if (lower > d_max) continue;
+        // Projected rectangle: extremes over the four (side, depth) corner combinations.
+        const double us[4] = {ulo / lower, ulo / d_max, uhi / lower, uhi / d_max};
+        const double vs[4] = {vlo / lower, vlo / d_max, vhi / lower, vhi / d_max};
+        const double u0 = pad_low(*std::min_element(us, us + 4)),
+                     u1 = pad_high(*std::max_element(us, us + 4));
+        const double v0 = pad_low(*std::min_element(vs, vs + 4)),
+                     v1 = pad_high(*std::max_element(vs, vs + 4));
+        const double limit = lower * (1.0 - kCubeDepthSlack);
+
+        for (int j = 0; j < r; ++j) {
+            for (int i = 0; i < r; ++i) {
+                const bool touched =
+                    grid(i, r) <= u1 && grid(i + 1, r) >= u0 && grid(j, r) <= v1 && grid(j + 1, r) >= v0;
+                if (!touched) continue;
+                float pixel = kInfF;
+                for (const Aabb& occ : occluders) {
+                    if (!box_usable(occ) || occ.contains(eye)) continue;
+                    double d = 0.0;
+                    for (int cj = j; cj <= j + 1; ++cj) {
+                        for (int ci = i; ci <= i + 1; ++ci) {
+                            d = std::max(d,
+                                         reference_corner_depth(
+                                             occ, eye, reference_direction(face, grid(ci, r), grid(cj, r))));
+                        }
+                    }
+                    if (d < kInf) pixel = std::min(pixel, float_up(d));
+                }
+                if (!(double(pixel) < limit)) return false;
+            }
+        }
+    }
+    return true;
+}
+
+}  // namespace pvs

@@ -1,0 +1,111 @@
+// pvsbake pvs: a conservative from-point occlusion test on a depth cube map around an eye point s.
+//
+// This is the from-point test of ALGORITHMS.md section 3 (Wonka, Wimmer, Schmalstieg 2000: occluder
+// shrinking; the caller passes the ε-shrunk occluders). Occluders and occludees are axis-aligned boxes.
+// Pure CPU, no Embree. DepthCube is the fast kernel; is_hidden_reference() is the plain reference of the
+// SAME rules, and tests/test_depth_cube.cpp runs both on fixed seeds and asserts identical answers.
+//
+// Conventions (read these before touching the code; Masked Occlusion Culling style):
+// - Axes: glTF world axes (right-handed, +Y up, metres). Everything is relative to the eye:
+//   Δ = p - eye.
+// - Faces, in this order: 0 = +X, 1 = -X, 2 = +Y, 3 = -Y, 4 = +Z, 5 = -Z. Face f has axis a = f / 2 and
+//   sign s = +1 for even f, -1 for odd f. Its other axes are ua = (a + 1) % 3 and va = (a + 2) % 3.
+// - Depth of a point on face f: d = s * Δ[a], the z-buffer distance along the face normal (not the
+//   Euclidean distance). Larger depth = farther. Along any ray of the face, depth grows with distance,
+//   so "nearer in depth" means "earlier on the ray".
+// - Face coordinates: u = Δ[ua] / d, v = Δ[va] / d. No per-face mirroring (this is NOT the OpenGL cube map
+//   layout; nothing here cares about handedness). A direction belongs to face f when
+//   s * Δ[a] >= max(|Δ[ua]|, |Δ[va]|), i.e. its largest |component|. The cones are CLOSED: a direction on a
+//   cube edge or corner belongs to every tied face, and both faces are checked (no tie breaking is needed,
+//   because every rule below is conservative on each face separately).
+// - Pixels: R = resolution pixels per face edge. Pixel (i, j) of a face is the closed square
+//   u in [g(i), g(i + 1)], v in [g(j), g(j + 1)], with g(k) = -1 + 2k / R evaluated in double (the
+//   definition of the grid, used by both the kernel and the reference). Neighbouring pixels share edges.
+//   Storage index: face * R * R + j * R + i.
+// - Near plane: d = kCubeNearPlane_m on every face. An empty pixel holds +infinity.
+// - Occluder pixel rule (writing less is always safe): an occluder box writes pixel P of face f when each
+//   of P's four corner rays, taken over depths t in [kCubeNearPlane_m, +inf), passes through the box with
+//   room to spare (exit >= entry * (1 + kCubeDepthSlack)). The depth written is
+//   max over the four corners of entry * (1 + kCubeDepthSlack), rounded UP to float. The pixel keeps the
+//   minimum over occluders. Boxes containing the eye (closed) write nothing.
+// - Occluder depth bound, and why it is safe: for a box B not containing the eye, let B' = B ∩ {d >=
+//   near}, a convex set. For any depth T, the directions whose ray meets B' at depth <= T form the central
+//   projection of the convex set B' ∩ {d <= T}, which is convex in the (u, v) plane. So the entry depth of
+//   B' is a quasi-convex function of (u, v) on the convex set of directions hitting B': if the four corners
+//   of the (convex) pixel square hit B', every ray through the pixel hits B', and no later than the largest
+//   corner entry depth. The max of the four corner entry depths is therefore exact, not only safe; the
+//   slack factor covers rounding (the doubles carry errors ~1e-16 relative; the slack is 1e-6). Note that
+//   this departs from the brief "crossing the near plane writes nothing": we clip such a box to d >= near
+//   instead, which is safe by the same argument (B' is inside B) and lets a floor or wall next to the eye
+//   occlude on the side faces too.
+// - Occludee rule (touching more is always safe): a box is visible (is_hidden returns false) when it is
+//   empty, not finite, or meets the closed cube [eye - near, eye + near] (this covers "contains the eye"
+//   and "reaches the near plane of a face inside that face's cone"). Otherwise, on each face f, let
+//   L_f = max(d_min, dist(0, [Δu_lo, Δu_hi]), dist(0, [Δv_lo, Δv_hi]), near): exactly the smallest depth of
+//   the box's part inside face f's cone (the part is empty when L_f > d_max: the face is skipped). The
+//   touched pixels are those whose closed square meets the bounding rectangle of the projection of
+//   box ∩ {L_f <= d <= d_max}, widened by 1e-9 (relative) and clamped to [-1, 1]^2.
+// - The conservative comparison: the box is hidden only if, on every face and at every touched pixel,
+//   stored_depth < L_f * (1 - kCubeDepthSlack) (STRICTLY nearer). Equal depths count as visible; an empty
+//   pixel (+inf) is visible.
+// - "Conservative" here: if is_hidden(box) is true, then every segment from the eye to any point x of the
+//   box meets some single occluder box at a depth strictly smaller than x's depth, i.e. before x. Proof:
+//   x lies in a cone of some face f with depth >= L_f, inside a touched pixel P; P's depth D < L_f came from
+//   an occluder that every ray through P has entered at depth <= D. Fusion of occluders happens on the
+//   depth buffer: different occluders may cover different pixels of the same occludee.
+#pragma once
+
+#include "core/math.h"
+
+#include <vector>
+
+namespace pvs {
+
+// Near plane of every face, metres along the face axis.
+inline constexpr double kCubeNearPlane_m = 1e-4;
+// Relative safety margin on depths and on "the ray passes through the box" (covers rounding).
+inline constexpr double kCubeDepthSlack = 1e-6;
+// Resolution limits (pixels per face edge).
+inline constexpr int kMinCubeResolution = 1;
+inline constexpr int kMaxCubeResolution = 4096;
+
+// A depth cube map around one eye point. Owns its buffers; reuse one per thread across eye samples
+// (clear() keeps the allocation). Not thread-safe for writes; is_hidden() is const and may be called from
+// several threads once the occluders are in.
+class DepthCube {
+public:
+    // resolution: pixels per face edge [Limit: kMinCubeResolution..kMaxCubeResolution], e.g. 32..256.
+    // Throws pvs::Error (kBadInput) outside the limits.
+    explicit DepthCube(int resolution);
+
+    // Moves the eye and resets every pixel to "no occluder" (+infinity).
+    void clear(glm::vec3 eye);
+    // Rasterizes one occluder box (see the pixel rule above). Empty or non-finite boxes are ignored.
+    void add_occluder(const Aabb& box);
+    // True only if the box is certainly hidden from the eye by the occluders added so far.
+    bool is_hidden(const Aabb& box) const;
+
+    int resolution() const { return resolution_; }
+    glm::vec3 eye() const { return eye_; }
+    // Stored depth of pixel (i, j) of a face (+infinity when no occluder covers it).
+    float depth(int face, int i, int j) const {
+        return depth_[(size_t(face) * resolution_ + j) * resolution_ + i];
+    }
+    // Pixels that hold an occluder (for tests and statistics).
+    size_t covered_pixel_count() const;
+
+private:
+    int resolution_;
+    glm::vec3 eye_{0.0f};
+    std::vector<float> depth_;  // 6 * R * R, index face * R * R + j * R + i
+    // Scratch of add_occluder(), reused: per grid vertex of a column / row, the slab interval of the ray
+    // parameter (depth) on the u / v axis; and the corner depths of two vertex rows.
+    std::vector<double> col_enter_, col_exit_, row_enter_, row_exit_, corner_prev_, corner_cur_;
+};
+
+// The plain reference of the same rules: for every pixel of every face, brute force "is it touched", and
+// for touched pixels the minimum over all occluders of the four-corner slab tests. Slow (O(6 R^2 * N)); for
+// the differential test and the benchmark ratio only.
+bool is_hidden_reference(const std::vector<Aabb>& occluders, glm::vec3 eye, const Aabb& box, int resolution);
+
+}  // namespace pvs

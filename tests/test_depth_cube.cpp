@@ -1,0 +1,286 @@
+// The conservative depth cube map: hand-built scenes (who hides whom), the fast kernel against the plain
+// reference on fixed seeds (identical answers), and the conservative guarantee against dense ray sampling.
+#include "core/error.h"
+#include "core/random.h"
+#include "pvs/depth_cube.h"
+#include "tests/test_util.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+namespace pvs {
+namespace {
+
+Aabb box(glm::vec3 lo, glm::vec3 hi) {
+    return Aabb::of(lo, hi);
+}
+
+DepthCube cube_with(glm::vec3 eye, const std::vector<Aabb>& occluders, int resolution = 64) {
+    DepthCube cube(resolution);
+    cube.clear(eye);
+    for (const Aabb& b : occluders) cube.add_occluder(b);
+    return cube;
+}
+
+// Fast and reference must agree on every hand-built case too.
+void expect_hidden(const std::vector<Aabb>& occluders, glm::vec3 eye, const Aabb& occludee, bool hidden,
+                   int resolution = 64) {
+    const DepthCube cube = cube_with(eye, occluders, resolution);
+    EXPECT_EQ(cube.is_hidden(occludee), hidden);
+    EXPECT_EQ(is_hidden_reference(occluders, eye, occludee, resolution), hidden);
+}
+
+const glm::vec3 kOrigin(0.0f);
+const Aabb kWall = box({5, -5, -5}, {6, 5, 5});  // 1 m thick, 10 x 10 m, 5 m along +X from the origin
+
+TEST(DepthCube, EmptyMapHidesNothing) {
+    const DepthCube cube = cube_with(kOrigin, {});
+    EXPECT_EQ(cube.covered_pixel_count(), 0u);
+    EXPECT_FALSE(cube.is_hidden(box({8, -1, -1}, {9, 1, 1})));
+}
+
+TEST(DepthCube, WallHidesWhatIsBehindItOnly) {
+    expect_hidden({kWall}, kOrigin, box({8, -1, -1}, {9, 1, 1}), true);     // behind
+    expect_hidden({kWall}, kOrigin, box({6, -1, -1}, {7, 1, 1}), true);     // touching its back
+    expect_hidden({kWall}, kOrigin, box({8, 10, -1}, {9, 11, 1}), false);   // beside
+    expect_hidden({kWall}, kOrigin, box({2, -1, -1}, {3, 1, 1}), false);    // in front
+    expect_hidden({kWall}, kOrigin, box({-9, -1, -1}, {-8, 1, 1}), false);  // behind the eye
+    expect_hidden({kWall}, kOrigin, box({8, 4, -1}, {9, 9, 1}), false);     // peeks past the edge (u > 1)
+    expect_hidden({kWall}, kOrigin, box({8, -1, -1}, {90, 1, 1}), true);    // long, still in the shadow
+    // Near the edge (u <= 0.69), still in the shadow.
+    expect_hidden({kWall}, kOrigin, box({8, 4, -1}, {9, 5.5f, 1}), true);
+}
+
+TEST(DepthCube, EqualDepthIsVisible) {
+    // A flat occludee lying on the wall's front face: same depth, not strictly nearer, so visible.
+    expect_hidden({kWall}, kOrigin, box({5, -1, -1}, {5, 1, 1}), false);
+    // A hair behind the front face is still within the depth slack: visible.
+    expect_hidden({kWall}, kOrigin, box({5.000001f, -1, -1}, {5.000001f, 1, 1}), false);
+    expect_hidden({kWall}, kOrigin, box({5.01f, -1, -1}, {5.01f, 1, 1}), true);
+}
+
+TEST(DepthCube, StoredDepthIsTheEntryDepthRoundedUp) {
+    const DepthCube cube = cube_with(kOrigin, {kWall}, 32);
+    // Face +X (0), pixel next to the centre: the rays enter through the front face at depth 5.
+    const float d = cube.depth(0, 16, 16);
+    EXPECT_GE(d, 5.0f);
+    EXPECT_NEAR(d, 5.0f, 1e-4f);
+    EXPECT_EQ(cube.depth(1, 16, 16), std::numeric_limits<float>::infinity());  // -X: nothing
+    // A 5 x 5 m wall at depth 5 projects onto |u|, |v| <= 0.5 (its front face; the back face projects
+    // smaller). At R = 32 pixels are 1/16 wide: pixels 8..23 lie inside, but the corner rays of pixels 8 and
+    // 23 only graze the wall's edge (exit == entry), which is not "certainly through": 14 x 14 pixels.
+    const DepthCube narrow = cube_with(kOrigin, {box({5, -2.5f, -2.5f}, {6, 2.5f, 2.5f})}, 32);
+    EXPECT_LT(narrow.depth(0, 9, 16), 5.001f);
+    EXPECT_LT(narrow.depth(0, 22, 16), 5.001f);
+    EXPECT_EQ(narrow.depth(0, 8, 16), std::numeric_limits<float>::infinity());
+    EXPECT_EQ(narrow.depth(0, 23, 16), std::numeric_limits<float>::infinity());
+    EXPECT_EQ(narrow.covered_pixel_count(), 14u * 14u);
+    // Slightly wider, the edge pixels are in.
+    const DepthCube wider = cube_with(kOrigin, {box({5, -2.501f, -2.501f}, {6, 2.501f, 2.501f})}, 32);
+    EXPECT_EQ(wider.covered_pixel_count(), 16u * 16u);
+}
+
+TEST(DepthCube, TwoHalfWallsFuseOnTheDepthBuffer) {
+    const Aabb lower = box({5, -5, -5}, {6, 0.5f, 5});
+    const Aabb upper = box({5.5f, -0.5f, -5}, {6.5f, 5, 5});
+    const Aabb target = box({9, -1, -1}, {10, 1, 1});
+    expect_hidden({lower}, kOrigin, target, false);
+    expect_hidden({upper}, kOrigin, target, false);
+    expect_hidden({lower, upper}, kOrigin, target, true);
+    // With a gap between them the target is visible.
+    expect_hidden({box({5, -5, -5}, {6, -0.2f, 5}), box({5.5f, 0.2f, -5}, {6.5f, 5, 5})}, kOrigin, target,
+                  false);
+}
+
+TEST(DepthCube, OccluderContainingTheEyeHidesNothing) {
+    const Aabb solid = box({-10, -10, -10}, {10, 10, 10});
+    const DepthCube cube = cube_with(kOrigin, {solid, kWall});
+    // The solid writes nothing; only the wall does.
+    const DepthCube wall_only = cube_with(kOrigin, {kWall});
+    EXPECT_EQ(cube.covered_pixel_count(), wall_only.covered_pixel_count());
+    expect_hidden({solid}, kOrigin, box({2, -1, -1}, {3, 1, 1}), false);
+    expect_hidden({solid}, kOrigin, box({20, -1, -1}, {21, 1, 1}), false);
+    expect_hidden({box({0, -1, -1}, {1, 1, 1})}, kOrigin, box({5, -0.1f, -0.1f}, {6, 0.1f, 0.1f}), false);
+}
+
+TEST(DepthCube, OccludeeAtTheEyeOrTheNearPlaneIsVisible) {
+    expect_hidden({kWall}, kOrigin, box({-1, -1, -1}, {1, 1, 1}), false);        // contains the eye
+    expect_hidden({kWall}, kOrigin, box({0.00005f, -1, -1}, {9, 1, 1}), false);  // crosses the +X near plane
+    expect_hidden({kWall}, kOrigin, Aabb::empty(), false);
+}
+
+TEST(DepthCube, FloorNextToTheEyeOccludesOnTheSideFaces) {
+    // The floor crosses the near planes of the four side faces; it is clipped to d >= near there, so it
+    // still hides what is under it at shallow angles (on face +X here).
+    const glm::vec3 eye(0, 1.7f, 0);
+    const Aabb floor = box({-50, -1, -50}, {50, 0, 50});
+    expect_hidden({floor}, eye, box({10, -3, -0.5f}, {11, -2, 0.5f}), true);
+    expect_hidden({floor}, eye, box({10, 0.5f, -0.5f}, {11, 1, 0.5f}), false);
+    expect_hidden({floor}, eye, box({60, -3, -0.5f}, {61, -2, 0.5f}), false);  // past the floor's edge
+}
+
+TEST(DepthCube, BoxesSpanningSeveralFaces) {
+    // A huge wall in front on +X, seen on +X, +Z, -Z, +Y, -Y; the occludee sits on the +X / +Z edge
+    // direction (1, 0, 1) and projects onto both faces.
+    const Aabb big = box({5, -40, -40}, {6, 40, 40});
+    const Aabb diagonal = box({8, -0.5f, 8}, {9, 0.5f, 9});
+    expect_hidden({big}, kOrigin, diagonal, true);
+    expect_hidden({big}, kOrigin, box({8, 8, 8}, {9, 9, 9}), true);             // the cube corner (1, 1, 1)
+    expect_hidden({big}, kOrigin, box({4, -0.5f, 8}, {4.5f, 0.5f, 9}), false);  // in front of it
+    // The same wall split into two halves along z = 0: fusion across the occludee's faces.
+    expect_hidden({box({5, -40, -40}, {6, 40, 0.5f}), box({5, -40, -0.5f}, {6, 40, 40})}, kOrigin,
+                  box({8, -0.5f, -0.5f}, {9, 0.5f, 0.5f}), true);
+}
+
+TEST(DepthCube, RejectsABadResolution) {
+    EXPECT_THROW(DepthCube(0), Error);
+    EXPECT_THROW(DepthCube(kMaxCubeResolution + 1), Error);
+    EXPECT_NO_THROW(DepthCube(1));
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Random scenes.
+
+struct Scene {
+    glm::vec3 eye;
+    std::vector<Aabb> occluders;
+    std::vector<Aabb> occludees;
+};
+
+float snap(float x, float step) {
+    return step > 0.0f ? std::round(x / step) * step : x;
+}
+
+// Walls and blocks around an eye; half the scenes snap every coordinate (eye included) to a 0.25 m grid,
+// so box faces pass exactly through the eye's planes and through pixel edges (the awkward cases).
+Scene random_scene(Rng& rng) {
+    Scene s;
+    const float step = rng.uniform() < 0.5f ? 0.25f : 0.0f;
+    auto r3 = [&](float lo, float hi) {
+        return glm::vec3(lo + (hi - lo) * rng.uniform(), lo + (hi - lo) * rng.uniform(),
+                         lo + (hi - lo) * rng.uniform());
+    };
+    auto snapped = [&](glm::vec3 p) { return glm::vec3(snap(p.x, step), snap(p.y, step), snap(p.z, step)); };
+    s.eye = snapped(r3(0, 20));
+    const int n_occ = 3 + int(rng.below(20));
+    for (int k = 0; k < n_occ; ++k) {
+        glm::vec3 size = r3(1, 6);
+        if (rng.uniform() < 0.6f) {  // a wall: thin along one axis, wide along the others
+            size = r3(4, 14);
+            size[rng.below(3)] = 0.2f + rng.uniform();
+        }
+        const glm::vec3 c = s.eye + r3(-12, 12);
+        s.occluders.push_back(Aabb::of(snapped(c - 0.5f * size), snapped(c + 0.5f * size)));
+    }
+    for (int k = 0; k < 40; ++k) {
+        const glm::vec3 size = r3(0.05f, 2.0f);
+        const glm::vec3 c = s.eye + r3(-16, 16);
+        Aabb b = Aabb::of(snapped(c - 0.5f * size), snapped(c + 0.5f * size));
+        if (rng.uniform() < 0.05f) b.max.x = b.min.x;  // flat boxes
+        s.occludees.push_back(b);
+    }
+    return s;
+}
+
+TEST(DepthCube, MatchesTheReferenceOnRandomScenes) {
+    const int scenes = test::in_ci() ? 60 : 300;
+    const int resolutions[] = {16, 17, 24, 31, 32, 48, 64};
+    Rng rng(7, 11);
+    int hidden = 0, tested = 0, disagreements = 0;
+    DepthCube cube(16);
+    for (int n = 0; n < scenes; ++n) {
+        const Scene s = random_scene(rng);
+        const int r = resolutions[rng.below(7)];
+        if (cube.resolution() != r) cube = DepthCube(r);
+        cube.clear(s.eye);
+        for (const Aabb& b : s.occluders) cube.add_occluder(b);
+        for (const Aabb& b : s.occludees) {
+            const bool fast = cube.is_hidden(b);
+            const bool slow = is_hidden_reference(s.occluders, s.eye, b, r);
+            hidden += fast;
+            ++tested;
+            if (fast != slow) {
+                ++disagreements;
+                ADD_FAILURE() << "scene " << n << " resolution " << r << " eye (" << s.eye.x << ", "
+                              << s.eye.y << ", " << s.eye.z << ") box (" << b.min.x << ", " << b.min.y << ", "
+                              << b.min.z << ")-(" << b.max.x << ", " << b.max.y << ", " << b.max.z
+                              << "): fast " << fast << ", reference " << slow;
+                if (disagreements > 5) return;
+            }
+        }
+    }
+    EXPECT_EQ(disagreements, 0);
+    EXPECT_GT(hidden, tested / 10) << hidden << " of " << tested << " hidden";
+    EXPECT_LT(hidden, tested * 9 / 10);
+}
+
+// Does the segment from eye to x meet the box strictly before x? (double slab test over t in [0, 1))
+bool segment_blocked(glm::dvec3 eye, glm::dvec3 x, const Aabb& b) {
+    double t0 = 0.0, t1 = 1.0;
+    const glm::dvec3 d = x - eye;
+    for (int k = 0; k < 3; ++k) {
+        const double lo = double(b.min[k]) - eye[k], hi = double(b.max[k]) - eye[k];
+        if (d[k] == 0.0) {
+            if (lo > 0.0 || hi < 0.0) return false;
+            continue;
+        }
+        const double a = lo / d[k], c = hi / d[k];
+        t0 = std::max(t0, std::min(a, c));
+        t1 = std::min(t1, std::max(a, c));
+    }
+    return t0 <= t1 && t0 < 1.0;
+}
+
+TEST(DepthCube, HiddenMeansEveryRayIsBlocked) {
+    const int scenes = test::in_ci() ? 80 : 400;
+    const int rays_per_box = test::in_ci() ? 500 : 2000;
+    const int resolutions[] = {16, 32, 64, 128};
+    Rng rng(3, 5);
+    long long violations = 0, rays = 0;
+    int hidden = 0, tested = 0;
+    for (int n = 0; n < scenes; ++n) {
+        const Scene s = random_scene(rng);
+        DepthCube cube(resolutions[rng.below(4)]);
+        cube.clear(s.eye);
+        for (const Aabb& b : s.occluders) cube.add_occluder(b);
+        // Ground truth ignores occluders containing the eye (the cube may not rely on them).
+        std::vector<Aabb> blockers;
+        for (const Aabb& b : s.occluders) {
+            if (!b.contains(s.eye)) blockers.push_back(b);
+        }
+        for (const Aabb& b : s.occludees) {
+            ++tested;
+            if (!cube.is_hidden(b)) continue;
+            ++hidden;
+            for (int k = 0; k < rays_per_box; ++k) {
+                glm::dvec3 x;
+                for (int a = 0; a < 3; ++a) {
+                    // The first 8 targets are the corners; then random points, a share of them on faces.
+                    const double t = k < 8 ? double((k >> a) & 1) : double(rng.uniform());
+                    x[a] = double(b.min[a]) + t * (double(b.max[a]) - double(b.min[a]));
+                }
+                if (k >= 8 && k % 4 == 0) {
+                    const int a = int(rng.below(3));
+                    x[a] = rng.uniform() < 0.5f ? double(b.min[a]) : double(b.max[a]);
+                }
+                ++rays;
+                const bool blocked = std::any_of(blockers.begin(), blockers.end(), [&](const Aabb& o) {
+                    return segment_blocked(glm::dvec3(s.eye), x, o);
+                });
+                if (!blocked && ++violations <= 5) {
+                    ADD_FAILURE() << "scene " << n << ": ray to (" << x.x << ", " << x.y << ", " << x.z
+                                  << ") is not blocked";
+                }
+            }
+        }
+    }
+    EXPECT_EQ(violations, 0) << "of " << rays << " rays";
+    EXPECT_GT(hidden, tested / 10) << hidden << " of " << tested << " hidden";
+}
+
+}  // namespace
+}  // namespace pvs
