@@ -11,21 +11,21 @@ namespace pvs {
 
 namespace {
 
-// Voxels of `mask` whose centres lie in `box` (indices into the mask).
+// Voxels of `mask` that overlap the box with volume (indices into the mask).
 void voxels_in(const VoxelMask& mask, const Aabb& box, std::vector<uint64_t>& out) {
     out.clear();
     if (mask.empty()) return;
+    const float s = mask.voxel_size_m;
     glm::ivec3 lo, hi;
     for (int a = 0; a < 3; ++a) {
-        lo[a] = std::max(0, int(std::floor((box.min[a] - mask.origin[a]) / mask.voxel_size_m - 0.5f)));
-        hi[a] = std::min(mask.dims[a] - 1, int(std::ceil((box.max[a] - mask.origin[a]) / mask.voxel_size_m - 0.5f)));
+        lo[a] = std::max(0, int(std::floor((box.min[a] - mask.origin[a]) / s)));
+        hi[a] = std::min(mask.dims[a] - 1, int(std::ceil((box.max[a] - mask.origin[a]) / s)) - 1);
     }
     for (int z = lo.z; z <= hi.z; ++z)
         for (int y = lo.y; y <= hi.y; ++y)
             for (int x = lo.x; x <= hi.x; ++x) {
                 const uint64_t i = uint64_t(x) + uint64_t(mask.dims.x) * (uint64_t(y) + uint64_t(mask.dims.y) * uint64_t(z));
-                const glm::vec3 c = mask.origin + (glm::vec3(x, y, z) + 0.5f) * mask.voxel_size_m;
-                if (mask.get(i) && box.contains(c)) out.push_back(i);
+                if (mask.get(i)) out.push_back(i);
             }
 }
 
@@ -51,24 +51,23 @@ void sample_eye_points_in(const CellSet& cells, const Aabb& region, uint64_t str
                           std::vector<glm::vec3>& out) {
     if (count == 0) return;
     Rng rng(seed, 0x4559450000000000ULL ^ stream);
-    std::vector<uint64_t> voxels;
-    const VoxelMask* mask = &cells.eyes;
-    voxels_in(cells.eyes, region, voxels);
-    if (voxels.empty()) {
-        mask = &cells.view;
-        voxels_in(cells.view, region, voxels);
-    }
-    if (!voxels.empty()) {
+    if (!cells.eyes.empty()) {
+        // Eyes only in the eye space: uniform points of (eye voxel ∩ box), the box's eye voxels split into
+        // `count` runs in index order with one random voxel per run. No eye voxel meets the box: no eyes
+        // (never a point that might be inside solid).
+        std::vector<uint64_t> voxels;
+        voxels_in(cells.eyes, region, voxels);
+        const VoxelMask& m = cells.eyes;
         const uint64_t n = voxels.size();
-        for (uint32_t k = 0; k < count; ++k) {
-            // Run k of the cell's voxels: [k n / count, (k + 1) n / count).
+        for (uint32_t k = 0; k < count && n > 0; ++k) {
             const uint64_t a = uint64_t(k) * n / count, b = std::max(a + 1, uint64_t(k + 1) * n / count);
             const uint64_t i = voxels[std::min<uint64_t>(n - 1, a + uint64_t(rng.uniform() * float(b - a)))];
-            const uint64_t x = i % uint64_t(mask->dims.x), yz = i / uint64_t(mask->dims.x);
-            const glm::vec3 v(float(x), float(yz % uint64_t(mask->dims.y)), float(yz / uint64_t(mask->dims.y)));
+            const uint64_t x = i % uint64_t(m.dims.x), yz = i / uint64_t(m.dims.x);
+            const glm::vec3 v(float(x), float(yz % uint64_t(m.dims.y)), float(yz / uint64_t(m.dims.y)));
+            const glm::vec3 lo = glm::max(m.origin + v * m.voxel_size_m, region.min);
+            const glm::vec3 hi = glm::min(m.origin + (v + 1.0f) * m.voxel_size_m, region.max);
             const glm::vec3 jitter(rng.uniform(), rng.uniform(), rng.uniform());
-            const glm::vec3 p = mask->origin + (v + jitter) * mask->voxel_size_m;
-            out.push_back(glm::clamp(p, region.min, region.max));
+            out.push_back(glm::clamp(lo + (hi - lo) * jitter, lo, hi));
         }
         return;
     }

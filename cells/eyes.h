@@ -1,10 +1,9 @@
 // pvsbake cells: where eyes can be. The ONE place that decides it: the sampled PVS, the verifier and
 // (later) occluder ranking all draw their eye points here.
 //
-// With a view volume (CellSet::eyes, cells/view_volume.h) an eye is drawn in the free voxels of the view
-// volume whose centres lie in the cell: never inside solid, never outside reachable space. A cell with no
-// such voxel (it only holds the walls' side of the view region) draws from its `view` voxels; without a
-// view volume, from the whole cell box.
+// With a view volume (CellSet::eyes, cells/view_volume.h) an eye is drawn in (free voxel of the eye space)
+// ∩ cell: never inside solid, never outside reachable space. A box no eye voxel meets gets no eye point
+// (cells are clipped so that every cell meets the eye space). Without a view volume, the whole box.
 //
 // Sampling is stratified: without voxels the box is split into about `count` strata (a k x k x k grid,
 // shuffled) with one jittered point in each; with voxels the cell's voxels (in index order) are split
@@ -31,6 +30,7 @@ inline void sample_eye_points(const CellSet& cells, uint32_t cell, uint32_t coun
 }
 
 // Does any voxel of `mask` meet the box's open interior? (A voxel only touching a face does not count.)
+// Cells are kept where the EYE mask meets them, so every cell has eye space in it.
 bool mask_meets_box(const VoxelMask& mask, const Aabb& box);
 
 // Appends `count` directions stratified over the whole sphere (equal-area strata in (cos theta, phi),

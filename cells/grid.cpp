@@ -67,7 +67,7 @@ uint64_t clip_grid_to_view(Context& ctx, CellSet& cells, const VoxelMask& view, 
     for (size_t g = 0; g < cells.grid_to_cell.size(); ++g) {
         const int32_t c = cells.grid_to_cell[g];
         if (c < 0) continue;
-        const bool any = mask_meets_box(view, cells.cells[size_t(c)].bounds);
+        const bool any = mask_meets_box(eyes.empty() ? view : eyes, cells.cells[size_t(c)].bounds);
         if (!any) {
             cells.grid_to_cell[g] = -1;
             ++dropped;

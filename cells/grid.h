@@ -18,8 +18,9 @@ constexpr uint64_t kMaxGridCells = 50'000'000;
 // naming --cell-size when the grid would exceed kMaxGridCells or the region is empty.
 CellSet build_uniform_grid(Context& ctx, const CellConfig& config, const Aabb& region);
 
-// Drops the cells no voxel of `view` overlaps (with volume: a voxel only touching a cell's face does not
-// count), renumbers the rest in grid order and stores the masks in the set. Returns the cells dropped.
+// Drops the cells no voxel of the eye space `eyes` overlaps (with volume: a voxel only touching a cell's
+// face does not count), renumbers the rest in grid order and stores the masks in the set (lookups also
+// check `view`). Returns the cells dropped.
 uint64_t clip_grid_to_view(Context& ctx, CellSet& cells, const VoxelMask& view, const VoxelMask& eyes);
 
 }  // namespace pvs

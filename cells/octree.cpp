@@ -21,7 +21,11 @@ uint32_t row_difference(const PvsSet& a, uint32_t ra, const PvsSet& b, uint32_t 
     return n;
 }
 
-bool has_view(const CellSet& masks, const Aabb& box) { return masks.view.empty() || mask_meets_box(masks.view, box); }
+// Does the box hold eye space (the octree keeps only such nodes, as the grid keeps only such cells)?
+bool has_view(const CellSet& masks, const Aabb& box) {
+    if (!masks.eyes.empty()) return mask_meets_box(masks.eyes, box);
+    return masks.view.empty() || mask_meets_box(masks.view, box);
+}
 
 }  // namespace
 

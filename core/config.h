@@ -66,6 +66,13 @@ struct OccluderConfig {
     uint64_t check_seed = 7;
 };
 
+// The conservative solver (pvs/conservative.h).
+struct ConservativeConfig {
+    double epsilon_m = 0.25;    // [Limit: > 0] [Units: m] occluders shrink by this; cell faces are sampled
+                                // every epsilon * sqrt(2). Smaller: tighter PVS, slower bake
+    int cube_resolution = 64;   // [Limit: 8..1024] depth cube pixels per face edge
+};
+
 // Ray sampling from eye points in each cell: the sampled (aggressive) PVS and the verifier share it.
 struct SampleConfig {
     uint32_t eyes_per_cell = 16;   // [Limit: >= 1] stratified random eye points per cell
@@ -93,6 +100,7 @@ struct BakeConfig {
     ViewVolumeConfig view;
     CellConfig cells;
     OccluderConfig occluders;
+    ConservativeConfig conservative;
     SampledPvsConfig sampled;
     VerifyConfig verify;
 };
@@ -150,6 +158,12 @@ void visit_options(Config& c, Visitor&& v) {
     v(OptionSpec{"--occluder-check-eyes", "occluders.check_eyes", "eyes",
                  "occluders: eye points whose rays check every box against the triangles", 1, 1e7},
       c.occluders.check_eyes);
+    v(OptionSpec{"--epsilon", "conservative.epsilon_m", "m",
+                 "conservative mode: occluders shrink by this and cell faces are sampled within it", 0.01, 100},
+      c.conservative.epsilon_m);
+    v(OptionSpec{"--cube-resolution", "conservative.cube_resolution", "pixels",
+                 "conservative mode: depth cube pixels per face edge", 8, 1024},
+      c.conservative.cube_resolution);
     v(OptionSpec{"--eyes", "sampled.eyes_per_cell", "eyes", "sampled mode: eye points per cell", 1, 1e6},
       c.sampled.rays.eyes_per_cell);
     v(OptionSpec{"--rays", "sampled.rays_per_eye", "rays", "sampled mode: rays per eye point", 1, 1e8},

@@ -5,6 +5,7 @@
 #include "cells/octree.h"
 #include "cells/view_volume.h"
 #include "core/error.h"
+#include "pvs/conservative.h"
 #include "pvs/embree_scene.h"
 #include "pvs/occluder_synthesis.h"
 #include "pvs/ray_sampler.h"
@@ -39,9 +40,6 @@ void store_verification(const VerifyResult& result, VerificationRecord& record) 
 BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, const std::string& world_path,
                     const std::string& world_hash) {
     validate(config);
-    if (config.mode != BakeMode::kSampled) {
-        throw bad_input("bake: --mode conservative is not available yet; use --mode sampled");
-    }
     BakeData bake;
     bake.tool_version = tool_version();
     bake.world_path = world_path;
@@ -55,9 +53,13 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
     RayScene scene(ctx, world, BuildQuality::kMedium, config.run.threads);
     bake.leak_path = view.leak_path;
     OccluderFigures occ;
-    if (config.occluders.enabled) {
-        bake.occluders = synthesize_occluders(ctx, config.occluders, world, view, scene, occ);
+    const bool conservative = config.mode == BakeMode::kConservative;
+    std::vector<Aabb> shrunk;
+    if (config.occluders.enabled || conservative) {
+        bake.occluders = synthesize_occluders(ctx, config.occluders, world, view, scene, occ,
+                                              config.conservative.epsilon_m, conservative ? &shrunk : nullptr);
     }
+    ConservativeFigures cons;
     uint32_t occluders_proven = 0;
     for (const Occluder& o : bake.occluders) occluders_proven += o.proven;
     uint64_t cells_dropped = 0;
@@ -66,7 +68,11 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
     if (config.cells.kind == CellKind::kGrid) {
         bake.cells = build_uniform_grid(ctx, config.cells, view.view_bounds);
         cells_dropped = clip_grid_to_view(ctx, bake.cells, view.view, view.eyes);
-        sampled = bake_sampled_pvs(ctx, config.sampled, world, scene, bake.cells);
+        if (conservative) {
+            sampled.pvs = bake_conservative_pvs(ctx, config.conservative, world, bake.cells, shrunk, cons);
+        } else {
+            sampled = bake_sampled_pvs(ctx, config.sampled, world, scene, bake.cells);
+        }
     } else {
         // The octree asks the sampled mode for the PVS of every box it considers; the leaves' rows are
         // the bake's rows. The ray budget does not apply: boxes are not known in advance.
@@ -78,6 +84,10 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
         sampled.rays_per_eye = config.sampled.rays.rays_per_eye;
         const RegionPvsOracle oracle = [&](const std::vector<Aabb>& boxes, const std::vector<uint64_t>& streams,
                                            PvsSet& rows) {
+            if (conservative) {
+                conservative_box_rows(ctx, config.conservative, world, boxes, shrunk, rows, cons);
+                return;
+            }
             sample_box_rows(config.sampled, world, scene, masks, boxes, streams, sampled.rays_per_eye, rows,
                             sampled.guard_band_added, &ctx);
             sampled.rays += uint64_t(boxes.size()) * config.sampled.rays.eyes_per_cell * sampled.rays_per_eye;
@@ -130,6 +140,13 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
         {"occluder_covered_share_of_solid_near_view", occ.near_m3 > 0 ? occ.near_covered_m3 / occ.near_m3 : 0.0},
         {"occluder_probe_rays_into_solid", double(occ.probe_rays_into_solid)},
         {"occluder_seconds", occ.seconds},
+        {"conservative_shrunk_occluders", double(shrunk.size())},
+        {"conservative_samples", double(cons.samples)},
+        {"conservative_samples_in_occluders", double(cons.samples_skipped)},
+        {"conservative_object_tests", double(cons.object_tests)},
+        {"conservative_seconds", cons.seconds},
+        {"cells_per_second", cons.seconds > 0 ? double(bake.cells.size()) / cons.seconds
+                             : (sampled.seconds > 0 ? double(bake.cells.size()) / sampled.seconds : 0.0)},
         {"pvs_objects_mean", double(listed) / n_cells},
         {"pvs_objects_max", double(listed_max)},
         {"pvs_share_of_objects_mean", double(listed) / n_cells / std::max<double>(1.0, double(world.objects.size()))},

@@ -360,8 +360,9 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
     bake->add_option("-o,--output", out_path, "the bake file to write (HDF5)")->required();
     bake->add_option("--report", common.report_path, "also write a JSON report here");
     bake->add_option("--mode", mode,
-                     "sampled: the union of what sample rays saw (AGGRESSIVE: may miss small or grazing objects)")
-        ->check(CLI::IsMember({"sampled"}))
+                     "sampled: the union of what sample rays saw (AGGRESSIVE: may miss small or grazing objects); "
+                     "conservative: every object any eye may see, proven with shrunk occluders (occluder fusion)")
+        ->check(CLI::IsMember({"sampled", "conservative"}))
         ->capture_default_str();
     bake->add_flag("--no-verify", no_verify, "skip verification by ray sampling");
     bool no_occluders = false;
@@ -374,7 +375,7 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
         ->capture_default_str();
     ViewArgs view_args;
     add_view_options(*bake, view_args);
-    bind_options(*bake, config, {"run.", "view.", "cells.", "occluders.", "sampled.", "verify."});
+    bind_options(*bake, config, {"run.", "view.", "cells.", "occluders.", "conservative.", "sampled.", "verify."});
     add_common(*bake, common);
 
     CLI::App* verify = app.add_subcommand(
@@ -436,6 +437,7 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
         config.verify.enabled = !no_verify;
         if (bake->parsed()) {
             config.cells.kind = cells_kind == "octree" ? CellKind::kOctree : CellKind::kGrid;
+            config.mode = mode == "conservative" ? BakeMode::kConservative : BakeMode::kSampled;
             apply_view_args(view_args, config.view);
             config.occluders.enabled = !no_occluders;
             validate(config);

@@ -122,7 +122,8 @@ void carve_seen_solid(Context& ctx, const OccluderConfig& config, const VoxelGri
 }  // namespace
 
 std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& config, const World& world,
-                                           const ViewVolume& view, const RayScene& scene, OccluderFigures& figures) {
+                                           const ViewVolume& view, const RayScene& scene, OccluderFigures& figures,
+                                           double epsilon_m, std::vector<Aabb>* shrunk) {
     ScopedTimer timer(ctx, "occluders");
     const auto start = std::chrono::steady_clock::now();
     // The voxels: the view volume's, or the world's at the default size when there is no view volume.
@@ -196,6 +197,44 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
     }
     ctx.progress_end();
     figures.check_rays = rays_total;
+
+    if (shrunk != nullptr) {
+        // The proven solid: the carved solid less every rejected box, then eroded: a voxel stays when every
+        // voxel within k (Chebyshev) is proven solid; voxels within k of the grid's border go (outside the
+        // grid is unknown).
+        ScopedTimer t(ctx, "shrink");
+        BitVolume proven = solid.solid;
+        for (size_t b = 0; b < boxes.size(); ++b) {
+            if (!rejected[b]) continue;
+            const VoxelBox& vb = boxes[b];
+            for (int z = vb.lo.z; z <= vb.hi.z; ++z)
+                for (int y = vb.lo.y; y <= vb.hi.y; ++y)
+                    for (int x = vb.lo.x; x <= vb.hi.x; ++x) proven.clear(grid.index(x, y, z));
+        }
+        const int k = std::max(1, int(std::ceil(epsilon_m / double(grid.voxel_size_m) - 1e-9)));
+        BitVolume not_proven;
+        not_proven.reset(grid.count());
+        for (size_t w = 0; w < proven.words.size(); ++w) not_proven.words[w] = ~proven.words[w];
+        const BitVolume near_not = dilate(grid, not_proven, k);
+        BitVolume eroded;
+        eroded.reset(grid.count());
+        for (size_t w = 0; w < proven.words.size(); ++w) eroded.words[w] = proven.words[w] & ~near_not.words[w];
+        for (uint64_t i = 0; i < grid.count(); ++i) {
+            if (!eroded.get(i)) continue;
+            const glm::ivec3 c = grid.coords(i);
+            if (glm::any(glm::lessThan(c, glm::ivec3(k))) || glm::any(glm::greaterThanEqual(c, grid.dims - k))) {
+                eroded.clear(i);
+            }
+        }
+        BoxConfig sc = bc;
+        sc.min_box_volume_m3 = 0.0;  // every shrunk box helps fusion
+        sc.max_boxes = std::max<uint32_t>(bc.max_boxes, 1024);
+        const std::vector<VoxelBox> shrunk_boxes = grow_boxes(ctx, grid, eroded, sc, nullptr);
+        shrunk->clear();
+        for (const VoxelBox& vb : shrunk_boxes) shrunk->push_back(box_bounds(grid, vb));
+        ctx.info(fmt::format("occluders shrunk by {} m ({} voxels): {} boxes of {:.0f} m3 of solid", epsilon_m, k,
+                             shrunk->size(), double(eroded.count()) * voxel_m3));
+    }
 
     std::vector<Occluder> out;
     for (size_t b = 0; b < boxes.size(); ++b) {

@@ -39,7 +39,12 @@ struct OccluderFigures {
     double seconds = 0.0;
 };
 
+// When `shrunk` is given, also fills it with boxes of the solid SHRUNK by `epsilon_m` (the proven solid,
+// without the voxels of rejected boxes, eroded by ceil(epsilon / voxel) voxels in the Chebyshev metric, so
+// every point of a shrunk box has its whole epsilon-ball inside the proven solid): the occluders of the
+// conservative solver (pvs/conservative.h).
 std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& config, const World& world,
-                                           const ViewVolume& view, const RayScene& scene, OccluderFigures& figures);
+                                           const ViewVolume& view, const RayScene& scene, OccluderFigures& figures,
+                                           double epsilon_m = 0.0, std::vector<Aabb>* shrunk = nullptr);
 
 }  // namespace pvs

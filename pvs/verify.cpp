@@ -83,8 +83,9 @@ VerifyResult verify_pvs(Context& ctx, const VerifyConfig& config, const World& w
 
     std::vector<std::vector<Miss>> cell_misses(n_cells);
     std::vector<uint64_t> cell_missed_rays(n_cells, 0);
+    uint64_t rays_traced = 0;
     ctx.progress_begin("verify", n_cells, "cells");
-#pragma omp parallel
+#pragma omp parallel reduction(+ : rays_traced)
     {
         CellRays rays;
         std::vector<uint8_t> reported;
@@ -92,6 +93,7 @@ VerifyResult verify_pvs(Context& ctx, const VerifyConfig& config, const World& w
         for (int64_t ci = 0; ci < int64_t(n_cells); ++ci) {
             const uint32_t c = uint32_t(ci);
             trace_cell(scene, cells, c, config.rays, result.rays_per_eye, rays);
+            rays_traced += uint64_t(rays.eyes.size()) * rays.rays_per_eye;
             // Touches come in ray order, so the first touch of a missed object is its first ray.
             reported.assign(world.objects.size(), 0);
             for (const RayTouch& t : rays.touches) {
@@ -110,7 +112,7 @@ VerifyResult verify_pvs(Context& ctx, const VerifyConfig& config, const World& w
     }
     ctx.progress_end();
 
-    result.rays = rays_per_cell * n_cells;
+    result.rays = rays_traced;
     result.cell_sampled_visible.resize(n_cells);
     std::vector<double> over, over_tri, pvs_share, sampled_share;
     const double world_tris = std::max<double>(1.0, double(world.triangles.size()));

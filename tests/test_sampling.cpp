@@ -226,7 +226,9 @@ TEST(GuardBand, ListsWhatRaysPassedCloseToAndNothingFar) {
     EXPECT_GE(added, 1u);
     // Nothing the rays saw is dropped.
     for (uint32_t o = 0; o < s.world.objects.size(); ++o)
-        if (seen.test(0, o)) EXPECT_TRUE(band.test(0, o));
+        if (seen.test(0, o)) {
+            EXPECT_TRUE(band.test(0, o));
+        }
 }
 
 }  // namespace
