@@ -17,12 +17,6 @@ namespace pvs {
 
 namespace {
 
-// Entry distance of the ray into the box, or -1 when it misses; 0 when the origin is inside.
-float entry_distance(glm::vec3 o, glm::vec3 d, const Aabb& b) {
-    float t0, t1;
-    return ray_box_interval(o, d, b, std::numeric_limits<float>::max(), t0, t1) ? t0 : -1.0f;
-}
-
 // Distance at which the ray leaves the box (the box holds the origin).
 float exit_distance(glm::vec3 o, glm::vec3 d, const Aabb& b) {
     float t0, t1;
@@ -77,7 +71,9 @@ void carve_seen_solid(Context& ctx, const OccluderConfig& config, const VoxelGri
             for (size_t r = 0; r < dirs.size(); ++r) {
                 // March to the stop (or out of the grid), looking for solid voxels.
                 const float exit = exit_distance(eyes[size_t(e)], dirs[r], gb);
-                const float end = std::min(stop[r], exit);
+                // The last voxel before the stop is not looked at: the surface that stops the ray may lie on
+                // a voxel face with solid right behind it, and rounding must not count that as a crack.
+                const float end = std::min(stop[r] - grid.voxel_size_m, exit);
                 escaped += !std::isfinite(stop[r]);
                 bool hit_solid = false;
                 for (float t = 0.0f; t < end; t += step) {
@@ -175,11 +171,13 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
                 for (uint32_t k = 0; k < config.check_rays_per_eye; ++k) {
                     const glm::vec3 target = box.min + box.size() * glm::vec3(rng.uniform(), rng.uniform(), rng.uniform());
                     const glm::vec3 d = glm::normalize(target - e);
-                    const float t = entry_distance(e, d, box);
+                    // The segment to the target point itself: a box whose face lies on the blocking surface
+                    // (internal faces are solid) is blocked at its face, before any point inside it.
+                    const float t = glm::length(target - e);
                     if (t <= 0.0f) continue;
                     origins.push_back(e);
                     dirs.push_back(d);
-                    tfar.push_back(t * (1.0f - 1e-5f));
+                    tfar.push_back(t);
                 }
             }
             if (!rejected[size_t(b)] && !origins.empty()) {
