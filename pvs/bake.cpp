@@ -60,6 +60,7 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
                                               config.conservative.epsilon_m, conservative ? &shrunk : nullptr);
     }
     ConservativeFigures cons;
+    const VoxelMask reach = conservative ? sample_reach(view.view, config.conservative.epsilon_m) : VoxelMask{};
     uint32_t occluders_proven = 0;
     for (const Occluder& o : bake.occluders) occluders_proven += o.proven;
     uint64_t cells_dropped = 0;
@@ -69,7 +70,7 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
         bake.cells = build_uniform_grid(ctx, config.cells, view.view_bounds);
         cells_dropped = clip_grid_to_view(ctx, bake.cells, view.view, view.eyes);
         if (conservative) {
-            sampled.pvs = bake_conservative_pvs(ctx, config.conservative, world, bake.cells, shrunk, cons);
+            sampled.pvs = bake_conservative_pvs(ctx, config.conservative, world, bake.cells, shrunk, reach, cons);
         } else {
             sampled = bake_sampled_pvs(ctx, config.sampled, world, scene, bake.cells);
         }
@@ -85,7 +86,7 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
         const RegionPvsOracle oracle = [&](const std::vector<Aabb>& boxes, const std::vector<uint64_t>& streams,
                                            PvsSet& rows) {
             if (conservative) {
-                conservative_box_rows(ctx, config.conservative, world, boxes, shrunk, rows, cons);
+                conservative_box_rows(ctx, config.conservative, world, boxes, shrunk, reach, rows, cons);
                 return;
             }
             sample_box_rows(config.sampled, world, scene, masks, boxes, streams, sampled.rays_per_eye, rows,
@@ -143,6 +144,7 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
         {"conservative_shrunk_occluders", double(shrunk.size())},
         {"conservative_samples", double(cons.samples)},
         {"conservative_samples_in_occluders", double(cons.samples_skipped)},
+        {"conservative_samples_far_from_view", double(cons.samples_far)},
         {"conservative_object_tests", double(cons.object_tests)},
         {"conservative_seconds", cons.seconds},
         {"cells_per_second", cons.seconds > 0 ? double(bake.cells.size()) / cons.seconds
