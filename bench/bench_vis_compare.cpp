@@ -1,0 +1,138 @@
+// bench_vis_compare: a bake's PVS against the map compiler's own PVS and against dense rays, at the same
+// eye points.
+//
+//   bench_vis_compare WORLD.glb BAKE.h5 [--vis WORLD.vis.json] [--eyes N] [--rays R] [--seed S]
+//
+// Eye points: random points of the bake's eye space that the compiler's BSP (the .vis.json beside the
+// world) also calls playable. At each: the share of the world's triangles in the objects the bake's cell
+// lists, the share the compiler's cluster PVS lets through (cluster_visible_triangle_fraction), and the
+// share in the objects R rays over the sphere actually reach from that point (a floor no cell-based PVS
+// can go below). Prints JSON: means, medians, and the ratio bake / compiler (issue 6 asks <= 0.75 on
+// oa_dm4, <= 0.5 on ctf_inyard).
+#include "cells/eyes.h"
+#include "core/random.h"
+#include "io/bake_file.h"
+#include "io/gltf_loader.h"
+#include "pvs/embree_scene.h"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+double median(std::vector<double> v) {
+    if (v.empty()) return 0.0;
+    std::sort(v.begin(), v.end());
+    return v[v.size() / 2];
+}
+
+double mean(const std::vector<double>& v) {
+    double s = 0.0;
+    for (double x : v) s += x;
+    return v.empty() ? 0.0 : s / double(v.size());
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    if (argc < 3) {
+        std::fprintf(stderr, "usage: bench_vis_compare WORLD.glb BAKE.h5 [--vis V.json] [--eyes N] [--rays R] [--seed S]\n");
+        return 2;
+    }
+    const std::string world_path = argv[1], bake_path = argv[2];
+    std::string vis_path = world_path.substr(0, world_path.rfind('.')) + ".vis.json";
+    uint32_t n_eyes = 200, n_rays = 100000;
+    uint64_t seed = 1;
+    for (int a = 3; a + 1 < argc; a += 2) {
+        if (!std::strcmp(argv[a], "--vis")) vis_path = argv[a + 1];
+        else if (!std::strcmp(argv[a], "--eyes")) n_eyes = uint32_t(std::atoi(argv[a + 1]));
+        else if (!std::strcmp(argv[a], "--rays")) n_rays = uint32_t(std::atoi(argv[a + 1]));
+        else if (!std::strcmp(argv[a], "--seed")) seed = std::strtoull(argv[a + 1], nullptr, 10);
+    }
+    try {
+        pvs::Context ctx(pvs::Context::Options{pvs::LogLevel::kWarning, true, stderr});
+        const pvs::World world = pvs::load_world(ctx, world_path);
+        const pvs::BakeData bake = pvs::read_bake_file(bake_path);
+        if (bake.objects.size() != world.objects.size()) {
+            std::fprintf(stderr, "error: %s was not baked from %s\n", bake_path.c_str(), world_path.c_str());
+            return 2;
+        }
+        std::ifstream in(vis_path);
+        if (!in) {
+            std::fprintf(stderr, "error: %s: cannot read the compiler's visibility\n", vis_path.c_str());
+            return 2;
+        }
+        const nlohmann::json vis = nlohmann::json::parse(in);
+        const auto& nodes = vis["nodes"];
+        const auto& leaves = vis["leaves"];
+        const auto& fraction = vis["cluster_visible_triangle_fraction"];
+        auto cluster_of = [&](glm::vec3 p) {
+            int n = 0;
+            while (n >= 0) {
+                const auto& node = nodes[size_t(n)];
+                const float d = node["normal"][0].get<float>() * p.x + node["normal"][1].get<float>() * p.y +
+                                node["normal"][2].get<float>() * p.z;
+                n = node["children"][d >= node["dist"].get<float>() ? 0 : 1].get<int>();
+            }
+            return leaves[size_t(-n - 1)]["cluster"].get<int>();
+        };
+        const double total = double(world.triangles.size());
+        pvs::RayScene scene(ctx, world);
+        std::vector<glm::vec3> dirs;
+        pvs::sample_sphere_directions(n_rays, seed, 0, dirs);
+        pvs::Rng rng(seed, 3);
+        std::vector<double> ours, compiler, seen, ratio;
+        const pvs::Aabb box = world.bounds;
+        for (uint32_t tries = 0; ours.size() < n_eyes && tries < 1000 * n_eyes; ++tries) {
+            const glm::vec3 p = box.min + box.size() * glm::vec3(rng.uniform(), rng.uniform(), rng.uniform());
+            if (!bake.cells.eyes.empty() && !bake.cells.eyes.contains(p)) continue;
+            const int32_t cell = bake.cells.find(p);
+            if (cell < 0) continue;
+            const int cluster = cluster_of(p);
+            if (cluster < 0 || !fraction.contains(std::to_string(cluster))) continue;
+            double listed = 0.0;
+            for (uint32_t o = 0; o < bake.objects.size(); ++o)
+                if (bake.pvs.test(uint32_t(cell), o)) listed += bake.objects[o].triangle_count;
+            std::vector<pvs::RayTouch> touches;
+            scene.trace(p, dirs.data(), uint32_t(dirs.size()), touches);
+            std::vector<uint8_t> hit(world.objects.size(), 0);
+            for (const pvs::RayTouch& t : touches) hit[t.object] = 1;
+            double visible = 0.0;
+            for (size_t o = 0; o < hit.size(); ++o)
+                if (hit[o]) visible += world.objects[o].triangle_count;
+            const double c = fraction[std::to_string(cluster)].get<double>();
+            ours.push_back(listed / total);
+            compiler.push_back(c);
+            seen.push_back(visible / total);
+            if (c > 0) ratio.push_back(listed / total / c);
+        }
+        nlohmann::ordered_json out;
+        out["bench"] = "vis_compare";
+        out["world"] = world_path;
+        out["bake"] = bake_path;
+        out["pvs_kind"] = bake.conservative ? "conservative" : "aggressive";
+        out["eyes"] = ours.size();
+        out["rays_per_eye"] = n_rays;
+        out["bake_triangle_share_mean"] = mean(ours);
+        out["bake_triangle_share_median"] = median(ours);
+        out["compiler_triangle_share_mean"] = mean(compiler);
+        out["compiler_triangle_share_median"] = median(compiler);
+        out["rays_triangle_share_mean"] = mean(seen);
+        out["bake_over_compiler_of_means"] = mean(compiler) > 0 ? mean(ours) / mean(compiler) : 0.0;
+        out["bake_over_compiler_median"] = median(ratio);
+        std::cout << out.dump(2) << std::endl;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "error: %s\n", e.what());
+        return 2;
+    }
+    return 0;
+}
