@@ -15,8 +15,8 @@
 #include "io/gltf_loader.h"
 #include "pvs/embree_scene.h"
 
-#include <nlohmann/json.hpp>
 #include <omp.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -49,9 +49,12 @@ int main(int argc, char** argv) {
     uint64_t total_rays = 4'000'000;
     int repeats = 3, threads = 0;
     for (int a = 2; a + 1 < argc; a += 2) {
-        if (!std::strcmp(argv[a], "--rays")) total_rays = std::strtoull(argv[a + 1], nullptr, 10);
-        else if (!std::strcmp(argv[a], "--repeats")) repeats = std::max(1, std::atoi(argv[a + 1]));
-        else if (!std::strcmp(argv[a], "--threads")) threads = std::atoi(argv[a + 1]);
+        if (!std::strcmp(argv[a], "--rays"))
+            total_rays = std::strtoull(argv[a + 1], nullptr, 10);
+        else if (!std::strcmp(argv[a], "--repeats"))
+            repeats = std::max(1, std::atoi(argv[a + 1]));
+        else if (!std::strcmp(argv[a], "--threads"))
+            threads = std::atoi(argv[a + 1]);
     }
     if (threads > 0) omp_set_num_threads(threads);
     pvs::Context ctx(pvs::Context::Options{pvs::LogLevel::kWarning, true, stderr});
@@ -75,8 +78,9 @@ int main(int argc, char** argv) {
     out["rays"] = rays;
     out["threads"] = omp_get_max_threads();
     out["repeats"] = repeats;
-    const std::pair<const char*, pvs::BuildQuality> qualities[] = {
-        {"low", pvs::BuildQuality::kLow}, {"medium", pvs::BuildQuality::kMedium}, {"high", pvs::BuildQuality::kHigh}};
+    const std::pair<const char*, pvs::BuildQuality> qualities[] = {{"low", pvs::BuildQuality::kLow},
+                                                                   {"medium", pvs::BuildQuality::kMedium},
+                                                                   {"high", pvs::BuildQuality::kHigh}};
     for (const auto& [name, quality] : qualities) {
         const auto t0 = std::chrono::steady_clock::now();
         pvs::RayScene scene(ctx, world, quality, threads);
@@ -84,7 +88,8 @@ int main(int argc, char** argv) {
         std::vector<double> stream, single, repeated, occluded;
         uint64_t touches_stream = 0, touches_single = 0, touches_repeated = 0;
         // Times one way of tracing every eye's rays; returns M rays/s and records the touches seen.
-        using TraceFn = void (pvs::RayScene::*)(glm::vec3, const glm::vec3*, uint32_t, std::vector<pvs::RayTouch>&) const;
+        using TraceFn =
+            void (pvs::RayScene::*)(glm::vec3, const glm::vec3*, uint32_t, std::vector<pvs::RayTouch>&) const;
         auto measure = [&](TraceFn fn, uint64_t& touches_seen) {
             const auto t = std::chrono::steady_clock::now();
             uint64_t n = 0;
@@ -109,7 +114,8 @@ int main(int argc, char** argv) {
             uint64_t hits = 0;
 #pragma omp parallel for schedule(dynamic, 8) reduction(+ : hits)
             for (int64_t e = 0; e < int64_t(eyes); ++e) {
-                hits += scene.occluded_baseline(eye_points[e], dirs.data() + size_t(e) * kRaysPerEye, kRaysPerEye);
+                hits += scene.occluded_baseline(eye_points[e], dirs.data() + size_t(e) * kRaysPerEye,
+                                                kRaysPerEye);
             }
             occluded.push_back(rays / seconds_since(t) * 1e-6);
         }

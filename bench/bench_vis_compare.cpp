@@ -45,7 +45,9 @@ double mean(const std::vector<double>& v) {
 
 int main(int argc, char** argv) {
     if (argc < 3) {
-        std::fprintf(stderr, "usage: bench_vis_compare WORLD.glb BAKE.h5 [--vis V.json] [--eyes N] [--rays R] [--seed S]\n");
+        std::fprintf(
+            stderr,
+            "usage: bench_vis_compare WORLD.glb BAKE.h5 [--vis V.json] [--eyes N] [--rays R] [--seed S]\n");
         return 2;
     }
     const std::string world_path = argv[1], bake_path = argv[2];
@@ -53,10 +55,14 @@ int main(int argc, char** argv) {
     uint32_t n_eyes = 200, n_rays = 100000;
     uint64_t seed = 1;
     for (int a = 3; a + 1 < argc; a += 2) {
-        if (!std::strcmp(argv[a], "--vis")) vis_path = argv[a + 1];
-        else if (!std::strcmp(argv[a], "--eyes")) n_eyes = uint32_t(std::atoi(argv[a + 1]));
-        else if (!std::strcmp(argv[a], "--rays")) n_rays = uint32_t(std::atoi(argv[a + 1]));
-        else if (!std::strcmp(argv[a], "--seed")) seed = std::strtoull(argv[a + 1], nullptr, 10);
+        if (!std::strcmp(argv[a], "--vis"))
+            vis_path = argv[a + 1];
+        else if (!std::strcmp(argv[a], "--eyes"))
+            n_eyes = uint32_t(std::atoi(argv[a + 1]));
+        else if (!std::strcmp(argv[a], "--rays"))
+            n_rays = uint32_t(std::atoi(argv[a + 1]));
+        else if (!std::strcmp(argv[a], "--seed"))
+            seed = std::strtoull(argv[a + 1], nullptr, 10);
     }
     try {
         pvs::Context ctx(pvs::Context::Options{pvs::LogLevel::kWarning, true, stderr});

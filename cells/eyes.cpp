@@ -24,7 +24,8 @@ void voxels_in(const VoxelMask& mask, const Aabb& box, std::vector<uint64_t>& ou
     for (int z = lo.z; z <= hi.z; ++z)
         for (int y = lo.y; y <= hi.y; ++y)
             for (int x = lo.x; x <= hi.x; ++x) {
-                const uint64_t i = uint64_t(x) + uint64_t(mask.dims.x) * (uint64_t(y) + uint64_t(mask.dims.y) * uint64_t(z));
+                const uint64_t i =
+                    uint64_t(x) + uint64_t(mask.dims.x) * (uint64_t(y) + uint64_t(mask.dims.y) * uint64_t(z));
                 if (mask.get(i)) out.push_back(i);
             }
 }
@@ -41,14 +42,15 @@ bool mask_meets_box(const VoxelMask& mask, const Aabb& box) {
     for (int z = lo.z; z <= hi.z; ++z)
         for (int y = lo.y; y <= hi.y; ++y)
             for (int x = lo.x; x <= hi.x; ++x)
-                if (mask.get(uint64_t(x) + uint64_t(mask.dims.x) * (uint64_t(y) + uint64_t(mask.dims.y) * uint64_t(z)))) {
+                if (mask.get(uint64_t(x) +
+                             uint64_t(mask.dims.x) * (uint64_t(y) + uint64_t(mask.dims.y) * uint64_t(z)))) {
                     return true;
                 }
     return false;
 }
 
-void sample_eye_points_in(const CellSet& cells, const Aabb& region, uint64_t stream, uint32_t count, uint64_t seed,
-                          std::vector<glm::vec3>& out) {
+void sample_eye_points_in(const CellSet& cells, const Aabb& region, uint64_t stream, uint32_t count,
+                          uint64_t seed, std::vector<glm::vec3>& out) {
     if (count == 0) return;
     Rng rng(seed, 0x4559450000000000ULL ^ stream);
     if (!cells.eyes.empty()) {

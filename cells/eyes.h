@@ -20,8 +20,8 @@ namespace pvs {
 
 // Appends `count` stratified random eye points of `box` (a cell, or an octree node being considered)
 // under the view volume masks of `cells`; `stream` is a number unique to the box.
-void sample_eye_points_in(const CellSet& cells, const Aabb& box, uint64_t stream, uint32_t count, uint64_t seed,
-                          std::vector<glm::vec3>& out);
+void sample_eye_points_in(const CellSet& cells, const Aabb& box, uint64_t stream, uint32_t count,
+                          uint64_t seed, std::vector<glm::vec3>& out);
 
 // Appends `count` stratified random eye points of the cell to `out`.
 inline void sample_eye_points(const CellSet& cells, uint32_t cell, uint32_t count, uint64_t seed,

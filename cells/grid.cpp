@@ -16,7 +16,8 @@ CellSet build_uniform_grid(Context& ctx, const CellConfig& config, const Aabb& r
         throw bad_input("build_uniform_grid: the region to cover is empty");
     }
     if (!(config.cell_size_m > 0.0)) {
-        throw bad_input(fmt::format("build_uniform_grid: --cell-size must be > 0 m (got {})", config.cell_size_m));
+        throw bad_input(
+            fmt::format("build_uniform_grid: --cell-size must be > 0 m (got {})", config.cell_size_m));
     }
     CellSet set;
     set.kind = CellSet::Kind::kGrid;
@@ -42,7 +43,8 @@ CellSet build_uniform_grid(Context& ctx, const CellConfig& config, const Aabb& r
     for (int z = 0; z < set.dims.z; ++z) {
         for (int y = 0; y < set.dims.y; ++y) {
             for (int x = 0; x < set.dims.x; ++x) {
-                const size_t g = size_t(x) + size_t(set.dims.x) * (size_t(y) + size_t(set.dims.y) * size_t(z));
+                const size_t g =
+                    size_t(x) + size_t(set.dims.x) * (size_t(y) + size_t(set.dims.y) * size_t(z));
                 Cell cell;
                 cell.bounds.min = set.origin + glm::vec3(float(x), float(y), float(z)) * s;
                 cell.bounds.max = set.origin + glm::vec3(float(x + 1), float(y + 1), float(z + 1)) * s;

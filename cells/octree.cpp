@@ -13,11 +13,14 @@ namespace pvs {
 
 namespace {
 
-uint32_t row_count(const PvsSet& p, uint32_t r) { return p.count(r); }
+uint32_t row_count(const PvsSet& p, uint32_t r) {
+    return p.count(r);
+}
 
 uint32_t row_difference(const PvsSet& a, uint32_t ra, const PvsSet& b, uint32_t rb) {
     uint32_t n = 0;
-    for (uint32_t w = 0; w < a.words_per_row; ++w) n += uint32_t(__builtin_popcountll(a.row(ra)[w] ^ b.row(rb)[w]));
+    for (uint32_t w = 0; w < a.words_per_row; ++w)
+        n += uint32_t(__builtin_popcountll(a.row(ra)[w] ^ b.row(rb)[w]));
     return n;
 }
 
@@ -30,9 +33,11 @@ bool has_view(const CellSet& masks, const Aabb& box) {
 }  // namespace
 
 CellSet build_octree(Context& ctx, const CellConfig& config, const CellSet& masks, const Aabb& region,
-                     uint32_t object_count, const RegionPvsOracle& oracle, PvsSet& leaf_pvs, OctreeStats& stats) {
+                     uint32_t object_count, const RegionPvsOracle& oracle, PvsSet& leaf_pvs,
+                     OctreeStats& stats) {
     ScopedTimer timer(ctx, "octree");
-    const int levels = std::max(0, int(std::lround(std::log2(config.root_cell_size_m / config.min_cell_size_m))));
+    const int levels =
+        std::max(0, int(std::lround(std::log2(config.root_cell_size_m / config.min_cell_size_m))));
     const double root_size = config.min_cell_size_m * std::ldexp(1.0, levels);
     CellConfig root_config = config;
     root_config.cell_size_m = root_size;
@@ -171,12 +176,14 @@ CellSet build_octree(Context& ctx, const CellConfig& config, const CellSet& mask
     out.nodes = std::move(kept);
     leaf_pvs = PvsSet::make(uint32_t(out.cells.size()), object_count);
     for (size_t c = 0; c < cell_rows.size(); ++c) {
-        std::copy(rows.row(cell_rows[c]), rows.row(cell_rows[c]) + rows.words_per_row, leaf_pvs.row(uint32_t(c)));
+        std::copy(rows.row(cell_rows[c]), rows.row(cell_rows[c]) + rows.words_per_row,
+                  leaf_pvs.row(uint32_t(c)));
     }
-    ctx.info(fmt::format("octree: {} cells from {} roots; {} splits where visibility differed, {} merged back, "
-                         "{} boxes evaluated, depth {}{}",
-                         out.cells.size(), stats.roots, stats.splits, stats.merged, stats.evaluated, stats.depth,
-                         stats.budget_reached ? " (cell budget reached)" : ""));
+    ctx.info(
+        fmt::format("octree: {} cells from {} roots; {} splits where visibility differed, {} merged back, "
+                    "{} boxes evaluated, depth {}{}",
+                    out.cells.size(), stats.roots, stats.splits, stats.merged, stats.evaluated, stats.depth,
+                    stats.budget_reached ? " (cell budget reached)" : ""));
     return out;
 }
 

@@ -27,16 +27,17 @@ using RegionPvsOracle =
 
 struct OctreeStats {
     uint32_t roots = 0;
-    uint32_t splits = 0;           // cells split because their children's visibility differed
-    uint32_t merged = 0;           // candidate splits undone: children near-identical to the parent
-    uint32_t evaluated = 0;        // boxes whose PVS the oracle computed
-    uint32_t depth = 0;            // deepest level below the roots
+    uint32_t splits = 0;     // cells split because their children's visibility differed
+    uint32_t merged = 0;     // candidate splits undone: children near-identical to the parent
+    uint32_t evaluated = 0;  // boxes whose PVS the oracle computed
+    uint32_t depth = 0;      // deepest level below the roots
     bool budget_reached = false;
 };
 
 // `masks` holds the view volume (CellSet::view, ::eyes) the cells inherit. Returns the leaf cells and
 // their PVS rows in `leaf_pvs` (one row per cell, as the oracle computed them).
 CellSet build_octree(Context& ctx, const CellConfig& config, const CellSet& masks, const Aabb& region,
-                     uint32_t object_count, const RegionPvsOracle& oracle, PvsSet& leaf_pvs, OctreeStats& stats);
+                     uint32_t object_count, const RegionPvsOracle& oracle, PvsSet& leaf_pvs,
+                     OctreeStats& stats);
 
 }  // namespace pvs

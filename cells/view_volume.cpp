@@ -41,14 +41,16 @@ ViewVolume build_view_volume(Context& ctx, const ViewVolumeConfig& config, const
     ViewVolume vv;
     vv.world_bounds_m3 = world.bounds.volume();
     std::vector<Aabb> boxes = config.boxes;
-    if (config.use_world_boxes) boxes.insert(boxes.end(), world.view_volume_boxes.begin(), world.view_volume_boxes.end());
+    if (config.use_world_boxes)
+        boxes.insert(boxes.end(), world.view_volume_boxes.begin(), world.view_volume_boxes.end());
     std::vector<glm::vec3> seeds = config.seeds;
     if (config.use_world_seeds) seeds.insert(seeds.end(), world.view_seeds.begin(), world.view_seeds.end());
     const bool play = config.play_height_m > 0.0;
     if (boxes.empty() && seeds.empty() && !play) {
-        ctx.warn("view volume: no view seeds, view boxes or play height: eyes may be anywhere in the world's "
-                 "bounds, so the bake is larger and slower than it needs to be (add pvs_view_seed nodes or "
-                 "--view-seed)");
+        ctx.warn(
+            "view volume: no view seeds, view boxes or play height: eyes may be anywhere in the world's "
+            "bounds, so the bake is larger and slower than it needs to be (add pvs_view_seed nodes or "
+            "--view-seed)");
         vv.sources = {"world_bounds"};
         vv.view_bounds = world.bounds;
         vv.eye_volume_m3 = vv.view_volume_m3 = vv.world_bounds_m3;
@@ -56,7 +58,8 @@ ViewVolume build_view_volume(Context& ctx, const ViewVolumeConfig& config, const
     }
     for (const Aabb& b : boxes) {
         if (b.is_empty() || !is_finite(b.min) || !is_finite(b.max)) {
-            throw bad_input("view volume: a view box is empty or not finite (--view-box wants min x,y,z then max x,y,z)");
+            throw bad_input(
+                "view volume: a view box is empty or not finite (--view-box wants min x,y,z then max x,y,z)");
         }
     }
     vv.voxelized = true;
@@ -64,8 +67,8 @@ ViewVolume build_view_volume(Context& ctx, const ViewVolumeConfig& config, const
                             ? config.voxel_size_m
                             : default_voxel_size(world.bounds, kDefaultVoxelSizeM, config.max_voxels);
     const VoxelGrid grid = make_voxel_grid(world.bounds, size, 2);
-    ctx.info(fmt::format("view volume: {} m voxels, {} x {} x {} = {:.1f} M voxels", grid.voxel_size_m, grid.dims.x,
-                         grid.dims.y, grid.dims.z, double(grid.count()) * 1e-6));
+    ctx.info(fmt::format("view volume: {} m voxels, {} x {} x {} = {:.1f} M voxels", grid.voxel_size_m,
+                         grid.dims.x, grid.dims.y, grid.dims.z, double(grid.count()) * 1e-6));
     BitVolume touched, upward;
     voxelize_opaque(ctx, world, grid, touched, play ? &upward : nullptr);
 
@@ -91,10 +94,11 @@ ViewVolume build_view_volume(Context& ctx, const ViewVolumeConfig& config, const
         }
         if (flood.leaked) {
             const glm::vec3 a = flood.leak_path.front(), b = flood.leak_path.back();
-            ctx.warn(fmt::format("view volume: the level LEAKS: free space connects a view seed at ({:.2f}, {:.2f}, "
-                                 "{:.2f}) to outside the world at ({:.2f}, {:.2f}, {:.2f}) ({} turns); the view "
-                                 "volume includes the outside it reached",
-                                 a.x, a.y, a.z, b.x, b.y, b.z, flood.leak_path.size()));
+            ctx.warn(fmt::format(
+                "view volume: the level LEAKS: free space connects a view seed at ({:.2f}, {:.2f}, "
+                "{:.2f}) to outside the world at ({:.2f}, {:.2f}, {:.2f}) ({} turns); the view "
+                "volume includes the outside it reached",
+                a.x, a.y, a.z, b.x, b.y, b.z, flood.leak_path.size()));
         }
     }
     if (!boxes.empty()) {
@@ -145,11 +149,12 @@ ViewVolume build_view_volume(Context& ctx, const ViewVolumeConfig& config, const
     vv.view = to_mask(grid, std::move(view));
     vv.grid = grid;
     vv.touched = std::move(touched);
-    ctx.info(fmt::format("view volume ({}): {:.0f} m3 of eye space, {:.0f} m3 with the walls, {:.1f}% of the world's "
-                         "bounds ({:.0f} m3){}",
-                         fmt::join(vv.sources, " & "), vv.eye_volume_m3, vv.view_volume_m3,
-                         100.0 * vv.view_volume_m3 / std::max(1e-9, vv.world_bounds_m3), vv.world_bounds_m3,
-                         vv.leaked ? "; LEAKS" : (vv.flooded ? "; sealed" : "")));
+    ctx.info(fmt::format(
+        "view volume ({}): {:.0f} m3 of eye space, {:.0f} m3 with the walls, {:.1f}% of the world's "
+        "bounds ({:.0f} m3){}",
+        fmt::join(vv.sources, " & "), vv.eye_volume_m3, vv.view_volume_m3,
+        100.0 * vv.view_volume_m3 / std::max(1e-9, vv.world_bounds_m3), vv.world_bounds_m3,
+        vv.leaked ? "; LEAKS" : (vv.flooded ? "; sealed" : "")));
     return vv;
 }
 

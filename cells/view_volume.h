@@ -28,13 +28,13 @@
 namespace pvs {
 
 struct ViewVolume {
-    bool voxelized = false;  // false: no source given, the view volume is the world bounds
+    bool voxelized = false;            // false: no source given, the view volume is the world bounds
     std::vector<std::string> sources;  // "boxes", "flood", "play_height", or "world_bounds"
     VoxelMask eyes;
     VoxelMask view;
-    VoxelGrid grid;          // the voxels of the masks (when voxelized)
-    BitVolume touched;       // voxels an opaque triangle touches (for occluder synthesis)
-    Aabb view_bounds;        // bounds of `view` (or the world bounds)
+    VoxelGrid grid;     // the voxels of the masks (when voxelized)
+    BitVolume touched;  // voxels an opaque triangle touches (for occluder synthesis)
+    Aabb view_bounds;   // bounds of `view` (or the world bounds)
     double eye_volume_m3 = 0.0;
     double view_volume_m3 = 0.0;
     double world_bounds_m3 = 0.0;

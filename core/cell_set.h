@@ -40,7 +40,8 @@ struct VoxelMask {
         for (int z = lo[2]; z <= hi[2]; ++z)
             for (int y = lo[1]; y <= hi[1]; ++y)
                 for (int x = lo[0]; x <= hi[0]; ++x)
-                    if (get(uint64_t(x) + uint64_t(dims.x) * (uint64_t(y) + uint64_t(dims.y) * uint64_t(z)))) return true;
+                    if (get(uint64_t(x) + uint64_t(dims.x) * (uint64_t(y) + uint64_t(dims.y) * uint64_t(z))))
+                        return true;
         return false;
     }
     bool operator==(const VoxelMask& o) const {
@@ -65,13 +66,13 @@ struct OctreeNode {
 struct CellSet {
     enum class Kind : int32_t { kGrid = 0, kOctree = 1 };
     Kind kind = Kind::kGrid;
-    glm::vec3 origin{0.0f};      // grid min corner, metres
-    float cell_size_m = 0.0f;    // grid cell edge, metres
-    glm::ivec3 dims{0};          // grid cells along x, y, z
+    glm::vec3 origin{0.0f};             // grid min corner, metres
+    float cell_size_m = 0.0f;           // grid cell edge, metres
+    glm::ivec3 dims{0};                 // grid cells along x, y, z
     std::vector<int32_t> grid_to_cell;  // dims.x*dims.y*dims.z entries; -1 = no cell there. For an
                                         // octree: the root grid, each entry a root node (or -1)
     std::vector<Cell> cells;
-    std::vector<OctreeNode> nodes;      // octree only
+    std::vector<OctreeNode> nodes;  // octree only
     // The view volume (cells/view_volume.h), when one was built: `view` is where a lookup finds a cell
     // (the view region, up to the walls), `eyes` where eye points are drawn (free space only).
     VoxelMask view;
@@ -95,7 +96,8 @@ struct CellSet {
         int32_t n = grid_to_cell[g];
         while (n >= 0 && nodes[size_t(n)].first_child >= 0) {
             const glm::vec3 c = nodes[size_t(n)].bounds.center();
-            n = nodes[size_t(n)].first_child + (p.x >= c.x ? 1 : 0) + (p.y >= c.y ? 2 : 0) + (p.z >= c.z ? 4 : 0);
+            n = nodes[size_t(n)].first_child + (p.x >= c.x ? 1 : 0) + (p.y >= c.y ? 2 : 0) +
+                (p.z >= c.z ? 4 : 0);
         }
         return n >= 0 ? nodes[size_t(n)].cell : -1;
     }

@@ -11,13 +11,17 @@ namespace pvs {
 
 const char* to_string(BakeMode mode) {
     switch (mode) {
-        case BakeMode::kSampled: return "sampled";
-        case BakeMode::kConservative: return "conservative";
+        case BakeMode::kSampled:
+            return "sampled";
+        case BakeMode::kConservative:
+            return "conservative";
     }
     return "?";
 }
 
-const char* to_string(CellKind kind) { return kind == CellKind::kOctree ? "octree" : "grid"; }
+const char* to_string(CellKind kind) {
+    return kind == CellKind::kOctree ? "octree" : "grid";
+}
 
 void validate(const BakeConfig& config) {
     if (config.cells.root_cell_size_m < config.cells.min_cell_size_m) {
@@ -30,8 +34,9 @@ void validate(const BakeConfig& config) {
         if constexpr (!std::is_same_v<T, bool>) {
             const double v = double(field);
             if (!std::isfinite(v) || v < spec.min || v > spec.max) {
-                throw bad_input(fmt::format("option {} ({}): {} is outside [{}, {}]{}", spec.flag, spec.key, v,
-                                            spec.min, spec.max, *spec.units ? fmt::format(" {}", spec.units) : ""));
+                throw bad_input(fmt::format("option {} ({}): {} is outside [{}, {}]{}", spec.flag, spec.key,
+                                            v, spec.min, spec.max,
+                                            *spec.units ? fmt::format(" {}", spec.units) : ""));
             }
         }
     });
@@ -47,8 +52,8 @@ std::vector<std::pair<std::string, std::string>> resolved_parameters(const BakeC
     out.emplace_back("view.use_world_boxes", config.view.use_world_boxes ? "true" : "false");
     std::string boxes, seeds;
     for (const Aabb& b : config.view.boxes) {
-        boxes += fmt::format("{}{},{},{},{},{},{}", boxes.empty() ? "" : ";", b.min.x, b.min.y, b.min.z, b.max.x,
-                             b.max.y, b.max.z);
+        boxes += fmt::format("{}{},{},{},{},{},{}", boxes.empty() ? "" : ";", b.min.x, b.min.y, b.min.z,
+                             b.max.x, b.max.y, b.max.z);
     }
     for (const glm::vec3& p : config.view.seeds) {
         seeds += fmt::format("{}{},{},{}", seeds.empty() ? "" : ";", p.x, p.y, p.z);

@@ -27,13 +27,13 @@ enum class CellKind { kGrid, kOctree };
 
 struct CellConfig {
     CellKind kind = CellKind::kGrid;
-    double cell_size_m = 2.0;        // [Limit: > 0] [Units: m] grid: edge of a cell
-    double min_cell_size_m = 1.0;    // [Limit: > 0] [Units: m] octree: never split below this edge
-    double root_cell_size_m = 8.0;   // [Limit: >= min] [Units: m] octree: edge of the root cells (rounded to
-                                     // min_cell_size_m times a power of two)
-    double split_threshold = 0.2;    // [Limit: 0..1] octree: split when a child's PVS differs from its parent's
-                                     // by more than this share of the parent's PVS size
-    uint32_t max_cells = 0;          // [Limit: >= 0] octree: stop splitting at this many cells; 0 = no limit
+    double cell_size_m = 2.0;       // [Limit: > 0] [Units: m] grid: edge of a cell
+    double min_cell_size_m = 1.0;   // [Limit: > 0] [Units: m] octree: never split below this edge
+    double root_cell_size_m = 8.0;  // [Limit: >= min] [Units: m] octree: edge of the root cells (rounded to
+                                    // min_cell_size_m times a power of two)
+    double split_threshold = 0.2;  // [Limit: 0..1] octree: split when a child's PVS differs from its parent's
+                                   // by more than this share of the parent's PVS size
+    uint32_t max_cells = 0;        // [Limit: >= 0] octree: stop splitting at this many cells; 0 = no limit
 };
 
 const char* to_string(CellKind kind);
@@ -41,36 +41,36 @@ const char* to_string(CellKind kind);
 // Where eyes can be (cells/view_volume.h): explicit boxes, the flood of free space from view seeds, and a
 // play height above floors, combined by intersection; none given = the world bounds.
 struct ViewVolumeConfig {
-    double voxel_size_m = 0.0;         // [Limit: >= 0] [Units: m] 0 = automatic (kDefaultVoxelSizeM, coarser
-                                       // when the grid would pass max_voxels)
-    uint64_t max_voxels = 200'000'000; // [Limit: >= 1000] voxels the automatic size may use (2 bytes each)
-    double play_height_m = 0.0;        // [Limit: >= 0] [Units: m] keep only space up to this height above
-                                       // upward-facing opaque surfaces; 0 = off
-    bool use_world_seeds = true;       // flood from the world's pvs_view_seed nodes
-    bool use_world_boxes = true;       // limit to the world's pvs_view_volume boxes
-    std::vector<Aabb> boxes;           // --view-box, metres
-    std::vector<glm::vec3> seeds;      // --view-seed, metres
+    double voxel_size_m = 0.0;          // [Limit: >= 0] [Units: m] 0 = automatic (kDefaultVoxelSizeM, coarser
+                                        // when the grid would pass max_voxels)
+    uint64_t max_voxels = 200'000'000;  // [Limit: >= 1000] voxels the automatic size may use (2 bytes each)
+    double play_height_m = 0.0;         // [Limit: >= 0] [Units: m] keep only space up to this height above
+                                        // upward-facing opaque surfaces; 0 = off
+    bool use_world_seeds = true;        // flood from the world's pvs_view_seed nodes
+    bool use_world_boxes = true;        // limit to the world's pvs_view_volume boxes
+    std::vector<Aabb> boxes;            // --view-box, metres
+    std::vector<glm::vec3> seeds;       // --view-seed, metres
 };
 constexpr double kDefaultVoxelSizeM = 0.25;
 
 // Occluder synthesis (occluders/, pvs/occluder_synthesis.h).
 struct OccluderConfig {
-    bool enabled = true;                 // synthesize occluders in a bake (--no-occluders to skip)
-    uint32_t max_occluders = 512;        // [Limit: >= 1] boxes kept at most
-    double min_occluder_volume_m3 = 0.5; // [Limit: >= 0] [Units: m3] smaller boxes are dropped
-    double min_added_share = 0.05;       // [Limit: 0..1] keep a box only while this share of it is new
-    uint32_t probe_eyes = 2048;          // [Limit: >= 0] eye points of the sight probe (0 = off)
-    uint32_t probe_rays_per_eye = 4096;  // [Limit: >= 1] directions over the sphere per probe eye
-    uint32_t check_eyes = 4096;          // [Limit: >= 1] eye points of the ray check of every box
-    uint32_t check_rays_per_eye = 4;     // [Limit: >= 1] rays from each eye point to each box
+    bool enabled = true;                  // synthesize occluders in a bake (--no-occluders to skip)
+    uint32_t max_occluders = 512;         // [Limit: >= 1] boxes kept at most
+    double min_occluder_volume_m3 = 0.5;  // [Limit: >= 0] [Units: m3] smaller boxes are dropped
+    double min_added_share = 0.05;        // [Limit: 0..1] keep a box only while this share of it is new
+    uint32_t probe_eyes = 2048;           // [Limit: >= 0] eye points of the sight probe (0 = off)
+    uint32_t probe_rays_per_eye = 4096;   // [Limit: >= 1] directions over the sphere per probe eye
+    uint32_t check_eyes = 4096;           // [Limit: >= 1] eye points of the ray check of every box
+    uint32_t check_rays_per_eye = 4;      // [Limit: >= 1] rays from each eye point to each box
     uint64_t check_seed = 7;
 };
 
 // The conservative solver (pvs/conservative.h).
 struct ConservativeConfig {
-    double epsilon_m = 0.25;    // [Limit: > 0] [Units: m] occluders shrink by this; cell faces are sampled
-                                // every epsilon * sqrt(2). Smaller: tighter PVS, slower bake
-    int cube_resolution = 64;   // [Limit: 8..1024] depth cube pixels per face edge
+    double epsilon_m = 0.25;   // [Limit: > 0] [Units: m] occluders shrink by this; cell faces are sampled
+                               // every epsilon * sqrt(2). Smaller: tighter PVS, slower bake
+    int cube_resolution = 64;  // [Limit: 8..1024] depth cube pixels per face edge
 };
 
 // Ray sampling from eye points in each cell: the sampled (aggressive) PVS and the verifier share it.
@@ -89,7 +89,7 @@ struct SampledPvsConfig {
 };
 
 struct VerifyConfig {
-    bool enabled = true;           // run verification after a bake
+    bool enabled = true;                                      // run verification after a bake
     SampleConfig rays{16, 1024, 200'000'000, 0x5eed5eedULL};  // ctf_inyard: about 30 s on two cores
     uint32_t max_misses_reported = 1000;  // [Limit: >= 0] misses kept in the report and the file
 };
@@ -125,15 +125,16 @@ void visit_options(Config& c, Visitor&& v) {
     v(OptionSpec{"--voxel-size", "view.voxel_size_m", "m",
                  "voxel edge for the view volume, 0 = automatic (0.25 m, coarser for huge worlds)", 0, 100},
       c.view.voxel_size_m);
-    v(OptionSpec{"--max-voxels", "view.max_voxels", "voxels", "voxels the automatic voxel size may use", 1000, 1e10},
+    v(OptionSpec{"--max-voxels", "view.max_voxels", "voxels", "voxels the automatic voxel size may use", 1000,
+                 1e10},
       c.view.max_voxels);
     v(OptionSpec{"--play-height", "view.play_height_m", "m",
                  "eyes only up to this height above upward-facing floors, 0 = anywhere", 0, 1e4},
       c.view.play_height_m);
     v(OptionSpec{"--cell-size", "cells.cell_size_m", "m", "grid: edge of a cell", 0.01, 1e4},
       c.cells.cell_size_m);
-    v(OptionSpec{"--min-cell-size", "cells.min_cell_size_m", "m", "octree: never split below this cell edge", 0.01,
-                 1e4},
+    v(OptionSpec{"--min-cell-size", "cells.min_cell_size_m", "m", "octree: never split below this cell edge",
+                 0.01, 1e4},
       c.cells.min_cell_size_m);
     v(OptionSpec{"--root-cell-size", "cells.root_cell_size_m", "m",
                  "octree: edge of the root cells (min cell size times a power of two)", 0.01, 1e5},
@@ -141,17 +142,21 @@ void visit_options(Config& c, Visitor&& v) {
     v(OptionSpec{"--split-threshold", "cells.split_threshold", "share",
                  "octree: split where a child's PVS differs from its parent's by more than this share", 0, 1},
       c.cells.split_threshold);
-    v(OptionSpec{"--max-cells", "cells.max_cells", "cells", "octree: stop splitting at this many cells, 0 = no limit",
-                 0, 1e9},
+    v(OptionSpec{"--max-cells", "cells.max_cells", "cells",
+                 "octree: stop splitting at this many cells, 0 = no limit", 0, 1e9},
       c.cells.max_cells);
-    v(OptionSpec{"--max-occluders", "occluders.max_occluders", "boxes", "occluders: boxes kept at most", 1, 1e7},
+    v(OptionSpec{"--max-occluders", "occluders.max_occluders", "boxes", "occluders: boxes kept at most", 1,
+                 1e7},
       c.occluders.max_occluders);
     v(OptionSpec{"--min-occluder-volume", "occluders.min_occluder_volume_m3", "m3",
                  "occluders: drop boxes smaller than this", 0, 1e12},
       c.occluders.min_occluder_volume_m3);
-    v(OptionSpec{"--occluder-probe-eyes", "occluders.probe_eyes", "eyes",
-                 "occluders: eye points whose rays over the sphere carve seen voxels out of the solid, 0 = off", 0, 1e7},
-      c.occluders.probe_eyes);
+    v(
+        OptionSpec{
+            "--occluder-probe-eyes", "occluders.probe_eyes", "eyes",
+            "occluders: eye points whose rays over the sphere carve seen voxels out of the solid, 0 = off", 0,
+            1e7},
+        c.occluders.probe_eyes);
     v(OptionSpec{"--occluder-probe-rays", "occluders.probe_rays_per_eye", "rays",
                  "occluders: rays per probe eye", 1, 1e8},
       c.occluders.probe_rays_per_eye);
@@ -159,7 +164,8 @@ void visit_options(Config& c, Visitor&& v) {
                  "occluders: eye points whose rays check every box against the triangles", 1, 1e7},
       c.occluders.check_eyes);
     v(OptionSpec{"--epsilon", "conservative.epsilon_m", "m",
-                 "conservative mode: occluders shrink by this and cell faces are sampled within it", 0.01, 100},
+                 "conservative mode: occluders shrink by this and cell faces are sampled within it", 0.01,
+                 100},
       c.conservative.epsilon_m);
     v(OptionSpec{"--cube-resolution", "conservative.cube_resolution", "pixels",
                  "conservative mode: depth cube pixels per face edge", 8, 1024},
@@ -175,7 +181,8 @@ void visit_options(Config& c, Visitor&& v) {
     v(OptionSpec{"--guard-band", "sampled.guard_band_deg", "degrees",
                  "sampled mode: also list objects a ray passed within this angle of, 0 = off", 0, 45},
       c.sampled.guard_band_deg);
-    v(OptionSpec{"--verify-eyes", "verify.eyes_per_cell", "eyes", "verification: eye points per cell", 1, 1e6},
+    v(OptionSpec{"--verify-eyes", "verify.eyes_per_cell", "eyes", "verification: eye points per cell", 1,
+                 1e6},
       c.verify.rays.eyes_per_cell);
     v(OptionSpec{"--verify-rays-per-eye", "verify.rays_per_eye", "rays", "verification: rays per eye point",
                  1, 1e8},

@@ -8,10 +8,14 @@ namespace pvs {
 namespace {
 const char* level_prefix(LogLevel level) {
     switch (level) {
-        case LogLevel::kError: return "error: ";
-        case LogLevel::kWarning: return "warning: ";
-        case LogLevel::kInfo: return "";
-        case LogLevel::kDebug: return "debug: ";
+        case LogLevel::kError:
+            return "error: ";
+        case LogLevel::kWarning:
+            return "warning: ";
+        case LogLevel::kInfo:
+            return "";
+        case LogLevel::kDebug:
+            return "debug: ";
     }
     return "";
 }
@@ -75,10 +79,9 @@ void Context::print_progress(bool /*final_line*/) {
     const double rate = elapsed > 0 ? double(done) / elapsed : 0.0;
     const double left = rate > 0 && total_ > done ? double(total_ - done) / rate : 0.0;
     const double pct = total_ ? 100.0 * double(done) / double(total_) : 100.0;
-    const std::string line =
-        total_ ? fmt::format("{}: {}/{} {} ({:.1f}%), {:.1f} {}/s, {:.0f} s left", stage_, done, total_, unit_, pct,
-                             rate, unit_, left)
-               : fmt::format("{}: {} {}, {:.1f} {}/s", stage_, done, unit_, rate, unit_);
+    const std::string line = total_ ? fmt::format("{}: {}/{} {} ({:.1f}%), {:.1f} {}/s, {:.0f} s left",
+                                                  stage_, done, total_, unit_, pct, rate, unit_, left)
+                                    : fmt::format("{}: {} {}, {:.1f} {}/s", stage_, done, unit_, rate, unit_);
     std::lock_guard<std::mutex> lock(mutex_);
     if (tty_) {
         std::fprintf(options_.sink, "\r\033[K%s", line.c_str());

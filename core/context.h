@@ -22,8 +22,8 @@ class Context {
 public:
     struct Options {
         LogLevel level = LogLevel::kInfo;
-        bool quiet = false;          // no info, no progress (warnings and errors still print)
-        std::FILE* sink = stderr;    // where logs and progress go; nullptr = nowhere (tests)
+        bool quiet = false;        // no info, no progress (warnings and errors still print)
+        std::FILE* sink = stderr;  // where logs and progress go; nullptr = nowhere (tests)
     };
 
     Context();

@@ -25,10 +25,18 @@ private:
     ErrorKind kind_;
 };
 
-inline Error bad_input(const std::string& message) { return Error(ErrorKind::kBadInput, message); }
-inline Error io_error(const std::string& message) { return Error(ErrorKind::kIo, message); }
-inline Error internal_error(const std::string& message) { return Error(ErrorKind::kInternal, message); }
+inline Error bad_input(const std::string& message) {
+    return Error(ErrorKind::kBadInput, message);
+}
+inline Error io_error(const std::string& message) {
+    return Error(ErrorKind::kIo, message);
+}
+inline Error internal_error(const std::string& message) {
+    return Error(ErrorKind::kInternal, message);
+}
 
-inline int exit_status(ErrorKind kind) { return kind == ErrorKind::kBadInput ? 2 : 1; }
+inline int exit_status(ErrorKind kind) {
+    return kind == ErrorKind::kBadInput ? 2 : 1;
+}
 
 }  // namespace pvs

@@ -38,8 +38,7 @@ struct Aabb {
         return double(s.x) * double(s.y) * double(s.z);
     }
     bool contains(glm::vec3 p) const {
-        return p.x >= min.x && p.y >= min.y && p.z >= min.z && p.x <= max.x && p.y <= max.y &&
-               p.z <= max.z;
+        return p.x >= min.x && p.y >= min.y && p.z >= min.z && p.x <= max.x && p.y <= max.y && p.z <= max.z;
     }
     // Closed boxes: touching faces overlap.
     bool overlaps(const Aabb& b) const {
@@ -68,6 +67,8 @@ inline bool ray_box_interval(glm::vec3 o, glm::vec3 d, const Aabb& b, float t_ma
     return true;
 }
 
-inline bool is_finite(glm::vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+inline bool is_finite(glm::vec3 v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
 
 }  // namespace pvs

@@ -13,9 +13,9 @@ namespace pvs {
 
 struct Occluder {
     Aabb box;
-    float voxel_size_m = 0.0f;       // the voxels it was found at
+    float voxel_size_m = 0.0f;  // the voxels it was found at
     bool proven = false;
-    std::vector<uint32_t> objects;   // opaque objects whose bounds meet the box grown by one voxel
+    std::vector<uint32_t> objects;  // opaque objects whose bounds meet the box grown by one voxel
 };
 
 }  // namespace pvs

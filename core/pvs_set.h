@@ -28,12 +28,8 @@ struct PvsSet {
     uint64_t* row(uint32_t cell) { return words.data() + size_t(cell) * words_per_row; }
     const uint64_t* row(uint32_t cell) const { return words.data() + size_t(cell) * words_per_row; }
     void set(uint32_t cell, uint32_t object) { row(cell)[object >> 6] |= uint64_t(1) << (object & 63); }
-    void clear(uint32_t cell, uint32_t object) {
-        row(cell)[object >> 6] &= ~(uint64_t(1) << (object & 63));
-    }
-    bool test(uint32_t cell, uint32_t object) const {
-        return (row(cell)[object >> 6] >> (object & 63)) & 1u;
-    }
+    void clear(uint32_t cell, uint32_t object) { row(cell)[object >> 6] &= ~(uint64_t(1) << (object & 63)); }
+    bool test(uint32_t cell, uint32_t object) const { return (row(cell)[object >> 6] >> (object & 63)) & 1u; }
     uint32_t count(uint32_t cell) const {
         uint32_t n = 0;
         for (uint32_t w = 0; w < words_per_row; ++w) n += uint32_t(__builtin_popcountll(row(cell)[w]));

@@ -17,10 +17,10 @@
 namespace pvs {
 
 enum ObjectFlags : uint32_t {
-    kObjectHasOpaque = 1u << 0,         // at least one triangle stops sight
-    kObjectHasSeeThrough = 1u << 1,     // at least one triangle is BLEND or MASK (or never occludes)
-    kObjectAlwaysVisible = 1u << 2,     // extras.pvs_always_visible: listed in every PVS
-    kObjectNeverOccludes = 1u << 3,     // extras.pvs_occluder == false
+    kObjectHasOpaque = 1u << 0,      // at least one triangle stops sight
+    kObjectHasSeeThrough = 1u << 1,  // at least one triangle is BLEND or MASK (or never occludes)
+    kObjectAlwaysVisible = 1u << 2,  // extras.pvs_always_visible: listed in every PVS
+    kObjectNeverOccludes = 1u << 3,  // extras.pvs_occluder == false
 };
 
 struct Triangle {
@@ -45,14 +45,14 @@ struct LoadStats {
 
 struct World {
     std::string source_path;
-    std::vector<glm::vec3> positions;       // world space, metres
-    std::vector<Triangle> triangles;        // grouped by object
-    std::vector<uint8_t> triangle_opaque;   // 1 if the triangle stops sight
+    std::vector<glm::vec3> positions;      // world space, metres
+    std::vector<Triangle> triangles;       // grouped by object
+    std::vector<uint8_t> triangle_opaque;  // 1 if the triangle stops sight
     std::vector<uint8_t> triangle_double_sided;
     std::vector<WorldObject> objects;
-    std::vector<glm::vec3> view_seeds;      // extras.pvs_view_seed nodes: points in playable space
-    std::vector<Aabb> view_volume_boxes;    // extras.pvs_view_volume nodes: boxes where eyes can be
-    Aabb bounds;                            // of all triangles
+    std::vector<glm::vec3> view_seeds;    // extras.pvs_view_seed nodes: points in playable space
+    std::vector<Aabb> view_volume_boxes;  // extras.pvs_view_volume nodes: boxes where eyes can be
+    Aabb bounds;                          // of all triangles
     LoadStats stats;
 
     size_t triangle_count() const { return triangles.size(); }

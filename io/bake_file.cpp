@@ -518,12 +518,14 @@ void write_cells(Writer& w, hid_t root, const CellSet& cells) {
     write_bounds(w, g.get(), "/cells", bounds);
     Handle p = w.dataset(g.get(), "/cells", "parent", H5T_STD_I32LE, H5T_NATIVE_INT32, {parents.size()},
                          parents.data());
-    w.string_attr(p.get(), "meaning", "octree: the parent node (index into /cells/octree); -1 = none (grid cells, roots)");
+    w.string_attr(p.get(), "meaning",
+                  "octree: the parent node (index into /cells/octree); -1 = none (grid cells, roots)");
     if (cells.kind == CellSet::Kind::kOctree) {
         Handle o = w.group(g.get(), "/cells", "octree");
-        w.string_attr(o.get(), "layout",
-                      "grid_to_cell holds the root node of each root-grid cell; a node's 8 children are consecutive "
-                      "from first_child (octant bits x = 1, y = 2, z = 4), always after the node");
+        w.string_attr(
+            o.get(), "layout",
+            "grid_to_cell holds the root node of each root-grid cell; a node's 8 children are consecutive "
+            "from first_child (octant bits x = 1, y = 2, z = 4), always after the node");
         std::vector<Aabb> node_bounds;
         std::vector<int32_t> first_child, cell, parent;
         for (const OctreeNode& n : cells.nodes) {
@@ -533,11 +535,12 @@ void write_cells(Writer& w, hid_t root, const CellSet& cells) {
             parent.push_back(n.parent);
         }
         write_bounds(w, o.get(), "/cells/octree", node_bounds);
-        w.dataset(o.get(), "/cells/octree", "first_child", H5T_STD_I32LE, H5T_NATIVE_INT32, {first_child.size()},
-                  first_child.data(), true);
-        w.dataset(o.get(), "/cells/octree", "cell", H5T_STD_I32LE, H5T_NATIVE_INT32, {cell.size()}, cell.data(), true);
-        w.dataset(o.get(), "/cells/octree", "parent", H5T_STD_I32LE, H5T_NATIVE_INT32, {parent.size()}, parent.data(),
-                  true);
+        w.dataset(o.get(), "/cells/octree", "first_child", H5T_STD_I32LE, H5T_NATIVE_INT32,
+                  {first_child.size()}, first_child.data(), true);
+        w.dataset(o.get(), "/cells/octree", "cell", H5T_STD_I32LE, H5T_NATIVE_INT32, {cell.size()},
+                  cell.data(), true);
+        w.dataset(o.get(), "/cells/octree", "parent", H5T_STD_I32LE, H5T_NATIVE_INT32, {parent.size()},
+                  parent.data(), true);
     }
     write_mask(w, g.get(), "view", cells.view);
     write_mask(w, g.get(), "eyes", cells.eyes);
@@ -597,9 +600,10 @@ void write_leak_path(Writer& w, hid_t root, const std::vector<glm::vec3>& path) 
 void write_occluders(Writer& w, hid_t root, const std::vector<Occluder>& occluders) {
     Handle g = w.group(root, "/", "occluders");
     w.u32_attr(g.get(), "count", uint32_t(occluders.size()));
-    w.string_attr(g.get(), "meaning",
-                  "synthesized occluder boxes inside the opaque solid; only proven ones (proven = 1) may be used by a "
-                  "conservative bake");
+    w.string_attr(
+        g.get(), "meaning",
+        "synthesized occluder boxes inside the opaque solid; only proven ones (proven = 1) may be used by a "
+        "conservative bake");
     std::vector<Aabb> boxes;
     std::vector<float> voxel;
     std::vector<uint8_t> proven;
@@ -612,12 +616,14 @@ void write_occluders(Writer& w, hid_t root, const std::vector<Occluder>& occlude
         offsets.push_back(uint32_t(objects.size()));
     }
     write_bounds(w, g.get(), "/occluders", boxes);
-    w.dataset(g.get(), "/occluders", "voxel_size_m", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, {voxel.size()}, voxel.data());
-    w.dataset(g.get(), "/occluders", "proven", H5T_STD_U8LE, H5T_NATIVE_UINT8, {proven.size()}, proven.data());
+    w.dataset(g.get(), "/occluders", "voxel_size_m", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, {voxel.size()},
+              voxel.data());
+    w.dataset(g.get(), "/occluders", "proven", H5T_STD_U8LE, H5T_NATIVE_UINT8, {proven.size()},
+              proven.data());
     w.dataset(g.get(), "/occluders", "object_offsets", H5T_STD_U32LE, H5T_NATIVE_UINT32, {offsets.size()},
               offsets.data());
-    w.dataset(g.get(), "/occluders", "objects", H5T_STD_U32LE, H5T_NATIVE_UINT32, {objects.size()}, objects.data(),
-              true);
+    w.dataset(g.get(), "/occluders", "objects", H5T_STD_U32LE, H5T_NATIVE_UINT32, {objects.size()},
+              objects.data(), true);
 }
 
 void write_verification(Writer& w, hid_t root, const VerificationRecord& v) {
@@ -1123,16 +1129,18 @@ void read_cells(const Reader& r, hid_t root, BakeData& bake) {
             n.cell = node_cell[size_t(i)];
             n.parent = node_parent[size_t(i)];
             if (n.first_child != -1 && (n.first_child <= i || int64_t(n.first_child) + 8 > nodes)) {
-                r.fail(fmt::format("/cells/octree/first_child[{}] = {} is not -1 or a node after it with 8 children "
-                                   "below {}",
-                                   i, n.first_child, nodes));
+                r.fail(fmt::format(
+                    "/cells/octree/first_child[{}] = {} is not -1 or a node after it with 8 children "
+                    "below {}",
+                    i, n.first_child, nodes));
             }
             if (n.cell < -1 || n.cell >= count) {
-                r.fail(fmt::format("/cells/octree/cell[{}] = {} is not -1 or a cell index below {}", i, n.cell, count));
+                r.fail(fmt::format("/cells/octree/cell[{}] = {} is not -1 or a cell index below {}", i,
+                                   n.cell, count));
             }
             if (n.parent < -1 || n.parent >= nodes) {
-                r.fail(fmt::format("/cells/octree/parent[{}] = {} is not -1 or a node index below {}", i, n.parent,
-                                   nodes));
+                r.fail(fmt::format("/cells/octree/parent[{}] = {} is not -1 or a node index below {}", i,
+                                   n.parent, nodes));
             }
         }
     }
@@ -1142,8 +1150,8 @@ void read_cells(const Reader& r, hid_t root, BakeData& bake) {
         const float* b = &flat[i * 6];
         cells.cells[i].bounds = Aabb::of({b[0], b[1], b[2]}, {b[3], b[4], b[5]});
         if (parents[i] < -1 || parents[i] >= parent_limit) {
-            r.fail(fmt::format("/cells/parent[{}] = {} is not -1 or an octree node index below {}", i, parents[i],
-                               parent_limit));
+            r.fail(fmt::format("/cells/parent[{}] = {} is not -1 or an octree node index below {}", i,
+                               parents[i], parent_limit));
         }
         cells.cells[i].parent = parents[i];
     }
@@ -1219,13 +1227,15 @@ void read_occluders(const Reader& r, hid_t root, BakeData& bake) {
     const std::string where = "/occluders";
     Handle g = r.open_group(root, where);
     std::vector<int64_t> shape = {-1, 6};
-    const std::vector<float> flat = r.numeric_dataset<float>(g.get(), where, "bounds", H5T_NATIVE_FLOAT, shape, H5T_FLOAT);
+    const std::vector<float> flat =
+        r.numeric_dataset<float>(g.get(), where, "bounds", H5T_NATIVE_FLOAT, shape, H5T_FLOAT);
     const int64_t n = shape[0];
-    const std::vector<float> voxel = r.numeric_dataset<float>(g.get(), where, "voxel_size_m", H5T_NATIVE_FLOAT, {n}, H5T_FLOAT);
+    const std::vector<float> voxel =
+        r.numeric_dataset<float>(g.get(), where, "voxel_size_m", H5T_NATIVE_FLOAT, {n}, H5T_FLOAT);
     const std::vector<uint8_t> proven =
         r.numeric_dataset<uint8_t>(g.get(), where, "proven", H5T_NATIVE_UINT8, {n}, H5T_INTEGER);
-    const std::vector<uint32_t> offsets =
-        r.numeric_dataset<uint32_t>(g.get(), where, "object_offsets", H5T_NATIVE_UINT32, {n + 1}, H5T_INTEGER);
+    const std::vector<uint32_t> offsets = r.numeric_dataset<uint32_t>(
+        g.get(), where, "object_offsets", H5T_NATIVE_UINT32, {n + 1}, H5T_INTEGER);
     std::vector<int64_t> objects_shape = {-1};
     const std::vector<uint32_t> objects =
         r.numeric_dataset<uint32_t>(g.get(), where, "objects", H5T_NATIVE_UINT32, objects_shape, H5T_INTEGER);
@@ -1233,7 +1243,8 @@ void read_occluders(const Reader& r, hid_t root, BakeData& bake) {
         r.fail("/occluders/object_offsets does not start at 0 and end at the size of /occluders/objects");
     }
     for (int64_t i = 0; i < n; ++i) {
-        if (offsets[size_t(i) + 1] < offsets[size_t(i)]) r.fail(fmt::format("/occluders/object_offsets[{}] decreases", i + 1));
+        if (offsets[size_t(i) + 1] < offsets[size_t(i)])
+            r.fail(fmt::format("/occluders/object_offsets[{}] decreases", i + 1));
         if (proven[size_t(i)] > 1) r.fail(fmt::format("/occluders/proven[{}] is not 0 or 1", i));
     }
     for (size_t k = 0; k < objects.size(); ++k) {

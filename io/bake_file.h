@@ -43,8 +43,8 @@ struct Miss {
 struct VerificationRecord {
     bool ran = false;
     std::vector<std::pair<std::string, double>> figures;  // rays, misses, overestimation ...
-    std::vector<uint32_t> cell_sampled_visible;  // per cell: objects the rays saw (empty if not ran)
-    std::vector<Miss> misses;                    // the first max_misses_reported
+    std::vector<uint32_t> cell_sampled_visible;           // per cell: objects the rays saw (empty if not ran)
+    std::vector<Miss> misses;                             // the first max_misses_reported
 };
 
 using NamedValues = std::vector<std::pair<std::string, double>>;
@@ -54,16 +54,16 @@ struct BakeData {
     int format_major = kBakeFormatMajor;
     int format_minor = kBakeFormatMinor;
     std::string tool_version;
-    std::string world_path;   // as given on the command line
-    std::string world_hash;   // content hash of the world file (hex)
-    std::string mode;         // "sampled" or "conservative"
+    std::string world_path;     // as given on the command line
+    std::string world_hash;     // content hash of the world file (hex)
+    std::string mode;           // "sampled" or "conservative"
     bool conservative = false;  // false = aggressive: may miss visible objects
-    NamedStrings parameters;  // every resolved option (core/config.h resolved_parameters)
+    NamedStrings parameters;    // every resolved option (core/config.h resolved_parameters)
     std::vector<ObjectRecord> objects;
     CellSet cells;
-    PvsSet pvs;               // cells.size() rows of objects.size() bits
-    NamedValues figures;      // counts and figures of the bake
-    NamedValues timings_s;    // seconds per stage
+    PvsSet pvs;                        // cells.size() rows of objects.size() bits
+    NamedValues figures;               // counts and figures of the bake
+    NamedValues timings_s;             // seconds per stage
     std::vector<glm::vec3> leak_path;  // view volume flood: seed to outside, when the level leaks
     std::vector<Occluder> occluders;   // synthesized boxes (only proven ones may occlude)
     VerificationRecord verification;

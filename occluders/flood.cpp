@@ -14,7 +14,8 @@ const glm::ivec3 kSteps[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 
 constexpr uint8_t kSeedMark = 6;  // came_from value of a seed voxel
 
 bool on_border(const VoxelGrid& g, glm::ivec3 c) {
-    return c.x == 0 || c.y == 0 || c.z == 0 || c.x == g.dims.x - 1 || c.y == g.dims.y - 1 || c.z == g.dims.z - 1;
+    return c.x == 0 || c.y == 0 || c.z == 0 || c.x == g.dims.x - 1 || c.y == g.dims.y - 1 ||
+           c.z == g.dims.z - 1;
 }
 
 // The free voxel nearest to c within `radius` voxels (Chebyshev shells), or -1.
@@ -49,7 +50,8 @@ FloodResult flood_free_space(Context& ctx, const VoxelGrid& grid, const BitVolum
     for (const glm::vec3& s : seeds) {
         if (!is_finite(s) || !grid.bounds().contains(s)) {
             ++r.seeds_dropped;
-            ctx.warn(fmt::format("flood: view seed ({:.2f}, {:.2f}, {:.2f}) is outside the world; ignored", s.x, s.y, s.z));
+            ctx.warn(fmt::format("flood: view seed ({:.2f}, {:.2f}, {:.2f}) is outside the world; ignored",
+                                 s.x, s.y, s.z));
             continue;
         }
         const glm::ivec3 c = grid.voxel_of(s);
@@ -58,9 +60,10 @@ FloodResult flood_free_space(Context& ctx, const VoxelGrid& grid, const BitVolum
             i = nearest_free(grid, blocked, c, max_seed_move_voxels);
             if (i < 0) {
                 ++r.seeds_dropped;
-                ctx.warn(fmt::format("flood: view seed ({:.2f}, {:.2f}, {:.2f}) is inside solid with no free voxel "
-                                     "within {} voxels; ignored",
-                                     s.x, s.y, s.z, max_seed_move_voxels));
+                ctx.warn(fmt::format(
+                    "flood: view seed ({:.2f}, {:.2f}, {:.2f}) is inside solid with no free voxel "
+                    "within {} voxels; ignored",
+                    s.x, s.y, s.z, max_seed_move_voxels));
                 continue;
             }
             ++r.seeds_moved;
@@ -105,7 +108,8 @@ FloodResult flood_free_space(Context& ctx, const VoxelGrid& grid, const BitVolum
         }
         std::reverse(path.begin(), path.end());
         for (size_t k = 0; k < path.size(); ++k) {
-            const bool turn = k == 0 || k + 1 == path.size() || (path[k] - path[k - 1]) != (path[k + 1] - path[k]);
+            const bool turn =
+                k == 0 || k + 1 == path.size() || (path[k] - path[k - 1]) != (path[k + 1] - path[k]);
             if (turn) r.leak_path.push_back(grid.voxel_center(path[k]));
         }
     }

@@ -54,11 +54,13 @@ Solid classify_solid(Context& ctx, const VoxelGrid& grid, const BitVolume& touch
         std::swap(frontier, next);
     }
     out.solid.reset(grid.count());
-    for (size_t w = 0; w < out.solid.words.size(); ++w) out.solid.words[w] = ~(reached.words[w] | touched.words[w]);
+    for (size_t w = 0; w < out.solid.words.size(); ++w)
+        out.solid.words[w] = ~(reached.words[w] | touched.words[w]);
     const uint64_t tail = grid.count() % 64;
     if (tail) out.solid.words.back() &= (uint64_t(1) << tail) - 1;
     out.solid_voxels = out.solid.count();
-    out.solid_m3 = double(out.solid_voxels) * double(grid.voxel_size_m) * grid.voxel_size_m * grid.voxel_size_m;
+    out.solid_m3 =
+        double(out.solid_voxels) * double(grid.voxel_size_m) * grid.voxel_size_m * grid.voxel_size_m;
     ctx.info(fmt::format("solid: {:.0f} m3 in {} voxels ({})", out.solid_m3, out.solid_voxels,
                          out.from_eye_space ? "sealed off from the eyes" : "inside closed meshes"));
     return out;

@@ -27,9 +27,10 @@ VoxelGrid make_voxel_grid(const Aabb& bounds, double voxel_size_m, int pad_voxel
         total *= uint64_t(g.dims[a]);
         if (total > kMaxVoxels) {
             const glm::vec3 e = bounds.size();
-            throw bad_input(fmt::format("make_voxel_grid: {} m voxels over {:.1f} x {:.1f} x {:.1f} m need more than {} "
-                                        "voxels; use a larger --voxel-size",
-                                        voxel_size_m, e.x, e.y, e.z, kMaxVoxels));
+            throw bad_input(
+                fmt::format("make_voxel_grid: {} m voxels over {:.1f} x {:.1f} x {:.1f} m need more than {} "
+                            "voxels; use a larger --voxel-size",
+                            voxel_size_m, e.x, e.y, e.z, kMaxVoxels));
         }
     }
     return g;
@@ -56,7 +57,8 @@ bool triangle_box_overlap(glm::vec3 center, glm::vec3 half, glm::vec3 a, glm::ve
     const glm::vec3 v0 = a - center, v1 = b - center, v2 = c - center;
     // 1. The box's three face normals (the triangle's bounds against the box).
     for (int i = 0; i < 3; ++i) {
-        if (std::min({v0[i], v1[i], v2[i]}) > half[i] || std::max({v0[i], v1[i], v2[i]}) < -half[i]) return false;
+        if (std::min({v0[i], v1[i], v2[i]}) > half[i] || std::max({v0[i], v1[i], v2[i]}) < -half[i])
+            return false;
     }
     // 2. The triangle's normal.
     const glm::vec3 e0 = v1 - v0, e1 = v2 - v1, e2 = v0 - v2;
@@ -143,8 +145,8 @@ BitVolume dilate(const VoxelGrid& g, const BitVolume& in, int radius) {
     return a;
 }
 
-void voxelize_opaque(Context& ctx, const World& world, const VoxelGrid& grid, BitVolume& touched, BitVolume* upward,
-                     float min_up_cos) {
+void voxelize_opaque(Context& ctx, const World& world, const VoxelGrid& grid, BitVolume& touched,
+                     BitVolume* upward, float min_up_cos) {
     ScopedTimer timer(ctx, "voxelize");
     touched.reset(grid.count());
     if (upward) upward->reset(grid.count());
@@ -154,7 +156,8 @@ void voxelize_opaque(Context& ctx, const World& world, const VoxelGrid& grid, Bi
     for (int64_t t = 0; t < n; ++t) {
         if (!world.triangle_opaque[size_t(t)]) continue;
         const Triangle& tri = world.triangles[size_t(t)];
-        const glm::vec3 a = world.positions[tri.v[0]], b = world.positions[tri.v[1]], c = world.positions[tri.v[2]];
+        const glm::vec3 a = world.positions[tri.v[0]], b = world.positions[tri.v[1]],
+                        c = world.positions[tri.v[2]];
         Aabb tb;
         tb.extend(a);
         tb.extend(b);

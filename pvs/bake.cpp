@@ -21,12 +21,15 @@
 
 namespace pvs {
 
-const char* tool_version() { return PVSBAKE_VERSION; }
+const char* tool_version() {
+    return PVSBAKE_VERSION;
+}
 
 std::vector<ObjectRecord> object_records(const World& world) {
     std::vector<ObjectRecord> out;
     out.reserve(world.objects.size());
-    for (const WorldObject& o : world.objects) out.push_back(ObjectRecord{o.name, o.bounds, o.triangle_count, o.flags});
+    for (const WorldObject& o : world.objects)
+        out.push_back(ObjectRecord{o.name, o.bounds, o.triangle_count, o.flags});
     return out;
 }
 
@@ -56,11 +59,13 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
     const bool conservative = config.mode == BakeMode::kConservative;
     std::vector<Aabb> shrunk;
     if (config.occluders.enabled || conservative) {
-        bake.occluders = synthesize_occluders(ctx, config.occluders, world, view, scene, occ,
-                                              config.conservative.epsilon_m, conservative ? &shrunk : nullptr);
+        bake.occluders =
+            synthesize_occluders(ctx, config.occluders, world, view, scene, occ,
+                                 config.conservative.epsilon_m, conservative ? &shrunk : nullptr);
     }
     ConservativeFigures cons;
-    const VoxelMask reach = conservative ? sample_reach(view.view, config.conservative.epsilon_m) : VoxelMask{};
+    const VoxelMask reach =
+        conservative ? sample_reach(view.view, config.conservative.epsilon_m) : VoxelMask{};
     uint32_t occluders_proven = 0;
     for (const Occluder& o : bake.occluders) occluders_proven += o.proven;
     uint64_t cells_dropped = 0;
@@ -70,7 +75,8 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
         bake.cells = build_uniform_grid(ctx, config.cells, view.view_bounds);
         cells_dropped = clip_grid_to_view(ctx, bake.cells, view.view, view.eyes);
         if (conservative) {
-            sampled.pvs = bake_conservative_pvs(ctx, config.conservative, world, bake.cells, shrunk, reach, cons);
+            sampled.pvs =
+                bake_conservative_pvs(ctx, config.conservative, world, bake.cells, shrunk, reach, cons);
         } else {
             sampled = bake_sampled_pvs(ctx, config.sampled, world, scene, bake.cells);
         }
@@ -83,8 +89,8 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
         masks.view = view.view;
         masks.eyes = view.eyes;
         sampled.rays_per_eye = config.sampled.rays.rays_per_eye;
-        const RegionPvsOracle oracle = [&](const std::vector<Aabb>& boxes, const std::vector<uint64_t>& streams,
-                                           PvsSet& rows) {
+        const RegionPvsOracle oracle = [&](const std::vector<Aabb>& boxes,
+                                           const std::vector<uint64_t>& streams, PvsSet& rows) {
             if (conservative) {
                 conservative_box_rows(ctx, config.conservative, world, boxes, shrunk, reach, rows, cons);
                 return;
@@ -93,8 +99,8 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
                             sampled.guard_band_added, &ctx);
             sampled.rays += uint64_t(boxes.size()) * config.sampled.rays.eyes_per_cell * sampled.rays_per_eye;
         };
-        bake.cells = build_octree(ctx, config.cells, masks, view.view_bounds, uint32_t(world.objects.size()), oracle,
-                                  sampled.pvs, octree);
+        bake.cells = build_octree(ctx, config.cells, masks, view.view_bounds, uint32_t(world.objects.size()),
+                                  oracle, sampled.pvs, octree);
         add_always_listed(world, bake.cells, sampled.pvs);
         sampled.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     }
@@ -138,7 +144,8 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
         {"occluder_boxes", double(bake.occluders.size())},
         {"occluder_boxes_proven", double(occluders_proven)},
         {"occluder_covered_share_of_solid", occ.solid_m3 > 0 ? occ.covered_m3 / occ.solid_m3 : 0.0},
-        {"occluder_covered_share_of_solid_near_view", occ.near_m3 > 0 ? occ.near_covered_m3 / occ.near_m3 : 0.0},
+        {"occluder_covered_share_of_solid_near_view",
+         occ.near_m3 > 0 ? occ.near_covered_m3 / occ.near_m3 : 0.0},
         {"occluder_probe_rays_into_solid", double(occ.probe_rays_into_solid)},
         {"occluder_seconds", occ.seconds},
         {"conservative_shrunk_occluders", double(shrunk.size())},
@@ -147,11 +154,13 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
         {"conservative_samples_far_from_view", double(cons.samples_far)},
         {"conservative_object_tests", double(cons.object_tests)},
         {"conservative_seconds", cons.seconds},
-        {"cells_per_second", cons.seconds > 0 ? double(bake.cells.size()) / cons.seconds
-                             : (sampled.seconds > 0 ? double(bake.cells.size()) / sampled.seconds : 0.0)},
+        {"cells_per_second", cons.seconds > 0
+                                 ? double(bake.cells.size()) / cons.seconds
+                                 : (sampled.seconds > 0 ? double(bake.cells.size()) / sampled.seconds : 0.0)},
         {"pvs_objects_mean", double(listed) / n_cells},
         {"pvs_objects_max", double(listed_max)},
-        {"pvs_share_of_objects_mean", double(listed) / n_cells / std::max<double>(1.0, double(world.objects.size()))},
+        {"pvs_share_of_objects_mean",
+         double(listed) / n_cells / std::max<double>(1.0, double(world.objects.size()))},
         {"sampled_rays", double(sampled.rays)},
         {"sampled_rays_per_eye", double(sampled.rays_per_eye)},
         {"sampled_eyes_per_cell", double(config.sampled.rays.eyes_per_cell)},
@@ -162,7 +171,8 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
 
     if (config.verify.enabled) {
         if (config.verify.rays.seed == config.sampled.rays.seed) {
-            ctx.warn("verify: the verification seed equals the bake's: it will only replay the bake's own rays");
+            ctx.warn(
+                "verify: the verification seed equals the bake's: it will only replay the bake's own rays");
         }
         const VerifyResult result = verify_pvs(ctx, config.verify, world, scene, bake.cells, bake.pvs);
         log_verify_summary(ctx, result, world);
@@ -171,21 +181,25 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
     return bake;
 }
 
-void check_bake_matches_world(Context& ctx, const BakeData& bake, const World& world, const std::string& world_hash) {
+void check_bake_matches_world(Context& ctx, const BakeData& bake, const World& world,
+                              const std::string& world_hash) {
     if (bake.objects.size() != world.objects.size()) {
-        throw bad_input(fmt::format("the bake lists {} objects but the world {} has {}: not the world it was baked from",
-                                    bake.objects.size(), world.source_path, world.objects.size()));
+        throw bad_input(
+            fmt::format("the bake lists {} objects but the world {} has {}: not the world it was baked from",
+                        bake.objects.size(), world.source_path, world.objects.size()));
     }
     for (size_t i = 0; i < world.objects.size(); ++i) {
         if (bake.objects[i].name != world.objects[i].name) {
-            throw bad_input(fmt::format("object {} is '{}' in the bake but '{}' in the world {}: not the world it was "
-                                        "baked from",
-                                        i, bake.objects[i].name, world.objects[i].name, world.source_path));
+            throw bad_input(
+                fmt::format("object {} is '{}' in the bake but '{}' in the world {}: not the world it was "
+                            "baked from",
+                            i, bake.objects[i].name, world.objects[i].name, world.source_path));
         }
     }
     if (!bake.world_hash.empty() && bake.world_hash != world_hash) {
-        ctx.warn(fmt::format("the world file {} changed since the bake (hash {} then, {} now); objects still match",
-                             world.source_path, bake.world_hash, world_hash));
+        ctx.warn(fmt::format(
+            "the world file {} changed since the bake (hash {} then, {} now); objects still match",
+            world.source_path, bake.world_hash, world_hash));
     }
 }
 

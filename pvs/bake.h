@@ -27,6 +27,7 @@ void store_verification(const VerifyResult& result, VerificationRecord& record);
 
 // Checks that a bake was made from this world (same objects, in the same order). Throws pvs::Error
 // (bad input) naming the first difference. A different content hash only warns.
-void check_bake_matches_world(Context& ctx, const BakeData& bake, const World& world, const std::string& world_hash);
+void check_bake_matches_world(Context& ctx, const BakeData& bake, const World& world,
+                              const std::string& world_hash);
 
 }  // namespace pvs

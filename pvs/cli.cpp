@@ -8,17 +8,17 @@
 #include "io/bake_file.h"
 #include "io/file_hash.h"
 #include "io/gltf_loader.h"
-#include "pvs/bake.h"
 #include "io/gltf_writer.h"
+#include "pvs/bake.h"
 #include "pvs/embree_scene.h"
 #include "pvs/occluder_synthesis.h"
 #include "pvs/report.h"
 #include "pvs/verify.h"
 
-#include <CLI/CLI.hpp>
 #include <fmt/format.h>
-#include <nlohmann/json.hpp>
 #include <omp.h>
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 
 #include <cmath>
 #include <cstring>
@@ -77,7 +77,8 @@ std::vector<double> parse_numbers(const std::string& text, size_t count, const c
         at = comma + 1;
     }
     if (out.size() != count) {
-        throw bad_input(fmt::format("{} {}: wants {} comma-separated numbers, got {}", option, text, count, out.size()));
+        throw bad_input(
+            fmt::format("{} {}: wants {} comma-separated numbers, got {}", option, text, count, out.size()));
     }
     return out;
 }
@@ -89,7 +90,8 @@ struct ViewArgs {
 };
 
 void add_view_options(CLI::App& app, ViewArgs& args) {
-    app.add_option("--view-box", args.boxes, "a box where eyes can be: minx,miny,minz,maxx,maxy,maxz [m]; repeat for more")
+    app.add_option("--view-box", args.boxes,
+                   "a box where eyes can be: minx,miny,minz,maxx,maxy,maxz [m]; repeat for more")
         ->type_name("BOX");
     app.add_option("--view-seed", args.seeds, "a point in the playable space: x,y,z [m]; repeat for more")
         ->type_name("POINT");
@@ -101,7 +103,8 @@ void apply_view_args(const ViewArgs& args, ViewVolumeConfig& view) {
     for (const std::string& text : args.boxes) {
         const std::vector<double> v = parse_numbers(text, 6, "--view-box");
         view.boxes.push_back(Aabb::of(glm::vec3(v[0], v[1], v[2]), glm::vec3(v[3], v[4], v[5])));
-        if (view.boxes.back().is_empty()) throw bad_input(fmt::format("--view-box {}: min must not exceed max", text));
+        if (view.boxes.back().is_empty())
+            throw bad_input(fmt::format("--view-box {}: min must not exceed max", text));
     }
     for (const std::string& text : args.seeds) {
         const std::vector<double> v = parse_numbers(text, 3, "--view-seed");
@@ -118,7 +121,8 @@ struct CommonOptions {
 };
 
 void add_common(CLI::App& app, CommonOptions& common) {
-    app.add_flag("-q,--quiet", common.quiet, "no progress and no info lines (warnings and errors still print)");
+    app.add_flag("-q,--quiet", common.quiet,
+                 "no progress and no info lines (warnings and errors still print)");
     app.add_flag("-v,--verbose", common.verbose, "debug lines, stage timings");
 }
 
@@ -140,17 +144,19 @@ void write_report(const std::string& path, const BakeData& bake, const Context& 
 }
 
 // occluders WORLD -o boxes.glb
-int run_occluders(Context& ctx, const BakeConfig& config, const std::string& world_path, const std::string& out_path,
-                  const std::string& report_path) {
+int run_occluders(Context& ctx, const BakeConfig& config, const std::string& world_path,
+                  const std::string& out_path, const std::string& report_path) {
     ScopedTimer total(ctx, "total");
     set_threads(config.run.threads);
     const World world = load_world(ctx, world_path);
     const ViewVolume view = build_view_volume(ctx, config.view, world);
     RayScene scene(ctx, world, BuildQuality::kMedium, config.run.threads);
     OccluderFigures figures;
-    const std::vector<Occluder> boxes = synthesize_occluders(ctx, config.occluders, world, view, scene, figures);
+    const std::vector<Occluder> boxes =
+        synthesize_occluders(ctx, config.occluders, world, view, scene, figures);
     SceneDesc glb;
-    glb.materials.push_back(SceneMaterial{"occluder", {0.9f, 0.3f, 0.2f, 0.5f}, SceneMaterial::Alpha::kBlend, true});
+    glb.materials.push_back(
+        SceneMaterial{"occluder", {0.9f, 0.3f, 0.2f, 0.5f}, SceneMaterial::Alpha::kBlend, true});
     uint32_t written = 0;
     for (size_t i = 0; i < boxes.size(); ++i) {
         if (!boxes[i].proven) continue;
@@ -183,7 +189,8 @@ int run_occluders(Context& ctx, const BakeConfig& config, const std::string& wor
         j["covered_m3"] = figures.covered_m3;
         j["covered_share_of_solid"] = figures.solid_m3 > 0 ? figures.covered_m3 / figures.solid_m3 : 0.0;
         j["solid_near_view_m3"] = figures.near_m3;
-        j["covered_share_of_solid_near_view"] = figures.near_m3 > 0 ? figures.near_covered_m3 / figures.near_m3 : 0.0;
+        j["covered_share_of_solid_near_view"] =
+            figures.near_m3 > 0 ? figures.near_covered_m3 / figures.near_m3 : 0.0;
         j["check_rays"] = figures.check_rays;
         j["probe_rays"] = figures.probe_rays;
         j["probe_rays_into_solid"] = figures.probe_rays_into_solid;
@@ -215,8 +222,8 @@ double figure_or(const NamedValues& values, const std::string& key, double fallb
 }
 
 // bake WORLD -o OUT.h5
-int run_bake(Context& ctx, const BakeConfig& config, const std::string& world_path, const std::string& out_path,
-             const std::string& report_path) {
+int run_bake(Context& ctx, const BakeConfig& config, const std::string& world_path,
+             const std::string& out_path, const std::string& report_path) {
     ScopedTimer total(ctx, "total");
     set_threads(config.run.threads);
     const World world = load_world(ctx, world_path);
@@ -235,14 +242,15 @@ int run_bake(Context& ctx, const BakeConfig& config, const std::string& world_pa
     }
     write_report(report_path, bake, ctx);
     ctx.info(fmt::format("wrote {} ({}, {} cells, mean PVS {:.1f} of {} objects)", out_path, pvs_kind(bake),
-                         bake.cells.size(), figure_or(bake.figures, "pvs_objects_mean", 0.0), bake.objects.size()));
+                         bake.cells.size(), figure_or(bake.figures, "pvs_objects_mean", 0.0),
+                         bake.objects.size()));
     const bool misses = bake.verification.ran && !bake.verification.misses.empty();
     return misses && bake.conservative ? kExitMisses : kExitOk;
 }
 
 // verify WORLD BAKE.h5
-int run_verify(Context& ctx, const BakeConfig& config, const std::string& world_path, const std::string& bake_path,
-               const std::string& report_path, bool write_back) {
+int run_verify(Context& ctx, const BakeConfig& config, const std::string& world_path,
+               const std::string& bake_path, const std::string& report_path, bool write_back) {
     set_threads(config.run.threads);
     BakeData bake = read_bake_file(bake_path);
     const World world = load_world(ctx, world_path);
@@ -264,16 +272,17 @@ int run_info(const std::string& bake_path, bool json, std::ostream& out) {
         out << bake_report_json(bake, {});
         return kExitOk;
     }
-    out << fmt::format("bake file   {} (format {}.{}, pvsbake {})\n", bake_path, bake.format_major, bake.format_minor,
-                       bake.tool_version);
+    out << fmt::format("bake file   {} (format {}.{}, pvsbake {})\n", bake_path, bake.format_major,
+                       bake.format_minor, bake.tool_version);
     out << fmt::format("world       {} (hash {})\n", bake.world_path, bake.world_hash);
     out << fmt::format("PVS         {}\n", pvs_kind(bake));
     out << fmt::format("objects     {}, triangles {}\n", bake.objects.size(),
                        uint64_t(figure_or(bake.figures, "triangles", 0)));
     const CellSet& cells = bake.cells;
-    out << fmt::format("cells       {} ({} {} x {} x {} of {} m from ({:.2f}, {:.2f}, {:.2f}))\n", cells.size(),
-                       cells.kind == CellSet::Kind::kGrid ? "grid" : "octree", cells.dims.x, cells.dims.y,
-                       cells.dims.z, cells.cell_size_m, cells.origin.x, cells.origin.y, cells.origin.z);
+    out << fmt::format("cells       {} ({} {} x {} x {} of {} m from ({:.2f}, {:.2f}, {:.2f}))\n",
+                       cells.size(), cells.kind == CellSet::Kind::kGrid ? "grid" : "octree", cells.dims.x,
+                       cells.dims.y, cells.dims.z, cells.cell_size_m, cells.origin.x, cells.origin.y,
+                       cells.origin.z);
     out << "parameters\n";
     for (const auto& [k, v] : bake.parameters) out << fmt::format("  {:<32} {}\n", k, v);
     out << "figures\n";
@@ -286,10 +295,11 @@ int run_info(const std::string& bake_path, bool json, std::ostream& out) {
         constexpr size_t kMissesShown = 20;
         for (size_t i = 0; i < bake.verification.misses.size() && i < kMissesShown; ++i) {
             const Miss& m = bake.verification.misses[i];
-            out << fmt::format("  miss: cell {} object '{}' eye ({:.3f}, {:.3f}, {:.3f}) dir ({:.4f}, {:.4f}, {:.4f}) "
-                               "at {:.3f} m\n",
-                               m.cell, bake.objects[m.object].name, m.eye.x, m.eye.y, m.eye.z, m.direction.x,
-                               m.direction.y, m.direction.z, m.distance_m);
+            out << fmt::format(
+                "  miss: cell {} object '{}' eye ({:.3f}, {:.3f}, {:.3f}) dir ({:.4f}, {:.4f}, {:.4f}) "
+                "at {:.3f} m\n",
+                m.cell, bake.objects[m.object].name, m.eye.x, m.eye.y, m.eye.z, m.direction.x, m.direction.y,
+                m.direction.z, m.distance_m);
         }
         if (bake.verification.misses.size() > kMissesShown) {
             out << fmt::format("  ... {} more misses stored (pvsbake info --json lists them)\n",
@@ -334,9 +344,10 @@ int run_query(const std::string& bake_path, const std::vector<double>& xyz, bool
         return kExitOk;
     }
     const Aabb& b = bake.cells.cells[cell].bounds;
-    out << fmt::format("cell {} ({:.2f}, {:.2f}, {:.2f}) - ({:.2f}, {:.2f}, {:.2f}) sees {} of {} objects ({})\n", cell,
-                       b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z, visible.size(), bake.objects.size(),
-                       pvs_kind(bake));
+    out << fmt::format(
+        "cell {} ({:.2f}, {:.2f}, {:.2f}) - ({:.2f}, {:.2f}, {:.2f}) sees {} of {} objects ({})\n", cell,
+        b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z, visible.size(), bake.objects.size(),
+        pvs_kind(bake));
     for (uint32_t o : visible) out << bake.objects[o].name << "\n";
     return kExitOk;
 }
@@ -344,8 +355,9 @@ int run_query(const std::string& bake_path, const std::vector<double>& xyz, bool
 }  // namespace
 
 int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log) {
-    CLI::App app{"pvsbake: bake, verify and inspect potentially-visible sets (PVS) of glTF 2.0 worlds.\n"
-                 "Units are metres; axes are glTF's (+Y up)."};
+    CLI::App app{
+        "pvsbake: bake, verify and inspect potentially-visible sets (PVS) of glTF 2.0 worlds.\n"
+        "Units are metres; axes are glTF's (+Y up)."};
     app.require_subcommand(1);
     app.set_version_flag("--version", tool_version());
 
@@ -355,13 +367,15 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
     bool no_verify = false, no_write = false, json = false;
     std::vector<double> point;
 
-    CLI::App* bake = app.add_subcommand("bake", "bake the PVS of a world into an HDF5 bake file, then verify it");
+    CLI::App* bake =
+        app.add_subcommand("bake", "bake the PVS of a world into an HDF5 bake file, then verify it");
     bake->add_option("world", world_path, "the world, glTF 2.0 (.gltf or .glb)")->required();
     bake->add_option("-o,--output", out_path, "the bake file to write (HDF5)")->required();
     bake->add_option("--report", common.report_path, "also write a JSON report here");
-    bake->add_option("--mode", mode,
-                     "sampled: the union of what sample rays saw (AGGRESSIVE: may miss small or grazing objects); "
-                     "conservative: every object any eye may see, proven with shrunk occluders (occluder fusion)")
+    bake->add_option(
+            "--mode", mode,
+            "sampled: the union of what sample rays saw (AGGRESSIVE: may miss small or grazing objects); "
+            "conservative: every object any eye may see, proven with shrunk occluders (occluder fusion)")
         ->check(CLI::IsMember({"sampled", "conservative"}))
         ->capture_default_str();
     bake->add_flag("--no-verify", no_verify, "skip verification by ray sampling");
@@ -375,12 +389,14 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
         ->capture_default_str();
     ViewArgs view_args;
     add_view_options(*bake, view_args);
-    bind_options(*bake, config, {"run.", "view.", "cells.", "occluders.", "conservative.", "sampled.", "verify."});
+    bind_options(*bake, config,
+                 {"run.", "view.", "cells.", "occluders.", "conservative.", "sampled.", "verify."});
     add_common(*bake, common);
 
     CLI::App* verify = app.add_subcommand(
-        "verify", "check a bake against its world with Embree rays: exit 3 and the misses when a ray sees an "
-                  "object the PVS leaves out");
+        "verify",
+        "check a bake against its world with Embree rays: exit 3 and the misses when a ray sees an "
+        "object the PVS leaves out");
     verify->add_option("world", world_path, "the world the bake was made from")->required();
     verify->add_option("bake", bake_path, "the bake file; its verification group is updated")->required();
     verify->add_option("--report", common.report_path, "also write a JSON report here");
@@ -389,7 +405,8 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
     add_common(*verify, common);
 
     CLI::App* occ = app.add_subcommand(
-        "occluders", "synthesize occluder boxes inside the world's opaque solid and write them as glTF (.glb)");
+        "occluders",
+        "synthesize occluder boxes inside the world's opaque solid and write them as glTF (.glb)");
     occ->add_option("world", world_path, "the world, glTF 2.0 (.gltf or .glb)")->required();
     occ->add_option("-o,--output", out_path, "the boxes, as a .glb to open over the world")->required();
     occ->add_option("--report", common.report_path, "also write a JSON report here");
@@ -411,7 +428,11 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
         bool known = false;
         for (const CLI::App* sub : app.get_subcommands({})) known |= sub->get_name() == argv[1];
         if (!known) {
-            if (log) std::fprintf(log, "error: unknown subcommand '%s' (use bake, verify, occluders, info or query; see pvsbake --help)\n", argv[1]);
+            if (log)
+                std::fprintf(log,
+                             "error: unknown subcommand '%s' (use bake, verify, occluders, info or query; "
+                             "see pvsbake --help)\n",
+                             argv[1]);
             return kExitBadInput;
         }
     }
@@ -427,8 +448,10 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
             out << o.str();
             return kExitOk;
         }
-        if (log) std::fprintf(log, "error: %s (see pvsbake %s--help)\n", e.what(),
-                              app.get_subcommands().empty() ? "" : (app.get_subcommands()[0]->get_name() + " ").c_str());
+        if (log)
+            std::fprintf(
+                log, "error: %s (see pvsbake %s--help)\n", e.what(),
+                app.get_subcommands().empty() ? "" : (app.get_subcommands()[0]->get_name() + " ").c_str());
         return kExitBadInput;
     }
 

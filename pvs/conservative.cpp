@@ -28,7 +28,7 @@ void boundary_samples(const Aabb& box, double spacing, std::vector<glm::vec3>& o
         for (int side = 0; side < 2; ++side) {
             for (int j = 0; j < nv; ++j)
                 for (int i = 0; i < nu; ++i) {
-                    glm::vec3 p;
+                    glm::vec3 p(0.0f);
                     p[axis] = side ? box.max[axis] : box.min[axis];
                     p[ua] = box.min[ua] + size[ua] * (float(i) + 0.5f) / float(nu);
                     p[va] = box.min[va] + size[va] * (float(j) + 0.5f) / float(nv);
@@ -74,8 +74,8 @@ VoxelMask sample_reach(const VoxelMask& view, double epsilon_m) {
 }
 
 void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const World& world,
-                           const std::vector<Aabb>& boxes, const std::vector<Aabb>& shrunk, const VoxelMask& reach,
-                           PvsSet& pvs, ConservativeFigures& figures) {
+                           const std::vector<Aabb>& boxes, const std::vector<Aabb>& shrunk,
+                           const VoxelMask& reach, PvsSet& pvs, ConservativeFigures& figures) {
     const auto start = std::chrono::steady_clock::now();
     const uint32_t n_objects = uint32_t(world.objects.size());
     // Spacing epsilon * sqrt(2): the centre of a square of that edge is within epsilon of all of it.
@@ -152,8 +152,8 @@ PvsSet bake_conservative_pvs(Context& ctx, const ConservativeConfig& config, con
                              const CellSet& cells, const std::vector<Aabb>& shrunk, const VoxelMask& reach,
                              ConservativeFigures& figures) {
     ScopedTimer timer(ctx, "conservative_pvs");
-    ctx.info(fmt::format("conservative PVS: {} cells, {} shrunk occluders, epsilon {} m, cube {} px", cells.size(),
-                         shrunk.size(), config.epsilon_m, config.cube_resolution));
+    ctx.info(fmt::format("conservative PVS: {} cells, {} shrunk occluders, epsilon {} m, cube {} px",
+                         cells.size(), shrunk.size(), config.epsilon_m, config.cube_resolution));
     PvsSet pvs = PvsSet::make(uint32_t(cells.size()), uint32_t(world.objects.size()));
     std::vector<Aabb> boxes;
     for (const Cell& c : cells.cells) boxes.push_back(c.bounds);
@@ -161,10 +161,11 @@ PvsSet bake_conservative_pvs(Context& ctx, const ConservativeConfig& config, con
     conservative_box_rows(ctx, config, world, boxes, shrunk, reach, pvs, figures);
     ctx.progress_end();
     add_always_listed(world, cells, pvs);
-    ctx.info(fmt::format("conservative PVS: {} samples ({} inside occluders and {} far from the view region skipped), "
-                         "{:.1f} M object tests, {:.1f} s ({:.0f} cells/s)",
-                         figures.samples, figures.samples_skipped, figures.samples_far, double(figures.object_tests) * 1e-6, figures.seconds,
-                         double(cells.size()) / std::max(1e-9, figures.seconds)));
+    ctx.info(fmt::format(
+        "conservative PVS: {} samples ({} inside occluders and {} far from the view region skipped), "
+        "{:.1f} M object tests, {:.1f} s ({:.0f} cells/s)",
+        figures.samples, figures.samples_skipped, figures.samples_far, double(figures.object_tests) * 1e-6,
+        figures.seconds, double(cells.size()) / std::max(1e-9, figures.seconds)));
     return pvs;
 }
 

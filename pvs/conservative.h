@@ -6,8 +6,9 @@
 // 1. Occluders are boxes of the proven solid shrunk by epsilon (pvs/occluder_synthesis.h): every point of a
 //    shrunk box has its whole epsilon-ball inside the solid, where no sight line goes.
 // 2. If the segment from a sample point s to a point x meets a shrunk box at y = s + t (x - s), then for any
-//    q with |q - s| <= epsilon, the point q + t (x - q) of segment qx is within (1 - t) epsilon of y, so inside
-//    the solid: segment qx is blocked too. Pointwise, so it holds for the union of boxes: fusion for free.
+//    q with |q - s| <= epsilon, the point q + t (x - q) of segment qx is within (1 - t) epsilon of y, so
+//    inside the solid: segment qx is blocked too. Pointwise, so it holds for the union of boxes: fusion for
+//    free.
 // 3. Sight from an eye inside a cell either ends inside the cell (objects whose bounds meet the cell are
 //    always listed) or leaves the cell's box through a point q of its boundary. The boundary is sampled on
 //    a square grid whose every point is within epsilon of a sample (spacing <= epsilon * sqrt(2)), so q is
@@ -47,8 +48,8 @@ struct ConservativeFigures {
 // rows. Lists pvs_always_visible objects and objects whose bounds meet the box, then every object some
 // boundary sample cannot prove hidden. `shrunk` are the epsilon-shrunk occluder boxes. Parallel over boxes.
 void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const World& world,
-                           const std::vector<Aabb>& boxes, const std::vector<Aabb>& shrunk, const VoxelMask& reach,
-                           PvsSet& rows, ConservativeFigures& figures);
+                           const std::vector<Aabb>& boxes, const std::vector<Aabb>& shrunk,
+                           const VoxelMask& reach, PvsSet& rows, ConservativeFigures& figures);
 
 // The region where boundary samples are needed: `view` grown by ceil(epsilon / voxel) + 1 voxels.
 VoxelMask sample_reach(const VoxelMask& view, double epsilon_m);

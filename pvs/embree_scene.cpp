@@ -107,8 +107,8 @@ struct RayScene::Impl {
         touches.resize(w);
         for (uint32_t i = 0; i < n; ++i) {
             if (rays[i].hit.geomID == kOpaqueGeom) {
-                touches.push_back(
-                    RayTouch{ray_base + i, object_of[kOpaqueGeom][rays[i].hit.primID], rays[i].ray.tfar, true});
+                touches.push_back(RayTouch{ray_base + i, object_of[kOpaqueGeom][rays[i].hit.primID],
+                                           rays[i].ray.tfar, true});
             }
         }
     }
@@ -135,15 +135,17 @@ RayScene::RayScene(Context& ctx, const World& world, BuildQuality quality, int t
         const bool want_opaque = g == kOpaqueGeom;
         std::vector<uint32_t>& owner = impl_->object_of[g];
         size_t count = 0;
-        for (size_t t = 0; t < world.triangles.size(); ++t) count += (world.triangle_opaque[t] != 0) == want_opaque;
+        for (size_t t = 0; t < world.triangles.size(); ++t)
+            count += (world.triangle_opaque[t] != 0) == want_opaque;
         RTCGeometry geom = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
         rtcSetGeometryBuildQuality(geom, q);
         // Each geometry gets its own copy of the vertices it needs: simple, and worlds are small
         // next to memory (tens of MB for millions of triangles).
-        auto* verts = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                                  3 * sizeof(float), std::max<size_t>(1, 3 * count)));
-        auto* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                                   3 * sizeof(unsigned), count));
+        auto* verts =
+            static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                        3 * sizeof(float), std::max<size_t>(1, 3 * count)));
+        auto* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
+            geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), count));
         owner.reserve(count);
         size_t k = 0;
         for (uint32_t o = 0; o < world.objects.size(); ++o) {
@@ -172,7 +174,8 @@ RayScene::RayScene(Context& ctx, const World& world, BuildQuality quality, int t
     }
     rtcCommitScene(impl_->scene);
     const RTCError err = rtcGetDeviceError(impl_->device);
-    if (err != RTC_ERROR_NONE) throw internal_error(fmt::format("RayScene: Embree scene build failed (error {})", int(err)));
+    if (err != RTC_ERROR_NONE)
+        throw internal_error(fmt::format("RayScene: Embree scene build failed (error {})", int(err)));
     ctx.debug(fmt::format("embree: {} opaque and {} see-through triangles", impl_->object_of[0].size(),
                           impl_->object_of[1].size()));
 }
@@ -232,7 +235,8 @@ void RayScene::trace_repeated(glm::vec3 origin, const glm::vec3* directions, uin
             rtcIntersect1(impl_->scene, &tc.rtc, &rh);
             if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) break;
             const bool opaque = rh.hit.geomID == kOpaqueGeom;
-            touches.push_back(RayTouch{i, impl_->object_of[rh.hit.geomID][rh.hit.primID], rh.ray.tfar, opaque});
+            touches.push_back(
+                RayTouch{i, impl_->object_of[rh.hit.geomID][rh.hit.primID], rh.ray.tfar, opaque});
             if (opaque) break;
             tnear = std::nextafter(rh.ray.tfar, std::numeric_limits<float>::infinity());
         }
@@ -245,7 +249,8 @@ void RayScene::occluded_opaque(const glm::vec3* origins, const glm::vec3* direct
     RTCRay rays[kStreamSize];
     for (uint32_t base = 0; base < count; base += kStreamSize) {
         const uint32_t n = std::min(kStreamSize, count - base);
-        for (uint32_t i = 0; i < n; ++i) init_ray(rays[i], origins[base + i], directions[base + i], 0.0f, tfar[base + i], i);
+        for (uint32_t i = 0; i < n; ++i)
+            init_ray(rays[i], origins[base + i], directions[base + i], 0.0f, tfar[base + i], i);
         RTCIntersectContext ictx;
         rtcInitIntersectContext(&ictx);
         rtcOccluded1M(impl_->scene, &ictx, rays, n, sizeof(RTCRay));

@@ -52,8 +52,8 @@ public:
 
     // Is each segment origins[i] + t * directions[i], t in [0, tfar[i]], blocked by an OPAQUE triangle?
     // (See-through triangles never block.) Writes 1 (blocked) or 0 into blocked[i]. Thread-safe.
-    void occluded_opaque(const glm::vec3* origins, const glm::vec3* directions, const float* tfar, uint32_t count,
-                         uint8_t* blocked) const;
+    void occluded_opaque(const glm::vec3* origins, const glm::vec3* directions, const float* tfar,
+                         uint32_t count, uint8_t* blocked) const;
 
     // Benchmark baseline: plain rtcOccluded1 per ray (is any opaque triangle hit?). Returns the
     // number of rays that hit something.

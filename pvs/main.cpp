@@ -3,4 +3,6 @@
 
 #include <iostream>
 
-int main(int argc, char** argv) { return pvs::run_cli(argc, argv, std::cout, stderr); }
+int main(int argc, char** argv) {
+    return pvs::run_cli(argc, argv, std::cout, stderr);
+}

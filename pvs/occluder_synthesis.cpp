@@ -46,10 +46,12 @@ std::vector<glm::vec3> check_eyes(const ViewVolume& view, const VoxelGrid& grid,
 
 // The sight probe: rays over the sphere from eye points; solid voxels a ray passes before it stops are
 // seen (through a crack): carve them and their neighbours out of the solid.
-void carve_seen_solid(Context& ctx, const OccluderConfig& config, const VoxelGrid& grid, const BitVolume& touched,
-                      const ViewVolume& view, const RayScene& scene, Solid& solid, OccluderFigures& figures) {
+void carve_seen_solid(Context& ctx, const OccluderConfig& config, const VoxelGrid& grid,
+                      const BitVolume& touched, const ViewVolume& view, const RayScene& scene, Solid& solid,
+                      OccluderFigures& figures) {
     ScopedTimer timer(ctx, "sight_probe");
-    const std::vector<glm::vec3> eyes = check_eyes(view, grid, touched, config.probe_eyes, config.check_seed ^ 0x5052);
+    const std::vector<glm::vec3> eyes =
+        check_eyes(view, grid, touched, config.probe_eyes, config.check_seed ^ 0x5052);
     std::vector<uint8_t> seen(grid.count(), 0);
     uint64_t into_solid = 0, escaped = 0;
     const float step = grid.voxel_size_m;  // a corner a step skips is covered by the 26-neighbour carving
@@ -110,16 +112,18 @@ void carve_seen_solid(Context& ctx, const OccluderConfig& config, const VoxelGri
     figures.probe_rays_escaped = escaped;
     figures.probe_carved_voxels = carved;
     solid.solid_voxels -= carved;
-    ctx.info(fmt::format("sight probe: {:.1f} M rays from {} eyes; {} reached solid voxels through cracks ({} left the "
-                         "world); {} voxels carved out of the solid",
-                         double(figures.probe_rays) * 1e-6, eyes.size(), into_solid, escaped, carved));
+    ctx.info(fmt::format(
+        "sight probe: {:.1f} M rays from {} eyes; {} reached solid voxels through cracks ({} left the "
+        "world); {} voxels carved out of the solid",
+        double(figures.probe_rays) * 1e-6, eyes.size(), into_solid, escaped, carved));
 }
 
 }  // namespace
 
 std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& config, const World& world,
-                                           const ViewVolume& view, const RayScene& scene, OccluderFigures& figures,
-                                           double epsilon_m, std::vector<Aabb>* shrunk) {
+                                           const ViewVolume& view, const RayScene& scene,
+                                           OccluderFigures& figures, double epsilon_m,
+                                           std::vector<Aabb>* shrunk) {
     ScopedTimer timer(ctx, "occluders");
     const auto start = std::chrono::steady_clock::now();
     // The voxels: the view volume's, or the world's at the default size when there is no view volume.
@@ -127,7 +131,8 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
     BitVolume touched_local;
     const BitVolume* touched = &view.touched;
     if (!view.voxelized) {
-        grid = make_voxel_grid(world.bounds, default_voxel_size(world.bounds, kDefaultVoxelSizeM, 200'000'000), 2);
+        grid = make_voxel_grid(world.bounds,
+                               default_voxel_size(world.bounds, kDefaultVoxelSizeM, 200'000'000), 2);
         voxelize_opaque(ctx, world, grid, touched_local);
         touched = &touched_local;
     }
@@ -147,7 +152,8 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
     figures.covered_m3 = double(stats.covered_voxels) * voxel_m3;
 
     // The ray check: every box against sight lines from eyes spread over the eye space.
-    const std::vector<glm::vec3> eyes = check_eyes(view, grid, *touched, config.check_eyes, config.check_seed);
+    const std::vector<glm::vec3> eyes =
+        check_eyes(view, grid, *touched, config.check_eyes, config.check_seed);
     std::vector<uint8_t> rejected(boxes.size(), 0);
     uint64_t rays_total = 0;
     ctx.progress_begin("occluder check", boxes.size(), "boxes");
@@ -169,7 +175,8 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
                     break;
                 }
                 for (uint32_t k = 0; k < config.check_rays_per_eye; ++k) {
-                    const glm::vec3 target = box.min + box.size() * glm::vec3(rng.uniform(), rng.uniform(), rng.uniform());
+                    const glm::vec3 target =
+                        box.min + box.size() * glm::vec3(rng.uniform(), rng.uniform(), rng.uniform());
                     const glm::vec3 d = glm::normalize(target - e);
                     // The segment to the target point itself: a box whose face lies on the blocking surface
                     // (internal faces are solid) is blocked at its face, before any point inside it.
@@ -182,7 +189,8 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
             }
             if (!rejected[size_t(b)] && !origins.empty()) {
                 blocked.resize(origins.size());
-                scene.occluded_opaque(origins.data(), dirs.data(), tfar.data(), uint32_t(origins.size()), blocked.data());
+                scene.occluded_opaque(origins.data(), dirs.data(), tfar.data(), uint32_t(origins.size()),
+                                      blocked.data());
                 rays_total += origins.size();
                 for (uint8_t x : blocked)
                     if (!x) {
@@ -216,11 +224,13 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
         const BitVolume near_not = dilate(grid, not_proven, k);
         BitVolume eroded;
         eroded.reset(grid.count());
-        for (size_t w = 0; w < proven.words.size(); ++w) eroded.words[w] = proven.words[w] & ~near_not.words[w];
+        for (size_t w = 0; w < proven.words.size(); ++w)
+            eroded.words[w] = proven.words[w] & ~near_not.words[w];
         for (uint64_t i = 0; i < grid.count(); ++i) {
             if (!eroded.get(i)) continue;
             const glm::ivec3 c = grid.coords(i);
-            if (glm::any(glm::lessThan(c, glm::ivec3(k))) || glm::any(glm::greaterThanEqual(c, grid.dims - k))) {
+            if (glm::any(glm::lessThan(c, glm::ivec3(k))) ||
+                glm::any(glm::greaterThanEqual(c, grid.dims - k))) {
                 eroded.clear(i);
             }
         }
@@ -230,8 +240,8 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
         const std::vector<VoxelBox> shrunk_boxes = grow_boxes(ctx, grid, eroded, sc, nullptr);
         shrunk->clear();
         for (const VoxelBox& vb : shrunk_boxes) shrunk->push_back(box_bounds(grid, vb));
-        ctx.info(fmt::format("occluders shrunk by {} m ({} voxels): {} boxes of {:.0f} m3 of solid", epsilon_m, k,
-                             shrunk->size(), double(eroded.count()) * voxel_m3));
+        ctx.info(fmt::format("occluders shrunk by {} m ({} voxels): {} boxes of {:.0f} m3 of solid",
+                             epsilon_m, k, shrunk->size(), double(eroded.count()) * voxel_m3));
     }
 
     std::vector<Occluder> out;
@@ -245,7 +255,8 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
         grown.min -= grid.voxel_size_m;
         grown.max += grid.voxel_size_m;
         for (uint32_t i = 0; i < world.objects.size(); ++i) {
-            if ((world.objects[i].flags & kObjectHasOpaque) && world.objects[i].bounds.overlaps(grown)) o.objects.push_back(i);
+            if ((world.objects[i].flags & kObjectHasOpaque) && world.objects[i].bounds.overlaps(grown))
+                o.objects.push_back(i);
         }
         out.push_back(std::move(o));
     }
@@ -268,7 +279,8 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
         }
         uint64_t n = 0, c = 0;
         for (size_t w = 0; w < solid.solid.words.size(); ++w) {
-            const uint64_t s_near = solid.solid.words[w] & (near.words.empty() ? ~uint64_t(0) : near.words[w]);
+            const uint64_t s_near =
+                solid.solid.words[w] & (near.words.empty() ? ~uint64_t(0) : near.words[w]);
             n += uint64_t(__builtin_popcountll(s_near));
             c += uint64_t(__builtin_popcountll(s_near & covered.words[w]));
         }
@@ -276,12 +288,13 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
         figures.near_covered_m3 = double(c) * voxel_m3;
     }
     figures.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    ctx.info(fmt::format("occluders: {} boxes cover {:.0f} of {:.0f} m3 of solid ({:.1f}%), {:.1f}% of the {:.0f} m3 "
-                         "within {} m of the view region; the ray check ({:.1f} M rays) rejected {}; {:.2f} s",
-                         figures.kept, figures.covered_m3, figures.solid_m3,
-                         figures.solid_m3 > 0 ? 100.0 * figures.covered_m3 / figures.solid_m3 : 0.0,
-                         figures.near_m3 > 0 ? 100.0 * figures.near_covered_m3 / figures.near_m3 : 0.0, figures.near_m3,
-                         kNearViewM, double(figures.check_rays) * 1e-6, figures.rejected_by_rays, figures.seconds));
+    ctx.info(fmt::format(
+        "occluders: {} boxes cover {:.0f} of {:.0f} m3 of solid ({:.1f}%), {:.1f}% of the {:.0f} m3 "
+        "within {} m of the view region; the ray check ({:.1f} M rays) rejected {}; {:.2f} s",
+        figures.kept, figures.covered_m3, figures.solid_m3,
+        figures.solid_m3 > 0 ? 100.0 * figures.covered_m3 / figures.solid_m3 : 0.0,
+        figures.near_m3 > 0 ? 100.0 * figures.near_covered_m3 / figures.near_m3 : 0.0, figures.near_m3,
+        kNearViewM, double(figures.check_rays) * 1e-6, figures.rejected_by_rays, figures.seconds));
     return out;
 }
 

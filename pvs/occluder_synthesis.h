@@ -2,11 +2,12 @@
 // solid (ALGORITHMS.md sections 1 and 2):
 //   solid (occluders/solid.h: voxels sight from the eye space never reaches) -> SIGHT PROBE (rays over the
 //   sphere from eye points; every solid voxel a ray passes before its first opaque hit, and its 26
-//   neighbours, is carved out: sight got there through a crack narrower than a voxel) -> boxes (occluders/boxes.h:
-//   greedy growth, sort and cut) -> RAY CHECK against the real triangles (Embree): from eye points spread
-//   over the view volume, segments to points on each box's faces; a box any segment reaches before an
-//   opaque triangle is rejected. This catches boxes sealed off only by a crack narrower than a voxel when
-//   the sampled sight lines pass the crack; it is a sampled check, not a proof (see the closing note).
+//   neighbours, is carved out: sight got there through a crack narrower than a voxel) -> boxes
+//   (occluders/boxes.h: greedy growth, sort and cut) -> RAY CHECK against the real triangles (Embree): from
+//   eye points spread over the view volume, segments to points on each box's faces; a box any segment reaches
+//   before an opaque triangle is rejected. This catches boxes sealed off only by a crack narrower than a
+//   voxel when the sampled sight lines pass the crack; it is a sampled check, not a proof (see the closing
+//   note).
 #pragma once
 
 #include "cells/view_volume.h"
@@ -25,9 +26,9 @@ constexpr double kNearViewM = 4.0;
 
 struct OccluderFigures {
     double solid_m3 = 0.0;
-    double covered_m3 = 0.0;        // solid inside some kept box (before the ray check)
-    double near_m3 = 0.0;            // solid within kNearViewM of the view region
-    double near_covered_m3 = 0.0;    // ... inside some proven box
+    double covered_m3 = 0.0;       // solid inside some kept box (before the ray check)
+    double near_m3 = 0.0;          // solid within kNearViewM of the view region
+    double near_covered_m3 = 0.0;  // ... inside some proven box
     uint32_t grown = 0;
     uint32_t kept = 0;
     uint32_t rejected_by_rays = 0;  // boxes a sight line reached
@@ -44,7 +45,8 @@ struct OccluderFigures {
 // every point of a shrunk box has its whole epsilon-ball inside the proven solid): the occluders of the
 // conservative solver (pvs/conservative.h).
 std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& config, const World& world,
-                                           const ViewVolume& view, const RayScene& scene, OccluderFigures& figures,
-                                           double epsilon_m = 0.0, std::vector<Aabb>* shrunk = nullptr);
+                                           const ViewVolume& view, const RayScene& scene,
+                                           OccluderFigures& figures, double epsilon_m = 0.0,
+                                           std::vector<Aabb>* shrunk = nullptr);
 
 }  // namespace pvs

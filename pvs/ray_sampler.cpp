@@ -51,13 +51,16 @@ void add_always_listed(const World& world, const CellSet& cells, PvsSet& pvs) {
             for (int a = 0; a < 3; ++a) {
                 const float s = cells.cell_size_m;
                 lo[a] = std::max(0, int(std::floor((obj.bounds.min[a] - cells.origin[a]) / s)) - 1);
-                hi[a] = std::min(cells.dims[a] - 1, int(std::floor((obj.bounds.max[a] - cells.origin[a]) / s)) + 1);
+                hi[a] = std::min(cells.dims[a] - 1,
+                                 int(std::floor((obj.bounds.max[a] - cells.origin[a]) / s)) + 1);
             }
             for (int z = lo.z; z <= hi.z; ++z)
                 for (int y = lo.y; y <= hi.y; ++y)
                     for (int x = lo.x; x <= hi.x; ++x) {
-                        const int32_t c = cells.grid_to_cell[size_t(x) + size_t(cells.dims.x) *
-                                                                        (size_t(y) + size_t(cells.dims.y) * size_t(z))];
+                        const int32_t c =
+                            cells
+                                .grid_to_cell[size_t(x) + size_t(cells.dims.x) *
+                                                              (size_t(y) + size_t(cells.dims.y) * size_t(z))];
                         if (c >= 0 && cells.cells[c].bounds.overlaps(obj.bounds)) pvs.set(uint32_t(c), o);
                     }
         } else {
@@ -100,7 +103,9 @@ struct DirectionBins {
         u -= std::floor(u);
         return std::clamp(int(u * float(cols)), 0, cols - 1);
     }
-    size_t bin_of(glm::vec3 d) const { return size_t(row_of(d.y)) * size_t(cols) + size_t(col_of(std::atan2(d.z, d.x))); }
+    size_t bin_of(glm::vec3 d) const {
+        return size_t(row_of(d.y)) * size_t(cols) + size_t(col_of(std::atan2(d.z, d.x)));
+    }
 };
 
 // Does the ray (eye, dir) come within angle atan(tan_band) of the box before `reach`? Tested as: the ray
@@ -113,8 +118,8 @@ bool ray_passes_near(glm::vec3 eye, glm::vec3 dir, float reach, const Aabb& box,
 }
 
 // True when a ray within `half` of `axis` (the candidates) passes near the box before it stops.
-bool cone_reaches(const DirectionBins& bins, const glm::vec3* dirs, const float* reach, glm::vec3 axis, float half,
-                  float near, glm::vec3 eye, const Aabb& box, float tan_band) {
+bool cone_reaches(const DirectionBins& bins, const glm::vec3* dirs, const float* reach, glm::vec3 axis,
+                  float half, float near, glm::vec3 eye, const Aabb& box, float tan_band) {
     const float polar = std::acos(std::clamp(axis.y, -1.0f, 1.0f));
     const float lo = std::max(0.0f, polar - half), hi = std::min(kPi, polar + half);
     const int r0 = bins.row_of(std::cos(lo)), r1 = bins.row_of(std::cos(hi));
@@ -168,7 +173,8 @@ uint32_t add_guard_band(const World& world, const CellRays& rays, float guard_ba
             bool listed = dist <= radius;
             if (!listed) {
                 const float half = std::min(kPi, std::asin(std::min(1.0f, radius / dist)) + guard_band_rad);
-                listed = cone_reaches(bins, dirs, reach.data(), v / dist, half, dist - radius, eye, box, tan_band);
+                listed =
+                    cone_reaches(bins, dirs, reach.data(), v / dist, half, dist - radius, eye, box, tan_band);
             }
             if (listed) {
                 row[o >> 6] |= uint64_t(1) << (o & 63);
@@ -179,9 +185,10 @@ uint32_t add_guard_band(const World& world, const CellRays& rays, float guard_ba
     return added;
 }
 
-void sample_box_rows(const SampledPvsConfig& config, const World& world, const RayScene& scene, const CellSet& masks,
-                     const std::vector<Aabb>& boxes, const std::vector<uint64_t>& streams, uint32_t rays_per_eye,
-                     PvsSet& rows, uint64_t& guard_band_added, Context* progress) {
+void sample_box_rows(const SampledPvsConfig& config, const World& world, const RayScene& scene,
+                     const CellSet& masks, const std::vector<Aabb>& boxes,
+                     const std::vector<uint64_t>& streams, uint32_t rays_per_eye, PvsSet& rows,
+                     uint64_t& guard_band_added, Context* progress) {
     const float guard_band_rad = float(config.guard_band_deg) * kPi / 180.0f;
     uint64_t added_total = 0;
 #pragma omp parallel reduction(+ : added_total)
@@ -191,7 +198,8 @@ void sample_box_rows(const SampledPvsConfig& config, const World& world, const R
         for (int64_t b = 0; b < int64_t(boxes.size()); ++b) {
             trace_region(scene, masks, boxes[size_t(b)], streams[size_t(b)], config.rays, rays_per_eye, rays);
             for (const RayTouch& t : rays.touches) rows.set(uint32_t(b), t.object);
-            if (guard_band_rad > 0.0f) added_total += add_guard_band(world, rays, guard_band_rad, rows.row(uint32_t(b)));
+            if (guard_band_rad > 0.0f)
+                added_total += add_guard_band(world, rays, guard_band_rad, rows.row(uint32_t(b)));
             if (progress) progress->progress_advance();
         }
     }
@@ -206,8 +214,8 @@ SampledPvs bake_sampled_pvs(Context& ctx, const SampledPvsConfig& config, const 
     result.pvs = PvsSet::make(uint32_t(cells.size()), uint32_t(world.objects.size()));
     result.rays_per_eye = rays_per_eye_within_budget(config.rays, cells.size());
     const uint64_t rays_per_cell = uint64_t(config.rays.eyes_per_cell) * result.rays_per_eye;
-    ctx.info(fmt::format("sampled PVS (aggressive): {} cells x {} eyes x {} rays = {:.1f} M rays", cells.size(),
-                         config.rays.eyes_per_cell, result.rays_per_eye,
+    ctx.info(fmt::format("sampled PVS (aggressive): {} cells x {} eyes x {} rays = {:.1f} M rays",
+                         cells.size(), config.rays.eyes_per_cell, result.rays_per_eye,
                          double(rays_per_cell) * double(cells.size()) * 1e-6));
     if (config.guard_band_deg > 0.0) {
         ctx.info(fmt::format("sampled PVS: guard band {} degrees (lists objects rays passed near)",
@@ -226,8 +234,9 @@ SampledPvs bake_sampled_pvs(Context& ctx, const SampledPvsConfig& config, const 
     add_always_listed(world, cells, result.pvs);
     result.rays = rays_per_cell * cells.size();
     result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    ctx.info(fmt::format("sampled PVS: {:.1f} M rays in {:.1f} s ({:.2f} M rays/s)", double(result.rays) * 1e-6,
-                         result.seconds, double(result.rays) * 1e-6 / std::max(result.seconds, 1e-9)));
+    ctx.info(fmt::format("sampled PVS: {:.1f} M rays in {:.1f} s ({:.2f} M rays/s)",
+                         double(result.rays) * 1e-6, result.seconds,
+                         double(result.rays) * 1e-6 / std::max(result.seconds, 1e-9)));
     return result;
 }
 

@@ -62,9 +62,10 @@ struct SampledPvs {
 
 // The sampled rows of arbitrary boxes (cells, or octree nodes being considered): every object a ray from
 // the box touched, plus the guard band. rows: boxes.size() rows. Parallel over boxes.
-void sample_box_rows(const SampledPvsConfig& config, const World& world, const RayScene& scene, const CellSet& masks,
-                     const std::vector<Aabb>& boxes, const std::vector<uint64_t>& streams, uint32_t rays_per_eye,
-                     PvsSet& rows, uint64_t& guard_band_added, Context* progress);
+void sample_box_rows(const SampledPvsConfig& config, const World& world, const RayScene& scene,
+                     const CellSet& masks, const std::vector<Aabb>& boxes,
+                     const std::vector<uint64_t>& streams, uint32_t rays_per_eye, PvsSet& rows,
+                     uint64_t& guard_band_added, Context* progress);
 
 // The sampled (aggressive) PVS: for every cell, every object a ray touched, plus add_always_listed().
 SampledPvs bake_sampled_pvs(Context& ctx, const SampledPvsConfig& config, const World& world,

@@ -152,29 +152,34 @@ VerifyResult verify_pvs(Context& ctx, const VerifyConfig& config, const World& w
 }
 
 void log_verify_summary(Context& ctx, const VerifyResult& r, const World& world) {
-    ctx.info(fmt::format("verify: {:.1f} M rays in {:.1f} s ({:.2f} M rays/s)", double(r.rays) * 1e-6, r.seconds,
-                         r.seconds > 0 ? double(r.rays) * 1e-6 / r.seconds : 0.0));
-    ctx.info(fmt::format("verify: overestimation |PVS|/|sampled| mean {:.2f}, median {:.2f}, max {:.2f}; "
-                         "by triangles mean {:.2f}, median {:.2f}, max {:.2f}",
-                         r.overestimation_mean, r.overestimation_median, r.overestimation_max,
-                         r.overestimation_tri_mean, r.overestimation_tri_median, r.overestimation_tri_max));
-    ctx.info(fmt::format("verify: the PVS lets through {:.1f}% of the triangles on average; the rays saw {:.1f}%",
-                         100.0 * r.pvs_triangle_share_mean, 100.0 * r.sampled_triangle_share_mean));
+    ctx.info(fmt::format("verify: {:.1f} M rays in {:.1f} s ({:.2f} M rays/s)", double(r.rays) * 1e-6,
+                         r.seconds, r.seconds > 0 ? double(r.rays) * 1e-6 / r.seconds : 0.0));
+    ctx.info(
+        fmt::format("verify: overestimation |PVS|/|sampled| mean {:.2f}, median {:.2f}, max {:.2f}; "
+                    "by triangles mean {:.2f}, median {:.2f}, max {:.2f}",
+                    r.overestimation_mean, r.overestimation_median, r.overestimation_max,
+                    r.overestimation_tri_mean, r.overestimation_tri_median, r.overestimation_tri_max));
+    ctx.info(
+        fmt::format("verify: the PVS lets through {:.1f}% of the triangles on average; the rays saw {:.1f}%",
+                    100.0 * r.pvs_triangle_share_mean, 100.0 * r.sampled_triangle_share_mean));
     if (r.missed_pairs == 0) {
         ctx.info("verify: no misses");
         return;
     }
-    ctx.warn(fmt::format("verify: {} MISSES: {} (cell, object) pairs in {} cells, {} rays saw an unlisted object",
-                         r.missed_pairs, r.missed_pairs, r.cells_with_misses, r.missed_rays));
+    ctx.warn(
+        fmt::format("verify: {} MISSES: {} (cell, object) pairs in {} cells, {} rays saw an unlisted object",
+                    r.missed_pairs, r.missed_pairs, r.cells_with_misses, r.missed_rays));
     const size_t show = std::min<size_t>(r.misses.size(), 10);
     for (size_t i = 0; i < show; ++i) {
         const Miss& m = r.misses[i];
-        ctx.warn(fmt::format("  miss: cell {} object {} '{}' from eye ({:.3f}, {:.3f}, {:.3f}) direction "
-                             "({:.4f}, {:.4f}, {:.4f}) at {:.3f} m",
-                             m.cell, m.object, world.objects[m.object].name, m.eye.x, m.eye.y, m.eye.z,
-                             m.direction.x, m.direction.y, m.direction.z, m.distance_m));
+        ctx.warn(
+            fmt::format("  miss: cell {} object {} '{}' from eye ({:.3f}, {:.3f}, {:.3f}) direction "
+                        "({:.4f}, {:.4f}, {:.4f}) at {:.3f} m",
+                        m.cell, m.object, world.objects[m.object].name, m.eye.x, m.eye.y, m.eye.z,
+                        m.direction.x, m.direction.y, m.direction.z, m.distance_m));
     }
-    if (r.missed_pairs > show) ctx.warn(fmt::format("  ... and {} more (see the report)", r.missed_pairs - show));
+    if (r.missed_pairs > show)
+        ctx.warn(fmt::format("  ... and {} more (see the report)", r.missed_pairs - show));
 }
 
 }  // namespace pvs

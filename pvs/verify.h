@@ -27,9 +27,9 @@ struct VerifyResult {
     uint64_t missed_pairs = 0;  // distinct (cell, object) pairs seen but not listed
     uint64_t missed_rays = 0;   // rays that touched an unlisted object
     uint32_t cells_with_misses = 0;
-    std::vector<Miss> misses;   // the first ray of each missed pair, cell order, at most max_misses_reported
+    std::vector<Miss> misses;  // the first ray of each missed pair, cell order, at most max_misses_reported
     std::vector<uint32_t> cell_sampled_visible;  // per cell: objects the rays touched
-    PvsSet sampled;             // per cell: which objects the rays touched
+    PvsSet sampled;                              // per cell: which objects the rays touched
 
     // Figures over cells whose sampled set is not empty.
     double overestimation_mean = 0, overestimation_median = 0, overestimation_max = 0;

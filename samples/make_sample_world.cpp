@@ -47,9 +47,10 @@ struct Builder {
 // optional opening [o0, o1] x [y0, y1]; glass fills the opening when `glass`.
 void wall(Builder& b, const std::string& name, int along, float across, float a, float c, bool open, float y0,
           float y1, float width, bool glass) {
-    auto piece = [&](const std::string& suffix, float s0, float s1, float h0, float h1, float thick, int mat) {
+    auto piece = [&](const std::string& suffix, float s0, float s1, float h0, float h1, float thick,
+                     int mat) {
         if (s1 - s0 <= 1e-4f || h1 - h0 <= 1e-4f) return;
-        glm::vec3 lo, hi;
+        glm::vec3 lo(0.0f), hi(0.0f);
         lo[along] = s0;
         hi[along] = s1;
         const int other = along == 0 ? 2 : 0;
@@ -118,8 +119,8 @@ pvs::SceneDesc make_rooms(int n, uint64_t seed) {
     for (int j = 0; j < n; ++j)
         for (int i = 0; i < n; ++i) {
             const glm::vec3 lo(float(i) * kRoomM, 0.0f, float(j) * kRoomM);
-            b.box(fmt::format("floor_{}_{}", i, j), lo + glm::vec3(0, -kSlabM, 0), lo + glm::vec3(kRoomM, 0, kRoomM),
-                  kFloor);
+            b.box(fmt::format("floor_{}_{}", i, j), lo + glm::vec3(0, -kSlabM, 0),
+                  lo + glm::vec3(kRoomM, 0, kRoomM), kFloor);
             b.box(fmt::format("ceiling_{}_{}", i, j), lo + glm::vec3(0, kHeightM, 0),
                   lo + glm::vec3(kRoomM, kHeightM + kSlabM, kRoomM), kStone);
         }
@@ -156,13 +157,13 @@ pvs::SceneDesc make_rooms(int n, uint64_t seed) {
                 const float s = 0.5f + 0.5f * rng.uniform();
                 const float x = 1.0f + (kRoomM - 2.0f - s) * rng.uniform();
                 const float z = 1.0f + (kRoomM - 2.0f - s) * rng.uniform();
-                b.box(fmt::format("crate_{}_{}_{}", i, j, c), o + glm::vec3(x, 0, z), o + glm::vec3(x + s, s, z + s),
-                      kWood);
+                b.box(fmt::format("crate_{}_{}_{}", i, j, c), o + glm::vec3(x, 0, z),
+                      o + glm::vec3(x + s, s, z + s), kWood);
             }
             if (rng.below(2) == 0) {
                 const float x = 2.0f + 3.5f * rng.uniform(), z = 2.0f + 3.5f * rng.uniform();
-                b.box(fmt::format("pillar_{}_{}", i, j), o + glm::vec3(x, 0, z), o + glm::vec3(x + 0.5f, kHeightM, z + 0.5f),
-                      kStone);
+                b.box(fmt::format("pillar_{}_{}", i, j), o + glm::vec3(x, 0, z),
+                      o + glm::vec3(x + 0.5f, kHeightM, z + 0.5f), kStone);
             }
             pvs::SceneNode seed_node;
             seed_node.name = fmt::format("spawn_{}_{}", i, j);
@@ -177,7 +178,9 @@ pvs::SceneDesc make_rooms(int n, uint64_t seed) {
 
 int main(int argc, char** argv) {
     if (argc < 2 || std::strcmp(argv[1], "--help") == 0) {
-        std::fprintf(stderr, "usage: make_sample_world OUT.glb [--rooms N (2..32, default 4)] [--seed S (default 1)]\n");
+        std::fprintf(
+            stderr,
+            "usage: make_sample_world OUT.glb [--rooms N (2..32, default 4)] [--seed S (default 1)]\n");
         return argc < 2 ? 2 : 0;
     }
     int rooms = 4;
@@ -199,7 +202,8 @@ int main(int argc, char** argv) {
     try {
         const pvs::SceneDesc scene = make_rooms(rooms, seed);
         pvs::write_glb(scene, argv[1]);
-        std::fprintf(stderr, "wrote %s: %d x %d rooms, %zu nodes\n", argv[1], rooms, rooms, scene.nodes.size());
+        std::fprintf(stderr, "wrote %s: %d x %d rooms, %zu nodes\n", argv[1], rooms, rooms,
+                     scene.nodes.size());
     } catch (const std::exception& e) {
         std::fprintf(stderr, "error: %s\n", e.what());
         return 1;

@@ -10,11 +10,14 @@
 namespace pvs {
 namespace {
 
-Context quiet_context() { return Context(Context::Options{LogLevel::kError, true, nullptr}); }
+Context quiet_context() {
+    return Context(Context::Options{LogLevel::kError, true, nullptr});
+}
 
 TEST(Grid, CoversTheRegionWithWholeCells) {
     Context ctx = quiet_context();
-    const CellSet g = build_uniform_grid(ctx, CellConfig{CellKind::kGrid, 2.0}, Aabb::of({0, 0, 0}, {5, 2, 4}));
+    const CellSet g =
+        build_uniform_grid(ctx, CellConfig{CellKind::kGrid, 2.0}, Aabb::of({0, 0, 0}, {5, 2, 4}));
     EXPECT_EQ(g.dims, glm::ivec3(3, 1, 2));
     ASSERT_EQ(g.size(), 6u);
     EXPECT_EQ(g.cells[0].bounds, Aabb::of({0, 0, 0}, {2, 2, 2}));
@@ -24,12 +27,13 @@ TEST(Grid, CoversTheRegionWithWholeCells) {
 
 TEST(Grid, LookupAtBordersAndCorners) {
     Context ctx = quiet_context();
-    const CellSet g = build_uniform_grid(ctx, CellConfig{CellKind::kGrid, 1.0}, Aabb::of({-2, 0, 0}, {2, 1, 2}));
+    const CellSet g =
+        build_uniform_grid(ctx, CellConfig{CellKind::kGrid, 1.0}, Aabb::of({-2, 0, 0}, {2, 1, 2}));
     ASSERT_EQ(g.dims, glm::ivec3(4, 1, 2));
-    EXPECT_EQ(g.find({-2, 0, 0}), 0);          // the min corner
+    EXPECT_EQ(g.find({-2, 0, 0}), 0);  // the min corner
     EXPECT_EQ(g.find({-1.5f, 0.5f, 0.5f}), 0);
-    EXPECT_EQ(g.find({-1, 0.5f, 0.5f}), 1);    // a shared face belongs to the higher cell
-    EXPECT_EQ(g.find({2, 1, 2}), 7);           // the max corner belongs to the last cell
+    EXPECT_EQ(g.find({-1, 0.5f, 0.5f}), 1);  // a shared face belongs to the higher cell
+    EXPECT_EQ(g.find({2, 1, 2}), 7);         // the max corner belongs to the last cell
     EXPECT_EQ(g.find({1.999f, 0.999f, 1.999f}), 7);
     EXPECT_EQ(g.find({0, 0.5f, 1.0f}), 2 + 4);
     EXPECT_EQ(g.find({-2.001f, 0.5f, 0.5f}), -1);  // outside
@@ -50,7 +54,8 @@ TEST(Grid, RefusesAGridTooLargeToHold) {
 
 TEST(Eyes, StratifiedInsideTheCellAndDeterministic) {
     Context ctx = quiet_context();
-    const CellSet g = build_uniform_grid(ctx, CellConfig{CellKind::kGrid, 2.0}, Aabb::of({0, 0, 0}, {4, 2, 2}));
+    const CellSet g =
+        build_uniform_grid(ctx, CellConfig{CellKind::kGrid, 2.0}, Aabb::of({0, 0, 0}, {4, 2, 2}));
     std::vector<glm::vec3> a, b, other;
     sample_eye_points(g, 1, 27, 42, a);
     sample_eye_points(g, 1, 27, 42, b);

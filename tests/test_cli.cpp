@@ -39,11 +39,13 @@ CliRun run(std::vector<std::string> args) {
     return r;
 }
 
-bool contains(const std::string& hay, const std::string& needle) { return hay.find(needle) != std::string::npos; }
+bool contains(const std::string& hay, const std::string& needle) {
+    return hay.find(needle) != std::string::npos;
+}
 
 // Small sampling so the whole bake of the sample world takes a fraction of a second.
-const std::vector<std::string> kFast = {"--eyes", "4", "--rays", "256", "--verify-eyes", "4", "--verify-rays-per-eye",
-                                        "256"};
+const std::vector<std::string> kFast = {
+    "--eyes", "4", "--rays", "256", "--verify-eyes", "4", "--verify-rays-per-eye", "256"};
 
 std::vector<std::string> with(std::vector<std::string> a, const std::vector<std::string>& b) {
     a.insert(a.end(), b.begin(), b.end());
@@ -137,8 +139,10 @@ TEST(Cli, BadInputGetsStatusTwoAClearMessageAndNoOutput) {
         {{"bake", test::sample_world(), "-o", out, "--view-box", "1,2,3"}, "--view-box"},
         {{"bake", test::sample_world(), "-o", out, "--view-box", "5,5,5,1,1,1"}, "--view-box"},
         {{"bake", test::sample_world(), "-o", out, "--view-seed", "1,x,3"}, "--view-seed"},
-        {{"bake", test::sample_world(), "-o", out, "--no-world-seeds", "--view-seed", "500,500,500"}, "view seed"},
-        {{"bake", test::sample_world(), "-o", out, "--root-cell-size", "0.5", "--min-cell-size", "1"}, "--root-cell-size"},
+        {{"bake", test::sample_world(), "-o", out, "--no-world-seeds", "--view-seed", "500,500,500"},
+         "view seed"},
+        {{"bake", test::sample_world(), "-o", out, "--root-cell-size", "0.5", "--min-cell-size", "1"},
+         "--root-cell-size"},
         {{"occluders", dir.file("missing.glb"), "-o", dir.file("boxes.glb")}, "missing.glb"},
         {{"info", dir.file("notgltf.glb")}, "notgltf.glb"},
         {{"info", dir.file("missing.h5")}, "missing.h5"},
@@ -150,7 +154,8 @@ TEST(Cli, BadInputGetsStatusTwoAClearMessageAndNoOutput) {
         EXPECT_EQ(r.status, kExitBadInput) << c.args[0] << " " << c.args.back() << "\n" << r.log;
         EXPECT_TRUE(contains(r.log, c.says)) << "expected '" << c.says << "' in: " << r.log;
         size_t error_lines = 0;
-        for (size_t at = r.log.find("error:"); at != std::string::npos; at = r.log.find("error:", at + 1)) ++error_lines;
+        for (size_t at = r.log.find("error:"); at != std::string::npos; at = r.log.find("error:", at + 1))
+            ++error_lines;
         EXPECT_EQ(error_lines, 1u) << "one error line: " << r.log;
         EXPECT_FALSE(std::filesystem::exists(out));
     }

@@ -8,7 +8,9 @@
 namespace pvs {
 namespace {
 
-Context quiet_context() { return Context(Context::Options{LogLevel::kError, true, nullptr}); }
+Context quiet_context() {
+    return Context(Context::Options{LogLevel::kError, true, nullptr});
+}
 
 // A closed hall (inside x in [0, 12], y in [0, 4], z in [0, 6]; 0.5 m shell) split at x = 6 by a 0.6 m wall
 // with a doorway at its far end (z in [4.6, 5.6], y < 2.5) so both halves are reachable. What stands in the
@@ -16,7 +18,16 @@ Context quiet_context() { return Context(Context::Options{LogLevel::kError, true
 // a doorway, a glass pane. The target stands behind it at x in [9, 9.5], z in [0.75, 1.25]. Walls are
 // 0.6 m thick: at 0.1 m voxels and epsilon 0.1 m a shrunk occluder remains inside them (thinner walls
 // shrink away, which is the price of epsilon, not an error).
-enum class Middle { kSolid, kFusedHalves, kLowHalfOnly, kHighHalfOnly, kGappedHalves, kSlit, kDoorway, kGlass };
+enum class Middle {
+    kSolid,
+    kFusedHalves,
+    kLowHalfOnly,
+    kHighHalfOnly,
+    kGappedHalves,
+    kSlit,
+    kDoorway,
+    kGlass
+};
 
 struct Scene {
     World world;
@@ -66,7 +77,8 @@ Scene make_scene(Middle middle) {
             test::add_box(w, "near_a", Aabb::of({x0, 0, 0}, {x1, 4, 0.6f}));
             test::add_box(w, "near_b", Aabb::of({x0, 0, 1.4f}, {x1, 4, 2}));
             test::add_box(w, "near_top", Aabb::of({x0, 2.5f, 0.6f}, {x1, 4, 1.4f}));
-            if (middle == Middle::kGlass) test::add_box(w, "glass", Aabb::of({5.99f, 0, 0.6f}, {6.01f, 2.5f, 1.4f}), false);
+            if (middle == Middle::kGlass)
+                test::add_box(w, "glass", Aabb::of({5.99f, 0, 0.6f}, {6.01f, 2.5f, 1.4f}), false);
             break;
     }
     s.target = test::add_box(w, "target", Aabb::of({9, 0.8f, 0.75f}, {9.5f, 1.8f, 1.25f}));
@@ -102,16 +114,28 @@ bool target_listed(Middle middle) {
     return bake.pvs.test(uint32_t(cell), s.target);
 }
 
-TEST(Conservative, BehindAWallIsCulled) { EXPECT_FALSE(target_listed(Middle::kSolid)); }
-TEST(Conservative, BehindTwoOverlappingHalfWallsIsCulledByFusion) { EXPECT_FALSE(target_listed(Middle::kFusedHalves)); }
+TEST(Conservative, BehindAWallIsCulled) {
+    EXPECT_FALSE(target_listed(Middle::kSolid));
+}
+TEST(Conservative, BehindTwoOverlappingHalfWallsIsCulledByFusion) {
+    EXPECT_FALSE(target_listed(Middle::kFusedHalves));
+}
 TEST(Conservative, EitherHalfWallAloneLeavesItListed) {
     EXPECT_TRUE(target_listed(Middle::kLowHalfOnly));
     EXPECT_TRUE(target_listed(Middle::kHighHalfOnly));
 }
-TEST(Conservative, ThroughAGapBetweenTwoWallsIsListed) { EXPECT_TRUE(target_listed(Middle::kGappedHalves)); }
-TEST(Conservative, ThroughASlitNarrowerThanEpsilonIsListed) { EXPECT_TRUE(target_listed(Middle::kSlit)); }
-TEST(Conservative, ThroughADoorwayIsListed) { EXPECT_TRUE(target_listed(Middle::kDoorway)); }
-TEST(Conservative, BehindGlassIsListed) { EXPECT_TRUE(target_listed(Middle::kGlass)); }
+TEST(Conservative, ThroughAGapBetweenTwoWallsIsListed) {
+    EXPECT_TRUE(target_listed(Middle::kGappedHalves));
+}
+TEST(Conservative, ThroughASlitNarrowerThanEpsilonIsListed) {
+    EXPECT_TRUE(target_listed(Middle::kSlit));
+}
+TEST(Conservative, ThroughADoorwayIsListed) {
+    EXPECT_TRUE(target_listed(Middle::kDoorway));
+}
+TEST(Conservative, BehindGlassIsListed) {
+    EXPECT_TRUE(target_listed(Middle::kGlass));
+}
 
 }  // namespace
 }  // namespace pvs

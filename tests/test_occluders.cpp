@@ -4,9 +4,9 @@
 #include "cells/view_volume.h"
 #include "core/random.h"
 #include "io/gltf_loader.h"
-#include "tests/test_util.h"
 #include "pvs/embree_scene.h"
 #include "pvs/occluder_synthesis.h"
+#include "tests/test_util.h"
 #include "tests/world_builder.h"
 
 #include <gtest/gtest.h>
@@ -17,7 +17,9 @@
 namespace pvs {
 namespace {
 
-Context quiet_context() { return Context(Context::Options{LogLevel::kError, true, nullptr}); }
+Context quiet_context() {
+    return Context(Context::Options{LogLevel::kError, true, nullptr});
+}
 
 // Room A (x in [0.3, 6.3]) and room B (x in [6.6, 12.6]) under one roof, sealed from each other by the
 // middle wall, except, when `slit`, a vertical slit 1 cm wide in it (z in [3.295, 3.305], y in [0.5, 2.5]).
@@ -106,15 +108,16 @@ TEST(Occluders, ASlitKeepsItsSightLine) {
                 std::vector<RayTouch> touches;
                 scene.trace(eye, &d, 1, touches);
                 bool reaches = false;
-                for (const RayTouch& t : touches) reaches |= t.object == target && t.stops && t.t <= dist + 1e-3f;
+                for (const RayTouch& t : touches)
+                    reaches |= t.object == target && t.stops && t.t <= dist + 1e-3f;
                 if (!reaches) continue;
                 ++lines;
                 for (const Occluder& o : boxes) {
                     if (!o.proven) continue;
                     // Segment-box test by sampling the segment finely.
                     for (float s = 0.0f; s < dist; s += 0.01f) {
-                        ASSERT_FALSE(o.box.contains(eye + s * d))
-                            << "a proven box cuts the sight line from (" << eye.x << ", " << eye.y << ") at " << s;
+                        ASSERT_FALSE(o.box.contains(eye + s * d)) << "a proven box cuts the sight line from ("
+                                                                  << eye.x << ", " << eye.y << ") at " << s;
                     }
                 }
             }
@@ -131,8 +134,8 @@ namespace {
 
 // Aims a ray from every eye at `per_box` random points of every proven box; returns how many arrive
 // (no opaque triangle before the point) and adds the rays shot to `rays`. Reports the first few.
-uint64_t count_seen(const RayScene& scene, const std::vector<Occluder>& boxes, const std::vector<glm::vec3>& eyes,
-                    uint32_t per_box, Rng& rng, uint64_t& rays) {
+uint64_t count_seen(const RayScene& scene, const std::vector<Occluder>& boxes,
+                    const std::vector<glm::vec3>& eyes, uint32_t per_box, Rng& rng, uint64_t& rays) {
     uint64_t seen = 0;
     std::vector<glm::vec3> origins, dirs;
     std::vector<float> tfar;
@@ -143,23 +146,25 @@ uint64_t count_seen(const RayScene& scene, const std::vector<Occluder>& boxes, c
         tfar.clear();
         for (const glm::vec3& e : eyes) {
             for (uint32_t k = 0; k < per_box; ++k) {
-                const glm::vec3 p = o.box.min + o.box.size() * glm::vec3(rng.uniform(), rng.uniform(), rng.uniform());
+                const glm::vec3 p =
+                    o.box.min + o.box.size() * glm::vec3(rng.uniform(), rng.uniform(), rng.uniform());
                 origins.push_back(e);
                 dirs.push_back(glm::normalize(p - e));
                 tfar.push_back(glm::length(p - e));
             }
         }
         std::vector<uint8_t> blocked(origins.size());
-        scene.occluded_opaque(origins.data(), dirs.data(), tfar.data(), uint32_t(origins.size()), blocked.data());
+        scene.occluded_opaque(origins.data(), dirs.data(), tfar.data(), uint32_t(origins.size()),
+                              blocked.data());
         rays += origins.size();
         for (size_t i = 0; i < blocked.size(); ++i) {
             if (blocked[i]) continue;
             if (++seen <= 5) {
                 ADD_FAILURE() << "seen: eye (" << origins[i].x << ", " << origins[i].y << ", " << origins[i].z
-                              << ") direction (" << dirs[i].x << ", " << dirs[i].y << ", " << dirs[i].z << ") reaches "
-                              << tfar[i] << " m into box (" << o.box.min.x << ", " << o.box.min.y << ", "
-                              << o.box.min.z << ")-(" << o.box.max.x << ", " << o.box.max.y << ", " << o.box.max.z
-                              << ")";
+                              << ") direction (" << dirs[i].x << ", " << dirs[i].y << ", " << dirs[i].z
+                              << ") reaches " << tfar[i] << " m into box (" << o.box.min.x << ", "
+                              << o.box.min.y << ", " << o.box.min.z << ")-(" << o.box.max.x << ", "
+                              << o.box.max.y << ", " << o.box.max.z << ")";
             }
         }
     }
@@ -180,7 +185,8 @@ std::vector<glm::vec3> bsp_eyes(const std::string& vis_path, const Aabb& bounds,
     Rng rng(31, 7);
     *outside_view = 0;
     for (uint32_t tries = 0; eyes.size() < count && tries < 200 * count; ++tries) {
-        const glm::vec3 p = bounds.min + bounds.size() * glm::vec3(rng.uniform(), rng.uniform(), rng.uniform());
+        const glm::vec3 p =
+            bounds.min + bounds.size() * glm::vec3(rng.uniform(), rng.uniform(), rng.uniform());
         int n = 0;
         while (n >= 0) {
             const auto& node = nodes[size_t(n)];
@@ -216,8 +222,9 @@ void expect_boxes_unseen(const std::string& world_path, uint32_t eyes_n, uint32_
     const std::string vis = world_path.substr(0, world_path.size() - 4) + ".vis.json";
     uint32_t outside = 0;
     const std::vector<glm::vec3> compiler_eyes = bsp_eyes(vis, w.bounds, view.eyes, eyes_n, &outside);
-    std::printf("%zu eye-space eyes, %zu BSP-playable eyes in the eye space (%u BSP-playable points outside it)\n",
-                eyes.size(), compiler_eyes.size(), outside);
+    std::printf(
+        "%zu eye-space eyes, %zu BSP-playable eyes in the eye space (%u BSP-playable points outside it)\n",
+        eyes.size(), compiler_eyes.size(), outside);
     eyes.insert(eyes.end(), compiler_eyes.begin(), compiler_eyes.end());
     Rng rng(4, 5);
     uint64_t rays = 0;
@@ -231,7 +238,8 @@ TEST(OccludersProperty, NoProvenBoxIsSeenInTheRealLevels) {
     for (const char* name : {"oa_dm4.glb", "ctf_inyard.glb"}) {
         const std::string path = test::shared_world(name);
         if (path.empty()) continue;
-        if (test::in_ci() && std::string(name) == "ctf_inyard.glb") continue;  // the benchmark runs it full size
+        if (test::in_ci() && std::string(name) == "ctf_inyard.glb")
+            continue;  // the benchmark runs it full size
         SCOPED_TRACE(name);
         expect_boxes_unseen(path, test::in_ci() ? 256 : 1024, 4);
         ++ran;
@@ -250,7 +258,8 @@ void add_octahedron(World& w, const std::string& name, glm::vec3 c, float r, flo
     const uint32_t base = uint32_t(w.positions.size());
     const float ca = std::cos(angle), sa = std::sin(angle);
     const glm::vec3 pts[6] = {{r, 0, 0}, {-r, 0, 0}, {0, r, 0}, {0, -r, 0}, {0, 0, r}, {0, 0, -r}};
-    for (const glm::vec3& p : pts) w.positions.push_back(c + glm::vec3(ca * p.x + sa * p.z, p.y, -sa * p.x + ca * p.z));
+    for (const glm::vec3& p : pts)
+        w.positions.push_back(c + glm::vec3(ca * p.x + sa * p.z, p.y, -sa * p.x + ca * p.z));
     static const uint32_t kFaces[8][3] = {{0, 2, 4}, {4, 2, 1}, {1, 2, 5}, {5, 2, 0},
                                           {4, 3, 0}, {1, 3, 4}, {5, 3, 1}, {0, 3, 5}};
     WorldObject o;
@@ -279,9 +288,11 @@ TEST(OccludersProperty, RandomClosedMeshesHideNothingTheyShouldNot) {
         test::add_box(w, "ground", Aabb::of({0, -0.5f, 0}, {20, 0, 20}));
         for (int i = 0; i < 12; ++i) {
             const glm::vec3 lo(1 + 16 * rng.uniform(), 0, 1 + 16 * rng.uniform());
-            const glm::vec3 size(0.5f + 3 * rng.uniform(), 0.5f + 3 * rng.uniform(), 0.5f + 3 * rng.uniform());
+            const glm::vec3 size(0.5f + 3 * rng.uniform(), 0.5f + 3 * rng.uniform(),
+                                 0.5f + 3 * rng.uniform());
             test::add_box(w, "box" + std::to_string(i), Aabb::of(lo, lo + size));
-            add_octahedron(w, "oct" + std::to_string(i), {2 + 16 * rng.uniform(), 1.5f, 2 + 16 * rng.uniform()},
+            add_octahedron(w, "oct" + std::to_string(i),
+                           {2 + 16 * rng.uniform(), 1.5f, 2 + 16 * rng.uniform()},
                            0.8f + 1.5f * rng.uniform(), 6.28f * rng.uniform());
         }
         ViewVolumeConfig vc;

@@ -10,7 +10,9 @@
 namespace pvs {
 namespace {
 
-Context quiet_context() { return Context(Context::Options{LogLevel::kError, true, nullptr}); }
+Context quiet_context() {
+    return Context(Context::Options{LogLevel::kError, true, nullptr});
+}
 
 // Under one roof (y in [0, 3]): x in [0, 16] an open hall with a pillar per corner; a solid wall at
 // x = 16; x in [16, 32] a maze of 2 m rooms.
@@ -36,23 +38,27 @@ World field_and_maze() {
     test::add_box(w, "roof", Aabb::of({0, 3, 0}, {32, 3.2f, 16}));
     test::add_box(w, "divide", Aabb::of({15.8f, 0, 0}, {16.0f, 3, 16}));
     for (float x : {1.0f, 14.5f})
-        for (float z : {1.0f, 14.5f}) test::add_box(w, "pillar", Aabb::of({x, 0, z}, {x + 0.5f, 3, z + 0.5f}));
+        for (float z : {1.0f, 14.5f})
+            test::add_box(w, "pillar", Aabb::of({x, 0, z}, {x + 0.5f, 3, z + 0.5f}));
     int n = 0;
     for (int i = 1; i <= 8; ++i) {
         for (int j = 0; j < 8; ++j) {
             const float x = 16.0f + 2.0f * float(i), z = 2.0f * float(j);
             // Walls along z at every 2 m in x, each with a doorway in a different place; and along x.
-            test::add_box(w, "wall_x" + std::to_string(n++), Aabb::of({x - 0.1f, 0, z}, {x + 0.1f, 3, z + (j % 2 ? 2.0f : 1.2f)}));
+            test::add_box(w, "wall_x" + std::to_string(n++),
+                          Aabb::of({x - 0.1f, 0, z}, {x + 0.1f, 3, z + (j % 2 ? 2.0f : 1.2f)}));
             if (i < 8)
                 test::add_box(w, "wall_z" + std::to_string(n++),
-                              Aabb::of({x + (i % 2 ? 0.8f : 0.0f), 0, z - 0.1f}, {x + (i % 2 ? 2.0f : 1.2f), 3, z + 0.1f}));
+                              Aabb::of({x + (i % 2 ? 0.8f : 0.0f), 0, z - 0.1f},
+                                       {x + (i % 2 ? 2.0f : 1.2f), 3, z + 0.1f}));
         }
     }
     return w;
 }
 
 // The sampled mode as the octree's oracle (the objects must outlive the oracle).
-RegionPvsOracle sampled_oracle(const SampledPvsConfig& sc, const World& w, const RayScene& scene, const CellSet& masks) {
+RegionPvsOracle sampled_oracle(const SampledPvsConfig& sc, const World& w, const RayScene& scene,
+                               const CellSet& masks) {
     return [&sc, &w, &scene, &masks](const std::vector<Aabb>& boxes, const std::vector<uint64_t>& streams,
                                      PvsSet& rows) {
         uint64_t guard = 0;
@@ -75,8 +81,8 @@ TEST(Octree, TheMazeGetsTheSmallCells) {
     cc.split_threshold = 0.3;
     PvsSet leaf;
     OctreeStats stats;
-    const CellSet cells =
-        build_octree(ctx, cc, masks, Aabb::of({0, 0, 0}, {32, 3, 16}), uint32_t(w.objects.size()), oracle, leaf, stats);
+    const CellSet cells = build_octree(ctx, cc, masks, Aabb::of({0, 0, 0}, {32, 3, 16}),
+                                       uint32_t(w.objects.size()), oracle, leaf, stats);
     ASSERT_GT(cells.size(), 0u);
     EXPECT_EQ(leaf.cell_count, cells.size());
     double field_edge = 0, maze_edge = 0;
@@ -92,7 +98,8 @@ TEST(Octree, TheMazeGetsTheSmallCells) {
     EXPECT_GT(stats.splits, 0u);
     EXPECT_GT(stats.merged, 0u);
     // Every point finds the leaf that holds it.
-    for (const glm::vec3 p : {glm::vec3(3, 1, 3), glm::vec3(20.3f, 1.4f, 5.1f), glm::vec3(31.9f, 2.9f, 15.9f)}) {
+    for (const glm::vec3 p :
+         {glm::vec3(3, 1, 3), glm::vec3(20.3f, 1.4f, 5.1f), glm::vec3(31.9f, 2.9f, 15.9f)}) {
         const int32_t c = cells.find(p);
         ASSERT_GE(c, 0);
         EXPECT_TRUE(cells.cells[size_t(c)].bounds.contains(p));
@@ -115,13 +122,13 @@ TEST(Octree, NeverSplitsBelowTheMinimumAndStopsAtTheBudget) {
     cc.split_threshold = 0.0;  // split wherever anything differs
     PvsSet leaf;
     OctreeStats stats;
-    const CellSet all = build_octree(ctx, cc, masks, Aabb::of({0, 0, 0}, {32, 3, 16}), uint32_t(w.objects.size()), oracle,
-                                     leaf, stats);
+    const CellSet all = build_octree(ctx, cc, masks, Aabb::of({0, 0, 0}, {32, 3, 16}),
+                                     uint32_t(w.objects.size()), oracle, leaf, stats);
     for (const Cell& c : all.cells) EXPECT_GE(c.bounds.size().x, 2.0f - 1e-4f);
     cc.max_cells = 20;
     OctreeStats limited;
-    const CellSet few = build_octree(ctx, cc, masks, Aabb::of({0, 0, 0}, {32, 3, 16}), uint32_t(w.objects.size()), oracle,
-                                     leaf, limited);
+    const CellSet few = build_octree(ctx, cc, masks, Aabb::of({0, 0, 0}, {32, 3, 16}),
+                                     uint32_t(w.objects.size()), oracle, leaf, limited);
     EXPECT_LE(few.size(), 20u);
     EXPECT_TRUE(limited.budget_reached);
     EXPECT_LT(few.size(), all.size());

@@ -17,7 +17,9 @@ namespace {
 using test::add_box;
 using test::single_cell;
 
-Context quiet_context() { return Context(Context::Options{LogLevel::kError, true, nullptr}); }
+Context quiet_context() {
+    return Context(Context::Options{LogLevel::kError, true, nullptr});
+}
 
 // A wall at x = 0 (10 x 10 m) between the cell (x in [-2.5, -1.5]) and the far side (x > 0).
 // Pieces: the wall has a doorway |z| < 0.5, |y| < 1 when `doorway`, else a glass pane fills it when
@@ -158,7 +160,8 @@ TEST(Verify, SameSeedSameFiguresForOneAndTwoThreads) {
     // A small random-ish world: a row of walls with gaps and objects between them.
     for (int i = 0; i < 6; ++i) {
         const float x = float(i) * 3.0f;
-        add_box(world, "wall" + std::to_string(i), Aabb::of({x, 0, float(i % 3) - 4}, {x + 0.2f, 3, float(i % 3)}));
+        add_box(world, "wall" + std::to_string(i),
+                Aabb::of({x, 0, float(i % 3) - 4}, {x + 0.2f, 3, float(i % 3)}));
         add_box(world, "crate" + std::to_string(i), Aabb::of({x + 1, 0, 1}, {x + 1.5f, 0.5f, 1.5f}));
     }
     CellSet cells;
@@ -210,7 +213,8 @@ TEST(GuardBand, ListsWhatRaysPassedCloseToAndNothingFar) {
     WallScene s = make_wall_scene(true, false);
     // Hidden just behind the wall, beside the doorway's edge: the steepest sight line through the doorway
     // reaches z = 0.5625 at x = 0.2 (eye at x = -1.5, z = -0.5), short of the box; rays pass within 10 cm.
-    const uint32_t peeking = add_box(s.world, "peeking", Aabb::of({0.12f, -0.25f, 0.62f}, {0.2f, 0.25f, 0.9f}));
+    const uint32_t peeking =
+        add_box(s.world, "peeking", Aabb::of({0.12f, -0.25f, 0.62f}, {0.2f, 0.25f, 0.9f}));
     RayScene scene(ctx, s.world);
     CellRays rays;
     const SampleConfig sc{16, 2048, 0, 5};

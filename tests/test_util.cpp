@@ -30,7 +30,9 @@ std::string shared_world(const std::string& name) {
     return std::filesystem::exists(p) ? p.string() : std::string();
 }
 
-std::string sample_world() { return std::string(PVSBAKE_SOURCE_DIR) + "/samples/rooms.glb"; }
+std::string sample_world() {
+    return std::string(PVSBAKE_SOURCE_DIR) + "/samples/rooms.glb";
+}
 
 bool in_ci() {
     const char* ci = std::getenv("CI");

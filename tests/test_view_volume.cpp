@@ -10,7 +10,9 @@
 namespace pvs {
 namespace {
 
-Context quiet_context() { return Context(Context::Options{LogLevel::kError, true, nullptr}); }
+Context quiet_context() {
+    return Context(Context::Options{LogLevel::kError, true, nullptr});
+}
 
 // Two closed rooms side by side (each 6 x 3 x 6 m inside, 0.3 m walls) joined by a doorway, or sealed
 // from each other; optionally a hole in room A's outer west wall.

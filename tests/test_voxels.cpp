@@ -12,7 +12,9 @@
 namespace pvs {
 namespace {
 
-Context quiet_context() { return Context(Context::Options{LogLevel::kError, true, nullptr}); }
+Context quiet_context() {
+    return Context(Context::Options{LogLevel::kError, true, nullptr});
+}
 
 // Reference: clip the triangle by the box's six closed half-spaces (Sutherland-Hodgman); it overlaps
 // the box when something is left.
@@ -41,7 +43,8 @@ TEST(TriangleBox, MatchesTheClippingReferenceOnRandomCases) {
     for (int i = 0; i < 200000; ++i) {
         auto r = [&] { return glm::vec3(rng.uniform(), rng.uniform(), rng.uniform()) * 4.0f - 2.0f; };
         const glm::vec3 a = r(), b = r() * 0.5f + a * 0.5f, c = r();
-        const glm::vec3 half = glm::vec3(0.1f) + glm::vec3(rng.uniform(), rng.uniform(), rng.uniform()) * 0.5f;
+        const glm::vec3 half =
+            glm::vec3(0.1f) + glm::vec3(rng.uniform(), rng.uniform(), rng.uniform()) * 0.5f;
         const bool fast = triangle_box_overlap(glm::vec3(0.0f), half, a, b, c);
         const bool slow = reference_overlap(glm::vec3(0.0f), half, a, b, c);
         overlaps += slow;
@@ -55,10 +58,12 @@ TEST(TriangleBox, TouchingCountsAsOverlap) {
     // A triangle lying exactly on the box's face, and one touching it at a vertex.
     EXPECT_TRUE(triangle_box_overlap(glm::vec3(0), glm::vec3(1), {1, -2, -2}, {1, 2, -2}, {1, 0, 2}));
     EXPECT_TRUE(triangle_box_overlap(glm::vec3(0), glm::vec3(1), {1, 1, 1}, {3, 1, 1}, {3, 3, 3}));
-    EXPECT_FALSE(triangle_box_overlap(glm::vec3(0), glm::vec3(1), {1.01f, -2, -2}, {1.01f, 2, -2}, {1.01f, 0, 2}));
+    EXPECT_FALSE(
+        triangle_box_overlap(glm::vec3(0), glm::vec3(1), {1.01f, -2, -2}, {1.01f, 2, -2}, {1.01f, 0, 2}));
 }
 
-// A closed room: a 10 x 4 x 10 m hollow box of 0.2 m walls and a 0.6 m ceiling (six wall objects), optionally with a hole.
+// A closed room: a 10 x 4 x 10 m hollow box of 0.2 m walls and a 0.6 m ceiling (six wall objects), optionally
+// with a hole.
 World room(bool hole) {
     World w;
     const float t = 0.2f;

@@ -13,7 +13,8 @@ inline uint32_t add_box(World& world, const std::string& name, const Aabb& b, bo
                         uint32_t extra_flags = 0) {
     const uint32_t base = uint32_t(world.positions.size());
     for (int i = 0; i < 8; ++i) {
-        world.positions.emplace_back(i & 1 ? b.max.x : b.min.x, i & 2 ? b.max.y : b.min.y, i & 4 ? b.max.z : b.min.z);
+        world.positions.emplace_back(i & 1 ? b.max.x : b.min.x, i & 2 ? b.max.y : b.min.y,
+                                     i & 4 ? b.max.z : b.min.z);
     }
     static const uint32_t kFaces[12][3] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
                                            {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
