@@ -90,6 +90,13 @@ namespace {
 
 struct SampleCounts {
     uint64_t samples = 0, skipped = 0, far = 0, tests = 0;
+    SampleCounts& operator+=(const SampleCounts& o) {
+        samples += o.samples;
+        skipped += o.skipped;
+        far += o.far;
+        tests += o.tests;
+        return *this;
+    }
 };
 
 // Proves objects of `open` hidden from every point of `points`; sets the row bit of every object some
@@ -181,12 +188,7 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
             ctx.progress_advance();
         }
 #pragma omp critical
-        {
-            total.samples += n.samples;
-            total.skipped += n.skipped;
-            total.far += n.far;
-            total.tests += n.tests;
-        }
+        total += n;
     }
     add_counts(figures, total, start);
 }
@@ -253,12 +255,7 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
             ctx.progress_advance();
         }
 #pragma omp critical
-        {
-            total.samples += n.samples;
-            total.skipped += n.skipped;
-            total.far += n.far;
-            total.tests += n.tests;
-        }
+        total += n;
     }
     ctx.progress_end();
     for (uint32_t c = 0; c < cells.size(); ++c) {
