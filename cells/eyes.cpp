@@ -11,10 +11,11 @@ namespace pvs {
 
 namespace {
 
-// Voxels of `mask` that overlap the box with volume (indices into the mask).
-void voxels_in(const VoxelMask& mask, const Aabb& box, std::vector<uint64_t>& out) {
-    out.clear();
-    if (mask.empty()) return;
+// Calls visit(i) for every set voxel i of `mask` that overlaps the box with volume (a voxel only touching
+// a face does not count), in index order, until visit returns true. Returns whether one did.
+template <class Visit>
+bool visit_set_voxels_in(const VoxelMask& mask, const Aabb& box, Visit&& visit) {
+    if (mask.empty()) return false;
     const float s = mask.voxel_size_m;
     glm::ivec3 lo, hi;
     for (int a = 0; a < 3; ++a) {
@@ -26,27 +27,15 @@ void voxels_in(const VoxelMask& mask, const Aabb& box, std::vector<uint64_t>& ou
             for (int x = lo.x; x <= hi.x; ++x) {
                 const uint64_t i =
                     uint64_t(x) + uint64_t(mask.dims.x) * (uint64_t(y) + uint64_t(mask.dims.y) * uint64_t(z));
-                if (mask.get(i)) out.push_back(i);
+                if (mask.get(i) && visit(i)) return true;
             }
+    return false;
 }
 
 }  // namespace
 
 bool mask_meets_box(const VoxelMask& mask, const Aabb& box) {
-    const float s = mask.voxel_size_m;
-    glm::ivec3 lo, hi;
-    for (int a = 0; a < 3; ++a) {
-        lo[a] = std::max(0, int(std::floor((box.min[a] - mask.origin[a]) / s)));
-        hi[a] = std::min(mask.dims[a] - 1, int(std::ceil((box.max[a] - mask.origin[a]) / s)) - 1);
-    }
-    for (int z = lo.z; z <= hi.z; ++z)
-        for (int y = lo.y; y <= hi.y; ++y)
-            for (int x = lo.x; x <= hi.x; ++x)
-                if (mask.get(uint64_t(x) +
-                             uint64_t(mask.dims.x) * (uint64_t(y) + uint64_t(mask.dims.y) * uint64_t(z)))) {
-                    return true;
-                }
-    return false;
+    return visit_set_voxels_in(mask, box, [](uint64_t) { return true; });
 }
 
 void sample_eye_points_in(const CellSet& cells, const Aabb& region, uint64_t stream, uint32_t count,
@@ -58,7 +47,10 @@ void sample_eye_points_in(const CellSet& cells, const Aabb& region, uint64_t str
         // `count` runs in index order with one random voxel per run. No eye voxel meets the box: no eyes
         // (never a point that might be inside solid).
         std::vector<uint64_t> voxels;
-        voxels_in(cells.eyes, region, voxels);
+        visit_set_voxels_in(cells.eyes, region, [&](uint64_t i) {
+            voxels.push_back(i);
+            return false;
+        });
         const VoxelMask& m = cells.eyes;
         const uint64_t n = voxels.size();
         for (uint32_t k = 0; k < count && n > 0; ++k) {
