@@ -13,6 +13,10 @@
 namespace pvs {
 
 namespace {
+constexpr double kVoidPadM = 1.0;  // [Units: m] voxels of empty space around the world
+}  // namespace
+
+namespace {
 
 VoxelMask to_mask(const VoxelGrid& grid, BitVolume&& bits) {
     VoxelMask m;
@@ -65,8 +69,11 @@ ViewVolume build_view_volume(Context& ctx, const ViewVolumeConfig& config, const
     vv.voxelized = true;
     const double size = config.voxel_size_m > 0.0
                             ? config.voxel_size_m
-                            : default_voxel_size(world.bounds, kDefaultVoxelSizeM, config.max_voxels);
-    const VoxelGrid grid = make_voxel_grid(world.bounds, size, 2);
+                            : default_voxel_size(world.bounds, config.auto_voxel_size_m, config.max_voxels);
+    // Pad by a metre (at least 2 voxels): around a sealed level the padding is solid the flood never
+    // reaches, thick enough to stay an occluder after shrinking, so thin floors and walls of the shell
+    // still occlude with the void behind them.
+    const VoxelGrid grid = make_voxel_grid(world.bounds, size, std::max(2, int(std::ceil(kVoidPadM / size))));
     ctx.info(fmt::format("view volume: {} m voxels, {} x {} x {} = {:.1f} M voxels", grid.voxel_size_m,
                          grid.dims.x, grid.dims.y, grid.dims.z, double(grid.count()) * 1e-6));
     BitVolume touched, upward;

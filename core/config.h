@@ -50,6 +50,9 @@ struct ViewVolumeConfig {
     bool use_world_boxes = true;        // limit to the world's pvs_view_volume boxes
     std::vector<Aabb> boxes;            // --view-box, metres
     std::vector<glm::vec3> seeds;       // --view-seed, metres
+    double auto_voxel_size_m = 0.25;  // [Units: m] what "automatic" aims at; not an option: the bake sets it
+                                      // to min(0.25, epsilon) in conservative mode, so walls thicker than
+                                      // about 2 epsilon + 2 voxels keep a shrunk occluder
 };
 constexpr double kDefaultVoxelSizeM = 0.25;
 
@@ -68,9 +71,13 @@ struct OccluderConfig {
 
 // The conservative solver (pvs/conservative.h).
 struct ConservativeConfig {
-    double epsilon_m = 0.25;   // [Limit: > 0] [Units: m] occluders shrink by this; cell faces are sampled
-                               // every epsilon * sqrt(2). Smaller: tighter PVS, slower bake
+    double epsilon_m = 0.125;  // [Limit: > 0] [Units: m] occluders shrink by this; cell faces are sampled
+                               // every epsilon * sqrt(2). Smaller: tighter PVS, slower bake (samples grow
+                               // as 1 / epsilon^2); walls thinner than 2 epsilon do not occlude
     int cube_resolution = 64;  // [Limit: 8..1024] depth cube pixels per face edge
+    int refine_levels = 4;     // [Limit: 0..8] adaptive refinement: patches of a face are first tested
+                               // with occluders shrunk by epsilon * 2^levels (few samples), and only the
+                               // objects not yet proven hidden go to patches half the size, down to epsilon
 };
 
 // Ray sampling from eye points in each cell: the sampled (aggressive) PVS and the verifier share it.
@@ -95,7 +102,7 @@ struct VerifyConfig {
 };
 
 struct BakeConfig {
-    BakeMode mode = BakeMode::kSampled;
+    BakeMode mode = BakeMode::kConservative;
     RunConfig run;
     ViewVolumeConfig view;
     CellConfig cells;
@@ -122,9 +129,13 @@ void visit_options(Config& c, Visitor&& v) {
     constexpr double kInf = std::numeric_limits<double>::infinity();
     v(OptionSpec{"--threads", "run.threads", "threads", "worker threads, 0 = every core", 0, 4096},
       c.run.threads);
-    v(OptionSpec{"--voxel-size", "view.voxel_size_m", "m",
-                 "voxel edge for the view volume, 0 = automatic (0.25 m, coarser for huge worlds)", 0, 100},
-      c.view.voxel_size_m);
+    v(
+        OptionSpec{
+            "--voxel-size", "view.voxel_size_m", "m",
+            "voxel edge for the view volume and occluders, 0 = automatic (0.25 m, or epsilon if smaller in "
+            "conservative mode; coarser for huge worlds)",
+            0, 100},
+        c.view.voxel_size_m);
     v(OptionSpec{"--max-voxels", "view.max_voxels", "voxels", "voxels the automatic voxel size may use", 1000,
                  1e10},
       c.view.max_voxels);
@@ -170,6 +181,13 @@ void visit_options(Config& c, Visitor&& v) {
     v(OptionSpec{"--cube-resolution", "conservative.cube_resolution", "pixels",
                  "conservative mode: depth cube pixels per face edge", 8, 1024},
       c.conservative.cube_resolution);
+    v(
+        OptionSpec{
+            "--refine-levels", "conservative.refine_levels", "levels",
+            "conservative mode: coarsest patches use occluders shrunk by epsilon * 2^levels; "
+            "objects they cannot prove hidden go to half-size patches, down to epsilon (0 = no refinement)",
+            0, 8},
+        c.conservative.refine_levels);
     v(OptionSpec{"--eyes", "sampled.eyes_per_cell", "eyes", "sampled mode: eye points per cell", 1, 1e6},
       c.sampled.rays.eyes_per_cell);
     v(OptionSpec{"--rays", "sampled.rays_per_eye", "rays", "sampled mode: rays per eye point", 1, 1e8},

@@ -4,6 +4,7 @@
 // (pvs/occluder_synthesis.h); only proven boxes may ever be used by a conservative bake.
 #pragma once
 
+#include "core/cell_set.h"
 #include "core/math.h"
 
 #include <cstdint>
@@ -16,6 +17,18 @@ struct Occluder {
     float voxel_size_m = 0.0f;  // the voxels it was found at
     bool proven = false;
     std::vector<uint32_t> objects;  // opaque objects whose bounds meet the box grown by one voxel
+};
+
+// The occluders of the conservative solver (pvs/conservative.h): the proven solid, and boxes of it shrunk
+// by each epsilon of a ladder (every point of a box of level k has its whole epsilon_m[k]-ball inside the
+// proven solid).
+struct ShrunkOccluders {
+    std::vector<double> epsilon_m;         // ascending, epsilon_m[0] is the floor (--epsilon)
+    std::vector<std::vector<Aabb>> boxes;  // boxes[k]: shrunk by epsilon_m[k]
+    VoxelMask solid;  // the proven solid (sealed off from the eyes, untouched, passed the sight probe and the
+                      // ray check): no sight line from the eye space enters it
+    VoxelMask free;   // voxels no opaque triangle touches, outside the proven solid: where sight from the eye
+                      // space can be, and a ray started there sees as an eye would
 };
 
 }  // namespace pvs

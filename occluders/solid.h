@@ -4,14 +4,18 @@
 // voxels, or, with no view volume, everything outside the world) and spreads through every voxel no
 // opaque triangle touches. SOLID is what that flood never reaches and no opaque triangle touches: the
 // inside of closed opaque meshes and everything sealed off from the eyes (behind a shell level's walls).
-// Touched voxels are never solid: part of them is on the free side of their surface.
+// Touched voxels are never solid (part of them is on the free side of their surface), except inside the
+// union of closed box meshes (add_closed_boxes()).
 // Not a proof: a crack narrower than a voxel between triangles seals in voxels while sight passes it.
 // Boxes built on this solid must be checked against the triangles before a conservative bake uses them.
 #pragma once
 
 #include "core/cell_set.h"
 #include "core/context.h"
+#include "core/world.h"
 #include "occluders/voxels.h"
+
+#include <vector>
 
 namespace pvs {
 
@@ -25,5 +29,18 @@ struct Solid {
 
 // `eyes`: the view volume's eye mask on the same grid as `touched` (empty: flood from the grid border).
 Solid classify_solid(Context& ctx, const VoxelGrid& grid, const BitVolume& touched, const VoxelMask& eyes);
+
+// Closed box meshes: the bounds of objects whose triangles are all opaque, all lie in the planes of the six
+// faces of the object's bounds, and add up on each face to exactly the face's area (a watertight box, as
+// modular walls, floors, pillars and crates are; overlapping triangles that also leave a hole are not
+// detected, a risk accepted for meshes built as boxes). Sight can only enter such a box through one of its
+// triangles.
+std::vector<Aabb> closed_box_objects(const World& world);
+
+// Adds to the solid every voxel wholly inside the UNION of the closed boxes (touched or not): this fills
+// the seams where closed meshes meet (a wall standing on a floor: the voxels of the contact plane are
+// touched by both, inside neither alone, but inside their union, which sight cannot enter). Boxes an eye
+// voxel meets are left out. Returns the voxels added.
+uint64_t add_closed_boxes(Context& ctx, const std::vector<Aabb>& boxes, const VoxelMask& eyes, Solid& solid);
 
 }  // namespace pvs

@@ -52,20 +52,21 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
     bake.parameters = resolved_parameters(config);
     bake.objects = object_records(world);
 
-    const ViewVolume view = build_view_volume(ctx, config.view, world);
+    ViewVolumeConfig view_config = config.view;
+    if (config.mode == BakeMode::kConservative)
+        view_config.auto_voxel_size_m = std::min(kDefaultVoxelSizeM, config.conservative.epsilon_m);
+    const ViewVolume view = build_view_volume(ctx, view_config, world);
     RayScene scene(ctx, world, BuildQuality::kMedium, config.run.threads);
     bake.leak_path = view.leak_path;
     OccluderFigures occ;
     const bool conservative = config.mode == BakeMode::kConservative;
-    std::vector<Aabb> shrunk;
+    ShrunkOccluders shrunk;
     if (config.occluders.enabled || conservative) {
-        bake.occluders =
-            synthesize_occluders(ctx, config.occluders, world, view, scene, occ,
-                                 config.conservative.epsilon_m, conservative ? &shrunk : nullptr);
+        bake.occluders = synthesize_occluders(
+            ctx, config.occluders, world, view, scene, occ, config.conservative.epsilon_m,
+            config.conservative.refine_levels, conservative ? &shrunk : nullptr);
     }
     ConservativeFigures cons;
-    const VoxelMask reach =
-        conservative ? sample_reach(view.view, config.conservative.epsilon_m) : VoxelMask{};
     uint32_t occluders_proven = 0;
     for (const Occluder& o : bake.occluders) occluders_proven += o.proven;
     uint64_t cells_dropped = 0;
@@ -76,7 +77,7 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
         cells_dropped = clip_grid_to_view(ctx, bake.cells, view.view, view.eyes);
         if (conservative) {
             sampled.pvs =
-                bake_conservative_pvs(ctx, config.conservative, world, bake.cells, shrunk, reach, cons);
+                bake_conservative_pvs(ctx, config.conservative, world, bake.cells, shrunk, scene, cons);
         } else {
             sampled = bake_sampled_pvs(ctx, config.sampled, world, scene, bake.cells);
         }
@@ -92,7 +93,8 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
         const RegionPvsOracle oracle = [&](const std::vector<Aabb>& boxes,
                                            const std::vector<uint64_t>& streams, PvsSet& rows) {
             if (conservative) {
-                conservative_box_rows(ctx, config.conservative, world, boxes, shrunk, reach, rows, cons);
+                conservative_box_rows(ctx, config.conservative, world, boxes, masks.eyes, shrunk, scene, rows,
+                                      cons);
                 return;
             }
             sample_box_rows(config.sampled, world, scene, masks, boxes, streams, sampled.rays_per_eye, rows,
@@ -148,10 +150,11 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
          occ.near_m3 > 0 ? occ.near_covered_m3 / occ.near_m3 : 0.0},
         {"occluder_probe_rays_into_solid", double(occ.probe_rays_into_solid)},
         {"occluder_seconds", occ.seconds},
-        {"conservative_shrunk_occluders", double(shrunk.size())},
+        {"conservative_shrunk_occluders", shrunk.boxes.empty() ? 0.0 : double(shrunk.boxes[0].size())},
+        {"conservative_epsilon_levels", double(shrunk.epsilon_m.size())},
         {"conservative_samples", double(cons.samples)},
         {"conservative_samples_in_occluders", double(cons.samples_skipped)},
-        {"conservative_samples_far_from_view", double(cons.samples_far)},
+        {"conservative_patches_in_solid", double(cons.patches_in_solid)},
         {"conservative_object_tests", double(cons.object_tests)},
         {"conservative_seconds", cons.seconds},
         {"cells_per_second", cons.seconds > 0

@@ -363,7 +363,7 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
 
     BakeConfig config;
     CommonOptions common;
-    std::string world_path, out_path, bake_path, mode = "sampled";
+    std::string world_path, out_path, bake_path, mode = "conservative";
     bool no_verify = false, no_write = false, json = false;
     std::vector<double> point;
 
@@ -374,9 +374,10 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
     bake->add_option("--report", common.report_path, "also write a JSON report here");
     bake->add_option(
             "--mode", mode,
-            "sampled: the union of what sample rays saw (AGGRESSIVE: may miss small or grazing objects); "
-            "conservative: every object any eye may see, proven with shrunk occluders (occluder fusion)")
-        ->check(CLI::IsMember({"sampled", "conservative"}))
+            "conservative (the default): every object any eye may see, proven with shrunk occluders "
+            "(occluder fusion); sampled: the union of what sample rays saw (AGGRESSIVE: may miss small or "
+            "grazing objects)")
+        ->check(CLI::IsMember({"conservative", "sampled"}))
         ->capture_default_str();
     bake->add_flag("--no-verify", no_verify, "skip verification by ray sampling");
     bool no_occluders = false;

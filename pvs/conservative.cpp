@@ -1,8 +1,7 @@
-// The conservative solver: every cell's boundary sampled within epsilon, a depth cube of the shrunk
-// occluders from each sample, objects proven hidden from every sample left out.
+// The conservative solver: every cell's boundary cut into patches, refined where objects are not yet proven
+// hidden; a depth cube of the shrunk occluders from each patch centre. Safety argument: conservative.h.
 #include "pvs/conservative.h"
 
-#include "occluders/voxels.h"
 #include "pvs/depth_cube.h"
 #include "pvs/ray_sampler.h"
 
@@ -12,48 +11,16 @@
 #include <array>
 #include <chrono>
 #include <cmath>
-#include <unordered_map>
+#include <map>
+#include <numeric>
 
 namespace pvs {
 
 namespace {
 
-// Sample points of one face (the side of `box` at box.min[axis] when !at_max, else at box.max[axis]),
-// split into n_u x n_v squares of edge <= spacing, one sample at each square's centre: every point of the
-// face is within spacing / sqrt(2) of a sample. Appends to `out`.
-void append_face_samples(const Aabb& box, int axis, bool at_max, double spacing,
-                         std::vector<glm::vec3>& out) {
-    const glm::vec3 size = box.size();
-    const int ua = (axis + 1) % 3, va = (axis + 2) % 3;
-    const int nu = std::max(1, int(std::ceil(double(size[ua]) / spacing - 1e-9)));
-    const int nv = std::max(1, int(std::ceil(double(size[va]) / spacing - 1e-9)));
-    for (int j = 0; j < nv; ++j)
-        for (int i = 0; i < nu; ++i) {
-            glm::vec3 p(0.0f);
-            p[axis] = at_max ? box.max[axis] : box.min[axis];
-            p[ua] = box.min[ua] + size[ua] * (float(i) + 0.5f) / float(nu);
-            p[va] = box.min[va] + size[va] * (float(j) + 0.5f) / float(nv);
-            out.push_back(p);
-        }
-}
-
-void face_samples(const Aabb& face, int axis, double spacing, std::vector<glm::vec3>& out) {
-    out.clear();
-    append_face_samples(face, axis, false, spacing, out);
-}
-
-// Sample points of the box's six faces.
-void boundary_samples(const Aabb& box, double spacing, std::vector<glm::vec3>& out) {
-    out.clear();
-    for (int axis = 0; axis < 3; ++axis) {
-        append_face_samples(box, axis, false, spacing, out);
-        append_face_samples(box, axis, true, spacing, out);
-    }
-}
-
 // Finer occludee boxes per object: its triangles in runs of kTrianglesPerPart, each run's bounds. An
 // object whose one box is not proven hidden may still be, part by part (all parts hidden = hidden).
-constexpr uint32_t kTrianglesPerPart = 4;
+constexpr uint32_t kTrianglesPerPart = 1;
 
 std::vector<std::vector<Aabb>> object_parts(const World& world) {
     std::vector<std::vector<Aabb>> parts(world.objects.size());
@@ -70,196 +37,475 @@ std::vector<std::vector<Aabb>> object_parts(const World& world) {
     return parts;
 }
 
-}  // namespace
+// A bounding volume hierarchy over the objects' bounds (median split on the longest axis of the centres).
+// Nodes are in pre-order: a node's children come after it, so a reverse walk sees children first.
+struct ObjectTree {
+    struct Node {
+        Aabb bounds;
+        int32_t left = -1, right = -1;  // children, -1 for a leaf
+        int32_t object = -1;            // the object of a leaf
+    };
+    std::vector<Node> nodes;
+};
 
-VoxelMask sample_reach(const VoxelMask& view, double epsilon_m) {
-    if (view.empty()) return view;
-    VoxelGrid grid;
-    grid.origin = view.origin;
-    grid.voxel_size_m = view.voxel_size_m;
-    grid.dims = view.dims;
-    BitVolume bits;
-    bits.words = view.bits;
-    const int k = int(std::ceil(epsilon_m / double(view.voxel_size_m) - 1e-9)) + 1;
-    VoxelMask out = view;
-    out.bits = dilate(grid, bits, k).words;
-    return out;
+int32_t build_tree(const World& world, std::vector<uint32_t>& objects, size_t lo, size_t hi,
+                   ObjectTree& tree) {
+    const int32_t id = int32_t(tree.nodes.size());
+    tree.nodes.emplace_back();
+    Aabb bounds, centres;
+    for (size_t i = lo; i < hi; ++i) {
+        bounds.extend(world.objects[objects[i]].bounds);
+        centres.extend(world.objects[objects[i]].bounds.center());
+    }
+    tree.nodes[size_t(id)].bounds = bounds;
+    if (hi - lo == 1) {
+        tree.nodes[size_t(id)].object = int32_t(objects[lo]);
+        return id;
+    }
+    const glm::vec3 ext = centres.size();
+    const int axis = ext.x >= ext.y && ext.x >= ext.z ? 0 : (ext.y >= ext.z ? 1 : 2);
+    const size_t mid = (lo + hi) / 2;
+    std::nth_element(objects.begin() + std::ptrdiff_t(lo), objects.begin() + std::ptrdiff_t(mid),
+                     objects.begin() + std::ptrdiff_t(hi), [&](uint32_t a, uint32_t b) {
+                         const float ca = world.objects[a].bounds.center()[axis];
+                         const float cb = world.objects[b].bounds.center()[axis];
+                         return ca < cb || (ca == cb && a < b);
+                     });
+    const int32_t left = build_tree(world, objects, lo, mid, tree);
+    const int32_t right = build_tree(world, objects, mid, hi, tree);
+    tree.nodes[size_t(id)].left = left;
+    tree.nodes[size_t(id)].right = right;
+    return id;
 }
 
-namespace {
+// Over the objects that can ever be left out (not pvs_always_visible). An object with empty bounds is
+// never proven hidden (is_hidden() says visible), so it is listed: the safe side.
+ObjectTree object_tree(const World& world) {
+    std::vector<uint32_t> objects;
+    for (uint32_t o = 0; o < world.objects.size(); ++o)
+        if (!(world.objects[o].flags & kObjectAlwaysVisible)) objects.push_back(o);
+    ObjectTree tree;
+    if (!objects.empty()) build_tree(world, objects, 0, objects.size(), tree);
+    return tree;
+}
 
-struct SampleCounts {
-    uint64_t samples = 0, skipped = 0, far = 0, tests = 0;
-    SampleCounts& operator+=(const SampleCounts& o) {
+// Are all voxels that meet the closed box (grown by a hair) set in the mask? False when the box reaches
+// outside the mask's grid, or the mask is empty.
+bool box_all_in_mask(const VoxelMask& mask, const Aabb& box) {
+    if (mask.empty()) return false;
+    constexpr float kHair = 1e-4f;
+    glm::ivec3 lo, hi;
+    for (int a = 0; a < 3; ++a) {
+        const float l = (box.min[a] - kHair - mask.origin[a]) / mask.voxel_size_m;
+        const float h = (box.max[a] + kHair - mask.origin[a]) / mask.voxel_size_m;
+        if (!(l >= 0.0f) || !(h < float(mask.dims[a]))) return false;
+        lo[a] = int(std::floor(l));
+        hi[a] = int(std::floor(h));
+    }
+    for (int z = lo.z; z <= hi.z; ++z)
+        for (int y = lo.y; y <= hi.y; ++y)
+            for (int x = lo.x; x <= hi.x; ++x)
+                if (!mask.get(uint64_t(x) +
+                              uint64_t(mask.dims.x) * (uint64_t(y) + uint64_t(mask.dims.y) * uint64_t(z))))
+                    return false;
+    return true;
+}
+
+struct Counts {
+    uint64_t samples = 0, skipped = 0, in_solid = 0, tests = 0, rays = 0;
+    std::vector<uint64_t> per_level;
+    Counts& operator+=(const Counts& o) {
         samples += o.samples;
         skipped += o.skipped;
-        far += o.far;
+        in_solid += o.in_solid;
         tests += o.tests;
+        rays += o.rays;
+        per_level.resize(std::max(per_level.size(), o.per_level.size()), 0);
+        for (size_t k = 0; k < o.per_level.size(); ++k) per_level[k] += o.per_level[k];
         return *this;
     }
 };
 
-// Proves objects of `open` hidden from every point of `points`; sets the row bit of every object some
-// point cannot prove hidden and removes it from `open`.
-void prove_from_samples(const ConservativeConfig& config, const World& world,
-                        const std::vector<std::vector<Aabb>>& parts, const std::vector<Aabb>& shrunk,
-                        const VoxelMask& reach, const std::vector<glm::vec3>& points, DepthCube& cube,
-                        std::vector<uint32_t>& open, uint64_t* row, SampleCounts& n) {
-    for (const glm::vec3& s : points) {
-        if (open.empty()) break;
-        if (!reach.empty() && !reach.contains(s)) {
-            ++n.far;
-            continue;
+// Points on each object to aim sight rays at: the centroids of up to kRayTargets of its triangles, spread
+// over its triangle list. first[o]..first[o + 1] index `points`.
+constexpr uint32_t kRayTargets = 8;
+
+struct RayTargets {
+    std::vector<uint32_t> first;
+    std::vector<glm::vec3> points;
+};
+
+RayTargets ray_targets(const World& world) {
+    RayTargets out;
+    for (const WorldObject& obj : world.objects) {
+        out.first.push_back(uint32_t(out.points.size()));
+        const uint32_t n = std::min(obj.triangle_count, kRayTargets);
+        for (uint32_t k = 0; k < n; ++k) {
+            const Triangle& t =
+                world.triangles[obj.first_triangle + uint32_t(uint64_t(k) * obj.triangle_count / n)];
+            out.points.push_back(
+                (world.positions[t.v[0]] + world.positions[t.v[1]] + world.positions[t.v[2]]) / 3.0f);
         }
-        bool in_occluder = false;
-        for (const Aabb& b : shrunk) in_occluder = in_occluder || b.contains(s);
-        if (in_occluder) {
-            ++n.skipped;
-            continue;
-        }
-        ++n.samples;
-        cube.clear(s);
-        for (const Aabb& b : shrunk) cube.add_occluder(b);
-        size_t w = 0;
-        for (uint32_t o : open) {
-            ++n.tests;
-            bool hidden = cube.is_hidden(world.objects[o].bounds);
-            if (!hidden && parts[o].size() > 1) {
-                hidden = true;
-                for (const Aabb& part : parts[o]) {
-                    ++n.tests;
-                    if (!cube.is_hidden(part)) {
-                        hidden = false;
-                        break;
-                    }
-                }
-            }
-            if (hidden) {
-                open[w++] = o;  // still hidden: stays open for the next sample
-            } else {
-                row[o >> 6] |= uint64_t(1) << (o & 63);
-            }
-        }
-        open.resize(w);
     }
+    out.first.push_back(uint32_t(out.points.size()));
+    return out;
 }
 
-void add_counts(ConservativeFigures& figures, const SampleCounts& n,
-                std::chrono::steady_clock::time_point start) {
+// What every thread shares: the world, its object tree, parts and ray targets, the occluders, the rays.
+struct Shared {
+    const World& world;
+    const ShrunkOccluders& occ;
+    const RayScene& scene;
+    ObjectTree tree;
+    std::vector<std::vector<Aabb>> parts;
+    RayTargets targets;
+    int cube_resolution;
+};
+
+// Per thread: the depth cube and scratch. solve_patch() refines one patch.
+class PatchSolver {
+public:
+    explicit PatchSolver(const Shared& shared)
+        : sh_(shared),
+          cube_(shared.cube_resolution),
+          open_mark_(shared.world.objects.size(), 0),
+          open_under_(shared.tree.nodes.size(), 0) {
+        counts_.per_level.assign(shared.occ.epsilon_m.size(), 0);
+    }
+
+    // Lists in `row` every object of `open` that some patch of the face `rect` (flat along `axis`) cannot
+    // prove hidden. The face is first cut into n x n top patches so that halving them m times ends at
+    // patches of half-diagonal <= epsilon_0 with as few leaves as a plain grid would need (within 20%
+    // more), and with m as large as that allows and the ladder has levels for.
+    void solve_face(const Aabb& rect, int axis, const std::vector<uint32_t>& open, uint64_t* row) {
+        const int ua = (axis + 1) % 3, va = (axis + 2) % 3;
+        const glm::vec3 size = rect.size();
+        const double eps0 = sh_.occ.epsilon_m.front();
+        const double side = std::max(size[ua], size[va]);
+        const int need = std::max(1, int(std::ceil(side / (eps0 * std::sqrt(2.0)) - 1e-9)));
+        int m = 0;
+        for (int t = 1; t < int(sh_.occ.epsilon_m.size()) && (1 << t) <= need; ++t) {
+            const int n_leaf = ((need + (1 << t) - 1) >> t) << t;
+            if (double(n_leaf) * n_leaf <= 1.2 * double(need) * need) m = t;
+        }
+        const int n = (need + (1 << m) - 1) >> m;
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) {
+                Aabb p = rect;
+                p.min[ua] = rect.min[ua] + size[ua] * float(i) / float(n);
+                p.max[ua] = i + 1 == n ? rect.max[ua] : rect.min[ua] + size[ua] * float(i + 1) / float(n);
+                p.min[va] = rect.min[va] + size[va] * float(j) / float(n);
+                p.max[va] = j + 1 == n ? rect.max[va] : rect.min[va] + size[va] * float(j + 1) / float(n);
+                solve_patch(p, axis, open, row);
+            }
+    }
+
+    // Lists in `row` every object of `open` that some sub-patch of `rect` (flat along `axis`) cannot prove
+    // hidden. `open` is consumed.
+    void solve_patch(const Aabb& rect, int axis, std::vector<uint32_t> open, uint64_t* row) {
+        if (open.empty()) return;
+        if (box_all_in_mask(sh_.occ.solid, rect)) {  // no sight line leaves through it (argument 3)
+            ++counts_.in_solid;
+            return;
+        }
+        const double r = 0.5 * glm::length(glm::dvec3(rect.size()));
+        const std::vector<double>& eps = sh_.occ.epsilon_m;
+        // The smallest epsilon >= r (a hair of slack for the float corners of the rectangle).
+        size_t k = 0;
+        while (k < eps.size() && eps[k] < r * (1.0 + 1e-6)) ++k;
+        if (k < eps.size()) {
+            const glm::vec3 s = rect.center();
+            bool inside = false;
+            for (const Aabb& b : sh_.occ.boxes[k]) inside = inside || b.contains(s);
+            if (inside) {  // its ball, which holds the patch, lies in the solid
+                ++counts_.skipped;
+                return;
+            }
+            ++counts_.samples;
+            ++counts_.per_level[k];
+            cube_.clear(s);
+            interest_.clear();
+            for (uint32_t o : open) interest_.push_back(sh_.world.objects[o].bounds);
+            cube_.limit_to(interest_);
+            cube_.add_occluders(sh_.occ.boxes[k]);
+            open = unproven(open);
+            if (k == 0 || open.empty()) {  // the floor: whatever is not proven is listed
+                for (uint32_t o : open) row[o >> 6] |= uint64_t(1) << (o & 63);
+                return;
+            }
+            open = list_seen(s, open, row);
+        }
+        // Split into halves along the patch's long in-plane sides (both for a square).
+        const int ua = (axis + 1) % 3, va = (axis + 2) % 3;
+        const glm::vec3 size = rect.size();
+        const float longest = std::max(size[ua], size[va]);
+        const bool split_u = size[ua] >= 0.5f * longest, split_v = size[va] >= 0.5f * longest;
+        for (int iu = 0; iu < (split_u ? 2 : 1); ++iu)
+            for (int iv = 0; iv < (split_v ? 2 : 1); ++iv) {
+                Aabb child = rect;
+                if (split_u) {
+                    const float mid = 0.5f * (rect.min[ua] + rect.max[ua]);
+                    (iu == 0 ? child.max[ua] : child.min[ua]) = mid;
+                }
+                if (split_v) {
+                    const float mid = 0.5f * (rect.min[va] + rect.max[va]);
+                    (iv == 0 ? child.max[va] : child.min[va]) = mid;
+                }
+                solve_patch(child, axis, open, row);
+            }
+    }
+
+    const Counts& counts() const { return counts_; }
+
+    // Lists the objects of `open` a sight line from s reaches (a ray to a point of one of its triangles that
+    // no opaque triangle stops) and returns the others. Such an object can never be proven hidden from a
+    // patch holding s, so refining it would only cost time: the PVS is the same, sooner. Only from
+    // free space (every voxel holding s free: untouched and not proven solid), or rays would start behind
+    // walls and reach the backs of triangles through the sealed void.
+    std::vector<uint32_t> list_seen(glm::vec3 s, const std::vector<uint32_t>& open, uint64_t* row) {
+        if (!box_all_in_mask(sh_.occ.free, Aabb::of(s, s))) return open;
+        origins_.clear();
+        dirs_.clear();
+        tfar_.clear();
+        for (uint32_t o : open)
+            for (uint32_t p = sh_.targets.first[o]; p < sh_.targets.first[o + 1]; ++p) {
+                const glm::vec3 d = sh_.targets.points[p] - s;
+                const float len = glm::length(d);
+                origins_.push_back(s);
+                dirs_.push_back(len > 0.0f ? d / len : glm::vec3(1.0f, 0.0f, 0.0f));
+                tfar_.push_back(len * (1.0f - 1e-4f));
+            }
+        blocked_.resize(origins_.size());
+        if (!origins_.empty())
+            sh_.scene.occluded_opaque(origins_.data(), dirs_.data(), tfar_.data(), uint32_t(origins_.size()),
+                                      blocked_.data());
+        counts_.rays += origins_.size();
+        std::vector<uint32_t> out;
+        size_t ray = 0;
+        for (uint32_t o : open) {
+            bool seen = false;
+            for (uint32_t p = sh_.targets.first[o]; p < sh_.targets.first[o + 1]; ++p, ++ray)
+                seen = seen || !blocked_[ray];
+            if (seen) {
+                row[o >> 6] |= uint64_t(1) << (o & 63);
+            } else {
+                out.push_back(o);
+            }
+        }
+        return out;
+    }
+
+private:
+    // The objects of `open` the current cube cannot prove hidden, in the order of `open`.
+    std::vector<uint32_t> unproven(const std::vector<uint32_t>& open) {
+        const std::vector<ObjectTree::Node>& nodes = sh_.tree.nodes;
+        for (uint32_t o : open) open_mark_[o] = 1;
+        // Open objects under each node (children after parents: walk backwards).
+        for (size_t n = nodes.size(); n-- > 0;) {
+            const ObjectTree::Node& node = nodes[n];
+            open_under_[n] = node.object >= 0
+                                 ? open_mark_[size_t(node.object)]
+                                 : open_under_[size_t(node.left)] + open_under_[size_t(node.right)];
+        }
+        stack_.clear();
+        if (!nodes.empty()) stack_.push_back(0);
+        while (!stack_.empty()) {
+            const int32_t n = stack_.back();
+            stack_.pop_back();
+            if (open_under_[size_t(n)] == 0) continue;
+            const ObjectTree::Node& node = nodes[size_t(n)];
+            ++counts_.tests;
+            if (cube_.is_hidden(node.bounds)) continue;  // every open object under it stays proven
+            if (node.object < 0) {
+                stack_.push_back(node.right);
+                stack_.push_back(node.left);
+                continue;
+            }
+            const std::vector<Aabb>& parts = sh_.parts[size_t(node.object)];
+            bool hidden = parts.size() > 1;
+            for (size_t p = 0; hidden && p < parts.size(); ++p) {
+                ++counts_.tests;
+                hidden = cube_.is_hidden(parts[p]);
+            }
+            if (!hidden) open_mark_[size_t(node.object)] = 2;  // not proven from this sample
+        }
+        std::vector<uint32_t> out;
+        for (uint32_t o : open) {
+            if (open_mark_[o] == 2) out.push_back(o);
+            open_mark_[o] = 0;
+        }
+        return out;
+    }
+
+    const Shared& sh_;
+    DepthCube cube_;
+    std::vector<uint8_t> open_mark_;    // per object: 0 not open, 1 open, 2 open and not proven
+    std::vector<uint32_t> open_under_;  // per tree node
+    std::vector<int32_t> stack_;
+    std::vector<Aabb> interest_;  // bounds of the open objects: the only pixels worth drawing
+    std::vector<glm::vec3> origins_, dirs_;
+    std::vector<float> tfar_;
+    std::vector<uint8_t> blocked_;
+    Counts counts_;
+};
+
+// The objects that start open for a face or box: all but pvs_always_visible ones (listed anyway).
+std::vector<uint32_t> leavable_objects(const World& world) {
+    std::vector<uint32_t> out;
+    for (uint32_t o = 0; o < world.objects.size(); ++o)
+        if (!(world.objects[o].flags & kObjectAlwaysVisible)) out.push_back(o);
+    return out;
+}
+
+void add_counts(ConservativeFigures& figures, const Counts& n, std::chrono::steady_clock::time_point start) {
     figures.samples += n.samples;
     figures.samples_skipped += n.skipped;
-    figures.samples_far += n.far;
+    figures.patches_in_solid += n.in_solid;
     figures.object_tests += n.tests;
+    figures.rays += n.rays;
+    figures.samples_per_level.resize(std::max(figures.samples_per_level.size(), n.per_level.size()), 0);
+    for (size_t k = 0; k < n.per_level.size(); ++k) figures.samples_per_level[k] += n.per_level[k];
     figures.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+Shared make_shared(const ConservativeConfig& config, const World& world, const ShrunkOccluders& occluders,
+                   const RayScene& scene) {
+    return Shared{world,
+                  occluders,
+                  scene,
+                  object_tree(world),
+                  object_parts(world),
+                  ray_targets(world),
+                  config.cube_resolution};
+}
+
+// One face of a box: the side at box.min[axis] (side 0) or box.max[axis] (side 1), flat along `axis`.
+Aabb box_face(const Aabb& box, int axis, int side) {
+    Aabb f = box;
+    f.min[axis] = f.max[axis] = side ? box.max[axis] : box.min[axis];
+    return f;
+}
+
+// The part of `box` eyes can be in: the bounds of the eye voxels meeting the box's interior, clipped to the
+// box (argument 3 of conservative.h: it is convex and holds every eye of the box, so sight leaves it
+// through its boundary). The whole box without an eye mask; empty when no eye voxel meets the box.
+Aabb eye_region(const VoxelMask& eyes, const Aabb& box) {
+    if (eyes.empty()) return box;
+    glm::ivec3 lo, hi;
+    for (int a = 0; a < 3; ++a) {
+        lo[a] = std::max(0, int(std::floor((box.min[a] - eyes.origin[a]) / eyes.voxel_size_m)));
+        hi[a] =
+            std::min(eyes.dims[a] - 1, int(std::ceil((box.max[a] - eyes.origin[a]) / eyes.voxel_size_m)) - 1);
+    }
+    Aabb region;
+    for (int z = lo.z; z <= hi.z; ++z)
+        for (int y = lo.y; y <= hi.y; ++y)
+            for (int x = lo.x; x <= hi.x; ++x) {
+                if (!eyes.get(uint64_t(x) +
+                              uint64_t(eyes.dims.x) * (uint64_t(y) + uint64_t(eyes.dims.y) * uint64_t(z))))
+                    continue;
+                const glm::vec3 vmin = eyes.origin + glm::vec3(x, y, z) * eyes.voxel_size_m;
+                region.extend(vmin);
+                region.extend(vmin + glm::vec3(eyes.voxel_size_m));
+            }
+    if (region.is_empty()) return region;
+    region.min = glm::max(region.min, box.min);
+    region.max = glm::min(region.max, box.max);
+    return region;
 }
 
 }  // namespace
 
 void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const World& world,
-                           const std::vector<Aabb>& boxes, const std::vector<Aabb>& shrunk,
-                           const VoxelMask& reach, PvsSet& pvs, ConservativeFigures& figures) {
+                           const std::vector<Aabb>& boxes, const VoxelMask& eyes,
+                           const ShrunkOccluders& occluders, const RayScene& scene, PvsSet& pvs,
+                           ConservativeFigures& figures) {
     const auto start = std::chrono::steady_clock::now();
-    const uint32_t n_objects = uint32_t(world.objects.size());
-    // Spacing epsilon * sqrt(2): the centre of a square of that edge is within epsilon of all of it.
-    const double spacing = config.epsilon_m * std::sqrt(2.0);
-    const std::vector<std::vector<Aabb>> parts = object_parts(world);
-    SampleCounts total;
+    const Shared shared = make_shared(config, world, occluders, scene);
+    const std::vector<uint32_t> leavable = leavable_objects(world);
+    Counts total;
 #pragma omp parallel
     {
-        DepthCube cube(config.cube_resolution);
-        std::vector<glm::vec3> points;
-        std::vector<uint32_t> open;  // objects not yet proven visible from this box
-        SampleCounts n;
+        PatchSolver solver(shared);
+        std::vector<uint32_t> open;
 #pragma omp for schedule(dynamic, 1)
         for (int64_t ci = 0; ci < int64_t(boxes.size()); ++ci) {
-            const uint32_t c = uint32_t(ci);
-            uint64_t* row = pvs.row(c);
+            const Aabb box = eye_region(eyes, boxes[size_t(ci)]);
+            uint64_t* row = pvs.row(uint32_t(ci));
             open.clear();
-            for (uint32_t o = 0; o < n_objects; ++o) {
-                const WorldObject& obj = world.objects[o];
-                if ((obj.flags & kObjectAlwaysVisible) || obj.bounds.overlaps(boxes[size_t(c)])) {
+            for (uint32_t o = 0; o < world.objects.size(); ++o) {
+                if ((world.objects[o].flags & kObjectAlwaysVisible) ||
+                    world.objects[o].bounds.overlaps(box)) {
                     row[o >> 6] |= uint64_t(1) << (o & 63);
-                } else {
-                    open.push_back(o);
                 }
             }
-            boundary_samples(boxes[size_t(c)], spacing, points);
-            prove_from_samples(config, world, parts, shrunk, reach, points, cube, open, row, n);
+            if (!box.is_empty()) {
+                for (uint32_t o : leavable)
+                    if (!world.objects[o].bounds.overlaps(box)) open.push_back(o);
+                for (int axis = 0; axis < 3; ++axis)
+                    for (int side = 0; side < 2; ++side)
+                        solver.solve_face(box_face(box, axis, side), axis, open, row);
+            }
             ctx.progress_advance();
         }
 #pragma omp critical
-        total += n;
+        total += solver.counts();
     }
     add_counts(figures, total, start);
 }
 
-// A grid: each face shared by two cells is computed once. A face's row lists every object some sample of
+// A grid: each face shared by two cells is computed once. A face's row lists every object some patch of
 // the face cannot prove hidden; a cell's row is the union of its six faces' rows and add_always_listed().
 static void conservative_grid_rows(Context& ctx, const ConservativeConfig& config, const World& world,
-                                   const CellSet& cells, const std::vector<Aabb>& shrunk,
-                                   const VoxelMask& reach, PvsSet& pvs, ConservativeFigures& figures) {
+                                   const CellSet& cells, const ShrunkOccluders& occluders,
+                                   const RayScene& scene, PvsSet& pvs, ConservativeFigures& figures) {
     const auto start = std::chrono::steady_clock::now();
     const uint32_t n_objects = uint32_t(world.objects.size());
-    const double spacing = config.epsilon_m * std::sqrt(2.0);
-    const std::vector<std::vector<Aabb>> parts = object_parts(world);
-    // Faces: key (axis, plane index along it, cell indices along the other two), in cell order.
+    // Faces of each cell's eye region (eye_region()); neighbours whose regions fill both cells share the
+    // face between them, found by its exact corners. In cell order, so the result is deterministic.
     struct Face {
         int axis;
         Aabb rect;  // flat along `axis`
     };
     std::vector<Face> faces;
-    std::unordered_map<uint64_t, uint32_t> face_of;
-    std::vector<std::array<uint32_t, 6>> cell_faces(cells.size());
-    const float s = cells.cell_size_m;
-    for (size_t g = 0; g < cells.grid_to_cell.size(); ++g) {
-        const int32_t c = cells.grid_to_cell[g];
-        if (c < 0) continue;
-        const glm::ivec3 idx(int(g % size_t(cells.dims.x)),
-                             int((g / size_t(cells.dims.x)) % size_t(cells.dims.y)),
-                             int(g / (size_t(cells.dims.x) * size_t(cells.dims.y))));
-        const Aabb box = cells.cells[size_t(c)].bounds;
-        for (int axis = 0; axis < 3; ++axis) {
+    std::map<std::array<float, 6>, uint32_t> face_of;
+    std::vector<std::vector<uint32_t>> cell_faces(cells.size());
+    std::vector<Aabb> regions(cells.size());
+    for (uint32_t c = 0; c < cells.size(); ++c) {
+        regions[c] = eye_region(cells.eyes, cells.cells[c].bounds);
+        if (regions[c].is_empty()) continue;
+        for (int axis = 0; axis < 3; ++axis)
             for (int side = 0; side < 2; ++side) {
-                glm::ivec3 k = idx;
-                k[axis] += side;
-                const uint64_t key =
-                    (uint64_t(axis) << 62) | (uint64_t(k.x) << 41) | (uint64_t(k.y) << 20) | uint64_t(k.z);
+                const Aabb rect = box_face(regions[c], axis, side);
+                std::array<float, 6> key{rect.min.x, rect.min.y, rect.min.z,
+                                         rect.max.x, rect.max.y, rect.max.z};
                 auto [it, fresh] = face_of.emplace(key, uint32_t(faces.size()));
-                if (fresh) {
-                    Aabb rect = box;
-                    rect.min[axis] = rect.max[axis] = cells.origin[axis] + float(k[axis]) * s;
-                    faces.push_back(Face{axis, rect});
-                }
-                cell_faces[size_t(c)][size_t(2 * axis + side)] = it->second;
+                if (fresh) faces.push_back(Face{axis, rect});
+                cell_faces[c].push_back(it->second);
             }
-        }
     }
+    const Shared shared = make_shared(config, world, occluders, scene);
+    const std::vector<uint32_t> leavable = leavable_objects(world);
     PvsSet face_rows = PvsSet::make(uint32_t(faces.size()), n_objects);
-    SampleCounts total;
+    Counts total;
     ctx.progress_begin("conservative PVS", faces.size(), "faces");
 #pragma omp parallel
     {
-        DepthCube cube(config.cube_resolution);
-        std::vector<glm::vec3> points;
-        std::vector<uint32_t> open;
-        SampleCounts n;
+        PatchSolver solver(shared);
 #pragma omp for schedule(dynamic, 4)
         for (int64_t fi = 0; fi < int64_t(faces.size()); ++fi) {
             const Face& f = faces[size_t(fi)];
-            open.clear();
-            for (uint32_t o = 0; o < n_objects; ++o)
-                if (!(world.objects[o].flags & kObjectAlwaysVisible)) open.push_back(o);
-            face_samples(f.rect, f.axis, spacing, points);
-            prove_from_samples(config, world, parts, shrunk, reach, points, cube, open,
-                               face_rows.row(uint32_t(fi)), n);
+            solver.solve_face(f.rect, f.axis, leavable, face_rows.row(uint32_t(fi)));
             ctx.progress_advance();
         }
 #pragma omp critical
-        total += n;
+        total += solver.counts();
     }
     ctx.progress_end();
     for (uint32_t c = 0; c < cells.size(); ++c) {
         uint64_t* row = pvs.row(c);
+        for (uint32_t o = 0; o < n_objects; ++o)
+            if (world.objects[o].bounds.overlaps(regions[c])) row[o >> 6] |= uint64_t(1) << (o & 63);
         for (uint32_t f : cell_faces[c]) {
             const uint64_t* fr = face_rows.row(f);
             for (uint32_t w = 0; w < pvs.words_per_row; ++w) row[w] |= fr[w];
@@ -269,26 +515,31 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
 }
 
 PvsSet bake_conservative_pvs(Context& ctx, const ConservativeConfig& config, const World& world,
-                             const CellSet& cells, const std::vector<Aabb>& shrunk, const VoxelMask& reach,
+                             const CellSet& cells, const ShrunkOccluders& occluders, const RayScene& scene,
                              ConservativeFigures& figures) {
     ScopedTimer timer(ctx, "conservative_pvs");
-    ctx.info(fmt::format("conservative PVS: {} cells, {} shrunk occluders, epsilon {} m, cube {} px",
-                         cells.size(), shrunk.size(), config.epsilon_m, config.cube_resolution));
+    ctx.info(fmt::format(
+        "conservative PVS: {} cells, epsilon {} m to {} m ({} levels), {} shrunk occluders "
+        "at the floor, cube {} px",
+        cells.size(), occluders.epsilon_m.empty() ? 0.0 : occluders.epsilon_m.front(),
+        occluders.epsilon_m.empty() ? 0.0 : occluders.epsilon_m.back(), occluders.epsilon_m.size(),
+        occluders.boxes.empty() ? 0 : occluders.boxes[0].size(), config.cube_resolution));
     PvsSet pvs = PvsSet::make(uint32_t(cells.size()), uint32_t(world.objects.size()));
-    std::vector<Aabb> boxes;
-    for (const Cell& c : cells.cells) boxes.push_back(c.bounds);
     if (cells.kind == CellSet::Kind::kGrid) {
-        conservative_grid_rows(ctx, config, world, cells, shrunk, reach, pvs, figures);
+        conservative_grid_rows(ctx, config, world, cells, occluders, scene, pvs, figures);
     } else {
+        std::vector<Aabb> boxes;
+        for (const Cell& c : cells.cells) boxes.push_back(c.bounds);
         ctx.progress_begin("conservative PVS", cells.size(), "cells");
-        conservative_box_rows(ctx, config, world, boxes, shrunk, reach, pvs, figures);
+        conservative_box_rows(ctx, config, world, boxes, cells.eyes, occluders, scene, pvs, figures);
         ctx.progress_end();
     }
     add_always_listed(world, cells, pvs);
     ctx.info(fmt::format(
-        "conservative PVS: {} samples ({} inside occluders and {} far from the view region skipped), "
-        "{:.1f} M object tests, {:.1f} s ({:.0f} cells/s)",
-        figures.samples, figures.samples_skipped, figures.samples_far, double(figures.object_tests) * 1e-6,
+        "conservative PVS: {} samples (per epsilon level {}), {} inside occluders and {} patches "
+        "in solid skipped, {:.1f} M box tests, {:.1f} M sight rays, {:.1f} s ({:.0f} cells/s)",
+        figures.samples, fmt::join(figures.samples_per_level, "/"), figures.samples_skipped,
+        figures.patches_in_solid, double(figures.object_tests) * 1e-6, double(figures.rays) * 1e-6,
         figures.seconds, double(cells.size()) / std::max(1e-9, figures.seconds)));
     return pvs;
 }

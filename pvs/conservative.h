@@ -4,24 +4,42 @@
 //
 // Why it is safe (the argument the code stands on):
 // 1. Occluders are boxes of the proven solid shrunk by epsilon (pvs/occluder_synthesis.h): every point of a
-//    shrunk box has its whole epsilon-ball inside the solid, where no sight line goes.
+//    box shrunk by epsilon has its whole epsilon-ball inside the proven solid, where no sight line goes.
+//    The solid includes the inside of the union of closed box meshes (occluders/solid.h), so a wall
+//    standing on a floor fuses with it without a seam.
 // 2. If the segment from a sample point s to a point x meets a shrunk box at y = s + t (x - s), then for any
 //    q with |q - s| <= epsilon, the point q + t (x - q) of segment qx is within (1 - t) epsilon of y, so
 //    inside the solid: segment qx is blocked too. Pointwise, so it holds for the union of boxes: fusion for
 //    free.
-// 3. Sight from an eye inside a cell either ends inside the cell (objects whose bounds meet the cell are
-//    always listed) or leaves the cell's box through a point q of its boundary. The boundary is sampled on
-//    a square grid whose every point is within epsilon of a sample (spacing <= epsilon * sqrt(2)), so q is
-//    within epsilon of some sample s, and the part of the sight line beyond q is blocked whenever sx is.
-//    The segment from the eye to q is unobstructed, so q lies in free space the flood reached or in a
-//    voxel next to it (the view region); cracks aside, which the sight probe handles. So samples are only
-//    needed near the view region: a sample is skipped when no voxel of `reach` (the view region grown by
-//    ceil(epsilon / voxel) + 1 voxels) holds it, since then no point of the view region is within
-//    epsilon of it. Without this, a cell straddling a wall would sample the room behind it.
-// 4. From each sample, the depth cube (pvs/depth_cube.h) proves an object's bounds hidden only when every
-//    segment from s to the bounds meets a shrunk box. An object is left out of a cell's PVS only if it is
-//    proven hidden from EVERY sample of the cell's boundary (samples inside a shrunk box are skipped: their
-//    ball lies in the solid, no sight line passes there).
+// 3. Eyes are points of the eye space (free voxels of the view volume, cells/view_volume.h; the lookup
+//    region `view` is one voxel larger, and an eye in that rim, within a voxel of a surface, is not covered).
+//    A cell's EYE REGION is the bounds of the eye voxels in it, clipped to the cell: convex, and it holds
+//    every eye of the cell. Sight from an eye either ends inside the region (objects whose bounds meet it
+//    are always listed) or leaves the region through a point q of its boundary. (Sampling the region, not
+//    the cell, keeps samples out of floors and walls the cell box cuts through, where they would see the
+//    backs of the level.) The boundary is cut into PATCHES (flat rectangles); a patch of half-diagonal r is
+//    covered by the r-ball around its centre s, so the part of the sight line beyond q is blocked whenever
+//    sx meets a box shrunk by some epsilon >= r.
+//    The segment from the eye to q is unobstructed, so q is not inside the proven solid (cracks aside,
+//    which the sight probe and the ray check of occluder synthesis handle): a patch all of whose voxels
+//    (closed, so a patch on a voxel face meets both sides) are proven solid lets no sight line out and is
+//    skipped. (An earlier version skipped patches far from the EYE space; that was wrong with
+//    --play-height: an eye sees up through the top of its cell, above the eye space.) Faces of neighbouring
+//    regions that coincide exactly are computed once.
+// 4. From s, the depth cube (pvs/depth_cube.h) proves a box hidden only when every segment from s to the box
+//    meets a shrunk occluder. So an object proven hidden from s at level k (boxes shrunk by epsilon_k >= r)
+//    is hidden from every eye whose sight leaves the cell through the patch. A sample inside a shrunk box
+//    needs no test: its ball, which holds the patch, lies in the solid.
+// 5. Adaptive refinement (ALGORITHMS.md section 3): a face is first tested as patches with r <= the
+//    largest epsilon of the ladder; an object proven hidden from a patch is done for all of it; the objects
+//    not yet proven go to the patch's four halves (r halves), down to r <= epsilon_0 (the floor), where an
+//    object not proven hidden is listed. Each patch uses the smallest epsilon >= its r (fewer shrunk-away
+//    walls). An object is left out of a cell's PVS only if every patch of the cell's boundary proved it.
+// 6. Objects are tested hierarchically: a bounding volume hierarchy over the objects' bounds; a node proven
+//    hidden proves every object under it (each point of those objects lies in the node's box). An object
+//    whose whole box is not proven may still be, part by part (its triangles in runs of 4, each run's box).
+// 7. Objects a sight ray from a patch centre s reaches (Embree, against the real triangles) are listed at
+//    once instead of refined: no patch holding s can prove them hidden, so refining them only costs time.
 // What it rests on beyond this argument: the solid being truly closed to sight (cracks narrower than a
 // voxel are found by the sight probe and the ray check of occluder synthesis, which sample).
 #pragma once
@@ -29,34 +47,37 @@
 #include "core/cell_set.h"
 #include "core/config.h"
 #include "core/context.h"
+#include "core/occluder.h"
 #include "core/pvs_set.h"
 #include "core/world.h"
+#include "pvs/embree_scene.h"
 
 #include <vector>
 
 namespace pvs {
 
 struct ConservativeFigures {
-    uint64_t samples = 0;          // boundary sample points tested
-    uint64_t samples_skipped = 0;  // inside a shrunk occluder
-    uint64_t samples_far = 0;      // farther than epsilon from the view region
-    uint64_t object_tests = 0;
+    uint64_t samples = 0;           // patch centres a depth cube was drawn from
+    uint64_t samples_skipped = 0;   // patch centres inside a shrunk occluder (nothing passes the patch)
+    uint64_t patches_in_solid = 0;  // patches wholly in the proven solid
+    uint64_t object_tests = 0;      // box tests on a depth cube (hierarchy nodes, objects and parts)
+    uint64_t rays = 0;              // sight rays from patch centres (objects seen need no refinement)
+    std::vector<uint64_t> samples_per_level;  // samples at each epsilon of the ladder
     double seconds = 0.0;
 };
 
 // The conservative rows of arbitrary boxes (cells, or octree nodes being considered): rows has boxes.size()
-// rows. Lists pvs_always_visible objects and objects whose bounds meet the box, then every object some
-// boundary sample cannot prove hidden. `shrunk` are the epsilon-shrunk occluder boxes. Parallel over boxes.
+// rows. Each box is first clipped to its eye region (the bounds of the `eyes` voxels in it; the whole box
+// when `eyes` is empty). Lists pvs_always_visible objects and objects whose bounds meet the region, then
+// every object some patch of the region's boundary cannot prove hidden. Parallel over boxes.
 void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const World& world,
-                           const std::vector<Aabb>& boxes, const std::vector<Aabb>& shrunk,
-                           const VoxelMask& reach, PvsSet& rows, ConservativeFigures& figures);
+                           const std::vector<Aabb>& boxes, const VoxelMask& eyes,
+                           const ShrunkOccluders& occluders, const RayScene& scene, PvsSet& rows,
+                           ConservativeFigures& figures);
 
-// The region where boundary samples are needed: `view` grown by ceil(epsilon / voxel) + 1 voxels.
-VoxelMask sample_reach(const VoxelMask& view, double epsilon_m);
-
-// The conservative PVS of every cell.
+// The conservative PVS of every cell. On a grid each face shared by two cells is computed once.
 PvsSet bake_conservative_pvs(Context& ctx, const ConservativeConfig& config, const World& world,
-                             const CellSet& cells, const std::vector<Aabb>& shrunk, const VoxelMask& reach,
+                             const CellSet& cells, const ShrunkOccluders& occluders, const RayScene& scene,
                              ConservativeFigures& figures);
 
 }  // namespace pvs

@@ -9,7 +9,9 @@
 #include "core/error.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <string>
 
@@ -26,10 +28,12 @@ inline double grid(int k, int r) {
     return -1.0 + 2.0 * double(k) / double(r);
 }
 
-// Round a non-negative double up to a float (larger stored depth is the safe side).
+// Round a non-negative finite double up to a float (larger stored depth is the safe side). The next float up
+// of a positive finite float is the one whose bits are one more (IEEE 754 orders positive floats as their
+// bit patterns); much cheaper than std::nextafter, which was 9% of a bake.
 inline float float_up(double x) {
     float f = float(x);
-    if (double(f) < x) f = std::nextafter(f, kInfF);
+    if (double(f) < x) f = std::bit_cast<float>(std::bit_cast<uint32_t>(f) + 1u);
     return f;
 }
 
@@ -160,6 +164,25 @@ DepthCube::DepthCube(int resolution) : resolution_(resolution) {
 void DepthCube::clear(glm::vec3 eye) {
     eye_ = eye;
     std::fill(depth_.begin(), depth_.end(), kInfF);
+    for (auto& r : region_) r = {0, resolution_ - 1, 0, resolution_ - 1};
+}
+
+void DepthCube::limit_to(const std::vector<Aabb>& boxes) {
+    const int r = resolution_;
+    for (auto& reg : region_) reg = {r, -1, r, -1};
+    for (const Aabb& box : boxes) {
+        if (!box_usable(box) || meets_near_cube(box, eye_)) {
+            for (auto& reg : region_) reg = {0, r - 1, 0, r - 1};  // tested as visible anyway; stay simple
+            return;
+        }
+        for (int face = 0; face < 6; ++face) {
+            const OccludeeFace of = occludee_face(box, eye_, face, r);
+            if (!of.touched) continue;
+            auto& reg = region_[size_t(face)];
+            reg = {std::min(reg[0], of.i0), std::max(reg[1], of.i1), std::min(reg[2], of.j0),
+                   std::max(reg[3], of.j1)};
+        }
+    }
 }
 
 size_t DepthCube::covered_pixel_count() const {
@@ -187,7 +210,10 @@ void DepthCube::add_occluder(const Aabb& box) {
         const auto vertex_hi = [r](double x) {
             return std::min(r, int(std::ceil((std::min(x, 1.0) + 1.0) * 0.5 * r)) + 1);
         };
-        const int iv0 = vertex_lo(u0), iv1 = vertex_hi(u1), jv0 = vertex_lo(v0), jv1 = vertex_hi(v1);
+        // Only the vertices of the pixels of the face's region (limit_to()).
+        const auto& reg = region_[size_t(face)];
+        const int iv0 = std::max(vertex_lo(u0), reg[0]), iv1 = std::min(vertex_hi(u1), reg[1] + 1);
+        const int jv0 = std::max(vertex_lo(v0), reg[2]), jv1 = std::min(vertex_hi(v1), reg[3] + 1);
         if (iv1 - iv0 < 1 || jv1 - jv0 < 1) continue;  // fewer than two vertices: no whole pixel
 
         // Separable slab test: a corner ray (u, v, 1) (depth-parameterized) enters at
@@ -212,11 +238,24 @@ void DepthCube::add_occluder(const Aabb& box) {
                 for (int i = iv0; i < iv1; ++i) {
                     const double d =
                         std::max({corner_prev_[i], corner_prev_[i + 1], corner_cur_[i], corner_cur_[i + 1]});
-                    if (d < kInf) row[i] = std::min(row[i], float_up(d));
+                    if (d < double(row[i])) row[i] = std::min(row[i], float_up(d));
                 }
             }
             std::swap(corner_prev_, corner_cur_);
         }
+    }
+}
+
+void DepthCube::add_occluders(const std::vector<Aabb>& boxes) {
+    order_.clear();
+    for (uint32_t b = 0; b < boxes.size(); ++b) {
+        const Aabb& box = boxes[b];
+        const glm::vec3 q = glm::clamp(eye_, box.min, box.max);
+        order_.push_back({glm::dot(q - eye_, q - eye_), b});
+    }
+    std::sort(order_.begin(), order_.end());
+    for (const auto& [dist2, b] : order_) {
+        if (!is_hidden(boxes[b])) add_occluder(boxes[b]);
     }
 }
 

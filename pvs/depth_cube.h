@@ -57,6 +57,8 @@
 
 #include "core/math.h"
 
+#include <array>
+#include <utility>
 #include <vector>
 
 namespace pvs {
@@ -78,10 +80,19 @@ public:
     // Throws pvs::Error (kBadInput) outside the limits.
     explicit DepthCube(int resolution);
 
-    // Moves the eye and resets every pixel to "no occluder" (+infinity).
+    // Moves the eye and resets every pixel to "no occluder" (+infinity); occluders will be drawn on all
+    // pixels.
     void clear(glm::vec3 eye);
+    // Occluders will only be drawn on the pixels that these boxes touch (the bounding pixel rectangle per
+    // face of the occludee rule's touched pixels), until the next clear(). Pixels left out stay +infinity,
+    // which is always the safe side; use it when only these boxes will be tested (adaptive refinement
+    // tests few objects on fine patches).
+    void limit_to(const std::vector<Aabb>& boxes);
     // Rasterizes one occluder box (see the pixel rule above). Empty or non-finite boxes are ignored.
     void add_occluder(const Aabb& box);
+    // Rasterizes all the boxes, nearest first, skipping each box the ones before already hide (it could not
+    // lower any pixel). Same depths as add_occluder() on every box, in far less time behind walls.
+    void add_occluders(const std::vector<Aabb>& boxes);
     // True only if the box is certainly hidden from the eye by the occluders added so far.
     bool is_hidden(const Aabb& box) const;
 
@@ -97,9 +108,11 @@ public:
 private:
     int resolution_;
     glm::vec3 eye_{0.0f};
-    std::vector<float> depth_;  // 6 * R * R, index face * R * R + j * R + i
+    std::vector<float> depth_;                    // 6 * R * R, index face * R * R + j * R + i
+    std::array<std::array<int, 4>, 6> region_{};  // per face: pixels i0, i1, j0, j1 occluders are drawn on
     // Scratch of add_occluder(), reused: per grid vertex of a column / row, the slab interval of the ray
     // parameter (depth) on the u / v axis; and the corner depths of two vertex rows.
+    std::vector<std::pair<float, uint32_t>> order_;  // scratch of add_occluders()
     std::vector<double> col_enter_, col_exit_, row_enter_, row_exit_, corner_prev_, corner_cur_;
 };
 

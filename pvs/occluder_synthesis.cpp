@@ -122,8 +122,8 @@ void carve_seen_solid(Context& ctx, const OccluderConfig& config, const VoxelGri
 
 std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& config, const World& world,
                                            const ViewVolume& view, const RayScene& scene,
-                                           OccluderFigures& figures, double epsilon_m,
-                                           std::vector<Aabb>* shrunk) {
+                                           OccluderFigures& figures, double epsilon_m, int levels,
+                                           ShrunkOccluders* shrunk) {
     ScopedTimer timer(ctx, "occluders");
     const auto start = std::chrono::steady_clock::now();
     // The voxels: the view volume's, or the world's at the default size when there is no view volume.
@@ -137,6 +137,7 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
         touched = &touched_local;
     }
     Solid solid = classify_solid(ctx, grid, *touched, view.eyes);
+    add_closed_boxes(ctx, closed_box_objects(world), view.eyes, solid);
     figures.solid_m3 = solid.solid_m3;
     if (config.probe_eyes > 0) carve_seen_solid(ctx, config, grid, *touched, view, scene, solid, figures);
 
@@ -217,31 +218,48 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
                 for (int y = vb.lo.y; y <= vb.hi.y; ++y)
                     for (int x = vb.lo.x; x <= vb.hi.x; ++x) proven.clear(grid.index(x, y, z));
         }
-        const int k = std::max(1, int(std::ceil(epsilon_m / double(grid.voxel_size_m) - 1e-9)));
         BitVolume not_proven;
         not_proven.reset(grid.count());
         for (size_t w = 0; w < proven.words.size(); ++w) not_proven.words[w] = ~proven.words[w];
-        const BitVolume near_not = dilate(grid, not_proven, k);
-        BitVolume eroded;
-        eroded.reset(grid.count());
-        for (size_t w = 0; w < proven.words.size(); ++w)
-            eroded.words[w] = proven.words[w] & ~near_not.words[w];
-        for (uint64_t i = 0; i < grid.count(); ++i) {
-            if (!eroded.get(i)) continue;
-            const glm::ivec3 c = grid.coords(i);
-            if (glm::any(glm::lessThan(c, glm::ivec3(k))) ||
-                glm::any(glm::greaterThanEqual(c, grid.dims - k))) {
-                eroded.clear(i);
-            }
-        }
         BoxConfig sc = bc;
         sc.min_box_volume_m3 = 0.0;  // every shrunk box helps fusion
         sc.max_boxes = std::max<uint32_t>(bc.max_boxes, 1024);
-        const std::vector<VoxelBox> shrunk_boxes = grow_boxes(ctx, grid, eroded, sc, nullptr);
-        shrunk->clear();
-        for (const VoxelBox& vb : shrunk_boxes) shrunk->push_back(box_bounds(grid, vb));
-        ctx.info(fmt::format("occluders shrunk by {} m ({} voxels): {} boxes of {:.0f} m3 of solid",
-                             epsilon_m, k, shrunk->size(), double(eroded.count()) * voxel_m3));
+        shrunk->epsilon_m.clear();
+        shrunk->boxes.clear();
+        for (int level = 0; level <= levels; ++level) {
+            const double eps = epsilon_m * std::ldexp(1.0, level);
+            const int k = std::max(1, int(std::ceil(eps / double(grid.voxel_size_m) - 1e-9)));
+            const BitVolume near_not = dilate(grid, not_proven, k);
+            BitVolume eroded;
+            eroded.reset(grid.count());
+            for (size_t w = 0; w < proven.words.size(); ++w)
+                eroded.words[w] = proven.words[w] & ~near_not.words[w];
+            for (uint64_t i = 0; i < grid.count(); ++i) {
+                if (!eroded.get(i)) continue;
+                const glm::ivec3 c = grid.coords(i);
+                if (glm::any(glm::lessThan(c, glm::ivec3(k))) ||
+                    glm::any(glm::greaterThanEqual(c, grid.dims - k))) {
+                    eroded.clear(i);
+                }
+            }
+            const std::vector<VoxelBox> shrunk_boxes = grow_boxes(ctx, grid, eroded, sc, nullptr);
+            std::vector<Aabb> level_boxes;
+            for (const VoxelBox& vb : shrunk_boxes) level_boxes.push_back(box_bounds(grid, vb));
+            ctx.info(fmt::format("occluders shrunk by {} m ({} voxels): {} boxes of {:.0f} m3 of solid", eps,
+                                 k, level_boxes.size(), double(eroded.count()) * voxel_m3));
+            shrunk->epsilon_m.push_back(eps);
+            shrunk->boxes.push_back(std::move(level_boxes));
+        }
+        shrunk->free.origin = grid.origin;
+        shrunk->free.voxel_size_m = grid.voxel_size_m;
+        shrunk->free.dims = grid.dims;
+        shrunk->free.bits.resize(proven.words.size());
+        for (size_t w = 0; w < proven.words.size(); ++w)
+            shrunk->free.bits[w] = ~(proven.words[w] | touched->words[w]);
+        shrunk->solid.origin = grid.origin;
+        shrunk->solid.voxel_size_m = grid.voxel_size_m;
+        shrunk->solid.dims = grid.dims;
+        shrunk->solid.bits = std::move(proven.words);
     }
 
     std::vector<Occluder> out;

@@ -40,13 +40,14 @@ struct OccluderFigures {
     double seconds = 0.0;
 };
 
-// When `shrunk` is given, also fills it with boxes of the solid SHRUNK by `epsilon_m` (the proven solid,
-// without the voxels of rejected boxes, eroded by ceil(epsilon / voxel) voxels in the Chebyshev metric, so
-// every point of a shrunk box has its whole epsilon-ball inside the proven solid): the occluders of the
-// conservative solver (pvs/conservative.h).
+// When `shrunk` is given, also fills it with the proven solid (the solid, less the voxels of rejected boxes)
+// and, for each epsilon of the ladder epsilon_m * 2^k, k = 0..levels, boxes of the proven solid SHRUNK by
+// it (eroded by ceil(epsilon / voxel) voxels in the Chebyshev metric, so every point of a shrunk box has its
+// whole epsilon-ball inside the proven solid): the occluders of the conservative solver
+// (pvs/conservative.h).
 std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& config, const World& world,
                                            const ViewVolume& view, const RayScene& scene,
-                                           OccluderFigures& figures, double epsilon_m = 0.0,
-                                           std::vector<Aabb>* shrunk = nullptr);
+                                           OccluderFigures& figures, double epsilon_m = 0.0, int levels = 0,
+                                           ShrunkOccluders* shrunk = nullptr);
 
 }  // namespace pvs

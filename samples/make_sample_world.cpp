@@ -2,7 +2,8 @@
 //
 //   make_sample_world OUT.glb [--rooms N] [--seed S]
 //
-// A square building of N x N rooms (8 m, 3 m high) with floor and ceiling slabs, 0.3 m walls, one
+// A square building of N x N rooms (8 m, 3 m high) with 0.5 m floor and ceiling slabs and 0.6 m walls
+// (thick enough to keep a shrunk occluder at the default epsilon and voxels), one
 // doorway per wall of a random spanning tree (a maze: the rooms are all reachable, most walls are
 // closed), glass windows (alphaMode BLEND) in a few closed walls, crates and pillars in the rooms, and
 // a view seed (extras.pvs_view_seed) at eye height in every room. Every wall piece, slab and prop is
@@ -24,9 +25,9 @@
 namespace {
 
 constexpr float kRoomM = 8.0f;
-constexpr float kWallM = 0.3f;
+constexpr float kWallM = 0.6f;
 constexpr float kHeightM = 3.0f;
-constexpr float kSlabM = 0.2f;
+constexpr float kSlabM = 0.5f;
 constexpr float kDoorWidthM = 1.2f;
 constexpr float kDoorHeightM = 2.2f;
 constexpr float kWindowWidthM = 1.6f;
