@@ -32,10 +32,31 @@ bool visit_set_voxels_in(const VoxelMask& mask, const Aabb& box, Visit&& visit) 
     return false;
 }
 
+// The voxel coordinates of index i of the mask, as floats.
+glm::vec3 voxel_coords(const VoxelMask& mask, uint64_t i) {
+    const uint64_t x = i % uint64_t(mask.dims.x), yz = i / uint64_t(mask.dims.x);
+    return {float(x), float(yz % uint64_t(mask.dims.y)), float(yz / uint64_t(mask.dims.y))};
+}
+
 }  // namespace
 
 bool mask_meets_box(const VoxelMask& mask, const Aabb& box) {
     return visit_set_voxels_in(mask, box, [](uint64_t) { return true; });
+}
+
+Aabb eye_region(const VoxelMask& eyes, const Aabb& box) {
+    if (eyes.empty()) return box;
+    Aabb region;
+    visit_set_voxels_in(eyes, box, [&](uint64_t i) {
+        const glm::vec3 v = voxel_coords(eyes, i);
+        region.extend(eyes.origin + v * eyes.voxel_size_m);
+        region.extend(eyes.origin + (v + 1.0f) * eyes.voxel_size_m);
+        return false;
+    });
+    if (region.is_empty()) return region;
+    region.min = glm::max(region.min, box.min);
+    region.max = glm::min(region.max, box.max);
+    return region;
 }
 
 void sample_eye_points_in(const CellSet& cells, const Aabb& region, uint64_t stream, uint32_t count,
@@ -56,8 +77,7 @@ void sample_eye_points_in(const CellSet& cells, const Aabb& region, uint64_t str
         for (uint32_t k = 0; k < count && n > 0; ++k) {
             const uint64_t a = uint64_t(k) * n / count, b = std::max(a + 1, uint64_t(k + 1) * n / count);
             const uint64_t i = voxels[std::min<uint64_t>(n - 1, a + uint64_t(rng.uniform() * float(b - a)))];
-            const uint64_t x = i % uint64_t(m.dims.x), yz = i / uint64_t(m.dims.x);
-            const glm::vec3 v(float(x), float(yz % uint64_t(m.dims.y)), float(yz / uint64_t(m.dims.y)));
+            const glm::vec3 v = voxel_coords(m, i);
             const glm::vec3 lo = glm::max(m.origin + v * m.voxel_size_m, region.min);
             const glm::vec3 hi = glm::min(m.origin + (v + 1.0f) * m.voxel_size_m, region.max);
             const glm::vec3 jitter(rng.uniform(), rng.uniform(), rng.uniform());

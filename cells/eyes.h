@@ -33,6 +33,11 @@ inline void sample_eye_points(const CellSet& cells, uint32_t cell, uint32_t coun
 // Cells are kept where the EYE mask meets them, so every cell has eye space in it.
 bool mask_meets_box(const VoxelMask& mask, const Aabb& box);
 
+// The part of `box` eyes can be in: the bounds of the eye voxels (as in mask_meets_box) clipped to the box.
+// Convex, and it holds every eye point the box can get. The whole box when `eyes` is empty (no view
+// volume); an empty box when no eye voxel meets it.
+Aabb eye_region(const VoxelMask& eyes, const Aabb& box);
+
 // Appends `count` directions stratified over the whole sphere (equal-area strata in (cos theta, phi),
 // one jittered direction per stratum). Unit length.
 void sample_sphere_directions(uint32_t count, uint64_t seed, uint64_t stream, std::vector<glm::vec3>& out);

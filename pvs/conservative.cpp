@@ -2,6 +2,7 @@
 // hidden; a depth cube of the shrunk occluders from each patch centre. Safety argument: conservative.h.
 #include "pvs/conservative.h"
 
+#include "cells/eyes.h"
 #include "pvs/depth_cube.h"
 #include "pvs/ray_sampler.h"
 
@@ -12,7 +13,6 @@
 #include <chrono>
 #include <cmath>
 #include <map>
-#include <numeric>
 
 namespace pvs {
 
@@ -384,34 +384,6 @@ Aabb box_face(const Aabb& box, int axis, int side) {
     Aabb f = box;
     f.min[axis] = f.max[axis] = side ? box.max[axis] : box.min[axis];
     return f;
-}
-
-// The part of `box` eyes can be in: the bounds of the eye voxels meeting the box's interior, clipped to the
-// box (argument 3 of conservative.h: it is convex and holds every eye of the box, so sight leaves it
-// through its boundary). The whole box without an eye mask; empty when no eye voxel meets the box.
-Aabb eye_region(const VoxelMask& eyes, const Aabb& box) {
-    if (eyes.empty()) return box;
-    glm::ivec3 lo, hi;
-    for (int a = 0; a < 3; ++a) {
-        lo[a] = std::max(0, int(std::floor((box.min[a] - eyes.origin[a]) / eyes.voxel_size_m)));
-        hi[a] =
-            std::min(eyes.dims[a] - 1, int(std::ceil((box.max[a] - eyes.origin[a]) / eyes.voxel_size_m)) - 1);
-    }
-    Aabb region;
-    for (int z = lo.z; z <= hi.z; ++z)
-        for (int y = lo.y; y <= hi.y; ++y)
-            for (int x = lo.x; x <= hi.x; ++x) {
-                if (!eyes.get(uint64_t(x) +
-                              uint64_t(eyes.dims.x) * (uint64_t(y) + uint64_t(eyes.dims.y) * uint64_t(z))))
-                    continue;
-                const glm::vec3 vmin = eyes.origin + glm::vec3(x, y, z) * eyes.voxel_size_m;
-                region.extend(vmin);
-                region.extend(vmin + glm::vec3(eyes.voxel_size_m));
-            }
-    if (region.is_empty()) return region;
-    region.min = glm::max(region.min, box.min);
-    region.max = glm::min(region.max, box.max);
-    return region;
 }
 
 }  // namespace
