@@ -1,33 +1,44 @@
-// pvsbake io: writes and reads the HDF5 bake file, format 1.0 (layout in docs/FORMAT.md), with the HDF5 C
+// pvsbake io: writes and reads the HDF5 bake file, format 1.1 (layout in docs/FORMAT.md), with the HDF5 C
 // API only (the runtime loader must depend on libhdf5 alone). The writer dedupes PVS rows, writes to an
-// AtomicOutput temporary file and commits it once the file is fully closed; the reader validates every
-// shape and index before it builds a BakeData, and turns every failure into a pvs::Error naming the file.
+// AtomicOutput temporary file and commits it once the file is fully closed. The reader is the loader
+// library's (io/loader/bake_reader.h: one validating reader of the format, shared with the runtime); this
+// file turns its sections into a BakeData and its failures into a pvs::Error naming the file.
 #include "io/bake_file.h"
 
 #include "core/error.h"
 #include "io/atomic_file.h"
+#include "io/loader/bake_reader.h"
+#include "io/loader/hdf5_reader.h"
+#include "io/loader/row_code.h"
 
 #include <fmt/format.h>
 #include <hdf5.h>
 
 #include <algorithm>
-#include <cerrno>
 #include <cstddef>
 #include <cstring>
 #include <filesystem>
 #include <new>
 #include <stdexcept>
+#include <tuple>
 #include <unordered_map>
 #include <unordered_set>
 #include <utility>
 
-#include <fcntl.h>
-#include <unistd.h>
-
 namespace pvs {
 namespace {
 
-constexpr const char* kFormatName = "pvsbake";
+using pvsbake::detail::at;
+using pvsbake::detail::Handle;
+using pvsbake::detail::hdf5_detail;
+using pvsbake::detail::QuietHdf5;
+using pvsbake::detail::Reader;
+
+static_assert(pvsbake::detail::kFormatMajor == kBakeFormatMajor &&
+                  pvsbake::detail::kFormatMinor == kBakeFormatMinor,
+              "the loader and the baker must read and write the same format version");
+
+using pvsbake::detail::kFormatName;
 constexpr const char* kConservativeNote = "conservative";
 constexpr const char* kAggressiveNote = "aggressive (sampled: may miss visible objects)";
 // Chunk size for the large datasets (FACTS.md: keep chunks at 32-128 KiB; one random row read inflates a
@@ -37,76 +48,9 @@ constexpr unsigned kGzipLevel = 6;
 constexpr const char* kBoundsColumns = "min_x, min_y, min_z, max_x, max_y, max_z";
 
 // ---------------------------------------------------------------------------------------------------------
-// HDF5 plumbing: handles, error messages, quiet error stack.
+// HDF5 plumbing for writing (handles and the quiet error stack come from io/loader/hdf5_reader.h).
 
-// Owns one HDF5 identifier and closes it with the matching H5?close.
-class Handle {
-public:
-    using Closer = herr_t (*)(hid_t);
-    Handle() = default;
-    Handle(hid_t id, Closer closer) : id_(id), closer_(closer) {}
-    Handle(Handle&& o) noexcept : id_(std::exchange(o.id_, H5I_INVALID_HID)), closer_(o.closer_) {}
-    Handle& operator=(Handle&& o) noexcept {
-        if (this != &o) {
-            reset();
-            id_ = std::exchange(o.id_, H5I_INVALID_HID);
-            closer_ = o.closer_;
-        }
-        return *this;
-    }
-    Handle(const Handle&) = delete;
-    Handle& operator=(const Handle&) = delete;
-    ~Handle() { reset(); }
-
-    hid_t get() const { return id_; }
-    // Closes now and reports the result (a file's close is where its last bytes reach the disk).
-    herr_t close() {
-        const herr_t r = id_ >= 0 ? closer_(id_) : 0;
-        id_ = H5I_INVALID_HID;
-        return r;
-    }
-
-private:
-    void reset() {
-        if (id_ >= 0) closer_(id_);
-        id_ = H5I_INVALID_HID;
-    }
-    hid_t id_ = H5I_INVALID_HID;
-    Closer closer_ = nullptr;
-};
-
-// Turns off HDF5's automatic printing of its error stack while alive; failures become our messages.
-class QuietHdf5 {
-public:
-    QuietHdf5() {
-        H5Eget_auto2(H5E_DEFAULT, &func_, &data_);
-        H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
-    }
-    ~QuietHdf5() { H5Eset_auto2(H5E_DEFAULT, func_, data_); }
-    QuietHdf5(const QuietHdf5&) = delete;
-    QuietHdf5& operator=(const QuietHdf5&) = delete;
-
-private:
-    H5E_auto2_t func_ = nullptr;
-    void* data_ = nullptr;
-};
-
-herr_t innermost_error(unsigned n, const H5E_error2_t* err, void* out) {
-    if (n == 0 && err->desc != nullptr) *static_cast<std::string*>(out) = err->desc;
-    return 0;
-}
-
-// The description of the deepest entry of HDF5's current error stack (where the failure started), then
-// clears the stack.
-std::string hdf5_detail() {
-    std::string detail;
-    H5Ewalk2(H5E_DEFAULT, H5E_WALK_UPWARD, innermost_error, &detail);
-    H5Eclear2(H5E_DEFAULT);
-    return detail;
-}
-
-// Names the file in every message and throws pvs::Error of one kind: kIo while writing, kBadInput while
-// reading (a file we cannot read is a bad input).
+// Names the file in every message and throws pvs::Error of one kind (kIo: the writer's failures).
 class Site {
 public:
     Site(std::string path, ErrorKind kind, std::string prefix)
@@ -134,11 +78,6 @@ private:
     std::string prefix_;
 };
 
-// Where an object sits in the file, for messages: "/pvs/rows".
-std::string at(const std::string& group, const std::string& name) {
-    return group == "/" ? "/" + name : group + "/" + name;
-}
-
 // A fixed-length UTF-8 string type of `bytes` bytes, each string NUL-terminated inside it. Fixed, not
 // variable-length: variable-length strings live in HDF5's global heap, and HDF5 1.10.8 reads a damaged
 // global heap out of bounds (segfaults in H5HG_read when a fuzzed file is read); fixed-length strings are
@@ -153,13 +92,7 @@ Handle string_type(const Site& site, size_t bytes) {
 }
 
 Handle file_access_list(const Site& site) {
-    Handle fapl = site.handle(H5Pcreate(H5P_FILE_ACCESS), H5Pclose, "cannot create a file access list");
-    // STRONG: H5Fclose closes every object still open in the file, so the file is complete once closed.
-    site.check(H5Pset_fclose_degree(fapl.get(), H5F_CLOSE_STRONG), "cannot set the file close degree");
-    // File locking stays at the library default (Debian's build ignores file systems without locks): an
-    // explicit H5Pset_file_locking makes H5Fopen fail with "file locking flag values don't match" when
-    // the same process already has the file open with the default settings.
-    return fapl;
+    return site.handle(pvsbake::detail::file_access_list(), H5Pclose, "cannot create a file access list");
 }
 
 // Group creation list that remembers the order links and attributes were created in, so that
@@ -298,6 +231,8 @@ struct MissRecord {
 };
 
 // The compound type of /verification/misses: native (in memory) or packed little-endian (on file).
+// Site: the writer's Site or the reader's Reader (both name the file and add what HDF5 said).
+template <class Site>
 Handle miss_type(const Site& site, bool on_file) {
     const hsize_t three[1] = {3};
     const hid_t u32 = on_file ? H5T_STD_U32LE : H5T_NATIVE_UINT32;
@@ -336,14 +271,8 @@ uint8_t last_byte_mask(uint32_t objects) {
 // dims.x * dims.y * dims.z, or UINT64_MAX when a dimension is negative or the product passes 2^48 (a grid
 // or voxel mask that large could not be held in memory anyway; the limit keeps the product from wrapping).
 uint64_t volume_of(glm::ivec3 d) {
-    if (d.x < 0 || d.y < 0 || d.z < 0) return UINT64_MAX;
-    constexpr uint64_t kLimit = uint64_t(1) << 48;
-    uint64_t v = 1;
-    for (int a = 0; a < 3; ++a) {
-        if (d[a] != 0 && v > kLimit / uint64_t(d[a])) return UINT64_MAX;
-        v *= uint64_t(d[a]);
-    }
-    return v;
+    const int32_t dims[3] = {d.x, d.y, d.z};
+    return pvsbake::detail::volume_of(dims);
 }
 
 // The writer refuses what the reader would refuse: a file it writes is always readable.
@@ -374,12 +303,24 @@ void check_writable(const std::string& path, const BakeData& bake) {
             bad(fmt::format("the {} mask has {} words for {} voxels", name, mask->bits.size(), voxels));
         }
     }
+    // As the reader checks: grid_to_cell holds cells (grid) or root nodes (octree); parents are nodes.
+    const bool octree = bake.cells.kind == CellSet::Kind::kOctree;
+    const int64_t nodes = octree ? int64_t(bake.cells.nodes.size()) : 0;
     for (int32_t c : bake.cells.grid_to_cell) {
-        if (c < -1 || int64_t(c) >= int64_t(cells)) bad(fmt::format("grid_to_cell entry {} out of range", c));
+        if (c < -1 || int64_t(c) >= (octree ? nodes : int64_t(cells)))
+            bad(fmt::format("grid_to_cell entry {} out of range", c));
     }
     for (const Cell& c : bake.cells.cells) {
-        if (c.parent < -1 || int64_t(c.parent) >= int64_t(cells))
+        if (c.parent < -1 || int64_t(c.parent) >= nodes)
             bad(fmt::format("cell parent {} out of range", c.parent));
+    }
+    for (size_t i = 0; i < bake.cells.nodes.size(); ++i) {
+        const OctreeNode& n = bake.cells.nodes[i];
+        if ((n.first_child != -1 &&
+             (int64_t(n.first_child) <= int64_t(i) || int64_t(n.first_child) + 8 > nodes)) ||
+            n.cell < -1 || int64_t(n.cell) >= int64_t(cells) || n.parent < -1 || int64_t(n.parent) >= nodes) {
+            bad(fmt::format("octree node {} has a child, cell or parent out of range", i));
+        }
     }
     const VerificationRecord& v = bake.verification;
     if (!v.cell_sampled_visible.empty() && v.cell_sampled_visible.size() != cells) {
@@ -580,6 +521,22 @@ void write_pvs(Writer& w, hid_t root, const BakeData& bake) {
         w.dataset(g.get(), "/pvs", "cell_row", H5T_STD_U32LE, H5T_NATIVE_UINT32, {cells}, cell_row.data());
     const uint64_t stored = storage_size(w.site(), rows_ds.get(), "/pvs/rows") +
                             storage_size(w.site(), cell_row_ds.get(), "/pvs/cell_row");
+    // Format 1.1: the same rows in the PVS code (io/loader/row_code.h), which the runtime loader keeps in
+    // memory as it is: loading is one plain read, no inflate (docs/FORMAT.md, "The PVS code").
+    if (pvs.object_count < pvsbake::detail::kMaxCodedObjects) {
+        const pvsbake::detail::RowCode code =
+            pvsbake::detail::encode_rows(rows.data(), unique_rows, row_bytes, pvs.object_count);
+        if (code.code.size() >= UINT32_MAX) w.site().fail("the PVS code passes 4 GiB");
+        Handle code_ds = w.dataset(g.get(), "/pvs", "code", H5T_STD_U8LE, H5T_NATIVE_UINT8,
+                                   {code.code.size()}, code.code.data());
+        w.string_attr(
+            code_ds.get(), "coding",
+            "per distinct row: varint ref (0 = key row, else XOR with row r - ref), varint count << 5 | k, "
+            "count Rice(k) codes of the gaps between visible object indices; docs/FORMAT.md");
+        w.dataset(g.get(), "/pvs", "code_offsets", H5T_STD_U32LE, H5T_NATIVE_UINT32, {code.offsets.size()},
+                  code.offsets.data());
+        w.u64_attr(g.get(), "bytes_code", code.code.size() + 4 * code.offsets.size() + 4 * uint64_t(cells));
+    }
     w.u32_attr(g.get(), "object_count", pvs.object_count);
     w.u32_attr(g.get(), "cell_count", cells);
     w.u32_attr(g.get(), "unique_rows", unique_rows);
@@ -647,570 +604,95 @@ void write_verification(Writer& w, hid_t root, const VerificationRecord& v) {
 }
 
 // ---------------------------------------------------------------------------------------------------------
-// Reading.
+// Reading: the loader's validated sections (io/loader/bake_reader.h) into a BakeData, plus what only the
+// baker reads (leak path, occluders, verification).
 
-// HDF5 1.10.8 trusts what a file says about its types and sizes: a damaged element size or compound member
-// offset makes H5Dread copy out of bounds, and a damaged dimension makes us allocate gigabytes. So the
-// reader checks every stored type (numbers of 1-8 bytes, IEEE floats, compound members inside their
-// record) and refuses a dataset larger than the file could hold even at gzip's best ratio (~1032:1).
-class Reader {
-public:
-    Reader(const Site& site, uint64_t file_bytes)
-        : site_(site), max_bytes_(file_bytes * 1100 + (1u << 20)), max_chunks_(file_bytes / 16 + 1024) {}
-
-    [[noreturn]] void fail(const std::string& what) const { site_.fail(what); }
-
-    bool has_attr(hid_t loc, const std::string& name) const {
-        const htri_t r = H5Aexists(loc, name.c_str());
-        if (r < 0) site_.fail_hdf5("cannot look for attribute " + name);
-        return r > 0;
-    }
-    Handle open_attr(hid_t loc, const std::string& where, const std::string& name) const {
-        if (!has_attr(loc, name)) fail(fmt::format("{} has no attribute '{}'", where, name));
-        return site_.handle(H5Aopen(loc, name.c_str(), H5P_DEFAULT), H5Aclose,
-                            fmt::format("cannot open attribute '{}' of {}", name, where));
-    }
-    Handle open_group(hid_t loc, const std::string& where) const {
-        const std::string name = where.substr(where.rfind('/') + 1);
-        const htri_t r = H5Lexists(loc, name.c_str(), H5P_DEFAULT);
-        if (r <= 0) fail(fmt::format("missing group {}", where));
-        return site_.handle(H5Gopen2(loc, name.c_str(), H5P_DEFAULT), H5Gclose, "cannot open group " + where);
-    }
-    Handle open_dataset(hid_t loc, const std::string& where, const std::string& name) const {
-        const htri_t r = H5Lexists(loc, name.c_str(), H5P_DEFAULT);
-        if (r <= 0) fail(fmt::format("missing dataset {}", at(where, name)));
-        return site_.handle(H5Dopen2(loc, name.c_str(), H5P_DEFAULT), H5Dclose,
-                            "cannot open dataset " + at(where, name));
-    }
-
-    // Dimensions of an attribute's or a dataset's space; a scalar has none.
-    std::vector<hsize_t> dims_of(hid_t space, const std::string& full) const {
-        Handle s(space, H5Sclose);
-        if (space < 0) site_.fail_hdf5("cannot read the shape of " + full);
-        const int rank = H5Sget_simple_extent_ndims(space);
-        if (rank < 0) site_.fail_hdf5("cannot read the shape of " + full);
-        std::vector<hsize_t> dims(size_t(rank), 0);
-        if (rank > 0 && H5Sget_simple_extent_dims(space, dims.data(), nullptr) < 0) {
-            site_.fail_hdf5("cannot read the shape of " + full);
-        }
-        return dims;
-    }
-    std::vector<hsize_t> dataset_dims(hid_t ds, const std::string& full) const {
-        return dims_of(H5Dget_space(ds), full);
-    }
-
-    // Fails unless the dataset's storage fits its shape: chunks no larger than the dataset's maximum
-    // dimensions (HDF5 itself enforces that when it creates a dataset, but trusts a damaged file: a
-    // chunk dimension damaged to 14,286,849 made H5Dread copy out of bounds), and contiguous storage of
-    // exactly the dataset's bytes (or none yet).
-    void check_storage(hid_t ds, uint64_t stored_element_bytes, const std::string& full) const {
-        Handle space = site_.handle(H5Dget_space(ds), H5Sclose, "cannot read the shape of " + full);
-        const int rank = H5Sget_simple_extent_ndims(space.get());
-        hsize_t dims[H5S_MAX_RANK], max_dims[H5S_MAX_RANK];
-        if (rank < 0 || rank > H5S_MAX_RANK || H5Sget_simple_extent_dims(space.get(), dims, max_dims) < 0) {
-            site_.fail_hdf5("cannot read the shape of " + full);
-        }
-        for (int i = 0; i < rank; ++i) {
-            if (max_dims[i] != H5S_UNLIMITED && dims[i] > max_dims[i]) {
-                fail(full + " is larger than its maximum size (damaged file?)");
+// The stored type of /verification/misses: a compound whose members all lie inside its record, with
+// the members this reader needs (more are allowed: a later minor version may add some).
+void check_miss_type(const Reader& r, hid_t type_id, const std::string& full) {
+    Handle t = r.handle(type_id, H5Tclose, "cannot read the type of " + full);
+    if (H5Tget_class(t.get()) != H5T_COMPOUND) r.fail(full + " is not a compound dataset");
+    const size_t record = H5Tget_size(t.get());
+    const int members = H5Tget_nmembers(t.get());
+    if (record == 0 || record > 4096 || members < 0) r.fail(full + " has a damaged compound type");
+    for (unsigned i = 0; i < unsigned(members); ++i) {
+        Handle m = r.handle(H5Tget_member_type(t.get(), i), H5Tclose, "cannot read the type of " + full);
+        size_t bytes = H5Tget_size(m.get());
+        if (H5Tget_class(m.get()) == H5T_ARRAY) {
+            Handle base = r.handle(H5Tget_super(m.get()), H5Tclose, "cannot read the type of " + full);
+            r.check_number_type(base.get(), full);
+            hsize_t dims[H5S_MAX_RANK];
+            const int rank = H5Tget_array_ndims(m.get());
+            if (rank < 0 || rank > H5S_MAX_RANK || H5Tget_array_dims2(m.get(), dims) != rank) {
+                r.fail(full + " has a damaged array member");
             }
+            uint64_t n = 1;
+            for (int d = 0; d < rank; ++d) n *= dims[d];
+            if (n * H5Tget_size(base.get()) != bytes) r.fail(full + " has a damaged array member");
+        } else if (H5Tget_class(m.get()) == H5T_INTEGER || H5Tget_class(m.get()) == H5T_FLOAT) {
+            r.check_number_type(m.get(), full);
         }
-        Handle dcpl = site_.handle(H5Dget_create_plist(ds), H5Pclose, "cannot read the layout of " + full);
-        const H5D_layout_t layout = H5Pget_layout(dcpl.get());
-        if (layout == H5D_CHUNKED) {
-            hsize_t chunk[H5S_MAX_RANK];
-            if (H5Pget_chunk(dcpl.get(), H5S_MAX_RANK, chunk) != rank) {
-                fail(full + " has a damaged chunk layout");
-            }
-            uint64_t chunk_bytes = stored_element_bytes;
-            uint64_t chunks = 1;
-            for (int i = 0; i < rank; ++i) {
-                if (chunk[i] == 0 || (max_dims[i] != H5S_UNLIMITED && chunk[i] > max_dims[i])) {
-                    fail(full + " has a damaged chunk layout");
-                }
-                chunk_bytes *= chunk[i];
-                if (chunk_bytes > (uint64_t(1) << 32)) fail(full + " has a damaged chunk layout");
-                // HDF5 spends about 2.5 KB of memory on each chunk a read touches, and each stored chunk
-                // takes well over 16 bytes of the file: a layout with more chunks than that is damaged.
-                chunks *= (dims[i] + chunk[i] - 1) / chunk[i];
-                if (chunks > max_chunks_)
-                    fail(full + " has more chunks than the file can hold (damaged file?)");
-            }
-        } else if (layout == H5D_CONTIGUOUS) {
-            uint64_t bytes = stored_element_bytes;
-            for (int i = 0; i < rank; ++i) bytes *= dims[i];
-            const hsize_t stored = H5Dget_storage_size(ds);
-            if (stored_element_bytes != 0 && stored != 0 && stored != bytes) {
-                fail(fmt::format("{} stores {} bytes for {} bytes of data (damaged file?)", full, stored,
-                                 bytes));
-            }
-        } else if (layout != H5D_COMPACT) {
-            fail(full + " has an unknown storage layout");
+        if (bytes == 0 || H5Tget_member_offset(t.get(), i) + bytes > record) {
+            r.fail(full + " has a compound member outside its record (damaged type)");
         }
     }
-    void check_storage(hid_t ds, const std::string& full) const {
-        Handle t = site_.handle(H5Dget_type(ds), H5Tclose, "cannot read the type of " + full);
-        const size_t bytes = H5Tget_size(t.get());
-        if (bytes == 0) site_.fail_hdf5("cannot read the type of " + full);
-        // A variable-length element's size on file is not its size in memory: check the chunks only.
-        const bool variable = H5Tget_class(t.get()) == H5T_VLEN || H5Tis_variable_str(t.get()) > 0;
-        check_storage(ds, variable ? 0 : bytes, full);
-    }
-
-    // Fails unless `count` elements of `element_bytes` each could come from this file.
-    void check_budget(uint64_t count, uint64_t element_bytes, const std::string& full) const {
-        if (element_bytes != 0 && count > max_bytes_ / element_bytes) {
-            fail(fmt::format("{} claims {} elements of {} bytes, more than the file can hold (damaged file?)",
-                             full, count, element_bytes));
-        }
-    }
-
-    // Fails unless t is a sound integer (1, 2, 4 or 8 bytes) or IEEE float type; returns its class.
-    H5T_class_t check_number_type(hid_t t, const std::string& full) const {
-        const H5T_class_t c = H5Tget_class(t);
-        if (c == H5T_INTEGER) {
-            const size_t size = H5Tget_size(t);
-            const size_t precision = H5Tget_precision(t);
-            const int offset = H5Tget_offset(t);
-            if ((size == 1 || size == 2 || size == 4 || size == 8) && precision > 0 && offset >= 0 &&
-                size_t(offset) + precision <= 8 * size) {
-                return c;
-            }
-            fail(full + " has a damaged integer type");
-        }
-        if (c == H5T_FLOAT) {
-            for (hid_t ieee : {H5T_IEEE_F32LE, H5T_IEEE_F32BE, H5T_IEEE_F64LE, H5T_IEEE_F64BE}) {
-                if (H5Tequal(t, ieee) > 0) return c;
-            }
-            fail(full + " has a float type that is not IEEE single or double");
-        }
-        fail(full + " is not a number");
-    }
-    // Takes ownership of type_id.
-    H5T_class_t number_type(hid_t type_id, const std::string& full) const {
-        Handle t = site_.handle(type_id, H5Tclose, "cannot read the type of " + full);
-        return check_number_type(t.get(), full);
-    }
-
-    // The stored type of /verification/misses: a compound whose members all lie inside its record, with
-    // the members this reader needs (more are allowed: a later minor version may add some).
-    void check_miss_type(hid_t type_id, const std::string& full) const {
-        Handle t = site_.handle(type_id, H5Tclose, "cannot read the type of " + full);
-        if (H5Tget_class(t.get()) != H5T_COMPOUND) fail(full + " is not a compound dataset");
-        const size_t record = H5Tget_size(t.get());
-        const int members = H5Tget_nmembers(t.get());
-        if (record == 0 || record > 4096 || members < 0) fail(full + " has a damaged compound type");
-        for (unsigned i = 0; i < unsigned(members); ++i) {
-            Handle m =
-                site_.handle(H5Tget_member_type(t.get(), i), H5Tclose, "cannot read the type of " + full);
-            size_t bytes = H5Tget_size(m.get());
-            if (H5Tget_class(m.get()) == H5T_ARRAY) {
-                Handle base =
-                    site_.handle(H5Tget_super(m.get()), H5Tclose, "cannot read the type of " + full);
-                check_number_type(base.get(), full);
-                hsize_t dims[H5S_MAX_RANK];
-                const int rank = H5Tget_array_ndims(m.get());
-                if (rank < 0 || rank > H5S_MAX_RANK || H5Tget_array_dims2(m.get(), dims) != rank) {
-                    fail(full + " has a damaged array member");
-                }
-                uint64_t n = 1;
-                for (int d = 0; d < rank; ++d) n *= dims[d];
-                if (n * H5Tget_size(base.get()) != bytes) fail(full + " has a damaged array member");
-            } else if (H5Tget_class(m.get()) == H5T_INTEGER || H5Tget_class(m.get()) == H5T_FLOAT) {
-                check_number_type(m.get(), full);
-            }
-            if (bytes == 0 || H5Tget_member_offset(t.get(), i) + bytes > record) {
-                fail(full + " has a compound member outside its record (damaged type)");
-            }
-        }
-        for (const char* name : {"cell", "object", "eye", "direction", "distance_m"}) {
-            if (H5Tget_member_index(t.get(), name) < 0)
-                fail(fmt::format("{} has no member '{}'", full, name));
-        }
-    }
-
-    // A numeric attribute with exactly `count` values (a scalar when count is 1).
-    template <class T>
-    std::vector<T> numeric_attr(hid_t loc, const std::string& where, const std::string& name, hid_t mem_type,
-                                size_t count) const {
-        const std::string full = fmt::format("attribute '{}' of {}", name, where);
-        Handle a = open_attr(loc, where, name);
-        number_type(H5Aget_type(a.get()), full);
-        size_t n = 1;
-        for (hsize_t d : dims_of(H5Aget_space(a.get()), full)) n *= size_t(d);
-        if (n != count) fail(fmt::format("{} has {} values, expected {}", full, n, count));
-        std::vector<T> out(count);
-        site_.check(H5Aread(a.get(), mem_type, out.data()), "cannot read " + full);
-        return out;
-    }
-    int64_t int_attr(hid_t loc, const std::string& where, const std::string& name) const {
-        return numeric_attr<int64_t>(loc, where, name, H5T_NATIVE_INT64, 1)[0];
-    }
-
-    // Strings of a dataset or an attribute, variable-length or fixed-length.
-    std::vector<std::string> strings(hid_t obj, bool is_attr, const std::string& full, size_t count) const {
-        const hid_t stored_type = is_attr ? H5Aget_type(obj) : H5Dget_type(obj);
-        Handle ftype = site_.handle(stored_type, H5Tclose, "cannot read the type of " + full);
-        if (H5Tget_class(ftype.get()) != H5T_STRING) fail(full + " is not text");
-        const htri_t variable = H5Tis_variable_str(ftype.get());
-        if (variable < 0) site_.fail_hdf5("cannot read the type of " + full);
-        Handle mtype = site_.handle(H5Tcopy(H5T_C_S1), H5Tclose, "cannot copy the string type");
-        site_.check(H5Tset_cset(mtype.get(), H5Tget_cset(ftype.get())), "cannot set the string encoding");
-        check_budget(count, sizeof(std::string), full);
-        std::vector<std::string> out(count);
-        if (count == 0) return out;
-        auto read = [&](void* buf) {
-            const herr_t r = is_attr ? H5Aread(obj, mtype.get(), buf)
-                                     : H5Dread(obj, mtype.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, buf);
-            return r;
-        };
-        if (variable > 0) {
-            // Variable-length strings (this writer never stores them; other tools may) are read through the
-            // global heap, which HDF5 does not check: a damaged one can still crash HDF5 here.
-            check_budget(count, sizeof(char*), full);
-            site_.check(H5Tset_size(mtype.get(), H5T_VARIABLE), "cannot make a string type");
-            std::vector<char*> ptrs(count, nullptr);
-            const herr_t r = read(ptrs.data());
-            std::string err;
-            if (r < 0) err = hdf5_detail();
-            for (size_t i = 0; i < count; ++i) {
-                if (ptrs[i] != nullptr) out[i] = ptrs[i];
-                H5free_memory(ptrs[i]);
-            }
-            if (r < 0) fail(fmt::format("cannot read {} ({})", full, err));
-        } else {
-            const size_t size = H5Tget_size(ftype.get());
-            if (size == 0) site_.fail_hdf5("cannot read the type of " + full);
-            check_budget(count, size, full);
-            site_.check(H5Tset_size(mtype.get(), size), "cannot make a string type");
-            site_.check(H5Tset_strpad(mtype.get(), H5Tget_strpad(ftype.get())), "cannot make a string type");
-            std::vector<char> buf(size * count);
-            site_.check(read(buf.data()), "cannot read " + full);
-            for (size_t i = 0; i < count; ++i) {
-                const char* s = buf.data() + i * size;
-                out[i].assign(s, strnlen(s, size));
-            }
-        }
-        return out;
-    }
-    std::string string_attr(hid_t loc, const std::string& where, const std::string& name) const {
-        const std::string full = fmt::format("attribute '{}' of {}", name, where);
-        Handle a = open_attr(loc, where, name);
-        size_t n = 1;
-        for (hsize_t d : dims_of(H5Aget_space(a.get()), full)) n *= size_t(d);
-        if (n != 1) fail(full + " is not a single string");
-        return strings(a.get(), true, full, 1)[0];
-    }
-    std::vector<std::string> string_dataset(hid_t loc, const std::string& where, const std::string& name,
-                                            int64_t expected) const {
-        const std::string full = at(where, name);
-        Handle ds = open_dataset(loc, where, name);
-        const std::vector<hsize_t> dims = dataset_dims(ds.get(), full);
-        if (dims.size() != 1) fail(full + " is not one-dimensional");
-        if (expected >= 0 && dims[0] != hsize_t(expected)) {
-            fail(fmt::format("{} has {} entries, expected {}", full, dims[0], expected));
-        }
-        check_storage(ds.get(), full);
-        return strings(ds.get(), false, full, size_t(dims[0]));
-    }
-
-    // A numeric dataset whose shape must equal `expected` (a -1 entry accepts any size on that axis, and
-    // `expected` then receives the actual size).
-    template <class T>
-    std::vector<T> numeric_dataset(hid_t loc, const std::string& where, const std::string& name,
-                                   hid_t mem_type, std::vector<int64_t>& expected,
-                                   H5T_class_t want = H5T_NO_CLASS) const {
-        const std::string full = at(where, name);
-        Handle ds = open_dataset(loc, where, name);
-        const H5T_class_t c = number_type(H5Dget_type(ds.get()), full);
-        if (want != H5T_NO_CLASS && c != want) {
-            fail(fmt::format("{} holds {} where {} are expected", full,
-                             c == H5T_FLOAT ? "floats" : "integers",
-                             want == H5T_FLOAT ? "floats" : "integers"));
-        }
-        const std::vector<hsize_t> dims = dataset_dims(ds.get(), full);
-        bool ok = dims.size() == expected.size();
-        for (size_t i = 0; ok && i < dims.size(); ++i)
-            ok = expected[i] < 0 || dims[i] == hsize_t(expected[i]);
-        if (!ok) fail(fmt::format("{} has shape {} but {} was expected", full, shape(dims), shape(expected)));
-        uint64_t n = 1;
-        for (size_t i = 0; i < dims.size(); ++i) {
-            expected[i] = int64_t(dims[i]);
-            check_budget(dims[i], 1, full);
-            n *= dims[i];
-        }
-        check_budget(n, std::max(sizeof(T), H5Tget_size(mem_type)), full);
-        std::vector<T> out(static_cast<size_t>(n));
-        check_storage(ds.get(), full);
-        if (n > 0) {
-            site_.check(H5Dread(ds.get(), mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, out.data()),
-                        "cannot read " + full);
-        }
-        return out;
-    }
-    template <class T>
-    std::vector<T> numeric_dataset(hid_t loc, const std::string& where, const std::string& name,
-                                   hid_t mem_type, std::vector<int64_t>&& expected,
-                                   H5T_class_t want = H5T_NO_CLASS) const {
-        std::vector<int64_t> e = std::move(expected);
-        return numeric_dataset<T>(loc, where, name, mem_type, e, want);
-    }
-
-    NamedValues named_values(hid_t loc, const std::string& where) const {
-        Handle g = open_group(loc, where);
-        const std::vector<std::string> names = string_dataset(g.get(), where, "names", -1);
-        const std::vector<double> values =
-            numeric_dataset<double>(g.get(), where, "values", H5T_NATIVE_DOUBLE, {int64_t(names.size())});
-        NamedValues out;
-        for (size_t i = 0; i < names.size(); ++i) out.emplace_back(names[i], values[i]);
-        return out;
-    }
-
-    const Site& site() const { return site_; }
-
-private:
-    template <class D>
-    static std::string shape(const std::vector<D>& dims) {
-        std::string s = "[";
-        for (size_t i = 0; i < dims.size(); ++i) {
-            if (i > 0) s += " x ";
-            s += int64_t(dims[i]) < 0 ? std::string("any") : std::to_string(int64_t(dims[i]));
-        }
-        return s + "]";
-    }
-
-    const Site& site_;
-    uint64_t max_bytes_;
-    uint64_t max_chunks_;
-};
-
-std::vector<Aabb> read_bounds(const Reader& r, hid_t loc, const std::string& where, int64_t count) {
-    const std::vector<float> flat =
-        r.numeric_dataset<float>(loc, where, "bounds", H5T_NATIVE_FLOAT, {count, 6}, H5T_FLOAT);
-    std::vector<Aabb> out(static_cast<size_t>(count));
-    for (size_t i = 0; i < out.size(); ++i) {
-        const float* b = &flat[i * 6];
-        out[i] = Aabb::of({b[0], b[1], b[2]}, {b[3], b[4], b[5]});
-    }
-    return out;
-}
-
-void read_root(const Reader& r, hid_t root, BakeData& bake) {
-    const Site& site = r.site();
-    if (!r.has_attr(root, "format")) site.fail("not a pvsbake bake file (no 'format' attribute)");
-    std::string format;
-    try {
-        format = r.string_attr(root, "/", "format");
-    } catch (const Error&) {
-        site.fail("not a pvsbake bake file ('format' is not text)");
-    }
-    if (format != kFormatName) site.fail(fmt::format("not a pvsbake bake file (format is '{}')", format));
-    const int64_t major = r.int_attr(root, "/", "format_major");
-    const int64_t minor = r.int_attr(root, "/", "format_minor");
-    if (major > kBakeFormatMajor) {
-        site.fail(fmt::format("bake format {}.{} is newer than this tool reads ({}.x); use a newer pvsbake",
-                              major, minor, kBakeFormatMajor));
-    }
-    if (major < kBakeFormatMajor || minor < 0 || minor > INT32_MAX) {
-        site.fail(fmt::format("bake format {}.{} is not one this tool reads ({}.x)", major, minor,
-                              kBakeFormatMajor));
-    }
-    bake.format_major = int(major);
-    bake.format_minor = int(minor);
-    bake.tool_version = r.string_attr(root, "/", "tool_version");
-    bake.world_path = r.string_attr(root, "/", "world_path");
-    bake.world_hash = r.string_attr(root, "/", "world_hash");
-    bake.mode = r.string_attr(root, "/", "mode");
-    const int64_t conservative = r.int_attr(root, "/", "conservative");
-    if (conservative != 0 && conservative != 1) site.fail("root attribute 'conservative' is not 0 or 1");
-    bake.conservative = conservative == 1;
-}
-
-void read_parameters(const Reader& r, hid_t root, BakeData& bake) {
-    Handle g = r.open_group(root, "/parameters");
-    const std::vector<std::string> keys = r.string_dataset(g.get(), "/parameters", "keys", -1);
-    const std::vector<std::string> values =
-        r.string_dataset(g.get(), "/parameters", "values", int64_t(keys.size()));
-    for (size_t i = 0; i < keys.size(); ++i) bake.parameters.emplace_back(keys[i], values[i]);
-}
-
-void read_objects(const Reader& r, hid_t root, BakeData& bake) {
-    Handle g = r.open_group(root, "/objects");
-    const std::vector<std::string> names = r.string_dataset(g.get(), "/objects", "name", -1);
-    const int64_t n = int64_t(names.size());
-    if (n > int64_t(UINT32_MAX)) r.fail("/objects/name has more than 2^32 entries");
-    const std::vector<Aabb> bounds = read_bounds(r, g.get(), "/objects", n);
-    const std::vector<uint32_t> triangles = r.numeric_dataset<uint32_t>(g.get(), "/objects", "triangle_count",
-                                                                        H5T_NATIVE_UINT32, {n}, H5T_INTEGER);
-    const std::vector<uint32_t> flags =
-        r.numeric_dataset<uint32_t>(g.get(), "/objects", "flags", H5T_NATIVE_UINT32, {n}, H5T_INTEGER);
-    bake.objects.resize(size_t(n));
-    for (size_t i = 0; i < size_t(n); ++i) {
-        bake.objects[i] = ObjectRecord{names[i], bounds[i], triangles[i], flags[i]};
+    for (const char* name : {"cell", "object", "eye", "direction", "distance_m"}) {
+        if (H5Tget_member_index(t.get(), name) < 0) r.fail(fmt::format("{} has no member '{}'", full, name));
     }
 }
 
-VoxelMask read_mask(const Reader& r, hid_t cells_group, const std::string& where) {
-    Handle g = r.open_group(cells_group, where);
+Aabb box_at(const std::vector<float>& flat, size_t i) {
+    const float* b = &flat[i * 6];
+    return Aabb::of({b[0], b[1], b[2]}, {b[3], b[4], b[5]});
+}
+
+VoxelMask to_mask(const pvsbake::detail::FileMask& m) {
     VoxelMask mask;
-    const std::vector<float> origin = r.numeric_attr<float>(g.get(), where, "origin", H5T_NATIVE_FLOAT, 3);
-    mask.origin = {origin[0], origin[1], origin[2]};
-    mask.voxel_size_m = r.numeric_attr<float>(g.get(), where, "voxel_size_m", H5T_NATIVE_FLOAT, 1)[0];
-    const std::vector<int32_t> dims = r.numeric_attr<int32_t>(g.get(), where, "dims", H5T_NATIVE_INT32, 3);
-    mask.dims = {dims[0], dims[1], dims[2]};
-    const uint64_t voxels = volume_of(mask.dims);
-    if (voxels == UINT64_MAX) r.fail(where + " attribute dims is negative or too large");
-    std::vector<int64_t> shape = {-1};
-    const std::vector<uint8_t> bytes =
-        r.numeric_dataset<uint8_t>(g.get(), where, "bits", H5T_NATIVE_UINT8, shape, H5T_INTEGER);
-    if (bytes.empty()) return mask;  // no mask
-    if (uint64_t(bytes.size()) != (voxels + 7) / 8) {
-        r.fail(fmt::format("{}/bits has {} bytes, expected 0 or {} for {} voxels", where, bytes.size(),
-                           (voxels + 7) / 8, voxels));
-    }
-    if (voxels % 8 != 0 && (bytes.back() >> (voxels % 8)) != 0) {
-        r.fail(fmt::format("{}/bits sets bits beyond voxel {}", where, voxels - 1));
-    }
-    mask.bits.assign(size_t((voxels + 63) / 64), 0);
-    for (size_t j = 0; j < bytes.size(); ++j) mask.bits[j / 8] |= uint64_t(bytes[j]) << (8 * (j % 8));
+    mask.origin = {m.origin[0], m.origin[1], m.origin[2]};
+    mask.voxel_size_m = m.voxel_size_m;
+    mask.dims = {m.dims[0], m.dims[1], m.dims[2]};
+    if (m.bytes.empty()) return mask;
+    mask.bits.assign(size_t((m.voxels + 63) / 64), 0);
+    for (size_t j = 0; j < m.bytes.size(); ++j) mask.bits[j / 8] |= uint64_t(m.bytes[j]) << (8 * (j % 8));
     return mask;
 }
 
-void read_cells(const Reader& r, hid_t root, BakeData& bake) {
-    const std::string where = "/cells";
-    Handle g = r.open_group(root, where);
-    CellSet& cells = bake.cells;
-    const int64_t kind = r.int_attr(g.get(), where, "kind_code");
-    if (kind != int64_t(CellSet::Kind::kGrid) && kind != int64_t(CellSet::Kind::kOctree)) {
-        r.fail(fmt::format("/cells attribute kind_code is {}, expected 0 (grid) or 1 (octree)", kind));
+void read_objects(const Reader& r, hid_t root, BakeData& bake) {
+    const pvsbake::detail::FileObjects o = pvsbake::detail::read_objects(r, root);
+    bake.objects.resize(o.names.size());
+    for (size_t i = 0; i < o.names.size(); ++i) {
+        bake.objects[i] = ObjectRecord{o.names[i], box_at(o.bounds, i), o.triangle_count[i], o.flags[i]};
     }
-    cells.kind = CellSet::Kind(kind);
-    const std::string kind_text = r.string_attr(g.get(), where, "kind");
-    if (kind_text != kind_name(cells.kind)) {
-        r.fail(fmt::format("/cells attribute kind '{}' disagrees with kind_code {}", kind_text, kind));
-    }
-    const std::vector<float> origin = r.numeric_attr<float>(g.get(), where, "origin", H5T_NATIVE_FLOAT, 3);
-    cells.origin = {origin[0], origin[1], origin[2]};
-    cells.cell_size_m = r.numeric_attr<float>(g.get(), where, "cell_size_m", H5T_NATIVE_FLOAT, 1)[0];
-    const std::vector<int32_t> dims = r.numeric_attr<int32_t>(g.get(), where, "dims", H5T_NATIVE_INT32, 3);
-    cells.dims = {dims[0], dims[1], dims[2]};
-    const uint64_t grid_size = volume_of(cells.dims);
-    if (grid_size == UINT64_MAX) r.fail("/cells attribute dims is negative or too large");
+}
 
-    std::vector<int64_t> bounds_shape = {-1, 6};
-    const std::vector<float> flat =
-        r.numeric_dataset<float>(g.get(), where, "bounds", H5T_NATIVE_FLOAT, bounds_shape, H5T_FLOAT);
-    const int64_t count = bounds_shape[0];
-    if (count > int64_t(INT32_MAX)) r.fail("/cells/bounds has more than 2^31 cells");
-    const std::vector<int32_t> parents =
-        r.numeric_dataset<int32_t>(g.get(), where, "parent", H5T_NATIVE_INT32, {count}, H5T_INTEGER);
-    // Octree nodes (validated so a lookup always terminates inside the arrays: children after parents).
-    int64_t nodes = 0;
-    if (cells.kind == CellSet::Kind::kOctree) {
-        const std::string ow = "/cells/octree";
-        Handle o = r.open_group(g.get(), ow);
-        std::vector<int64_t> node_shape = {-1, 6};
-        const std::vector<float> nb =
-            r.numeric_dataset<float>(o.get(), ow, "bounds", H5T_NATIVE_FLOAT, node_shape, H5T_FLOAT);
-        nodes = node_shape[0];
-        if (nodes > int64_t(INT32_MAX)) r.fail("/cells/octree/bounds has more than 2^31 nodes");
-        const std::vector<int32_t> first_child =
-            r.numeric_dataset<int32_t>(o.get(), ow, "first_child", H5T_NATIVE_INT32, {nodes}, H5T_INTEGER);
-        const std::vector<int32_t> node_cell =
-            r.numeric_dataset<int32_t>(o.get(), ow, "cell", H5T_NATIVE_INT32, {nodes}, H5T_INTEGER);
-        const std::vector<int32_t> node_parent =
-            r.numeric_dataset<int32_t>(o.get(), ow, "parent", H5T_NATIVE_INT32, {nodes}, H5T_INTEGER);
-        cells.nodes.resize(size_t(nodes));
-        for (int64_t i = 0; i < nodes; ++i) {
-            const float* b = &nb[size_t(i) * 6];
-            OctreeNode& n = cells.nodes[size_t(i)];
-            n.bounds = Aabb::of({b[0], b[1], b[2]}, {b[3], b[4], b[5]});
-            n.first_child = first_child[size_t(i)];
-            n.cell = node_cell[size_t(i)];
-            n.parent = node_parent[size_t(i)];
-            if (n.first_child != -1 && (n.first_child <= i || int64_t(n.first_child) + 8 > nodes)) {
-                r.fail(fmt::format(
-                    "/cells/octree/first_child[{}] = {} is not -1 or a node after it with 8 children "
-                    "below {}",
-                    i, n.first_child, nodes));
-            }
-            if (n.cell < -1 || n.cell >= count) {
-                r.fail(fmt::format("/cells/octree/cell[{}] = {} is not -1 or a cell index below {}", i,
-                                   n.cell, count));
-            }
-            if (n.parent < -1 || n.parent >= nodes) {
-                r.fail(fmt::format("/cells/octree/parent[{}] = {} is not -1 or a node index below {}", i,
-                                   n.parent, nodes));
-            }
-        }
+void read_cells(const Reader& r, hid_t root, BakeData& bake) {
+    pvsbake::detail::FileCells f = pvsbake::detail::read_cells(r, root, /*read_eyes=*/true);
+    CellSet& cells = bake.cells;
+    cells.kind = CellSet::Kind(f.kind);
+    cells.origin = {f.origin[0], f.origin[1], f.origin[2]};
+    cells.cell_size_m = f.cell_size_m;
+    cells.dims = {f.dims[0], f.dims[1], f.dims[2]};
+    cells.grid_to_cell = std::move(f.grid_to_cell);
+    cells.cells.resize(f.count);
+    for (size_t i = 0; i < cells.cells.size(); ++i) cells.cells[i] = Cell{box_at(f.bounds, i), f.parent[i]};
+    cells.nodes.resize(f.node_first_child.size());
+    for (size_t i = 0; i < cells.nodes.size(); ++i) {
+        cells.nodes[i] =
+            OctreeNode{box_at(f.node_bounds, i), f.node_first_child[i], f.node_cell[i], f.node_parent[i]};
     }
-    cells.cells.resize(size_t(count));
-    const int64_t parent_limit = cells.kind == CellSet::Kind::kOctree ? nodes : 0;
-    for (size_t i = 0; i < cells.cells.size(); ++i) {
-        const float* b = &flat[i * 6];
-        cells.cells[i].bounds = Aabb::of({b[0], b[1], b[2]}, {b[3], b[4], b[5]});
-        if (parents[i] < -1 || parents[i] >= parent_limit) {
-            r.fail(fmt::format("/cells/parent[{}] = {} is not -1 or an octree node index below {}", i,
-                               parents[i], parent_limit));
-        }
-        cells.cells[i].parent = parents[i];
-    }
-    if (r.has_attr(g.get(), "cell_count") && r.int_attr(g.get(), where, "cell_count") != count) {
-        r.fail(fmt::format("/cells attribute cell_count disagrees with /cells/bounds ({} cells)", count));
-    }
-    cells.grid_to_cell = r.numeric_dataset<int32_t>(g.get(), where, "grid_to_cell", H5T_NATIVE_INT32,
-                                                    {int64_t(grid_size)}, H5T_INTEGER);
-    const int64_t target = cells.kind == CellSet::Kind::kOctree ? nodes : count;
-    for (size_t i = 0; i < cells.grid_to_cell.size(); ++i) {
-        const int32_t c = cells.grid_to_cell[i];
-        if (c < -1 || c >= target) {
-            r.fail(fmt::format("/cells/grid_to_cell[{}] = {} is not -1 or a {} index below {}", i, c,
-                               cells.kind == CellSet::Kind::kOctree ? "root node" : "cell", target));
-        }
-    }
-    cells.view = read_mask(r, g.get(), "/cells/view");
-    cells.eyes = read_mask(r, g.get(), "/cells/eyes");
+    cells.view = to_mask(f.view);
+    cells.eyes = to_mask(f.eyes);
 }
 
 void read_pvs(const Reader& r, hid_t root, BakeData& bake) {
-    const std::string where = "/pvs";
-    Handle g = r.open_group(root, where);
     const uint32_t objects = uint32_t(bake.objects.size());
     const uint32_t cells = uint32_t(bake.cells.size());
-    if (r.int_attr(g.get(), where, "object_count") != objects) {
-        r.fail(fmt::format("/pvs attribute object_count disagrees with /objects ({} objects)", objects));
-    }
-    if (r.int_attr(g.get(), where, "cell_count") != cells) {
-        r.fail(fmt::format("/pvs attribute cell_count disagrees with /cells ({} cells)", cells));
-    }
-    const uint32_t row_bytes = bytes_per_row(objects);
-    std::vector<int64_t> rows_shape = {-1, row_bytes};
-    const std::vector<uint8_t> rows =
-        r.numeric_dataset<uint8_t>(g.get(), where, "rows", H5T_NATIVE_UINT8, rows_shape, H5T_INTEGER);
-    const int64_t unique_rows = rows_shape[0];
-    if (unique_rows > int64_t(cells)) {
-        r.fail(fmt::format("/pvs/rows has {} rows, more than the {} cells", unique_rows, cells));
-    }
-    if (r.has_attr(g.get(), "unique_rows") && r.int_attr(g.get(), where, "unique_rows") != unique_rows) {
-        r.fail(fmt::format("/pvs attribute unique_rows disagrees with /pvs/rows ({} rows)", unique_rows));
-    }
-    const uint8_t mask = last_byte_mask(objects);
-    for (int64_t i = 0; row_bytes > 0 && i < unique_rows; ++i) {
-        if (rows[size_t(i) * row_bytes + row_bytes - 1] & ~mask) {
-            r.fail(fmt::format("/pvs/rows row {} sets bits beyond object {}", i, objects - 1));
-        }
-    }
-    const std::vector<uint32_t> cell_row =
-        r.numeric_dataset<uint32_t>(g.get(), where, "cell_row", H5T_NATIVE_UINT32, {cells}, H5T_INTEGER);
+    const pvsbake::detail::FilePvs f = pvsbake::detail::read_pvs(r, root, objects, cells, /*want_rows=*/true);
     bake.pvs = PvsSet::make(cells, objects);
     for (uint32_t c = 0; c < cells; ++c) {
-        if (int64_t(cell_row[c]) >= unique_rows) {
-            r.fail(fmt::format("/pvs/cell_row[{}] = {} is not below the {} rows of /pvs/rows", c, cell_row[c],
-                               unique_rows));
-        }
-        const uint8_t* bytes = rows.data() + size_t(cell_row[c]) * row_bytes;
+        const uint8_t* bytes = f.rows.data() + size_t(f.cell_row[c]) * f.row_bytes;
         uint64_t* words = bake.pvs.row(c);
-        for (uint32_t j = 0; j < row_bytes; ++j) words[j / 8] |= uint64_t(bytes[j]) << (8 * (j % 8));
+        for (uint32_t j = 0; j < f.row_bytes; ++j) words[j / 8] |= uint64_t(bytes[j]) << (8 * (j % 8));
     }
 }
 
@@ -1284,16 +766,16 @@ void read_verification(const Reader& r, hid_t root, BakeData& bake) {
 
     const std::string full = where + "/misses";
     Handle ds = r.open_dataset(g.get(), where, "misses");
-    r.check_miss_type(H5Dget_type(ds.get()), full);
+    check_miss_type(r, H5Dget_type(ds.get()), full);
     const std::vector<hsize_t> dims = r.dataset_dims(ds.get(), full);
     if (dims.size() != 1) r.fail(full + " is not one-dimensional");
     r.check_budget(dims[0], 64, full);
     r.check_storage(ds.get(), full);
     std::vector<MissRecord> misses(static_cast<size_t>(dims[0]));
     if (!misses.empty()) {
-        Handle mem_type = miss_type(r.site(), false);
-        r.site().check(H5Dread(ds.get(), mem_type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, misses.data()),
-                       "cannot read " + full);
+        Handle mem_type = miss_type(r, false);
+        r.check(H5Dread(ds.get(), mem_type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, misses.data()),
+                "cannot read " + full);
     }
     for (size_t i = 0; i < misses.size(); ++i) {
         const MissRecord& m = misses[i];
@@ -1351,43 +833,36 @@ void write_bake_file(const std::string& path, const BakeData& bake) {
 }
 
 BakeData read_bake_file(const std::string& path) {
-    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd < 0) {
-        if (errno == ENOENT) throw bad_input(path + ": no such file");
-        throw io_error(fmt::format("{}: cannot read: {}", path, std::strerror(errno)));
-    }
-    ::close(fd);
-    std::error_code ec;
-    if (std::filesystem::is_directory(path, ec)) throw bad_input(path + ": is a folder, not a bake file");
-
     QuietHdf5 quiet;
-    if (H5Fis_hdf5(path.c_str()) <= 0) {
-        H5Eclear2(H5E_DEFAULT);
-        throw bad_input(path + ": not an HDF5 file");
-    }
-    const Site site(path, ErrorKind::kBadInput, "");
-    const uint64_t file_bytes = std::filesystem::file_size(path, ec);
-    const Reader r(site, ec ? 0 : file_bytes);
     BakeData bake;
     try {
-        Handle fapl = file_access_list(site);
-        Handle file = site.handle(H5Fopen(path.c_str(), H5F_ACC_RDONLY, fapl.get()), H5Fclose,
-                                  "cannot open the HDF5 file (truncated or damaged?)");
-        Handle root = site.handle(H5Gopen2(file.get(), "/", H5P_DEFAULT), H5Gclose, "cannot open /");
-        read_root(r, root.get(), bake);
-        read_parameters(r, root.get(), bake);
-        read_objects(r, root.get(), bake);
-        read_cells(r, root.get(), bake);
-        read_pvs(r, root.get(), bake);
-        read_leak_path(r, root.get(), bake);
-        read_occluders(r, root.get(), bake);
-        bake.figures = r.named_values(root.get(), "/figures");
-        bake.timings_s = r.named_values(root.get(), "/timings");
-        read_verification(r, root.get(), bake);
-    } catch (const std::bad_alloc&) {
-        site.fail("a dataset is too large to load (damaged file?)");
-    } catch (const std::length_error&) {
-        site.fail("a dataset is too large to load (damaged file?)");
+        uint64_t file_bytes = 0;
+        Handle file = pvsbake::detail::open_bake_file(path, file_bytes);
+        const Reader r(path, file_bytes);
+        try {
+            Handle root = r.handle(H5Gopen2(file.get(), "/", H5P_DEFAULT), H5Gclose, "cannot open /");
+            const pvsbake::BakeInfo h = pvsbake::detail::read_header(r, root.get());
+            std::tie(bake.format_major, bake.format_minor, bake.tool_version, bake.world_path,
+                     bake.world_hash, bake.mode, bake.conservative) =
+                std::tie(h.format_major, h.format_minor, h.tool_version, h.world_path, h.world_hash, h.mode,
+                         h.conservative);
+            bake.parameters = pvsbake::detail::read_parameters(r, root.get());
+            read_objects(r, root.get(), bake);
+            read_cells(r, root.get(), bake);
+            read_pvs(r, root.get(), bake);
+            read_leak_path(r, root.get(), bake);
+            read_occluders(r, root.get(), bake);
+            bake.figures = r.named_values(root.get(), "/figures");
+            bake.timings_s = r.named_values(root.get(), "/timings");
+            read_verification(r, root.get(), bake);
+        } catch (const std::bad_alloc&) {
+            r.fail("a dataset is too large to load (damaged file?)");
+        } catch (const std::length_error&) {
+            r.fail("a dataset is too large to load (damaged file?)");
+        }
+    } catch (const pvsbake::detail::ReadError& e) {
+        if (e.status() == pvsbake::Status::kIoError) throw io_error(e.what());
+        throw bad_input(e.what());
     }
     return bake;
 }

@@ -1,4 +1,4 @@
-// pvsbake io: the bake file (HDF5), format version 1. docs/FORMAT.md documents every group, dataset and
+// pvsbake io: the bake file (HDF5), format version 1.1. docs/FORMAT.md documents every group, dataset and
 // attribute; this header is the in-memory form.
 //
 // Conventions: glTF axes (right-handed, +Y up), metres. Grid index order x fastest (core/cell_set.h).
@@ -22,7 +22,7 @@
 namespace pvs {
 
 constexpr int kBakeFormatMajor = 1;
-constexpr int kBakeFormatMinor = 0;
+constexpr int kBakeFormatMinor = 1;  // 1.1 added the PVS code (/pvs/code)
 
 struct ObjectRecord {
     std::string name;

@@ -1,5 +1,7 @@
 #include "tests/test_util.h"
 
+#include <algorithm>
+#include <cstdlib>
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -37,6 +39,11 @@ std::string sample_world() {
 bool in_ci() {
     const char* ci = std::getenv("CI");
     return ci != nullptr && std::string(ci) == "true";
+}
+
+int fuzz_iterations(int full, int ci) {
+    if (const char* env = std::getenv("PVSBAKE_FUZZ_ITERATIONS")) return std::max(1, std::atoi(env));
+    return in_ci() ? ci : full;
 }
 
 std::string read_file(const std::string& path) {

@@ -28,6 +28,9 @@ std::string sample_world();
 // True under CI (CI=true): long checks run smaller there and full size in bench/.
 bool in_ci();
 
+// Mutants a fuzz test makes: PVSBAKE_FUZZ_ITERATIONS when set, else `ci` under CI and `full` otherwise.
+int fuzz_iterations(int full, int ci);
+
 std::string read_file(const std::string& path);
 void write_file(const std::string& path, const std::string& bytes);
 

@@ -1,0 +1,292 @@
+// pvsbake loader (internal): the validated sections of a bake file (bake_reader.h).
+#include "bake_reader.h"
+
+#include "row_code.h"
+
+#include <cerrno>
+#include <cstring>
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+namespace pvsbake::detail {
+namespace {
+
+const char* kind_name(int32_t kind) {
+    return kind == 1 ? "octree" : "grid";
+}
+
+uint8_t last_byte_mask(uint32_t objects) {
+    return objects % 8 == 0 ? uint8_t(0xff) : uint8_t((1u << (objects % 8)) - 1);
+}
+
+// `count` boxes of the dataset `bounds` (6 floats each) under loc; count -1 accepts any and sets it.
+std::vector<float> read_bounds(const Reader& r, hid_t loc, const std::string& where, int64_t& count) {
+    std::vector<int64_t> shape = {count, 6};
+    std::vector<float> flat =
+        r.numeric_dataset<float>(loc, where, "bounds", H5T_NATIVE_FLOAT, shape, H5T_FLOAT);
+    count = shape[0];
+    return flat;
+}
+
+FileMask read_mask(const Reader& r, hid_t cells_group, const std::string& where) {
+    Handle g = r.open_group(cells_group, where);
+    FileMask mask;
+    const std::vector<float> origin = r.numeric_attr<float>(g.get(), where, "origin", H5T_NATIVE_FLOAT, 3);
+    std::copy(origin.begin(), origin.end(), mask.origin);
+    mask.voxel_size_m = r.numeric_attr<float>(g.get(), where, "voxel_size_m", H5T_NATIVE_FLOAT, 1)[0];
+    const std::vector<int32_t> dims = r.numeric_attr<int32_t>(g.get(), where, "dims", H5T_NATIVE_INT32, 3);
+    std::copy(dims.begin(), dims.end(), mask.dims);
+    mask.voxels = volume_of(mask.dims);
+    if (mask.voxels == UINT64_MAX) r.fail(where + " attribute dims is negative or too large");
+    std::vector<int64_t> shape = {-1};
+    mask.bytes = r.numeric_dataset<uint8_t>(g.get(), where, "bits", H5T_NATIVE_UINT8, shape, H5T_INTEGER);
+    if (mask.bytes.empty()) return mask;  // no mask
+    if (uint64_t(mask.bytes.size()) != (mask.voxels + 7) / 8) {
+        r.fail(cat(where, "/bits has ", mask.bytes.size(), " bytes, expected 0 or ", (mask.voxels + 7) / 8,
+                   " for ", mask.voxels, " voxels"));
+    }
+    if (mask.voxels % 8 != 0 && (mask.bytes.back() >> (mask.voxels % 8)) != 0) {
+        r.fail(cat(where, "/bits sets bits beyond voxel ", mask.voxels - 1));
+    }
+    return mask;
+}
+
+void read_octree(const Reader& r, hid_t cells_group, FileCells& cells) {
+    const std::string ow = "/cells/octree";
+    Handle o = r.open_group(cells_group, ow);
+    int64_t nodes = -1;
+    cells.node_bounds = read_bounds(r, o.get(), ow, nodes);
+    if (nodes > int64_t(INT32_MAX)) r.fail("/cells/octree/bounds has more than 2^31 nodes");
+    cells.node_first_child =
+        r.numeric_dataset<int32_t>(o.get(), ow, "first_child", H5T_NATIVE_INT32, {nodes}, H5T_INTEGER);
+    cells.node_cell = r.numeric_dataset<int32_t>(o.get(), ow, "cell", H5T_NATIVE_INT32, {nodes}, H5T_INTEGER);
+    cells.node_parent =
+        r.numeric_dataset<int32_t>(o.get(), ow, "parent", H5T_NATIVE_INT32, {nodes}, H5T_INTEGER);
+    // Children after their parent, so that a lookup always ends inside the arrays.
+    for (int64_t i = 0; i < nodes; ++i) {
+        const int32_t fc = cells.node_first_child[size_t(i)];
+        if (fc != -1 && (fc <= i || int64_t(fc) + 8 > nodes)) {
+            r.fail(cat("/cells/octree/first_child[", i, "] = ", fc,
+                       " is not -1 or a node after it with 8 children below ", nodes));
+        }
+        const int32_t c = cells.node_cell[size_t(i)];
+        if (c < -1 || int64_t(c) >= int64_t(cells.count)) {
+            r.fail(
+                cat("/cells/octree/cell[", i, "] = ", c, " is not -1 or a cell index below ", cells.count));
+        }
+        const int32_t p = cells.node_parent[size_t(i)];
+        if (p < -1 || p >= nodes) {
+            r.fail(cat("/cells/octree/parent[", i, "] = ", p, " is not -1 or a node index below ", nodes));
+        }
+    }
+}
+
+}  // namespace
+
+uint64_t volume_of(const int32_t dims[3]) {
+    if (dims[0] < 0 || dims[1] < 0 || dims[2] < 0) return UINT64_MAX;
+    constexpr uint64_t kLimit = uint64_t(1) << 48;
+    uint64_t v = 1;
+    for (int a = 0; a < 3; ++a) {
+        if (dims[a] != 0 && v > kLimit / uint64_t(dims[a])) return UINT64_MAX;
+        v *= uint64_t(dims[a]);
+    }
+    return v;
+}
+
+Handle open_bake_file(const std::string& path, uint64_t& file_bytes) {
+    const Reader site(path, 0);
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) {
+        if (errno == ENOENT) site.fail("no such file", Status::kFileMissing);
+        site.fail(cat("cannot read: ", std::strerror(errno)), Status::kIoError);
+    }
+    struct stat st {};
+    const int stat_result = ::fstat(fd, &st);
+    ::close(fd);
+    if (stat_result == 0 && S_ISDIR(st.st_mode))
+        site.fail("is a folder, not a bake file", Status::kNotBakeFile);
+    file_bytes = stat_result == 0 ? uint64_t(st.st_size) : 0;
+    if (H5Fis_hdf5(path.c_str()) <= 0) {
+        H5Eclear2(H5E_DEFAULT);
+        site.fail("not an HDF5 file", Status::kNotBakeFile);
+    }
+    Handle fapl = site.handle(file_access_list(), H5Pclose, "cannot create a file access list");
+    return site.handle(H5Fopen(path.c_str(), H5F_ACC_RDONLY, fapl.get()), H5Fclose,
+                       "cannot open the HDF5 file (truncated or damaged?)");
+}
+
+BakeInfo read_header(const Reader& r, hid_t root) {
+    if (!r.has_attr(root, "format"))
+        r.fail("not a pvsbake bake file (no 'format' attribute)", Status::kNotBakeFile);
+    std::string format;
+    try {
+        format = r.string_attr(root, "/", "format");
+    } catch (const ReadError&) {
+        r.fail("not a pvsbake bake file ('format' is not text)", Status::kNotBakeFile);
+    }
+    if (format != kFormatName)
+        r.fail(cat("not a pvsbake bake file (format is '", format, "')"), Status::kNotBakeFile);
+    const int64_t major = r.int_attr(root, "/", "format_major");
+    const int64_t minor = r.int_attr(root, "/", "format_minor");
+    if (major > kFormatMajor) {
+        r.fail(cat("bake format ", major, ".", minor, " is newer than this tool reads (", kFormatMajor,
+                   ".x); use a newer pvsbake"),
+               Status::kVersionTooNew);
+    }
+    if (major < kFormatMajor || minor < 0 || minor > INT32_MAX) {
+        r.fail(cat("bake format ", major, ".", minor, " is not one this tool reads (", kFormatMajor, ".x)"));
+    }
+    BakeInfo h;
+    h.format_major = int(major);
+    h.format_minor = int(minor);
+    h.tool_version = r.string_attr(root, "/", "tool_version");
+    h.world_path = r.string_attr(root, "/", "world_path");
+    h.world_hash = r.string_attr(root, "/", "world_hash");
+    h.mode = r.string_attr(root, "/", "mode");
+    const int64_t conservative = r.int_attr(root, "/", "conservative");
+    if (conservative != 0 && conservative != 1) r.fail("root attribute 'conservative' is not 0 or 1");
+    h.conservative = conservative == 1;
+    return h;
+}
+
+std::vector<std::pair<std::string, std::string>> read_parameters(const Reader& r, hid_t root) {
+    Handle g = r.open_group(root, "/parameters");
+    const std::vector<std::string> keys = r.string_dataset(g.get(), "/parameters", "keys", -1);
+    const std::vector<std::string> values =
+        r.string_dataset(g.get(), "/parameters", "values", int64_t(keys.size()));
+    std::vector<std::pair<std::string, std::string>> out;
+    for (size_t i = 0; i < keys.size(); ++i) out.emplace_back(keys[i], values[i]);
+    return out;
+}
+
+FileObjects read_objects(const Reader& r, hid_t root) {
+    Handle g = r.open_group(root, "/objects");
+    FileObjects o;
+    o.names = r.string_dataset(g.get(), "/objects", "name", -1);
+    int64_t n = int64_t(o.names.size());
+    if (n > int64_t(UINT32_MAX)) r.fail("/objects/name has more than 2^32 entries");
+    o.bounds = read_bounds(r, g.get(), "/objects", n);
+    o.triangle_count = r.numeric_dataset<uint32_t>(g.get(), "/objects", "triangle_count", H5T_NATIVE_UINT32,
+                                                   {n}, H5T_INTEGER);
+    o.flags = r.numeric_dataset<uint32_t>(g.get(), "/objects", "flags", H5T_NATIVE_UINT32, {n}, H5T_INTEGER);
+    return o;
+}
+
+FileCells read_cells(const Reader& r, hid_t root, bool read_eyes) {
+    const std::string where = "/cells";
+    Handle g = r.open_group(root, where);
+    FileCells cells;
+    const int64_t kind = r.int_attr(g.get(), where, "kind_code");
+    if (kind != 0 && kind != 1)
+        r.fail(cat("/cells attribute kind_code is ", kind, ", expected 0 (grid) or 1 (octree)"));
+    cells.kind = int32_t(kind);
+    const std::string kind_text = r.string_attr(g.get(), where, "kind");
+    if (kind_text != kind_name(cells.kind)) {
+        r.fail(cat("/cells attribute kind '", kind_text, "' disagrees with kind_code ", kind));
+    }
+    const std::vector<float> origin = r.numeric_attr<float>(g.get(), where, "origin", H5T_NATIVE_FLOAT, 3);
+    std::copy(origin.begin(), origin.end(), cells.origin);
+    cells.cell_size_m = r.numeric_attr<float>(g.get(), where, "cell_size_m", H5T_NATIVE_FLOAT, 1)[0];
+    const std::vector<int32_t> dims = r.numeric_attr<int32_t>(g.get(), where, "dims", H5T_NATIVE_INT32, 3);
+    std::copy(dims.begin(), dims.end(), cells.dims);
+    const uint64_t grid_size = volume_of(cells.dims);
+    if (grid_size == UINT64_MAX) r.fail("/cells attribute dims is negative or too large");
+
+    int64_t count = -1;
+    cells.bounds = read_bounds(r, g.get(), where, count);
+    if (count > int64_t(INT32_MAX)) r.fail("/cells/bounds has more than 2^31 cells");
+    cells.count = uint32_t(count);
+    cells.parent =
+        r.numeric_dataset<int32_t>(g.get(), where, "parent", H5T_NATIVE_INT32, {count}, H5T_INTEGER);
+    int64_t nodes = 0;
+    if (cells.kind == 1) {
+        read_octree(r, g.get(), cells);
+        nodes = int64_t(cells.node_first_child.size());
+    }
+    for (size_t i = 0; i < cells.parent.size(); ++i) {
+        if (cells.parent[i] < -1 || cells.parent[i] >= nodes) {
+            r.fail(cat("/cells/parent[", i, "] = ", cells.parent[i],
+                       " is not -1 or an octree node index below ", nodes));
+        }
+    }
+    if (r.has_attr(g.get(), "cell_count") && r.int_attr(g.get(), where, "cell_count") != count) {
+        r.fail(cat("/cells attribute cell_count disagrees with /cells/bounds (", count, " cells)"));
+    }
+    cells.grid_to_cell = r.numeric_dataset<int32_t>(g.get(), where, "grid_to_cell", H5T_NATIVE_INT32,
+                                                    {int64_t(grid_size)}, H5T_INTEGER);
+    const int64_t target = cells.kind == 1 ? nodes : count;
+    for (size_t i = 0; i < cells.grid_to_cell.size(); ++i) {
+        const int32_t c = cells.grid_to_cell[i];
+        if (c < -1 || c >= target) {
+            r.fail(cat("/cells/grid_to_cell[", i, "] = ", c, " is not -1 or a ",
+                       cells.kind == 1 ? "root node" : "cell", " index below ", target));
+        }
+    }
+    cells.view = read_mask(r, g.get(), "/cells/view");
+    if (read_eyes) cells.eyes = read_mask(r, g.get(), "/cells/eyes");
+    return cells;
+}
+
+FilePvs read_pvs(const Reader& r, hid_t root, uint32_t objects, uint32_t cells, bool want_rows) {
+    const std::string where = "/pvs";
+    Handle g = r.open_group(root, where);
+    if (r.int_attr(g.get(), where, "object_count") != objects) {
+        r.fail(cat("/pvs attribute object_count disagrees with /objects (", objects, " objects)"));
+    }
+    if (r.int_attr(g.get(), where, "cell_count") != cells) {
+        r.fail(cat("/pvs attribute cell_count disagrees with /cells (", cells, " cells)"));
+    }
+    FilePvs pvs;
+    pvs.row_bytes = (objects + 7) / 8;
+    pvs.bytes_raw = uint64_t(cells) * pvs.row_bytes;
+    if (r.has_attr(g.get(), "bytes_stored")) {
+        pvs.bytes_stored =
+            uint64_t(r.numeric_attr<uint64_t>(g.get(), where, "bytes_stored", H5T_NATIVE_UINT64, 1)[0]);
+    }
+    const bool use_code = !want_rows && r.has_link(g.get(), "code");
+    int64_t unique_rows = -1;
+    if (use_code) {
+        std::vector<int64_t> offsets_shape = {-1};
+        pvs.code_offsets = r.numeric_dataset<uint32_t>(g.get(), where, "code_offsets", H5T_NATIVE_UINT32,
+                                                       offsets_shape, H5T_INTEGER);
+        if (offsets_shape[0] < 1) r.fail("/pvs/code_offsets is empty");
+        unique_rows = offsets_shape[0] - 1;
+        std::vector<int64_t> code_shape = {-1};
+        pvs.code = r.numeric_dataset<uint8_t>(g.get(), where, "code", H5T_NATIVE_UINT8, code_shape,
+                                              H5T_INTEGER, kCodePadding);
+        const std::string bad = check_row_code(pvs.code.data(), uint64_t(code_shape[0]),
+                                               pvs.code_offsets.data(), uint64_t(unique_rows), objects);
+        if (!bad.empty()) r.fail(bad);
+    } else {
+        std::vector<int64_t> rows_shape = {-1, pvs.row_bytes};
+        pvs.rows =
+            r.numeric_dataset<uint8_t>(g.get(), where, "rows", H5T_NATIVE_UINT8, rows_shape, H5T_INTEGER);
+        unique_rows = rows_shape[0];
+        const uint8_t mask = last_byte_mask(objects);
+        for (int64_t i = 0; pvs.row_bytes > 0 && i < unique_rows; ++i) {
+            if (pvs.rows[size_t(i) * pvs.row_bytes + pvs.row_bytes - 1] & ~mask) {
+                r.fail(cat("/pvs/rows row ", i, " sets bits beyond object ", int64_t(objects) - 1));
+            }
+        }
+    }
+    pvs.unique_rows = uint64_t(unique_rows);
+    if (unique_rows > int64_t(cells))
+        r.fail(cat("/pvs/rows has ", unique_rows, " rows, more than the ", cells, " cells"));
+    if (r.has_attr(g.get(), "unique_rows") && r.int_attr(g.get(), where, "unique_rows") != unique_rows) {
+        r.fail(cat("/pvs attribute unique_rows disagrees with /pvs/rows (", unique_rows, " rows)"));
+    }
+    pvs.cell_row =
+        r.numeric_dataset<uint32_t>(g.get(), where, "cell_row", H5T_NATIVE_UINT32, {cells}, H5T_INTEGER);
+    for (uint32_t c = 0; c < cells; ++c) {
+        if (int64_t(pvs.cell_row[c]) >= unique_rows) {
+            r.fail(cat("/pvs/cell_row[", c, "] = ", pvs.cell_row[c], " is not below the ", unique_rows,
+                       " rows of /pvs/rows"));
+        }
+    }
+    return pvs;
+}
+
+}  // namespace pvsbake::detail

@@ -1,0 +1,81 @@
+// pvsbake loader (internal): reads and validates the sections of a bake file (docs/FORMAT.md) into plain
+// arrays, as they are in the file. The one reader of the format: the runtime loader builds its lookup
+// structures from these, and the baker's read_bake_file (io/bake_file.cpp) builds a BakeData.
+//
+// Conventions: as the file's (glTF axes, metres, x-fastest grid order, object i = bit i % 8 of byte i / 8).
+// Every function throws ReadError (hdf5_reader.h) naming the file and the dataset when something is wrong;
+// what it returns is consistent: every index is in range and every size agrees with the counts.
+#pragma once
+
+#include "hdf5_reader.h"
+
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace pvsbake::detail {
+
+constexpr const char* kFormatName = "pvsbake";
+constexpr int kFormatMajor = 1;
+constexpr int kFormatMinor = 1;
+
+// The root attributes. Throws kNotBakeFile without format = "pvsbake", kVersionTooNew for a newer major.
+BakeInfo read_header(const Reader& r, hid_t root);
+
+std::vector<std::pair<std::string, std::string>> read_parameters(const Reader& r, hid_t root);
+
+struct FileObjects {
+    std::vector<std::string> names;
+    std::vector<float> bounds;  // 6 per object: min xyz, max xyz
+    std::vector<uint32_t> triangle_count, flags;
+};
+FileObjects read_objects(const Reader& r, hid_t root);
+
+// dims x*y*z, or UINT64_MAX when a dimension is negative or the product passes 2^48.
+uint64_t volume_of(const int32_t dims[3]);
+
+struct FileMask {
+    float origin[3] = {0, 0, 0};
+    float voxel_size_m = 0;
+    int32_t dims[3] = {0, 0, 0};
+    uint64_t voxels = 0;
+    std::vector<uint8_t> bytes;  // empty (no mask) or ceil(voxels / 8), bits past the voxels zero
+};
+
+struct FileCells {
+    int32_t kind = 0;  // 0 grid, 1 octree
+    float origin[3] = {0, 0, 0};
+    float cell_size_m = 0;
+    int32_t dims[3] = {0, 0, 0};
+    uint32_t count = 0;
+    std::vector<float> bounds;          // 6 per cell
+    std::vector<int32_t> parent;        // per cell: -1 or an octree node
+    std::vector<int32_t> grid_to_cell;  // dims product entries: -1 or a cell (grid) / root node (octree)
+    // Octree nodes: first_child -1 or > the node, with 8 children below the node count.
+    std::vector<float> node_bounds;
+    std::vector<int32_t> node_first_child, node_cell, node_parent;
+    FileMask view, eyes;
+};
+// read_eyes false skips /cells/eyes (the runtime does not need it).
+FileCells read_cells(const Reader& r, hid_t root, bool read_eyes);
+
+// /pvs. With want_rows, `rows` holds the distinct rows (format 1.0 and later); else, when the file has
+// the code (format 1.1), `code` and `code_offsets` hold it, validated, and rows stays empty (old files
+// without the code always give rows). The code is followed by kCodePadding zero bytes (row_code.h).
+struct FilePvs {
+    uint32_t row_bytes = 0;
+    uint64_t unique_rows = 0;
+    std::vector<uint8_t> rows;
+    std::vector<uint32_t> cell_row;
+    std::vector<uint8_t> code;
+    std::vector<uint32_t> code_offsets;
+    uint64_t bytes_raw = 0, bytes_stored = 0;
+};
+FilePvs read_pvs(const Reader& r, hid_t root, uint32_t objects, uint32_t cells, bool want_rows);
+
+// Opens path for reading: kFileMissing, kIoError, kNotBakeFile (not HDF5, a folder) or kCorrupt (HDF5
+// cannot open it). The returned handle is the file; `file_bytes` receives its size.
+Handle open_bake_file(const std::string& path, uint64_t& file_bytes);
+
+}  // namespace pvsbake::detail

@@ -1,0 +1,399 @@
+// pvsbake runtime loader: load() (reads and validates everything through bake_reader.h, then builds the
+// lookup structures) and the queries of pvsbake/loader.h. Nothing here throws out of load(); queries are
+// noexcept and read only validated data.
+#include "pvsbake/loader.h"
+
+#include "bake_reader.h"
+#include "row_code.h"
+
+#include <cmath>
+#include <new>
+
+namespace pvsbake {
+namespace {
+
+constexpr uint32_t kBrickEmpty = 0;
+constexpr uint32_t kBrickFull = 1;
+constexpr uint32_t kFirstBrick = 2;  // brick_[b] - kFirstBrick = index of the brick's 64 bytes
+
+Box empty_box() {
+    const float inf = INFINITY;
+    return Box{{inf, inf, inf}, {-inf, -inf, -inf}};
+}
+
+Box box_at(const std::vector<float>& flat, size_t i) {
+    const float* b = &flat[i * 6];
+    return Box{{b[0], b[1], b[2]}, {b[3], b[4], b[5]}};
+}
+
+bool same_box(const Box& a, const Box& b) {
+    return std::memcmp(&a, &b, sizeof(Box)) == 0;
+}
+
+}  // namespace
+
+const char* status_name(Status status) noexcept {
+    switch (status) {
+        case Status::kOk:
+            return "ok";
+        case Status::kFileMissing:
+            return "file missing";
+        case Status::kNotBakeFile:
+            return "not a bake file";
+        case Status::kVersionTooNew:
+            return "version too new";
+        case Status::kCorrupt:
+            return "corrupt";
+        case Status::kOutOfMemory:
+            return "out of memory";
+        case Status::kIoError:
+            return "read error";
+        case Status::kInvalidArgument:
+            return "invalid argument";
+    }
+    return "unknown status";
+}
+
+// Builds a Bake from the validated sections of a file (friend of Bake).
+class Loading {
+public:
+    static void run(const std::string& path, Bake& b) {
+        detail::QuietHdf5 quiet;
+        uint64_t file_bytes = 0;
+        detail::Handle file = detail::open_bake_file(path, file_bytes);
+        const detail::Reader r(path, file_bytes);
+        detail::Handle root = r.handle(H5Gopen2(file.get(), "/", H5P_DEFAULT), H5Gclose, "cannot open /");
+        b.info_ = detail::read_header(r, root.get());
+        b.parameters_ = detail::read_parameters(r, root.get());
+        objects(detail::read_objects(r, root.get()), b);
+        detail::FileCells file_cells = detail::read_cells(r, root.get(), /*read_eyes=*/false);
+        const uint32_t cell_count = file_cells.count;
+        cells(std::move(file_cells), b);
+        pvs(detail::read_pvs(r, root.get(), b.object_count_, cell_count, /*want_rows=*/false), b);
+        b.figures_ = r.named_values(root.get(), "/figures");
+        detail::Handle v = r.open_group(root.get(), "/verification");
+        const int64_t ran = r.int_attr(v.get(), "/verification", "ran");
+        if (ran != 0 && ran != 1) r.fail("/verification attribute ran is not 0 or 1");
+        b.verification_ran_ = ran == 1;
+        b.verification_figures_ = r.named_values(v.get(), "/verification/figures");
+        b.stats_.memory_bytes = memory(b);
+    }
+
+private:
+    static void objects(detail::FileObjects o, Bake& b) {
+        b.object_count_ = uint32_t(o.names.size());
+        size_t chars = 0;
+        for (const std::string& n : o.names) chars += n.size() + 1;
+        b.names_.reserve(chars);
+        b.name_offset_.reserve(o.names.size() + 1);
+        for (const std::string& n : o.names) {
+            b.name_offset_.push_back(uint32_t(b.names_.size()));
+            b.names_.insert(b.names_.end(), n.begin(), n.end());
+            b.names_.push_back('\0');
+        }
+        b.name_offset_.push_back(uint32_t(b.names_.size()));
+        b.object_bounds_.resize(o.names.size());
+        for (size_t i = 0; i < o.names.size(); ++i) b.object_bounds_[i] = box_at(o.bounds, i);
+        b.object_triangles_ = std::move(o.triangle_count);
+        b.object_flags_ = std::move(o.flags);
+        for (uint32_t t : b.object_triangles_) b.total_triangles_ += t;
+    }
+
+    static void cells(detail::FileCells f, Bake& b) {
+        b.kind_ = CellKind(f.kind);
+        std::copy(f.origin, f.origin + 3, b.origin_);
+        b.cell_size_m_ = f.cell_size_m;
+        std::copy(f.dims, f.dims + 3, b.dims_);
+        b.grid_to_cell_ = std::move(f.grid_to_cell);
+        b.nodes_.resize(f.node_first_child.size());
+        for (size_t i = 0; i < b.nodes_.size(); ++i) {
+            const Box box = box_at(f.node_bounds, i);
+            Bake::Node& n = b.nodes_[i];
+            for (int a = 0; a < 3; ++a) n.center[a] = 0.5f * (box.min[a] + box.max[a]);  // as Aabb::center()
+            n.first_child = f.node_first_child[i];
+            n.cell = f.node_cell[i];
+        }
+        cell_boxes(f, b);
+        view_bricks(f.view, b);
+    }
+
+    // A grid cell's box is its grid box (cells/grid.cpp: origin + index * size): then only its grid
+    // position is kept (4 bytes, not 24). Any other box (an octree, or a file that says otherwise) is kept.
+    static void cell_boxes(const detail::FileCells& f, Bake& b) {
+        const uint32_t count = f.count;
+        b.cell_grid_.clear();
+        b.cell_bounds_.clear();
+        bool derived = f.kind == 0;
+        if (derived) {
+            b.cell_grid_.assign(count, UINT32_MAX);
+            for (size_t g = 0; g < b.grid_to_cell_.size() && derived; ++g) {
+                const int32_t c = b.grid_to_cell_[g];
+                if (c < 0) continue;
+                if (b.cell_grid_[size_t(c)] != UINT32_MAX || g > UINT32_MAX) derived = false;
+                b.cell_grid_[size_t(c)] = uint32_t(g);
+            }
+            for (uint32_t c = 0; c < count && derived; ++c) {
+                derived = b.cell_grid_[c] != UINT32_MAX &&
+                          same_box(b.grid_box(b.cell_grid_[c]), box_at(f.bounds, c));
+            }
+        }
+        if (derived) return;
+        std::vector<uint32_t>().swap(b.cell_grid_);
+        b.cell_bounds_.resize(count);
+        for (uint32_t c = 0; c < count; ++c) b.cell_bounds_[c] = box_at(f.bounds, c);
+    }
+
+    // The view mask as 8 x 8 x 8 bricks: empty and full bricks cost 4 bytes, mixed ones 68.
+    static void view_bricks(const detail::FileMask& m, Bake& b) {
+        b.has_view_ = !m.bytes.empty();
+        if (!b.has_view_) return;
+        std::copy(m.origin, m.origin + 3, b.view_origin_);
+        b.view_voxel_m_ = m.voxel_size_m;
+        std::copy(m.dims, m.dims + 3, b.view_dims_);
+        for (int a = 0; a < 3; ++a) b.brick_dims_[a] = (m.dims[a] + 7) / 8;
+        const uint64_t dx = uint64_t(m.dims[0]), dy = uint64_t(m.dims[1]), dz = uint64_t(m.dims[2]);
+        b.brick_.assign(size_t(b.brick_dims_[0]) * size_t(b.brick_dims_[1]) * size_t(b.brick_dims_[2]),
+                        kBrickEmpty);
+        uint8_t brick[64];
+        size_t at = 0;
+        for (uint64_t bz = 0; bz < uint64_t(b.brick_dims_[2]); ++bz) {
+            for (uint64_t by = 0; by < uint64_t(b.brick_dims_[1]); ++by) {
+                for (uint64_t bx = 0; bx < uint64_t(b.brick_dims_[0]); ++bx, ++at) {
+                    const uint64_t x0 = bx * 8;
+                    const uint32_t width = uint32_t(std::min<uint64_t>(8, dx - x0));
+                    const uint8_t valid = uint8_t((1u << width) - 1);
+                    bool any = false, full = true;
+                    for (uint64_t zz = 0; zz < 8; ++zz) {
+                        for (uint64_t yy = 0; yy < 8; ++yy) {
+                            const uint64_t y = by * 8 + yy, z = bz * 8 + zz;
+                            uint8_t v = 0;
+                            if (y < dy && z < dz) {
+                                const uint64_t i = x0 + dx * (y + dy * z);
+                                const size_t byte = size_t(i >> 3);
+                                const unsigned shift = unsigned(i & 7);
+                                unsigned w = m.bytes[byte] >> shift;
+                                if (shift != 0 && byte + 1 < m.bytes.size())
+                                    w |= unsigned(m.bytes[byte + 1]) << (8 - shift);
+                                v = uint8_t(w) & valid;
+                                full = full && v == valid;
+                            }
+                            any = any || v != 0;
+                            brick[zz * 8 + yy] = v;
+                        }
+                    }
+                    if (!any) continue;
+                    if (full) {
+                        b.brick_[at] = kBrickFull;
+                        continue;
+                    }
+                    b.brick_[at] = kFirstBrick + uint32_t(b.brick_bytes_.size() / 64);
+                    b.brick_bytes_.insert(b.brick_bytes_.end(), brick, brick + 64);
+                }
+            }
+        }
+    }
+
+    static void pvs(detail::FilePvs f, Bake& b) {
+        if (f.code_offsets.empty()) {  // a format 1.0 file: code its rows now
+            detail::RowCode code =
+                detail::encode_rows(f.rows.data(), f.unique_rows, f.row_bytes, b.object_count_);
+            code.code.resize(code.code.size() + detail::kCodePadding, 0);  // GapReader reads whole words
+            f.code = std::move(code.code);
+            f.code_offsets = std::move(code.offsets);
+            std::vector<uint8_t>().swap(f.rows);
+        }
+        b.code_ = std::move(f.code);
+        b.row_offset_ = std::move(f.code_offsets);
+        b.cell_row_ = std::move(f.cell_row);
+        PvsStats& s = b.stats_;
+        s.cell_count = b.cell_row_.size();
+        s.object_count = b.object_count_;
+        s.unique_rows = f.unique_rows;
+        s.bytes_per_row = f.row_bytes;
+        s.bytes_raw = f.bytes_raw;
+        s.bytes_stored = f.bytes_stored;
+        s.bytes_code = b.code_.size() + 4 * (b.row_offset_.size() + b.cell_row_.size());
+    }
+
+    template <class T>
+    static uint64_t bytes(const std::vector<T>& v) {
+        return uint64_t(v.capacity()) * sizeof(T);
+    }
+    static uint64_t memory(const Bake& b) {
+        uint64_t n = sizeof(Bake) + b.info_.tool_version.capacity() + b.info_.world_path.capacity() +
+                     b.info_.world_hash.capacity() + b.info_.mode.capacity();
+        for (const auto& [k, v] : b.parameters_) n += sizeof(k) + sizeof(v) + k.capacity() + v.capacity();
+        for (const auto& [k, v] : b.figures_) n += sizeof(k) + sizeof(v) + k.capacity();
+        for (const auto& [k, v] : b.verification_figures_) n += sizeof(k) + sizeof(v) + k.capacity();
+        return n + bytes(b.names_) + bytes(b.name_offset_) + bytes(b.object_bounds_) +
+               bytes(b.object_triangles_) + bytes(b.object_flags_) + bytes(b.grid_to_cell_) +
+               bytes(b.nodes_) + bytes(b.cell_bounds_) + bytes(b.cell_grid_) + bytes(b.brick_) +
+               bytes(b.brick_bytes_) + bytes(b.code_) + bytes(b.row_offset_) + bytes(b.cell_row_);
+    }
+};
+
+LoadResult Bake::load(const std::string& path) noexcept {
+    LoadResult result;
+    try {
+        *this = Bake();
+        Loading::run(path, *this);
+        return result;
+    } catch (const detail::ReadError& e) {
+        result.status = e.status();
+        try {
+            result.message = e.what();
+        } catch (...) {
+        }
+    } catch (const std::bad_alloc&) {
+        result.status = Status::kOutOfMemory;
+    } catch (const std::length_error&) {
+        result.status = Status::kOutOfMemory;
+    } catch (...) {
+        result.status = Status::kCorrupt;
+    }
+    *this = Bake();
+    if (result.message.empty()) {
+        try {
+            result.message =
+                path + (result.status == Status::kOutOfMemory ? ": the bake does not fit in memory"
+                                                              : ": cannot load the bake");
+        } catch (...) {
+        }
+    }
+    return result;
+}
+
+Box Bake::grid_box(uint32_t g) const {
+    const uint32_t gx = g % uint32_t(dims_[0]);
+    const uint32_t gy = g / uint32_t(dims_[0]) % uint32_t(dims_[1]);
+    const uint32_t gz = g / (uint32_t(dims_[0]) * uint32_t(dims_[1]));
+    const uint32_t idx[3] = {gx, gy, gz};
+    Box box;
+    for (int a = 0; a < 3; ++a) {
+        box.min[a] = origin_[a] + float(idx[a]) * cell_size_m_;
+        box.max[a] = origin_[a] + float(idx[a] + 1) * cell_size_m_;
+    }
+    return box;
+}
+
+Box Bake::cell_bounds(uint32_t c) const noexcept {
+    if (c >= cell_row_.size()) return empty_box();
+    return cell_bounds_.empty() ? grid_box(cell_grid_[c]) : cell_bounds_[c];
+}
+
+bool Bake::view_voxel(int64_t x, int64_t y, int64_t z) const {
+    const size_t b =
+        size_t(x >> 3) + size_t(brick_dims_[0]) * (size_t(y >> 3) + size_t(brick_dims_[1]) * size_t(z >> 3));
+    const uint32_t t = brick_[b];
+    if (t < kFirstBrick) return t == kBrickFull;
+    return (brick_bytes_[size_t(t - kFirstBrick) * 64 + size_t(z & 7) * 8 + size_t(y & 7)] >> (x & 7)) & 1u;
+}
+
+// VoxelMask::contains (core/cell_set.h), step by step: voxels are closed boxes, so a point on a face of a
+// set voxel is in.
+bool Bake::view_contains(float x, float y, float z) const {
+    const float p[3] = {x, y, z};
+    int lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) {
+        const float rel = (p[a] - view_origin_[a]) / view_voxel_m_;
+        if (!(rel >= 0.0f) || rel > float(view_dims_[a])) return false;
+        const float f = std::floor(rel);
+        hi[a] = std::min(int(f), view_dims_[a] - 1);
+        lo[a] = rel == f ? std::min(std::max(int(f) - 1, 0), hi[a]) : hi[a];
+    }
+    for (int k = lo[2]; k <= hi[2]; ++k)
+        for (int j = lo[1]; j <= hi[1]; ++j)
+            for (int i = lo[0]; i <= hi[0]; ++i)
+                if (view_voxel(i, j, k)) return true;
+    return false;
+}
+
+int32_t Bake::find_cell(float x, float y, float z) const noexcept {
+    if (!(cell_size_m_ > 0.0f) || !std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) return -1;
+    if (grid_to_cell_.empty()) return -1;
+    if (has_view_ && !view_contains(x, y, z)) return -1;
+    const float p[3] = {x, y, z};
+    int idx[3];
+    for (int a = 0; a < 3; ++a) {
+        const float rel = (p[a] - origin_[a]) / cell_size_m_;
+        if (!(rel >= 0.0f) || rel > float(dims_[a])) return -1;
+        idx[a] = std::min(int(std::floor(rel)), dims_[a] - 1);
+    }
+    const size_t g = size_t(idx[0]) + size_t(dims_[0]) * (size_t(idx[1]) + size_t(dims_[1]) * size_t(idx[2]));
+    int32_t n = grid_to_cell_[g];
+    if (kind_ == CellKind::kGrid) return n;
+    while (n >= 0 && nodes_[size_t(n)].first_child >= 0) {  // children come after parents: this ends
+        const Node& node = nodes_[size_t(n)];
+        n = node.first_child + (x >= node.center[0] ? 1 : 0) + (y >= node.center[1] ? 2 : 0) +
+            (z >= node.center[2] ? 4 : 0);
+    }
+    return n >= 0 ? nodes_[size_t(n)].cell : -1;
+}
+
+uint32_t Bake::visible_count(uint32_t c) const noexcept {
+    uint32_t n = 0;
+    for_each_visible(c, [&](uint32_t) { ++n; });
+    return n;
+}
+
+bool Bake::is_visible(uint32_t c, uint32_t o) const noexcept {
+    if (c >= cell_row_.size() || o >= object_count_) return false;
+    detail::GapReader key, diff;
+    const bool has_diff = row_readers(cell_row_[c], key, diff);
+    bool in = false;
+    uint32_t i = key.next();
+    while (i < o) i = key.next();
+    in = i == o;
+    if (has_diff) {
+        i = diff.next();
+        while (i < o) i = diff.next();
+        in = in != (i == o);
+    }
+    return in;
+}
+
+uint32_t Bake::fill_bitset(uint32_t c, uint64_t* words, size_t word_count) const noexcept {
+    if (c >= cell_row_.size() || words == nullptr || word_count < words_per_row()) return UINT32_MAX;
+    std::memset(words, 0, word_count * sizeof(uint64_t));
+    uint32_t n = 0;
+    for_each_visible(c, [&](uint32_t i) {
+        words[i >> 6] |= uint64_t(1) << (i & 63);
+        ++n;
+    });
+    return n;
+}
+
+std::string_view Bake::object_name(uint32_t o) const noexcept {
+    if (o >= object_count_) return {};
+    return std::string_view(names_.data() + name_offset_[o], name_offset_[o + 1] - name_offset_[o] - 1);
+}
+
+const char* Bake::object_name_c(uint32_t o) const noexcept {
+    return o < object_count_ ? names_.data() + name_offset_[o] : "";
+}
+
+Box Bake::object_bounds(uint32_t o) const noexcept {
+    return o < object_count_ ? object_bounds_[o] : empty_box();
+}
+
+uint32_t Bake::object_triangles(uint32_t o) const noexcept {
+    return o < object_count_ ? object_triangles_[o] : 0;
+}
+
+uint32_t Bake::object_flags(uint32_t o) const noexcept {
+    return o < object_count_ ? object_flags_[o] : 0;
+}
+
+const double* Bake::figure(std::string_view name) const noexcept {
+    for (const auto& [k, v] : figures_)
+        if (k == name) return &v;
+    return nullptr;
+}
+
+const std::string* Bake::parameter(std::string_view name) const noexcept {
+    for (const auto& [k, v] : parameters_)
+        if (k == name) return &v;
+    return nullptr;
+}
+
+}  // namespace pvsbake

@@ -1,0 +1,212 @@
+// pvsbake loader (internal): the PVS code (row_code.h). Rice coding of gaps: Golomb, "Run-length encodings"
+// (IEEE Trans. Inf. Theory, 1966), with power-of-two parameters after Rice (1979); coding a row against a
+// similar earlier one is the key-frame idea of video codecs.
+#include "row_code.h"
+
+#include "pvsbake/loader.h"
+
+#include <algorithm>
+#include <cstring>
+
+namespace pvsbake::detail {
+namespace {
+
+constexpr size_t kKeyWindow = 32;  // key rows a row may be coded against
+constexpr double kDiffGain = 0.8;  // code against a key row when that needs at most 0.8 x the bits
+
+void put_varint(std::vector<uint8_t>& out, uint32_t v) {
+    while (v >= 0x80) {
+        out.push_back(uint8_t(v | 0x80));
+        v >>= 7;
+    }
+    out.push_back(uint8_t(v));
+}
+
+// The best Rice parameter for these increasing indices and the bits it needs.
+std::pair<uint32_t, uint64_t> best_rice(const std::vector<uint32_t>& idx) {
+    uint32_t best_k = 0;
+    uint64_t best_bits = UINT64_MAX;
+    for (uint32_t k = 0; k <= kMaxRiceK; ++k) {
+        uint64_t bits = 0;
+        uint32_t prev = UINT32_MAX;
+        for (uint32_t i : idx) {
+            bits += ((i - prev - 1) >> k) + 1 + k;
+            prev = i;
+        }
+        if (bits < best_bits) {
+            best_bits = bits;
+            best_k = k;
+        }
+        if ((uint64_t(1) << k) > (idx.empty() ? 0 : idx.back())) break;  // larger k only adds bits
+    }
+    return {best_k, best_bits};
+}
+
+void put_row(std::vector<uint8_t>& out, uint32_t ref, const std::vector<uint32_t>& idx, uint32_t k) {
+    put_varint(out, ref);
+    put_varint(out, uint32_t(idx.size()) << 5 | k);
+    uint64_t acc = 0;
+    int used = 0;
+    auto put_bits = [&](uint64_t v, int n) {  // n <= 32
+        acc |= v << used;
+        used += n;
+        while (used >= 8) {
+            out.push_back(uint8_t(acc));
+            acc >>= 8;
+            used -= 8;
+        }
+    };
+    uint32_t prev = UINT32_MAX;
+    for (uint32_t i : idx) {
+        const uint32_t g = i - prev - 1;
+        prev = i;
+        for (uint32_t q = g >> k; q > 0;) {
+            const uint32_t n = std::min<uint32_t>(q, 32);
+            put_bits(0, int(n));
+            q -= n;
+        }
+        put_bits(1, 1);
+        put_bits(g & ((uint32_t(1) << k) - 1), int(k));
+    }
+    if (used > 0) out.push_back(uint8_t(acc));
+}
+
+void set_bits(const uint64_t* words, uint32_t word_count, std::vector<uint32_t>& idx) {
+    idx.clear();
+    for (uint32_t w = 0; w < word_count; ++w) {
+        for (uint64_t b = words[w]; b != 0; b &= b - 1) idx.push_back(w * 64 + uint32_t(__builtin_ctzll(b)));
+    }
+}
+
+}  // namespace
+
+RowCode encode_rows(const uint8_t* rows, uint64_t row_count, uint32_t row_bytes, uint32_t objects) {
+    const uint32_t words = (row_bytes + 7) / 8;
+    std::vector<uint64_t> packed(size_t(row_count) * words, 0);
+    std::vector<uint32_t> ones(static_cast<size_t>(row_count), 0);
+    for (uint64_t r = 0; r < row_count; ++r) {
+        uint64_t* w = packed.data() + size_t(r) * words;
+        for (uint32_t j = 0; j < row_bytes; ++j)
+            w[j / 8] |= uint64_t(rows[size_t(r) * row_bytes + j]) << (8 * (j % 8));
+        for (uint32_t i = 0; i < words; ++i) ones[size_t(r)] += uint32_t(__builtin_popcountll(w[i]));
+    }
+    RowCode out;
+    out.offsets.reserve(size_t(row_count) + 1);
+    std::vector<uint64_t> keys;
+    std::vector<uint32_t> idx, diff_idx;
+    std::vector<uint64_t> diff(words);
+    for (uint64_t r = 0; r < row_count; ++r) {
+        out.offsets.push_back(uint32_t(out.code.size()));
+        const uint64_t* w = packed.data() + size_t(r) * words;
+        set_bits(w, words, idx);
+        const auto [k, bits] = best_rice(idx);
+        // The key row with the fewest differing bits, then the exact cost of coding against it.
+        uint64_t best_key = UINT64_MAX;
+        uint32_t best_ones = ones[size_t(r)];
+        for (size_t i = keys.size() > kKeyWindow ? keys.size() - kKeyWindow : 0; i < keys.size(); ++i) {
+            const uint64_t* kw = packed.data() + size_t(keys[i]) * words;
+            uint32_t n = 0;
+            for (uint32_t j = 0; j < words && n < best_ones; ++j)
+                n += uint32_t(__builtin_popcountll(w[j] ^ kw[j]));
+            if (n < best_ones) {
+                best_ones = n;
+                best_key = keys[i];
+            }
+        }
+        if (best_key != UINT64_MAX) {
+            const uint64_t* kw = packed.data() + size_t(best_key) * words;
+            for (uint32_t j = 0; j < words; ++j) diff[j] = w[j] ^ kw[j];
+            set_bits(diff.data(), words, diff_idx);
+            const auto [dk, dbits] = best_rice(diff_idx);
+            if (double(dbits + 16) <= kDiffGain * double(bits)) {
+                put_row(out.code, uint32_t(r - best_key), diff_idx, dk);
+                continue;
+            }
+        }
+        put_row(out.code, 0, idx, k);
+        keys.push_back(r);
+    }
+    out.offsets.push_back(uint32_t(out.code.size()));
+    (void)objects;
+    return out;
+}
+
+std::string check_row_code(const uint8_t* code, uint64_t code_size, const uint32_t* offsets,
+                           uint64_t row_count, uint32_t objects) {
+    if (offsets[0] != 0 || offsets[row_count] != code_size) {
+        return "/pvs/code_offsets does not start at 0 and end at the size of /pvs/code";
+    }
+    if (objects >= kMaxCodedObjects) return "/pvs: too many objects for the PVS code";
+    std::vector<bool> is_key(size_t(row_count), false);
+    for (uint64_t r = 0; r < row_count; ++r) {
+        const uint64_t begin = offsets[r], end = offsets[r + 1];
+        const std::string where = "/pvs/code row " + std::to_string(r);
+        if (end < begin + 2) return where + ": offsets decrease or leave no room for a row";
+        const uint8_t* p = code + begin;
+        const uint8_t* const stop = code + end;
+        uint32_t fields[2];
+        for (uint32_t& f : fields) {
+            uint64_t v = 0;
+            for (int shift = 0;; shift += 7) {
+                if (p == stop || shift > 28) return where + ": a damaged varint";
+                const uint8_t b = *p++;
+                v |= uint64_t(b & 0x7f) << shift;
+                if ((b & 0x80) == 0) break;
+            }
+            if (v > UINT32_MAX) return where + ": a damaged varint";
+            f = uint32_t(v);
+        }
+        const uint32_t ref = fields[0], count = fields[1] >> 5, k = fields[1] & 31;
+        if (ref > r || (ref > 0 && !is_key[size_t(r - ref)]))
+            return where + ": refers to a row that is not a key row before it";
+        is_key[size_t(r)] = ref == 0;
+        if (k > kMaxRiceK) return where + ": Rice parameter above 24";
+        if (count > objects) return where + ": more indices than objects";
+        // Decode with bounds: every bit used must lie before `stop` (reads may look up to 8 bytes past it:
+        // the buffer is padded).
+        const uint64_t limit = uint64_t(stop - p) * 8;
+        const uint64_t mask = (uint64_t(1) << k) - 1;
+        uint64_t pos = 0, last = UINT64_MAX;
+        for (uint32_t n = 0; n < count; ++n) {
+            uint64_t q = 0;
+            for (;;) {
+                if (pos >= limit || q > objects) return where + ": the code runs past the row";
+                const uint64_t w = peek_bits(p, pos);
+                if (w != 0) {
+                    const unsigned z = unsigned(__builtin_ctzll(w));
+                    q += z;
+                    pos += z + 1;
+                    break;
+                }
+                q += 64 - (pos & 7);
+                pos += 64 - (pos & 7);
+            }
+            if (pos + k > limit || q > objects) return where + ": the code runs past the row";
+            const uint64_t low = peek_bits(p, pos) & mask;
+            pos += k;
+            last += 1 + ((q << k) | low);
+            if (last >= objects) return where + ": an index beyond the objects";
+        }
+        if ((pos + 7) / 8 != limit / 8) return where + ": bytes left after the code";
+    }
+    return "";
+}
+
+void decode_row(const uint8_t* code, const uint32_t* offsets, uint64_t r, uint8_t* out, uint32_t row_bytes) {
+    if (row_bytes > 0) std::memset(out, 0, row_bytes);
+    auto flip = [&](const uint8_t* p) {
+        const uint32_t head = read_varint(p);
+        GapReader g(p, head >> 5, head & 31);
+        for (uint32_t i = g.next(); i != kEnd; i = g.next()) out[i / 8] ^= uint8_t(1u << (i % 8));
+    };
+    const uint8_t* p = code + offsets[r];
+    const uint32_t ref = read_varint(p);
+    flip(p);
+    if (ref != 0) {
+        const uint8_t* q = code + offsets[r - ref];
+        read_varint(q);
+        flip(q);
+    }
+}
+
+}  // namespace pvsbake::detail
