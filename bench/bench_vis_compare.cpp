@@ -8,7 +8,7 @@
 // lists, the share the compiler's cluster PVS lets through (cluster_visible_triangle_fraction), and the
 // share in the objects R rays over the sphere actually reach from that point (a floor no cell-based PVS
 // can go below). Prints JSON: means, medians, and the ratio bake / compiler (issue 6 asks <= 0.75 on
-// oa_dm4, <= 0.5 on ctf_inyard).
+// oa_dm4, <= 0.5 on ctf_inyard), and the share of the bake's eye voxels the compiler calls solid or outside.
 #include "cells/eyes.h"
 #include "core/random.h"
 #include "io/bake_file.h"
@@ -121,6 +121,20 @@ int main(int argc, char** argv) {
             seen.push_back(visible / total);
             if (c > 0) ratio.push_back(listed / total / c);
         }
+        // How much of the bake's eye space the compiler calls solid or outside (cluster -1): eyes there,
+        // inside walls or out in the void of a leaking level, see the backs of everything.
+        uint64_t eye_voxels = 0, eye_voxels_outside = 0;
+        const pvs::VoxelMask& em = bake.cells.eyes;
+        for (int z = 0; z < em.dims.z; ++z)
+            for (int y = 0; y < em.dims.y; ++y)
+                for (int x = 0; x < em.dims.x; ++x) {
+                    const uint64_t i =
+                        uint64_t(x) + uint64_t(em.dims.x) * (uint64_t(y) + uint64_t(em.dims.y) * uint64_t(z));
+                    if (!em.get(i)) continue;
+                    ++eye_voxels;
+                    eye_voxels_outside +=
+                        cluster_of(em.origin + (glm::vec3(x, y, z) + 0.5f) * em.voxel_size_m) < 0;
+                }
         nlohmann::ordered_json out;
         out["bench"] = "vis_compare";
         out["world"] = world_path;
@@ -135,6 +149,9 @@ int main(int argc, char** argv) {
         out["rays_triangle_share_mean"] = mean(seen);
         out["bake_over_compiler_of_means"] = mean(compiler) > 0 ? mean(ours) / mean(compiler) : 0.0;
         out["bake_over_compiler_median"] = median(ratio);
+        out["eye_voxels"] = eye_voxels;
+        out["eye_voxels_in_compiler_solid_share"] =
+            eye_voxels ? double(eye_voxels_outside) / double(eye_voxels) : 0.0;
         std::cout << out.dump(2) << std::endl;
     } catch (const std::exception& e) {
         std::fprintf(stderr, "error: %s\n", e.what());

@@ -1,5 +1,5 @@
-// The view volume: voxelize, flood from the seeds, intersect with boxes and the play height band, grow
-// by one voxel.
+// The view volume: voxelize, flood (or walk, with a play height) from the seeds, intersect with boxes and
+// the play height band, grow by one voxel.
 #include "cells/view_volume.h"
 
 #include "core/error.h"
@@ -77,7 +77,31 @@ ViewVolume build_view_volume(Context& ctx, const ViewVolumeConfig& config, const
     ctx.info(fmt::format("view volume: {} m voxels, {} x {} x {} = {:.1f} M voxels", grid.voxel_size_m,
                          grid.dims.x, grid.dims.y, grid.dims.z, double(grid.count()) * 1e-6));
     BitVolume touched, upward;
-    voxelize_opaque(ctx, world, grid, touched, play ? &upward : nullptr);
+    BitVolume glass;
+    voxelize_opaque(ctx, world, grid, touched, play ? &upward : nullptr, 0.5f, play ? &glass : nullptr);
+
+    // The play-height band: per column, walking up, an upward-facing voxel is a floor; any other touched
+    // voxel is solid in between; a free voxel is in the band while it is within the play height above the
+    // last floor.
+    BitVolume band;
+    if (play) {
+        band.reset(grid.count());
+        const int reach = int(std::floor(config.play_height_m / grid.voxel_size_m));
+        for (int z = 0; z < grid.dims.z; ++z)
+            for (int x = 0; x < grid.dims.x; ++x) {
+                int last_floor = -1 << 30;
+                for (int y = 0; y < grid.dims.y; ++y) {
+                    const uint64_t i = grid.index(x, y, z);
+                    if (upward.get(i)) {
+                        last_floor = y;
+                    } else if (touched.get(i)) {
+                        last_floor = -1 << 30;
+                    } else if (y - last_floor <= reach) {
+                        band.set(i);
+                    }
+                }
+            }
+    }
 
     // Start from every free voxel, then intersect.
     BitVolume eyes;
@@ -88,7 +112,10 @@ ViewVolume build_view_volume(Context& ctx, const ViewVolumeConfig& config, const
 
     if (!seeds.empty()) {
         vv.sources.push_back("flood");
-        const FloodResult flood = flood_free_space(ctx, grid, touched, seeds);
+        // With a play height the flood walks (stays in the band, or falls): eyes never get to where only
+        // flight would take them, over walls or out through the sky and back in.
+        const WalkRules walk{band, glass};
+        const FloodResult flood = flood_free_space(ctx, grid, touched, seeds, 4, play ? &walk : nullptr);
         vv.flooded = true;
         vv.leaked = flood.leaked;
         vv.leak_path = flood.leak_path;
@@ -123,23 +150,7 @@ ViewVolume build_view_volume(Context& ctx, const ViewVolumeConfig& config, const
     }
     if (play) {
         vv.sources.push_back("play_height");
-        // Per column, walking up: an upward-facing voxel is a floor; any other touched voxel is solid in
-        // between; a free voxel is kept while it is within the play height above the last floor.
-        const int reach = int(std::floor(config.play_height_m / grid.voxel_size_m));
-        for (int z = 0; z < grid.dims.z; ++z)
-            for (int x = 0; x < grid.dims.x; ++x) {
-                int last_floor = -1 << 30;
-                for (int y = 0; y < grid.dims.y; ++y) {
-                    const uint64_t i = grid.index(x, y, z);
-                    if (upward.get(i)) {
-                        last_floor = y;
-                    } else if (touched.get(i)) {
-                        last_floor = -1 << 30;
-                    } else if (y - last_floor > reach) {
-                        eyes.clear(i);
-                    }
-                }
-            }
+        for (size_t w = 0; w < eyes.words.size(); ++w) eyes.words[w] &= band.words[w];
     }
     BitVolume view = dilate(grid, eyes, 1);
     const double voxel_m3 = double(grid.voxel_size_m) * grid.voxel_size_m * grid.voxel_size_m;

@@ -5,7 +5,11 @@
 //   - reachable space: the flood of free voxels (no opaque triangle touches them) from the view seeds
 //     (the world's pvs_view_seed nodes and --view-seed); a flood that reaches the world's bounds LEAKS:
 //     reported with its path, and the bake carries on with all the flood reached;
-//   - play height: only space up to --play-height above an upward-facing opaque surface.
+//   - play height: only space up to --play-height above an upward-facing opaque surface (the BAND). With
+//     a play height the flood from the seeds WALKS instead of flying (occluders/flood.h): it stays in the
+//     band, steps off ledges and falls, and never walks sideways through a see-through surface. So eyes
+//     never get over a wall, out through the sky or through a window into the inside of walls or the
+//     void around a level: places a body cannot reach, where eyes would see the backs of everything.
 // None given: the world bounds, with a warning (the bake is larger and slower than it needs to be).
 //
 // Conventions: voxels as in occluders/voxels.h. Two masks come out:

@@ -29,7 +29,28 @@ struct FloodResult {
 };
 
 // `max_seed_move_voxels`: how far a seed inside a blocked voxel may move to a free one.
+// `walk` (optional): a WALK instead of a flight: the flood enters a voxel of the band from any side;
+// it leaves the band only sideways (off a ledge) or down, and moves through free voxels outside the band
+// only down (falling). With the play-height band (the space a player's eye can be above floors) this is
+// walking, climbing up to the band's height, and dropping off ledges: free space reached only by flying
+// (over a wall, out through the sky) is not entered, nor is a see-through surface walked through
+// sideways. Walking, reaching the grid's top is not a leak.
+struct WalkRules {
+    const BitVolume& band;   // where an eye can be: within the play height above a floor
+    const BitVolume& glass;  // voxels see-through triangles touch: walked into only from above (a pool's
+                             // surface), never sideways (a window)
+};
 FloodResult flood_free_space(Context& ctx, const VoxelGrid& grid, const BitVolume& blocked,
-                             const std::vector<glm::vec3>& seeds, int max_seed_move_voxels = 4);
+                             const std::vector<glm::vec3>& seeds, int max_seed_move_voxels = 4,
+                             const WalkRules* walk = nullptr);
+
+// SIGHT from `sources` through voxels not `blocked`: every voxel some straight line from a source voxel
+// can pass before it enters a blocked voxel. A line with direction signs (sx, sy, sz) visits voxels along
+// a path whose every step adds 0 or the sign on each axis (a face, edge or corner step); so the union over
+// the 8 sign octants of the voxels such monotone paths reach from the sources holds every voxel a line of
+// sight reaches (plus some no line does: a superset, which is the safe side). Unlike a flood, sight does
+// not turn corners: space behind an opening is reached only in the directions the opening looks. One sweep
+// per octant, 64 voxels at a time; parallel over octants (OpenMP).
+BitVolume sight_reach(const VoxelGrid& grid, const BitVolume& blocked, const BitVolume& sources);
 
 }  // namespace pvs

@@ -1,8 +1,9 @@
-// Solid classification: a flood of sight from the eye space through untouched voxels; the rest, less the
-// touched voxels, is solid.
+// Solid classification: sight from the eye space through untouched voxels (occluders/flood.h sight_reach);
+// the rest, less the touched voxels, is solid.
 #include "occluders/solid.h"
 
 #include "core/error.h"
+#include "occluders/flood.h"
 
 #include <fmt/format.h>
 
@@ -17,47 +18,24 @@ Solid classify_solid(Context& ctx, const VoxelGrid& grid, const BitVolume& touch
     ScopedTimer timer(ctx, "solid");
     Solid out;
     out.grid = grid;
-    BitVolume reached;
-    reached.reset(grid.count());
-    std::vector<uint64_t> frontier, next;
+    BitVolume sources;
+    sources.reset(grid.count());
     if (!eyes.empty()) {
         if (eyes.dims != grid.dims || eyes.origin != grid.origin || eyes.voxel_size_m != grid.voxel_size_m) {
             throw internal_error("classify_solid: the eye mask is not on the voxel grid");
         }
         out.from_eye_space = true;
-        for (uint64_t i = 0; i < grid.count(); ++i) {
-            if (eyes.get(i) && !touched.get(i)) {
-                reached.set(i);
-                frontier.push_back(i);
-            }
-        }
+        sources.words = eyes.bits;
     } else {
-        for (uint64_t i = 0; i < grid.count(); ++i) {
-            const glm::ivec3 c = grid.coords(i);
-            const bool border = c.x == 0 || c.y == 0 || c.z == 0 || c.x == grid.dims.x - 1 ||
-                                c.y == grid.dims.y - 1 || c.z == grid.dims.z - 1;
-            if (border && !touched.get(i)) {
-                reached.set(i);
-                frontier.push_back(i);
-            }
-        }
+        for (int z = 0; z < grid.dims.z; ++z)
+            for (int y = 0; y < grid.dims.y; ++y)
+                for (int x = 0; x < grid.dims.x; ++x) {
+                    const bool border = x == 0 || y == 0 || z == 0 || x == grid.dims.x - 1 ||
+                                        y == grid.dims.y - 1 || z == grid.dims.z - 1;
+                    if (border) sources.set(grid.index(x, y, z));
+                }
     }
-    static const glm::ivec3 kSteps[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
-    while (!frontier.empty()) {
-        next.clear();
-        for (uint64_t i : frontier) {
-            const glm::ivec3 c = grid.coords(i);
-            for (const glm::ivec3& s : kSteps) {
-                const glm::ivec3 n = c + s;
-                if (!grid.inside(n)) continue;
-                const uint64_t j = grid.index(n.x, n.y, n.z);
-                if (reached.get(j) || touched.get(j)) continue;
-                reached.set(j);
-                next.push_back(j);
-            }
-        }
-        std::swap(frontier, next);
-    }
+    const BitVolume reached = sight_reach(grid, touched, sources);
     out.solid.reset(grid.count());
     for (size_t w = 0; w < out.solid.words.size(); ++w)
         out.solid.words[w] = ~(reached.words[w] | touched.words[w]);

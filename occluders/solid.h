@@ -1,9 +1,12 @@
 // pvsbake occluders: the opaque solid, where occluders may live (ALGORITHMS.md section 1).
 //
 // Conventions: voxels as in occluders/voxels.h. Sight starts at the eye space (the view volume's free
-// voxels, or, with no view volume, everything outside the world) and spreads through every voxel no
-// opaque triangle touches. SOLID is what that flood never reaches and no opaque triangle touches: the
-// inside of closed opaque meshes and everything sealed off from the eyes (behind a shell level's walls).
+// voxels, or, with no view volume, everything outside the world) and goes in straight lines through
+// voxels no opaque triangle touches (sight_reach: the 8 octants of directions, each a monotone sweep; a
+// superset of what lines of sight reach). SOLID is what sight never reaches and no opaque triangle
+// touches: the inside of closed opaque meshes, everything sealed off from the eyes (behind a shell
+// level's walls), and, in a level open to the outside, the inside of walls whose faces toward the outside
+// are missing, as long as no line of sight from the eye space goes through the opening into them.
 // Touched voxels are never solid (part of them is on the free side of their surface), except inside the
 // union of closed box meshes (add_closed_boxes()).
 // Not a proof: a crack narrower than a voxel between triangles seals in voxels while sight passes it.

@@ -146,15 +146,17 @@ BitVolume dilate(const VoxelGrid& g, const BitVolume& in, int radius) {
 }
 
 void voxelize_opaque(Context& ctx, const World& world, const VoxelGrid& grid, BitVolume& touched,
-                     BitVolume* upward, float min_up_cos) {
+                     BitVolume* upward, float min_up_cos, BitVolume* see_through) {
     ScopedTimer timer(ctx, "voxelize");
     touched.reset(grid.count());
     if (upward) upward->reset(grid.count());
+    if (see_through) see_through->reset(grid.count());
     const float grow = grid.voxel_size_m * 1e-4f;
     const int64_t n = int64_t(world.triangles.size());
 #pragma omp parallel for schedule(dynamic, 256)
     for (int64_t t = 0; t < n; ++t) {
-        if (!world.triangle_opaque[size_t(t)]) continue;
+        const bool opaque = world.triangle_opaque[size_t(t)];
+        if (!opaque && !see_through) continue;
         const Triangle& tri = world.triangles[size_t(t)];
         const glm::vec3 a = world.positions[tri.v[0]], b = world.positions[tri.v[1]],
                         c = world.positions[tri.v[2]];
@@ -165,8 +167,8 @@ void voxelize_opaque(Context& ctx, const World& world, const VoxelGrid& grid, Bi
         const glm::ivec3 lo = grid.voxel_of(tb.min - grow), hi = grid.voxel_of(tb.max + grow);
         const glm::vec3 normal = glm::cross(b - a, c - a);
         const float len = glm::length(normal);
-        const bool up = upward && len > 0.0f && normal.y / len >= min_up_cos;
-        Voxelizer v{grid, a, b, c, grow, touched, up ? upward : nullptr};
+        const bool up = opaque && upward && len > 0.0f && normal.y / len >= min_up_cos;
+        Voxelizer v{grid, a, b, c, grow, opaque ? touched : *see_through, up ? upward : nullptr};
         v.visit(lo, hi);
     }
     ctx.debug(fmt::format("voxelize: {} of {} voxels touched", touched.count(), grid.count()));

@@ -82,8 +82,9 @@ bool triangle_box_overlap(glm::vec3 box_center, glm::vec3 box_half, glm::vec3 a,
 BitVolume dilate(const VoxelGrid& grid, const BitVolume& in, int radius);
 
 // Marks every voxel an opaque triangle touches. When `upward` is given, also marks the voxels touched by
-// opaque triangles facing up (normal.y >= min_up_cos; floors a player can stand on). Parallel (OpenMP).
+// opaque triangles facing up (normal.y >= min_up_cos; floors a player can stand on); when `see_through` is
+// given, the voxels see-through triangles touch (glass a player cannot walk through). Parallel (OpenMP).
 void voxelize_opaque(Context& ctx, const World& world, const VoxelGrid& grid, BitVolume& touched,
-                     BitVolume* upward = nullptr, float min_up_cos = 0.5f);
+                     BitVolume* upward = nullptr, float min_up_cos = 0.5f, BitVolume* see_through = nullptr);
 
 }  // namespace pvs

@@ -173,11 +173,35 @@ public:
         counts_.per_level.assign(shared.occ.epsilon_m.size(), 0);
     }
 
-    // Lists in `row` every object of `open` that some patch of the face `rect` (flat along `axis`) cannot
-    // prove hidden. The face is first cut into n x n top patches so that halving them m times ends at
-    // patches of half-diagonal <= epsilon_0 with as few leaves as a plain grid would need (within 20%
-    // more), and with m as large as that allows and the ladder has levels for.
-    void solve_face(const Aabb& rect, int axis, const std::vector<uint32_t>& open, uint64_t* row) {
+    // Sight leaves a convex region through a face outward, so what it reaches through the face lies on the
+    // face's outer side: for the side at the region's min along `axis` (side 0) only objects reaching down
+    // to the face's plane matter, for side 1 only objects reaching up to it. A face shared by two regions is
+    // solved for both sides at once, on the same depth cubes: Sides holds the open objects and the row of
+    // each side (an empty list: that side is not wanted).
+    struct Sides {
+        std::array<std::vector<uint32_t>, 2> open;
+        std::array<uint64_t*, 2> row{nullptr, nullptr};
+        bool empty() const { return open[0].empty() && open[1].empty(); }
+    };
+
+    // The open objects of `candidates` on each wanted side of the face at `plane` along `axis`.
+    Sides sides_of(const std::vector<uint32_t>& candidates, int axis, float plane, uint64_t* row_lo,
+                   uint64_t* row_hi) const {
+        Sides out;
+        out.row = {row_lo, row_hi};
+        for (uint32_t o : candidates) {
+            const Aabb& b = sh_.world.objects[o].bounds;
+            if (row_lo && b.min[axis] <= plane) out.open[0].push_back(o);
+            if (row_hi && b.max[axis] >= plane) out.open[1].push_back(o);
+        }
+        return out;
+    }
+
+    // Lists in each side's row every object of its open list that some patch of the face `rect` (flat along
+    // `axis`) cannot prove hidden. The face is first cut into n x n top patches so that halving them m
+    // times ends at patches of half-diagonal <= epsilon_0 with as few leaves as a plain grid would need
+    // (within 20% more), and with m as large as that allows and the ladder has levels for.
+    void solve_face(const Aabb& rect, int axis, const Sides& sides) {
         const int ua = (axis + 1) % 3, va = (axis + 2) % 3;
         const glm::vec3 size = rect.size();
         const double eps0 = sh_.occ.epsilon_m.front();
@@ -196,14 +220,14 @@ public:
                 p.max[ua] = i + 1 == n ? rect.max[ua] : rect.min[ua] + size[ua] * float(i + 1) / float(n);
                 p.min[va] = rect.min[va] + size[va] * float(j) / float(n);
                 p.max[va] = j + 1 == n ? rect.max[va] : rect.min[va] + size[va] * float(j + 1) / float(n);
-                solve_patch(p, axis, open, row);
+                solve_patch(p, axis, sides);
             }
     }
 
-    // Lists in `row` every object of `open` that some sub-patch of `rect` (flat along `axis`) cannot prove
-    // hidden. `open` is consumed.
-    void solve_patch(const Aabb& rect, int axis, std::vector<uint32_t> open, uint64_t* row) {
-        if (open.empty()) return;
+    // Lists in each side's row every object of its open list that some sub-patch of `rect` (flat along
+    // `axis`) cannot prove hidden. `sides` is consumed.
+    void solve_patch(const Aabb& rect, int axis, Sides sides) {
+        if (sides.empty()) return;
         if (box_all_in_mask(sh_.occ.solid, rect)) {  // no sight line leaves through it (argument 3)
             ++counts_.in_solid;
             return;
@@ -225,15 +249,21 @@ public:
             ++counts_.per_level[k];
             cube_.clear(s);
             interest_.clear();
-            for (uint32_t o : open) interest_.push_back(sh_.world.objects[o].bounds);
+            for (const std::vector<uint32_t>& open : sides.open)
+                for (uint32_t o : open) interest_.push_back(sh_.world.objects[o].bounds);
             cube_.limit_to(interest_);
             cube_.add_occluders(sh_.occ.boxes[k]);
-            open = unproven(open);
-            if (k == 0 || open.empty()) {  // the floor: whatever is not proven is listed
-                for (uint32_t o : open) row[o >> 6] |= uint64_t(1) << (o & 63);
-                return;
+            for (int side = 0; side < 2; ++side) {
+                std::vector<uint32_t>& open = sides.open[size_t(side)];
+                open = unproven(open);
+                if (k == 0) {  // the floor: whatever is not proven is listed
+                    for (uint32_t o : open) sides.row[size_t(side)][o >> 6] |= uint64_t(1) << (o & 63);
+                    open.clear();
+                }
             }
-            open = list_seen(s, open, row);
+            if (sides.empty()) return;
+            for (int side = 0; side < 2; ++side)
+                sides.open[size_t(side)] = list_seen(s, sides.open[size_t(side)], sides.row[size_t(side)]);
         }
         // Split into halves along the patch's long in-plane sides (both for a square).
         const int ua = (axis + 1) % 3, va = (axis + 2) % 3;
@@ -251,19 +281,19 @@ public:
                     const float mid = 0.5f * (rect.min[va] + rect.max[va]);
                     (iv == 0 ? child.max[va] : child.min[va]) = mid;
                 }
-                solve_patch(child, axis, open, row);
+                solve_patch(child, axis, sides);
             }
     }
 
     const Counts& counts() const { return counts_; }
 
-    // Lists the objects of `open` a sight line from s reaches (a ray to a point of one of its triangles that
-    // no opaque triangle stops) and returns the others. Such an object can never be proven hidden from a
-    // patch holding s, so refining it would only cost time: the PVS is the same, sooner. Only from
+    // Lists the objects of `open` a sight line from s reaches (a ray to a point of one of its triangles
+    // that no opaque triangle stops) and returns the others. Such an object can never be proven hidden
+    // from a patch holding s, so refining it would only cost time: the PVS is the same, sooner. Only from
     // free space (every voxel holding s free: untouched and not proven solid), or rays would start behind
     // walls and reach the backs of triangles through the sealed void.
     std::vector<uint32_t> list_seen(glm::vec3 s, const std::vector<uint32_t>& open, uint64_t* row) {
-        if (!box_all_in_mask(sh_.occ.free, Aabb::of(s, s))) return open;
+        if (open.empty() || !box_all_in_mask(sh_.occ.free, Aabb::of(s, s))) return open;
         origins_.clear();
         dirs_.clear();
         tfar_.clear();
@@ -416,7 +446,9 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
                     if (!world.objects[o].bounds.overlaps(box)) open.push_back(o);
                 for (int axis = 0; axis < 3; ++axis)
                     for (int side = 0; side < 2; ++side)
-                        solver.solve_face(box_face(box, axis, side), axis, open, row);
+                        solver.solve_face(box_face(box, axis, side), axis,
+                                          solver.sides_of(open, axis, side ? box.max[axis] : box.min[axis],
+                                                          side ? nullptr : row, side ? row : nullptr));
             }
             ctx.progress_advance();
         }
@@ -426,8 +458,9 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
     add_counts(figures, total, start);
 }
 
-// A grid: each face shared by two cells is computed once. A face's row lists every object some patch of
-// the face cannot prove hidden; a cell's row is the union of its six faces' rows and add_always_listed().
+// A grid: each face shared by two cells is computed once, for both sides (PatchSolver::Sides). A face
+// side's row lists every object on that side that some patch of the face cannot prove hidden; a cell's row
+// is the union of its six faces' outward rows and add_always_listed().
 static void conservative_grid_rows(Context& ctx, const ConservativeConfig& config, const World& world,
                                    const CellSet& cells, const ShrunkOccluders& occluders,
                                    const RayScene& scene, PvsSet& pvs, ConservativeFigures& figures) {
@@ -437,11 +470,12 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
     // face between them, found by its exact corners. In cell order, so the result is deterministic.
     struct Face {
         int axis;
-        Aabb rect;  // flat along `axis`
+        Aabb rect;                                 // flat along `axis`
+        std::array<bool, 2> wanted{false, false};  // side 0: a region's min face (sight goes to -axis)
     };
     std::vector<Face> faces;
     std::map<std::array<float, 6>, uint32_t> face_of;
-    std::vector<std::vector<uint32_t>> cell_faces(cells.size());
+    std::vector<std::vector<uint32_t>> cell_faces(cells.size());  // face * 2 + side
     std::vector<Aabb> regions(cells.size());
     for (uint32_t c = 0; c < cells.size(); ++c) {
         regions[c] = eye_region(cells.eyes, cells.cells[c].bounds);
@@ -453,12 +487,13 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
                                          rect.max.x, rect.max.y, rect.max.z};
                 auto [it, fresh] = face_of.emplace(key, uint32_t(faces.size()));
                 if (fresh) faces.push_back(Face{axis, rect});
-                cell_faces[c].push_back(it->second);
+                faces[it->second].wanted[size_t(side)] = true;
+                cell_faces[c].push_back(it->second * 2 + uint32_t(side));
             }
     }
     const Shared shared = make_shared(config, world, occluders, scene);
     const std::vector<uint32_t> leavable = leavable_objects(world);
-    PvsSet face_rows = PvsSet::make(uint32_t(faces.size()), n_objects);
+    PvsSet face_rows = PvsSet::make(uint32_t(2 * faces.size()), n_objects);  // face * 2 + side
     Counts total;
     ctx.progress_begin("conservative PVS", faces.size(), "faces");
 #pragma omp parallel
@@ -467,7 +502,10 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
 #pragma omp for schedule(dynamic, 4)
         for (int64_t fi = 0; fi < int64_t(faces.size()); ++fi) {
             const Face& f = faces[size_t(fi)];
-            solver.solve_face(f.rect, f.axis, leavable, face_rows.row(uint32_t(fi)));
+            solver.solve_face(f.rect, f.axis,
+                              solver.sides_of(leavable, f.axis, f.rect.min[f.axis],
+                                              f.wanted[0] ? face_rows.row(uint32_t(2 * fi)) : nullptr,
+                                              f.wanted[1] ? face_rows.row(uint32_t(2 * fi + 1)) : nullptr));
             ctx.progress_advance();
         }
 #pragma omp critical

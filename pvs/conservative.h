@@ -25,7 +25,10 @@
 //    (closed, so a patch on a voxel face meets both sides) are proven solid lets no sight line out and is
 //    skipped. (An earlier version skipped patches far from the EYE space; that was wrong with
 //    --play-height: an eye sees up through the top of its cell, above the eye space.) Faces of neighbouring
-//    regions that coincide exactly are computed once.
+//    regions that coincide exactly are computed once, on the same samples, for both sides.
+//    The region is convex, so a sight line leaving through q on a face goes outward: beyond q it stays in
+//    the face's closed outer half-space. So a face lists, for the region it bounds, only objects whose
+//    bounds reach its plane from the outer side (the rest cannot be seen through it).
 // 4. From s, the depth cube (pvs/depth_cube.h) proves a box hidden only when every segment from s to the box
 //    meets a shrunk occluder. So an object proven hidden from s at level k (boxes shrunk by epsilon_k >= r)
 //    is hidden from every eye whose sight leaves the cell through the patch. A sample inside a shrunk box

@@ -156,6 +156,35 @@ TEST(Conservative, SeenByLookingUpAboveThePlayHeightIsListed) {
     EXPECT_FALSE(bake.pvs.test(uint32_t(corner), crate)) << "the crate is behind the divide";
 }
 
+// A yard open to the sky, split by a wall 0.6 m thick whose top face is missing, as in a compiled level
+// whose walls lose the faces they share with the sky. Eyes are only up to 2 m above the floor. Flying, a
+// flood of free space would go up, over and down into the wall (eyes inside it would see everything);
+// walking it does not, and sight goes in straight lines: none from below the wall's top goes down into
+// it. So the wall is solid and hides the crate behind it.
+TEST(Conservative, AWallOpenOnlyAtItsTopUnderTheSkyHidesWhatIsBehindIt) {
+    World w;
+    test::add_box(w, "floor", Aabb::of({-0.5f, -0.5f, -0.5f}, {12.5f, 0, 6.5f}));
+    test::add_box(w, "west", Aabb::of({-0.5f, 0, -0.5f}, {0, 4, 6.5f}));
+    test::add_box(w, "east", Aabb::of({12, 0, -0.5f}, {12.5f, 4, 6.5f}));
+    test::add_box(w, "south", Aabb::of({0, 0, -0.5f}, {12, 4, 0}));
+    test::add_box(w, "north", Aabb::of({0, 0, 6}, {12, 4, 6.5f}));
+    test::add_box_faces(w, "divide", Aabb::of({5.7f, 0, 0}, {6.3f, 4, 6}), true, 0, 3);  // no top face
+    const uint32_t crate = test::add_box(w, "crate", Aabb::of({9, 0.2f, 0.75f}, {9.5f, 1.2f, 1.25f}));
+    w.view_seeds = {{3, 1, 3}, {9, 1, 3}};
+    BakeConfig c = conservative_config();
+    c.view.play_height_m = 2.0;
+    Context ctx = quiet_context();
+    const BakeData bake = bake_world(ctx, c, w, "test", "");
+    EXPECT_TRUE(bake.verification.ran);
+    EXPECT_TRUE(bake.verification.misses.empty()) << bake.verification.misses.size() << " misses";
+    const int32_t cell = bake.cells.find({2.5f, 1.5f, 1.0f});
+    ASSERT_GE(cell, 0);
+    EXPECT_FALSE(bake.pvs.test(uint32_t(cell), crate)) << "the crate is behind the wall";
+    const int32_t near = bake.cells.find({8.5f, 1.5f, 1.0f});
+    ASSERT_GE(near, 0);
+    EXPECT_TRUE(bake.pvs.test(uint32_t(near), crate));
+}
+
 TEST(Conservative, BehindAWallIsCulled) {
     EXPECT_FALSE(target_listed(Middle::kSolid));
 }

@@ -122,6 +122,32 @@ TEST(ViewVolume, BoxesAndPlayHeightOnlyRemoveSpace) {
     EXPECT_LT(low.eye_volume_m3, 0.4 * all.eye_volume_m3);
 }
 
+// A yard open to the sky, split by a 4 m wall; the only seed stands on a 5 m pedestal in the west half.
+// Flying (no play height), the flood goes over the wall and out to the sky: both halves and a leak. With a
+// play height the flood walks: it drops off the pedestal into the west half, and never gets over the wall.
+TEST(ViewVolume, WithAPlayHeightEyesWalkAndDropButDoNotFly) {
+    World w;
+    test::add_box(w, "floor", Aabb::of({-0.5f, -0.5f, -0.5f}, {12.5f, 0, 6.5f}));
+    test::add_box(w, "west", Aabb::of({-0.5f, 0, -0.5f}, {0, 4, 6.5f}));
+    test::add_box(w, "east", Aabb::of({12, 0, -0.5f}, {12.5f, 4, 6.5f}));
+    test::add_box(w, "south", Aabb::of({0, 0, -0.5f}, {12, 4, 0}));
+    test::add_box(w, "north", Aabb::of({0, 0, 6}, {12, 4, 6.5f}));
+    test::add_box(w, "divide", Aabb::of({5.7f, 0, 0}, {6.3f, 4, 6}));
+    test::add_box(w, "pedestal", Aabb::of({1, 0, 1}, {3, 5, 3}));
+    Context ctx = quiet_context();
+    ViewVolumeConfig c = flood_from({{2, 6, 2}});
+    const ViewVolume flying = build_view_volume(ctx, c, w);
+    EXPECT_TRUE(flying.leaked);
+    EXPECT_TRUE(flying.eyes.contains({9, 1, 3}));
+    c.play_height_m = 1.8;
+    const ViewVolume walking = build_view_volume(ctx, c, w);
+    EXPECT_FALSE(walking.leaked);
+    EXPECT_TRUE(walking.eyes.contains({2, 6, 2}));      // on the pedestal
+    EXPECT_TRUE(walking.eyes.contains({4.5f, 1, 5}));   // dropped into the west half
+    EXPECT_FALSE(walking.eyes.contains({9, 1, 3}));     // the east half: only flying gets there
+    EXPECT_FALSE(walking.eyes.contains({4.5f, 3, 5}));  // above the play height
+}
+
 TEST(ViewVolume, NoSourceMeansTheWorldBoundsWithAWarning) {
     Context ctx = quiet_context();
     const World w = two_rooms(true, false);

@@ -203,5 +203,142 @@ TEST(Dilate, GrowsBySoManyVoxelsInTheChebyshevMetric) {
     }
 }
 
+// A pocket open only at its top, beside a hole that sight enters from below: a flood turns the corner
+// into the pocket, straight sight cannot (it would have to go up through the hole and then down). A slice
+// one voxel thick (dims.z = 1), x to the right, y up.
+TEST(Sight, DoesNotTurnTheCornerAFloodTurns) {
+    Context ctx = quiet_context();
+    VoxelGrid g;
+    g.voxel_size_m = 1.0f;
+    g.dims = {20, 12, 1};
+    BitVolume blocked, sources;
+    blocked.reset(g.count());
+    sources.reset(g.count());
+    auto at = [&](int x, int y) { return g.index(x, y, 0); };
+    for (int x = 0; x < 20; ++x) {
+        if (x != 2) blocked.set(at(x, 5));                        // the ceiling, a hole at x = 2
+        if (x != 2 && (x < 10 || x > 12)) blocked.set(at(x, 6));  // the pocket: x 10..12 at y = 6
+    }
+    sources.set(at(2, 0));
+    const BitVolume seen = sight_reach(g, blocked, sources);
+    EXPECT_TRUE(seen.get(at(2, 0)));
+    EXPECT_TRUE(seen.get(at(0, 4)));    // below the ceiling, up and to the side
+    EXPECT_TRUE(seen.get(at(19, 0)));   // along the floor
+    EXPECT_TRUE(seen.get(at(2, 6)));    // in the hole
+    EXPECT_TRUE(seen.get(at(11, 7)));   // above the pocket, through the hole
+    EXPECT_TRUE(seen.get(at(19, 11)));  // the far corner above
+    for (int x = 10; x <= 12; ++x) EXPECT_FALSE(seen.get(at(x, 6))) << x;  // the pocket
+    for (uint64_t i = 0; i < g.count(); ++i) EXPECT_FALSE(seen.get(i) && blocked.get(i)) << i;
+    // The flood of free space does turn the corner.
+    const FloodResult f = flood_free_space(ctx, g, blocked, {{2.5f, 0.5f, 0.5f}});
+    EXPECT_TRUE(f.reached.get(at(11, 6)));
+}
+
+// A tunnel along x longer than several words, both ways; and a line through the corner between two
+// blocked voxels, which only a corner step follows.
+TEST(Sight, RunsDownALongTunnelBothWaysAndThroughACorner) {
+    VoxelGrid g;
+    g.voxel_size_m = 1.0f;
+    g.dims = {200, 3, 3};
+    BitVolume blocked, sources;
+    blocked.reset(g.count());
+    sources.reset(g.count());
+    for (uint64_t i = 0; i < g.count(); ++i) {
+        const glm::ivec3 c = g.coords(i);
+        if (c.y != 1 || c.z != 1) blocked.set(i);
+    }
+    for (int end : {0, 199}) {
+        sources.reset(g.count());
+        sources.set(g.index(end, 1, 1));
+        const BitVolume seen = sight_reach(g, blocked, sources);
+        for (int x = 0; x < 200; ++x) ASSERT_TRUE(seen.get(g.index(x, 1, 1))) << end << " " << x;
+        EXPECT_EQ(seen.count(), 200u);
+    }
+    g.dims = {70, 4, 4};
+    for (int octant = 0; octant < 8; ++octant) {
+        const int sx = octant & 1 ? -1 : 1, sy = octant & 2 ? -1 : 1, sz = octant & 4 ? -1 : 1;
+        const glm::ivec3 a(sx > 0 ? 62 : 65, sy > 0 ? 1 : 2, sz > 0 ? 1 : 2), b = a + glm::ivec3(sx, sy, sz);
+        blocked.reset(g.count());
+        sources.reset(g.count());
+        for (uint64_t i = 0; i < g.count(); ++i) blocked.set(i);
+        blocked.clear(g.index(a.x, a.y, a.z));
+        blocked.clear(g.index(b.x, b.y, b.z));
+        sources.set(g.index(a.x, a.y, a.z));
+        const BitVolume seen = sight_reach(g, blocked, sources);
+        EXPECT_TRUE(seen.get(g.index(b.x, b.y, b.z))) << octant;
+        EXPECT_EQ(seen.count(), 2u) << octant;
+    }
+}
+
+// Property: every voxel a straight ray from a source voxel passes before it enters a blocked voxel is in
+// sight_reach (random grids, blocked voxels and rays; rays marched in steps of a tenth of a voxel).
+TEST(Sight, HoldsEveryVoxelARayReaches) {
+    Rng rng(11, 3);
+    for (int trial = 0; trial < 6; ++trial) {
+        VoxelGrid g;
+        g.voxel_size_m = 1.0f;
+        g.dims = {67 + trial, 23, 19 + trial};  // rows longer than a word, odd sizes
+        BitVolume blocked, sources;
+        blocked.reset(g.count());
+        sources.reset(g.count());
+        const float density = 0.08f + 0.04f * float(trial);
+        for (uint64_t i = 0; i < g.count(); ++i)
+            if (rng.uniform() < density) blocked.set(i);
+        // A closed shell of blocked voxels: its inside is out of every sight.
+        const glm::ivec3 lo(40, 5, 5), hi(50, 15, 12);
+        auto in_shell = [&](glm::ivec3 c) {
+            return glm::all(glm::greaterThanEqual(c, lo)) && glm::all(glm::lessThanEqual(c, hi));
+        };
+        for (int z = lo.z; z <= hi.z; ++z)
+            for (int y = lo.y; y <= hi.y; ++y)
+                for (int x = lo.x; x <= hi.x; ++x) {
+                    const bool wall =
+                        x == lo.x || x == hi.x || y == lo.y || y == hi.y || z == lo.z || z == hi.z;
+                    if (wall)
+                        blocked.set(g.index(x, y, z));
+                    else
+                        blocked.clear(g.index(x, y, z));
+                }
+        std::vector<glm::ivec3> src;
+        while (src.size() < 5) {
+            const glm::ivec3 c(int(rng.uniform() * float(g.dims.x)) % g.dims.x,
+                               int(rng.uniform() * float(g.dims.y)) % g.dims.y,
+                               int(rng.uniform() * float(g.dims.z)) % g.dims.z);
+            if (in_shell(c)) continue;
+            blocked.clear(g.index(c.x, c.y, c.z));
+            sources.set(g.index(c.x, c.y, c.z));
+            src.push_back(c);
+        }
+        const BitVolume seen = sight_reach(g, blocked, sources);
+        uint64_t checked = 0;
+        for (int r = 0; r < 4000; ++r) {
+            const glm::ivec3 c = src[size_t(r) % src.size()];
+            const glm::vec3 o = glm::vec3(c) + glm::vec3(rng.uniform(), rng.uniform(), rng.uniform());
+            glm::vec3 d(rng.uniform() - 0.5f, rng.uniform() - 0.5f, rng.uniform() - 0.5f);
+            if (glm::length(d) < 1e-3f) continue;
+            d = glm::normalize(d);
+            for (float t = 0.0f;; t += 0.1f) {
+                const glm::vec3 p = o + t * d;
+                if (!g.bounds().contains(p)) break;
+                const glm::ivec3 v = g.voxel_of(p);
+                const uint64_t i = g.index(v.x, v.y, v.z);
+                if (blocked.get(i)) break;
+                ASSERT_TRUE(seen.get(i))
+                    << "trial " << trial << " ray " << r << " voxel " << v.x << " " << v.y << " " << v.z;
+                ++checked;
+            }
+        }
+        EXPECT_GT(checked, 10000u);
+        EXPECT_FALSE(seen.get(g.index(45, 10, 8))) << trial;  // inside the shell
+        uint64_t outside_free = 0, outside_seen = 0;
+        for (uint64_t i = 0; i < g.count(); ++i) {
+            if (blocked.get(i) || in_shell(g.coords(i))) continue;
+            ++outside_free;
+            outside_seen += seen.get(i);
+        }
+        EXPECT_GT(outside_seen, outside_free / 2) << trial;
+    }
+}
+
 }  // namespace
 }  // namespace pvs

@@ -8,9 +8,10 @@
 
 namespace pvs::test {
 
-// Appends a closed box (12 triangles) as one object. opaque=false: seen through (glass).
-inline uint32_t add_box(World& world, const std::string& name, const Aabb& b, bool opaque = true,
-                        uint32_t extra_flags = 0) {
+// Appends a box as one object: 12 triangles, or 10 with face `open_face` left out (0 and 1: z min and
+// max; 2 and 3: y; 4 and 5: x). opaque=false: seen through (glass).
+inline uint32_t add_box_faces(World& world, const std::string& name, const Aabb& b, bool opaque,
+                              uint32_t extra_flags, int open_face) {
     const uint32_t base = uint32_t(world.positions.size());
     for (int i = 0; i < 8; ++i) {
         world.positions.emplace_back(i & 1 ? b.max.x : b.min.x, i & 2 ? b.max.y : b.min.y,
@@ -23,9 +24,11 @@ inline uint32_t add_box(World& world, const std::string& name, const Aabb& b, bo
     obj.node_path = name;
     obj.bounds = b;
     obj.first_triangle = uint32_t(world.triangles.size());
-    obj.triangle_count = 12;
+    obj.triangle_count = open_face >= 0 ? 10 : 12;
     obj.flags = (opaque ? kObjectHasOpaque : kObjectHasSeeThrough) | extra_flags;
-    for (const auto& f : kFaces) {
+    for (int k = 0; k < 12; ++k) {
+        if (k / 2 == open_face) continue;
+        const auto& f = kFaces[k];
         world.triangles.push_back(Triangle{{base + f[0], base + f[1], base + f[2]}});
         world.triangle_opaque.push_back(opaque ? 1 : 0);
         world.triangle_double_sided.push_back(0);
@@ -33,6 +36,12 @@ inline uint32_t add_box(World& world, const std::string& name, const Aabb& b, bo
     world.objects.push_back(obj);
     world.bounds.extend(b);
     return uint32_t(world.objects.size() - 1);
+}
+
+// A closed box (12 triangles) as one object. opaque=false: seen through (glass).
+inline uint32_t add_box(World& world, const std::string& name, const Aabb& b, bool opaque = true,
+                        uint32_t extra_flags = 0) {
+    return add_box_faces(world, name, b, opaque, extra_flags, -1);
 }
 
 // One grid cell of edge `size` with its min corner at `origin`.
