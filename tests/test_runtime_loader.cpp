@@ -411,3 +411,25 @@ TEST(RuntimeLoaderExample, WalksThroughASmallBake) {
 
 }  // namespace
 }  // namespace pvs
+
+namespace pvsbake::detail {
+namespace {
+
+// Row offsets and cell rows drop to 16 bits when every value fits, and keep 32 when one does not.
+TEST(IndexArray, NarrowWhenEveryValueFitsWideOtherwise) {
+    for (const uint32_t top : {0u, 65535u, 65536u, 4000000000u}) {
+        std::vector<uint32_t> values = {7, top, 0, 12345};
+        const std::vector<uint32_t> copy = values;
+        IndexArray a;
+        a.assign(std::move(values));
+        ASSERT_EQ(a.size(), copy.size());
+        for (size_t i = 0; i < copy.size(); ++i) EXPECT_EQ(a[i], copy[i]) << top;
+        EXPECT_EQ(a.bytes(), copy.size() * (top <= 65535u ? 2u : 4u)) << top;
+    }
+    IndexArray empty;
+    empty.assign({});
+    EXPECT_TRUE(empty.empty());
+}
+
+}  // namespace
+}  // namespace pvsbake::detail

@@ -203,8 +203,8 @@ private:
             std::vector<uint8_t>().swap(f.rows);
         }
         b.code_ = std::move(f.code);
-        b.row_offset_ = std::move(f.code_offsets);
-        b.cell_row_ = std::move(f.cell_row);
+        b.row_offset_.assign(std::move(f.code_offsets));
+        b.cell_row_.assign(std::move(f.cell_row));
         PvsStats& s = b.stats_;
         s.cell_count = b.cell_row_.size();
         s.object_count = b.object_count_;
@@ -212,7 +212,7 @@ private:
         s.bytes_per_row = f.row_bytes;
         s.bytes_raw = f.bytes_raw;
         s.bytes_stored = f.bytes_stored;
-        s.bytes_code = b.code_.size() + 4 * (b.row_offset_.size() + b.cell_row_.size());
+        s.bytes_code = b.code_.size() + b.row_offset_.bytes() + b.cell_row_.bytes();
     }
 
     template <class T>
@@ -228,7 +228,7 @@ private:
         return n + bytes(b.names_) + bytes(b.name_offset_) + bytes(b.object_bounds_) +
                bytes(b.object_triangles_) + bytes(b.object_flags_) + bytes(b.grid_to_cell_) +
                bytes(b.nodes_) + bytes(b.cell_bounds_) + bytes(b.cell_grid_) + bytes(b.brick_) +
-               bytes(b.brick_bytes_) + bytes(b.code_) + bytes(b.row_offset_) + bytes(b.cell_row_);
+               bytes(b.brick_bytes_) + bytes(b.code_) + b.row_offset_.bytes() + b.cell_row_.bytes();
     }
 };
 

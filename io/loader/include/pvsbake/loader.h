@@ -155,6 +155,36 @@ inline uint32_t read_varint(const uint8_t*& p) {
     }
 }
 
+// Indices kept in 16 bits when every value fits, else 32: the row of each cell and where each row's code
+// starts weigh as much as the code itself on small bakes (a few bytes a row).
+class IndexArray {
+public:
+    void assign(std::vector<uint32_t>&& values) {
+        uint32_t top = 0;
+        for (uint32_t v : values) top = v > top ? v : top;
+        if (top <= UINT16_MAX) {
+            narrow_.assign(values.begin(), values.end());
+            std::vector<uint32_t>().swap(wide_);
+        } else {
+            wide_ = std::move(values);
+            std::vector<uint16_t>().swap(narrow_);
+        }
+        size_ = narrow_.size() + wide_.size();
+    }
+    size_t size() const { return size_; }
+    bool empty() const { return size_ == 0; }
+    uint32_t operator[](size_t i) const { return wide_.empty() ? narrow_[i] : wide_[i]; }
+    uint64_t bytes() const {
+        return uint64_t(narrow_.capacity()) * sizeof(uint16_t) +
+               uint64_t(wide_.capacity()) * sizeof(uint32_t);
+    }
+
+private:
+    std::vector<uint16_t> narrow_;
+    std::vector<uint32_t> wide_;
+    size_t size_ = 0;
+};
+
 }  // namespace detail
 
 // A loaded bake. Default-constructed (or after a failed load) it is empty: no cells, no objects.
@@ -333,8 +363,8 @@ private:
     std::vector<uint8_t> brick_bytes_;
     // The PVS: row code (plus 8 bytes of padding), where each distinct row starts, and each cell's row.
     std::vector<uint8_t> code_;
-    std::vector<uint32_t> row_offset_;
-    std::vector<uint32_t> cell_row_;
+    detail::IndexArray row_offset_;
+    detail::IndexArray cell_row_;
     PvsStats stats_;
 };
 
