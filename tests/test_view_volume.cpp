@@ -122,30 +122,41 @@ TEST(ViewVolume, BoxesAndPlayHeightOnlyRemoveSpace) {
     EXPECT_LT(low.eye_volume_m3, 0.4 * all.eye_volume_m3);
 }
 
-// A yard open to the sky, split by a 4 m wall; the only seed stands on a 5 m pedestal in the west half.
-// Flying (no play height), the flood goes over the wall and out to the sky: both halves and a leak. With a
-// play height the flood walks: it drops off the pedestal into the west half, and never gets over the wall.
-TEST(ViewVolume, WithAPlayHeightEyesWalkAndDropButDoNotFly) {
+// A yard open to the sky, split by a 4 m wall with a doorway (z in [2.5, 3.5]), closed by a glass pane or
+// open; the only seed stands on a 5 m pedestal in the west half.
+World walled_yard(bool glass) {
     World w;
     test::add_box(w, "floor", Aabb::of({-0.5f, -0.5f, -0.5f}, {12.5f, 0, 6.5f}));
     test::add_box(w, "west", Aabb::of({-0.5f, 0, -0.5f}, {0, 4, 6.5f}));
     test::add_box(w, "east", Aabb::of({12, 0, -0.5f}, {12.5f, 4, 6.5f}));
     test::add_box(w, "south", Aabb::of({0, 0, -0.5f}, {12, 4, 0}));
     test::add_box(w, "north", Aabb::of({0, 0, 6}, {12, 4, 6.5f}));
-    test::add_box(w, "divide", Aabb::of({5.7f, 0, 0}, {6.3f, 4, 6}));
+    test::add_box(w, "divide_a", Aabb::of({5.7f, 0, 0}, {6.3f, 4, 2.5f}));
+    test::add_box(w, "divide_b", Aabb::of({5.7f, 0, 3.5f}, {6.3f, 4, 6}));
+    if (glass) test::add_box(w, "glass", Aabb::of({5.95f, 0, 2.5f}, {6.05f, 4, 3.5f}), false);
     test::add_box(w, "pedestal", Aabb::of({1, 0, 1}, {3, 5, 3}));
+    return w;
+}
+
+// Flying (no play height), the flood goes over the wall and out to the sky: both halves and a leak. With a
+// play height the flood walks: it drops off the pedestal into the west half, never gets over the wall, and
+// goes through the doorway only when no glass closes it.
+TEST(ViewVolume, WithAPlayHeightEyesWalkAndDropButDoNotFlyOrPassGlass) {
     Context ctx = quiet_context();
     ViewVolumeConfig c = flood_from({{2, 6, 2}});
-    const ViewVolume flying = build_view_volume(ctx, c, w);
+    const ViewVolume flying = build_view_volume(ctx, c, walled_yard(true));
     EXPECT_TRUE(flying.leaked);
     EXPECT_TRUE(flying.eyes.contains({9, 1, 3}));
     c.play_height_m = 1.8;
-    const ViewVolume walking = build_view_volume(ctx, c, w);
+    const ViewVolume walking = build_view_volume(ctx, c, walled_yard(true));
     EXPECT_FALSE(walking.leaked);
     EXPECT_TRUE(walking.eyes.contains({2, 6, 2}));      // on the pedestal
     EXPECT_TRUE(walking.eyes.contains({4.5f, 1, 5}));   // dropped into the west half
-    EXPECT_FALSE(walking.eyes.contains({9, 1, 3}));     // the east half: only flying gets there
+    EXPECT_FALSE(walking.eyes.contains({9, 1, 3}));     // the east half: behind glass, or over the wall
     EXPECT_FALSE(walking.eyes.contains({4.5f, 3, 5}));  // above the play height
+    const ViewVolume through_door = build_view_volume(ctx, c, walled_yard(false));
+    EXPECT_FALSE(through_door.leaked);
+    EXPECT_TRUE(through_door.eyes.contains({9, 1, 3}));  // walked through the open doorway
 }
 
 TEST(ViewVolume, NoSourceMeansTheWorldBoundsWithAWarning) {
