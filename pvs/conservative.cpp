@@ -252,7 +252,15 @@ public:
             for (const std::vector<uint32_t>& open : sides.open)
                 for (uint32_t o : open) interest_.push_back(sh_.world.objects[o].bounds);
             cube_.limit_to(interest_);
-            cube_.add_occluders(sh_.occ.boxes[k]);
+            // Only occluders meeting the box around s and the open objects (a segment from s to an open
+            // object stays in it): drawing fewer is always safe, and these are nearly all that matter (the
+            // same rows on rooms and oa_dm4, in 0.64x to 0.74x the time).
+            Aabb reach = Aabb::of(s, s);
+            for (const Aabb& b : interest_) reach.extend(b);
+            near_.clear();
+            for (const Aabb& b : sh_.occ.boxes[k])
+                if (b.overlaps(reach)) near_.push_back(b);
+            cube_.add_occluders(near_);
             for (int side = 0; side < 2; ++side) {
                 std::vector<uint32_t>& open = sides.open[size_t(side)];
                 open = unproven(open);
@@ -373,6 +381,7 @@ private:
     std::vector<uint32_t> open_under_;  // per tree node
     std::vector<int32_t> stack_;
     std::vector<Aabb> interest_;  // bounds of the open objects: the only pixels worth drawing
+    std::vector<Aabb> near_;      // the occluders drawn for the current sample
     std::vector<glm::vec3> origins_, dirs_;
     std::vector<float> tfar_;
     std::vector<uint8_t> blocked_;

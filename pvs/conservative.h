@@ -32,7 +32,9 @@
 // 4. From s, the depth cube (pvs/depth_cube.h) proves a box hidden only when every segment from s to the box
 //    meets a shrunk occluder. So an object proven hidden from s at level k (boxes shrunk by epsilon_k >= r)
 //    is hidden from every eye whose sight leaves the cell through the patch. A sample inside a shrunk box
-//    needs no test: its ball, which holds the patch, lies in the solid.
+//    needs no test: its ball, which holds the patch, lies in the solid. Drawing fewer occluders only
+//    leaves more pixels open, so the cube is drawn with only those meeting the box around s and the
+//    objects still to prove (which holds every segment from s to them).
 // 5. Adaptive refinement (ALGORITHMS.md section 3): a face is first tested as patches with r <= the
 //    largest epsilon of the ladder; an object proven hidden from a patch is done for all of it; the objects
 //    not yet proven go to the patch's four halves (r halves), down to r <= epsilon_0 (the floor), where an
