@@ -18,6 +18,8 @@ PACKAGES=(
   nlohmann-json3-dev  # JSON reports
   libfmt-dev          # message formatting
   libxxhash-dev       # content hash of the world in the bake file
+  libvtk9-dev         # pvsview, the viewer (optional: the rest builds without it)
+  xvfb xauth          # xvfb-run: pvsview's headless screenshots and their tests without a display
 )
 
 missing=()
