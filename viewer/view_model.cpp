@@ -118,8 +118,7 @@ CellFigures cell_figures(const BakeData& bake, int32_t cell) {
     const auto& sampled = bake.verification.cell_sampled_visible;
     if (bake.verification.ran && size_t(cell) < sampled.size()) {
         f.sampled_visible = sampled[size_t(cell)];
-        if (f.sampled_visible > 0)
-            f.overestimation = double(f.objects_visible) / double(f.sampled_visible) - 1.0;
+        if (f.sampled_visible > 0) f.overestimation = double(f.objects_visible) / double(f.sampled_visible);
     }
     for (const Miss& m : bake.verification.misses) f.misses += m.cell == uint32_t(cell) ? 1u : 0u;
     return f;
@@ -136,7 +135,7 @@ std::string cell_overlay_text(const BakeData& bake, const CellFigures& f, size_t
                      f.triangles_total, pct(double(f.triangles_visible), double(f.triangles_total)));
     if (f.sampled_visible >= 0) {
         s += fmt::format("sampled visible set: {} objects", f.sampled_visible);
-        if (f.overestimation >= 0.0) s += fmt::format("   overestimation: {:.1f}%", 100.0 * f.overestimation);
+        if (f.overestimation >= 0.0) s += fmt::format("   overestimation: {:.2f}x", f.overestimation);
         s += fmt::format("   misses here: {}\n", f.misses);
     } else {
         s += "sampled visible set: not verified\n";

@@ -62,7 +62,7 @@ struct CellFigures {
     uint64_t triangles_visible = 0;  // of the objects in the PVS
     uint64_t triangles_total = 0;
     int64_t sampled_visible = -1;  // objects verification rays saw from the cell; -1: no verification
-    double overestimation = -1.0;  // objects_visible / sampled_visible - 1; -1: unknown
+    double overestimation = -1.0;  // objects_visible / sampled_visible (as verify reports it); -1: unknown
     uint32_t misses = 0;           // verification misses recorded for this cell
     std::vector<uint32_t> listed;  // the PVS objects, ascending
 };

@@ -92,7 +92,7 @@ TEST(ViewModel, CellFiguresCountObjectsTrianglesSampledSetAndMisses) {
     EXPECT_EQ(c0.triangles_visible, 24u);
     EXPECT_EQ(c0.triangles_total, 36u);
     EXPECT_EQ(c0.sampled_visible, 1);
-    EXPECT_DOUBLE_EQ(c0.overestimation, 1.0);
+    EXPECT_DOUBLE_EQ(c0.overestimation, 2.0);
     EXPECT_EQ(c0.misses, 0u);
     EXPECT_EQ(c0.listed, (std::vector<uint32_t>{0, 2}));
     const CellFigures c1 = cell_figures(f.bake, 1);
@@ -100,7 +100,7 @@ TEST(ViewModel, CellFiguresCountObjectsTrianglesSampledSetAndMisses) {
     const std::string text = cell_overlay_text(f.bake, c0, 1);
     EXPECT_NE(text.find("cell 0 of 2"), std::string::npos) << text;
     EXPECT_NE(text.find("2 of 3 objects"), std::string::npos) << text;
-    EXPECT_NE(text.find("overestimation: 100.0%"), std::string::npos) << text;
+    EXPECT_NE(text.find("overestimation: 2.00x"), std::string::npos) << text;
     EXPECT_NE(text.find("and 1 more"), std::string::npos) << text;
     EXPECT_EQ(cell_figures(f.bake, -1).cell, -1);
     EXPECT_EQ(cell_figures(f.bake, 2).cell, -1);
