@@ -163,11 +163,7 @@ TEST(Conservative, SeenByLookingUpAboveThePlayHeightIsListed) {
 // it. So the wall is solid and hides the crate behind it.
 TEST(Conservative, AWallOpenOnlyAtItsTopUnderTheSkyHidesWhatIsBehindIt) {
     World w;
-    test::add_box(w, "floor", Aabb::of({-0.5f, -0.5f, -0.5f}, {12.5f, 0, 6.5f}));
-    test::add_box(w, "west", Aabb::of({-0.5f, 0, -0.5f}, {0, 4, 6.5f}));
-    test::add_box(w, "east", Aabb::of({12, 0, -0.5f}, {12.5f, 4, 6.5f}));
-    test::add_box(w, "south", Aabb::of({0, 0, -0.5f}, {12, 4, 0}));
-    test::add_box(w, "north", Aabb::of({0, 0, 6}, {12, 4, 6.5f}));
+    test::add_open_yard(w);
     test::add_box_faces(w, "divide", Aabb::of({5.7f, 0, 0}, {6.3f, 4, 6}), true, 0, 3);  // no top face
     const uint32_t crate = test::add_box(w, "crate", Aabb::of({9, 0.2f, 0.75f}, {9.5f, 1.2f, 1.25f}));
     w.view_seeds = {{3, 1, 3}, {9, 1, 3}};

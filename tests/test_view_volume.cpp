@@ -126,11 +126,7 @@ TEST(ViewVolume, BoxesAndPlayHeightOnlyRemoveSpace) {
 // open; the only seed stands on a 5 m pedestal in the west half.
 World walled_yard(bool glass) {
     World w;
-    test::add_box(w, "floor", Aabb::of({-0.5f, -0.5f, -0.5f}, {12.5f, 0, 6.5f}));
-    test::add_box(w, "west", Aabb::of({-0.5f, 0, -0.5f}, {0, 4, 6.5f}));
-    test::add_box(w, "east", Aabb::of({12, 0, -0.5f}, {12.5f, 4, 6.5f}));
-    test::add_box(w, "south", Aabb::of({0, 0, -0.5f}, {12, 4, 0}));
-    test::add_box(w, "north", Aabb::of({0, 0, 6}, {12, 4, 6.5f}));
+    test::add_open_yard(w);
     test::add_box(w, "divide_a", Aabb::of({5.7f, 0, 0}, {6.3f, 4, 2.5f}));
     test::add_box(w, "divide_b", Aabb::of({5.7f, 0, 3.5f}, {6.3f, 4, 6}));
     if (glass) test::add_box(w, "glass", Aabb::of({5.95f, 0, 2.5f}, {6.05f, 4, 3.5f}), false);

@@ -44,6 +44,16 @@ inline uint32_t add_box(World& world, const std::string& name, const Aabb& b, bo
     return add_box_faces(world, name, b, opaque, extra_flags, -1);
 }
 
+// A yard open to the sky: inside x in [0, 12], z in [0, 6], a 0.5 m floor below y = 0 and 4 m walls of
+// 0.5 m, no roof (a flood of free space leaks out over the walls).
+inline void add_open_yard(World& world) {
+    add_box(world, "floor", Aabb::of({-0.5f, -0.5f, -0.5f}, {12.5f, 0, 6.5f}));
+    add_box(world, "west", Aabb::of({-0.5f, 0, -0.5f}, {0, 4, 6.5f}));
+    add_box(world, "east", Aabb::of({12, 0, -0.5f}, {12.5f, 4, 6.5f}));
+    add_box(world, "south", Aabb::of({0, 0, -0.5f}, {12, 4, 0}));
+    add_box(world, "north", Aabb::of({0, 0, 6}, {12, 4, 6.5f}));
+}
+
 // One grid cell of edge `size` with its min corner at `origin`.
 inline CellSet single_cell(glm::vec3 origin, float size) {
     CellSet cells;
