@@ -3,6 +3,7 @@
 #include "pvs/conservative.h"
 
 #include "cells/eyes.h"
+#include "occluders/panels.h"
 #include "pvs/depth_cube.h"
 #include "pvs/ray_sampler.h"
 
@@ -260,6 +261,20 @@ public:
             near_.clear();
             for (const Aabb& b : sh_.occ.boxes[k])
                 if (b.overlaps(reach)) near_.push_back(b);
+            // Panels (argument 8) whose plane the patch's ball does not reach; drawn first, they are cheap
+            // and hide many boxes behind them, which add_occluders() then skips.
+            near_panels_.clear();
+            if (k < sh_.occ.panels.size()) {
+                const double clear_of_plane = eps[k] * (1.0 + 1e-6);
+                for (const Aabb& p : sh_.occ.panels[k]) {
+                    const int a = panel_axis(p);
+                    if (a >= 0 && p.overlaps(reach) &&
+                        std::abs(double(p.min[a]) - double(s[a])) > clear_of_plane) {
+                        near_panels_.push_back(p);
+                    }
+                }
+            }
+            cube_.add_panels(near_panels_);
             cube_.add_occluders(near_);
             for (int side = 0; side < 2; ++side) {
                 std::vector<uint32_t>& open = sides.open[size_t(side)];
@@ -380,8 +395,9 @@ private:
     std::vector<uint8_t> open_mark_;    // per object: 0 not open, 1 open, 2 open and not proven
     std::vector<uint32_t> open_under_;  // per tree node
     std::vector<int32_t> stack_;
-    std::vector<Aabb> interest_;  // bounds of the open objects: the only pixels worth drawing
-    std::vector<Aabb> near_;      // the occluders drawn for the current sample
+    std::vector<Aabb> interest_;     // bounds of the open objects: the only pixels worth drawing
+    std::vector<Aabb> near_;         // the occluders drawn for the current sample
+    std::vector<Aabb> near_panels_;  // the panels drawn for it
     std::vector<glm::vec3> origins_, dirs_;
     std::vector<float> tfar_;
     std::vector<uint8_t> blocked_;

@@ -45,6 +45,19 @@
 //    whose whole box is not proven may still be, part by part (its triangles in runs of 4, each run's box).
 // 7. Objects a sight ray from a patch centre s reaches (Embree, against the real triangles) are listed at
 //    once instead of refined: no patch holding s can prove them hidden, so refining them only costs time.
+// 8. PANELS (occluders/panels.h) are flat rectangles wholly covered by opaque triangles: a segment that meets
+//    one is stopped. A panel is used for a patch of half-diagonal r <= epsilon_k only when its plane is
+//    farther than epsilon_k from the patch centre s (so the whole ball B(s, r) is on one side), only on the
+//    cube face along its normal (so a ray s -> x it hides makes an angle theta with the normal with
+//    tan(theta) <= sqrt 2), and inset by (1 + sqrt 2) epsilon_k. Why that is enough: put the plane at height
+//    0, s at height h_s > r, x behind it at height -h_x < 0, and let y(q) be where segment q -> x crosses the
+//    plane, for q in B(s, r). With mu_q = h_x / (h_x + h_q) in (0, 1),
+//    y(q) - y(s) = (q - s) mu_q + (s - x) (mu_q - mu_s), and in the plane
+//    |y(q) - y(s)| <= r + tan(theta) |h_s - h_q| mu_q <= r (1 + tan(theta)) <= (1 + sqrt 2) epsilon_k.
+//    The depth cube proves x hidden through a panel pixel only if y(s) lies in the inset rectangle, so y(q)
+//    lies in the covered one: every segment from the ball to x crosses an opaque triangle before x. Unlike a
+//    box, a panel needs no solid behind it: a wall thinner than 2 epsilon + 2 voxels, or a hollow shell,
+//    still occludes by its faces.
 // What it rests on beyond this argument: the solid being truly closed to sight (cracks narrower than a
 // voxel are found by the sight probe and the ray check of occluder synthesis, which sample).
 #pragma once

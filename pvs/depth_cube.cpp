@@ -246,6 +246,79 @@ void DepthCube::add_occluder(const Aabb& box) {
     }
 }
 
+namespace {
+
+// Does the corner ray of grid value g (on an in-plane axis) cross a panel's plane, at depth t, inside
+// [lo, hi] on that axis with room to spare? The same slab as a box's, and the same slack.
+inline bool panel_corner_hits(double lo, double hi, double g, double t) {
+    double enter, exit;
+    slab(lo, hi, g, enter, exit);
+    return enter * (1.0 + kCubeDepthSlack) <= t && t * (1.0 + kCubeDepthSlack) <= exit;
+}
+
+// The panel's plane relative to the eye: the face along its normal that looks at it, and its depth there;
+// false when the panel is unusable (not flat along exactly one axis, not finite) or within the near plane.
+bool panel_face(const Aabb& panel, glm::vec3 eye, int& face, double& depth) {
+    if (!is_finite(panel.min) || !is_finite(panel.max)) return false;
+    int axis = -1;
+    for (int a = 0; a < 3; ++a) {
+        if (!(panel.min[a] <= panel.max[a])) return false;
+        if (panel.min[a] == panel.max[a]) {
+            if (axis >= 0) return false;
+            axis = a;
+        }
+    }
+    if (axis < 0) return false;
+    const double h = double(panel.min[axis]) - double(eye[axis]);
+    if (!(std::abs(h) > kCubeNearPlane_m)) return false;
+    face = 2 * axis + (h > 0.0 ? 0 : 1);
+    depth = std::abs(h);
+    return true;
+}
+
+}  // namespace
+
+void DepthCube::add_panel(const Aabb& panel) {
+    int face = 0;
+    double t = 0.0;
+    if (!panel_face(panel, eye_, face, t)) return;
+    const int r = resolution_, a = face / 2, ua = (a + 1) % 3, va = (a + 2) % 3;
+    const double u_lo = double(panel.min[ua]) - double(eye_[ua]),
+                 u_hi = double(panel.max[ua]) - double(eye_[ua]);
+    const double v_lo = double(panel.min[va]) - double(eye_[va]),
+                 v_hi = double(panel.max[va]) - double(eye_[va]);
+    // Candidate vertices: those of the region's pixels within the projected rectangle, one vertex of slack
+    // each side (the test at the vertices decides; extra candidates change nothing).
+    const auto& reg = region_[size_t(face)];
+    const auto vertex_lo = [r](double x) {
+        return std::max(0, int(std::floor((std::max(x, -1.0) + 1.0) * 0.5 * r)) - 1);
+    };
+    const auto vertex_hi = [r](double x) {
+        return std::min(r, int(std::ceil((std::min(x, 1.0) + 1.0) * 0.5 * r)) + 1);
+    };
+    if (u_lo / t > 1.0 || u_hi / t < -1.0 || v_lo / t > 1.0 || v_hi / t < -1.0) return;
+    const int iv0 = std::max(vertex_lo(u_lo / t), reg[0]), iv1 = std::min(vertex_hi(u_hi / t), reg[1] + 1);
+    const int jv0 = std::max(vertex_lo(v_lo / t), reg[2]), jv1 = std::min(vertex_hi(v_hi / t), reg[3] + 1);
+    if (iv1 - iv0 < 1 || jv1 - jv0 < 1) return;
+    // Vertices whose corner rays hit; a pixel is written when its four corners do.
+    for (int iv = iv0; iv <= iv1; ++iv)
+        col_enter_[iv] = panel_corner_hits(u_lo, u_hi, grid(iv, r), t) ? 1.0 : 0.0;
+    for (int jv = jv0; jv <= jv1; ++jv)
+        row_enter_[jv] = panel_corner_hits(v_lo, v_hi, grid(jv, r), t) ? 1.0 : 0.0;
+    const float depth = float_up(t * (1.0 + kCubeDepthSlack));
+    float* const face_depth = depth_.data() + size_t(face) * r * r;
+    for (int j = jv0; j < jv1; ++j) {
+        if (row_enter_[j] == 0.0 || row_enter_[j + 1] == 0.0) continue;
+        float* const row = face_depth + size_t(j) * r;
+        for (int i = iv0; i < iv1; ++i)
+            if (col_enter_[i] != 0.0 && col_enter_[i + 1] != 0.0) row[i] = std::min(row[i], depth);
+    }
+}
+
+void DepthCube::add_panels(const std::vector<Aabb>& panels) {
+    for (const Aabb& p : panels) add_panel(p);
+}
+
 void DepthCube::add_occluders(const std::vector<Aabb>& boxes) {
     order_.clear();
     for (uint32_t b = 0; b < boxes.size(); ++b) {
@@ -312,6 +385,11 @@ glm::dvec3 reference_direction(int face, double u, double v) {
 }  // namespace
 
 bool is_hidden_reference(const std::vector<Aabb>& occluders, glm::vec3 eye, const Aabb& box, int resolution) {
+    return is_hidden_reference(occluders, {}, eye, box, resolution);
+}
+
+bool is_hidden_reference(const std::vector<Aabb>& occluders, const std::vector<Aabb>& panels, glm::vec3 eye,
+                         const Aabb& box, int resolution) {
     const int r = resolution;
     if (!box_usable(box)) return false;
     // Visible when the box meets the closed near cube around the eye.
@@ -364,6 +442,33 @@ bool is_hidden_reference(const std::vector<Aabb>& occluders, glm::vec3 eye, cons
                         }
                     }
                     if (d < kInf) pixel = std::min(pixel, float_up(d));
+                }
+                for (const Aabb& panel : panels) {
+                    int panel_f = 0;
+                    double t = 0.0;
+                    if (!panel_face(panel, eye, panel_f, t) || panel_f != face) continue;
+                    // The four corner rays cross the plane at depth t: inside the rectangle with room to
+                    // spare?
+                    bool hits = true;
+                    for (int cj = j; cj <= j + 1; ++cj) {
+                        for (int ci = i; ci <= i + 1; ++ci) {
+                            const glm::dvec3 dir = reference_direction(face, grid(ci, r), grid(cj, r));
+                            for (const int k : {ua, va}) {
+                                double lo = (double(panel.min[k]) - double(eye[k])) / dir[k];
+                                double hi = (double(panel.max[k]) - double(eye[k])) / dir[k];
+                                if (dir[k] < 0.0) std::swap(lo, hi);
+                                if (dir[k] == 0.0) {
+                                    const bool in = double(panel.min[k]) - double(eye[k]) <= 0.0 &&
+                                                    double(panel.max[k]) - double(eye[k]) >= 0.0;
+                                    lo = in ? -kInf : kInf;
+                                    hi = in ? kInf : -kInf;
+                                }
+                                hits = hits && lo * (1.0 + kCubeDepthSlack) <= t &&
+                                       t * (1.0 + kCubeDepthSlack) <= hi;
+                            }
+                        }
+                    }
+                    if (hits) pixel = std::min(pixel, float_up(t * (1.0 + kCubeDepthSlack)));
                 }
                 if (!(double(pixel) < limit)) return false;
             }

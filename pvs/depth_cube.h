@@ -90,6 +90,13 @@ public:
     void limit_to(const std::vector<Aabb>& boxes);
     // Rasterizes one occluder box (see the pixel rule above). Empty or non-finite boxes are ignored.
     void add_occluder(const Aabb& box);
+    // Rasterizes one PANEL (occluders/panels.h: flat along exactly one axis, else ignored), only on the face
+    // along its normal that looks at it, where its plane has the constant depth t = |plane - eye|: a pixel
+    // whose four corner rays cross the plane inside the rectangle (with the slack on both sides) gets
+    // t (1 + slack), rounded up to float. By the same convexity as for boxes, every ray through such a
+    // pixel crosses the rectangle at depth t. Panels within the near plane are ignored.
+    void add_panel(const Aabb& panel);
+    void add_panels(const std::vector<Aabb>& panels);
     // Rasterizes all the boxes, nearest first, skipping each box the ones before already hide (it could not
     // lower any pixel). Same depths as add_occluder() on every box, in far less time behind walls.
     void add_occluders(const std::vector<Aabb>& boxes);
@@ -120,5 +127,8 @@ private:
 // for touched pixels the minimum over all occluders of the four-corner slab tests. Slow (O(6 R^2 * N)); for
 // the differential test and the benchmark ratio only.
 bool is_hidden_reference(const std::vector<Aabb>& occluders, glm::vec3 eye, const Aabb& box, int resolution);
+// The same with panels (add_panel()) besides the boxes.
+bool is_hidden_reference(const std::vector<Aabb>& occluders, const std::vector<Aabb>& panels, glm::vec3 eye,
+                         const Aabb& box, int resolution);
 
 }  // namespace pvs

@@ -4,6 +4,7 @@
 #include "cells/eyes.h"
 #include "core/random.h"
 #include "occluders/boxes.h"
+#include "occluders/panels.h"
 #include "occluders/solid.h"
 
 #include <fmt/format.h>
@@ -226,6 +227,13 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
         sc.max_boxes = std::max<uint32_t>(bc.max_boxes, 1024);
         shrunk->epsilon_m.clear();
         shrunk->boxes.clear();
+        shrunk->panels.clear();
+        PanelFigures pf;
+        const std::vector<Aabb> panels = find_panels(world, &pf);
+        ctx.info(
+            fmt::format("panels: {} opaque triangles lie in axis planes, {} rectangles are covered by pairs "
+                        "of them, merged into {} panels",
+                        pf.flat_triangles, pf.rectangles, pf.panels));
         for (int level = 0; level <= levels; ++level) {
             const double eps = epsilon_m * std::ldexp(1.0, level);
             const int k = std::max(1, int(std::ceil(eps / double(grid.voxel_size_m) - 1e-9)));
@@ -249,6 +257,7 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
                                  k, level_boxes.size(), double(eroded.count()) * voxel_m3));
             shrunk->epsilon_m.push_back(eps);
             shrunk->boxes.push_back(std::move(level_boxes));
+            shrunk->panels.push_back(inset_panels(panels, kPanelInset * eps));
         }
         shrunk->free.origin = grid.origin;
         shrunk->free.voxel_size_m = grid.voxel_size_m;

@@ -25,9 +25,9 @@ Context quiet_context() {
 // A closed hall (inside x in [0, 12], y in [0, 4], z in [0, 6]; 0.5 m shell) split at x = 6 by a 0.6 m wall
 // with a doorway at its far end (z in [4.6, 5.6], y < 2.5) so both halves are reachable. What stands in the
 // wall near z in [0, 2] varies: solid, two walls overlapping in view (fusion), the same with a gap, a slit,
-// a doorway, a glass pane. The target stands behind it at x in [9, 9.5], z in [0.75, 1.25]. Walls are
-// 0.6 m thick: at 0.1 m voxels and epsilon 0.1 m a shrunk occluder remains inside them (thinner walls
-// shrink away, which is the price of epsilon, not an error).
+// a doorway, a glass pane, a wall thinner than a voxel. The target stands behind it at x in [9, 9.5], z in
+// [0.75, 1.25]. Walls are 0.6 m thick: at 0.1 m voxels and epsilon 0.1 m a shrunk occluder remains inside
+// them; a thinner wall leaves no box, only its faces (panels, occluders/panels.h).
 enum class Middle {
     kSolid,
     kFusedHalves,
@@ -36,7 +36,8 @@ enum class Middle {
     kGappedHalves,
     kSlit,
     kDoorway,
-    kGlass
+    kGlass,
+    kThinShell
 };
 
 struct Scene {
@@ -89,6 +90,9 @@ Scene make_scene(Middle middle) {
             test::add_box(w, "near_top", Aabb::of({x0, 2.5f, 0.6f}, {x1, 4, 1.4f}));
             if (middle == Middle::kGlass)
                 test::add_box(w, "glass", Aabb::of({5.99f, 0, 0.6f}, {6.01f, 2.5f, 1.4f}), false);
+            break;
+        case Middle::kThinShell:  // 5 cm thick, half a voxel: no solid in it, only its faces (panels)
+            test::add_box(w, "near_thin", Aabb::of({5.975f, 0, 0}, {6.025f, 4, 2}));
             break;
     }
     s.target = test::add_box(w, "target", Aabb::of({9, 0.8f, 0.75f}, {9.5f, 1.8f, 1.25f}));
@@ -190,6 +194,9 @@ TEST(Conservative, BehindTwoOverlappingHalfWallsIsCulledByFusion) {
 TEST(Conservative, EitherHalfWallAloneLeavesItListed) {
     EXPECT_TRUE(target_listed(Middle::kLowHalfOnly));
     EXPECT_TRUE(target_listed(Middle::kHighHalfOnly));
+}
+TEST(Conservative, BehindAWallThinnerThanAVoxelIsCulledByItsFaces) {
+    EXPECT_FALSE(target_listed(Middle::kThinShell));
 }
 TEST(Conservative, ThroughAGapBetweenTwoWallsIsListed) {
     EXPECT_TRUE(target_listed(Middle::kGappedHalves));

@@ -282,5 +282,119 @@ TEST(DepthCube, HiddenMeansEveryRayIsBlocked) {
     EXPECT_GT(hidden, tested / 10) << hidden << " of " << tested << " hidden";
 }
 
+// Walls given as their two big faces (panels) instead of boxes, as occluders/panels.h finds them.
+std::vector<Aabb> wall_faces(const std::vector<Aabb>& walls) {
+    std::vector<Aabb> panels;
+    for (const Aabb& w : walls) {
+        const glm::vec3 size = w.size();
+        const int thin = size.x <= size.y && size.x <= size.z ? 0 : (size.y <= size.z ? 1 : 2);
+        for (int side = 0; side < 2; ++side) {
+            Aabb p = w;
+            p.min[thin] = p.max[thin] = side ? w.max[thin] : w.min[thin];
+            panels.push_back(p);
+        }
+    }
+    return panels;
+}
+
+TEST(DepthCube, PanelsMatchTheReferenceOnRandomScenes) {
+    const int scenes = test::in_ci() ? 60 : 300;
+    const int resolutions[] = {16, 17, 24, 31, 32, 48, 64};
+    Rng rng(17, 3);
+    int hidden = 0, tested = 0, disagreements = 0;
+    DepthCube cube(16);
+    for (int n = 0; n < scenes; ++n) {
+        Scene s = random_scene(rng);
+        // Half the occluders become panels (their two largest faces).
+        const size_t half = s.occluders.size() / 2;
+        const std::vector<Aabb> panels =
+            wall_faces(std::vector<Aabb>(s.occluders.begin(), s.occluders.begin() + std::ptrdiff_t(half)));
+        s.occluders.erase(s.occluders.begin(), s.occluders.begin() + std::ptrdiff_t(half));
+        const int r = resolutions[rng.below(7)];
+        if (cube.resolution() != r) cube = DepthCube(r);
+        cube.clear(s.eye);
+        cube.add_panels(panels);
+        for (const Aabb& b : s.occluders) cube.add_occluder(b);
+        for (const Aabb& b : s.occludees) {
+            const bool fast = cube.is_hidden(b);
+            const bool slow = is_hidden_reference(s.occluders, panels, s.eye, b, r);
+            hidden += fast;
+            ++tested;
+            if (fast != slow) {
+                ++disagreements;
+                ADD_FAILURE() << "scene " << n << " resolution " << r << ": fast " << fast << ", reference "
+                              << slow;
+                if (disagreements > 5) return;
+            }
+        }
+    }
+    EXPECT_EQ(disagreements, 0);
+    EXPECT_GT(hidden, tested / 10) << hidden << " of " << tested << " hidden";
+    EXPECT_LT(hidden, tested * 9 / 10);
+}
+
+TEST(DepthCube, APanelHidesWhatIsBehindItSeenFromEitherSideOnly) {
+    const Aabb panel = Aabb::of({-2.0f, -2.0f, 5.0f}, {2.0f, 2.0f, 5.0f});  // flat along z at z = 5
+    const Aabb behind = Aabb::of({-0.5f, -0.5f, 7.0f}, {0.5f, 0.5f, 8.0f});
+    const Aabb in_front = Aabb::of({-0.5f, -0.5f, 3.0f}, {0.5f, 0.5f, 4.0f});
+    const Aabb past_its_edge = Aabb::of({3.0f, -0.5f, 7.0f}, {4.0f, 0.5f, 8.0f});
+    const Aabb touching_it = Aabb::of({-0.5f, -0.5f, 5.0f}, {0.5f, 0.5f, 6.0f});
+    DepthCube cube(64);
+    cube.clear({0.0f, 0.0f, 0.0f});
+    cube.add_panel(panel);
+    EXPECT_TRUE(cube.is_hidden(behind));
+    EXPECT_FALSE(cube.is_hidden(in_front));
+    EXPECT_FALSE(cube.is_hidden(past_its_edge));
+    EXPECT_FALSE(cube.is_hidden(touching_it));  // equal depth counts as visible
+    // From the other side, what is now behind it.
+    cube.clear({0.0f, 0.0f, 10.0f});
+    cube.add_panel(panel);
+    EXPECT_TRUE(cube.is_hidden(in_front));
+    EXPECT_FALSE(cube.is_hidden(behind));
+    // A box is no panel: flat along two axes, or along none, draws nothing.
+    cube.clear({0.0f, 0.0f, 0.0f});
+    cube.add_panel(Aabb::of({-2.0f, 0.0f, 5.0f}, {2.0f, 0.0f, 5.0f}));
+    cube.add_panel(Aabb::of({-2.0f, -2.0f, 5.0f}, {2.0f, 2.0f, 5.5f}));
+    EXPECT_EQ(cube.covered_pixel_count(), 0u);
+}
+
+TEST(DepthCube, HiddenByPanelsMeansEveryRayCrossesOne) {
+    const int scenes = test::in_ci() ? 80 : 400;
+    const int rays_per_box = test::in_ci() ? 500 : 2000;
+    const int resolutions[] = {16, 32, 64, 128};
+    Rng rng(5, 9);
+    long long violations = 0, rays = 0;
+    int hidden = 0, tested = 0;
+    for (int n = 0; n < scenes; ++n) {
+        const Scene s = random_scene(rng);
+        const std::vector<Aabb> panels = wall_faces(s.occluders);
+        DepthCube cube(resolutions[rng.below(4)]);
+        cube.clear(s.eye);
+        cube.add_panels(panels);
+        for (const Aabb& b : s.occludees) {
+            ++tested;
+            if (!cube.is_hidden(b)) continue;
+            ++hidden;
+            for (int k = 0; k < rays_per_box; ++k) {
+                glm::dvec3 x;
+                for (int a = 0; a < 3; ++a) {
+                    const double t = k < 8 ? double((k >> a) & 1) : double(rng.uniform());
+                    x[a] = double(b.min[a]) + t * (double(b.max[a]) - double(b.min[a]));
+                }
+                ++rays;
+                const bool blocked = std::any_of(panels.begin(), panels.end(), [&](const Aabb& p) {
+                    return segment_blocked(glm::dvec3(s.eye), x, p);
+                });
+                if (!blocked && ++violations <= 5) {
+                    ADD_FAILURE() << "scene " << n << ": ray to (" << x.x << ", " << x.y << ", " << x.z
+                                  << ") crosses no panel";
+                }
+            }
+        }
+    }
+    EXPECT_EQ(violations, 0) << "of " << rays << " rays";
+    EXPECT_GT(hidden, tested / 20) << hidden << " of " << tested << " hidden";
+}
+
 }  // namespace
 }  // namespace pvs

@@ -4,6 +4,7 @@
 #include "cells/view_volume.h"
 #include "core/random.h"
 #include "io/gltf_loader.h"
+#include "occluders/panels.h"
 #include "occluders/solid.h"
 #include "pvs/embree_scene.h"
 #include "pvs/occluder_synthesis.h"
@@ -353,6 +354,90 @@ bool contact_voxel_solid(float gap) {
 TEST(ClosedBoxes, FillTheSeamWhereTwoMeet) {
     EXPECT_TRUE(contact_voxel_solid(0.0f));
     EXPECT_FALSE(contact_voxel_solid(0.01f));
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Panels: rectangles covered by opaque triangles.
+
+// Appends one triangle (as its own object).
+void add_triangle(World& w, glm::vec3 a, glm::vec3 b, glm::vec3 c, bool opaque = true) {
+    const uint32_t base = uint32_t(w.positions.size());
+    w.positions.insert(w.positions.end(), {a, b, c});
+    WorldObject o;
+    o.name = "t" + std::to_string(w.objects.size());
+    o.first_triangle = uint32_t(w.triangles.size());
+    o.triangle_count = 1;
+    o.flags = opaque ? kObjectHasOpaque : kObjectHasSeeThrough;
+    o.bounds = Aabb::of(glm::min(a, glm::min(b, c)), glm::max(a, glm::max(b, c)));
+    w.triangles.push_back(Triangle{{base, base + 1, base + 2}});
+    w.triangle_opaque.push_back(opaque ? 1 : 0);
+    w.triangle_double_sided.push_back(0);
+    w.objects.push_back(o);
+    w.bounds.extend(o.bounds);
+}
+
+// A rectangle at z = `z` over [x0, x1] x [y0, y1] as two triangles cut along one diagonal.
+void add_rect_z(World& w, float z, float x0, float x1, float y0, float y1, bool opaque = true) {
+    add_triangle(w, {x0, y0, z}, {x1, y0, z}, {x1, y1, z}, opaque);
+    add_triangle(w, {x0, y0, z}, {x1, y1, z}, {x0, y1, z}, opaque);
+}
+
+TEST(Panels, TwoHalvesOfARectangleMakeOneAndNeighboursMerge) {
+    World w;
+    add_rect_z(w, 3.0f, 0, 2, 0, 1);
+    add_rect_z(w, 3.0f, 2, 5, 0, 1);  // shares the edge x = 2: merged
+    add_rect_z(w, 3.0f, 0, 5, 1, 4);  // then shares y = 1 with the merged one: merged again
+    add_rect_z(w, 7.0f, 0, 5, 0, 1);  // another plane: its own
+    PanelFigures fig;
+    const std::vector<Aabb> panels = find_panels(w, &fig);
+    EXPECT_EQ(fig.flat_triangles, 8u);
+    EXPECT_EQ(fig.rectangles, 4u);
+    ASSERT_EQ(panels.size(), 2u);
+    EXPECT_EQ(panel_axis(panels[0]), 2);
+    EXPECT_EQ(panels[0].min, glm::vec3(0, 0, 3));
+    EXPECT_EQ(panels[0].max, glm::vec3(5, 4, 3));
+    EXPECT_EQ(panels[1].min, glm::vec3(0, 0, 7));
+    EXPECT_EQ(panels[1].max, glm::vec3(5, 1, 7));
+    // The faces of a closed box: six panels.
+    World box;
+    test::add_box(box, "b", Aabb::of({0, 0, 0}, {1, 2, 3}));
+    EXPECT_EQ(find_panels(box).size(), 6u);
+}
+
+TEST(Panels, OnlyWhatOpaqueTrianglesWhollyCover) {
+    World w;
+    // Two halves that overlap (both hold the corner (0, 0)): they do not cover the rectangle.
+    add_triangle(w, {0, 0, 1}, {2, 0, 1}, {2, 2, 1});
+    add_triangle(w, {0, 0, 1}, {2, 0, 1}, {0, 2, 1});
+    // Glass.
+    add_rect_z(w, 2.0f, 0, 2, 0, 2, false);
+    // One half only.
+    add_triangle(w, {0, 0, 3}, {2, 0, 3}, {2, 2, 3});
+    // Tilted (not in an axis plane).
+    add_triangle(w, {0, 0, 4}, {2, 0, 4}, {2, 2, 4.5f});
+    add_triangle(w, {0, 0, 4}, {2, 2, 4.5f}, {0, 2, 4.5f});
+    // Halves of different rectangles that meet at a corner.
+    add_triangle(w, {0, 0, 5}, {1, 0, 5}, {1, 1, 5});
+    add_triangle(w, {1, 1, 5}, {2, 2, 5}, {1, 2, 5});
+    EXPECT_TRUE(find_panels(w).empty());
+}
+
+TEST(Panels, InsetShrinksTheRectangleAndDropsWhatVanishes) {
+    const std::vector<Aabb> panels = {Aabb::of({0, 0, 3}, {5, 4, 3}), Aabb::of({0, 0, 7}, {0.5f, 9, 7}),
+                                      Aabb::of({0, 0, 0}, {1, 1, 1})};  // the last is no panel
+    const std::vector<Aabb> inset = inset_panels(panels, 0.3);
+    ASSERT_EQ(inset.size(), 1u);
+    EXPECT_GE(double(inset[0].min.x), 0.3);
+    EXPECT_LE(double(inset[0].max.x), 4.7);
+    EXPECT_NEAR(inset[0].min.y, 0.3f, 1e-6f);
+    EXPECT_NEAR(inset[0].max.y, 3.7f, 1e-6f);
+    EXPECT_EQ(inset[0].min.z, 3.0f);
+    EXPECT_EQ(inset[0].max.z, 3.0f);
+    // Never rounded outward: the float nearest 0.1 is below it, so the inset edge goes up past it.
+    const std::vector<Aabb> thin = inset_panels({Aabb::of({0, 0, 1}, {1, 1, 1})}, 0.1);
+    ASSERT_EQ(thin.size(), 1u);
+    EXPECT_GE(double(thin[0].min.x), 0.1);
+    EXPECT_LE(double(thin[0].max.x), 0.9);
 }
 
 }  // namespace
