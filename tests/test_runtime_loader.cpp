@@ -404,6 +404,7 @@ TEST(RuntimeLoaderExample, WalksThroughASmallBake) {
     EXPECT_NE(text.find("loaded " + path), std::string::npos) << text;
     EXPECT_NE(text.find("frame   47"), std::string::npos) << text;
     EXPECT_NE(text.find("total: 48 frames"), std::string::npos) << text;
+    EXPECT_NE(text.find("moving objects: 300; the occluders culled"), std::string::npos) << text;
     EXPECT_NE(
         std::system((std::string(PVSBAKE_WALKTHROUGH) + " " + dir.file("none.h5") + " 2> /dev/null").c_str()),
         0);

@@ -2,12 +2,17 @@
 // camera along a smooth path through the world's cells (a Catmull-Rom spline through the centres of
 // neighbouring cells, going straight where it can), looks up the camera's cell and walks its PVS, and prints
 // how many objects and triangles it would draw against all of them. Outside the view volume a game draws
-// everything.
+// everything. Moving objects (people and vehicles, which no PVS can list) walk through the view volume, and
+// every frame the occlusion culler (pvsbake/occlusion.h) tests their boxes against the current cell's ranked
+// occluders; the example prints how many it culled and what that cost.
 //
-//   pvsbake_walkthrough BAKE.h5 [--frames N] [--quiet]
+//   pvsbake_walkthrough BAKE.h5 [--frames N] [--objects M] [--seed S] [--quiet]
 //
 // Links pvsbake::loader only (find_package(pvsbake) + target_link_libraries(game pvsbake::loader)).
+#include "walk.h"
+
 #include <pvsbake/loader.h>
+#include <pvsbake/occlusion.h>
 
 #include <algorithm>
 #include <chrono>
@@ -15,86 +20,39 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <random>
 #include <string>
 #include <vector>
 
 namespace {
 
-struct Vec3 {
-    float x, y, z;
-};
+using pvsbake::walk::Vec3;
 
-Vec3 center_of(const pvsbake::Box& b) {
-    return {0.5f * (b.min[0] + b.max[0]), 0.5f * (b.min[1] + b.max[1]), 0.5f * (b.min[2] + b.max[2])};
-}
-
-// Catmull-Rom between p1 and p2 at t in [0, 1].
-Vec3 spline(Vec3 p0, Vec3 p1, Vec3 p2, Vec3 p3, float t) {
-    auto c = [t](float a, float b, float c, float d) {
-        return 0.5f * (2 * b + (-a + c) * t + (2 * a - 5 * b + 4 * c - d) * t * t +
-                       (-a + 3 * b - 3 * c + d) * t * t * t);
-    };
-    return {c(p0.x, p1.x, p2.x, p3.x), c(p0.y, p1.y, p2.y, p3.y), c(p0.z, p1.z, p2.z, p3.z)};
-}
-
-// Waypoints: `count` cell centres, each in a face neighbour of the one before (the one straight ahead when
-// it can, else turning), never back into a cell already visited while another way is open. Starts at the
-// first cell whose centre lies in the view volume.
-std::vector<Vec3> waypoints(const pvsbake::Bake& bake, uint32_t count) {
-    std::vector<Vec3> path;
-    std::vector<bool> visited(bake.cell_count(), false);
-    int32_t cell = -1;
-    Vec3 at{};
-    for (uint32_t c = 0; c < bake.cell_count() && cell < 0; ++c) {
-        at = center_of(bake.cell_bounds(c));
-        if (bake.find_cell(at.x, at.y, at.z) == int32_t(c)) cell = int32_t(c);
-    }
-    int heading = 0;  // 0..5: +x, -x, +y, -y, +z, -z
-    while (cell >= 0 && path.size() < count) {
-        path.push_back(at);
-        visited[size_t(cell)] = true;
-        const pvsbake::Box box = bake.cell_bounds(uint32_t(cell));
-        int32_t next = -1, fallback = -1;
-        Vec3 next_at{}, fallback_at{};
-        int next_heading = heading;
-        for (int turn = 0; turn < 6 && next < 0; ++turn) {
-            const int h = (heading + turn) % 6;
-            const int axis = h / 2;
-            const float step = (box.max[axis] - box.min[axis]) * (h % 2 ? -1.0f : 1.0f);
-            Vec3 p = at;
-            (axis == 0 ? p.x : axis == 1 ? p.y : p.z) += step;
-            const int32_t c = bake.find_cell(p.x, p.y, p.z);
-            if (c < 0 || c == cell) continue;
-            const Vec3 centre = center_of(bake.cell_bounds(uint32_t(c)));
-            const Vec3 q =
-                bake.find_cell(centre.x, centre.y, centre.z) == c ? centre : p;  // stay in the volume
-            if (!visited[size_t(c)]) {
-                next = c;
-                next_at = q;
-                next_heading = h;
-            } else if (fallback < 0) {
-                fallback = c;
-                fallback_at = q;
-            }
-        }
-        heading = next_heading;
-        cell = next >= 0 ? next : fallback;
-        at = next >= 0 ? next_at : fallback_at;
-    }
-    return path;
+// The ranked occluders of a cell (ALGORITHMS.md section 4), best first: what the culler of moving objects
+// tests against. Empty for now: replaced by bake.occluders(cell) when issue 9's bake side lands.
+std::vector<pvsbake::Box> cell_occluders(const pvsbake::Bake& bake, int32_t cell) {
+    (void)bake;
+    (void)cell;
+    return {};
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
     if (argc < 2) {
-        std::fprintf(stderr, "usage: %s BAKE.h5 [--frames N] [--quiet]\n", argv[0]);
+        std::fprintf(stderr, "usage: %s BAKE.h5 [--frames N] [--objects M] [--seed S] [--quiet]\n", argv[0]);
         return 2;
     }
     int frames = 240;
+    int movers_wanted = 300;
+    unsigned seed = 1;
     bool quiet = false;
     for (int i = 2; i < argc; ++i) {
         if (std::strcmp(argv[i], "--frames") == 0 && i + 1 < argc) frames = std::max(1, std::atoi(argv[++i]));
+        if (std::strcmp(argv[i], "--objects") == 0 && i + 1 < argc)
+            movers_wanted = std::max(0, std::atoi(argv[++i]));
+        if (std::strcmp(argv[i], "--seed") == 0 && i + 1 < argc)
+            seed = unsigned(std::strtoul(argv[++i], nullptr, 10));
         if (std::strcmp(argv[i], "--quiet") == 0) quiet = true;
     }
 
@@ -114,15 +72,19 @@ int main(int argc, char** argv) {
                 load_ms, bake.cell_count(), bake.cell_kind() == pvsbake::CellKind::kGrid ? "grid" : "octree",
                 objects, (unsigned long long)triangles, bake.mode_label(), bake.mode().c_str());
 
-    // The camera path: 8 frames per segment between waypoints.
-    const int per_segment = 8;
-    const std::vector<Vec3> way = waypoints(bake, uint32_t(frames / per_segment + 2));
+    // The camera path: 8 frames per segment between waypoints; 30 frames a second for the moving objects.
+    const std::vector<Vec3> way =
+        pvsbake::walk::waypoints(bake, uint32_t(frames / pvsbake::walk::kFramesPerSegment + 2));
+    std::mt19937 rng(seed);
+    std::vector<pvsbake::walk::Mover> movers =
+        pvsbake::walk::spawn_movers(bake, uint32_t(movers_wanted), rng);
+    pvsbake::OcclusionCuller culler;  // allocates once; every frame reuses it
     uint64_t drawn_objects = 0, drawn_triangles = 0, outside = 0;
+    uint64_t moving_tested = 0, moving_culled = 0, culled_by_frusta = 0, occluders_used = 0;
+    double cull_us = 0.0;
     for (int f = 0; f < frames && !way.empty(); ++f) {
-        const size_t seg = std::min(way.size() - 1, size_t(f / per_segment));
-        const float t = float(f % per_segment) / float(per_segment);
-        auto at = [&](long i) { return way[size_t(std::clamp<long>(i, 0, long(way.size()) - 1))]; };
-        const Vec3 eye = spline(at(long(seg) - 1), at(long(seg)), at(long(seg) + 1), at(long(seg) + 2), t);
+        const Vec3 eye = pvsbake::walk::camera_eye(way, f);
+        pvsbake::walk::step_movers(bake, movers, 1.0f / 30.0f, rng);
 
         // The per-frame work of a game: find the cell, walk its PVS.
         const int32_t cell = bake.find_cell(eye.x, eye.y, eye.z);
@@ -140,12 +102,30 @@ int main(int argc, char** argv) {
         }
         drawn_objects += n;
         drawn_triangles += tris;
+
+        // Moving objects: cull their boxes against the cell's ranked occluders (none outside the view
+        // volume).
+        const std::vector<pvsbake::Box> occluders =
+            cell >= 0 ? cell_occluders(bake, cell) : std::vector<pvsbake::Box>();
+        const auto c0 = std::chrono::steady_clock::now();
+        const float eye_m[3] = {eye.x, eye.y, eye.z};
+        culler.begin_frame(eye_m, occluders);
+        uint32_t culled = 0;
+        for (const pvsbake::walk::Mover& m : movers) {
+            const pvsbake::OcclusionCuller::Path path = culler.classify(pvsbake::walk::mover_box(m));
+            culled += path != pvsbake::OcclusionCuller::Path::kVisible;
+            culled_by_frusta += path == pvsbake::OcclusionCuller::Path::kShadowFrustum;
+        }
+        cull_us += std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - c0).count();
+        moving_tested += movers.size();
+        moving_culled += culled;
+        occluders_used += culler.occluders_used();
         if (!quiet) {
             std::printf(
                 "frame %4d  eye (%8.2f %8.2f %8.2f)  cell %7d  draws %5u / %u objects, %8llu / %llu "
-                "triangles\n",
+                "triangles; moving: culled %4u / %zu (%zu occluders)\n",
                 f, eye.x, eye.y, eye.z, cell, n, objects, (unsigned long long)tris,
-                (unsigned long long)triangles);
+                (unsigned long long)triangles, culled, movers.size(), culler.occluders_used());
         }
     }
     const double fo = double(drawn_objects) / std::max(1.0, double(frames) * objects);
@@ -154,5 +134,12 @@ int main(int argc, char** argv) {
         "total: %d frames (%llu outside the view volume, drawn whole): drew %.1f%% of objects and %.1f%% of "
         "triangles\n",
         frames, (unsigned long long)outside, 100.0 * fo, 100.0 * ft);
+    std::printf(
+        "moving objects: %zu; the occluders culled %llu of %llu boxes tested (%.1f%%; %llu by single shadow "
+        "frusta, %llu by the fused depth cube) with %.1f occluders a frame, at %.1f us a frame\n",
+        movers.size(), (unsigned long long)moving_culled, (unsigned long long)moving_tested,
+        100.0 * double(moving_culled) / std::max(1.0, double(moving_tested)),
+        (unsigned long long)culled_by_frusta, (unsigned long long)(moving_culled - culled_by_frusta),
+        double(occluders_used) / std::max(1, frames), cull_us / std::max(1, frames));
     return 0;
 }

@@ -1,0 +1,174 @@
+// pvsbake runtime loader: run-time culling of MOVING objects (characters, vehicles, props: what no PVS can
+// list) against a few occluder boxes, such as the ranked occluders a bake stores per cell (ALGORITHMS.md
+// section 4). Every frame: begin_frame(eye, occluders), then is_hidden(box) / classify(box) for each moving
+// object's bounding box. Part of pvsbake::loader: no exceptions leave it, no global state, no allocation
+// after construction (an OcclusionCuller whose buffers could not be allocated culls nothing: ok() false).
+//
+// After: T. Hudson, D. Manocha, J. Cohen, M. Lin, K. Hoff, H. Zhang. Accelerated Occlusion Culling using
+// Shadow Frusta. SoCG 1997 (one occluder: is the box inside its shadow frustum?); fusing occluders on a
+// small conservative depth buffer as H. Zhang, D. Manocha, T. Hudson, K. Hoff. Visibility Culling using
+// Hierarchical Occlusion Maps. SIGGRAPH 1997 (a box is hidden when every pixel it touches is covered
+// nearer than it), with the coverage and depth rules of pvs/depth_cube.h (the baker's from-point test of
+// P. Wonka, M. Wimmer, D. Schmalstieg. Visibility Preprocessing with Occluder Fusion for Urban
+// Walkthroughs, EGWR 2000), written here in float with explicit margins, as a cube map so that every
+// direction around the eye is covered (the culler needs no view frustum).
+//
+// Conventions (read these before touching the code; Masked Occlusion Culling style):
+// - Axes: glTF world axes (right-handed, +Y up), metres. Boxes are pvsbake::Box (loader.h): closed,
+//   axis-aligned; min > max on some axis is an empty box. Everything is relative to the eye: Δ = p - eye.
+// - Occluders are SOLID boxes: a box counts as blocking sight exactly inside its own volume (as the
+//   bake's occluders are boxes inside the opaque solid: no sight line from the view volume enters them).
+//   An occluder that contains or touches the eye (within its margin) is skipped: it hides nothing.
+// - "Hidden" (the one conservative answer): is_hidden(Q) is true only if every segment from the eye to any
+//   point x of Q enters some occluder strictly before x. Anything not proven is visible: empty or
+//   non-finite boxes, a box within kNearPlane_m of the eye (which covers "contains the eye"), and every box
+//   when the eye is not finite or there are no usable occluders. Wrong answers can only be "visible".
+// - Path 1, shadow frusta (one occluder at a time, Hudson et al.): the shadow of a convex occluder B from
+//   the eye, S(B) = { x : the segment eye-x meets B }, is convex; for a box B it is the intersection of the
+//   half-spaces behind B's front faces (those facing the eye) and of the planes through the eye and B's
+//   silhouette edges (4 or 6). Q is hidden by B when Q lies in S(B). Computed in double on the float
+//   inputs with margins: B is shrunk and Q grown by delta = kMargin_m + kMarginRel * (largest |coordinate|
+//   of the eye and the box), per box. Double rounding (~1e-16 relative) is far below these margins, so a
+//   computed "inside" proves Q grown a little lies in S(B shrunk a little): every segment to a point of Q
+//   passes through the interior of B before reaching the point (or the point itself is inside B's
+//   interior, behind B's surface).
+// - Path 2, the depth cube (fusion: several occluders together): six faces, in this order 0 = +X, 1 = -X,
+//   2 = +Y, 3 = -Y, 4 = +Z, 5 = -Z; face f has axis a = f / 2, sign s = +1 for even f, and side axes
+//   ua = (a + 1) % 3, va = (a + 2) % 3. Depth on face f: d = s * Δ[a] (along the face normal, not the
+//   Euclidean distance; larger = farther; along any ray it grows with distance). Face coordinates
+//   u = Δ[ua] / d, v = Δ[va] / d, no mirroring. Cones are CLOSED (a direction on a cube edge belongs to
+//   every tied face, and each face is checked on its own, so no tie breaking is needed).
+//   Pixels: R per face edge; pixel (i, j) is the closed square [g(i), g(i + 1)] x [g(j), g(j + 1)] with
+//   g(k) = float(-1 + 2k / R), one table shared by writing and testing (neighbours share edges; g(R / 2) = 0
+//   exactly). An empty pixel holds +infinity. Near plane: d = kNearPlane_m.
+// - Occluder pixel rule (writing less is always safe): occluder B writes pixel P of face f only when each
+//   of P's four corner rays, over depths [kNearPlane_m, inf), passes through B with room to spare
+//   (exit >= entry * (1 + kDepthSlack)); it writes the FARTHEST of the four entry depths times
+//   (1 + kDepthSlack), and a pixel keeps the nearest of what is written (min). Why the whole pixel is
+//   covered no farther than that: the entry depth of B' = B ∩ {d >= near} is quasi-convex over the convex
+//   set of directions hitting B' (depth_cube.h has the argument), so if the four corners hit, every ray
+//   through the (convex) pixel hits, no later than the largest corner entry.
+// - Occludee rule (touching more is always safe): on each face, L_f = the smallest depth of Q's part inside
+//   the face's cone (max(d_min, dist(0, Δu range), dist(0, Δv range), near)); the touched pixels are those
+//   whose closed square meets the bounding rectangle of the projection of Q ∩ {L_f <= d <= d_max}, widened
+//   by kRectPad (relative). The conservative comparison: hidden only if on every face, at every touched
+//   pixel, stored depth < L_f * (1 - kDepthSlack), STRICTLY nearer; +infinity (empty) is never nearer.
+// - Float: the depth cube is float. Each float operation errs by at most 2^-24 relative, and a corner
+//   depth or an occludee bound takes a few of them (a subtraction, a division, a max): under 1e-6
+//   relative in all. kDepthSlack = 1e-5 and kRectPad = 1e-5 exceed that tenfold, so a computed "the corner
+//   ray passes through B" is true, a written depth is >= the true entry, a computed limit is < the true
+//   L_f, and the touched pixels include every pixel the true projection meets. Then for x in Q: x lies in
+//   a face cone at depth >= L_f inside a touched pixel P whose depth D < L_f; the segment to x enters the
+//   occluder that wrote D at depth <= D < depth of x: strictly before x.
+// - Costs: begin_frame() is O(occluders * pixels they cover) (the cube's written parts are cleared, not
+//   the whole cube); is_hidden() is O(occluders) for the frusta, then O(pixels the box touches).
+#pragma once
+
+#include <pvsbake/loader.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace pvsbake {
+
+class OcclusionCuller {
+public:
+    // Which test proved a box hidden (tests and figures). Values are stable (the C API uses them).
+    enum class Path : int32_t {
+        kVisible = 0,        // not proven hidden: draw it
+        kShadowFrustum = 1,  // inside the shadow frustum of one occluder
+        kDepthBuffer = 2,    // hidden by the depth cube, not by any single frustum (occluders fused)
+    };
+
+    static constexpr int kDefaultResolution = 32;  // pixels per cube face edge
+    static constexpr int kMinResolution = 2;       // even sizes only: g(R / 2) = 0 is a pixel edge
+    static constexpr int kMaxResolution = 256;
+    static constexpr size_t kMaxOccluders = 64;  // more are ignored (pass the best first)
+    static constexpr float kNearPlane_m = 1e-3f;
+    static constexpr float kDepthSlack = 1e-5f;
+    static constexpr float kRectPad = 1e-5f;
+    static constexpr double kMargin_m = 1e-5;
+    static constexpr double kMarginRel = 1e-6;
+
+    // resolution: pixels per cube face edge, rounded up to even and clamped to [kMinResolution,
+    // kMaxResolution]; 0 turns the depth cube off (shadow frusta only). Allocates the buffers
+    // (6 * resolution^2 floats); if that fails, ok() is false and nothing is ever culled.
+    explicit OcclusionCuller(int resolution = kDefaultResolution) noexcept;
+    OcclusionCuller(OcclusionCuller&&) noexcept = default;
+    OcclusionCuller& operator=(OcclusionCuller&&) noexcept = default;
+    OcclusionCuller(const OcclusionCuller&) =
+        delete;  // a copy would allocate (and could throw): make another
+    OcclusionCuller& operator=(const OcclusionCuller&) = delete;
+
+    // Prepares one frame: the eye (metres) and the occluder boxes (solid). Boxes are read at `stride_bytes`
+    // apart (default: a plain array of Box), so an array of structs holding a Box can be passed as
+    // (&array[0].box, n, sizeof array[0]). At most kMaxOccluders are used, the first ones. Empty, non-finite
+    // and eye-touching boxes are skipped; the rest go in nearest first, and a box the ones before it already
+    // hide is skipped too (it could add nothing: its shadow lies in theirs). A non-finite eye makes every box
+    // visible this frame.
+    void begin_frame(const float eye[3], const Box* occluders, size_t count,
+                     size_t stride_bytes = sizeof(Box)) noexcept;
+    void begin_frame(const float eye[3], const std::vector<Box>& occluders) noexcept {
+        begin_frame(eye, occluders.data(), occluders.size());
+    }
+
+    // True only if the box is certainly hidden from this frame's eye (see the conventions above).
+    // Thread-safe between begin_frame() calls (const, no scratch).
+    bool is_hidden(const Box& box) const noexcept { return classify(box) != Path::kVisible; }
+    // The same answer with the test that proved it: shadow frusta first, then the depth cube.
+    Path classify(const Box& box) const noexcept;
+    // The depth cube's answer alone, or the shadow frusta's alone (tests, figures).
+    bool hidden_by_depth_cube(const Box& box) const noexcept;
+    bool hidden_by_shadow_frusta(const Box& box) const noexcept;
+
+    bool ok() const noexcept { return ok_; }
+    int resolution() const noexcept { return resolution_; }
+    // Occluders this frame uses (after skipping those that touch the eye and those the nearer ones already
+    // hide), the redundant ones skipped, and the cube pixels the used ones cover.
+    size_t occluders_used() const noexcept { return used_; }
+    size_t occluders_redundant() const noexcept { return redundant_; }
+    size_t covered_pixels() const noexcept;
+
+private:
+    struct Frustum {
+        // Behind the front faces: Q.min[a] >= lo[a] and Q.max[a] <= hi[a] (+-inf where B has no front face).
+        double lo[3], hi[3];
+        // Silhouette planes through the eye: n . x >= w for every x in Q.
+        double n[6][3];
+        double w[6];
+        int planes;
+        bool usable;  // false when B is too thin for the margins: then only the depth cube uses it
+    };
+    struct Rect {
+        int i0, i1, j0, j1;  // inclusive pixel range; empty when i0 > i1
+    };
+
+    struct Candidate {
+        Box box;
+        double delta;  // its margin
+        double dist2;  // squared distance from the eye
+    };
+
+    void rasterize(const Box& b) noexcept;
+    void build_frustum(const Box& b, double delta, Frustum& fr) const noexcept;
+    bool inside_shadow(const Frustum& fr, const double q_min[3], const double q_max[3]) const noexcept;
+
+    bool ok_ = false;
+    bool eye_ok_ = false;
+    int resolution_ = 0;
+    float eye_[3] = {0, 0, 0};
+    double eye_d_[3] = {0, 0, 0};
+    size_t used_ = 0;
+    size_t redundant_ = 0;
+    std::vector<Candidate> candidates_;  // reserved for kMaxOccluders
+    std::vector<Frustum> frusta_;        // kMaxOccluders
+    size_t frustum_count_ = 0;
+    std::vector<float> grid_;   // g(0 .. R)
+    std::vector<float> depth_;  // 6 * R * R, index face * R * R + j * R + i
+    Rect written_[6] = {};      // per face: bounding rectangle of written pixels
+    // Scratch of rasterize(): per grid vertex, slab intervals along u and v and corner depths of two rows.
+    std::vector<float> col_enter_, col_exit_, row_enter_, row_exit_, corner_prev_, corner_cur_;
+};
+
+}  // namespace pvsbake

@@ -1,0 +1,46 @@
+/* pvsbake runtime loader, plain C API of the run-time occlusion culler of moving objects. Mirrors
+ * pvsbake/occlusion.h (read its conventions: glTF axes, metres, solid occluder boxes, "hidden" only when
+ * certainly hidden). Boxes are float[6]: min x, y, z, max x, y, z, as in pvsbake/loader_c.h. Nothing here
+ * throws or crashes; a null culler or box gives "visible" (0).
+ *
+ *   pvsbake_culler* culler = pvsbake_culler_create(0);       // 0: the default cube resolution
+ *   each frame:
+ *     pvsbake_culler_begin_frame(culler, eye, occluder_boxes, occluder_count);
+ *     for each moving object: if (!pvsbake_culler_is_hidden(culler, box)) draw(object);
+ *   pvsbake_culler_free(culler);
+ */
+#ifndef PVSBAKE_OCCLUSION_C_H
+#define PVSBAKE_OCCLUSION_C_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct pvsbake_culler pvsbake_culler;
+
+/* The same values as pvsbake::OcclusionCuller::Path. */
+typedef enum pvsbake_cull_path {
+    PVSBAKE_CULL_VISIBLE = 0,        /* not proven hidden: draw it */
+    PVSBAKE_CULL_SHADOW_FRUSTUM = 1, /* inside one occluder's shadow frustum */
+    PVSBAKE_CULL_DEPTH_BUFFER = 2    /* hidden by the fused depth cube only */
+} pvsbake_cull_path;
+
+/* A new culler (free it with pvsbake_culler_free). resolution: pixels per cube face edge, 0 = default
+ * (32), negative = shadow frusta only. NULL when out of memory. */
+pvsbake_culler* pvsbake_culler_create(int resolution);
+void pvsbake_culler_free(pvsbake_culler* culler);
+/* Prepares a frame: eye float[3] and `count` occluder boxes (float[6] each, count * 6 floats). */
+void pvsbake_culler_begin_frame(pvsbake_culler* culler, const float eye[3], const float* boxes, size_t count);
+/* 1 only if box (float[6]) is certainly hidden from this frame's eye. */
+int pvsbake_culler_is_hidden(const pvsbake_culler* culler, const float box[6]);
+/* Which test proved it (pvsbake_cull_path). */
+int pvsbake_culler_classify(const pvsbake_culler* culler, const float box[6]);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* PVSBAKE_OCCLUSION_C_H */

@@ -1,0 +1,510 @@
+// The run-time culler of moving objects (pvsbake/occlusion.h): scenes whose answer is known (behind a wall,
+// peeking round its edge, two walls that only hide together), awkward inputs (eye inside an occluder, a box
+// holding the eye, empty, flat and non-finite boxes, a NaN eye), the C API, and zero wrong culls against
+// Embree rays on random box worlds (every box the culler hides: no ray from the eye reaches a point of it
+// before an occluder), including boxes grown to the edge of what the culler still hides.
+#include "core/context.h"
+#include "pvs/embree_scene.h"
+#include "tests/test_util.h"
+#include "tests/world_builder.h"
+
+#include <pvsbake/occlusion.h>
+#include <pvsbake/occlusion_c.h>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <vector>
+
+namespace pvs {
+namespace {
+
+using pvsbake::Box;
+using Culler = pvsbake::OcclusionCuller;
+using Path = pvsbake::OcclusionCuller::Path;
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+Box box(float x0, float y0, float z0, float x1, float y1, float z1) {
+    return Box{{x0, y0, z0}, {x1, y1, z1}};
+}
+
+Context quiet_context() {
+    return Context(Context::Options{LogLevel::kError, true, nullptr});
+}
+
+// Eye 1.7 m above the ground at the origin, looking down +z at a wall 4 m high, x in [-5, 5], z in [5, 5.5].
+const float kEye[3] = {0.0f, 1.7f, 0.0f};
+const Box kWall = box(-5, 0, 5, 5, 4, 5.5f);
+
+TEST(RuntimeOcclusion, ABoxBehindAWallIsCulled) {
+    Culler culler;
+    culler.begin_frame(kEye, &kWall, 1);
+    EXPECT_EQ(culler.occluders_used(), 1u);
+    // A person behind the wall, straddling the eye's x = 0 plane (crossing the eye's planes is fine).
+    const Box person = box(-0.3f, 0, 8, 0.3f, 1.8f, 8.6f);
+    EXPECT_TRUE(culler.is_hidden(person));
+    EXPECT_EQ(culler.classify(person), Path::kShadowFrustum);
+    EXPECT_TRUE(culler.hidden_by_depth_cube(person));  // the cube alone agrees
+    // Farther off to the side but still in the shadow: x = 7.6 at z = 8 is seen through x = 4.75 at z = 5.
+    EXPECT_TRUE(culler.is_hidden(box(7.0f, 0, 8, 7.6f, 1.8f, 8.6f)));
+    // In front of the wall, above it, and behind the eye: visible.
+    EXPECT_FALSE(culler.is_hidden(box(-0.3f, 0, 3, 0.3f, 1.8f, 3.6f)));
+    EXPECT_FALSE(culler.is_hidden(box(-0.3f, 5, 8, 0.3f, 6.8f, 8.6f)));
+    EXPECT_FALSE(culler.is_hidden(box(-0.3f, 0, -8.6f, 0.3f, 1.8f, -8)));
+}
+
+TEST(RuntimeOcclusion, ABoxPeekingRoundTheEdgeIsNot) {
+    Culler culler;
+    culler.begin_frame(kEye, &kWall, 1);
+    // x in [7.5, 8.1] at z = 8 is seen through x in [4.69, 5.06] at z = 5: its right side shows past the
+    // edge.
+    const Box peeking = box(7.5f, 0, 8, 8.1f, 1.8f, 8.6f);
+    EXPECT_FALSE(culler.is_hidden(peeking));
+    EXPECT_FALSE(culler.hidden_by_shadow_frusta(peeking));
+    EXPECT_FALSE(culler.hidden_by_depth_cube(peeking));
+    // A head showing over the top: the wall's top edge at y = 4, z = 5 hides below y = 1.7 + 2.3 * 8 / 5.
+    EXPECT_FALSE(culler.is_hidden(box(-0.3f, 5.0f, 8, 0.3f, 5.6f, 8.6f)));
+    EXPECT_TRUE(culler.is_hidden(box(-0.3f, 4.9f, 8, 0.3f, 5.2f, 8.6f)));
+}
+
+// Wall A (x in [-5, 0.1], z in [4, 4.5]) and wall B (x in [-0.5, 5], z in [6, 6.5]) overlap in view only
+// together: a box x in [-1, 1] at z = 10 shows past A's right end (x = 1 is seen through x = 0.4 at z = 4)
+// and past B's left end (x = -1 through x = -0.6 at z = 6).
+TEST(RuntimeOcclusion, TwoWallsThatOnlyTogetherHideABoxFuseOnTheDepthCube) {
+    const std::vector<Box> walls = {box(-5, 0, 4, 0.1f, 4, 4.5f), box(-0.5f, 0, 6, 5, 4, 6.5f)};
+    const Box target = box(-1, 0, 10, 1, 1.8f, 10.6f);
+    Culler culler;
+    culler.begin_frame(kEye, walls);
+    EXPECT_EQ(culler.classify(target), Path::kDepthBuffer);
+    EXPECT_FALSE(culler.hidden_by_shadow_frusta(target));
+    EXPECT_TRUE(culler.hidden_by_depth_cube(target));
+    for (const Box& wall : walls) {  // each wall alone hides it on neither path
+        culler.begin_frame(kEye, &wall, 1);
+        EXPECT_EQ(culler.classify(target), Path::kVisible);
+    }
+    // From 8 pixels per face edge on, the pixels the box touches are each covered whole by one wall (x = 0 is
+    // a pixel edge on every even resolution); at 2 and 4 they are too coarse. Never by single frusta.
+    for (int r : {2, 4, 8, 16, 32, 64, 128}) {
+        Culler c(r);
+        c.begin_frame(kEye, walls);
+        EXPECT_EQ(c.classify(target), r >= 8 ? Path::kDepthBuffer : Path::kVisible) << r;
+        EXPECT_FALSE(c.hidden_by_shadow_frusta(target)) << r;
+    }
+    // Shadow frusta only (resolution 0): no fusion, so not hidden.
+    Culler frusta_only(0);
+    frusta_only.begin_frame(kEye, walls);
+    EXPECT_EQ(frusta_only.resolution(), 0);
+    EXPECT_EQ(frusta_only.classify(target), Path::kVisible);
+}
+
+TEST(RuntimeOcclusion, AnOccluderHoldingOrTouchingTheEyeIsSkipped) {
+    const Box behind = box(-0.3f, 0, 8, 0.3f, 1.8f, 8.6f);
+    Culler culler;
+    const float inside[3] = {0.0f, 1.7f, 5.2f};  // in the wall
+    culler.begin_frame(inside, &kWall, 1);
+    EXPECT_EQ(culler.occluders_used(), 0u);
+    EXPECT_FALSE(culler.is_hidden(behind));
+    const float touching[3] = {0.0f, 1.7f, 5.0f};  // on its front face
+    culler.begin_frame(touching, &kWall, 1);
+    EXPECT_EQ(culler.occluders_used(), 0u);
+    EXPECT_FALSE(culler.is_hidden(behind));
+    const float near_it[3] = {0.0f, 1.7f, 4.999999f};  // within the margin
+    culler.begin_frame(near_it, &kWall, 1);
+    EXPECT_EQ(culler.occluders_used(), 0u);
+    // A step back, it occludes again.
+    const float back[3] = {0.0f, 1.7f, 4.9f};
+    culler.begin_frame(back, &kWall, 1);
+    EXPECT_EQ(culler.occluders_used(), 1u);
+    EXPECT_TRUE(culler.is_hidden(behind));
+}
+
+TEST(RuntimeOcclusion, ABoxHoldingOrGrazingTheEyeIsVisible) {
+    // Occluders all round the eye: a closed room of six walls.
+    const std::vector<Box> room = {box(-3, -1, -3, 3, 0, 3),  box(-3, 4, -3, 3, 5, 3),
+                                   box(-4, -1, -3, -3, 5, 3), box(3, -1, -3, 4, 5, 3),
+                                   box(-4, -1, -4, 4, 5, -3), box(-4, -1, 3, 4, 5, 4)};
+    Culler culler;
+    culler.begin_frame(kEye, room);
+    EXPECT_EQ(culler.occluders_used(), 6u);
+    EXPECT_TRUE(culler.is_hidden(box(-1, 0, 6, 1, 2, 7)));     // outside the room
+    EXPECT_FALSE(culler.is_hidden(box(-1, 0, -1, 1, 2, 1)));   // holds the eye
+    EXPECT_FALSE(culler.is_hidden(box(0, 1.7f, 0, 1, 2, 1)));  // its corner is the eye
+    EXPECT_FALSE(culler.is_hidden(box(-20, 1, 1, 20, 2, 2)));  // crosses the room in front of the eye
+    EXPECT_FALSE(culler.is_hidden(box(-20, -20, -20, 20, 20, 20)));
+    EXPECT_FALSE(culler.is_hidden(box(0.0005f, 1.7f, 0, 0.01f, 1.8f, 0.01f)));  // within the near plane
+}
+
+TEST(RuntimeOcclusion, EmptyFlatAndNonFiniteBoxes) {
+    Culler culler;
+    culler.begin_frame(kEye, &kWall, 1);
+    EXPECT_FALSE(culler.is_hidden(box(1, 1, 9, 0, 0, 8)));  // empty (min > max)
+    EXPECT_FALSE(culler.is_hidden(box(kInf, kInf, kInf, -kInf, -kInf, -kInf)));
+    EXPECT_FALSE(culler.is_hidden(box(kNaN, 0, 8, 1, 1, 9)));
+    EXPECT_FALSE(culler.is_hidden(box(-kInf, 0, 8, 1, 1, 9)));
+    (void)culler.classify(box(0, 0, 8, 1, 1, 1e38f));      // huge: either answer is safe; it must not trap
+    EXPECT_TRUE(culler.is_hidden(box(0, 1, 8, 0, 1, 8)));  // a point behind the wall
+    EXPECT_TRUE(culler.is_hidden(box(-1, 0, 8, 1, 1.8f, 8)));  // a flat box (zero depth)
+    // Empty, flat and non-finite occluders are skipped or used safely.
+    const std::vector<Box> odd = {box(1, 1, 1, 0, 0, 0), box(kNaN, 0, 5, 1, 1, 6), box(-kInf, 0, 5, 1, 1, 6),
+                                  box(-5, 0, 5, 5, 4, 5)};  // the last one: a flat wall
+    culler.begin_frame(kEye, odd);
+    EXPECT_EQ(culler.occluders_used(), 1u);
+    // A flat (zero-thickness) occluder hides nothing on either path: its shrunk box is empty, and no corner
+    // ray passes through it with room to spare.
+    EXPECT_FALSE(culler.is_hidden(box(-0.3f, 0, 8, 0.3f, 1.8f, 8.6f)));
+}
+
+TEST(RuntimeOcclusion, ANonFiniteEyeMakesEverythingVisible) {
+    Culler culler;
+    for (const float bad : {kNaN, kInf, -kInf}) {
+        const float eye[3] = {0.0f, bad, 0.0f};
+        culler.begin_frame(eye, &kWall, 1);
+        EXPECT_EQ(culler.occluders_used(), 0u);
+        EXPECT_FALSE(culler.is_hidden(box(-0.3f, 0, 8, 0.3f, 1.8f, 8.6f)));
+    }
+    culler.begin_frame(nullptr, &kWall, 1);
+    EXPECT_FALSE(culler.is_hidden(box(-0.3f, 0, 8, 0.3f, 1.8f, 8.6f)));
+    culler.begin_frame(kEye, nullptr, 5);  // no occluders
+    EXPECT_EQ(culler.occluders_used(), 0u);
+    EXPECT_FALSE(culler.is_hidden(box(-0.3f, 0, 8, 0.3f, 1.8f, 8.6f)));
+    // And back to normal: nothing from the bad frames stays behind.
+    culler.begin_frame(kEye, &kWall, 1);
+    EXPECT_TRUE(culler.is_hidden(box(-0.3f, 0, 8, 0.3f, 1.8f, 8.6f)));
+}
+
+TEST(RuntimeOcclusion, FramesDoNotLeakIntoEachOther) {
+    Culler culler;
+    const Box target = box(-0.3f, 0, 8, 0.3f, 1.8f, 8.6f);
+    culler.begin_frame(kEye, &kWall, 1);
+    EXPECT_TRUE(culler.hidden_by_depth_cube(target));
+    EXPECT_GT(culler.covered_pixels(), 0u);
+    const Box elsewhere = box(-5, 0, -5.5f, 5, 4, -5);  // the same wall behind the eye
+    culler.begin_frame(kEye, &elsewhere, 1);
+    EXPECT_FALSE(culler.hidden_by_depth_cube(target));
+    EXPECT_TRUE(culler.hidden_by_depth_cube(box(-0.3f, 0, -8.6f, 0.3f, 1.8f, -8)));
+}
+
+// An occluder that a nearer one already hides adds nothing and is skipped, whatever order it comes in.
+TEST(RuntimeOcclusion, OccludersHiddenByNearerOnesAreSkipped) {
+    const std::vector<Box> occluders = {box(-1, 0, 9, 1, 1.5f, 9.5f),
+                                        kWall};  // the first stands behind the wall
+    Culler culler;
+    culler.begin_frame(kEye, occluders);
+    EXPECT_EQ(culler.occluders_used(), 1u);
+    EXPECT_EQ(culler.occluders_redundant(), 1u);
+    EXPECT_TRUE(culler.is_hidden(box(-0.3f, 0, 12, 0.3f, 1.8f, 12.6f)));
+    const std::vector<Box> apart = {box(-1, 0, -9.5f, 1, 1.5f, -9), kWall};  // one behind the eye
+    culler.begin_frame(kEye, apart);
+    EXPECT_EQ(culler.occluders_used(), 2u);
+    EXPECT_EQ(culler.occluders_redundant(), 0u);
+}
+
+// Occluders read at a stride: an array of structs holding a Box (as the bake's ranked occluders will be).
+TEST(RuntimeOcclusion, OccludersAtAStride) {
+    struct Ranked {
+        Box box;
+        float score;
+        float solid_angle_sr;
+    };
+    const Ranked ranked[2] = {{box(-5, 0, 4, 0.1f, 4, 4.5f), 2.0f, 1.0f},
+                              {box(-0.5f, 0, 6, 5, 4, 6.5f), 1.0f, 0.5f}};
+    Culler culler;
+    culler.begin_frame(kEye, &ranked[0].box, 2, sizeof(Ranked));
+    EXPECT_EQ(culler.occluders_used(), 2u);
+    EXPECT_EQ(culler.classify(box(-1, 0, 10, 1, 1.8f, 10.6f)), Path::kDepthBuffer);
+}
+
+TEST(RuntimeOcclusion, CApiMirrorsTheCppApi) {
+    pvsbake_culler* c = pvsbake_culler_create(0);
+    ASSERT_NE(c, nullptr);
+    const float walls[12] = {-5, 0, 4, 0.1f, 4, 4.5f, -0.5f, 0, 6, 5, 4, 6.5f};
+    pvsbake_culler_begin_frame(c, kEye, walls, 2);
+    const float fused[6] = {-1, 0, 10, 1, 1.8f, 10.6f};
+    const float single[6] = {1, 0, 10, 2, 1.8f, 10.6f};
+    const float front[6] = {-1, 0, 2, 1, 1.8f, 2.6f};
+    EXPECT_EQ(pvsbake_culler_classify(c, fused), PVSBAKE_CULL_DEPTH_BUFFER);
+    EXPECT_EQ(pvsbake_culler_classify(c, single), PVSBAKE_CULL_SHADOW_FRUSTUM);
+    EXPECT_EQ(pvsbake_culler_classify(c, front), PVSBAKE_CULL_VISIBLE);
+    EXPECT_EQ(pvsbake_culler_is_hidden(c, fused), 1);
+    EXPECT_EQ(pvsbake_culler_is_hidden(c, front), 0);
+    EXPECT_EQ(pvsbake_culler_is_hidden(c, nullptr), 0);
+    EXPECT_EQ(pvsbake_culler_is_hidden(nullptr, fused), 0);
+    pvsbake_culler_begin_frame(c, kEye, nullptr, 3);
+    EXPECT_EQ(pvsbake_culler_is_hidden(c, fused), 0);
+    pvsbake_culler_begin_frame(nullptr, kEye, walls, 2);
+    pvsbake_culler_free(c);
+    pvsbake_culler_free(nullptr);
+    pvsbake_culler* frusta_only = pvsbake_culler_create(-1);
+    ASSERT_NE(frusta_only, nullptr);
+    pvsbake_culler_begin_frame(frusta_only, kEye, walls, 2);
+    EXPECT_EQ(pvsbake_culler_classify(frusta_only, fused), PVSBAKE_CULL_VISIBLE);
+    EXPECT_EQ(pvsbake_culler_classify(frusta_only, single), PVSBAKE_CULL_SHADOW_FRUSTUM);
+    pvsbake_culler_free(frusta_only);
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Zero wrong culls against rays.
+
+Aabb to_aabb(const Box& b) {
+    return Aabb::of({b.min[0], b.min[1], b.min[2]}, {b.max[0], b.max[1], b.max[2]});
+}
+
+bool inside(const Box& b, const float p[3], float pad) {
+    for (int a = 0; a < 3; ++a) {
+        if (p[a] < b.min[a] - pad || p[a] > b.max[a] + pad) return false;
+    }
+    return true;
+}
+
+// Points of a box to aim at: the 8 corners, the 12 edge midpoints, the 6 face centres, the centre, and
+// `extra` random points on its faces and inside.
+std::vector<glm::vec3> aim_points(const Box& b, int extra, std::mt19937& rng) {
+    std::vector<glm::vec3> pts;
+    const auto at = [&](float fx, float fy, float fz) {
+        pts.emplace_back(b.min[0] + fx * (b.max[0] - b.min[0]), b.min[1] + fy * (b.max[1] - b.min[1]),
+                         b.min[2] + fz * (b.max[2] - b.min[2]));
+    };
+    const float h[3] = {0.0f, 0.5f, 1.0f};
+    for (float fx : h)
+        for (float fy : h)
+            for (float fz : h) at(fx, fy, fz);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    for (int k = 0; k < extra; ++k) {
+        float f[3] = {u(rng), u(rng), u(rng)};
+        if (k % 3 != 0) f[k % 3] = float(k % 2);  // on a face
+        at(f[0], f[1], f[2]);
+    }
+    return pts;
+}
+
+// Rays from the eye to every aim point of the box; returns how many reach their point unblocked.
+uint32_t rays_reaching(const RayScene& scene, const float eye_f[3], const Box& b, int extra,
+                       std::mt19937& rng, uint64_t& rays) {
+    const glm::vec3 eye(eye_f[0], eye_f[1], eye_f[2]);
+    const std::vector<glm::vec3> pts = aim_points(b, extra, rng);
+    std::vector<glm::vec3> origins, dirs;
+    std::vector<float> tfar;
+    for (const glm::vec3& p : pts) {
+        const glm::vec3 d = p - eye;
+        const float len = glm::length(d);
+        if (!(len > 0.0f)) continue;
+        origins.push_back(eye);
+        dirs.push_back(d / len);
+        tfar.push_back(len);
+    }
+    std::vector<uint8_t> blocked(origins.size());
+    scene.occluded_opaque(origins.data(), dirs.data(), tfar.data(), uint32_t(origins.size()), blocked.data());
+    rays += origins.size();
+    return uint32_t(std::count(blocked.begin(), blocked.end(), uint8_t(0)));
+}
+
+struct PropertyTally {
+    uint64_t queries = 0, hidden_frustum = 0, hidden_cube = 0, wrong = 0, rays = 0, edge_boxes = 0;
+};
+
+// Random box worlds: K walls (thin on one axis), eyes outside them, query boxes of person to vehicle size,
+// half of them placed behind a random wall as seen from the eye. Every box the culler hides is checked with
+// rays; then grown by bisection to the largest copy the culler still hides, which is checked again.
+void random_worlds(int worlds, int eyes_per_world, int queries_per_eye, int resolution, uint32_t seed,
+                   PropertyTally& t) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    const auto range = [&](float a, float b) { return a + (b - a) * u(rng); };
+    Context ctx = quiet_context();
+    for (int w = 0; w < worlds; ++w) {
+        const int k = 2 + int(rng() % 15);
+        std::vector<Box> occ;
+        World world;
+        for (int i = 0; i < k; ++i) {
+            float c[3], half[3];
+            for (int a = 0; a < 3; ++a) {
+                c[a] = range(-15.0f, 15.0f);
+                half[a] = range(1.0f, 6.0f);
+            }
+            half[rng() % 3] = range(0.1f, 0.8f);
+            const Box b = box(c[0] - half[0], c[1] - half[1], c[2] - half[2], c[0] + half[0], c[1] + half[1],
+                              c[2] + half[2]);
+            occ.push_back(b);
+            test::add_box(world, "occ" + std::to_string(i), to_aabb(b));
+        }
+        const RayScene scene(ctx, world, BuildQuality::kMedium, 1);
+        Culler culler(resolution);
+        for (int e = 0; e < eyes_per_world; ++e) {
+            float eye[3];
+            bool ok = false;
+            for (int tries = 0; tries < 100 && !ok; ++tries) {
+                for (float& x : eye) x = range(-18.0f, 18.0f);
+                ok =
+                    std::none_of(occ.begin(), occ.end(), [&](const Box& b) { return inside(b, eye, 0.05f); });
+            }
+            if (!ok) continue;
+            culler.begin_frame(eye, occ);
+            for (int q = 0; q < queries_per_eye; ++q) {
+                float c[3];
+                if (q % 2 == 0) {  // behind a wall: past a random point of it, farther from the eye
+                    const Box& b = occ[rng() % occ.size()];
+                    const float s = range(1.05f, 3.0f);
+                    for (int a = 0; a < 3; ++a) c[a] = eye[a] + s * (range(b.min[a], b.max[a]) - eye[a]);
+                } else {
+                    for (float& x : c) x = range(-20.0f, 20.0f);
+                }
+                float half[3] = {range(0.1f, 1.5f), range(0.1f, 1.5f), range(0.1f, 1.5f)};
+                Box qb = box(c[0] - half[0], c[1] - half[1], c[2] - half[2], c[0] + half[0], c[1] + half[1],
+                             c[2] + half[2]);
+                ++t.queries;
+                const Path path = culler.classify(qb);
+                if (path == Path::kVisible) continue;
+                (path == Path::kShadowFrustum ? t.hidden_frustum : t.hidden_cube) += 1;
+                const uint32_t seen = rays_reaching(scene, eye, qb, 40, rng, t.rays);
+                t.wrong += seen;
+                EXPECT_EQ(seen, 0u) << "world " << w << " eye " << eye[0] << " " << eye[1] << " " << eye[2]
+                                    << " box " << qb.min[0] << " " << qb.min[1] << " " << qb.min[2] << " "
+                                    << qb.max[0] << " " << qb.max[1] << " " << qb.max[2] << " path "
+                                    << int(path);
+                // Grow the box about its centre to the edge of what the culler still hides (the margins are
+                // tested where they matter), and check that box with rays too.
+                if (q % 4 < 2) {
+                    float lo = 0.0f, hi = 40.0f;
+                    for (int it = 0; it < 24; ++it) {
+                        const float mid = 0.5f * (lo + hi);
+                        Box g = qb;
+                        for (int a = 0; a < 3; ++a) {
+                            g.min[a] -= mid;
+                            g.max[a] += mid;
+                        }
+                        (culler.is_hidden(g) ? lo : hi) = mid;
+                    }
+                    for (int a = 0; a < 3; ++a) {
+                        qb.min[a] -= lo;
+                        qb.max[a] += lo;
+                    }
+                    ASSERT_TRUE(culler.is_hidden(qb));
+                    ++t.edge_boxes;
+                    const uint32_t seen_edge = rays_reaching(scene, eye, qb, 200, rng, t.rays);
+                    t.wrong += seen_edge;
+                    EXPECT_EQ(seen_edge, 0u) << "edge box of world " << w;
+                }
+            }
+        }
+    }
+}
+
+TEST(RuntimeOcclusionProperty, NeverCullsABoxARayReaches) {
+    const bool ci = test::in_ci();
+    for (int resolution : {Culler::kDefaultResolution, 64, 8}) {
+        PropertyTally t;
+        random_worlds(ci ? 12 : 60, 6, ci ? 100 : 200, resolution, 20261123u + uint32_t(resolution), t);
+        std::printf(
+            "resolution %d: %llu queries, hidden %llu by frusta + %llu by the cube only, %llu edge boxes, "
+            "%llu rays, %llu wrong\n",
+            resolution, (unsigned long long)t.queries, (unsigned long long)t.hidden_frustum,
+            (unsigned long long)t.hidden_cube, (unsigned long long)t.edge_boxes, (unsigned long long)t.rays,
+            (unsigned long long)t.wrong);
+        EXPECT_EQ(t.wrong, 0u);
+        // The scenes are built so that many boxes are hidden: a culler hiding nothing fails here.
+        EXPECT_GT(t.hidden_frustum, t.queries / 20);
+        if (resolution >= Culler::kDefaultResolution) {
+            EXPECT_GT(t.hidden_cube, 0u);
+        }
+    }
+}
+
+// The same on a scene made for fusion: a row of wall segments at different depths that overlap in view
+// only together, so the depth cube does the work.
+TEST(RuntimeOcclusionProperty, FusedWallsNeverCullABoxARayReaches) {
+    std::mt19937 rng(99);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    std::vector<Box> occ;
+    World world;
+    for (int i = 0; i < 16; ++i) {  // segments 1.6 m wide every 1.2 m of x, alternating z = 6 and z = 7
+        const float x0 = -10.0f + 1.2f * float(i), z0 = i % 2 ? 7.0f : 6.0f;
+        occ.push_back(box(x0, -1, z0, x0 + 1.6f, 5, z0 + 0.3f));
+        test::add_box(world, "wall" + std::to_string(i), to_aabb(occ.back()));
+    }
+    Context ctx = quiet_context();
+    const RayScene scene(ctx, world, BuildQuality::kMedium, 1);
+    Culler culler(Culler::kDefaultResolution);
+    PropertyTally t;
+    for (int e = 0; e < 40; ++e) {
+        const float eye[3] = {-4.0f + 8.0f * u(rng), 0.5f + 3.0f * u(rng), -2.0f + 5.0f * u(rng)};
+        culler.begin_frame(eye, occ);
+        for (int q = 0; q < 200; ++q) {
+            const float c[3] = {-6.0f + 12.0f * u(rng), 0.0f + 4.0f * u(rng), 10.0f + 10.0f * u(rng)};
+            const float h = 0.2f + 1.0f * u(rng);
+            const Box qb = box(c[0] - h, c[1] - h, c[2] - h, c[0] + h, c[1] + h, c[2] + h);
+            ++t.queries;
+            const Path path = culler.classify(qb);
+            if (path == Path::kVisible) continue;
+            (path == Path::kShadowFrustum ? t.hidden_frustum : t.hidden_cube) += 1;
+            const uint32_t seen = rays_reaching(scene, eye, qb, 60, rng, t.rays);
+            t.wrong += seen;
+            EXPECT_EQ(seen, 0u);
+        }
+    }
+    std::printf(
+        "fused walls: %llu queries, hidden %llu by frusta + %llu by the cube only, %llu rays, %llu wrong\n",
+        (unsigned long long)t.queries, (unsigned long long)t.hidden_frustum,
+        (unsigned long long)t.hidden_cube, (unsigned long long)t.rays, (unsigned long long)t.wrong);
+    EXPECT_EQ(t.wrong, 0u);
+    EXPECT_GT(t.hidden_cube, t.queries / 10);
+}
+
+// The shadow frusta against their definition: a box is in B's shadow when the segment from the eye to each
+// of its corners meets B (the shadow is convex). Random boxes; the planes may only be stricter.
+TEST(RuntimeOcclusionProperty, ShadowFrustaAgreeWithCornerSegments) {
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> u(-10.0f, 10.0f), s(0.05f, 4.0f);
+    const auto segment_meets = [](const float e[3], const float p[3], const Box& b) {
+        double t0 = 0.0, t1 = 1.0;
+        for (int a = 0; a < 3; ++a) {
+            const double d = double(p[a]) - e[a];
+            if (d == 0.0) {
+                if (e[a] < b.min[a] || e[a] > b.max[a]) return false;
+                continue;
+            }
+            double ta = (double(b.min[a]) - e[a]) / d, tb = (double(b.max[a]) - e[a]) / d;
+            if (ta > tb) std::swap(ta, tb);
+            t0 = std::max(t0, ta);
+            t1 = std::min(t1, tb);
+        }
+        return t0 <= t1;
+    };
+    Culler culler(0);
+    uint64_t hidden = 0;
+    for (int n = 0; n < 20000; ++n) {
+        const float eye[3] = {u(rng), u(rng), u(rng)};
+        const float c[3] = {u(rng), u(rng), u(rng)};
+        const Box b =
+            box(c[0] - s(rng), c[1] - s(rng), c[2] - s(rng), c[0] + s(rng), c[1] + s(rng), c[2] + s(rng));
+        culler.begin_frame(eye, &b, 1);
+        for (int q = 0; q < 20; ++q) {
+            const float f = 1.0f + 2.0f * std::abs(u(rng)) / 10.0f;
+            const float p[3] = {eye[0] + f * (c[0] - eye[0]) + u(rng) / 4,
+                                eye[1] + f * (c[1] - eye[1]) + u(rng) / 4,
+                                eye[2] + f * (c[2] - eye[2]) + u(rng) / 4};
+            const float h = s(rng) / 8;
+            const Box qb = box(p[0] - h, p[1] - h, p[2] - h, p[0] + h, p[1] + h, p[2] + h);
+            bool all = true;
+            for (int k = 0; k < 8 && all; ++k) {
+                const float corner[3] = {k & 1 ? qb.max[0] : qb.min[0], k & 2 ? qb.max[1] : qb.min[1],
+                                         k & 4 ? qb.max[2] : qb.min[2]};
+                all = segment_meets(eye, corner, b);
+            }
+            const bool by_planes = culler.hidden_by_shadow_frusta(qb);
+            if (by_planes) {
+                ++hidden;
+                EXPECT_TRUE(all) << "frustum hides a box whose corner segment misses the occluder";
+            }
+        }
+    }
+    EXPECT_GT(hidden, 1000u);
+    std::printf("shadow frusta: %llu hidden, all confirmed by corner segments\n", (unsigned long long)hidden);
+}
+
+}  // namespace
+}  // namespace pvs
