@@ -15,6 +15,12 @@
 #include <limits>
 #include <string>
 
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define PVS_AVX2_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define PVS_AVX2_CLONES
+#endif
+
 namespace pvs {
 namespace {
 
@@ -32,9 +38,8 @@ inline double grid(int k, int r) {
 // of a positive finite float is the one whose bits are one more (IEEE 754 orders positive floats as their
 // bit patterns); much cheaper than std::nextafter, which was 9% of a bake.
 inline float float_up(double x) {
-    float f = float(x);
-    if (double(f) < x) f = std::bit_cast<float>(std::bit_cast<uint32_t>(f) + 1u);
-    return f;
+    const float f = float(x);
+    return std::bit_cast<float>(std::bit_cast<uint32_t>(f) + uint32_t(double(f) < x));
 }
 
 // The box relative to the eye, in face f's axes (double; differences of floats are exact in practice).
@@ -189,7 +194,9 @@ size_t DepthCube::covered_pixel_count() const {
     return size_t(std::count_if(depth_.begin(), depth_.end(), [](float d) { return d < kInfF; }));
 }
 
-void DepthCube::add_occluder(const Aabb& box) {
+// Built twice, for AVX2 and for plain x86-64, and chosen when the program loads (GCC target_clones): the
+// pixel loops vectorize four doubles wide with AVX2. Same arithmetic, same results.
+PVS_AVX2_CLONES void DepthCube::add_occluder(const Aabb& box) {
     if (!box_usable(box) || box.contains(eye_)) return;
     const int r = resolution_;
     for (int face = 0; face < 6; ++face) {
@@ -234,11 +241,15 @@ void DepthCube::add_occluder(const Aabb& box) {
                 corner_cur_[iv] = exit >= hit_depth ? hit_depth : kInf;
             }
             if (jv > jv0) {
-                float* const row = face_depth + size_t(jv - 1) * r;
+                // Branch-free, so that it vectorizes: min with float_up(d) keeps the pixel when d >= it
+                // (float_up(d) >= d) and lowers it to float_up(d) otherwise.
+                float* __restrict const row = face_depth + size_t(jv - 1) * r;
+                const double* __restrict const cp = corner_prev_.data();
+                const double* __restrict const cc = corner_cur_.data();
                 for (int i = iv0; i < iv1; ++i) {
-                    const double d =
-                        std::max({corner_prev_[i], corner_prev_[i + 1], corner_cur_[i], corner_cur_[i + 1]});
-                    if (d < double(row[i])) row[i] = std::min(row[i], float_up(d));
+                    const float f =
+                        float_up(std::max(std::max(cp[i], cp[i + 1]), std::max(cc[i], cc[i + 1])));
+                    row[i] = f < row[i] ? f : row[i];
                 }
             }
             std::swap(corner_prev_, corner_cur_);
