@@ -85,7 +85,8 @@ inline BakeData coherent_bake(uint32_t objects, glm::ivec3 dims, bool octree, bo
         cells.view.bits.assign(size_t((n + 63) / 64), 0);
         for (uint64_t v = 0; v < n; ++v)
             if (v % 7 != 3) cells.view.bits[v / 64] |= uint64_t(1) << (v % 64);
-        cells.eyes = cells.view;
+        cells.eyes = cells.view;  // the eye space: the view volume less a rim (here every fifth voxel)
+        for (uint64_t v = 2; v < n; v += 5) cells.eyes.bits[v / 64] &= ~(uint64_t(1) << (v % 64));
     }
     const uint32_t n_cells = uint32_t(cells.size());
     b.pvs = PvsSet::make(n_cells, objects);
@@ -185,7 +186,7 @@ inline void expect_same_lookup(const pvsbake::Bake& got, const CellSet& cells, u
         all.extend(c.bounds.max);
     }
     const int n = test::in_ci() ? 4000 : 40000;
-    int found = 0;
+    int found = 0, eyes = 0, rim = 0;
     for (int i = 0; i < n && !all.is_empty(); ++i) {
         glm::vec3 p = all.min + glm::vec3(u(rng), u(rng), u(rng)) * (all.max - all.min);
         if (i % 4 == 1)
@@ -197,9 +198,17 @@ inline void expect_same_lookup(const pvsbake::Bake& got, const CellSet& cells, u
         const int32_t want = cells.find(p);
         ASSERT_EQ(got.find_cell(p.x, p.y, p.z), want) << p.x << " " << p.y << " " << p.z;
         found += want >= 0;
+        const bool eye = want >= 0 && (cells.eyes.empty() || cells.eyes.contains(p));
+        ASSERT_EQ(got.in_eye_space(p.x, p.y, p.z), eye) << p.x << " " << p.y << " " << p.z;
+        eyes += eye;
+        rim += want >= 0 && !eye;
     }
     if (!cells.cells.empty()) {
         EXPECT_GT(found, n / 10);
+        EXPECT_GT(eyes, n / 20);
+    }
+    if (!cells.eyes.empty() && !cells.cells.empty()) {
+        EXPECT_GT(rim, 0);
     }
     const float nan = std::nanf(""), inf = INFINITY;
     EXPECT_EQ(got.find_cell(nan, 0, 0), -1);

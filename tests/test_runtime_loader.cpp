@@ -349,6 +349,8 @@ TEST(RuntimeLoaderC, MirrorsTheCppApi) {
             pvsbake_find_cell(b, 0.5f * (box[0] + box[3]), 0.5f * (box[1] + box[4]),
                               0.5f * (box[2] + box[5])),
             cpp.find_cell(0.5f * (box[0] + box[3]), 0.5f * (box[1] + box[4]), 0.5f * (box[2] + box[5])));
+        EXPECT_EQ(pvsbake_in_eye_space(b, box[0], box[1], box[2]) == 1,
+                  cpp.in_eye_space(box[0], box[1], box[2]));
     }
     for (uint32_t o = 0; o < pvsbake_object_count(b); ++o) {
         EXPECT_STREQ(pvsbake_object_name(b, o), bake.objects[o].name.c_str());
@@ -376,6 +378,7 @@ TEST(RuntimeLoaderC, MirrorsTheCppApi) {
     pvsbake_free(b);
     EXPECT_EQ(pvsbake_cell_count(nullptr), 0u);
     EXPECT_EQ(pvsbake_find_cell(nullptr, 0, 0, 0), -1);
+    EXPECT_EQ(pvsbake_in_eye_space(nullptr, 0, 0, 0), 0);
     EXPECT_STREQ(pvsbake_mode(nullptr), "");
     pvsbake_free(nullptr);
 

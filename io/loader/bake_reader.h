@@ -57,7 +57,7 @@ struct FileCells {
     std::vector<int32_t> node_first_child, node_cell, node_parent;
     FileMask view, eyes;
 };
-// read_eyes false skips /cells/eyes (the runtime does not need it).
+// read_eyes false skips /cells/eyes.
 FileCells read_cells(const Reader& r, hid_t root, bool read_eyes);
 
 // /pvs. With want_rows, `rows` holds the distinct rows (format 1.0 and later); else, when the file has

@@ -66,7 +66,7 @@ public:
         b.info_ = detail::read_header(r, root.get());
         b.parameters_ = detail::read_parameters(r, root.get());
         objects(detail::read_objects(r, root.get()), b);
-        detail::FileCells file_cells = detail::read_cells(r, root.get(), /*read_eyes=*/false);
+        detail::FileCells file_cells = detail::read_cells(r, root.get(), /*read_eyes=*/true);
         const uint32_t cell_count = file_cells.count;
         cells(std::move(file_cells), b);
         pvs(detail::read_pvs(r, root.get(), b.object_count_, cell_count, /*want_rows=*/false), b);
@@ -114,7 +114,7 @@ private:
             n.cell = f.node_cell[i];
         }
         cell_boxes(f, b);
-        view_bricks(f.view, b);
+        view_bricks(f.view, f.eyes, b);
     }
 
     // A grid cell's box is its grid box (cells/grid.cpp: origin + index * size): then only its grid
@@ -143,22 +143,31 @@ private:
         for (uint32_t c = 0; c < count; ++c) b.cell_bounds_[c] = box_at(f.bounds, c);
     }
 
-    // The view mask as 8 x 8 x 8 bricks: empty and full bricks cost 4 bytes, mixed ones 68.
-    static void view_bricks(const detail::FileMask& m, Bake& b) {
+    // The view mask as 8 x 8 x 8 bricks: empty and full bricks cost 4 bytes, mixed ones 68. The eye mask
+    // (on the same voxels) the same way, when the file has one.
+    static void view_bricks(const detail::FileMask& m, const detail::FileMask& eyes, Bake& b) {
         b.has_view_ = !m.bytes.empty();
         if (!b.has_view_) return;
         std::copy(m.origin, m.origin + 3, b.view_origin_);
         b.view_voxel_m_ = m.voxel_size_m;
         std::copy(m.dims, m.dims + 3, b.view_dims_);
         for (int a = 0; a < 3; ++a) b.brick_dims_[a] = (m.dims[a] + 7) / 8;
+        bricks(m, b.brick_dims_, b.brick_, b.brick_bytes_);
+        b.has_eyes_ = !eyes.bytes.empty() && eyes.voxel_size_m == m.voxel_size_m &&
+                      std::equal(eyes.origin, eyes.origin + 3, m.origin) &&
+                      std::equal(eyes.dims, eyes.dims + 3, m.dims);
+        if (b.has_eyes_) bricks(eyes, b.brick_dims_, b.eye_brick_, b.eye_brick_bytes_);
+    }
+
+    static void bricks(const detail::FileMask& m, const int32_t brick_dims[3],
+                       std::vector<uint32_t>& brick_of, std::vector<uint8_t>& bytes) {
         const uint64_t dx = uint64_t(m.dims[0]), dy = uint64_t(m.dims[1]), dz = uint64_t(m.dims[2]);
-        b.brick_.assign(size_t(b.brick_dims_[0]) * size_t(b.brick_dims_[1]) * size_t(b.brick_dims_[2]),
-                        kBrickEmpty);
+        brick_of.assign(size_t(brick_dims[0]) * size_t(brick_dims[1]) * size_t(brick_dims[2]), kBrickEmpty);
         uint8_t brick[64];
         size_t at = 0;
-        for (uint64_t bz = 0; bz < uint64_t(b.brick_dims_[2]); ++bz) {
-            for (uint64_t by = 0; by < uint64_t(b.brick_dims_[1]); ++by) {
-                for (uint64_t bx = 0; bx < uint64_t(b.brick_dims_[0]); ++bx, ++at) {
+        for (uint64_t bz = 0; bz < uint64_t(brick_dims[2]); ++bz) {
+            for (uint64_t by = 0; by < uint64_t(brick_dims[1]); ++by) {
+                for (uint64_t bx = 0; bx < uint64_t(brick_dims[0]); ++bx, ++at) {
                     const uint64_t x0 = bx * 8;
                     const uint32_t width = uint32_t(std::min<uint64_t>(8, dx - x0));
                     const uint8_t valid = uint8_t((1u << width) - 1);
@@ -183,11 +192,11 @@ private:
                     }
                     if (!any) continue;
                     if (full) {
-                        b.brick_[at] = kBrickFull;
+                        brick_of[at] = kBrickFull;
                         continue;
                     }
-                    b.brick_[at] = kFirstBrick + uint32_t(b.brick_bytes_.size() / 64);
-                    b.brick_bytes_.insert(b.brick_bytes_.end(), brick, brick + 64);
+                    brick_of[at] = kFirstBrick + uint32_t(bytes.size() / 64);
+                    bytes.insert(bytes.end(), brick, brick + 64);
                 }
             }
         }
@@ -228,7 +237,8 @@ private:
         return n + bytes(b.names_) + bytes(b.name_offset_) + bytes(b.object_bounds_) +
                bytes(b.object_triangles_) + bytes(b.object_flags_) + bytes(b.grid_to_cell_) +
                bytes(b.nodes_) + bytes(b.cell_bounds_) + bytes(b.cell_grid_) + bytes(b.brick_) +
-               bytes(b.brick_bytes_) + bytes(b.code_) + b.row_offset_.bytes() + b.cell_row_.bytes();
+               bytes(b.brick_bytes_) + bytes(b.eye_brick_) + bytes(b.eye_brick_bytes_) + bytes(b.code_) +
+               b.row_offset_.bytes() + b.cell_row_.bytes();
     }
 };
 
@@ -281,17 +291,20 @@ Box Bake::cell_bounds(uint32_t c) const noexcept {
     return cell_bounds_.empty() ? grid_box(cell_grid_[c]) : cell_bounds_[c];
 }
 
-bool Bake::view_voxel(int64_t x, int64_t y, int64_t z) const {
+bool Bake::mask_voxel(bool eyes, int64_t x, int64_t y, int64_t z) const {
     const size_t b =
         size_t(x >> 3) + size_t(brick_dims_[0]) * (size_t(y >> 3) + size_t(brick_dims_[1]) * size_t(z >> 3));
-    const uint32_t t = brick_[b];
+    const uint32_t t = (eyes ? eye_brick_ : brick_)[b];
     if (t < kFirstBrick) return t == kBrickFull;
-    return (brick_bytes_[size_t(t - kFirstBrick) * 64 + size_t(z & 7) * 8 + size_t(y & 7)] >> (x & 7)) & 1u;
+    return ((eyes ? eye_brick_bytes_
+                  : brick_bytes_)[size_t(t - kFirstBrick) * 64 + size_t(z & 7) * 8 + size_t(y & 7)] >>
+            (x & 7)) &
+           1u;
 }
 
 // VoxelMask::contains (core/cell_set.h), step by step: voxels are closed boxes, so a point on a face of a
 // set voxel is in.
-bool Bake::view_contains(float x, float y, float z) const {
+bool Bake::mask_contains(bool eyes, float x, float y, float z) const {
     const float p[3] = {x, y, z};
     int lo[3], hi[3];
     for (int a = 0; a < 3; ++a) {
@@ -304,14 +317,19 @@ bool Bake::view_contains(float x, float y, float z) const {
     for (int k = lo[2]; k <= hi[2]; ++k)
         for (int j = lo[1]; j <= hi[1]; ++j)
             for (int i = lo[0]; i <= hi[0]; ++i)
-                if (view_voxel(i, j, k)) return true;
+                if (mask_voxel(eyes, i, j, k)) return true;
     return false;
+}
+
+bool Bake::in_eye_space(float x, float y, float z) const noexcept {
+    if (find_cell(x, y, z) < 0) return false;
+    return !has_eyes_ || mask_contains(true, x, y, z);
 }
 
 int32_t Bake::find_cell(float x, float y, float z) const noexcept {
     if (!(cell_size_m_ > 0.0f) || !std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) return -1;
     if (grid_to_cell_.empty()) return -1;
-    if (has_view_ && !view_contains(x, y, z)) return -1;
+    if (has_view_ && !mask_contains(false, x, y, z)) return -1;
     const float p[3] = {x, y, z};
     int idx[3];
     for (int a = 0; a < 3; ++a) {

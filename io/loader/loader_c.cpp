@@ -83,6 +83,10 @@ size_t pvsbake_words_per_row(const pvsbake_bake* b) {
 int32_t pvsbake_find_cell(const pvsbake_bake* b, float x, float y, float z) {
     return b != nullptr ? b->bake.find_cell(x, y, z) : -1;
 }
+
+int pvsbake_in_eye_space(const pvsbake_bake* b, float x, float y, float z) {
+    return b != nullptr && b->bake.in_eye_space(x, y, z) ? 1 : 0;
+}
 int pvsbake_cell_bounds(const pvsbake_bake* b, uint32_t cell, float box[6]) {
     return b != nullptr && cell < b->bake.cell_count() ? copy_box(b->bake.cell_bounds(cell), box) : 0;
 }

@@ -210,6 +210,13 @@ public:
     // view volume, a point outside its voxels (closed boxes) has no cell.
     int32_t find_cell(float x, float y, float z) const noexcept;
     int32_t find_cell(const float p[3]) const noexcept { return find_cell(p[0], p[1], p[2]); }
+    // Is p in the EYE SPACE, the free voxels (closed boxes) where the bake's eyes are? The bake's promises
+    // hold for eyes there: the PVS lists everything an eye there can see, and occluders cull only what is
+    // hidden from there. find_cell() also answers in a rim one voxel wide around it (up to and into thin
+    // walls), where they do not: a game that culls with occluders should do so only when this is true.
+    // Bakes without an eye mask: true wherever find_cell() finds a cell.
+    bool in_eye_space(float x, float y, float z) const noexcept;
+    bool in_eye_space(const float p[3]) const noexcept { return in_eye_space(p[0], p[1], p[2]); }
     CellKind cell_kind() const { return kind_; }
     // The box of cell c (an empty box for c out of range).
     Box cell_bounds(uint32_t c) const noexcept;
@@ -328,8 +335,8 @@ private:
         return true;
     }
     Box grid_box(uint32_t grid_index) const;
-    bool view_voxel(int64_t x, int64_t y, int64_t z) const;
-    bool view_contains(float x, float y, float z) const;
+    bool mask_voxel(bool eyes, int64_t x, int64_t y, int64_t z) const;
+    bool mask_contains(bool eyes, float x, float y, float z) const;
 
     // What the bake is.
     BakeInfo info_;
@@ -361,6 +368,10 @@ private:
     int32_t brick_dims_[3] = {0, 0, 0};
     std::vector<uint32_t> brick_;
     std::vector<uint8_t> brick_bytes_;
+    // The eye space (within the view volume, same voxels and bricks).
+    bool has_eyes_ = false;
+    std::vector<uint32_t> eye_brick_;
+    std::vector<uint8_t> eye_brick_bytes_;
     // The PVS: row code (plus 8 bytes of padding), where each distinct row starts, and each cell's row.
     std::vector<uint8_t> code_;
     detail::IndexArray row_offset_;

@@ -50,6 +50,8 @@ size_t pvsbake_words_per_row(const pvsbake_bake* bake);
 
 /* The cell holding (x, y, z), or -1 outside the view volume (then draw everything). */
 int32_t pvsbake_find_cell(const pvsbake_bake* bake, float x, float y, float z);
+/* 1 when the point is in the eye space, where the bake's promises hold (Bake::in_eye_space), else 0. */
+int pvsbake_in_eye_space(const pvsbake_bake* bake, float x, float y, float z);
 /* The box of a cell; 0 when cell is out of range. 0 = grid, 1 = octree. */
 int pvsbake_cell_bounds(const pvsbake_bake* bake, uint32_t cell, float box[6]);
 int pvsbake_cell_kind(const pvsbake_bake* bake);
