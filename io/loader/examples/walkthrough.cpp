@@ -128,6 +128,8 @@ int main(int argc, char** argv) {
         const int32_t cell = bake.find_cell(eye.x, eye.y, eye.z);
         uint32_t n = objects;
         uint64_t tris = triangles;
+        // Ranked occluders (format 1.2) a game would test its moving objects against, best first.
+        const uint32_t occluders = cell >= 0 ? bake.occluder_count(uint32_t(cell)) : 0;
         if (cell >= 0) {
             n = 0;
             tris = 0;
@@ -143,9 +145,9 @@ int main(int argc, char** argv) {
         if (!quiet) {
             std::printf(
                 "frame %4d  eye (%8.2f %8.2f %8.2f)  cell %7d  draws %5u / %u objects, %8llu / %llu "
-                "triangles\n",
+                "triangles, %u occluders\n",
                 f, eye.x, eye.y, eye.z, cell, n, objects, (unsigned long long)tris,
-                (unsigned long long)triangles);
+                (unsigned long long)triangles, occluders);
         }
     }
     const double fo = double(drawn_objects) / std::max(1.0, double(frames) * objects);
