@@ -292,7 +292,9 @@ nlohmann::json ground_truth(const std::string& world_path, const std::string& ba
     std::vector<double> frame_us, pick_us, begin_us;
     uint64_t tested = 0, culled = 0, by_frusta = 0, wrong_boxes = 0, wrong_rays = 0, rays = 0, ray_hidden = 0;
     uint64_t frames_in_volume = 0, occluders_used = 0, wrong_by_culler = 0, wrong_by_leaky_occluder = 0;
-    uint64_t occluders_checked = 0, leaky_occluders = 0, frames_in_eye_space = 0;
+    uint64_t occluders_checked = 0, leaky_occluders = 0, frames_in_eye_space = 0, eye_space_disagreements = 0;
+    bool ranked = false;
+    for (uint32_t c = 0; c < bake.cell_count() && !ranked; ++c) ranked = bake.occluder_count(c) > 0;
     uint64_t eye_space_tested = 0, eye_space_culled = 0, eye_space_wrong = 0, eye_space_ray_hidden = 0;
     uint64_t eye_space_occluders_checked = 0, eye_space_leaky_occluders = 0;
     std::vector<glm::vec3> origins, dirs;
@@ -307,14 +309,24 @@ nlohmann::json ground_truth(const std::string& world_path, const std::string& ba
         // The bake's promises hold for eyes in the eye space (free space a player reaches; core/cell_set.h
         // `eyes`). The view volume around it is one voxel wider and can reach behind one-sided walls, where
         // the void sees into every occluder; the example's path passes there (cell centres of that margin).
-        const bool in_eyes =
-            data.cells.eyes.empty() || data.cells.eyes.contains(glm::vec3(eye[0], eye[1], eye[2]));
+        // As the example does, the culler gets occluders only there (Bake::in_eye_space), and culls
+        // nothing elsewhere. The loader's answer is checked against the baker's own mask.
+        const bool in_eyes = bake.in_eye_space(eye);
+        eye_space_disagreements +=
+            in_eyes != (cell >= 0 && (data.cells.eyes.empty() ||
+                                      data.cells.eyes.contains(glm::vec3(eye[0], eye[1], eye[2]))));
         frames_in_eye_space += in_eyes;
         const auto p0 = std::chrono::steady_clock::now();
         occ.clear();
-        // Stand-in for the cell's ranked occluders: when issue 9's bake side lands, take bake.occluders(cell)
-        // here (their .box), as the example's cell_occluders() will.
-        if (cell >= 0) pick_occluders(proven, eye, k, occ, scratch);
+        // The cell's ranked occluders (format 1.2); for older bakes, the k proven boxes of largest solid
+        // angle from the eye.
+        if (cell >= 0 && in_eyes) {
+            if (ranked) {
+                for (const pvsbake::RankedOccluder& r : bake.occluders(uint32_t(cell))) occ.push_back(r.box);
+            } else {
+                pick_occluders(proven, eye, k, occ, scratch);
+            }
+        }
         pick_us.push_back(1e6 * seconds_since(p0));
         frames_in_volume += cell >= 0;
 
@@ -449,6 +461,8 @@ nlohmann::json ground_truth(const std::string& world_path, const std::string& ba
     j["frames"] = frames;
     j["frames_in_view_volume"] = frames_in_volume;
     j["frames_in_eye_space"] = frames_in_eye_space;
+    j["eye_space_loader_disagreements"] = eye_space_disagreements;
+    j["occluders"] = ranked ? "ranked (the bake's, per cell)" : "the k proven boxes of largest solid angle";
     j["eye_space"] = {
         {"boxes_tested", eye_space_tested},
         {"culled", eye_space_culled},

@@ -69,6 +69,15 @@ struct OccluderConfig {
     uint64_t check_seed = 7;
 };
 
+// Ranked occluders per cell (occluders/ranking.h, pvs/occluder_ranking.h; ALGORITHMS.md section 4).
+struct RankingConfig {
+    uint32_t occluders_per_cell = 8;   // [Limit: 0..1024] boxes kept per cell, best first; 0 = off
+    double min_solid_angle_sr = 0.01;  // [Limit: 0..4 pi] [Units: sr] a box is a candidate for a cell when
+                                       // its exact solid angle from some sampled eye of the cell passes this
+    uint32_t eyes_per_cell = 8;        // [Limit: 1..1024] seeded eye points per cell (cells/eyes.h)
+    uint64_t seed = 0x72616e6bULL;     // [Limit: any] the same seed gives the same ranking for any threads
+};
+
 // The conservative solver (pvs/conservative.h).
 struct ConservativeConfig {
     double epsilon_m = 0.125;  // [Limit: > 0] [Units: m] occluders shrink by this; cell faces are sampled
@@ -107,6 +116,7 @@ struct BakeConfig {
     ViewVolumeConfig view;
     CellConfig cells;
     OccluderConfig occluders;
+    RankingConfig ranking;
     ConservativeConfig conservative;
     SampledPvsConfig sampled;
     VerifyConfig verify;
@@ -174,6 +184,21 @@ void visit_options(Config& c, Visitor&& v) {
     v(OptionSpec{"--occluder-check-eyes", "occluders.check_eyes", "eyes",
                  "occluders: eye points whose rays check every box against the triangles", 1, 1e7},
       c.occluders.check_eyes);
+    v(OptionSpec{"--occluders-per-cell", "ranking.occluders_per_cell", "boxes",
+                 "ranked occluders kept per cell for run-time culling, best first; 0 = off", 0, 1024},
+      c.ranking.occluders_per_cell);
+    v(OptionSpec{"--min-solid-angle", "ranking.min_solid_angle_sr", "sr",
+                 "ranked occluders: a box is a candidate for a cell when its solid angle from some sampled "
+                 "eye of the cell reaches this",
+                 0, 12.566370614359172},
+      c.ranking.min_solid_angle_sr);
+    v(OptionSpec{"--ranking-eyes", "ranking.eyes_per_cell", "eyes",
+                 "ranked occluders: seeded eye points per cell for solid angle and depth complexity", 1,
+                 1024},
+      c.ranking.eyes_per_cell);
+    v(OptionSpec{"--ranking-seed", "ranking.seed", "", "ranked occluders: random seed of the eye points", 0,
+                 kInf},
+      c.ranking.seed);
     v(OptionSpec{"--epsilon", "conservative.epsilon_m", "m",
                  "conservative mode: occluders shrink by this and cell faces are sampled within it", 0.01,
                  100},

@@ -19,6 +19,28 @@ struct Occluder {
     std::vector<uint32_t> objects;  // opaque objects whose bounds meet the box grown by one voxel
 };
 
+// One ranked occluder of a cell (occluders/ranking.h defines the score and the measures).
+struct RankedOccluder {
+    uint32_t box = 0;                    // index into the bake's occluders (always a proven one)
+    float score = 0.0f;                  // higher is better (occluders/ranking.h)
+    float solid_angle_sr = 0.0f;         // largest exact solid angle from the cell's sampled eyes
+    float hidden_objects = 0.0f;         // mean over the sampled eyes: objects wholly in its shadow
+    float hidden_triangle_share = 0.0f;  // mean over the sampled eyes: share of the world's triangles
+                                         // in objects wholly in its shadow
+};
+
+// The ranked occluders of every cell: cell c has entries[offsets[c] .. offsets[c + 1]), best first.
+// Empty offsets = no ranking (a bake made without it, or read from a file older than format 1.2).
+struct RankedOccluders {
+    std::vector<uint32_t> offsets;  // cells + 1 entries, from 0, never decreasing; or empty
+    std::vector<RankedOccluder> entries;
+
+    bool empty() const { return offsets.empty(); }
+    uint32_t count(uint32_t cell) const {
+        return cell + 1 < offsets.size() ? offsets[cell + 1] - offsets[cell] : 0;
+    }
+};
+
 // The occluders of the conservative solver (pvs/conservative.h): the proven solid, and boxes of it shrunk
 // by each epsilon of a ladder (every point of a box of level k has its whole epsilon_m[k]-ball inside the
 // proven solid).

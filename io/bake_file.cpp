@@ -1,4 +1,4 @@
-// pvsbake io: writes and reads the HDF5 bake file, format 1.1 (layout in docs/FORMAT.md), with the HDF5 C
+// pvsbake io: writes and reads the HDF5 bake file, format 1.2 (layout in docs/FORMAT.md), with the HDF5 C
 // API only (the runtime loader must depend on libhdf5 alone). The writer dedupes PVS rows, writes to an
 // AtomicOutput temporary file and commits it once the file is fully closed. The reader is the loader
 // library's (io/loader/bake_reader.h: one validating reader of the format, shared with the runtime); this
@@ -15,6 +15,7 @@
 #include <hdf5.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <cstring>
 #include <filesystem>
@@ -322,6 +323,33 @@ void check_writable(const std::string& path, const BakeData& bake) {
             bad(fmt::format("octree node {} has a child, cell or parent out of range", i));
         }
     }
+    // As the reader checks the ranking (io/loader/bake_reader.h, read_occluders).
+    const RankedOccluders& ranked = bake.ranked;
+    if (!ranked.empty()) {
+        if (ranked.offsets.size() != cells + 1 || ranked.offsets[0] != 0 ||
+            ranked.offsets.back() != ranked.entries.size()) {
+            bad(fmt::format("the ranked occluders have {} offsets for {} cells and {} entries",
+                            ranked.offsets.size(), cells, ranked.entries.size()));
+        }
+        for (size_t c = 0; c < cells; ++c) {
+            if (ranked.offsets[c + 1] < ranked.offsets[c]) bad("the ranked occluders' offsets decrease");
+            for (uint32_t k = ranked.offsets[c]; k < ranked.offsets[c + 1]; ++k) {
+                const RankedOccluder& e = ranked.entries[k];
+                if (e.box >= bake.occluders.size() || !bake.occluders[e.box].proven)
+                    bad(fmt::format("ranked occluder {} names box {}, not a proven occluder", k, e.box));
+                if (!std::isfinite(e.score) || e.score < 0.0f || !(e.solid_angle_sr >= 0.0f) ||
+                    !(e.solid_angle_sr <= 12.566371f) || !(e.hidden_objects >= 0.0f) ||
+                    !(e.hidden_objects <= float(objects)) || !(e.hidden_triangle_share >= 0.0f) ||
+                    !(e.hidden_triangle_share <= 1.0f))
+                    bad(fmt::format("ranked occluder {} has a measure out of range", k));
+                if (k > ranked.offsets[c] && e.score > ranked.entries[k - 1].score)
+                    bad(fmt::format("the ranked occluders of cell {} are not best first", c));
+                if (!is_finite(bake.occluders[e.box].box.min) || !is_finite(bake.occluders[e.box].box.max) ||
+                    bake.occluders[e.box].box.is_empty())
+                    bad(fmt::format("ranked occluder {} names box {}, which is not a finite box", k, e.box));
+            }
+        }
+    }
     const VerificationRecord& v = bake.verification;
     if (!v.cell_sampled_visible.empty() && v.cell_sampled_visible.size() != cells) {
         bad("verification cell_sampled_visible does not have one entry per cell");
@@ -554,7 +582,8 @@ void write_leak_path(Writer& w, hid_t root, const std::vector<glm::vec3>& path) 
                   "view volume flood from a seed to the outside, when the level leaks; empty = sealed");
 }
 
-void write_occluders(Writer& w, hid_t root, const std::vector<Occluder>& occluders) {
+void write_occluders(Writer& w, hid_t root, const std::vector<Occluder>& occluders,
+                     const RankedOccluders& ranked) {
     Handle g = w.group(root, "/", "occluders");
     w.u32_attr(g.get(), "count", uint32_t(occluders.size()));
     w.string_attr(
@@ -581,6 +610,33 @@ void write_occluders(Writer& w, hid_t root, const std::vector<Occluder>& occlude
               offsets.data());
     w.dataset(g.get(), "/occluders", "objects", H5T_STD_U32LE, H5T_NATIVE_UINT32, {objects.size()},
               objects.data(), true);
+    if (ranked.empty()) return;
+    // Format 1.2: the ranked occluders of each cell (occluders/ranking.h), as indices into the boxes above
+    // and their measures; cell c has entries ranked_offsets[c] .. ranked_offsets[c + 1], best first.
+    const size_t m = ranked.entries.size();
+    std::vector<uint32_t> box(m);
+    std::vector<float> score(m), solid(m), hidden(m), share(m);
+    for (size_t k = 0; k < m; ++k) {
+        const RankedOccluder& e = ranked.entries[k];
+        std::tie(box[k], score[k], solid[k], hidden[k], share[k]) =
+            std::tie(e.box, e.score, e.solid_angle_sr, e.hidden_objects, e.hidden_triangle_share);
+    }
+    w.string_attr(
+        g.get(), "ranked_score",
+        "sqrt(mean solid angle / 4 pi * (mean hidden objects / objects + mean hidden triangle share) "
+        "/ 2), over the cell's sampled eyes; higher is better (docs/FORMAT.md)");
+    w.dataset(g.get(), "/occluders", "ranked_offsets", H5T_STD_U32LE, H5T_NATIVE_UINT32,
+              {ranked.offsets.size()}, ranked.offsets.data(), true);
+    w.dataset(g.get(), "/occluders", "ranked_box", H5T_STD_U32LE, H5T_NATIVE_UINT32, {m}, box.data(), true);
+    w.dataset(g.get(), "/occluders", "ranked_score", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, {m}, score.data(),
+              true);
+    Handle sa = w.dataset(g.get(), "/occluders", "ranked_solid_angle_sr", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT,
+                          {m}, solid.data(), true);
+    w.string_attr(sa.get(), "units", "sr");
+    w.dataset(g.get(), "/occluders", "ranked_hidden_objects", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, {m},
+              hidden.data(), true);
+    w.dataset(g.get(), "/occluders", "ranked_hidden_triangle_share", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, {m},
+              share.data(), true);
 }
 
 void write_verification(Writer& w, hid_t root, const VerificationRecord& v) {
@@ -705,44 +761,25 @@ void read_leak_path(const Reader& r, hid_t root, BakeData& bake) {
 }
 
 void read_occluders(const Reader& r, hid_t root, BakeData& bake) {
-    if (H5Lexists(root, "occluders", H5P_DEFAULT) <= 0) return;  // a bake made without occluders
-    const std::string where = "/occluders";
-    Handle g = r.open_group(root, where);
-    std::vector<int64_t> shape = {-1, 6};
-    const std::vector<float> flat =
-        r.numeric_dataset<float>(g.get(), where, "bounds", H5T_NATIVE_FLOAT, shape, H5T_FLOAT);
-    const int64_t n = shape[0];
-    const std::vector<float> voxel =
-        r.numeric_dataset<float>(g.get(), where, "voxel_size_m", H5T_NATIVE_FLOAT, {n}, H5T_FLOAT);
-    const std::vector<uint8_t> proven =
-        r.numeric_dataset<uint8_t>(g.get(), where, "proven", H5T_NATIVE_UINT8, {n}, H5T_INTEGER);
-    const std::vector<uint32_t> offsets = r.numeric_dataset<uint32_t>(
-        g.get(), where, "object_offsets", H5T_NATIVE_UINT32, {n + 1}, H5T_INTEGER);
-    std::vector<int64_t> objects_shape = {-1};
-    const std::vector<uint32_t> objects =
-        r.numeric_dataset<uint32_t>(g.get(), where, "objects", H5T_NATIVE_UINT32, objects_shape, H5T_INTEGER);
-    if (offsets.empty() || offsets[0] != 0 || offsets.back() != objects.size()) {
-        r.fail("/occluders/object_offsets does not start at 0 and end at the size of /occluders/objects");
-    }
-    for (int64_t i = 0; i < n; ++i) {
-        if (offsets[size_t(i) + 1] < offsets[size_t(i)])
-            r.fail(fmt::format("/occluders/object_offsets[{}] decreases", i + 1));
-        if (proven[size_t(i)] > 1) r.fail(fmt::format("/occluders/proven[{}] is not 0 or 1", i));
-    }
-    for (size_t k = 0; k < objects.size(); ++k) {
-        if (objects[k] >= bake.objects.size()) {
-            r.fail(fmt::format("/occluders/objects[{}] = {} is not an object index below {}", k, objects[k],
-                               bake.objects.size()));
-        }
-    }
-    for (int64_t i = 0; i < n; ++i) {
+    const pvsbake::detail::FileOccluders f = pvsbake::detail::read_occluders(
+        r, root, uint32_t(bake.objects.size()), uint32_t(bake.cells.size()), /*want_boxes=*/true);
+    if (!f.present) return;  // a bake made without occluders
+    for (size_t i = 0; i < f.count; ++i) {
         Occluder o;
-        const float* b = &flat[size_t(i) * 6];
-        o.box = Aabb::of({b[0], b[1], b[2]}, {b[3], b[4], b[5]});
-        o.voxel_size_m = voxel[size_t(i)];
-        o.proven = proven[size_t(i)] != 0;
-        o.objects.assign(objects.begin() + offsets[size_t(i)], objects.begin() + offsets[size_t(i) + 1]);
+        o.box = box_at(f.bounds, i);
+        o.voxel_size_m = f.voxel_size_m[i];
+        o.proven = f.proven[i] != 0;
+        o.objects.assign(f.objects.begin() + f.object_offsets[i],
+                         f.objects.begin() + f.object_offsets[i + 1]);
         bake.occluders.push_back(std::move(o));
+    }
+    if (f.ranked_offsets.empty()) return;  // older than format 1.2, or ranking was off
+    bake.ranked.offsets = f.ranked_offsets;
+    bake.ranked.entries.resize(f.ranked_box.size());
+    for (size_t k = 0; k < f.ranked_box.size(); ++k) {
+        bake.ranked.entries[k] =
+            RankedOccluder{f.ranked_box[k], f.ranked_score[k], f.ranked_solid_angle_sr[k],
+                           f.ranked_hidden_objects[k], f.ranked_hidden_triangle_share[k]};
     }
 }
 
@@ -822,7 +859,7 @@ void write_bake_file(const std::string& path, const BakeData& bake) {
             write_cells(w, root.get(), bake.cells);
             write_pvs(w, root.get(), bake);
             write_leak_path(w, root.get(), bake.leak_path);
-            write_occluders(w, root.get(), bake.occluders);
+            write_occluders(w, root.get(), bake.occluders, bake.ranked);
             w.named_values(root.get(), "/", "figures", bake.figures, nullptr);
             w.named_values(root.get(), "/", "timings", bake.timings_s, "s");
             write_verification(w, root.get(), bake.verification);

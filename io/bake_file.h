@@ -1,4 +1,4 @@
-// pvsbake io: the bake file (HDF5), format version 1.1. docs/FORMAT.md documents every group, dataset and
+// pvsbake io: the bake file (HDF5), format version 1.2. docs/FORMAT.md documents every group, dataset and
 // attribute; this header is the in-memory form.
 //
 // Conventions: glTF axes (right-handed, +Y up), metres. Grid index order x fastest (core/cell_set.h).
@@ -22,7 +22,7 @@
 namespace pvs {
 
 constexpr int kBakeFormatMajor = 1;
-constexpr int kBakeFormatMinor = 1;  // 1.1 added the PVS code (/pvs/code)
+constexpr int kBakeFormatMinor = 2;  // 1.1 added the PVS code (/pvs/code), 1.2 ranked occluders per cell
 
 struct ObjectRecord {
     std::string name;
@@ -66,6 +66,7 @@ struct BakeData {
     NamedValues timings_s;             // seconds per stage
     std::vector<glm::vec3> leak_path;  // view volume flood: seed to outside, when the level leaks
     std::vector<Occluder> occluders;   // synthesized boxes (only proven ones may occlude)
+    RankedOccluders ranked;            // per cell, indices into `occluders` (empty: none, or a file < 1.2)
     VerificationRecord verification;
 };
 

@@ -7,6 +7,7 @@
 #include "core/error.h"
 #include "pvs/conservative.h"
 #include "pvs/embree_scene.h"
+#include "pvs/occluder_ranking.h"
 #include "pvs/occluder_synthesis.h"
 #include "pvs/ray_sampler.h"
 
@@ -107,6 +108,11 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
         sampled.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     }
     bake.pvs = std::move(sampled.pvs);
+    // Ranked occluders per cell (issue 9): once the cells are final (the octree's depend on the PVS).
+    RankingFigures ranking;
+    if (!bake.occluders.empty()) {
+        bake.ranked = rank_occluders(ctx, config.ranking, world, bake.cells, bake.occluders, ranking);
+    }
     double edge_sum = 0.0, edge_max = 0.0;
     for (const Cell& c : bake.cells.cells) {
         edge_sum += c.bounds.size().x;
@@ -150,6 +156,13 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
          occ.near_m3 > 0 ? occ.near_covered_m3 / occ.near_m3 : 0.0},
         {"occluder_probe_rays_into_solid", double(occ.probe_rays_into_solid)},
         {"occluder_seconds", occ.seconds},
+        {"ranked_occluders_per_cell_mean",
+         bake.cells.size() ? double(ranking.ranked) / double(bake.cells.size()) : 0.0},
+        {"ranked_occluders_cells_with_none", double(ranking.cells_with_none)},
+        {"ranked_occluder_score_mean", ranking.score_mean},
+        {"ranked_occluder_solid_angle_mean_sr", ranking.solid_angle_mean_sr},
+        {"ranked_occluder_hidden_triangle_share_mean", ranking.hidden_triangle_share_mean},
+        {"ranking_seconds", ranking.seconds},
         {"conservative_shrunk_occluders", shrunk.boxes.empty() ? 0.0 : double(shrunk.boxes[0].size())},
         {"conservative_epsilon_levels", double(shrunk.epsilon_m.size())},
         {"conservative_samples", double(cons.samples)},

@@ -266,6 +266,48 @@ int run_verify(Context& ctx, const BakeConfig& config, const std::string& world_
     return result.missed_pairs > 0 ? kExitMisses : kExitOk;
 }
 
+// The ranked occluders of a bake in a few lines (format 1.2; older files and bakes without occluders have
+// none).
+std::string ranked_summary(const BakeData& bake) {
+    uint32_t proven = 0;
+    for (const Occluder& o : bake.occluders) proven += o.proven ? 1 : 0;
+    std::string text = fmt::format("occluders   {} boxes, {} proven\n", bake.occluders.size(), proven);
+    const RankedOccluders& r = bake.ranked;
+    if (r.empty()) {
+        return text + (bake.format_minor < 2 && bake.format_major == 1
+                           ? "ranked      none (format older than 1.2)\n"
+                           : "ranked      none (ranking off, or no occluders)\n");
+    }
+    const size_t cells = bake.cells.size();
+    uint32_t most = 0, none = 0;
+    double score = 0.0, solid = 0.0, hidden = 0.0, share = 0.0, best_share = 0.0;
+    std::vector<uint32_t> uses(bake.occluders.size(), 0);
+    for (uint32_t c = 0; c < cells; ++c) {
+        const uint32_t n = r.count(c);
+        most = std::max(most, n);
+        none += n == 0 ? 1 : 0;
+        if (n > 0) best_share += r.entries[r.offsets[c]].hidden_triangle_share;
+    }
+    for (const RankedOccluder& e : r.entries) {
+        score += e.score;
+        solid += e.solid_angle_sr;
+        hidden += e.hidden_objects;
+        share += e.hidden_triangle_share;
+        ++uses[e.box];
+    }
+    const double n = std::max<double>(1.0, double(r.entries.size()));
+    const size_t distinct = size_t(std::count_if(uses.begin(), uses.end(), [](uint32_t u) { return u > 0; }));
+    text += fmt::format("ranked      {:.2f} per cell (most {}, {} cells with none), {} distinct boxes\n",
+                        cells ? double(r.entries.size()) / double(cells) : 0.0, most, none, distinct);
+    text += fmt::format(
+        "            mean of the kept: score {:.3f}, solid angle {:.3f} sr, hides {:.1f} objects and {:.1f}% "
+        "of "
+        "the triangles; the best of a cell hides {:.1f}% of the triangles on average\n",
+        score / n, solid / n, hidden / n, 100.0 * share / n,
+        cells > none ? 100.0 * best_share / double(cells - none) : 0.0);
+    return text;
+}
+
 int run_info(const std::string& bake_path, bool json, std::ostream& out) {
     const BakeData bake = read_bake_file(bake_path);
     if (json) {
@@ -283,6 +325,7 @@ int run_info(const std::string& bake_path, bool json, std::ostream& out) {
                        cells.size(), cells.kind == CellSet::Kind::kGrid ? "grid" : "octree", cells.dims.x,
                        cells.dims.y, cells.dims.z, cells.cell_size_m, cells.origin.x, cells.origin.y,
                        cells.origin.z);
+    out << ranked_summary(bake);
     out << "parameters\n";
     for (const auto& [k, v] : bake.parameters) out << fmt::format("  {:<32} {}\n", k, v);
     out << "figures\n";
@@ -390,8 +433,9 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
         ->capture_default_str();
     ViewArgs view_args;
     add_view_options(*bake, view_args);
-    bind_options(*bake, config,
-                 {"run.", "view.", "cells.", "occluders.", "conservative.", "sampled.", "verify."});
+    bind_options(
+        *bake, config,
+        {"run.", "view.", "cells.", "occluders.", "ranking.", "conservative.", "sampled.", "verify."});
     add_common(*bake, common);
 
     CLI::App* verify = app.add_subcommand(

@@ -40,6 +40,12 @@ std::string bake_report_json(const BakeData& bake, const std::vector<std::string
     j["parameters"] = params;
     j["timings_s"] = values_json(bake.timings_s);
     j["figures"] = values_json(bake.figures);
+    nlohmann::ordered_json ranked;
+    ranked["stored"] = !bake.ranked.empty();
+    ranked["entries"] = bake.ranked.entries.size();
+    ranked["per_cell_mean"] =
+        bake.cells.size() ? double(bake.ranked.entries.size()) / double(bake.cells.size()) : 0.0;
+    j["ranked_occluders"] = ranked;
     nlohmann::ordered_json leak = nlohmann::ordered_json::array();
     for (const glm::vec3& p : bake.leak_path) leak.push_back({p.x, p.y, p.z});
     j["leak_path"] = leak;

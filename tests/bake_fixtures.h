@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <span>
 #include <string>
 
 namespace pvs::test {
@@ -21,7 +22,8 @@ namespace pvs::test {
 // PVS that is spatially coherent (object o is seen from cells near its own cell, plus noise), so that the
 // code has both key rows and rows coded against them. octree: each kept root position becomes a node;
 // every third splits into 8 leaves, the first of which is empty. view: a voxel mask of 0.5 m voxels
-// with a hole in it (about one voxel in seven unset).
+// with a hole in it (about one voxel in seven unset). Six occluder boxes (box 1 not proven) and a ranking:
+// cell c has c % 4 ranked occluders, best first.
 inline BakeData coherent_bake(uint32_t objects, glm::ivec3 dims, bool octree, bool view, uint32_t seed) {
     BakeData b;
     b.tool_version = "pvsbake test";
@@ -100,11 +102,46 @@ inline BakeData coherent_bake(uint32_t objects, glm::ivec3 dims, bool octree, bo
     for (uint32_t c = 3; c < n_cells; c += 4) {  // some rows repeat: stored once
         std::copy(b.pvs.row(c - 1), b.pvs.row(c - 1) + b.pvs.words_per_row, b.pvs.row(c));
     }
+    for (uint32_t i = 0; i < 6; ++i) {
+        const glm::vec3 lo(u(rng) * 10.0f, u(rng) * 5.0f, u(rng) * 10.0f);
+        b.occluders.push_back(Occluder{Aabb::of(lo, lo + glm::vec3(1.0f, 2.0f, 0.5f)), 0.25f, i != 1, {}});
+    }
+    const uint32_t proven[5] = {0, 2, 3, 4, 5};
+    b.ranked.offsets = {0};
+    for (uint32_t c = 0; c < n_cells; ++c) {
+        for (uint32_t k = 0; k < c % 4; ++k) {
+            b.ranked.entries.push_back(RankedOccluder{proven[(c + k) % 5], 0.5f / float(k + 1),
+                                                      0.25f * float(c % 7), float(std::min(objects, k)),
+                                                      0.125f * float(k)});
+        }
+        b.ranked.offsets.push_back(uint32_t(b.ranked.entries.size()));
+    }
     b.figures = {{"cells", double(n_cells)}, {"objects", double(objects)}, {"", 0.5}, {"cells", 7.0}};
     b.timings_s = {{"solve", 1.25}};
     b.verification.ran = true;
     b.verification.figures = {{"rays", 4096.0}, {"misses", 0.0}};
     return b;
+}
+
+// The loader's ranked occluders are the bake's, each with its box (C++ and C).
+inline void expect_same_ranked(const pvsbake::Bake& got, const BakeData& want) {
+    for (uint32_t c = 0; c <= got.cell_count(); ++c) {  // one past the end too: 0, empty
+        const uint32_t n = want.ranked.count(c);
+        ASSERT_EQ(got.occluder_count(c), n) << "cell " << c;
+        const std::span<const pvsbake::RankedOccluder> list = got.occluders(c);
+        ASSERT_EQ(list.size(), n);
+        for (uint32_t k = 0; k < n; ++k) {
+            const RankedOccluder& w = want.ranked.entries[want.ranked.offsets[c] + k];
+            const Aabb& box = want.occluders[w.box].box;
+            const pvsbake::RankedOccluder& g = list[k];
+            EXPECT_EQ(glm::vec3(g.box.min[0], g.box.min[1], g.box.min[2]), box.min);
+            EXPECT_EQ(glm::vec3(g.box.max[0], g.box.max[1], g.box.max[2]), box.max);
+            EXPECT_EQ(g.score, w.score);
+            EXPECT_EQ(g.solid_angle_sr, w.solid_angle_sr);
+            EXPECT_EQ(g.hidden_objects, w.hidden_objects);
+            EXPECT_EQ(g.hidden_triangle_share, w.hidden_triangle_share);
+        }
+    }
 }
 
 // Loads path, failing the test on a non-ok status.
@@ -155,6 +192,7 @@ inline void expect_loaded_equals(const pvsbake::Bake& got, const BakeData& want)
 
     ASSERT_EQ(got.cell_count(), want.cells.size());
     EXPECT_EQ(int(got.cell_kind()), int(want.cells.kind));
+    expect_same_ranked(got, want);
     std::vector<uint64_t> words(got.words_per_row() + 1, ~uint64_t(0));
     for (uint32_t c = 0; c < got.cell_count(); ++c) {
         const pvsbake::Box box = got.cell_bounds(c);

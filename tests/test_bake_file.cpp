@@ -11,6 +11,7 @@
 #include <hdf5.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <random>
@@ -178,6 +179,16 @@ void expect_same(const BakeData& a, const BakeData& b) {
     for (size_t i = 0; i < a.cells.size(); ++i) {
         EXPECT_EQ(a.cells.cells[i].bounds, b.cells.cells[i].bounds);
         EXPECT_EQ(a.cells.cells[i].parent, b.cells.cells[i].parent);
+    }
+    EXPECT_EQ(a.ranked.offsets, b.ranked.offsets);
+    ASSERT_EQ(a.ranked.entries.size(), b.ranked.entries.size());
+    for (size_t k = 0; k < a.ranked.entries.size(); ++k) {
+        const RankedOccluder &x = a.ranked.entries[k], &y = b.ranked.entries[k];
+        EXPECT_EQ(x.box, y.box) << k;
+        EXPECT_EQ(x.score, y.score) << k;
+        EXPECT_EQ(x.solid_angle_sr, y.solid_angle_sr) << k;
+        EXPECT_EQ(x.hidden_objects, y.hidden_objects) << k;
+        EXPECT_EQ(x.hidden_triangle_share, y.hidden_triangle_share) << k;
     }
     EXPECT_EQ(a.pvs.cell_count, b.pvs.cell_count);
     EXPECT_EQ(a.pvs.object_count, b.pvs.object_count);
@@ -876,6 +887,144 @@ TEST(BakeFile, OccludersRoundTrip) {
         EXPECT_EQ(back.occluders[i].proven, bake.occluders[i].proven);
         EXPECT_EQ(back.occluders[i].objects, bake.occluders[i].objects);
     }
+}
+
+}  // namespace
+}  // namespace pvs
+
+namespace pvs {
+namespace {
+
+// A bake of 4 cells with 3 occluders (the second not proven) and a ranking: cell 0 has two entries, cell 1
+// none, cell 2 one, cell 3 two.
+BakeData ranked_bake() {
+    BakeData bake = make_bake(10, {2, 1, 2}, 0, 0, 3);
+    bake.occluders.push_back(Occluder{Aabb::of({0, 0, 0}, {1, 2, 3}), 0.25f, true, {1, 4, 9}});
+    bake.occluders.push_back(Occluder{Aabb::of({-5, 0, 0}, {-4, 1, 1}), 0.25f, false, {}});
+    bake.occluders.push_back(Occluder{Aabb::of({7, 7, 7}, {8.5f, 9, 10}), 0.1f, true, {0}});
+    bake.ranked.offsets = {0, 2, 2, 3, 5};
+    bake.ranked.entries = {{2, 0.5f, 1.25f, 3.5f, 0.25f},
+                           {0, 0.125f, 0.5f, 1.0f, 0.0625f},
+                           {0, 0.75f, 2.0f, 9.0f, 0.5f},
+                           {0, 0.0f, 0.02f, 0.0f, 0.0f},
+                           {2, 0.0f, 0.01f, 0.0f, 0.0f}};
+    return bake;
+}
+
+TEST(BakeFile, RankedOccludersRoundTrip) {
+    test::TempDir dir;
+    const BakeData bake = ranked_bake();
+    const std::string path = dir.file("ranked.h5");
+    write_bake_file(path, bake);
+    EXPECT_EQ(int_attr(path, "/", "format_minor"), 2);
+    const BakeData back = read_bake_file(path);
+    expect_same(bake, back);
+    EXPECT_EQ(back.ranked.count(0), 2u);
+    EXPECT_EQ(back.ranked.count(1), 0u);
+    EXPECT_EQ(back.ranked.count(3), 2u);
+    EXPECT_EQ(back.ranked.count(4), 0u);  // out of range
+    // Same bake, same bytes (the ranking too).
+    write_bake_file(dir.file("again.h5"), back);
+    EXPECT_EQ(test::read_file(dir.file("again.h5")), test::read_file(path));
+}
+
+// A bake without a ranking (ranking off, or read from an older file) writes no ranked datasets, and a file
+// of format 1.1 (which has none) still reads, with no ranked occluders.
+TEST(BakeFile, Format11FilesWithoutRankingRead) {
+    test::TempDir dir;
+    BakeData bake = ranked_bake();
+    bake.ranked = RankedOccluders{};
+    const std::string path = dir.file("old.h5");
+    write_bake_file(path, bake);
+    patch_int_attr(path, "/", "format_minor", 1);
+    const BakeData back = read_bake_file(path);
+    EXPECT_EQ(back.format_minor, 1);
+    EXPECT_TRUE(back.ranked.empty());
+    EXPECT_EQ(back.ranked.count(0), 0u);
+    ASSERT_EQ(back.occluders.size(), 3u);
+    EXPECT_EQ(back.occluders[2].box, bake.occluders[2].box);
+}
+
+TEST(BakeFileBad, RankedOccludersOutOfRangeOrDamaged) {
+    test::TempDir dir;
+    const std::string good = dir.file("good.h5");
+    write_bake_file(good, ranked_bake());
+    const std::string path = dir.file("bad.h5");
+    auto patched = [&](const char* dataset, hsize_t index, hid_t type, const void* value,
+                       std::vector<std::string> needles) {
+        SCOPED_TRACE(dataset);
+        fs::copy_file(good, path, fs::copy_options::overwrite_existing);
+        patch_element(path, dataset, index, type, value);
+        expect_bad_input(path, needles);
+    };
+    const uint32_t big = 99, unproven = 1, down = 1;
+    const float nan = std::nanf(""), negative = -1.0f, higher = 0.9f, too_much = 1.5f, huge_angle = 13.0f;
+    patched("/occluders/ranked_box", 1, H5T_NATIVE_UINT32, &big,
+            {"/occluders/ranked_box[1] = 99 is not a box index below 3"});
+    patched("/occluders/ranked_box", 0, H5T_NATIVE_UINT32, &unproven, {"ranked_box[0] = 1", "not proven"});
+    patched("/occluders/ranked_offsets", 2, H5T_NATIVE_UINT32, &down,
+            {"/occluders/ranked_offsets[2] decreases"});
+    patched("/occluders/ranked_score", 0, H5T_NATIVE_FLOAT, &nan, {"/occluders/ranked_score[0]", "finite"});
+    patched("/occluders/ranked_score", 3, H5T_NATIVE_FLOAT, &negative, {"/occluders/ranked_score[3]"});
+    patched("/occluders/ranked_score", 1, H5T_NATIVE_FLOAT, &higher, {"ranked_score[1]", "best first"});
+    patched("/occluders/ranked_hidden_triangle_share", 2, H5T_NATIVE_FLOAT, &too_much,
+            {"/occluders/ranked_hidden_triangle_share[2]"});
+    patched("/occluders/ranked_solid_angle_sr", 4, H5T_NATIVE_FLOAT, &huge_angle,
+            {"/occluders/ranked_solid_angle_sr[4]"});
+    patched("/occluders/ranked_hidden_objects", 4, H5T_NATIVE_FLOAT, &nan,
+            {"/occluders/ranked_hidden_objects[4]"});
+    // A ranked box whose bounds are not finite.
+    fs::copy_file(good, path, fs::copy_options::overwrite_existing);
+    {
+        H5File f(path, true);
+        const hid_t ds = H5Dopen2(f.id(), "/occluders/bounds", H5P_DEFAULT);
+        ASSERT_GE(ds, 0);
+        std::vector<float> flat(18);
+        ASSERT_GE(H5Dread(ds, H5T_NATIVE_FLOAT, H5S_ALL, H5S_ALL, H5P_DEFAULT, flat.data()), 0);
+        flat[12] = INFINITY;  // box 2's min x
+        ASSERT_GE(H5Dwrite(ds, H5T_NATIVE_FLOAT, H5S_ALL, H5S_ALL, H5P_DEFAULT, flat.data()), 0);
+        H5Dclose(ds);
+    }
+    expect_bad_input(path, {"/occluders/bounds[2]", "not a finite box"});
+    // Offsets that do not match the cells.
+    fs::copy_file(good, path, fs::copy_options::overwrite_existing);
+    {
+        H5File f(path, true);
+        ASSERT_GE(H5Ldelete(f.id(), "/occluders/ranked_offsets", H5P_DEFAULT), 0);
+        const hsize_t n = 3;
+        const uint32_t values[3] = {0, 2, 5};
+        const hid_t space = H5Screate_simple(1, &n, nullptr);
+        const hid_t ds = H5Dcreate2(f.id(), "/occluders/ranked_offsets", H5T_STD_U32LE, space, H5P_DEFAULT,
+                                    H5P_DEFAULT, H5P_DEFAULT);
+        ASSERT_GE(H5Dwrite(ds, H5T_NATIVE_UINT32, H5S_ALL, H5S_ALL, H5P_DEFAULT, values), 0);
+        H5Dclose(ds);
+        H5Sclose(space);
+    }
+    expect_bad_input(path, {"/occluders/ranked_offsets"});
+}
+
+TEST(BakeFileWrite, RankedOccludersTheReaderWouldRefuseAreNotWritten) {
+    test::TempDir dir;
+    const std::string path = dir.file("bad.h5");
+    auto refused = [&](const BakeData& bake, const std::string& needle) {
+        try {
+            write_bake_file(path, bake);
+            ADD_FAILURE() << "written: " << needle;
+        } catch (const Error& e) {
+            EXPECT_EQ(e.kind(), ErrorKind::kInternal) << e.what();
+            EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+        }
+        EXPECT_FALSE(fs::exists(path));
+    };
+    BakeData bake = ranked_bake();
+    bake.ranked.entries[0].box = 1;  // not proven
+    refused(bake, "not a proven occluder");
+    bake = ranked_bake();
+    bake.ranked.offsets.pop_back();
+    refused(bake, "offsets");
+    bake = ranked_bake();
+    bake.ranked.entries[1].score = 0.75f;
+    refused(bake, "not best first");
 }
 
 }  // namespace

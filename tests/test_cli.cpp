@@ -75,9 +75,13 @@ TEST(Cli, BakeInfoQueryOnTheSampleWorld) {
     ASSERT_EQ(info.status, 0) << info.log;
     EXPECT_TRUE(contains(info.out, "objects     149")) << info.out;
     EXPECT_FALSE(contains(info.out, "aggressive"));
+    // Every bake ranks its proven occluders per cell (issue 9), and info sums them up.
+    EXPECT_TRUE(contains(info.out, "ranked      8.00 per cell")) << info.out;
+    EXPECT_EQ(j["figures"]["ranked_occluders_per_cell_mean"].get<double>(), 8.0);
     const CliRun info_json = run({"info", out, "--json"});
     ASSERT_EQ(info_json.status, 0);
     EXPECT_EQ(nlohmann::json::parse(info_json.out)["objects"], 149);
+    EXPECT_TRUE(nlohmann::json::parse(info_json.out)["ranked_occluders"]["stored"].get<bool>());
 
     // The spawn point of room (0, 0) sees that room's floor; much of the maze is behind its walls.
     const CliRun q = run({"query", out, "4", "1.6", "4", "--json"});

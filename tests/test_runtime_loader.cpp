@@ -18,6 +18,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <random>
 #include <string>
@@ -220,6 +221,132 @@ TEST(RuntimeLoaderStatus, IndicesOutOfRangeAreCorrupt) {
     }
 }
 
+// Ranked occluders (format 1.2): each entry with its box; files of 1.1 (no ranking) load with none.
+TEST(RuntimeLoader, RankedOccludersRoundTripAndOldFilesHaveNone) {
+    test::TempDir dir;
+    BakeData bake = test::coherent_bake(40, {3, 2, 3}, false, false, 5);
+    ASSERT_GT(bake.ranked.entries.size(), 10u);
+    const std::string path = dir.file("ranked.h5");
+    pvsbake::Bake loaded;
+    test::write_and_load(bake, path, loaded);
+    test::expect_same_ranked(loaded, bake);
+    EXPECT_EQ(loaded.occluder_count(3), 3u);
+    EXPECT_TRUE(loaded.occluders(loaded.cell_count()).empty());
+    EXPECT_EQ(loaded.occluder_count(UINT32_MAX), 0u);
+
+    // A 1.1 file: the same bake without the ranked datasets (as pvsbake 1.1 wrote them).
+    bake.ranked = RankedOccluders{};
+    const std::string old_path = dir.file("old.h5");
+    write_bake_file(old_path, bake);
+    set_int_attr(old_path, "format_minor", 1);
+    pvsbake::Bake old;
+    test::load_ok(old, old_path);
+    EXPECT_EQ(old.format_minor(), 1);
+    for (uint32_t c = 0; c < old.cell_count(); ++c) {
+        EXPECT_EQ(old.occluder_count(c), 0u);
+        EXPECT_TRUE(old.occluders(c).empty());
+    }
+    test::expect_loaded_equals(old, bake);
+    // And a bake made without occluders (no /occluders group at all).
+    {
+        const hid_t f = H5Fopen(old_path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+        ASSERT_GE(f, 0);
+        ASSERT_GE(H5Ldelete(f, "/occluders", H5P_DEFAULT), 0);
+        H5Fclose(f);
+    }
+    test::load_ok(old, old_path);
+    EXPECT_EQ(old.occluder_count(0), 0u);
+}
+
+// Damaged ranked occluders are refused at load with a message naming the dataset.
+TEST(RuntimeLoaderStatus, DamagedRankedOccludersAreCorrupt) {
+    test::TempDir dir;
+    const std::string good = dir.file("good.h5");
+    write_bake_file(good, test::coherent_bake(30, {3, 2, 2}, false, false, 1));
+    struct Patch {
+        const char* dataset;
+        hid_t type;
+        uint32_t index;
+        float value;
+        const char* needle;
+    };
+    for (const Patch& p :
+         {Patch{"/occluders/ranked_box", H5T_NATIVE_FLOAT, 1, 6.0f,
+                "/occluders/ranked_box[1] = 6 is not a box index below 6"},
+          Patch{"/occluders/ranked_box", H5T_NATIVE_FLOAT, 0, 1.0f, "not proven"},
+          Patch{"/occluders/ranked_offsets", H5T_NATIVE_FLOAT, 3, 0.0f,
+                "/occluders/ranked_offsets[3] decreases"},
+          Patch{"/occluders/ranked_score", H5T_NATIVE_FLOAT, 0, NAN, "/occluders/ranked_score[0]"},
+          Patch{"/occluders/ranked_score", H5T_NATIVE_FLOAT, 2, 2.0f, "best first"},
+          Patch{"/occluders/ranked_hidden_triangle_share", H5T_NATIVE_FLOAT, 0, -0.5f,
+                "/occluders/ranked_hidden_triangle_share[0]"},
+          Patch{"/occluders/proven", H5T_NATIVE_FLOAT, 0, 0.0f, "not proven"}}) {
+        SCOPED_TRACE(p.dataset);
+        const std::string path = dir.file("bad.h5");
+        fs::copy_file(good, path, fs::copy_options::overwrite_existing);
+        const hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+        const hid_t ds = H5Dopen2(f, p.dataset, H5P_DEFAULT);
+        ASSERT_GE(ds, 0);
+        const hid_t space = H5Dget_space(ds);
+        const hsize_t at = p.index, one = 1;
+        H5Sselect_hyperslab(space, H5S_SELECT_SET, &at, nullptr, &one, nullptr);
+        const hid_t mem = H5Screate_simple(1, &one, nullptr);
+        EXPECT_GE(H5Dwrite(ds, p.type, mem, space, H5P_DEFAULT, &p.value), 0);
+        H5Sclose(mem);
+        H5Sclose(space);
+        H5Dclose(ds);
+        H5Fclose(f);
+        expect_status(path, pvsbake::Status::kCorrupt, p.needle);
+    }
+}
+
+// HDF5 1.10.8 trusts a chunk's filter mask and size: a chunk whose mask says its deflate was skipped, or an
+// unfiltered chunk shorter than a chunk, made H5Dread copy a whole chunk out of the few bytes it read (the
+// fuzz test found it under AddressSanitizer). Both are refused at load.
+TEST(RuntimeLoaderStatus, ChunksStoredWithoutTheirFiltersAreCorrupt) {
+    test::TempDir dir;
+    const std::string good = dir.file("good.h5");
+    write_bake_file(good, test::coherent_bake(30, {3, 2, 2}, false, false, 1));
+    const std::string path = dir.file("bad.h5");
+    const std::vector<uint8_t> junk(20, 0x3f);
+    const hsize_t origin[1] = {0};
+    // A deflated chunk whose mask says "deflate skipped" (bit 0), 20 raw bytes for a longer chunk.
+    fs::copy_file(good, path, fs::copy_options::overwrite_existing);
+    {
+        const hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+        const hid_t ds = H5Dopen2(f, "/occluders/ranked_score", H5P_DEFAULT);
+        ASSERT_GE(ds, 0);
+        ASSERT_GE(H5Dwrite_chunk(ds, H5P_DEFAULT, 1, origin, junk.size(), junk.data()), 0);
+        H5Dclose(ds);
+        H5Fclose(f);
+    }
+    expect_status(path, pvsbake::Status::kCorrupt,
+                  "/occluders/ranked_score has a chunk stored without its filters");
+    // An unfiltered chunked dataset whose one chunk is short.
+    fs::copy_file(good, path, fs::copy_options::overwrite_existing);
+    {
+        const hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+        const hid_t old = H5Dopen2(f, "/occluders/ranked_score", H5P_DEFAULT);
+        const hid_t space = H5Dget_space(old);
+        hsize_t n = 0;
+        H5Sget_simple_extent_dims(space, &n, nullptr);
+        H5Dclose(old);
+        ASSERT_GT(n * 4, junk.size());
+        ASSERT_GE(H5Ldelete(f, "/occluders/ranked_score", H5P_DEFAULT), 0);
+        const hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
+        H5Pset_chunk(dcpl, 1, &n);
+        const hid_t ds =
+            H5Dcreate2(f, "/occluders/ranked_score", H5T_IEEE_F32LE, space, H5P_DEFAULT, dcpl, H5P_DEFAULT);
+        ASSERT_GE(ds, 0);
+        ASSERT_GE(H5Dwrite_chunk(ds, H5P_DEFAULT, 0, origin, junk.size(), junk.data()), 0);
+        H5Dclose(ds);
+        H5Pclose(dcpl);
+        H5Sclose(space);
+        H5Fclose(f);
+    }
+    expect_status(path, pvsbake::Status::kCorrupt, "/occluders/ranked_score stores a chunk of 20 bytes");
+}
+
 // ---------------------------------------------------------------------------------------------------------
 // The PVS code.
 
@@ -328,6 +455,27 @@ TEST(RuntimeLoaderC, MirrorsTheCppApi) {
     pvsbake_format_version(b, &major, &minor);
     EXPECT_EQ(major, 1);
     EXPECT_EQ(minor, kBakeFormatMinor);
+    uint32_t ranked = 0;
+    for (uint32_t c = 0; c <= pvsbake_cell_count(b); ++c) {
+        ASSERT_EQ(pvsbake_occluder_count(b, c), cpp.occluder_count(c));
+        pvsbake_ranked_occluder r;
+        for (uint32_t k = 0; k < cpp.occluder_count(c); ++k, ++ranked) {
+            ASSERT_EQ(pvsbake_occluder(b, c, k, &r), 1);
+            const pvsbake::RankedOccluder& w = cpp.occluders(c)[k];
+            EXPECT_EQ(std::memcmp(r.box, w.box.min, sizeof(float) * 3), 0);
+            EXPECT_EQ(std::memcmp(r.box + 3, w.box.max, sizeof(float) * 3), 0);
+            EXPECT_EQ(r.score, w.score);
+            EXPECT_EQ(r.solid_angle_sr, w.solid_angle_sr);
+            EXPECT_EQ(r.hidden_objects, w.hidden_objects);
+            EXPECT_EQ(r.hidden_triangle_share, w.hidden_triangle_share);
+        }
+        r.score = -7.0f;
+        EXPECT_EQ(pvsbake_occluder(b, c, cpp.occluder_count(c), &r), 0);
+        EXPECT_EQ(r.score, -7.0f);  // untouched
+        EXPECT_EQ(pvsbake_occluder(b, c, 0, nullptr), 0);
+    }
+    EXPECT_GT(ranked, 0u);
+    EXPECT_EQ(pvsbake_occluder_count(nullptr, 0), 0u);
     for (uint32_t c = 0; c < pvsbake_cell_count(b); ++c) {
         Visits v;
         const uint32_t n = pvsbake_visit_visible(b, c, record, &v);

@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <functional>
@@ -79,6 +80,18 @@ void load_mutant(const std::string& path, const std::string& what, Outcome& outc
         ASSERT_LT(bake.find_cell(u(rng), u(rng), u(rng)), int32_t(bake.cell_count())) << what;
     for (uint32_t o = 0; o < bake.object_count(); ++o)
         ASSERT_EQ(bake.object_name(o).size(), std::strlen(bake.object_name_c(o)));
+    // Ranked occluders: what load() let through is sound (validated there), so reading them is safe.
+    for (uint32_t c = 0; c <= bake.cell_count(); ++c) {
+        const auto list = bake.occluders(c);
+        ASSERT_EQ(list.size(), bake.occluder_count(c)) << what;
+        for (size_t k = 0; k < list.size(); ++k) {
+            const pvsbake::RankedOccluder& r = list[k];
+            ASSERT_TRUE(std::isfinite(r.score) && r.score >= 0.0f) << what;
+            ASSERT_TRUE(k == 0 || r.score <= list[k - 1].score) << what;
+            ASSERT_TRUE(r.hidden_triangle_share >= 0.0f && r.hidden_triangle_share <= 1.0f) << what;
+            for (int a = 0; a < 3; ++a) ASSERT_LE(r.box.min[a], r.box.max[a]) << what;
+        }
+    }
 }
 
 // The byte ranges of the stored data of every dataset in the file (contiguous: one range; chunked: one
@@ -254,11 +267,30 @@ TEST(RuntimeLoaderFuzz, WrongTypesAndHugeSizes) {
     H5Tinsert(compound, "a", 0, H5T_STD_U32LE);
     H5Tinsert(compound, "b", 4, H5T_IEEE_F32LE);
     const hsize_t huge = hsize_t(1) << 40;
-    for (const char* name :
-         {"/pvs/code", "/pvs/code_offsets", "/pvs/cell_row", "/pvs/rows", "/cells/grid_to_cell",
-          "/cells/bounds", "/cells/parent", "/cells/view/bits", "/cells/octree/first_child",
-          "/cells/octree/cell", "/cells/octree/bounds", "/objects/name", "/objects/bounds",
-          "/objects/triangle_count", "/parameters/keys", "/figures/values"}) {
+    for (const char* name : {"/pvs/code",
+                             "/pvs/code_offsets",
+                             "/pvs/cell_row",
+                             "/pvs/rows",
+                             "/cells/grid_to_cell",
+                             "/cells/bounds",
+                             "/cells/parent",
+                             "/cells/view/bits",
+                             "/cells/octree/first_child",
+                             "/cells/octree/cell",
+                             "/cells/octree/bounds",
+                             "/objects/name",
+                             "/objects/bounds",
+                             "/objects/triangle_count",
+                             "/parameters/keys",
+                             "/figures/values",
+                             "/occluders/bounds",
+                             "/occluders/proven",
+                             "/occluders/ranked_offsets",
+                             "/occluders/ranked_box",
+                             "/occluders/ranked_score",
+                             "/occluders/ranked_solid_angle_sr",
+                             "/occluders/ranked_hidden_objects",
+                             "/occluders/ranked_hidden_triangle_share"}) {
         for (hid_t type : {H5T_IEEE_F64LE, H5T_STD_I8LE, H5T_STD_U64BE, text, odd_int, compound}) {
             edited(
                 good, path, std::string(name) + " retyped",

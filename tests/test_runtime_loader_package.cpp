@@ -28,8 +28,10 @@ TEST(RuntimeLoader, RealBakeOfTheSampleWorld) {
     const BakeData bake = read_bake_file(out);
     pvsbake::Bake loaded;
     test::load_ok(loaded, out);
-    test::expect_loaded_equals(loaded, bake);
+    test::expect_loaded_equals(loaded, bake);  // the ranked occluders too
     test::expect_same_lookup(loaded, bake.cells, 21);
+    ASSERT_FALSE(bake.ranked.empty());
+    EXPECT_GT(bake.ranked.entries.size(), bake.cells.size());  // more than one per cell on average
     // Memory against the compressed rows (the figure issue 7 asks for; docs/FORMAT.md has the real worlds).
     const pvsbake::PvsStats& s = loaded.pvs_stats();
     EXPECT_LT(s.bytes_code, s.bytes_raw);

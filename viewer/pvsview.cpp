@@ -365,8 +365,9 @@ private:
         }
         slice_actor_->GetProperty()->SetOpacity(0.55);
 
-        // The picked cell's bounds.
+        // The picked cell's bounds, and its ranked occluders (cyan; format 1.2 bakes).
         picked_actor_ = make_line_actor(picked_data_, {255, 240, 60, 255}, 3.0f, top_);
+        ranked_actor_ = make_line_actor(ranked_data_, {40, 230, 255, 255}, 2.5f, top_);
 
         build_occluders();
         build_misses();
@@ -566,6 +567,13 @@ private:
         picked_data_->SetPoints(points);
         picked_data_->SetLines(lines);
         picked_data_->Modified();
+        vtkNew<vtkPoints> ranked_points;
+        vtkNew<vtkCellArray> ranked_lines;
+        for (const Aabb& b : ranked_occluder_boxes(bake_, cell_))
+            add_box_edges(ranked_points, ranked_lines, b);
+        ranked_data_->SetPoints(ranked_points);
+        ranked_data_->SetLines(ranked_lines);
+        ranked_data_->Modified();
     }
 
     void update_cells() {
@@ -608,6 +616,8 @@ private:
     vtkNew<vtkRenderer> top_;
     vtkNew<vtkRenderWindow> window_;
     vtkNew<vtkPoints> world_points_;
+    vtkNew<vtkPolyData> ranked_data_;
+    vtkSmartPointer<vtkActor> ranked_actor_;
     vtkNew<vtkPolyData> world_opaque_data_, world_translucent_data_, cells_data_, slice_data_, picked_data_,
         occluders_data_, misses_data_, leak_data_;
     vtkSmartPointer<vtkActor> world_opaque_, world_translucent_, cells_actor_, slice_actor_, picked_actor_,

@@ -121,7 +121,21 @@ CellFigures cell_figures(const BakeData& bake, int32_t cell) {
         if (f.sampled_visible > 0) f.overestimation = double(f.objects_visible) / double(f.sampled_visible);
     }
     for (const Miss& m : bake.verification.misses) f.misses += m.cell == uint32_t(cell) ? 1u : 0u;
+    const RankedOccluders& r = bake.ranked;
+    for (uint32_t k = 0; k < r.count(uint32_t(cell)); ++k)
+        f.ranked.push_back(r.entries[r.offsets[size_t(cell)] + k]);
     return f;
+}
+
+std::vector<Aabb> ranked_occluder_boxes(const BakeData& bake, int32_t cell) {
+    std::vector<Aabb> boxes;
+    if (cell < 0 || size_t(cell) >= bake.cells.size()) return boxes;
+    const RankedOccluders& r = bake.ranked;
+    for (uint32_t k = 0; k < r.count(uint32_t(cell)); ++k) {
+        const uint32_t box = r.entries[r.offsets[size_t(cell)] + k].box;
+        if (box < bake.occluders.size()) boxes.push_back(bake.occluders[box].box);
+    }
+    return boxes;
 }
 
 std::string cell_overlay_text(const BakeData& bake, const CellFigures& f, size_t max_names) {
@@ -139,6 +153,17 @@ std::string cell_overlay_text(const BakeData& bake, const CellFigures& f, size_t
         s += fmt::format("   misses here: {}\n", f.misses);
     } else {
         s += "sampled visible set: not verified\n";
+    }
+    if (!f.ranked.empty()) {
+        const RankedOccluder& best = f.ranked.front();
+        s += fmt::format(
+            "ranked occluders (cyan): {}; the best scores {:.3f}, {:.2f} sr, hides {:.1f} objects, {:.1f}% "
+            "of "
+            "the triangles\n",
+            f.ranked.size(), best.score, best.solid_angle_sr, best.hidden_objects,
+            100.0 * best.hidden_triangle_share);
+    } else if (!bake.ranked.empty()) {
+        s += "ranked occluders: none\n";
     }
     const size_t shown = std::min(max_names, f.listed.size());
     for (size_t i = 0; i < shown; ++i) {

@@ -65,12 +65,16 @@ struct CellFigures {
     double overestimation = -1.0;  // objects_visible / sampled_visible (as verify reports it); -1: unknown
     uint32_t misses = 0;           // verification misses recorded for this cell
     std::vector<uint32_t> listed;  // the PVS objects, ascending
+    std::vector<RankedOccluder> ranked;  // the cell's ranked occluders, best first (format 1.2; else none)
 };
 CellFigures cell_figures(const BakeData& bake, int32_t cell);
 
 // The overlay text: the cell, its bounds, counts, sampled set, overestimation, misses, and the first
 // `max_names` object names (with their triangle counts).
 std::string cell_overlay_text(const BakeData& bake, const CellFigures& figures, size_t max_names);
+
+// The boxes of a cell's ranked occluders, best first (none for a cell out of range or an older bake).
+std::vector<Aabb> ranked_occluder_boxes(const BakeData& bake, int32_t cell);
 
 // The overlay of the whole bake (no cell picked): world, mode, cells, PVS sizes, misses, leak.
 std::string bake_overlay_text(const BakeData& bake, const std::string& world_path);

@@ -4,6 +4,7 @@
 #include "row_code.h"
 
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 
 #include <fcntl.h>
@@ -287,6 +288,105 @@ FilePvs read_pvs(const Reader& r, hid_t root, uint32_t objects, uint32_t cells, 
         }
     }
     return pvs;
+}
+
+FileOccluders read_occluders(const Reader& r, hid_t root, uint32_t objects, uint32_t cells, bool want_boxes) {
+    FileOccluders o;
+    if (!r.has_link(root, "occluders")) return o;  // a bake made without occluders
+    o.present = true;
+    const std::string where = "/occluders";
+    Handle g = r.open_group(root, where);
+    const bool ranked = r.has_link(g.get(), "ranked_offsets");
+    if (!want_boxes && !ranked) return o;
+    int64_t n = -1;
+    o.bounds = read_bounds(r, g.get(), where, n);
+    o.count = uint64_t(n);
+    o.proven = r.numeric_dataset<uint8_t>(g.get(), where, "proven", H5T_NATIVE_UINT8, {n}, H5T_INTEGER);
+    for (int64_t i = 0; i < n; ++i) {
+        if (o.proven[size_t(i)] > 1) r.fail(cat("/occluders/proven[", i, "] is not 0 or 1"));
+    }
+    if (want_boxes) {
+        o.voxel_size_m =
+            r.numeric_dataset<float>(g.get(), where, "voxel_size_m", H5T_NATIVE_FLOAT, {n}, H5T_FLOAT);
+        o.object_offsets = r.numeric_dataset<uint32_t>(g.get(), where, "object_offsets", H5T_NATIVE_UINT32,
+                                                       {n + 1}, H5T_INTEGER);
+        std::vector<int64_t> objects_shape = {-1};
+        o.objects = r.numeric_dataset<uint32_t>(g.get(), where, "objects", H5T_NATIVE_UINT32, objects_shape,
+                                                H5T_INTEGER);
+        if (o.object_offsets.empty() || o.object_offsets[0] != 0 ||
+            o.object_offsets.back() != o.objects.size())
+            r.fail("/occluders/object_offsets does not start at 0 and end at the size of /occluders/objects");
+        for (int64_t i = 0; i < n; ++i) {
+            if (o.object_offsets[size_t(i) + 1] < o.object_offsets[size_t(i)])
+                r.fail(cat("/occluders/object_offsets[", i + 1, "] decreases"));
+        }
+        for (size_t k = 0; k < o.objects.size(); ++k) {
+            if (o.objects[k] >= objects) {
+                r.fail(cat("/occluders/objects[", k, "] = ", o.objects[k], " is not an object index below ",
+                           objects));
+            }
+        }
+    }
+    if (!ranked) return o;
+    o.ranked_offsets = r.numeric_dataset<uint32_t>(g.get(), where, "ranked_offsets", H5T_NATIVE_UINT32,
+                                                   {int64_t(cells) + 1}, H5T_INTEGER);
+    std::vector<int64_t> shape = {-1};
+    o.ranked_box =
+        r.numeric_dataset<uint32_t>(g.get(), where, "ranked_box", H5T_NATIVE_UINT32, shape, H5T_INTEGER);
+    const int64_t m = shape[0];
+    o.ranked_score =
+        r.numeric_dataset<float>(g.get(), where, "ranked_score", H5T_NATIVE_FLOAT, {m}, H5T_FLOAT);
+    o.ranked_solid_angle_sr =
+        r.numeric_dataset<float>(g.get(), where, "ranked_solid_angle_sr", H5T_NATIVE_FLOAT, {m}, H5T_FLOAT);
+    o.ranked_hidden_objects =
+        r.numeric_dataset<float>(g.get(), where, "ranked_hidden_objects", H5T_NATIVE_FLOAT, {m}, H5T_FLOAT);
+    o.ranked_hidden_triangle_share = r.numeric_dataset<float>(g.get(), where, "ranked_hidden_triangle_share",
+                                                              H5T_NATIVE_FLOAT, {m}, H5T_FLOAT);
+    const std::vector<uint32_t>& off = o.ranked_offsets;
+    if (off[0] != 0 || int64_t(off.back()) != m) {
+        r.fail(cat("/occluders/ranked_offsets does not start at 0 and end at ", m,
+                   " (the size of /occluders/ranked_box)"));
+    }
+    for (uint32_t c = 0; c < cells; ++c) {
+        if (off[c + 1] < off[c]) r.fail(cat("/occluders/ranked_offsets[", c + 1, "] decreases"));
+    }
+    constexpr double kFourPi = 12.566370614359172;
+    for (int64_t k = 0; k < m; ++k) {
+        const size_t i = size_t(k);
+        const uint32_t box = o.ranked_box[i];
+        if (box >= o.count) {
+            r.fail(cat("/occluders/ranked_box[", k, "] = ", box, " is not a box index below ", o.count));
+        }
+        if (o.proven[box] != 1) {
+            r.fail(cat("/occluders/ranked_box[", k, "] = ", box, " names a box that is not proven"));
+        }
+        const float* b = &o.bounds[size_t(box) * 6];
+        for (int a = 0; a < 3; ++a) {
+            if (!std::isfinite(b[a]) || !std::isfinite(b[a + 3]) || b[a] > b[a + 3]) {
+                r.fail(cat("/occluders/bounds[", box, "] (ranked_box[", k,
+                           "]) is not a finite box with min <= max"));
+            }
+        }
+        const float score = o.ranked_score[i], solid = o.ranked_solid_angle_sr[i];
+        const float hidden = o.ranked_hidden_objects[i], share = o.ranked_hidden_triangle_share[i];
+        if (!std::isfinite(score) || score < 0.0f)
+            r.fail(cat("/occluders/ranked_score[", k, "] is not a finite number >= 0"));
+        if (!(solid >= 0.0f && double(solid) <= kFourPi))
+            r.fail(cat("/occluders/ranked_solid_angle_sr[", k, "] is not in [0, 4 pi]"));
+        if (!(hidden >= 0.0f && double(hidden) <= double(objects)))
+            r.fail(cat("/occluders/ranked_hidden_objects[", k, "] is not in [0, ", objects, "]"));
+        if (!(share >= 0.0f && share <= 1.0f))
+            r.fail(cat("/occluders/ranked_hidden_triangle_share[", k, "] is not in [0, 1]"));
+    }
+    for (uint32_t c = 0; c < cells; ++c) {
+        for (uint32_t k = off[c] + 1; k < off[c + 1]; ++k) {
+            if (o.ranked_score[k] > o.ranked_score[k - 1]) {
+                r.fail(cat("/occluders/ranked_score[", k, "] is higher than the entry before it in cell ", c,
+                           " (entries must come best first)"));
+            }
+        }
+    }
+    return o;
 }
 
 }  // namespace pvsbake::detail

@@ -18,7 +18,7 @@ namespace pvsbake::detail {
 
 constexpr const char* kFormatName = "pvsbake";
 constexpr int kFormatMajor = 1;
-constexpr int kFormatMinor = 1;
+constexpr int kFormatMinor = 2;
 
 // The root attributes. Throws kNotBakeFile without format = "pvsbake", kVersionTooNew for a newer major.
 BakeInfo read_header(const Reader& r, hid_t root);
@@ -73,6 +73,28 @@ struct FilePvs {
     uint64_t bytes_raw = 0, bytes_stored = 0;
 };
 FilePvs read_pvs(const Reader& r, hid_t root, uint32_t objects, uint32_t cells, bool want_rows);
+
+// /occluders (docs/FORMAT.md): the synthesized boxes and, from format 1.2, the ranked occluders of each cell.
+// `present` is false in a bake made with --no-occluders (no group). With want_boxes every box is read
+// (bounds, voxel sizes, proven flags, the objects of each box: the baker); without it (the runtime), the
+// boxes' bounds and proven flags only when the file has a ranking, and never their objects. The ranking is
+// empty (ranked_offsets empty) in older files and when ranking was off; else it is validated: ranked_offsets
+// has cells + 1 entries from 0, never decreasing, ending at the number of entries; each entry names a proven
+// box with finite bounds; scores are finite, >= 0 and never increase within a cell (best first); solid angles
+// lie in [0, 4 pi], hidden objects in [0, objects], hidden triangle shares in [0, 1].
+struct FileOccluders {
+    bool present = false;
+    uint64_t count = 0;           // boxes (0 when they were not read)
+    std::vector<float> bounds;    // 6 per box
+    std::vector<uint8_t> proven;  // 0 or 1 per box
+    std::vector<float> voxel_size_m;
+    std::vector<uint32_t> object_offsets, objects;  // want_boxes only
+    std::vector<uint32_t> ranked_offsets;           // cells + 1, or empty: no ranking
+    std::vector<uint32_t> ranked_box;
+    std::vector<float> ranked_score, ranked_solid_angle_sr, ranked_hidden_objects,
+        ranked_hidden_triangle_share;
+};
+FileOccluders read_occluders(const Reader& r, hid_t root, uint32_t objects, uint32_t cells, bool want_boxes);
 
 // Opens path for reading: kFileMissing, kIoError, kNotBakeFile (not HDF5, a folder) or kCorrupt (HDF5
 // cannot open it). The returned handle is the file; `file_bytes` receives its size.

@@ -119,6 +119,32 @@ void Reader::check_storage(hid_t ds, uint64_t stored_element_bytes, const std::s
             chunks *= (dims[i] + chunk[i] - 1) / chunk[i];
             if (chunks > max_chunks_) fail(full + " has more chunks than the file can hold (damaged file?)");
         }
+        // Every stored chunk went through every filter (the writer never skips one). A damaged filter mask
+        // says a deflated chunk was stored raw: HDF5 then copies a whole chunk's bytes out of the few it
+        // read (fuzzing: 528 bytes from a 27-byte chunk). Unfiltered chunks must hold a whole chunk.
+        const int filters = H5Pget_nfilters(dcpl.get());
+        if (filters < 0) fail_hdf5("cannot read the filters of " + full);
+        // By coordinate (a lookup in the chunk index each), not by index (HDF5 1.10 walks the index for
+        // each): linear in the chunks, which are bounded above.
+        hsize_t grid[H5S_MAX_RANK], at[H5S_MAX_RANK];
+        for (int i = 0; i < rank; ++i) grid[i] = (dims[i] + chunk[i] - 1) / chunk[i];
+        for (uint64_t n = 0; n < chunks && rank > 0; ++n) {
+            uint64_t rest = n;
+            for (int i = rank - 1; i >= 0; --i) {
+                at[i] = (rest % grid[i]) * chunk[i];
+                rest /= grid[i];
+            }
+            unsigned mask = 0;
+            haddr_t addr = HADDR_UNDEF;
+            hsize_t size = 0;
+            if (H5Dget_chunk_info_by_coord(ds, at, &mask, &addr, &size) < 0)
+                fail_hdf5("cannot read the chunks of " + full);
+            if (addr == HADDR_UNDEF) continue;  // not stored: reads as fill values
+            if (mask != 0) fail(full + " has a chunk stored without its filters (damaged file?)");
+            if (filters == 0 && stored_element_bytes != 0 && size != chunk_bytes)
+                fail(cat(full, " stores a chunk of ", uint64_t(size), " bytes, not ", chunk_bytes,
+                         " (damaged file?)"));
+        }
     } else if (layout == H5D_CONTIGUOUS) {
         uint64_t bytes = stored_element_bytes;
         for (int i = 0; i < rank; ++i) bytes *= dims[i];
@@ -127,7 +153,18 @@ void Reader::check_storage(hid_t ds, uint64_t stored_element_bytes, const std::s
             fail(cat(full, " stores ", uint64_t(stored), " bytes for ", bytes,
                      " bytes of data (damaged file?)"));
         }
-    } else if (layout != H5D_COMPACT) {
+    } else if (layout == H5D_COMPACT) {
+        // The writer never makes compact datasets, but a damaged layout can say compact: HDF5 then copies
+        // the dataspace's bytes out of the compact buffer whatever its size (fuzzing: 528 bytes read from
+        // a 30-byte buffer). The buffer must hold exactly the data.
+        uint64_t bytes = stored_element_bytes;
+        for (int i = 0; i < rank; ++i) bytes *= dims[i];
+        const hsize_t stored = H5Dget_storage_size(ds);
+        if (stored_element_bytes != 0 && stored != bytes) {
+            fail(cat(full, " stores ", uint64_t(stored), " bytes for ", bytes,
+                     " bytes of data (damaged file?)"));
+        }
+    } else {
         fail(full + " has an unknown storage layout");
     }
 }

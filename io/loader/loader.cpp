@@ -70,6 +70,7 @@ public:
         const uint32_t cell_count = file_cells.count;
         cells(std::move(file_cells), b);
         pvs(detail::read_pvs(r, root.get(), b.object_count_, cell_count, /*want_rows=*/false), b);
+        ranked(detail::read_occluders(r, root.get(), b.object_count_, cell_count, /*want_boxes=*/false), b);
         b.figures_ = r.named_values(root.get(), "/figures");
         detail::Handle v = r.open_group(root.get(), "/verification");
         const int64_t ran = r.int_attr(v.get(), "/verification", "ran");
@@ -224,6 +225,18 @@ private:
         s.bytes_code = b.code_.size() + b.row_offset_.bytes() + b.cell_row_.bytes();
     }
 
+    // The ranked occluders, each entry with its box (the runtime culler wants them as they are).
+    static void ranked(detail::FileOccluders f, Bake& b) {
+        if (f.ranked_offsets.empty()) return;
+        b.ranked_.resize(f.ranked_box.size());
+        for (size_t k = 0; k < b.ranked_.size(); ++k) {
+            b.ranked_[k] = RankedOccluder{box_at(f.bounds, f.ranked_box[k]), f.ranked_score[k],
+                                          f.ranked_solid_angle_sr[k], f.ranked_hidden_objects[k],
+                                          f.ranked_hidden_triangle_share[k]};
+        }
+        b.ranked_offset_.assign(std::move(f.ranked_offsets));
+    }
+
     template <class T>
     static uint64_t bytes(const std::vector<T>& v) {
         return uint64_t(v.capacity()) * sizeof(T);
@@ -238,7 +251,7 @@ private:
                bytes(b.object_triangles_) + bytes(b.object_flags_) + bytes(b.grid_to_cell_) +
                bytes(b.nodes_) + bytes(b.cell_bounds_) + bytes(b.cell_grid_) + bytes(b.brick_) +
                bytes(b.brick_bytes_) + bytes(b.eye_brick_) + bytes(b.eye_brick_bytes_) + bytes(b.code_) +
-               b.row_offset_.bytes() + b.cell_row_.bytes();
+               b.row_offset_.bytes() + b.cell_row_.bytes() + b.ranked_offset_.bytes() + bytes(b.ranked_);
     }
 };
 
@@ -401,6 +414,19 @@ uint32_t Bake::object_triangles(uint32_t o) const noexcept {
 uint32_t Bake::object_flags(uint32_t o) const noexcept {
     return o < object_count_ ? object_flags_[o] : 0;
 }
+
+uint32_t Bake::occluder_count(uint32_t c) const noexcept {
+    if (size_t(c) + 1 >= ranked_offset_.size()) return 0;
+    return ranked_offset_[size_t(c) + 1] - ranked_offset_[c];
+}
+
+#if defined(__cpp_lib_span)
+std::span<const RankedOccluder> Bake::occluders(uint32_t c) const noexcept {
+    const uint32_t n = occluder_count(c);
+    if (n == 0) return {};
+    return std::span<const RankedOccluder>(ranked_.data() + ranked_offset_[c], n);
+}
+#endif
 
 const double* Bake::figure(std::string_view name) const noexcept {
     for (const auto& [k, v] : figures_)

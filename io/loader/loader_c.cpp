@@ -135,6 +135,20 @@ uint64_t pvsbake_total_triangles(const pvsbake_bake* b) {
     return b != nullptr ? b->bake.total_triangles() : 0;
 }
 
+uint32_t pvsbake_occluder_count(const pvsbake_bake* b, uint32_t cell) {
+    return b != nullptr ? b->bake.occluder_count(cell) : 0;
+}
+int pvsbake_occluder(const pvsbake_bake* b, uint32_t cell, uint32_t rank, pvsbake_ranked_occluder* out) {
+    if (b == nullptr || out == nullptr || rank >= b->bake.occluder_count(cell)) return 0;
+    const pvsbake::RankedOccluder& r = b->bake.occluders(cell)[rank];
+    copy_box(r.box, out->box);
+    out->score = r.score;
+    out->solid_angle_sr = r.solid_angle_sr;
+    out->hidden_objects = r.hidden_objects;
+    out->hidden_triangle_share = r.hidden_triangle_share;
+    return 1;
+}
+
 const char* pvsbake_mode(const pvsbake_bake* b) {
     return text(b, &pvsbake::Bake::mode);
 }

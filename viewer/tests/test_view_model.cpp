@@ -34,8 +34,29 @@ struct Fixture {
         bake.verification.ran = true;
         bake.verification.cell_sampled_visible = {1, 1};
         bake.verification.misses.push_back(Miss{1, 0, {1, -5, 0}, {0, 1, 0}, 4.0f});
+        bake.occluders = {Occluder{Aabb::of({-3, -1, -1}, {-1, 1, 1}), 0.25f, true, {0}},
+                          Occluder{Aabb::of({1, -1, -1}, {3, 1, 1}), 0.25f, true, {1}}};
+        bake.ranked.offsets = {0, 2, 2};  // cell 0: boxes 1 then 0; cell 1: none
+        bake.ranked.entries = {{1, 0.5f, 1.5f, 2.0f, 0.25f}, {0, 0.25f, 0.75f, 1.0f, 0.125f}};
     }
 };
+
+TEST(ViewModel, RankedOccludersOfThePickedCell) {
+    Fixture f;
+    const std::vector<Aabb> boxes = ranked_occluder_boxes(f.bake, 0);
+    ASSERT_EQ(boxes.size(), 2u);
+    EXPECT_EQ(boxes[0], f.bake.occluders[1].box);  // best first
+    EXPECT_EQ(boxes[1], f.bake.occluders[0].box);
+    EXPECT_TRUE(ranked_occluder_boxes(f.bake, 1).empty());
+    EXPECT_TRUE(ranked_occluder_boxes(f.bake, 5).empty());
+    const std::string text = cell_overlay_text(f.bake, cell_figures(f.bake, 0), 1);
+    EXPECT_NE(
+        text.find("ranked occluders (cyan): 2; the best scores 0.500, 1.50 sr, hides 2.0 objects, 25.0%"),
+        std::string::npos)
+        << text;
+    EXPECT_NE(cell_overlay_text(f.bake, cell_figures(f.bake, 1), 1).find("ranked occluders: none"),
+              std::string::npos);
+}
 
 TEST(ViewModel, ObjectStatesFollowThePickedCellsPvs) {
     Fixture f;

@@ -21,20 +21,13 @@
 #include <cstdlib>
 #include <cstring>
 #include <random>
+#include <span>
 #include <string>
 #include <vector>
 
 namespace {
 
 using pvsbake::walk::Vec3;
-
-// The ranked occluders of a cell (ALGORITHMS.md section 4), best first: what the culler of moving objects
-// tests against. Empty for now: replaced by bake.occluders(cell) when issue 9's bake side lands.
-std::vector<pvsbake::Box> cell_occluders(const pvsbake::Bake& bake, int32_t cell) {
-    (void)bake;
-    (void)cell;
-    return {};
-}
 
 }  // namespace
 
@@ -80,7 +73,8 @@ int main(int argc, char** argv) {
         pvsbake::walk::spawn_movers(bake, uint32_t(movers_wanted), rng);
     pvsbake::OcclusionCuller culler;  // allocates once; every frame reuses it
     uint64_t drawn_objects = 0, drawn_triangles = 0, outside = 0;
-    uint64_t moving_tested = 0, moving_culled = 0, culled_by_frusta = 0, occluders_used = 0;
+    uint64_t moving_tested = 0, moving_culled = 0, culled_by_frusta = 0, occluders_used = 0,
+             frames_culling = 0;
     double cull_us = 0.0;
     for (int f = 0; f < frames && !way.empty(); ++f) {
         const Vec3 eye = pvsbake::walk::camera_eye(way, f);
@@ -103,13 +97,17 @@ int main(int argc, char** argv) {
         drawn_objects += n;
         drawn_triangles += tris;
 
-        // Moving objects: cull their boxes against the cell's ranked occluders (none outside the view
-        // volume).
-        const std::vector<pvsbake::Box> occluders =
-            cell >= 0 ? cell_occluders(bake, cell) : std::vector<pvsbake::Box>();
+        // Moving objects: cull their boxes against the cell's ranked occluders (format 1.2, best first),
+        // only when the eye is in the eye space, where the bake promises what they hide (in the rim
+        // around it, up to and into thin walls, it does not: cull nothing there).
+        const bool can_cull = cell >= 0 && bake.in_eye_space(eye.x, eye.y, eye.z);
+        const std::span<const pvsbake::RankedOccluder> occluders =
+            can_cull ? bake.occluders(uint32_t(cell)) : std::span<const pvsbake::RankedOccluder>();
+        frames_culling += can_cull;
         const auto c0 = std::chrono::steady_clock::now();
         const float eye_m[3] = {eye.x, eye.y, eye.z};
-        culler.begin_frame(eye_m, occluders);
+        culler.begin_frame(eye_m, occluders.empty() ? nullptr : &occluders.front().box, occluders.size(),
+                           sizeof(pvsbake::RankedOccluder));
         uint32_t culled = 0;
         for (const pvsbake::walk::Mover& m : movers) {
             const pvsbake::OcclusionCuller::Path path = culler.classify(pvsbake::walk::mover_box(m));
@@ -136,10 +134,12 @@ int main(int argc, char** argv) {
         frames, (unsigned long long)outside, 100.0 * fo, 100.0 * ft);
     std::printf(
         "moving objects: %zu; the occluders culled %llu of %llu boxes tested (%.1f%%; %llu by single shadow "
-        "frusta, %llu by the fused depth cube) with %.1f occluders a frame, at %.1f us a frame\n",
+        "frusta, %llu by the fused depth cube) with %.1f occluders a frame, at %.1f us a frame; %llu frames "
+        "in the eye space culled, the others drew every moving object\n",
         movers.size(), (unsigned long long)moving_culled, (unsigned long long)moving_tested,
         100.0 * double(moving_culled) / std::max(1.0, double(moving_tested)),
         (unsigned long long)culled_by_frusta, (unsigned long long)(moving_culled - culled_by_frusta),
-        double(occluders_used) / std::max(1, frames), cull_us / std::max(1, frames));
+        double(occluders_used) / std::max(1, frames), cull_us / std::max(1, frames),
+        (unsigned long long)frames_culling);
     return 0;
 }

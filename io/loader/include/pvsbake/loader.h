@@ -23,6 +23,9 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#if __has_include(<span>)
+#include <span>
+#endif
 #include <string>
 #include <string_view>
 #include <utility>
@@ -55,6 +58,17 @@ struct LoadResult {
 struct Box {
     float min[3];
     float max[3];
+};
+
+// One ranked occluder of a cell (format 1.2; docs/FORMAT.md, "/occluders"): a box inside the opaque solid,
+// worth testing at run time to cull what the PVS cannot list (dynamic objects). Its shadow frustum from the
+// eye (the points q for which the segment eye-q meets the box) hides whatever lies wholly inside it.
+struct RankedOccluder {
+    Box box;                      // the occluder box, world metres (already shrunk/proven as stored)
+    float score;                  // the documented ranking score, higher is better
+    float solid_angle_sr;         // largest solid angle seen from the cell's sampled eyes, steradians
+    float hidden_objects;         // mean number of objects wholly in its shadow from the sampled eyes
+    float hidden_triangle_share;  // mean share of the world's triangles wholly in its shadow
 };
 
 enum class CellKind : int32_t { kGrid = 0, kOctree = 1 };
@@ -282,31 +296,64 @@ public:
         uint32_t o) const noexcept;  // bit 0 opaque, 1 see-through, 2 always visible, 3 never occludes
     uint64_t total_triangles() const { return total_triangles_; }
 
-    // ---- Ranked occluders of a cell: not in format 1.x yet (a later issue adds them to /occluders).
-    // They will come as `occluder_count(c)` / `occluder(c, rank)` here and pvsbake_occluder_* in C.
+    // ---- Ranked occluders of a cell (format 1.2): the few occluder boxes worth testing at run time from
+    // anywhere in cell c, best first (score = sqrt(mean solid angle / 4 pi * mean hidden share), see
+    // docs/FORMAT.md). Files of format 1.0 and 1.1, bakes made without occluders or with
+    // --occluders-per-cell 0 have none. Every entry was validated at load (a proven, finite box; finite
+    // measures; scores never increasing), so a culler may use them as they are.
+    uint32_t occluder_count(uint32_t c) const noexcept;  // 0 for old files / out of range
+#if defined(__cpp_lib_span)  // C++20; a C++17 game reads them with pvsbake_occluder() (loader_c.h)
+    std::span<const RankedOccluder> occluders(uint32_t c) const noexcept;  // best first; empty if none
+#endif
 
     // ---- What the bake is
-    const BakeInfo& info() const { return info_; }
-    int format_major() const { return info_.format_major; }
-    int format_minor() const { return info_.format_minor; }
-    const std::string& mode() const { return info_.mode; }  // "sampled" or "conservative"
-    bool is_conservative() const { return info_.conservative; }
-    const char* mode_label() const { return info_.conservative ? "conservative" : "aggressive"; }
-    const std::string& tool_version() const { return info_.tool_version; }
-    const std::string& world_path() const { return info_.world_path; }
-    const std::string& world_hash() const { return info_.world_hash; }
+    const BakeInfo& info() const {
+        return info_;
+    }
+    int format_major() const {
+        return info_.format_major;
+    }
+    int format_minor() const {
+        return info_.format_minor;
+    }
+    const std::string& mode() const {
+        return info_.mode;
+    }  // "sampled" or "conservative"
+    bool is_conservative() const {
+        return info_.conservative;
+    }
+    const char* mode_label() const {
+        return info_.conservative ? "conservative" : "aggressive";
+    }
+    const std::string& tool_version() const {
+        return info_.tool_version;
+    }
+    const std::string& world_path() const {
+        return info_.world_path;
+    }
+    const std::string& world_hash() const {
+        return info_.world_hash;
+    }
     // Every resolved option of the bake (name, value as text), in the file's order.
-    const std::vector<std::pair<std::string, std::string>>& parameters() const { return parameters_; }
+    const std::vector<std::pair<std::string, std::string>>& parameters() const {
+        return parameters_;
+    }
     // The bake's figures (name, value), in the file's order, and the verification's (empty if none ran).
-    const std::vector<std::pair<std::string, double>>& figures() const { return figures_; }
+    const std::vector<std::pair<std::string, double>>& figures() const {
+        return figures_;
+    }
     const std::vector<std::pair<std::string, double>>& verification_figures() const {
         return verification_figures_;
     }
-    bool verification_ran() const { return verification_ran_; }
+    bool verification_ran() const {
+        return verification_ran_;
+    }
     // The first figure or parameter of that name; nullptr when there is none.
     const double* figure(std::string_view name) const noexcept;
     const std::string* parameter(std::string_view name) const noexcept;
-    const PvsStats& pvs_stats() const { return stats_; }
+    const PvsStats& pvs_stats() const {
+        return stats_;
+    }
 
 private:
     friend class Loading;
@@ -372,6 +419,9 @@ private:
     bool has_eyes_ = false;
     std::vector<uint32_t> eye_brick_;
     std::vector<uint8_t> eye_brick_bytes_;
+    // Ranked occluders: cell c has ranked_[ranked_offset_[c] .. ranked_offset_[c + 1]); empty offsets: none.
+    detail::IndexArray ranked_offset_;
+    std::vector<RankedOccluder> ranked_;
     // The PVS: row code (plus 8 bytes of padding), where each distinct row starts, and each cell's row.
     std::vector<uint8_t> code_;
     detail::IndexArray row_offset_;

@@ -74,7 +74,21 @@ uint32_t pvsbake_object_triangles(const pvsbake_bake* bake, uint32_t object);
 uint32_t pvsbake_object_flags(const pvsbake_bake* bake, uint32_t object);
 uint64_t pvsbake_total_triangles(const pvsbake_bake* bake);
 
-/* Ranked occluders per cell: not in format 1.x yet; pvsbake_occluder_* will come here. */
+/* Ranked occluders of a cell (format 1.2), best first: as pvsbake::RankedOccluder. box is float[6]
+ * (min x, y, z, max x, y, z), world metres; score higher is better; solid_angle_sr the largest solid angle
+ * from the cell's sampled eyes; hidden_objects the mean number of objects, hidden_triangle_share the mean
+ * share of the world's triangles, wholly in its shadow. Old files and out-of-range cells have none. */
+typedef struct pvsbake_ranked_occluder {
+    float box[6];
+    float score;
+    float solid_angle_sr;
+    float hidden_objects;
+    float hidden_triangle_share;
+} pvsbake_ranked_occluder;
+uint32_t pvsbake_occluder_count(const pvsbake_bake* bake, uint32_t cell);
+/* Writes the occluder of that rank (0 = best) to *out; returns 1, or 0 (out untouched) when the cell or
+ * rank is out of range or a pointer is NULL. */
+int pvsbake_occluder(const pvsbake_bake* bake, uint32_t cell, uint32_t rank, pvsbake_ranked_occluder* out);
 
 /* What the bake is. Strings live as long as the bake. */
 const char* pvsbake_mode(const pvsbake_bake* bake);       /* "sampled" or "conservative" */
