@@ -14,10 +14,11 @@
 //       Ground truth on a real world: follows the walkthrough example's camera path and moves its objects
 //       (io/loader/examples/walk.h, same seed), culls them against K occluders a frame, and checks every
 //       culled box with Embree rays against the world's triangles (27 points of the box plus 40 random
-//       ones): a ray that reaches its point unblocked is a wrong cull. Until the bake stores ranked
-//       occluders per cell (issue 9, bake side), the occluders of a frame are the K proven boxes of the
-//       bake's /occluders with the largest solid angle from the eye. Also: how many boxes the same rays find
-//       hidden (every ray blocked), an upper estimate of what any culler could cull.
+//       ones): a ray that reaches its point unblocked is a wrong cull. The occluders of a frame are the
+//       cell's ranked occluders (format 1.2); for older bakes, the K proven boxes of the bake's /occluders
+//       with the largest solid angle from the eye. As in the example, only frames whose eye is in the eye
+//       space (Bake::in_eye_space) cull; the others draw every moving object. Also: how many boxes the same
+//       rays find hidden (every ray blocked), an upper estimate of what any culler could cull.
 // Prints one JSON object.
 #include "bench/bench_util.h"
 #include "core/context.h"
