@@ -89,6 +89,20 @@ inline void slab(double lo, double hi, double c, double& enter, double& exit) {
     }
 }
 
+// slab() for the grid values g(k), k = k0..k1, branch-free so that it vectorizes (the same divisions, so
+// the same values; the quotients of a lane with g = 0 are computed and not used).
+inline void slabs(double lo, double hi, int k0, int k1, int r, double* __restrict enter,
+                  double* __restrict exit) {
+    const bool inside = lo <= 0.0 && 0.0 <= hi;
+    const double zero_enter = inside ? -kInf : kInf, zero_exit = inside ? kInf : -kInf;
+    for (int k = k0; k <= k1; ++k) {
+        const double c = grid(k, r);
+        const double a = lo / c, b = hi / c;
+        enter[k] = c > 0.0 ? a : (c < 0.0 ? b : zero_enter);
+        exit[k] = c > 0.0 ? b : (c < 0.0 ? a : zero_exit);
+    }
+}
+
 inline bool box_usable(const Aabb& box) {
     return !box.is_empty() && is_finite(box.min) && is_finite(box.max);
 }
@@ -225,10 +239,8 @@ PVS_AVX2_CLONES void DepthCube::add_occluder(const Aabb& box) {
 
         // Separable slab test: a corner ray (u, v, 1) (depth-parameterized) enters at
         // max(d_lo, enter_u(u), enter_v(v)) and leaves at min(d_max, exit_u(u), exit_v(v)).
-        for (int iv = iv0; iv <= iv1; ++iv)
-            slab(fb.u_lo, fb.u_hi, grid(iv, r), col_enter_[iv], col_exit_[iv]);
-        for (int jv = jv0; jv <= jv1; ++jv)
-            slab(fb.v_lo, fb.v_hi, grid(jv, r), row_enter_[jv], row_exit_[jv]);
+        slabs(fb.u_lo, fb.u_hi, iv0, iv1, r, col_enter_.data(), col_exit_.data());
+        slabs(fb.v_lo, fb.v_hi, jv0, jv1, r, row_enter_.data(), row_exit_.data());
 
         float* const face_depth = depth_.data() + size_t(face) * r * r;
         for (int jv = jv0; jv <= jv1; ++jv) {
