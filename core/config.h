@@ -67,6 +67,14 @@ struct OccluderConfig {
     uint32_t check_eyes = 4096;           // [Limit: >= 1] eye points of the ray check of every box
     uint32_t check_rays_per_eye = 4;      // [Limit: >= 1] rays from each eye point to each box
     uint64_t check_seed = 7;
+    // Occluders per block of cells (conservative mode; pvs/occluder_synthesis.h synthesize_block_occluders).
+    double block_m = 16.0;          // [Limit: >= 0] [Units: m] block edge (rounded to whole cells); 0 = off
+    double block_reach_m = 24.0;    // [Limit: >= 0] [Units: m] a block's own solid is looked for this far
+                                    // around it
+    double block_min_gain = 0.25;   // [Limit: >= 0] a block keeps its own occluders only when its eyes leave
+                                    // more than (1 + this) times the solid all eyes leave in its window
+    uint32_t block_probe_eyes = 256;   // [Limit: >= 0] sight probe eyes per block (0 = off)
+    uint32_t block_check_eyes = 1024;  // [Limit: >= 1] ray check eyes per block
 };
 
 // Ranked occluders per cell (occluders/ranking.h, pvs/occluder_ranking.h; ALGORITHMS.md section 4).
@@ -184,6 +192,25 @@ void visit_options(Config& c, Visitor&& v) {
     v(OptionSpec{"--occluder-check-eyes", "occluders.check_eyes", "eyes",
                  "occluders: eye points whose rays check every box against the triangles", 1, 1e7},
       c.occluders.check_eyes);
+    v(OptionSpec{"--occluder-block", "occluders.block_m", "m",
+                 "conservative mode: occluders per block of cells of this edge (rounded to whole cells), from "
+                 "the sight of the block's own eyes; 0 = one set for all cells",
+                 0, 1e5},
+      c.occluders.block_m);
+    v(OptionSpec{"--occluder-block-reach", "occluders.block_reach_m", "m",
+                 "conservative mode: a block's own occluders are looked for this far around it", 0, 1e5},
+      c.occluders.block_reach_m);
+    v(OptionSpec{"--occluder-block-min-gain", "occluders.block_min_gain", "share",
+                 "conservative mode: a block keeps its own occluders only when its eyes leave more than "
+                 "(1 + this) times the solid all eyes leave around it",
+                 0, 1e6},
+      c.occluders.block_min_gain);
+    v(OptionSpec{"--occluder-block-probe-eyes", "occluders.block_probe_eyes", "eyes",
+                 "conservative mode: sight probe eyes per block, 0 = off", 0, 1e7},
+      c.occluders.block_probe_eyes);
+    v(OptionSpec{"--occluder-block-check-eyes", "occluders.block_check_eyes", "eyes",
+                 "conservative mode: ray check eyes per block", 1, 1e7},
+      c.occluders.block_check_eyes);
     v(OptionSpec{"--occluders-per-cell", "ranking.occluders_per_cell", "boxes",
                  "ranked occluders kept per cell for run-time culling, best first; 0 = off", 0, 1024},
       c.ranking.occluders_per_cell);

@@ -7,6 +7,7 @@
 #include "core/cell_set.h"
 #include "core/math.h"
 
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -57,6 +58,34 @@ struct ShrunkOccluders {
                       // ray check): no sight line from the eye space enters it
     VoxelMask free;   // voxels no opaque triangle touches, outside the proven solid: where sight from the eye
                       // space can be, and a ray started there sees as an eye would
+
+    // Occluders per block of cells (pvs/occluder_synthesis.h, synthesize_block_occluders): squares of
+    // block_size_m in x and z from block_origin; block_set[bx + block_dims.x * bz] indexes block_sets, or is
+    // -1 where the block uses these occluders. A block set has the same epsilon ladder, its own boxes, panels
+    // and solid, and an empty `free` (use this one's).
+    float block_size_m = 0.0f;  // 0: no blocks
+    glm::vec3 block_origin{0.0f};
+    glm::ivec2 block_dims{0};
+    float block_tolerance_m = 0.0f;  // a region may pass its block's square by this much (half a voxel:
+                                     // the block's eye sources reach a whole voxel beyond it)
+    std::vector<int32_t> block_set;
+    std::vector<ShrunkOccluders> block_sets;
+
+    // The set serving every eye of `region`: the block set whose square holds it, or -1 (these).
+    int32_t set_for(const Aabb& region) const {
+        if (block_size_m <= 0.0f || region.is_empty()) return -1;
+        const float bx = std::floor((0.5f * (region.min.x + region.max.x) - block_origin.x) / block_size_m);
+        const float bz = std::floor((0.5f * (region.min.z + region.max.z) - block_origin.z) / block_size_m);
+        if (!(bx >= 0.0f && bz >= 0.0f && bx < float(block_dims.x) && bz < float(block_dims.y))) return -1;
+        const float x0 = block_origin.x + bx * block_size_m, z0 = block_origin.z + bz * block_size_m;
+        const float t = block_tolerance_m;
+        if (region.min.x < x0 - t || region.max.x > x0 + block_size_m + t || region.min.z < z0 - t ||
+            region.max.z > z0 + block_size_m + t) {
+            return -1;
+        }
+        return block_set[size_t(bx) + size_t(block_dims.x) * size_t(bz)];
+    }
+    const ShrunkOccluders& set(int32_t i) const { return i < 0 ? *this : block_sets[size_t(i)]; }
 };
 
 }  // namespace pvs

@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 
 #ifndef PVSBAKE_VERSION
 #define PVSBAKE_VERSION "0.0.0"
@@ -66,6 +67,20 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
         bake.occluders = synthesize_occluders(
             ctx, config.occluders, world, view, scene, occ, config.conservative.epsilon_m,
             config.conservative.refine_levels, conservative ? &shrunk : nullptr);
+    }
+    BlockFigures blocks;
+    if (conservative && config.occluders.block_m > 0.0) {
+        // Blocks of whole cells from the cells' origin (the view bounds' corner, for the grid and the
+        // octree's roots), so that every cell lies in one block.
+        const double unit =
+            config.cells.kind == CellKind::kGrid
+                ? config.cells.cell_size_m
+                : config.cells.min_cell_size_m *
+                      std::ldexp(1.0, std::max(0, int(std::lround(std::log2(config.cells.root_cell_size_m /
+                                                                            config.cells.min_cell_size_m)))));
+        const double block = unit * std::max(1.0, std::round(config.occluders.block_m / unit));
+        blocks = synthesize_block_occluders(ctx, config.occluders, world, view, scene, view.view_bounds.min,
+                                            float(block), shrunk);
     }
     ConservativeFigures cons;
     uint32_t occluders_proven = 0;
@@ -156,6 +171,11 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
          occ.near_m3 > 0 ? occ.near_covered_m3 / occ.near_m3 : 0.0},
         {"occluder_probe_rays_into_solid", double(occ.probe_rays_into_solid)},
         {"occluder_seconds", occ.seconds},
+        {"occluder_blocks", double(blocks.blocks)},
+        {"occluder_blocks_with_own_occluders", double(blocks.blocks_used)},
+        {"occluder_block_solid_m3", blocks.solid_m3},
+        {"occluder_block_global_solid_m3", blocks.global_solid_m3},
+        {"occluder_block_seconds", blocks.seconds},
         {"ranked_occluders_per_cell_mean",
          bake.cells.size() ? double(ranking.ranked) / double(bake.cells.size()) : 0.0},
         {"ranked_occluders_cells_with_none", double(ranking.cells_with_none)},

@@ -174,6 +174,10 @@ public:
         counts_.per_level.assign(shared.occ.epsilon_m.size(), 0);
     }
 
+    // The occluders of the next faces: those serving the eyes of the region whose face it is
+    // (ShrunkOccluders::set_for; every set has the same epsilon ladder).
+    void use(const ShrunkOccluders& occluders) { occ_ = &occluders; }
+
     // Sight leaves a convex region through a face outward, so what it reaches through the face lies on the
     // face's outer side: for the side at the region's min along `axis` (side 0) only objects reaching down
     // to the face's plane matter, for side 1 only objects reaching up to it. A face shared by two regions is
@@ -205,11 +209,11 @@ public:
     void solve_face(const Aabb& rect, int axis, const Sides& sides) {
         const int ua = (axis + 1) % 3, va = (axis + 2) % 3;
         const glm::vec3 size = rect.size();
-        const double eps0 = sh_.occ.epsilon_m.front();
+        const double eps0 = occ_->epsilon_m.front();
         const double side = std::max(size[ua], size[va]);
         const int need = std::max(1, int(std::ceil(side / (eps0 * std::sqrt(2.0)) - 1e-9)));
         int m = 0;
-        for (int t = 1; t < int(sh_.occ.epsilon_m.size()) && (1 << t) <= need; ++t) {
+        for (int t = 1; t < int(occ_->epsilon_m.size()) && (1 << t) <= need; ++t) {
             const int n_leaf = ((need + (1 << t) - 1) >> t) << t;
             if (double(n_leaf) * n_leaf <= 1.2 * double(need) * need) m = t;
         }
@@ -229,19 +233,19 @@ public:
     // `axis`) cannot prove hidden. `sides` is consumed.
     void solve_patch(const Aabb& rect, int axis, Sides sides) {
         if (sides.empty()) return;
-        if (box_all_in_mask(sh_.occ.solid, rect)) {  // no sight line leaves through it (argument 3)
+        if (box_all_in_mask(occ_->solid, rect)) {  // no sight line leaves through it (argument 3)
             ++counts_.in_solid;
             return;
         }
         const double r = 0.5 * glm::length(glm::dvec3(rect.size()));
-        const std::vector<double>& eps = sh_.occ.epsilon_m;
+        const std::vector<double>& eps = occ_->epsilon_m;
         // The smallest epsilon >= r (a hair of slack for the float corners of the rectangle).
         size_t k = 0;
         while (k < eps.size() && eps[k] < r * (1.0 + 1e-6)) ++k;
         if (k < eps.size()) {
             const glm::vec3 s = rect.center();
             bool inside = false;
-            for (const Aabb& b : sh_.occ.boxes[k]) inside = inside || b.contains(s);
+            for (const Aabb& b : occ_->boxes[k]) inside = inside || b.contains(s);
             if (inside) {  // its ball, which holds the patch, lies in the solid
                 ++counts_.skipped;
                 return;
@@ -259,14 +263,14 @@ public:
             Aabb reach = Aabb::of(s, s);
             for (const Aabb& b : interest_) reach.extend(b);
             near_.clear();
-            for (const Aabb& b : sh_.occ.boxes[k])
+            for (const Aabb& b : occ_->boxes[k])
                 if (b.overlaps(reach)) near_.push_back(b);
             // Panels (argument 8) whose plane the patch's ball does not reach; drawn first, they are cheap
             // and hide many boxes behind them, which add_occluders() then skips.
             near_panels_.clear();
-            if (k < sh_.occ.panels.size()) {
+            if (k < occ_->panels.size()) {
                 const double clear_of_plane = eps[k] * (1.0 + 1e-6);
-                for (const Aabb& p : sh_.occ.panels[k]) {
+                for (const Aabb& p : occ_->panels[k]) {
                     const int a = panel_axis(p);
                     if (a >= 0 && p.overlaps(reach) &&
                         std::abs(double(p.min[a]) - double(s[a])) > clear_of_plane) {
@@ -391,6 +395,7 @@ private:
     }
 
     const Shared& sh_;
+    const ShrunkOccluders* occ_ = &sh_.occ;
     DepthCube cube_;
     std::vector<uint8_t> open_mark_;    // per object: 0 not open, 1 open, 2 open and not proven
     std::vector<uint32_t> open_under_;  // per tree node
@@ -467,6 +472,7 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
                 }
             }
             if (!box.is_empty()) {
+                solver.use(occluders.set(occluders.set_for(box)));
                 for (uint32_t o : leavable)
                     if (!world.objects[o].bounds.overlaps(box)) open.push_back(o);
                 for (int axis = 0; axis < 3; ++axis)
@@ -497,6 +503,7 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
         int axis;
         Aabb rect;                                 // flat along `axis`
         std::array<bool, 2> wanted{false, false};  // side 0: a region's min face (sight goes to -axis)
+        std::array<int32_t, 2> set{-1, -1};        // each side's occluders (ShrunkOccluders::set_for)
     };
     std::vector<Face> faces;
     std::map<std::array<float, 6>, uint32_t> face_of;
@@ -513,6 +520,7 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
                 auto [it, fresh] = face_of.emplace(key, uint32_t(faces.size()));
                 if (fresh) faces.push_back(Face{axis, rect});
                 faces[it->second].wanted[size_t(side)] = true;
+                faces[it->second].set[size_t(side)] = occluders.set_for(regions[c]);
                 cell_faces[c].push_back(it->second * 2 + uint32_t(side));
             }
     }
@@ -527,10 +535,18 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
 #pragma omp for schedule(dynamic, 4)
         for (int64_t fi = 0; fi < int64_t(faces.size()); ++fi) {
             const Face& f = faces[size_t(fi)];
-            solver.solve_face(f.rect, f.axis,
-                              solver.sides_of(leavable, f.axis, f.rect.min[f.axis],
-                                              f.wanted[0] ? face_rows.row(uint32_t(2 * fi)) : nullptr,
-                                              f.wanted[1] ? face_rows.row(uint32_t(2 * fi + 1)) : nullptr));
+            uint64_t* row_lo = f.wanted[0] ? face_rows.row(uint32_t(2 * fi)) : nullptr;
+            uint64_t* row_hi = f.wanted[1] ? face_rows.row(uint32_t(2 * fi + 1)) : nullptr;
+            if (row_lo && row_hi && f.set[0] != f.set[1]) {
+                // The regions on the two sides take their occluders from different blocks: once per side.
+                solver.use(occluders.set(f.set[0]));
+                solver.solve_face(f.rect, f.axis, solver.sides_of(leavable, f.axis, f.rect.min[f.axis], row_lo, nullptr));
+                solver.use(occluders.set(f.set[1]));
+                solver.solve_face(f.rect, f.axis, solver.sides_of(leavable, f.axis, f.rect.min[f.axis], nullptr, row_hi));
+            } else {
+                solver.use(occluders.set(row_lo ? f.set[0] : f.set[1]));
+                solver.solve_face(f.rect, f.axis, solver.sides_of(leavable, f.axis, f.rect.min[f.axis], row_lo, row_hi));
+            }
             ctx.progress_advance();
         }
 #pragma omp critical

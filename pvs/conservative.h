@@ -58,8 +58,19 @@
 //    lies in the covered one: every segment from the ball to x crosses an opaque triangle before x. Unlike a
 //    box, a panel needs no solid behind it: a wall thinner than 2 epsilon + 2 voxels, or a hollow shell,
 //    still occludes by its faces.
-// What it rests on beyond this argument: the solid being truly closed to sight (cracks narrower than a
-// voxel are found by the sight probe and the ray check of occluder synthesis, which sample).
+// 9. OCCLUDERS PER BLOCK (pvs/occluder_synthesis.h, synthesize_block_occluders). Points 1 to 4 need the
+//    occluders only to lie where no sight line from the eyes of THIS region goes: the segment from an eye e
+//    through q to x, were it clear, would carry sight from e into the solid. So a region whose eyes all lie
+//    in one block's sources may use that block's solid: what sight from those eyes alone never reaches (a
+//    superset of the global solid; in a level open to the sky, also the space behind walls out of those
+//    eyes' sight, and the surfaces in it). ShrunkOccluders::set_for picks a region's set; a face shared by
+//    regions of two blocks is solved once per side, each with its own set (argument 3 per side).
+// What it rests on beyond this argument: the solid being truly closed to sight. The voxel sweep treats a
+// voxel an opaque triangle touches as closed, so a line through a crack narrower than a voxel, or grazing
+// past a surface's edge through a touched voxel, goes where the sweep says sight does not. The sight probe
+// and the ray check of occluder synthesis (global and per block, from the eyes concerned) look for such
+// lines with Embree rays against the real triangles; they sample. A block's shadow has such grazing
+// boundaries all along it, so verification (pvs/verify.h) is the last word on every bake.
 #pragma once
 
 #include "core/cell_set.h"

@@ -24,12 +24,12 @@ float exit_distance(glm::vec3 o, glm::vec3 d, const Aabb& b) {
     return ray_box_interval(o, d, b, std::numeric_limits<float>::max(), t0, t1) ? t1 : 0.0f;
 }
 
-// Eye points for the check, spread over the eye space (or, with none, over free voxels of the grid).
-std::vector<glm::vec3> check_eyes(const ViewVolume& view, const VoxelGrid& grid, const BitVolume& blocked,
+// Eye points for the check, spread over the eye mask's voxels (or, with none, over free voxels of the grid).
+std::vector<glm::vec3> check_eyes(const VoxelMask& eye_mask, const VoxelGrid& grid, const BitVolume& blocked,
                                   uint32_t count, uint64_t seed) {
     std::vector<uint64_t> candidates;
     for (uint64_t i = 0; i < grid.count(); ++i) {
-        const bool ok = !view.eyes.empty() ? view.eyes.get(i) : !blocked.get(i);
+        const bool ok = !eye_mask.empty() ? eye_mask.get(i) : !blocked.get(i);
         if (ok) candidates.push_back(i);
     }
     std::vector<glm::vec3> eyes;
@@ -47,12 +47,12 @@ std::vector<glm::vec3> check_eyes(const ViewVolume& view, const VoxelGrid& grid,
 
 // The sight probe: rays over the sphere from eye points; solid voxels a ray passes before it stops are
 // seen (through a crack): carve them and their neighbours out of the solid.
-void carve_seen_solid(Context& ctx, const OccluderConfig& config, const VoxelGrid& grid,
-                      const BitVolume& touched, const ViewVolume& view, const RayScene& scene, Solid& solid,
+void carve_seen_solid(Context& ctx, const OccluderConfig& config, uint32_t probe_eyes, const VoxelGrid& grid,
+                      const BitVolume& touched, const VoxelMask& eye_mask, const RayScene& scene, Solid& solid,
                       OccluderFigures& figures) {
     ScopedTimer timer(ctx, "sight_probe");
     const std::vector<glm::vec3> eyes =
-        check_eyes(view, grid, touched, config.probe_eyes, config.check_seed ^ 0x5052);
+        check_eyes(eye_mask, grid, touched, probe_eyes, config.check_seed ^ 0x5052);
     std::vector<uint8_t> seen(grid.count(), 0);
     uint64_t into_solid = 0, escaped = 0;
     const float step = grid.voxel_size_m;  // a corner a step skips is covered by the 26-neighbour carving
@@ -119,43 +119,12 @@ void carve_seen_solid(Context& ctx, const OccluderConfig& config, const VoxelGri
         double(figures.probe_rays) * 1e-6, eyes.size(), into_solid, escaped, carved));
 }
 
-}  // namespace
 
-std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& config, const World& world,
-                                           const ViewVolume& view, const RayScene& scene,
-                                           OccluderFigures& figures, double epsilon_m, int levels,
-                                           ShrunkOccluders* shrunk) {
-    ScopedTimer timer(ctx, "occluders");
-    const auto start = std::chrono::steady_clock::now();
-    // The voxels: the view volume's, or the world's at the default size when there is no view volume.
-    VoxelGrid grid = view.grid;
-    BitVolume touched_local;
-    const BitVolume* touched = &view.touched;
-    if (!view.voxelized) {
-        grid = make_voxel_grid(world.bounds,
-                               default_voxel_size(world.bounds, kDefaultVoxelSizeM, 200'000'000), 2);
-        voxelize_opaque(ctx, world, grid, touched_local);
-        touched = &touched_local;
-    }
-    Solid solid = classify_solid(ctx, grid, *touched, view.eyes);
-    add_closed_boxes(ctx, closed_box_objects(world), view.eyes, solid);
-    figures.solid_m3 = solid.solid_m3;
-    if (config.probe_eyes > 0) carve_seen_solid(ctx, config, grid, *touched, view, scene, solid, figures);
-
-    BoxConfig bc;
-    bc.max_boxes = config.max_occluders;
-    bc.min_box_volume_m3 = config.min_occluder_volume_m3;
-    bc.min_added_share = config.min_added_share;
-    BoxStats stats;
-    const std::vector<VoxelBox> boxes = grow_boxes(ctx, grid, solid.solid, bc, &stats);
-    figures.grown = stats.grown;
-    figures.kept = uint32_t(boxes.size());
-    const double voxel_m3 = double(grid.voxel_size_m) * grid.voxel_size_m * grid.voxel_size_m;
-    figures.covered_m3 = double(stats.covered_voxels) * voxel_m3;
-
-    // The ray check: every box against sight lines from eyes spread over the eye space.
-    const std::vector<glm::vec3> eyes =
-        check_eyes(view, grid, *touched, config.check_eyes, config.check_seed);
+// The ray check: every box against sight lines from `eyes` to random points of it; returns 1 per rejected
+// box (a segment reached a point of it before an opaque triangle, or an eye is inside it).
+std::vector<uint8_t> check_boxes(Context& ctx, const OccluderConfig& config, const VoxelGrid& grid,
+                                 const std::vector<VoxelBox>& boxes, const std::vector<glm::vec3>& eyes,
+                                 const RayScene& scene, uint64_t& rays) {
     std::vector<uint8_t> rejected(boxes.size(), 0);
     uint64_t rays_total = 0;
     ctx.progress_begin("occluder check", boxes.size(), "boxes");
@@ -204,71 +173,142 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
         }
     }
     ctx.progress_end();
-    figures.check_rays = rays_total;
+    rays += rays_total;
+    return rejected;
+}
+
+// The solid less the voxels of every rejected box.
+BitVolume proven_solid(const VoxelGrid& grid, const BitVolume& solid, const std::vector<VoxelBox>& boxes,
+                       const std::vector<uint8_t>& rejected) {
+    BitVolume proven = solid;
+    for (size_t b = 0; b < boxes.size(); ++b) {
+        if (!rejected[b]) continue;
+        const VoxelBox& vb = boxes[b];
+        for (int z = vb.lo.z; z <= vb.hi.z; ++z)
+            for (int y = vb.lo.y; y <= vb.hi.y; ++y)
+                for (int x = vb.lo.x; x <= vb.hi.x; ++x) proven.clear(grid.index(x, y, z));
+    }
+    return proven;
+}
+
+// Boxes of the proven solid eroded by each epsilon of the ladder: a voxel stays when every voxel within k
+// (Chebyshev) is proven solid; voxels within k of the grid's border go (outside the grid is unknown).
+std::vector<std::vector<Aabb>> shrunk_boxes(Context& ctx, const VoxelGrid& grid, const BitVolume& proven,
+                                            const BoxConfig& bc, const std::vector<double>& epsilon_m) {
+    const double voxel_m3 = double(grid.voxel_size_m) * grid.voxel_size_m * grid.voxel_size_m;
+    BitVolume not_proven;
+    not_proven.reset(grid.count());
+    for (size_t w = 0; w < proven.words.size(); ++w) not_proven.words[w] = ~proven.words[w];
+    BoxConfig sc = bc;
+    sc.min_box_volume_m3 = 0.0;  // every shrunk box helps fusion
+    sc.max_boxes = std::max<uint32_t>(bc.max_boxes, 1024);
+    std::vector<std::vector<Aabb>> out;
+    for (const double eps : epsilon_m) {
+        const int k = std::max(1, int(std::ceil(eps / double(grid.voxel_size_m) - 1e-9)));
+        const BitVolume near_not = dilate(grid, not_proven, k);
+        BitVolume eroded;
+        eroded.reset(grid.count());
+        for (size_t w = 0; w < proven.words.size(); ++w) eroded.words[w] = proven.words[w] & ~near_not.words[w];
+        for (uint64_t i = 0; i < grid.count(); ++i) {
+            if (!eroded.get(i)) continue;
+            const glm::ivec3 c = grid.coords(i);
+            if (glm::any(glm::lessThan(c, glm::ivec3(k))) || glm::any(glm::greaterThanEqual(c, grid.dims - k)))
+                eroded.clear(i);
+        }
+        std::vector<Aabb> level_boxes;
+        for (const VoxelBox& vb : grow_boxes(ctx, grid, eroded, sc, nullptr)) level_boxes.push_back(box_bounds(grid, vb));
+        ctx.info(fmt::format("occluders shrunk by {} m ({} voxels): {} boxes of {:.0f} m3 of solid", eps, k,
+                             level_boxes.size(), double(eroded.count()) * voxel_m3));
+        out.push_back(std::move(level_boxes));
+    }
+    return out;
+}
+
+VoxelMask mask_of(const VoxelGrid& grid, std::vector<uint64_t> bits) {
+    VoxelMask m;
+    m.origin = grid.origin;
+    m.voxel_size_m = grid.voxel_size_m;
+    m.dims = grid.dims;
+    m.bits = std::move(bits);
+    return m;
+}
+
+BoxConfig box_config(const OccluderConfig& config) {
+    BoxConfig bc;
+    bc.max_boxes = config.max_occluders;
+    bc.min_box_volume_m3 = config.min_occluder_volume_m3;
+    bc.min_added_share = config.min_added_share;
+    return bc;
+}
+
+// The voxels of `grid` from `lo` over `window`'s dims, as a volume on `window` (the same voxel size).
+BitVolume crop(const VoxelGrid& grid, const std::vector<uint64_t>& bits, glm::ivec3 lo, const VoxelGrid& window) {
+    BitVolume out;
+    out.reset(window.count());
+    for (int z = 0; z < window.dims.z; ++z)
+        for (int y = 0; y < window.dims.y; ++y)
+            for (int x = 0; x < window.dims.x; ++x) {
+                const uint64_t i = grid.index(lo.x + x, lo.y + y, lo.z + z);
+                if ((bits[i >> 6] >> (i & 63)) & 1u) out.set(window.index(x, y, z));
+            }
+    return out;
+}
+
+}  // namespace
+
+std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& config, const World& world,
+                                           const ViewVolume& view, const RayScene& scene,
+                                           OccluderFigures& figures, double epsilon_m, int levels,
+                                           ShrunkOccluders* shrunk) {
+    ScopedTimer timer(ctx, "occluders");
+    const auto start = std::chrono::steady_clock::now();
+    // The voxels: the view volume's, or the world's at the default size when there is no view volume.
+    VoxelGrid grid = view.grid;
+    BitVolume touched_local;
+    const BitVolume* touched = &view.touched;
+    if (!view.voxelized) {
+        grid = make_voxel_grid(world.bounds,
+                               default_voxel_size(world.bounds, kDefaultVoxelSizeM, 200'000'000), 2);
+        voxelize_opaque(ctx, world, grid, touched_local);
+        touched = &touched_local;
+    }
+    Solid solid = classify_solid(ctx, grid, *touched, view.eyes);
+    add_closed_boxes(ctx, closed_box_objects(world), view.eyes, solid);
+    figures.solid_m3 = solid.solid_m3;
+    if (config.probe_eyes > 0)
+        carve_seen_solid(ctx, config, config.probe_eyes, grid, *touched, view.eyes, scene, solid, figures);
+
+    const BoxConfig bc = box_config(config);
+    BoxStats stats;
+    const std::vector<VoxelBox> boxes = grow_boxes(ctx, grid, solid.solid, bc, &stats);
+    figures.grown = stats.grown;
+    figures.kept = uint32_t(boxes.size());
+    const double voxel_m3 = double(grid.voxel_size_m) * grid.voxel_size_m * grid.voxel_size_m;
+    figures.covered_m3 = double(stats.covered_voxels) * voxel_m3;
+
+    // The ray check: every box against sight lines from eyes spread over the eye space.
+    const std::vector<glm::vec3> eyes =
+        check_eyes(view.eyes, grid, *touched, config.check_eyes, config.check_seed);
+    const std::vector<uint8_t> rejected = check_boxes(ctx, config, grid, boxes, eyes, scene, figures.check_rays);
 
     if (shrunk != nullptr) {
-        // The proven solid: the carved solid less every rejected box, then eroded: a voxel stays when every
-        // voxel within k (Chebyshev) is proven solid; voxels within k of the grid's border go (outside the
-        // grid is unknown).
+        // The proven solid: the carved solid less every rejected box, then eroded per epsilon.
         ScopedTimer t(ctx, "shrink");
-        BitVolume proven = solid.solid;
-        for (size_t b = 0; b < boxes.size(); ++b) {
-            if (!rejected[b]) continue;
-            const VoxelBox& vb = boxes[b];
-            for (int z = vb.lo.z; z <= vb.hi.z; ++z)
-                for (int y = vb.lo.y; y <= vb.hi.y; ++y)
-                    for (int x = vb.lo.x; x <= vb.hi.x; ++x) proven.clear(grid.index(x, y, z));
-        }
-        BitVolume not_proven;
-        not_proven.reset(grid.count());
-        for (size_t w = 0; w < proven.words.size(); ++w) not_proven.words[w] = ~proven.words[w];
-        BoxConfig sc = bc;
-        sc.min_box_volume_m3 = 0.0;  // every shrunk box helps fusion
-        sc.max_boxes = std::max<uint32_t>(bc.max_boxes, 1024);
-        shrunk->epsilon_m.clear();
-        shrunk->boxes.clear();
-        shrunk->panels.clear();
+        BitVolume proven = proven_solid(grid, solid.solid, boxes, rejected);
+        *shrunk = ShrunkOccluders{};
+        for (int level = 0; level <= levels; ++level) shrunk->epsilon_m.push_back(epsilon_m * std::ldexp(1.0, level));
         PanelFigures pf;
         const std::vector<Aabb> panels = find_panels(world, &pf);
         ctx.info(
             fmt::format("panels: {} opaque triangles lie in axis planes, {} rectangles are covered by pairs "
                         "of them, merged into {} panels",
                         pf.flat_triangles, pf.rectangles, pf.panels));
-        for (int level = 0; level <= levels; ++level) {
-            const double eps = epsilon_m * std::ldexp(1.0, level);
-            const int k = std::max(1, int(std::ceil(eps / double(grid.voxel_size_m) - 1e-9)));
-            const BitVolume near_not = dilate(grid, not_proven, k);
-            BitVolume eroded;
-            eroded.reset(grid.count());
-            for (size_t w = 0; w < proven.words.size(); ++w)
-                eroded.words[w] = proven.words[w] & ~near_not.words[w];
-            for (uint64_t i = 0; i < grid.count(); ++i) {
-                if (!eroded.get(i)) continue;
-                const glm::ivec3 c = grid.coords(i);
-                if (glm::any(glm::lessThan(c, glm::ivec3(k))) ||
-                    glm::any(glm::greaterThanEqual(c, grid.dims - k))) {
-                    eroded.clear(i);
-                }
-            }
-            const std::vector<VoxelBox> shrunk_boxes = grow_boxes(ctx, grid, eroded, sc, nullptr);
-            std::vector<Aabb> level_boxes;
-            for (const VoxelBox& vb : shrunk_boxes) level_boxes.push_back(box_bounds(grid, vb));
-            ctx.info(fmt::format("occluders shrunk by {} m ({} voxels): {} boxes of {:.0f} m3 of solid", eps,
-                                 k, level_boxes.size(), double(eroded.count()) * voxel_m3));
-            shrunk->epsilon_m.push_back(eps);
-            shrunk->boxes.push_back(std::move(level_boxes));
-            shrunk->panels.push_back(inset_panels(panels, kPanelInset * eps));
-        }
-        shrunk->free.origin = grid.origin;
-        shrunk->free.voxel_size_m = grid.voxel_size_m;
-        shrunk->free.dims = grid.dims;
-        shrunk->free.bits.resize(proven.words.size());
-        for (size_t w = 0; w < proven.words.size(); ++w)
-            shrunk->free.bits[w] = ~(proven.words[w] | touched->words[w]);
-        shrunk->solid.origin = grid.origin;
-        shrunk->solid.voxel_size_m = grid.voxel_size_m;
-        shrunk->solid.dims = grid.dims;
-        shrunk->solid.bits = std::move(proven.words);
+        shrunk->boxes = shrunk_boxes(ctx, grid, proven, bc, shrunk->epsilon_m);
+        for (const double eps : shrunk->epsilon_m) shrunk->panels.push_back(inset_panels(panels, kPanelInset * eps));
+        std::vector<uint64_t> free_bits(proven.words.size());
+        for (size_t w = 0; w < proven.words.size(); ++w) free_bits[w] = ~(proven.words[w] | touched->words[w]);
+        shrunk->free = mask_of(grid, std::move(free_bits));
+        shrunk->solid = mask_of(grid, std::move(proven.words));
     }
 
     std::vector<Occluder> out;
@@ -323,6 +363,138 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
         figures.near_m3 > 0 ? 100.0 * figures.near_covered_m3 / figures.near_m3 : 0.0, figures.near_m3,
         kNearViewM, double(figures.check_rays) * 1e-6, figures.rejected_by_rays, figures.seconds));
     return out;
+}
+
+BlockFigures synthesize_block_occluders(Context& ctx, const OccluderConfig& config, const World& world,
+                                        const ViewVolume& view, const RayScene& scene, glm::vec3 origin,
+                                        float block_m, ShrunkOccluders& shrunk) {
+    ScopedTimer timer(ctx, "block_occluders");
+    const auto start = std::chrono::steady_clock::now();
+    BlockFigures figures;
+    if (!view.voxelized || view.eyes.empty() || !(block_m > 0.0f) || shrunk.epsilon_m.empty() ||
+        shrunk.solid.empty()) {
+        return figures;
+    }
+    const VoxelGrid& grid = view.grid;
+    const float vs = grid.voxel_size_m;
+    const Aabb& vb = view.view_bounds;
+    const glm::ivec2 dims(std::max(1, int(std::ceil((vb.max.x - origin.x) / block_m))),
+                          std::max(1, int(std::ceil((vb.max.z - origin.z) / block_m))));
+    shrunk.block_size_m = block_m;
+    shrunk.block_origin = origin;
+    shrunk.block_dims = dims;
+    shrunk.block_tolerance_m = 0.5f * vs;
+    shrunk.block_set.assign(size_t(dims.x) * size_t(dims.y), -1);
+    shrunk.block_sets.clear();
+    const BoxConfig bc = box_config(config);
+    const std::vector<Aabb> closed = closed_box_objects(world);
+    const double voxel_m3 = double(vs) * vs * vs;
+    // The stages' own logs and timers would repeat once per block: they go to a quiet context.
+    Context quiet(Context::Options{LogLevel::kWarning, true, nullptr});
+    const auto voxel_lo = [&](float p, int a) {
+        return std::clamp(int(std::floor((p - grid.origin[a]) / vs)), 0, grid.dims[a]);
+    };
+    ctx.progress_begin("block occluders", shrunk.block_set.size(), "blocks");
+    for (int bz = 0; bz < dims.y; ++bz)
+        for (int bx = 0; bx < dims.x; ++bx) {
+            ctx.progress_advance();
+            const float x0 = origin.x + float(bx) * block_m, z0 = origin.z + float(bz) * block_m;
+            const float x1 = x0 + block_m, z1 = z0 + block_m;
+            // The window: the block's square grown by the reach, every height.
+            const float reach = float(config.block_reach_m);
+            const glm::ivec3 lo(voxel_lo(x0 - reach, 0), 0, voxel_lo(z0 - reach, 2));
+            const glm::ivec3 hi(std::min(grid.dims.x, voxel_lo(x1 + reach, 0) + 1), grid.dims.y,
+                                std::min(grid.dims.z, voxel_lo(z1 + reach, 2) + 1));
+            if (glm::any(glm::lessThanEqual(hi, lo))) continue;
+            VoxelGrid window;
+            window.origin = grid.origin + glm::vec3(lo) * vs;
+            window.voxel_size_m = vs;
+            window.dims = hi - lo;
+            // The sources: every eye voxel meeting the square grown by a voxel (a cell of the block, and so
+            // its eye region, lies in the square; more sources only mean less solid).
+            BitVolume sources;
+            sources.reset(window.count());
+            const int sx0 = std::max(lo.x, voxel_lo(x0 - vs, 0)), sx1 = std::min(hi.x, voxel_lo(x1 + vs, 0) + 1);
+            const int sz0 = std::max(lo.z, voxel_lo(z0 - vs, 2)), sz1 = std::min(hi.z, voxel_lo(z1 + vs, 2) + 1);
+            uint64_t n_sources = 0;
+            for (int z = sz0; z < sz1; ++z)
+                for (int y = 0; y < grid.dims.y; ++y)
+                    for (int x = sx0; x < sx1; ++x)
+                        if (view.eyes.get(grid.index(x, y, z))) {
+                            sources.set(window.index(x - lo.x, y, z - lo.z));
+                            ++n_sources;
+                        }
+            if (n_sources == 0) continue;
+            ++figures.blocks;
+            const BitVolume touched = crop(grid, view.touched.words, lo, window);
+            const VoxelMask eyes = mask_of(window, std::move(sources.words));
+            Solid solid = classify_solid(quiet, window, touched, eyes);
+            // Touched voxels no sight line enters (none of their 26 neighbours is reached: a line's voxel
+            // path enters a voxel from one of them) are out of sight as much as the solid is: the surfaces
+            // in the block's shadow (a floor behind a wall) join the solid, which closes the seam a floor's
+            // touched layer would leave between the solid below it and the shadow above it.
+            {
+                BitVolume reached;
+                reached.reset(window.count());
+                for (size_t w = 0; w < reached.words.size(); ++w)
+                    reached.words[w] = ~(solid.solid.words[w] | touched.words[w]);
+                const uint64_t tail = window.count() % 64;
+                if (tail) reached.words.back() &= (uint64_t(1) << tail) - 1;
+                const BitVolume lit = dilate(window, reached, 1);
+                for (size_t w = 0; w < solid.solid.words.size(); ++w)
+                    solid.solid.words[w] |= touched.words[w] & ~lit.words[w];
+            }
+            add_closed_boxes(quiet, closed, eyes, solid);
+            // Worth it only when the block's eyes leave clearly more solid than all eyes do.
+            const BitVolume global = crop(grid, shrunk.solid.bits, lo, window);
+            const uint64_t n_global = global.count(), n_block = solid.solid.count();
+            if (double(n_block) <= (1.0 + config.block_min_gain) * double(n_global)) continue;
+            OccluderFigures f;
+            if (config.block_probe_eyes > 0)
+                carve_seen_solid(quiet, config, config.block_probe_eyes, window, touched, eyes, scene, solid, f);
+            // The global proven solid is proven for these eyes too.
+            for (size_t w = 0; w < solid.solid.words.size(); ++w) solid.solid.words[w] |= global.words[w];
+            const std::vector<VoxelBox> boxes = grow_boxes(quiet, window, solid.solid, bc, nullptr);
+            const uint64_t block_index = uint64_t(bx) + uint64_t(dims.x) * uint64_t(bz);
+            const std::vector<glm::vec3> check =
+                check_eyes(eyes, window, touched, config.block_check_eyes, config.check_seed ^ (block_index << 8));
+            const std::vector<uint8_t> rejected = check_boxes(quiet, config, window, boxes, check, scene, f.check_rays);
+            BitVolume proven = proven_solid(window, solid.solid, boxes, rejected);
+            ShrunkOccluders set;
+            set.epsilon_m = shrunk.epsilon_m;
+            set.boxes = shrunk_boxes(quiet, window, proven, bc, shrunk.epsilon_m);
+            figures.boxes += set.boxes.front().size();
+            // The global boxes still serve beyond the window; those inside one of the block's are dropped.
+            for (size_t k = 0; k < set.boxes.size(); ++k) {
+                const size_t own = set.boxes[k].size();
+                for (const Aabb& g : shrunk.boxes[k]) {
+                    bool inside = false;
+                    for (size_t i = 0; i < own && !inside; ++i) {
+                        const Aabb& b = set.boxes[k][i];
+                        inside = glm::all(glm::lessThanEqual(b.min, g.min)) &&
+                                 glm::all(glm::lessThanEqual(g.max, b.max));
+                    }
+                    if (!inside) set.boxes[k].push_back(g);
+                }
+            }
+            set.panels = shrunk.panels;
+            figures.solid_m3 += double(proven.count()) * voxel_m3;
+            figures.global_solid_m3 += double(n_global) * voxel_m3;
+            figures.rays += f.probe_rays + f.check_rays;
+            set.solid = mask_of(window, std::move(proven.words));  // `free` stays the global one
+            shrunk.block_set[block_index] = int32_t(shrunk.block_sets.size());
+            shrunk.block_sets.push_back(std::move(set));
+        }
+    ctx.progress_end();
+    figures.blocks_used = uint32_t(shrunk.block_sets.size());
+    figures.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    ctx.info(fmt::format(
+        "block occluders: {} m blocks (sight from the block's own eyes, {} m around it): {} of {} blocks "
+        "leave more solid and have their own occluders ({:.0f} m3 of proven solid where all eyes leave "
+        "{:.0f} m3; {} own boxes at the floor epsilon); {:.1f} s",
+        block_m, config.block_reach_m, figures.blocks_used, figures.blocks, figures.solid_m3,
+        figures.global_solid_m3, figures.boxes, figures.seconds));
+    return figures;
 }
 
 }  // namespace pvs

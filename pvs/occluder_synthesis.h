@@ -50,4 +50,35 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
                                            OccluderFigures& figures, double epsilon_m = 0.0, int levels = 0,
                                            ShrunkOccluders* shrunk = nullptr);
 
+struct BlockFigures {
+    uint32_t blocks = 0;          // blocks holding eyes
+    uint32_t blocks_used = 0;     // blocks given their own occluders
+    double solid_m3 = 0.0;        // proven solid in the windows of the blocks used, from their own eyes
+    double global_solid_m3 = 0.0;  // ... from all eyes
+    uint64_t boxes = 0;           // own shrunk boxes at the floor epsilon, all blocks
+    uint64_t rays = 0;            // sight probe and ray check rays
+    double seconds = 0.0;
+};
+
+// OCCLUDERS PER BLOCK of cells (issue 6, open levels). The solid is what sight from the eye space never
+// reaches; in a level open to the sky one eye that sees into a hollow wall (over it, or through a gap to
+// the outside) unmakes that wall as an occluder for every cell. But a cell's occluders need only lie where
+// no sight from THAT cell's eyes goes (pvs/conservative.h, points 1 to 3, hold eye by eye). So the view
+// volume is cut into square blocks of `block_m` in x and z (all heights) from `origin`; for each, sight
+// starts only from the eye voxels meeting the block's square grown by a voxel, within a WINDOW of the
+// square grown by config.block_reach_m (every line from a source to a window voxel stays in the convex
+// window, so sight_reach on the window's voxels is still a superset of that sight). The window's solid is
+// then probed, boxed, ray-checked (against segments from the block's own eyes) and shrunk exactly as the
+// global one, joined with the global proven solid (proven for every eye), and kept in
+// shrunk.block_sets when it holds more than (1 + block_min_gain) times the global solid of the window.
+// A block set's boxes are its own plus the global ones not inside one of its own (beyond the window the
+// global boxes still serve); its `free` mask is left empty (the solver uses the global one, a superset of
+// the block's free space, for its sight rays, which only ever list objects).
+// The solver uses a block's set for every region of eyes lying in the block's square
+// (ShrunkOccluders::set_for); on a grid `block_m` should be a multiple of the cell size from the grid's
+// origin, so that every cell lies in one block.
+BlockFigures synthesize_block_occluders(Context& ctx, const OccluderConfig& config, const World& world,
+                                        const ViewVolume& view, const RayScene& scene, glm::vec3 origin,
+                                        float block_m, ShrunkOccluders& shrunk);
+
 }  // namespace pvs

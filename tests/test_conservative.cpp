@@ -2,13 +2,17 @@
 // dense rays on random box worlds.
 #include "core/error.h"
 #include "core/random.h"
+#include "cells/view_volume.h"
 #include "pvs/bake.h"
+#include "pvs/embree_scene.h"
+#include "pvs/occluder_synthesis.h"
 #include "tests/test_util.h"
 #include "tests/world_builder.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstdio>
 #include <sstream>
@@ -209,6 +213,120 @@ TEST(Conservative, ThroughADoorwayIsListed) {
 }
 TEST(Conservative, BehindGlassIsListed) {
     EXPECT_TRUE(target_listed(Middle::kGlass));
+}
+
+// A prism standing on y0 up to y1 over the convex footprint `xz` (four corners, counterclockwise seen from
+// above), as one opaque object; side k (from corner k to k + 1) is left out when open_side == k. Its faces
+// are not axis-aligned rectangles, so no panel comes from it (occluders/panels.h).
+uint32_t add_prism(World& w, const std::string& name, const std::array<glm::vec2, 4>& xz, float y0, float y1,
+                   int open_side) {
+    const uint32_t base = uint32_t(w.positions.size());
+    Aabb bounds;
+    for (int k = 0; k < 4; ++k)
+        for (const float y : {y0, y1}) {
+            w.positions.emplace_back(xz[size_t(k)].x, y, xz[size_t(k)].y);
+            bounds.extend(w.positions.back());
+        }
+    WorldObject obj;
+    obj.name = name;
+    obj.node_path = name;
+    obj.bounds = bounds;
+    obj.first_triangle = uint32_t(w.triangles.size());
+    obj.flags = kObjectHasOpaque;
+    const auto tri = [&](uint32_t a, uint32_t b, uint32_t c) {
+        w.triangles.push_back(Triangle{{base + a, base + b, base + c}});
+        w.triangle_opaque.push_back(1);
+        w.triangle_double_sided.push_back(0);
+    };
+    tri(0, 4, 2), tri(2, 4, 6);  // bottom (vertex 2k at y0, 2k + 1 at y1)
+    tri(1, 3, 5), tri(3, 7, 5);  // top
+    for (uint32_t k = 0; k < 4; ++k) {
+        if (int(k) == open_side) continue;
+        const uint32_t a = 2 * k, b = 2 * ((k + 1) % 4);
+        tri(a, b, a + 1), tri(b, b + 1, a + 1);
+    }
+    obj.triangle_count = uint32_t(w.triangles.size()) - obj.first_triangle;
+    w.objects.push_back(obj);
+    w.bounds.extend(bounds);
+    return uint32_t(w.objects.size() - 1);
+}
+
+// OCCLUDERS PER BLOCK (pvs/occluder_synthesis.h synthesize_block_occluders). A yard 36 m long, open to the
+// sky, eyes up to 2 m above the floor, cut in two by a diagonal wall 1.2 m thick whose side facing the far
+// (east) half is missing, as a compiled level's hollow walls are. Eyes in the east half look into the
+// wall, so from ALL eyes the wall holds no solid; it is not axis-aligned, so it gives no panels: the one
+// occluder set hides nothing behind it. From the west block's own eyes the wall is closed, and everything
+// behind it is out of their sight: the west cells cull the crate in the east half, and the east cells,
+// which see it, list it.
+World blocked_yard(uint32_t& crate) {
+    World w;
+    test::add_box(w, "floor", Aabb::of({-0.5f, -0.5f, -0.5f}, {36.5f, 0, 12.5f}));
+    test::add_box(w, "west", Aabb::of({-0.5f, 0, -0.5f}, {0, 4, 12.5f}));
+    test::add_box(w, "east", Aabb::of({36, 0, -0.5f}, {36.5f, 4, 12.5f}));
+    test::add_box(w, "south", Aabb::of({0, 0, -0.5f}, {36, 4, 0}));
+    test::add_box(w, "north", Aabb::of({0, 0, 12}, {36, 4, 12.5f}));
+    // From (12, 0) to (16, 12) on its west face, 1.2 m thick in x; side 1 (east face) open.
+    add_prism(w, "diagonal", {glm::vec2(12, -0.01f), glm::vec2(13.2f, -0.01f), glm::vec2(17.2f, 12.01f),
+                              glm::vec2(16, 12.01f)}, 0, 4, 1);
+    crate = test::add_box(w, "crate", Aabb::of({22, 0.2f, 5}, {23, 1.2f, 6}));
+    w.view_seeds = {{4, 1, 6}, {28, 1, 6}};
+    return w;
+}
+
+// The same yard, one stage down: the west block's own occluders fill the space behind the wall (out of
+// its eyes' sight), the global ones and the east block's do not (east eyes see it).
+TEST(Conservative, AWestBlocksOwnOccludersFillTheSpaceBehindTheHollowWall) {
+    uint32_t crate = 0;
+    const World w = blocked_yard(crate);
+    BakeConfig c = conservative_config();
+    c.view.play_height_m = 2.0;
+    Context ctx = quiet_context();
+    const ViewVolume view = build_view_volume(ctx, c.view, w);
+    RayScene scene(ctx, w);
+    OccluderFigures f;
+    ShrunkOccluders shrunk;
+    synthesize_occluders(ctx, c.occluders, w, view, scene, f, c.conservative.epsilon_m, 2, &shrunk);
+    const BlockFigures b =
+        synthesize_block_occluders(ctx, c.occluders, w, view, scene, view.view_bounds.min, 8.0f, shrunk);
+    EXPECT_GT(b.blocks_used, 0u);
+    const glm::vec3 behind(19, 0.7f, 5.5f);
+    const auto holds = [&](const ShrunkOccluders& set) {
+        for (const Aabb& box : set.boxes[0])
+            if (box.contains(behind)) return true;
+        return false;
+    };
+    EXPECT_FALSE(holds(shrunk)) << "east eyes see the space behind the wall";
+    const int32_t west = shrunk.set_for(Aabb::of({2, 0.5f, 6}, {4, 2, 8}));
+    const int32_t east = shrunk.set_for(Aabb::of({26, 0.5f, 6}, {28, 2, 8}));
+    ASSERT_GE(west, 0);
+    EXPECT_TRUE(holds(shrunk.set(west))) << "no west eye sees the space behind the wall";
+    EXPECT_FALSE(holds(shrunk.set(east)));
+}
+
+TEST(Conservative, BehindAHollowWallOthersSeeIntoIsCulledByTheBlocksOwnOccluders) {
+    uint32_t crate = 0;
+    const World w = blocked_yard(crate);
+    for (const bool blocks : {true, false}) {
+        BakeConfig c = conservative_config();
+        c.view.play_height_m = 2.0;
+        c.cells.cell_size_m = 2.0;
+        c.occluders.block_m = blocks ? 8.0 : 0.0;
+        Context ctx = quiet_context();
+        const BakeData bake = bake_world(ctx, c, w, "test", "");
+        EXPECT_TRUE(bake.verification.ran);
+        EXPECT_TRUE(bake.verification.misses.empty()) << bake.verification.misses.size() << " misses";
+        const int32_t west = bake.cells.find({3, 1, 6}), east = bake.cells.find({27, 1, 6});
+        ASSERT_GE(west, 0);
+        ASSERT_GE(east, 0);
+        EXPECT_TRUE(bake.pvs.test(uint32_t(east), crate)) << "the east cells see the crate";
+        EXPECT_EQ(bake.pvs.test(uint32_t(west), crate), !blocks)
+            << (blocks ? "the west block's own occluders hide the crate"
+                       : "with one occluder set for all eyes the hollow wall hides nothing");
+        double used = -1;
+        for (const auto& [name, value] : bake.figures)
+            if (name == "occluder_blocks_with_own_occluders") used = value;
+        if (blocks) EXPECT_GT(used, 0.0);
+    }
 }
 
 // ---- Property: on random enclosed box worlds the conservative bake misses nothing dense rays see ----
