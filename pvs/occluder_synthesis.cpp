@@ -120,6 +120,27 @@ void carve_seen_solid(Context& ctx, const OccluderConfig& config, uint32_t probe
 }
 
 
+// Touched voxels no sight line enters (none of their 26 neighbours is reached: a line's voxel path enters a
+// voxel from one of them) are out of sight as much as the solid is: they join it. Behind a block's walls
+// this adds the surfaces in its shadow (closing the seam a floor's touched layer would leave between the
+// solid below it and the shadow above it); in a sealed level, the outer layer of a wall's surface voxels.
+void add_unlit_surfaces(const VoxelGrid& grid, const BitVolume& touched, Solid& solid) {
+    BitVolume reached;
+    reached.reset(grid.count());
+    for (size_t w = 0; w < reached.words.size(); ++w) reached.words[w] = ~(solid.solid.words[w] | touched.words[w]);
+    const uint64_t tail = grid.count() % 64;
+    if (tail) reached.words.back() &= (uint64_t(1) << tail) - 1;
+    const BitVolume lit = dilate(grid, reached, 1);
+    uint64_t added = 0;
+    for (size_t w = 0; w < solid.solid.words.size(); ++w) {
+        const uint64_t add = touched.words[w] & ~lit.words[w] & ~solid.solid.words[w];
+        added += uint64_t(__builtin_popcountll(add));
+        solid.solid.words[w] |= add;
+    }
+    solid.solid_voxels += added;
+    solid.solid_m3 = double(solid.solid_voxels) * double(grid.voxel_size_m) * grid.voxel_size_m * grid.voxel_size_m;
+}
+
 // The ray check: every box against sight lines from `eyes` to random points of it; returns 1 per rejected
 // box (a segment reached a point of it before an opaque triangle, or an eye is inside it).
 std::vector<uint8_t> check_boxes(Context& ctx, const OccluderConfig& config, const VoxelGrid& grid,
@@ -273,6 +294,7 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
         touched = &touched_local;
     }
     Solid solid = classify_solid(ctx, grid, *touched, view.eyes);
+    add_unlit_surfaces(grid, *touched, solid);
     add_closed_boxes(ctx, closed_box_objects(world), view.eyes, solid);
     figures.solid_m3 = solid.solid_m3;
     if (config.probe_eyes > 0)
@@ -429,21 +451,7 @@ BlockFigures synthesize_block_occluders(Context& ctx, const OccluderConfig& conf
             const BitVolume touched = crop(grid, view.touched.words, lo, window);
             const VoxelMask eyes = mask_of(window, std::move(sources.words));
             Solid solid = classify_solid(quiet, window, touched, eyes);
-            // Touched voxels no sight line enters (none of their 26 neighbours is reached: a line's voxel
-            // path enters a voxel from one of them) are out of sight as much as the solid is: the surfaces
-            // in the block's shadow (a floor behind a wall) join the solid, which closes the seam a floor's
-            // touched layer would leave between the solid below it and the shadow above it.
-            {
-                BitVolume reached;
-                reached.reset(window.count());
-                for (size_t w = 0; w < reached.words.size(); ++w)
-                    reached.words[w] = ~(solid.solid.words[w] | touched.words[w]);
-                const uint64_t tail = window.count() % 64;
-                if (tail) reached.words.back() &= (uint64_t(1) << tail) - 1;
-                const BitVolume lit = dilate(window, reached, 1);
-                for (size_t w = 0; w < solid.solid.words.size(); ++w)
-                    solid.solid.words[w] |= touched.words[w] & ~lit.words[w];
-            }
+            add_unlit_surfaces(window, touched, solid);
             add_closed_boxes(quiet, closed, eyes, solid);
             // Worth it only when the block's eyes leave clearly more solid than all eyes do.
             const BitVolume global = crop(grid, shrunk.solid.bits, lo, window);
