@@ -66,7 +66,8 @@ std::vector<double> cumulative_areas(const World& world) {
         double sum = 0.0;
         for (uint32_t i = obj.first_triangle; i < obj.first_triangle + obj.triangle_count; ++i) {
             const Triangle& t = world.triangles[i];
-            const glm::vec3 a = world.positions[t.v[0]], b = world.positions[t.v[1]], c = world.positions[t.v[2]];
+            const glm::vec3 a = world.positions[t.v[0]], b = world.positions[t.v[1]],
+                            c = world.positions[t.v[2]];
             sum += 0.5 * double(glm::length(glm::cross(b - a, c - a)));
             out[i] = sum;
         }
@@ -75,7 +76,8 @@ std::vector<double> cumulative_areas(const World& world) {
 }
 
 // A uniform random point on the object's surface: a triangle by area, then a uniform point in it.
-glm::vec3 random_point_on(const World& world, const std::vector<double>& cum_area, uint32_t object, Rng& rng) {
+glm::vec3 random_point_on(const World& world, const std::vector<double>& cum_area, uint32_t object,
+                          Rng& rng) {
     const WorldObject& obj = world.objects[object];
     const auto first = cum_area.begin() + obj.first_triangle;
     const auto last = first + obj.triangle_count;
@@ -96,21 +98,22 @@ struct AimedRays {
     std::vector<RayTouch> touches;  // ray = index into directions
 };
 
-// Draws and traces the aimed rays of cell c at `targets`: `eye_count` eye points, each aiming one ray at
-// a random point on every target object.
+// Draws and traces the aimed rays of cell c: `full_eyes` eye points each aim one ray at a random point on
+// every object of `targets`, then, when `partial` is not empty, one more eye point aims at those objects.
 void trace_aimed(const RayScene& scene, const World& world, const std::vector<double>& cum_area,
-                 const CellSet& cells, uint32_t c, const std::vector<uint32_t>& targets, uint32_t eye_count,
-                 uint64_t seed, AimedRays& out) {
+                 const CellSet& cells, uint32_t c, const std::vector<uint32_t>& targets, uint32_t full_eyes,
+                 const std::vector<uint32_t>& partial, uint64_t seed, AimedRays& out) {
     out.eyes.clear();
     out.first.assign(1, 0);
     out.directions.clear();
     out.touches.clear();
+    const uint32_t eye_count = full_eyes + (partial.empty() ? 0 : 1);
     sample_eye_points_in(cells, cells.cells[c].bounds, kAimedEyeStream | c, eye_count, seed, out.eyes);
     for (uint32_t e = 0; e < out.eyes.size(); ++e) {
         Rng rng(seed, kAimedPointStream ^ (uint64_t(c) << 20) ^ e);
         const glm::vec3 eye = out.eyes[e];
         const uint32_t begin = uint32_t(out.directions.size());
-        for (uint32_t o : targets) {
+        for (uint32_t o : e < full_eyes ? targets : partial) {
             const glm::vec3 d = random_point_on(world, cum_area, o, rng) - eye;
             const float len = glm::length(d);
             if (len < kMinAimDistanceM) continue;
@@ -177,14 +180,16 @@ VerifyResult verify_pvs(Context& ctx, const VerifyConfig& config, const World& w
                          config.rays.eyes_per_cell, result.rays_per_eye,
                          double(rays_per_cell) * double(n_cells) * 1e-6, config.rays.seed));
     if (aim && aim_capped) {
-        ctx.info(fmt::format("verify: aimed rays: {} per cell ({:.1f} M, {:.0f}% of the budget) at the objects "
-                             "the uniform rays did not touch",
-                             result.aimed_rays_per_cell, double(result.aimed_rays_per_cell * n_cells) * 1e-6,
-                             100.0 * config.aimed_share));
+        ctx.info(
+            fmt::format("verify: aimed rays: {} per cell ({:.1f} M, {:.0f}% of the budget) at the objects "
+                        "the uniform rays did not touch",
+                        result.aimed_rays_per_cell, double(result.aimed_rays_per_cell * n_cells) * 1e-6,
+                        100.0 * config.aimed_share));
     } else if (aim) {
-        ctx.info(fmt::format("verify: aimed rays: from {} eye points per cell at every object the uniform rays "
-                             "did not touch (no ray budget)",
-                             config.rays.eyes_per_cell));
+        ctx.info(
+            fmt::format("verify: aimed rays: from {} eye points per cell at every object the uniform rays "
+                        "did not touch (no ray budget)",
+                        config.rays.eyes_per_cell));
     }
     const std::vector<double> cum_area = aim ? cumulative_areas(world) : std::vector<double>();
 
@@ -198,7 +203,7 @@ VerifyResult verify_pvs(Context& ctx, const VerifyConfig& config, const World& w
     {
         CellRays rays;
         AimedRays aimed;
-        std::vector<uint32_t> targets;
+        std::vector<uint32_t> partial;
         std::vector<uint8_t> reported;
 #pragma omp for schedule(dynamic, 4)
         for (int64_t ci = 0; ci < int64_t(n_cells); ++ci) {
@@ -227,32 +232,35 @@ VerifyResult verify_pvs(Context& ctx, const VerifyConfig& config, const World& w
                     const WorldObject& obj = world.objects[o];
                     if (result.sampled.test(c, o) || obj.triangle_count == 0) continue;
                     if (cum_area[obj.first_triangle + obj.triangle_count - 1] <= 0.0) continue;
-                    if (pvs.test(c, o) && ((obj.flags & kObjectAlwaysVisible) || cell_box.overlaps(obj.bounds)))
+                    if (pvs.test(c, o) &&
+                        ((obj.flags & kObjectAlwaysVisible) || cell_box.overlaps(obj.bounds)))
                         continue;
                     aimed.candidates.push_back(o);
                 }
+                // A eye points aim at every candidate, A = aimed rays per cell / candidates (eyes_per_cell
+                // without a budget); the rest of the cell's rays, fewer than the candidates, go from one
+                // more eye point to a seeded random subset of them.
                 const uint64_t k = aimed.candidates.size();
                 aimed_candidates += k;
-                uint32_t eye_count = config.rays.eyes_per_cell;
-                targets = aimed.candidates;
-                if (aim_capped) {
+                uint32_t full_eyes = k > 0 ? config.rays.eyes_per_cell : 0;
+                partial.clear();
+                if (aim_capped && k > 0) {
                     const uint64_t per_cell = result.aimed_rays_per_cell;
-                    if (per_cell >= k) {
-                        eye_count = uint32_t(std::min<uint64_t>(k ? per_cell / k : 0, UINT32_MAX));
-                    } else {
-                        // Not one ray each: a seeded random subset of per_cell candidates (partial shuffle).
+                    full_eyes = uint32_t(std::min<uint64_t>(per_cell / k, UINT32_MAX - 1));
+                    const uint64_t rest = per_cell % k;
+                    if (rest > 0 && full_eyes < UINT32_MAX - 1) {
+                        partial = aimed.candidates;
                         Rng rng(config.rays.seed, kAimedSubsetStream | c);
-                        for (uint64_t i = 0; i < per_cell; ++i)
-                            std::swap(targets[i], targets[i + rng.below(uint32_t(k - i))]);
-                        targets.resize(per_cell);
-                        std::sort(targets.begin(), targets.end());
-                        eye_count = 1;
+                        for (uint64_t i = 0; i < rest; ++i)
+                            std::swap(partial[i], partial[i + rng.below(uint32_t(k - i))]);
+                        partial.resize(rest);
+                        std::sort(partial.begin(), partial.end());
                     }
                 }
-                if (targets.empty()) eye_count = 0;
-                if (eye_count > 0) {
-                    trace_aimed(scene, world, cum_area, cells, c, targets, eye_count, config.rays.seed, aimed);
-                    aimed_targets += aimed.eyes.empty() ? 0 : targets.size();
+                if (full_eyes > 0 || !partial.empty()) {
+                    trace_aimed(scene, world, cum_area, cells, c, aimed.candidates, full_eyes, partial,
+                                config.rays.seed, aimed);
+                    if (!aimed.eyes.empty()) aimed_targets += full_eyes > 0 ? k : partial.size();
                     aimed_rays += aimed.directions.size();
                     rays_traced += aimed.directions.size();
                     for (const RayTouch& t : aimed.touches) {
@@ -261,9 +269,9 @@ VerifyResult verify_pvs(Context& ctx, const VerifyConfig& config, const World& w
                             ++aimed_new;
                         }
                         if (pvs.test(c, t.object)) continue;
-                        const uint32_t eye = uint32_t(
-                            std::upper_bound(aimed.first.begin(), aimed.first.end(), t.ray) - aimed.first.begin() -
-                            1);
+                        const uint32_t eye =
+                            uint32_t(std::upper_bound(aimed.first.begin(), aimed.first.end(), t.ray) -
+                                     aimed.first.begin() - 1);
                         if (record(t.object, aimed.eyes[eye], aimed.directions[t.ray], t.t)) ++aimed_missed;
                     }
                 }

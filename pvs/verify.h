@@ -20,9 +20,10 @@
 //   too, to tighten the sampled set. Every object an aimed ray touches counts as seen (and as a miss
 //   when unlisted), whether or not it is the one aimed at. Objects every PVS lists (pvs_always_visible,
 //   or bounds meeting the cell) are not aimed at when the PVS lists them.
-//   Per cell: A eye points each aim one ray at every candidate object, A = max(1, aimed rays per cell /
-//   candidates); when even A = 1 would pass the cell's share, a seeded random subset of the candidates of
-//   that size is aimed at (aimed_targets < aimed_candidates). With no ray budget, A = eyes_per_cell.
+//   Per cell (budget B = aimed_share x ray_budget / cells rays, K candidates): A = floor(B / K) eye
+//   points each aim one ray at every candidate, and the B mod K rays left go from one more eye point to a
+//   seeded random subset of B mod K candidates, so a cell spends its share and no more (when B < K only
+//   that subset is aimed at: aimed_targets < aimed_candidates). With no ray budget, A = eyes_per_cell.
 // Rays and eye points depend only on (seed, cell, eye): the result is the same for any thread count.
 // aimed_share = 0 traces exactly the uniform rays of before (same seed, same rays, same figures).
 #pragma once
