@@ -116,6 +116,10 @@ struct VerifyConfig {
     bool enabled = true;                                      // run verification after a bake
     SampleConfig rays{16, 1024, 200'000'000, 0x5eed5eedULL};  // ctf_inyard: about 30 s on two cores
     uint32_t max_misses_reported = 1000;  // [Limit: >= 0] misses kept in the report and the file
+    double aimed_share = 0.5;  // [Limit: 0..0.95] [Units: share] of the ray budget spent on rays aimed from
+                               // fresh eye points at the objects the uniform rays did not touch; the
+                               // uniform rays get the rest. 0 = uniform rays only (the figures before aimed
+                               // rays). With no budget (0), each cell aims from eyes_per_cell eye points
 };
 
 struct BakeConfig {
@@ -266,6 +270,11 @@ void visit_options(Config& c, Visitor&& v) {
     v(OptionSpec{"--max-misses", "verify.max_misses_reported", "misses",
                  "verification: misses kept in the report and the file", 0, 1e7},
       c.verify.max_misses_reported);
+    v(OptionSpec{"--verify-aimed-share", "verify.aimed_share", "share",
+                 "verification: share of the rays aimed at points on the objects the uniform rays missed "
+                 "(the uniform rays get the rest), 0 = uniform rays only",
+                 0, 0.95},
+      c.verify.aimed_share);
 }
 
 // Throws pvs::Error (bad input) naming the option when a value is outside its limits.

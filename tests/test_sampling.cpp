@@ -9,6 +9,8 @@
 #include <gtest/gtest.h>
 #include <omp.h>
 
+#include <algorithm>
+#include <cmath>
 #include <set>
 
 namespace pvs {
@@ -257,6 +259,276 @@ TEST(Verify, RepeatedQueriesGiveTheFiltersAnswer) {
         return out;
     };
     EXPECT_EQ(key(filtered), key(repeated));
+}
+
+}  // namespace
+}  // namespace pvs
+
+// Aimed rays (pvs/verify.h): rays from fresh eye points at points on the objects the uniform rays missed.
+namespace pvs {
+namespace {
+
+// Every object of the world listed, but `left_out`.
+PvsSet all_but(const World& world, uint32_t cells, uint32_t left_out) {
+    PvsSet p = PvsSet::make(cells, uint32_t(world.objects.size()));
+    for (uint32_t c = 0; c < cells; ++c)
+        for (uint32_t o = 0; o < world.objects.size(); ++o)
+            if (o != left_out) p.set(c, o);
+    return p;
+}
+
+// 2,000 rays for the one cell, half of them aimed (or none with aimed_share = 0).
+VerifyConfig small_budget(double aimed_share) {
+    VerifyConfig v;
+    v.rays = SampleConfig{16, 1024, 2000, 21};
+    v.aimed_share = aimed_share;
+    return v;
+}
+
+// A wall at x = 0 with a slit |z| < 0.1 (full height) between the cell (kCell, x in [-2.5, -1.5]) and a
+// 10 cm cube 20 m behind it on the slit's axis. It covers about 2e-7 of the sphere and only eyes with
+// |z| < 0.11 see it: 1,000 uniform rays have about a 1 in 10,000 chance to touch it.
+struct SlitScene {
+    World world;
+    uint32_t tiny = 0;
+};
+
+SlitScene make_slit_scene() {
+    SlitScene s;
+    add_box(s.world, "wall_left", Aabb::of({-0.1f, -5, -5}, {0.1f, 5, -0.1f}));
+    add_box(s.world, "wall_right", Aabb::of({-0.1f, -5, 0.1f}, {0.1f, 5, 5}));
+    s.tiny = add_box(s.world, "tiny", Aabb::of({20, -0.05f, -0.05f}, {20.1f, 0.05f, 0.05f}));
+    return s;
+}
+
+TEST(AimedRays, FindTheMissOfATinyObjectThroughASlitThatUniformRaysDoNot) {
+    Context ctx = quiet_context();
+    SlitScene s = make_slit_scene();
+    RayScene scene(ctx, s.world);
+    const PvsSet pvs = all_but(s.world, 1, s.tiny);
+
+    const VerifyResult uniform = verify_pvs(ctx, small_budget(0.0), s.world, scene, kCell, pvs);
+    EXPECT_EQ(uniform.missed_pairs, 0u);
+    EXPECT_FALSE(uniform.sampled.test(0, s.tiny));
+    EXPECT_EQ(uniform.aimed_rays, 0u);
+
+    const VerifyResult aimed = verify_pvs(ctx, small_budget(0.5), s.world, scene, kCell, pvs);
+    // The same total budget: 1,000 uniform rays (16 eyes x 62) and 1,000 aimed at the one untouched object.
+    EXPECT_LE(aimed.rays, 2000u);
+    EXPECT_EQ(aimed.aimed_rays_per_cell, 1000u);
+    EXPECT_EQ(aimed.aimed_candidates, 1u);
+    EXPECT_EQ(aimed.aimed_targets, 1u);
+    EXPECT_EQ(aimed.aimed_rays, 1000u);
+    ASSERT_EQ(aimed.missed_pairs, 1u);
+    EXPECT_EQ(aimed.aimed_missed_pairs, 1u);
+    EXPECT_EQ(aimed.aimed_new_pairs, 1u);
+    EXPECT_EQ(aimed.cells_with_misses, 1u);
+    EXPECT_GT(aimed.missed_rays, 0u);
+    ASSERT_EQ(aimed.misses.size(), 1u);
+    const Miss& m = aimed.misses[0];
+    EXPECT_EQ(m.object, s.tiny);
+    EXPECT_TRUE(kCell.cells[0].bounds.contains(m.eye));
+    // The reported ray really reaches the cube through the slit: its near face at x = 20, and |z| < 0.1
+    // where it crosses the wall.
+    const glm::vec3 hit = m.eye + m.distance_m * m.direction;
+    EXPECT_NEAR(hit.x, 20.0f, 1e-3f);
+    EXPECT_LE(std::abs(hit.y), 0.05f + 1e-3f);
+    EXPECT_LE(std::abs(hit.z), 0.05f + 1e-3f);
+    const float t_wall = -m.eye.x / m.direction.x;
+    EXPECT_LT(std::abs(m.eye.z + t_wall * m.direction.z), 0.1f);
+    EXPECT_NEAR(glm::length(m.direction), 1.0f, 1e-5f);
+}
+
+TEST(AimedRays, NeverReportAMissForATrulyHiddenObject) {
+    Context ctx = quiet_context();
+    WallScene s = make_wall_scene(false, false);  // a whole wall: far_in_line and far_behind are hidden
+    // And a cube shut in a closed shell beside the cell.
+    add_box(s.world, "shell_floor", Aabb::of({-3, -2, 2}, {-1, -1.9f, 4}));
+    add_box(s.world, "shell_roof", Aabb::of({-3, -0.1f, 2}, {-1, 0, 4}));
+    add_box(s.world, "shell_west", Aabb::of({-3, -2, 2}, {-2.9f, 0, 4}));
+    add_box(s.world, "shell_east", Aabb::of({-1.1f, -2, 2}, {-1, 0, 4}));
+    add_box(s.world, "shell_south", Aabb::of({-3, -2, 2}, {-1, 0, 2.1f}));
+    add_box(s.world, "shell_north", Aabb::of({-3, -2, 3.9f}, {-1, 0, 4}));
+    const uint32_t shut = add_box(s.world, "shut_in", Aabb::of({-2.2f, -1.2f, 2.8f}, {-1.8f, -0.8f, 3.2f}));
+    RayScene scene(ctx, s.world);
+    const uint32_t n = uint32_t(s.world.objects.size());
+    PvsSet pvs = PvsSet::make(1, n);
+    for (uint32_t o = 0; o < n; ++o) pvs.set(0, o);
+    pvs.clear(0, s.far_in_line);
+    pvs.clear(0, s.far_behind);
+    pvs.clear(0, shut);
+    for (uint64_t budget : {uint64_t(0), uint64_t(20000), uint64_t(100)}) {
+        VerifyConfig v;
+        v.rays = SampleConfig{16, 1024, budget, 31};
+        v.aimed_share = 0.5;
+        const VerifyResult r = verify_pvs(ctx, v, s.world, scene, kCell, pvs);
+        EXPECT_EQ(r.missed_pairs, 0u) << "budget " << budget;
+        EXPECT_EQ(r.missed_rays, 0u) << "budget " << budget;
+        EXPECT_TRUE(r.misses.empty());
+        EXPECT_FALSE(r.sampled.test(0, s.far_in_line));
+        EXPECT_FALSE(r.sampled.test(0, s.far_behind));
+        EXPECT_FALSE(r.sampled.test(0, shut));
+        // The three hidden objects were candidates and were aimed at (all three when the budget allows).
+        EXPECT_GE(r.aimed_candidates, 3u) << "budget " << budget;
+        EXPECT_GT(r.aimed_rays, 0u) << "budget " << budget;
+        if (budget == 0) {
+            EXPECT_EQ(r.aimed_targets, r.aimed_candidates);
+        }
+        if (budget == 100) {  // half of 100 rays for the one cell
+            EXPECT_LE(r.aimed_rays, 50u);
+        }
+    }
+}
+
+// The grid world of SameSeedSameFiguresForOneAndTwoThreads: walls with gaps and crates, 2 m cells.
+struct GridWorld {
+    World world;
+    CellSet cells;
+};
+
+GridWorld make_grid_world() {
+    GridWorld g;
+    for (int i = 0; i < 6; ++i) {
+        const float x = float(i) * 3.0f;
+        add_box(g.world, "wall" + std::to_string(i),
+                Aabb::of({x, 0, float(i % 3) - 4}, {x + 0.2f, 3, float(i % 3)}));
+        add_box(g.world, "crate" + std::to_string(i), Aabb::of({x + 1, 0, 1}, {x + 1.5f, 0.5f, 1.5f}));
+        add_box(g.world, "pebble" + std::to_string(i),
+                Aabb::of({x + 2, 0.1f, float(i % 2) - 2}, {x + 2.05f, 0.15f, float(i % 2) - 1.95f}));
+    }
+    CellSet& cells = g.cells;
+    cells.kind = CellSet::Kind::kGrid;
+    cells.origin = g.world.bounds.min;
+    cells.cell_size_m = 2.0f;
+    cells.dims = glm::ivec3(glm::ceil((g.world.bounds.max - g.world.bounds.min) / 2.0f));
+    for (int z = 0; z < cells.dims.z; ++z)
+        for (int y = 0; y < cells.dims.y; ++y)
+            for (int x = 0; x < cells.dims.x; ++x) {
+                cells.grid_to_cell.push_back(int32_t(cells.cells.size()));
+                const glm::vec3 lo = cells.origin + 2.0f * glm::vec3(x, y, z);
+                cells.cells.push_back(Cell{Aabb::of(lo, lo + glm::vec3(2.0f)), -1});
+            }
+    return g;
+}
+
+NamedValues without_timing(NamedValues v) {
+    std::erase_if(v, [](const auto& kv) { return kv.first == "seconds" || kv.first == "rays_per_second"; });
+    return v;
+}
+
+void expect_same_misses(const VerifyResult& a, const VerifyResult& b) {
+    ASSERT_EQ(a.misses.size(), b.misses.size());
+    for (size_t i = 0; i < a.misses.size(); ++i) {
+        EXPECT_EQ(a.misses[i].cell, b.misses[i].cell);
+        EXPECT_EQ(a.misses[i].object, b.misses[i].object);
+        EXPECT_EQ(a.misses[i].eye, b.misses[i].eye);
+        EXPECT_EQ(a.misses[i].direction, b.misses[i].direction);
+        EXPECT_EQ(a.misses[i].distance_m, b.misses[i].distance_m);
+    }
+}
+
+TEST(AimedRays, SameResultForOneAndTwoThreads) {
+    Context ctx = quiet_context();
+    GridWorld g = make_grid_world();
+    RayScene scene(ctx, g.world);
+    const uint32_t n_cells = uint32_t(g.cells.size());
+    // An aggressive PVS from few rays: it leaves out visible objects, so there are misses to report.
+    SampledPvsConfig sc;
+    sc.rays = SampleConfig{2, 32, 0, 3};
+    omp_set_num_threads(1);
+    const PvsSet pvs = bake_sampled_pvs(ctx, sc, g.world, scene, g.cells).pvs;
+    // No budget (eyes_per_cell aimed eyes); a budget with several aimed eyes per cell; one too small for
+    // one ray per candidate (a random subset).
+    for (uint64_t budget : {uint64_t(0), uint64_t(n_cells) * 2000, uint64_t(n_cells) * 10}) {
+        VerifyConfig vc;
+        vc.rays = SampleConfig{4, 256, budget, 4};
+        vc.aimed_share = 0.5;
+        omp_set_num_threads(1);
+        const VerifyResult one = verify_pvs(ctx, vc, g.world, scene, g.cells, pvs);
+        omp_set_num_threads(2);
+        const VerifyResult two = verify_pvs(ctx, vc, g.world, scene, g.cells, pvs);
+        EXPECT_GT(one.aimed_rays, 0u) << "budget " << budget;
+        EXPECT_GT(one.missed_pairs, 0u) << "budget " << budget;
+        EXPECT_EQ(one.sampled, two.sampled) << "budget " << budget;
+        EXPECT_EQ(without_timing(one.figures()), without_timing(two.figures())) << "budget " << budget;
+        EXPECT_EQ(one.cell_sampled_visible, two.cell_sampled_visible);
+        expect_same_misses(one, two);
+        if (budget == uint64_t(n_cells) * 10) {
+            EXPECT_LT(one.aimed_targets, one.aimed_candidates);
+        }
+        if (budget == 0) {
+            EXPECT_EQ(one.aimed_targets, one.aimed_candidates);
+        }
+    }
+}
+
+// Verification as it was before aimed rays, written out: uniform rays only.
+struct UniformOnly {
+    PvsSet sampled;
+    uint64_t rays = 0;
+    uint32_t rays_per_eye = 0;
+    std::vector<Miss> first_misses;  // per cell, the first ray of each missed object, by object
+};
+
+UniformOnly uniform_only(const VerifyConfig& config, const RayScene& scene, const World& world,
+                         const CellSet& cells, const PvsSet& pvs) {
+    UniformOnly u;
+    u.sampled = PvsSet::make(uint32_t(cells.size()), uint32_t(world.objects.size()));
+    u.rays_per_eye = rays_per_eye_within_budget(config.rays, cells.size());
+    CellRays rays;
+    for (uint32_t c = 0; c < cells.size(); ++c) {
+        trace_cell(scene, cells, c, config.rays, u.rays_per_eye, rays);
+        u.rays += rays.directions.size();
+        std::vector<Miss> cell;
+        std::set<uint32_t> reported;
+        for (const RayTouch& t : rays.touches) {
+            u.sampled.set(c, t.object);
+            if (pvs.test(c, t.object) || !reported.insert(t.object).second) continue;
+            cell.push_back(
+                Miss{c, t.object, rays.eyes[t.ray / rays.rays_per_eye], rays.directions[t.ray], t.t});
+        }
+        std::sort(cell.begin(), cell.end(), [](const Miss& a, const Miss& b) { return a.object < b.object; });
+        u.first_misses.insert(u.first_misses.end(), cell.begin(), cell.end());
+    }
+    return u;
+}
+
+TEST(AimedRays, ShareZeroReproducesTheUniformOnlyResult) {
+    Context ctx = quiet_context();
+    GridWorld g = make_grid_world();
+    RayScene scene(ctx, g.world);
+    const uint32_t n_cells = uint32_t(g.cells.size());
+    SampledPvsConfig sc;
+    sc.rays = SampleConfig{2, 32, 0, 3};
+    const PvsSet pvs = bake_sampled_pvs(ctx, sc, g.world, scene, g.cells).pvs;
+    for (uint64_t budget : {uint64_t(0), uint64_t(n_cells) * 1000}) {
+        VerifyConfig vc;
+        vc.rays = SampleConfig{4, 512, budget, 4};
+        vc.aimed_share = 0.0;
+        const VerifyResult r = verify_pvs(ctx, vc, g.world, scene, g.cells, pvs);
+        const UniformOnly u = uniform_only(vc, scene, g.world, g.cells, pvs);
+        EXPECT_EQ(r.aimed_rays, 0u);
+        EXPECT_EQ(r.aimed_candidates, 0u);
+        EXPECT_EQ(r.rays_per_eye, u.rays_per_eye) << "budget " << budget;
+        EXPECT_EQ(r.rays, u.rays);
+        EXPECT_EQ(r.sampled, u.sampled);
+        EXPECT_GT(r.missed_pairs, 0u);
+        EXPECT_EQ(r.missed_pairs, u.first_misses.size());
+        VerifyResult expected;
+        expected.misses = u.first_misses;
+        expect_same_misses(r, expected);
+        if (budget > 0) {  // 1,000 rays per cell over 4 eyes
+            EXPECT_EQ(r.rays_per_eye, 250u);
+        }
+        // With aimed rays the uniform rays shrink to half the budget and the aimed ones add on top.
+        if (budget > 0) {
+            vc.aimed_share = 0.5;
+            const VerifyResult half = verify_pvs(ctx, vc, g.world, scene, g.cells, pvs);
+            EXPECT_EQ(half.rays_per_eye, 125u);
+            EXPECT_LE(half.rays, budget);
+            EXPECT_GT(half.aimed_rays, 0u);
+        }
+    }
 }
 
 }  // namespace
