@@ -69,7 +69,7 @@ struct OccluderConfig {
     uint64_t check_seed = 7;
     // Occluders per block of cells (conservative mode; pvs/occluder_synthesis.h synthesize_block_occluders).
     double block_m = 16.0;          // [Limit: >= 0] [Units: m] block edge (rounded to whole cells); 0 = off
-    double block_reach_m = 24.0;    // [Limit: >= 0] [Units: m] a block's own solid is looked for this far
+    double block_reach_m = 64.0;    // [Limit: >= 0] [Units: m] a block's own solid is looked for this far
                                     // around it
     double block_min_gain = 0.25;   // [Limit: >= 0] a block keeps its own occluders only when its eyes leave
                                     // more than (1 + this) times the solid all eyes leave in its window
