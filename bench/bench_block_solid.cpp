@@ -2,6 +2,7 @@
 // from all of it (issue 6, open levels).
 //
 //   bench_block_solid WORLD.glb [--play-height H] [--voxel-size V] [--block B] [--range R]
+//                     [--audit EYES [--audit-points P] [--epsilon E] [--reach R2]]
 //
 // The conservative solver's occluders live in the solid: voxels no straight line of sight from the eye
 // space reaches (occluders/flood.h sight_reach), less the voxels opaque triangles touch. One eye that sees
@@ -10,10 +11,16 @@
 // to miss it. For every block (B x B metres in x and z, all heights) holding eyes, this prints the solid
 // within R metres of the block when sight starts from all eyes, and when it starts from the block's eyes
 // only. JSON on stdout.
+// --audit EYES also builds the bake's occluders per block (pvs/occluder_synthesis.h, blocks of B metres,
+// --reach R2 around them, --epsilon E) and audits them (audit_block_occluders): EYES fresh eye points per
+// block, P random points in every box of its set; "audit_reached" counts rays that get inside one (each is
+// a failure of the argument).
 #include "cells/view_volume.h"
 #include "core/context.h"
 #include "io/gltf_loader.h"
 #include "occluders/flood.h"
+#include "pvs/embree_scene.h"
+#include "pvs/occluder_synthesis.h"
 
 #include <nlohmann/json.hpp>
 
@@ -34,6 +41,8 @@ int main(int argc, char** argv) {
     ViewVolumeConfig vc;
     vc.voxel_size_m = 0.25;
     float block = 16.0f, range = 24.0f;
+    uint32_t audit_eyes = 0, audit_points = 2;
+    double epsilon = 0.25, reach = OccluderConfig{}.block_reach_m;
     for (int i = 2; i + 1 < argc; i += 2) {
         const std::string k = argv[i];
         const double v = std::atof(argv[i + 1]);
@@ -45,13 +54,21 @@ int main(int argc, char** argv) {
             block = float(v);
         else if (k == "--range")
             range = float(v);
+        else if (k == "--audit")
+            audit_eyes = uint32_t(v);
+        else if (k == "--audit-points")
+            audit_points = uint32_t(v);
+        else if (k == "--epsilon")
+            epsilon = v;
+        else if (k == "--reach")
+            reach = v;
         else {
             std::cerr << "bench_block_solid: unknown option " << k << "\n";
             return 2;
         }
     }
-    if (!(block > 0.0f) || !(range >= 0.0f)) {
-        std::cerr << "bench_block_solid: --block must be > 0 and --range >= 0\n";
+    if (!(block > 0.0f) || !(range >= 0.0f) || !(epsilon > 0.0) || !(reach >= 0.0)) {
+        std::cerr << "bench_block_solid: --block and --epsilon must be > 0, --range and --reach >= 0\n";
         return 2;
     }
     try {
@@ -122,6 +139,28 @@ int main(int argc, char** argv) {
                               {"median_ratio", ratios.empty() ? 0.0 : ratios[ratios.size() / 2]},
                               {"min_ratio", ratios.empty() ? 0.0 : ratios.front()},
                               {"sum_ratio", sum_block / std::max(1.0, sum_all)}};
+        if (audit_eyes > 0) {
+            RayScene scene(ctx, w);
+            OccluderConfig oc;
+            oc.block_reach_m = reach;
+            OccluderFigures f;
+            ShrunkOccluders shrunk;
+            synthesize_occluders(ctx, oc, w, v, scene, f, epsilon, 4, &shrunk);
+            const BlockFigures bf =
+                synthesize_block_occluders(ctx, oc, w, v, scene, v.view_bounds.min, block, shrunk);
+            const BlockAudit a = audit_block_occluders(v, scene, shrunk, audit_eyes, audit_points, 99);
+            out["audit"] = {{"epsilon_m", epsilon},
+                            {"reach_m", reach},
+                            {"blocks_with_own_occluders", bf.blocks_used},
+                            {"own_boxes", bf.boxes},
+                            {"boxes_dropped_by_second_check", bf.boxes_dropped},
+                            {"synthesis_seconds", bf.seconds},
+                            {"audit_eyes_per_block", audit_eyes},
+                            {"audit_points_per_box", audit_points},
+                            {"audit_rays", a.rays},
+                            {"audit_reached", a.reached},
+                            {"audit_first", a.first}};
+        }
         std::cout << out.dump(2) << "\n";
     } catch (const std::exception& e) {
         std::cerr << "bench_block_solid: " << e.what() << "\n";

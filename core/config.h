@@ -68,7 +68,8 @@ struct OccluderConfig {
     uint32_t check_rays_per_eye = 4;      // [Limit: >= 1] rays from each eye point to each box
     uint64_t check_seed = 7;
     // Occluders per block of cells (conservative mode; pvs/occluder_synthesis.h synthesize_block_occluders).
-    double block_m = 16.0;          // [Limit: >= 0] [Units: m] block edge (rounded to whole cells); 0 = off
+    // OPT-IN: their boxes rest on sampled ray checks at grazing shadow edges (README, "Occluders per block").
+    double block_m = 0.0;           // [Limit: >= 0] [Units: m] block edge (rounded to whole cells); 0 = off
     double block_reach_m = 64.0;    // [Limit: >= 0] [Units: m] a block's own solid is looked for this far
                                     // around it
     double block_min_gain = 0.25;   // [Limit: >= 0] a block keeps its own occluders only when its eyes leave
@@ -197,8 +198,9 @@ void visit_options(Config& c, Visitor&& v) {
                  "occluders: eye points whose rays check every box against the triangles", 1, 1e7},
       c.occluders.check_eyes);
     v(OptionSpec{"--occluder-block", "occluders.block_m", "m",
-                 "conservative mode: occluders per block of cells of this edge (rounded to whole cells), from "
-                 "the sight of the block's own eyes; 0 = one set for all cells",
+                 "conservative mode, opt-in (16 suits open levels): occluders per block of cells of this edge "
+                 "(rounded to whole cells), from the sight of the block's own eyes; their boxes rest on sampled "
+                 "ray checks (README); 0 = one set for all cells",
                  0, 1e5},
       c.occluders.block_m);
     v(OptionSpec{"--occluder-block-reach", "occluders.block_reach_m", "m",

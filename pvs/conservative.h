@@ -63,7 +63,7 @@
 //    through q to x, were it clear, would carry sight from e into the solid. So a region whose eyes all lie
 //    in one block's sources may use that block's solid: what sight from those eyes alone never reaches (a
 //    superset of the global solid; in a level open to the sky, also the space behind walls out of those
-//    eyes' sight, and the surfaces in it). ShrunkOccluders::set_for picks a region's set; a face shared by
+//    eyes' sight). ShrunkOccluders::set_for picks a region's set; a face shared by
 //    regions of two blocks is solved once per side, each with its own set (argument 3 per side).
 // What it rests on beyond this argument: the solid being truly closed to sight. The voxel sweep treats a
 // voxel an opaque triangle touches as closed, so a line through a crack narrower than a voxel, or grazing

@@ -13,6 +13,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <sstream>
 
 namespace pvs {
 
@@ -120,31 +121,10 @@ void carve_seen_solid(Context& ctx, const OccluderConfig& config, uint32_t probe
 }
 
 
-// Touched voxels no sight line enters (none of their 26 neighbours is reached: a line's voxel path enters a
-// voxel from one of them) are out of sight as much as the solid is: they join it. Behind a block's walls
-// this adds the surfaces in its shadow (closing the seam a floor's touched layer would leave between the
-// solid below it and the shadow above it); in a sealed level, the outer layer of a wall's surface voxels.
-void add_unlit_surfaces(const VoxelGrid& grid, const BitVolume& touched, Solid& solid) {
-    BitVolume reached;
-    reached.reset(grid.count());
-    for (size_t w = 0; w < reached.words.size(); ++w) reached.words[w] = ~(solid.solid.words[w] | touched.words[w]);
-    const uint64_t tail = grid.count() % 64;
-    if (tail) reached.words.back() &= (uint64_t(1) << tail) - 1;
-    const BitVolume lit = dilate(grid, reached, 1);
-    uint64_t added = 0;
-    for (size_t w = 0; w < solid.solid.words.size(); ++w) {
-        const uint64_t add = touched.words[w] & ~lit.words[w] & ~solid.solid.words[w];
-        added += uint64_t(__builtin_popcountll(add));
-        solid.solid.words[w] |= add;
-    }
-    solid.solid_voxels += added;
-    solid.solid_m3 = double(solid.solid_voxels) * double(grid.voxel_size_m) * grid.voxel_size_m * grid.voxel_size_m;
-}
-
 // The ray check: every box against sight lines from `eyes` to random points of it; returns 1 per rejected
 // box (a segment reached a point of it before an opaque triangle, or an eye is inside it).
-std::vector<uint8_t> check_boxes(Context& ctx, const OccluderConfig& config, const VoxelGrid& grid,
-                                 const std::vector<VoxelBox>& boxes, const std::vector<glm::vec3>& eyes,
+std::vector<uint8_t> check_boxes(Context& ctx, const OccluderConfig& config, const std::vector<Aabb>& boxes,
+                                 const std::vector<glm::vec3>& eyes, uint32_t rays_per_eye, uint64_t stream,
                                  const RayScene& scene, uint64_t& rays) {
     std::vector<uint8_t> rejected(boxes.size(), 0);
     uint64_t rays_total = 0;
@@ -156,8 +136,8 @@ std::vector<uint8_t> check_boxes(Context& ctx, const OccluderConfig& config, con
         std::vector<uint8_t> blocked;
 #pragma omp for schedule(dynamic, 1)
         for (int64_t b = 0; b < int64_t(boxes.size()); ++b) {
-            const Aabb box = box_bounds(grid, boxes[size_t(b)]);
-            Rng rng(config.check_seed, uint64_t(b));
+            const Aabb& box = boxes[size_t(b)];
+            Rng rng(config.check_seed, stream + uint64_t(b));
             origins.clear();
             dirs.clear();
             tfar.clear();
@@ -166,7 +146,7 @@ std::vector<uint8_t> check_boxes(Context& ctx, const OccluderConfig& config, con
                     rejected[size_t(b)] = 1;  // an eye inside: not solid at all
                     break;
                 }
-                for (uint32_t k = 0; k < config.check_rays_per_eye; ++k) {
+                for (uint32_t k = 0; k < rays_per_eye; ++k) {
                     const glm::vec3 target =
                         box.min + box.size() * glm::vec3(rng.uniform(), rng.uniform(), rng.uniform());
                     const glm::vec3 d = glm::normalize(target - e);
@@ -196,6 +176,13 @@ std::vector<uint8_t> check_boxes(Context& ctx, const OccluderConfig& config, con
     ctx.progress_end();
     rays += rays_total;
     return rejected;
+}
+
+std::vector<Aabb> bounds_of(const VoxelGrid& grid, const std::vector<VoxelBox>& boxes) {
+    std::vector<Aabb> out;
+    out.reserve(boxes.size());
+    for (const VoxelBox& b : boxes) out.push_back(box_bounds(grid, b));
+    return out;
 }
 
 // The solid less the voxels of every rejected box.
@@ -294,7 +281,6 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
         touched = &touched_local;
     }
     Solid solid = classify_solid(ctx, grid, *touched, view.eyes);
-    add_unlit_surfaces(grid, *touched, solid);
     add_closed_boxes(ctx, closed_box_objects(world), view.eyes, solid);
     figures.solid_m3 = solid.solid_m3;
     if (config.probe_eyes > 0)
@@ -311,7 +297,8 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
     // The ray check: every box against sight lines from eyes spread over the eye space.
     const std::vector<glm::vec3> eyes =
         check_eyes(view.eyes, grid, *touched, config.check_eyes, config.check_seed);
-    const std::vector<uint8_t> rejected = check_boxes(ctx, config, grid, boxes, eyes, scene, figures.check_rays);
+    const std::vector<uint8_t> rejected = check_boxes(ctx, config, bounds_of(grid, boxes), eyes,
+                                                      config.check_rays_per_eye, 0, scene, figures.check_rays);
 
     if (shrunk != nullptr) {
         // The proven solid: the carved solid less every rejected box, then eroded per epsilon.
@@ -387,6 +374,9 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
     return out;
 }
 
+// Boxes grown over the solid only a block's eyes leave, each ray-checked before its voxels count as proven.
+constexpr uint32_t kBlockCheckBoxes = 4096;
+
 BlockFigures synthesize_block_occluders(Context& ctx, const OccluderConfig& config, const World& world,
                                         const ViewVolume& view, const RayScene& scene, glm::vec3 origin,
                                         float block_m, ShrunkOccluders& shrunk) {
@@ -451,7 +441,6 @@ BlockFigures synthesize_block_occluders(Context& ctx, const OccluderConfig& conf
             const BitVolume touched = crop(grid, view.touched.words, lo, window);
             const VoxelMask eyes = mask_of(window, std::move(sources.words));
             Solid solid = classify_solid(quiet, window, touched, eyes);
-            add_unlit_surfaces(window, touched, solid);
             add_closed_boxes(quiet, closed, eyes, solid);
             // Worth it only when the block's eyes leave clearly more solid than all eyes do.
             const BitVolume global = crop(grid, shrunk.solid.bits, lo, window);
@@ -460,17 +449,43 @@ BlockFigures synthesize_block_occluders(Context& ctx, const OccluderConfig& conf
             OccluderFigures f;
             if (config.block_probe_eyes > 0)
                 carve_seen_solid(quiet, config, config.block_probe_eyes, window, touched, eyes, scene, solid, f);
-            // The global proven solid is proven for these eyes too.
-            for (size_t w = 0; w < solid.solid.words.size(); ++w) solid.solid.words[w] |= global.words[w];
-            const std::vector<VoxelBox> boxes = grow_boxes(quiet, window, solid.solid, bc, nullptr);
+            // What only the block's eyes leave is proven box by box: boxes grown to cover it (up to
+            // kBlockCheckBoxes, however small), each checked with segments from the block's own eyes; the
+            // block's proven solid is the accepted boxes, with the global proven solid (proven for every eye).
+            // (Voxels no checked box covers are dropped: unlike the global solid, which is mostly sealed
+            // space, a block's is mostly shadow, whose edges are grazing lines.)
+            BoxConfig cover = bc;
+            cover.max_boxes = kBlockCheckBoxes;
+            cover.min_box_volume_m3 = 0.0;
+            const std::vector<VoxelBox> boxes = grow_boxes(quiet, window, solid.solid, cover, nullptr);
             const uint64_t block_index = uint64_t(bx) + uint64_t(dims.x) * uint64_t(bz);
             const std::vector<glm::vec3> check =
                 check_eyes(eyes, window, touched, config.block_check_eyes, config.check_seed ^ (block_index << 8));
-            const std::vector<uint8_t> rejected = check_boxes(quiet, config, window, boxes, check, scene, f.check_rays);
-            BitVolume proven = proven_solid(window, solid.solid, boxes, rejected);
+            const std::vector<uint8_t> rejected = check_boxes(quiet, config, bounds_of(window, boxes), check,
+                                                              config.check_rays_per_eye, 0, scene, f.check_rays);
+            BitVolume proven = global;
+            for (size_t b = 0; b < boxes.size(); ++b) {
+                if (rejected[b]) continue;
+                const VoxelBox& v = boxes[b];
+                for (int z = v.lo.z; z <= v.hi.z; ++z)
+                    for (int y = v.lo.y; y <= v.hi.y; ++y)
+                        for (int x = v.lo.x; x <= v.hi.x; ++x) proven.set(window.index(x, y, z));
+            }
             ShrunkOccluders set;
             set.epsilon_m = shrunk.epsilon_m;
             set.boxes = shrunk_boxes(quiet, window, proven, bc, shrunk.epsilon_m);
+            // The boxes the solver will draw are checked once more, from the same eyes at fresh points: a
+            // box any segment reaches is dropped (drawing fewer occluders is always safe).
+            for (size_t k = 0; k < set.boxes.size(); ++k) {
+                const std::vector<uint8_t> seen = check_boxes(quiet, config, set.boxes[k], check,
+                                                              config.check_rays_per_eye, uint64_t(k + 1) << 32,
+                                                              scene, f.check_rays);
+                std::vector<Aabb> kept;
+                for (size_t i = 0; i < seen.size(); ++i)
+                    if (!seen[i]) kept.push_back(set.boxes[k][i]);
+                figures.boxes_dropped += seen.size() - kept.size();
+                set.boxes[k] = std::move(kept);
+            }
             figures.boxes += set.boxes.front().size();
             // The global boxes still serve beyond the window; those inside one of the block's are dropped.
             for (size_t k = 0; k < set.boxes.size(); ++k) {
@@ -499,10 +514,67 @@ BlockFigures synthesize_block_occluders(Context& ctx, const OccluderConfig& conf
     ctx.info(fmt::format(
         "block occluders: {} m blocks (sight from the block's own eyes, {} m around it): {} of {} blocks "
         "leave more solid and have their own occluders ({:.0f} m3 of proven solid where all eyes leave "
-        "{:.0f} m3; {} own boxes at the floor epsilon); {:.1f} s",
+        "{:.0f} m3; {} own boxes at the floor epsilon, {} shrunk boxes dropped by the second check); {:.1f} s",
         block_m, config.block_reach_m, figures.blocks_used, figures.blocks, figures.solid_m3,
-        figures.global_solid_m3, figures.boxes, figures.seconds));
+        figures.global_solid_m3, figures.boxes, figures.boxes_dropped, figures.seconds));
     return figures;
+}
+
+BlockAudit audit_block_occluders(const ViewVolume& view, const RayScene& scene, const ShrunkOccluders& shrunk,
+                                 uint32_t eyes_per_block, uint32_t points_per_box, uint64_t seed) {
+    BlockAudit out;
+    CellSet masks;
+    masks.eyes = view.eyes;
+    Rng rng(seed, 0x415544);
+    std::vector<glm::vec3> eyes, origins, dirs;
+    std::vector<float> tfar;
+    std::vector<uint8_t> blocked;
+    for (int bz = 0; bz < shrunk.block_dims.y; ++bz)
+        for (int bx = 0; bx < shrunk.block_dims.x; ++bx) {
+            const size_t index = size_t(bx) + size_t(shrunk.block_dims.x) * size_t(bz);
+            const int32_t set = shrunk.block_set[index];
+            if (set < 0) continue;
+            ++out.blocks;
+            const float b = shrunk.block_size_m;
+            const float x0 = shrunk.block_origin.x + float(bx) * b, z0 = shrunk.block_origin.z + float(bz) * b;
+            const Aabb square =
+                Aabb::of({x0, view.view_bounds.min.y, z0}, {x0 + b, view.view_bounds.max.y, z0 + b});
+            eyes.clear();
+            sample_eye_points_in(masks, square, 7000 + index, eyes_per_block, seed, eyes);
+            for (const Aabb& box : shrunk.set(set).boxes.front()) {
+                origins.clear();
+                dirs.clear();
+                tfar.clear();
+                for (const glm::vec3& e : eyes)
+                    for (uint32_t k = 0; k < points_per_box; ++k) {
+                        const glm::vec3 p =
+                            box.min + box.size() * glm::vec3(rng.uniform(), rng.uniform(), rng.uniform());
+                        const float len = glm::length(p - e);
+                        if (!(len > 0.0f)) continue;
+                        origins.push_back(e);
+                        dirs.push_back((p - e) / len);
+                        tfar.push_back(len);
+                    }
+                blocked.resize(origins.size());
+                if (origins.empty()) continue;
+                scene.occluded_opaque(origins.data(), dirs.data(), tfar.data(), uint32_t(origins.size()),
+                                      blocked.data());
+                out.rays += origins.size();
+                for (size_t i = 0; i < blocked.size(); ++i) {
+                    if (blocked[i]) continue;
+                    if (out.reached++ == 0) {
+                        std::ostringstream m;
+                        m << "block " << index << ": eye (" << origins[i].x << ", " << origins[i].y << ", "
+                          << origins[i].z << ") reaches " << tfar[i] << " m along (" << dirs[i].x << ", "
+                          << dirs[i].y << ", " << dirs[i].z << ") into box (" << box.min.x << ", " << box.min.y
+                          << ", " << box.min.z << ")-(" << box.max.x << ", " << box.max.y << ", " << box.max.z
+                          << ")";
+                        out.first = m.str();
+                    }
+                }
+            }
+        }
+    return out;
 }
 
 }  // namespace pvs

@@ -17,6 +17,7 @@
 #include "core/world.h"
 #include "pvs/embree_scene.h"
 
+#include <string>
 #include <vector>
 
 namespace pvs {
@@ -56,6 +57,7 @@ struct BlockFigures {
     double solid_m3 = 0.0;        // proven solid in the windows of the blocks used, from their own eyes
     double global_solid_m3 = 0.0;  // ... from all eyes
     uint64_t boxes = 0;           // own shrunk boxes at the floor epsilon, all blocks
+    uint64_t boxes_dropped = 0;   // own shrunk boxes (all levels) a segment of the second check reached
     uint64_t rays = 0;            // sight probe and ray check rays
     double seconds = 0.0;
 };
@@ -80,5 +82,18 @@ struct BlockFigures {
 BlockFigures synthesize_block_occluders(Context& ctx, const OccluderConfig& config, const World& world,
                                         const ViewVolume& view, const RayScene& scene, glm::vec3 origin,
                                         float block_m, ShrunkOccluders& shrunk);
+
+// An AUDIT of occluders per block, independent of how they were made (fresh eyes, fresh points): rays from
+// `eyes_per_block` eye points of each block with its own set (seeded), aimed at `points_per_box` random
+// points inside every box of that set at the floor epsilon. A ray no opaque triangle stops before its point
+// is a FAILURE of the argument (pvs/conservative.h, point 9): sight from the block reaches its occluders.
+struct BlockAudit {
+    uint32_t blocks = 0;     // blocks with their own occluders
+    uint64_t rays = 0;
+    uint64_t reached = 0;    // rays that reached a point inside a box of their block's set
+    std::string first;       // the first such ray, in words
+};
+BlockAudit audit_block_occluders(const ViewVolume& view, const RayScene& scene, const ShrunkOccluders& shrunk,
+                                 uint32_t eyes_per_block, uint32_t points_per_box, uint64_t seed);
 
 }  // namespace pvs
