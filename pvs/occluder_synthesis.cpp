@@ -185,18 +185,19 @@ std::vector<Aabb> bounds_of(const VoxelGrid& grid, const std::vector<VoxelBox>& 
     return out;
 }
 
-// The solid less the voxels of every rejected box.
-BitVolume proven_solid(const VoxelGrid& grid, const BitVolume& solid, const std::vector<VoxelBox>& boxes,
-                       const std::vector<uint8_t>& rejected) {
-    BitVolume proven = solid;
+// Sets (value true) or clears the voxels of every box whose flag in `rejected` equals `which`.
+void mark_boxes(const VoxelGrid& grid, const std::vector<VoxelBox>& boxes, const std::vector<uint8_t>& rejected,
+                uint8_t which, bool value, BitVolume& out) {
     for (size_t b = 0; b < boxes.size(); ++b) {
-        if (!rejected[b]) continue;
+        if (rejected[b] != which) continue;
         const VoxelBox& vb = boxes[b];
         for (int z = vb.lo.z; z <= vb.hi.z; ++z)
             for (int y = vb.lo.y; y <= vb.hi.y; ++y)
-                for (int x = vb.lo.x; x <= vb.hi.x; ++x) proven.clear(grid.index(x, y, z));
+                for (int x = vb.lo.x; x <= vb.hi.x; ++x) {
+                    const uint64_t i = grid.index(x, y, z);
+                    value ? out.set(i) : out.clear(i);
+                }
     }
-    return proven;
 }
 
 // Boxes of the proven solid eroded by each epsilon of the ladder: a voxel stays when every voxel within k
@@ -303,7 +304,8 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
     if (shrunk != nullptr) {
         // The proven solid: the carved solid less every rejected box, then eroded per epsilon.
         ScopedTimer t(ctx, "shrink");
-        BitVolume proven = proven_solid(grid, solid.solid, boxes, rejected);
+        BitVolume proven = solid.solid;  // less every rejected box
+        mark_boxes(grid, boxes, rejected, 1, false, proven);
         *shrunk = ShrunkOccluders{};
         for (int level = 0; level <= levels; ++level) shrunk->epsilon_m.push_back(epsilon_m * std::ldexp(1.0, level));
         PanelFigures pf;
@@ -340,13 +342,7 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
     {
         BitVolume covered;
         covered.reset(grid.count());
-        for (size_t b = 0; b < boxes.size(); ++b) {
-            if (rejected[b]) continue;
-            const VoxelBox& vb = boxes[b];
-            for (int z = vb.lo.z; z <= vb.hi.z; ++z)
-                for (int y = vb.lo.y; y <= vb.hi.y; ++y)
-                    for (int x = vb.lo.x; x <= vb.hi.x; ++x) covered.set(grid.index(x, y, z));
-        }
+        mark_boxes(grid, boxes, rejected, 0, true, covered);
         BitVolume near;
         if (!view.view.empty()) {
             BitVolume region;
@@ -464,13 +460,7 @@ BlockFigures synthesize_block_occluders(Context& ctx, const OccluderConfig& conf
             const std::vector<uint8_t> rejected = check_boxes(quiet, config, bounds_of(window, boxes), check,
                                                               config.check_rays_per_eye, 0, scene, f.check_rays);
             BitVolume proven = global;
-            for (size_t b = 0; b < boxes.size(); ++b) {
-                if (rejected[b]) continue;
-                const VoxelBox& v = boxes[b];
-                for (int z = v.lo.z; z <= v.hi.z; ++z)
-                    for (int y = v.lo.y; y <= v.hi.y; ++y)
-                        for (int x = v.lo.x; x <= v.hi.x; ++x) proven.set(window.index(x, y, z));
-            }
+            mark_boxes(window, boxes, rejected, 0, true, proven);
             ShrunkOccluders set;
             set.epsilon_m = shrunk.epsilon_m;
             set.boxes = shrunk_boxes(quiet, window, proven, bc, shrunk.epsilon_m);

@@ -275,11 +275,11 @@ World blocked_yard(uint32_t& crate) {
     return w;
 }
 
-// The same yard, one stage down: the west block's own occluders fill the space behind the wall (out of
-// its eyes' sight), the global ones and the east block's do not (east eyes see it).
-TEST(Conservative, AWestBlocksOwnOccludersFillTheSpaceBehindTheHollowWall) {
-    uint32_t crate = 0;
-    const World w = blocked_yard(crate);
+// The yard's view volume, rays, global occluders and 8 m block occluders, handed to `check`.
+template <class Check>
+void with_yard_blocks(const Check& check) {
+    uint32_t sign = 0;
+    const World w = blocked_yard(sign);
     BakeConfig c = conservative_config();
     c.view.play_height_m = 2.0;
     Context ctx = quiet_context();
@@ -290,19 +290,28 @@ TEST(Conservative, AWestBlocksOwnOccludersFillTheSpaceBehindTheHollowWall) {
     synthesize_occluders(ctx, c.occluders, w, view, scene, f, c.conservative.epsilon_m, 2, &shrunk);
     const BlockFigures b =
         synthesize_block_occluders(ctx, c.occluders, w, view, scene, view.view_bounds.min, 8.0f, shrunk);
-    EXPECT_GT(b.blocks_used, 0u);
-    const glm::vec3 behind(19, 1.5f, 5.5f);
-    const auto holds = [&](const ShrunkOccluders& set) {
-        for (const Aabb& box : set.boxes[0])
-            if (box.contains(behind)) return true;
-        return false;
-    };
-    EXPECT_FALSE(holds(shrunk)) << "east eyes see the space behind the wall";
-    const int32_t west = shrunk.set_for(Aabb::of({2, 0.5f, 6}, {4, 2, 8}));
-    const int32_t east = shrunk.set_for(Aabb::of({26, 0.5f, 6}, {28, 2, 8}));
-    ASSERT_GE(west, 0);
-    EXPECT_TRUE(holds(shrunk.set(west))) << "no west eye sees the space behind the wall";
-    EXPECT_FALSE(holds(shrunk.set(east)));
+    check(view, scene, shrunk, b);
+}
+
+// The same yard, one stage down: the west block's own occluders fill the space behind the wall (out of
+// its eyes' sight), the global ones and the east block's do not (east eyes see it).
+TEST(Conservative, AWestBlocksOwnOccludersFillTheSpaceBehindTheHollowWall) {
+    with_yard_blocks([](const ViewVolume&, const RayScene&, const ShrunkOccluders& shrunk,
+                        const BlockFigures& b) {
+        EXPECT_GT(b.blocks_used, 0u);
+        const glm::vec3 behind(19, 1.5f, 5.5f);
+        const auto holds = [&](const ShrunkOccluders& set) {
+            for (const Aabb& box : set.boxes[0])
+                if (box.contains(behind)) return true;
+            return false;
+        };
+        EXPECT_FALSE(holds(shrunk)) << "east eyes see the space behind the wall";
+        const int32_t west = shrunk.set_for(Aabb::of({2, 0.5f, 6}, {4, 2, 8}));
+        const int32_t east = shrunk.set_for(Aabb::of({26, 0.5f, 6}, {28, 2, 8}));
+        ASSERT_GE(west, 0);
+        EXPECT_TRUE(holds(shrunk.set(west))) << "no west eye sees the space behind the wall";
+        EXPECT_FALSE(holds(shrunk.set(east)));
+    });
 }
 
 TEST(Conservative, BehindAHollowWallOthersSeeIntoIsCulledByTheBlocksOwnOccluders) {
@@ -334,21 +343,13 @@ TEST(Conservative, BehindAHollowWallOthersSeeIntoIsCulledByTheBlocksOwnOccluders
 // The safety property of block occluders, on the yard: no ray from eyes of a block (fresh ones, not those
 // synthesis used) reaches a point inside one of that block's shrunk boxes before an opaque triangle.
 TEST(Conservative, NoRayFromABlocksEyesReachesIntoItsOwnOccluders) {
-    uint32_t crate = 0;
-    const World w = blocked_yard(crate);
-    BakeConfig c = conservative_config();
-    c.view.play_height_m = 2.0;
-    Context ctx = quiet_context();
-    const ViewVolume view = build_view_volume(ctx, c.view, w);
-    RayScene scene(ctx, w);
-    OccluderFigures f;
-    ShrunkOccluders shrunk;
-    synthesize_occluders(ctx, c.occluders, w, view, scene, f, c.conservative.epsilon_m, 2, &shrunk);
-    synthesize_block_occluders(ctx, c.occluders, w, view, scene, view.view_bounds.min, 8.0f, shrunk);
-    const BlockAudit r = audit_block_occluders(view, scene, shrunk, 128, 8, 99);
-    EXPECT_GT(r.blocks, 0u);
-    EXPECT_GT(r.rays, 100000u);
-    EXPECT_EQ(r.reached, 0u) << r.first;
+    with_yard_blocks([](const ViewVolume& view, const RayScene& scene, const ShrunkOccluders& shrunk,
+                        const BlockFigures&) {
+        const BlockAudit r = audit_block_occluders(view, scene, shrunk, 128, 8, 99);
+        EXPECT_GT(r.blocks, 0u);
+        EXPECT_GT(r.rays, 100000u);
+        EXPECT_EQ(r.reached, 0u) << r.first;
+    });
 }
 
 // The same on an octree: its nodes take their block's occluders too (conservative_box_rows).
