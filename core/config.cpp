@@ -5,6 +5,8 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <cstdlib>
+#include <string>
 #include <type_traits>
 
 namespace pvs {
@@ -70,6 +72,90 @@ std::vector<std::pair<std::string, std::string>> resolved_parameters(const BakeC
         }
     });
     return out;
+}
+
+namespace {
+
+double parse_number(const std::string& key, const std::string& text) {
+    char* end = nullptr;
+    const double v = std::strtod(text.c_str(), &end);
+    if (text.empty() || end != text.c_str() + text.size())
+        throw bad_input(fmt::format("parameter {}: '{}' is not a number", key, text));
+    return v;
+}
+
+bool parse_bool(const std::string& key, const std::string& text) {
+    if (text == "true") return true;
+    if (text == "false") return false;
+    throw bad_input(fmt::format("parameter {}: '{}' is neither true nor false", key, text));
+}
+
+// "a,b,c;d,e,f" -> numbers in groups of `group`.
+std::vector<double> parse_groups(const std::string& key, const std::string& text, size_t group) {
+    std::vector<double> out;
+    size_t start = 0;
+    while (start < text.size()) {
+        size_t end = text.find_first_of(",;", start);
+        if (end == std::string::npos) end = text.size();
+        out.push_back(parse_number(key, text.substr(start, end - start)));
+        start = end + 1;
+    }
+    if (out.size() % group != 0)
+        throw bad_input(fmt::format("parameter {}: '{}' is not groups of {} numbers", key, text, group));
+    return out;
+}
+
+}  // namespace
+
+BakeConfig config_from_parameters(const std::vector<std::pair<std::string, std::string>>& parameters) {
+    BakeConfig config;
+    for (const auto& [key, value] : parameters) {
+        if (key == "mode") {
+            if (value != "sampled" && value != "conservative")
+                throw bad_input(fmt::format("parameter mode: '{}' is not a bake mode", value));
+            config.mode = value == "sampled" ? BakeMode::kSampled : BakeMode::kConservative;
+        } else if (key == "cells.kind") {
+            if (value != "grid" && value != "octree")
+                throw bad_input(fmt::format("parameter cells.kind: '{}' is not a cell kind", value));
+            config.cells.kind = value == "octree" ? CellKind::kOctree : CellKind::kGrid;
+        } else if (key == "verify.enabled") {
+            config.verify.enabled = parse_bool(key, value);
+        } else if (key == "occluders.enabled") {
+            config.occluders.enabled = parse_bool(key, value);
+        } else if (key == "view.use_world_seeds") {
+            config.view.use_world_seeds = parse_bool(key, value);
+        } else if (key == "view.use_world_boxes") {
+            config.view.use_world_boxes = parse_bool(key, value);
+        } else if (key == "view.boxes") {
+            const std::vector<double> v = parse_groups(key, value, 6);
+            for (size_t i = 0; i < v.size(); i += 6)
+                config.view.boxes.push_back(Aabb::of(glm::vec3(float(v[i]), float(v[i + 1]), float(v[i + 2])),
+                                                     glm::vec3(float(v[i + 3]), float(v[i + 4]), float(v[i + 5]))));
+        } else if (key == "view.seeds") {
+            const std::vector<double> v = parse_groups(key, value, 3);
+            for (size_t i = 0; i < v.size(); i += 3)
+                config.view.seeds.emplace_back(float(v[i]), float(v[i + 1]), float(v[i + 2]));
+        } else {
+            visit_options(config, [&](const OptionSpec& spec, auto& field) {
+                if (key != spec.key) return;
+                using T = std::decay_t<decltype(field)>;
+                if constexpr (std::is_same_v<T, bool>) {
+                    field = parse_bool(key, value);
+                } else if constexpr (std::is_integral_v<T>) {
+                    // Whole numbers as text: seeds pass 2^53, where a double would round them.
+                    char* end = nullptr;
+                    const long long v = std::strtoll(value.c_str(), &end, 10);
+                    const unsigned long long u = std::strtoull(value.c_str(), &end, 10);
+                    if (value.empty() || end != value.c_str() + value.size())
+                        throw bad_input(fmt::format("parameter {}: '{}' is not a whole number", key, value));
+                    field = std::is_signed_v<T> ? T(v) : T(u);
+                } else {
+                    field = T(parse_number(key, value));
+                }
+            });
+        }
+    }
+    return config;
 }
 
 }  // namespace pvs

@@ -285,4 +285,8 @@ void validate(const BakeConfig& config);
 // The resolved options as (key, value) text pairs, in declaration order, mode first.
 std::vector<std::pair<std::string, std::string>> resolved_parameters(const BakeConfig& config);
 
+// The inverse: the config a bake was made with, from its stored parameters (keys not given keep their
+// defaults). Throws pvs::Error (bad input) naming a key whose value does not parse.
+BakeConfig config_from_parameters(const std::vector<std::pair<std::string, std::string>>& parameters);
+
 }  // namespace pvs

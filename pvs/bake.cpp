@@ -42,6 +42,29 @@ void store_verification(const VerifyResult& result, VerificationRecord& record) 
     record.misses = result.misses;
 }
 
+std::vector<Occluder> solver_occluders(Context& ctx, const BakeConfig& config, const World& world,
+                                       const ViewVolume& view, const RayScene& scene, OccluderFigures& figures,
+                                       BlockFigures& blocks, ShrunkOccluders& shrunk) {
+    const bool conservative = config.mode == BakeMode::kConservative;
+    std::vector<Occluder> boxes =
+        synthesize_occluders(ctx, config.occluders, world, view, scene, figures, config.conservative.epsilon_m,
+                             config.conservative.refine_levels, conservative ? &shrunk : nullptr);
+    if (conservative && config.occluders.block_m > 0.0) {
+        // Blocks of whole cells from the cells' origin (the view bounds' corner, for the grid and the
+        // octree's roots), so that every cell lies in one block.
+        const double unit =
+            config.cells.kind == CellKind::kGrid
+                ? config.cells.cell_size_m
+                : config.cells.min_cell_size_m *
+                      std::ldexp(1.0, std::max(0, int(std::lround(std::log2(config.cells.root_cell_size_m /
+                                                                            config.cells.min_cell_size_m)))));
+        const double block = unit * std::max(1.0, std::round(config.occluders.block_m / unit));
+        blocks = synthesize_block_occluders(ctx, config.occluders, world, view, scene, view.view_bounds.min,
+                                            float(block), shrunk);
+    }
+    return boxes;
+}
+
 BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, const std::string& world_path,
                     const std::string& world_hash) {
     validate(config);
@@ -63,25 +86,9 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
     OccluderFigures occ;
     const bool conservative = config.mode == BakeMode::kConservative;
     ShrunkOccluders shrunk;
-    if (config.occluders.enabled || conservative) {
-        bake.occluders = synthesize_occluders(
-            ctx, config.occluders, world, view, scene, occ, config.conservative.epsilon_m,
-            config.conservative.refine_levels, conservative ? &shrunk : nullptr);
-    }
     BlockFigures blocks;
-    if (conservative && config.occluders.block_m > 0.0) {
-        // Blocks of whole cells from the cells' origin (the view bounds' corner, for the grid and the
-        // octree's roots), so that every cell lies in one block.
-        const double unit =
-            config.cells.kind == CellKind::kGrid
-                ? config.cells.cell_size_m
-                : config.cells.min_cell_size_m *
-                      std::ldexp(1.0, std::max(0, int(std::lround(std::log2(config.cells.root_cell_size_m /
-                                                                            config.cells.min_cell_size_m)))));
-        const double block = unit * std::max(1.0, std::round(config.occluders.block_m / unit));
-        blocks = synthesize_block_occluders(ctx, config.occluders, world, view, scene, view.view_bounds.min,
-                                            float(block), shrunk);
-    }
+    if (config.occluders.enabled || conservative)
+        bake.occluders = solver_occluders(ctx, config, world, view, scene, occ, blocks, shrunk);
     ConservativeFigures cons;
     uint32_t occluders_proven = 0;
     for (const Occluder& o : bake.occluders) occluders_proven += o.proven;

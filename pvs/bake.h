@@ -5,8 +5,12 @@
 
 #include "core/config.h"
 #include "core/context.h"
+#include "cells/view_volume.h"
+#include "core/occluder.h"
 #include "core/world.h"
 #include "io/bake_file.h"
+#include "pvs/embree_scene.h"
+#include "pvs/occluder_synthesis.h"
 #include "pvs/verify.h"
 
 #include <string>
@@ -17,6 +21,14 @@ const char* tool_version();
 
 // Object records for the bake file.
 std::vector<ObjectRecord> object_records(const World& world);
+
+// The occluder stage of a bake: the synthesized boxes (returned, as stored in the bake file) and, in
+// conservative mode, the solver's occluders (`shrunk`; per block too when config.occluders.block_m > 0,
+// blocks of whole cells). Deterministic: the same config and world give the same occluders, so tools can
+// rebuild a bake's occluders from its stored parameters (core/config.h config_from_parameters).
+std::vector<Occluder> solver_occluders(Context& ctx, const BakeConfig& config, const World& world,
+                                       const ViewVolume& view, const RayScene& scene, OccluderFigures& figures,
+                                       BlockFigures& blocks, ShrunkOccluders& shrunk);
 
 // Runs the bake of `world` (already loaded from world_path, whose content hash is world_hash).
 BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, const std::string& world_path,

@@ -1,4 +1,6 @@
 // The command line end to end, in-process: bake, info, query, verify, and bad input.
+#include "core/config.h"
+#include "core/error.h"
 #include "io/bake_file.h"
 #include "pvs/cli.h"
 #include "tests/test_util.h"
@@ -247,3 +249,36 @@ TEST(Cli, BakesTheRealWorldsWhenPresent) {
 
 }  // namespace
 }  // namespace pvs
+
+// The parameters a bake stores give back the config it was made with (bench_overestimation rebuilds a
+// bake's occluders from them), and a value that does not parse is named.
+TEST(Config, ParametersGiveBackTheConfig) {
+    pvs::BakeConfig config;
+    config.mode = pvs::BakeMode::kSampled;
+    config.cells.kind = pvs::CellKind::kOctree;
+    config.cells.cell_size_m = 1.5;
+    config.view.play_height_m = 3.0;
+    config.view.use_world_boxes = false;
+    config.view.boxes.push_back(pvs::Aabb::of(glm::vec3(-1.5f, 0.0f, 2.0f), glm::vec3(4.0f, 3.25f, 8.0f)));
+    config.view.seeds.emplace_back(0.5f, 1.0f, -2.0f);
+    config.verify.enabled = false;
+    config.verify.rays.seed = (uint64_t(1) << 60) + 1;  // a double would round it
+    config.conservative.epsilon_m = 0.0625;
+    const auto params = pvs::resolved_parameters(config);
+    const pvs::BakeConfig back = pvs::config_from_parameters(params);
+    EXPECT_EQ(pvs::resolved_parameters(back), params);
+    EXPECT_EQ(back.verify.rays.seed, config.verify.rays.seed);
+    EXPECT_EQ(back.mode, pvs::BakeMode::kSampled);
+    ASSERT_EQ(back.view.boxes.size(), 1u);
+    EXPECT_EQ(back.view.boxes[0].max.y, 3.25f);
+
+    auto bad = params;
+    for (auto& [k, v] : bad)
+        if (k == "cells.cell_size_m") v = "two";
+    try {
+        pvs::config_from_parameters(bad);
+        FAIL() << "a cell size of 'two' was accepted";
+    } catch (const pvs::Error& e) {
+        EXPECT_NE(std::string(e.what()).find("cells.cell_size_m"), std::string::npos) << e.what();
+    }
+}
