@@ -15,7 +15,8 @@
 // - region:   every ray is stopped by the shrunk occluders, but a ray from a random point of the cell's eye
 //             REGION (the box around its eye voxels, whose boundary the solver samples) passes them: the
 //             solver proves hiddenness for the whole box, not just the eye voxels in it;
-// - solver:   every ray from the region is stopped by the shrunk occluders, yet the solver listed it: the
+// - solver:   every ray from the region is stopped by the shrunk occluders, yet the solver listed it (split
+//             by whether the shrunk boxes alone stop the rays, or they need the panels): the
 //             patches' epsilon balls, pixel coverage, the boxes of triangle runs it tests.
 // With R rays a class is a sample, not a proof: a pair that only a few sight lines reach reads as hidden.
 // Prints JSON: pairs and triangles per class, the listed / visible ratio, and what it would be if each
@@ -139,7 +140,7 @@ int main(int argc, char** argv) {
         for (const pvs::Occluder& o : proven_boxes)
             if (o.proven) unshrunk.push_back(o.box);
         const size_t n_sets = 1 + shrunk.block_sets.size();
-        std::vector<std::unique_ptr<pvs::RayScene>> full_scenes, shrunk_scenes;
+        std::vector<std::unique_ptr<pvs::RayScene>> full_scenes, shrunk_scenes, boxes_only_scenes;
         for (size_t s = 0; s < n_sets; ++s) {
             const pvs::ShrunkOccluders& set = shrunk.set(int32_t(s) - 1);
             // A block's unshrunk solid is not kept as boxes: its floor-level boxes stand in for it.
@@ -147,6 +148,7 @@ int main(int argc, char** argv) {
             const pvs::World thin = box_world(set.boxes[0], set.panels[0]);
             full_scenes.push_back(std::make_unique<pvs::RayScene>(ctx, full));
             shrunk_scenes.push_back(std::make_unique<pvs::RayScene>(ctx, thin));
+            boxes_only_scenes.push_back(std::make_unique<pvs::RayScene>(ctx, box_world(set.boxes[0], {})));
         }
         pvs::CellSet cells = bake.cells;
         cells.view = view.view;
@@ -164,6 +166,8 @@ int main(int argc, char** argv) {
 
         std::vector<std::array<uint64_t, kClasses>> pairs(n_cells), tris(n_cells);
         std::vector<uint64_t> misses(n_cells, 0);
+        // Solver pairs whose rays the shrunk boxes alone stop [0], or that need the panels too [1].
+        std::vector<std::array<uint64_t, 2>> solver_needs_panels(n_cells, std::array<uint64_t, 2>{});
         // [no_box, epsilon][stopped within 0.5 m of the eye, within 0.3 m of the target, between]
         std::vector<std::array<std::array<uint64_t, 3>, 2>> stops(n_cells, std::array<std::array<uint64_t, 3>, 2>{});
         // [no_box, epsilon][stopper in an uninset panel, in an axis plane but no panel]
@@ -220,6 +224,7 @@ int main(int argc, char** argv) {
             for (uint32_t o : listed)
                 if (!reached[o]) hidden.push_back(o);
             std::vector<uint8_t> passes_full(n_objects, 0), passes_thin(n_objects, 0), passes_region(n_objects, 0),
+                needs_panels(n_objects, 0),
                 blocked;
             const pvs::Aabb region = pvs::eye_region(cells.eyes, box);
             struct Ray {
@@ -266,6 +271,11 @@ int main(int argc, char** argv) {
                 shrunk_scenes[size_t(set + 1)]->occluded_opaque(origins.data(), dirs.data(), lengths.data(),
                                                                 uint32_t(hidden.size()), blocked.data());
                 for (size_t h = 0; h < hidden.size(); ++h) passes_region[hidden[h]] |= !blocked[h];
+                // The same rays against the shrunk boxes without panels: do they need the panels?
+                blocked.assign(hidden.size(), 0);
+                boxes_only_scenes[size_t(set + 1)]->occluded_opaque(origins.data(), dirs.data(), lengths.data(),
+                                                                    uint32_t(hidden.size()), blocked.data());
+                for (size_t h = 0; h < hidden.size(); ++h) needs_panels[hidden[h]] |= !blocked[h];
             }
             for (uint32_t o : listed) {
                 const pvs::WorldObject& obj = world.objects[o];
@@ -338,6 +348,7 @@ int main(int argc, char** argv) {
                         }
                     }
                 }
+                if (k == kSolver) ++solver_needs_panels[size_t(i)][needs_panels[o] ? 1 : 0];
                 ++pairs[size_t(i)][k];
                 tris[size_t(i)][k] += obj.triangle_count;
             }
@@ -410,6 +421,13 @@ int main(int argc, char** argv) {
                 }
             }
         }
+        uint64_t sb = 0, sp = 0;
+        for (uint32_t i = 0; i < n_cells; ++i) {
+            sb += solver_needs_panels[i][0];
+            sp += solver_needs_panels[i][1];
+        }
+        out["classes"]["solver"]["boxes_alone_stop_the_rays"] = sb;
+        out["classes"]["solver"]["rays_need_the_panels"] = sp;
         std::cout << out.dump(2) << std::endl;
     } catch (const std::exception& e) {
         std::fprintf(stderr, "error: %s\n", e.what());

@@ -93,6 +93,9 @@ struct ConservativeConfig {
                                // every epsilon * sqrt(2). Smaller: tighter PVS, slower bake (samples grow
                                // as 1 / epsilon^2); walls thinner than 2 epsilon do not occlude
     int cube_resolution = 64;  // [Limit: 8..1024] depth cube pixels per face edge
+    int fine_cube_resolution = 0;  // [Limit: 0..4096] floor samples take a second look at what the
+                                     // cube could not prove on a cube this fine, drawn only over those
+                                     // objects' pixels; 0 = off
     int refine_levels = 4;     // [Limit: 0..8] adaptive refinement: patches of a face are first tested
                                // with occluders shrunk by epsilon * 2^levels (few samples), and only the
                                // objects not yet proven hidden go to patches half the size, down to epsilon
@@ -239,6 +242,11 @@ void visit_options(Config& c, Visitor&& v) {
     v(OptionSpec{"--cube-resolution", "conservative.cube_resolution", "pixels",
                  "conservative mode: depth cube pixels per face edge", 8, 1024},
       c.conservative.cube_resolution);
+    v(OptionSpec{"--fine-cube-resolution", "conservative.fine_cube_resolution", "pixels",
+                 "conservative mode: floor samples take a second look at what the cube could not prove on a "
+                 "cube this fine (only over those objects' pixels); 0 = off",
+                 0, 4096},
+      c.conservative.fine_cube_resolution);
     v(
         OptionSpec{
             "--refine-levels", "conservative.refine_levels", "levels",

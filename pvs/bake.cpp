@@ -197,6 +197,7 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
         {"conservative_samples_in_occluders", double(cons.samples_skipped)},
         {"conservative_patches_in_solid", double(cons.patches_in_solid)},
         {"conservative_object_tests", double(cons.object_tests)},
+        {"conservative_fine_samples", double(cons.fine_samples)},
         {"conservative_seconds", cons.seconds},
         {"cells_per_second", cons.seconds > 0
                                  ? double(bake.cells.size()) / cons.seconds

@@ -113,7 +113,7 @@ bool box_all_in_mask(const VoxelMask& mask, const Aabb& box) {
 }
 
 struct Counts {
-    uint64_t samples = 0, skipped = 0, in_solid = 0, tests = 0, rays = 0;
+    uint64_t samples = 0, skipped = 0, in_solid = 0, tests = 0, rays = 0, fine_samples = 0;
     std::vector<uint64_t> per_level;
     Counts& operator+=(const Counts& o) {
         samples += o.samples;
@@ -121,6 +121,7 @@ struct Counts {
         in_solid += o.in_solid;
         tests += o.tests;
         rays += o.rays;
+        fine_samples += o.fine_samples;
         per_level.resize(std::max(per_level.size(), o.per_level.size()), 0);
         for (size_t k = 0; k < o.per_level.size(); ++k) per_level[k] += o.per_level[k];
         return *this;
@@ -161,6 +162,7 @@ struct Shared {
     std::vector<std::vector<Aabb>> parts;
     RayTargets targets;
     int cube_resolution;
+    int fine_cube_resolution;  // 0: no second look at the floor
 };
 
 // Per thread: the depth cube and scratch. solve_patch() refines one patch.
@@ -169,6 +171,7 @@ public:
     explicit PatchSolver(const Shared& shared)
         : sh_(shared),
           cube_(shared.cube_resolution),
+          fine_(std::max(shared.fine_cube_resolution, kMinCubeResolution)),
           open_mark_(shared.world.objects.size(), 0),
           open_under_(shared.tree.nodes.size(), 0) {
         counts_.per_level.assign(shared.occ.epsilon_m.size(), 0);
@@ -280,13 +283,15 @@ public:
             }
             cube_.add_panels(near_panels_);
             cube_.add_occluders(near_);
-            for (int side = 0; side < 2; ++side) {
-                std::vector<uint32_t>& open = sides.open[size_t(side)];
-                open = unproven(open);
-                if (k == 0) {  // the floor: whatever is not proven is listed
-                    for (uint32_t o : open) sides.row[size_t(side)][o >> 6] |= uint64_t(1) << (o & 63);
-                    open.clear();
+            for (int side = 0; side < 2; ++side) sides.open[size_t(side)] = unproven(cube_, sides.open[size_t(side)]);
+            if (k == 0) {  // the floor: whatever is not proven is listed
+                if (sh_.fine_cube_resolution > 0 && !sides.empty()) second_look(s, sides);
+                for (int side = 0; side < 2; ++side) {
+                    for (uint32_t o : sides.open[size_t(side)])
+                        sides.row[size_t(side)][o >> 6] |= uint64_t(1) << (o & 63);
+                    sides.open[size_t(side)].clear();
                 }
+                return;
             }
             if (sides.empty()) return;
             for (int side = 0; side < 2; ++side)
@@ -353,8 +358,28 @@ public:
     }
 
 private:
-    // The objects of `open` the current cube cannot prove hidden, in the order of `open`.
-    std::vector<uint32_t> unproven(const std::vector<uint32_t>& open) {
+    // At a floor sample, before listing what the cube could not prove: objects a sight ray from s reaches
+    // are listed (no cube can prove them), and the rest get a second look on a finer cube (the same
+    // occluders and panels, drawn only over their pixels). A pixel of the coarse cube is written only where
+    // a box covers all of it and an object claims every pixel its bounds touch, so near every occluder edge
+    // about two coarse pixels are lost; the fine cube loses the same count of pixels R_fine / R times
+    // smaller. Both tests are conservative (argument 4), so proving on either is enough.
+    void second_look(glm::vec3 s, Sides& sides) {
+        for (int side = 0; side < 2; ++side)
+            sides.open[size_t(side)] = list_seen(s, sides.open[size_t(side)], sides.row[size_t(side)]);
+        if (sides.empty()) return;
+        interest_.clear();
+        for (const std::vector<uint32_t>& open : sides.open)
+            for (uint32_t o : open) interest_.push_back(sh_.world.objects[o].bounds);
+        fine_.clear_for(s, interest_);
+        fine_.add_panels(near_panels_);
+        fine_.add_occluders(near_);
+        ++counts_.fine_samples;
+        for (int side = 0; side < 2; ++side) sides.open[size_t(side)] = unproven(fine_, sides.open[size_t(side)]);
+    }
+
+    // The objects of `open` the cube cannot prove hidden, in the order of `open`.
+    std::vector<uint32_t> unproven(const DepthCube& cube, const std::vector<uint32_t>& open) {
         const std::vector<ObjectTree::Node>& nodes = sh_.tree.nodes;
         for (uint32_t o : open) open_mark_[o] = 1;
         // Open objects under each node (children after parents: walk backwards).
@@ -372,7 +397,7 @@ private:
             if (open_under_[size_t(n)] == 0) continue;
             const ObjectTree::Node& node = nodes[size_t(n)];
             ++counts_.tests;
-            if (cube_.is_hidden(node.bounds)) continue;  // every open object under it stays proven
+            if (cube.is_hidden(node.bounds)) continue;  // every open object under it stays proven
             if (node.object < 0) {
                 stack_.push_back(node.right);
                 stack_.push_back(node.left);
@@ -382,7 +407,7 @@ private:
             bool hidden = parts.size() > 1;
             for (size_t p = 0; hidden && p < parts.size(); ++p) {
                 ++counts_.tests;
-                hidden = cube_.is_hidden(parts[p]);
+                hidden = cube.is_hidden(parts[p]);
             }
             if (!hidden) open_mark_[size_t(node.object)] = 2;  // not proven from this sample
         }
@@ -397,6 +422,7 @@ private:
     const Shared& sh_;
     const ShrunkOccluders* occ_ = &sh_.occ;
     DepthCube cube_;
+    DepthCube fine_;  // the second look at floor samples (1 pixel when off)
     std::vector<uint8_t> open_mark_;    // per object: 0 not open, 1 open, 2 open and not proven
     std::vector<uint32_t> open_under_;  // per tree node
     std::vector<int32_t> stack_;
@@ -423,6 +449,7 @@ void add_counts(ConservativeFigures& figures, const Counts& n, std::chrono::stea
     figures.patches_in_solid += n.in_solid;
     figures.object_tests += n.tests;
     figures.rays += n.rays;
+    figures.fine_samples += n.fine_samples;
     figures.samples_per_level.resize(std::max(figures.samples_per_level.size(), n.per_level.size()), 0);
     for (size_t k = 0; k < n.per_level.size(); ++k) figures.samples_per_level[k] += n.per_level[k];
     figures.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -436,7 +463,8 @@ Shared make_shared(const ConservativeConfig& config, const World& world, const S
                   object_tree(world),
                   object_parts(world),
                   ray_targets(world),
-                  config.cube_resolution};
+                  config.cube_resolution,
+                  config.fine_cube_resolution};
 }
 
 // One face of a box: the side at box.min[axis] (side 0) or box.max[axis] (side 1), flat along `axis`.
@@ -587,9 +615,10 @@ PvsSet bake_conservative_pvs(Context& ctx, const ConservativeConfig& config, con
     }
     add_always_listed(world, cells, pvs);
     ctx.info(fmt::format(
-        "conservative PVS: {} samples (per epsilon level {}), {} inside occluders and {} patches "
-        "in solid skipped, {:.1f} M box tests, {:.1f} M sight rays, {:.1f} s ({:.0f} cells/s)",
-        figures.samples, fmt::join(figures.samples_per_level, "/"), figures.samples_skipped,
+        "conservative PVS: {} samples (per epsilon level {}; {} second looks at {} px), {} inside occluders "
+        "and {} patches in solid skipped, {:.1f} M box tests, {:.1f} M sight rays, {:.1f} s ({:.0f} cells/s)",
+        figures.samples, fmt::join(figures.samples_per_level, "/"), figures.fine_samples,
+        config.fine_cube_resolution, figures.samples_skipped,
         figures.patches_in_solid, double(figures.object_tests) * 1e-6, double(figures.rays) * 1e-6,
         figures.seconds, double(cells.size()) / std::max(1e-9, figures.seconds)));
     return pvs;

@@ -91,6 +91,7 @@ struct ConservativeFigures {
     uint64_t patches_in_solid = 0;  // patches wholly in the proven solid
     uint64_t object_tests = 0;      // box tests on a depth cube (hierarchy nodes, objects and parts)
     uint64_t rays = 0;              // sight rays from patch centres (objects seen need no refinement)
+    uint64_t fine_samples = 0;      // floor samples that took a second look on the fine cube
     std::vector<uint64_t> samples_per_level;  // samples at each epsilon of the ladder
     double seconds = 0.0;
 };

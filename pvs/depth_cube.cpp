@@ -186,6 +186,19 @@ void DepthCube::clear(glm::vec3 eye) {
     for (auto& r : region_) r = {0, resolution_ - 1, 0, resolution_ - 1};
 }
 
+void DepthCube::clear_for(glm::vec3 eye, const std::vector<Aabb>& boxes) {
+    eye_ = eye;
+    limit_to(boxes);
+    const int r = resolution_;
+    for (int face = 0; face < 6; ++face) {
+        const auto& reg = region_[size_t(face)];
+        for (int j = reg[2]; j <= reg[3]; ++j) {
+            float* const row = depth_.data() + (size_t(face) * r + size_t(j)) * r;
+            std::fill(row + reg[0], row + reg[1] + 1, kInfF);
+        }
+    }
+}
+
 void DepthCube::limit_to(const std::vector<Aabb>& boxes) {
     const int r = resolution_;
     for (auto& reg : region_) reg = {r, -1, r, -1};
@@ -361,6 +374,9 @@ bool DepthCube::is_hidden(const Aabb& box) const {
     for (int face = 0; face < 6; ++face) {
         const OccludeeFace of = occludee_face(box, eye_, face, r);
         if (!of.touched) continue;
+        // Pixels outside the drawn region hold no occluder (or, after clear_for(), stale depths): visible.
+        const auto& reg = region_[size_t(face)];
+        if (of.i0 < reg[0] || of.i1 > reg[1] || of.j0 < reg[2] || of.j1 > reg[3]) return false;
         const float* const face_depth = depth_.data() + size_t(face) * r * r;
         for (int j = of.j0; j <= of.j1; ++j) {
             const float* const row = face_depth + size_t(j) * r;

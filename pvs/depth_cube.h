@@ -88,6 +88,11 @@ public:
     // which is always the safe side; use it when only these boxes will be tested (adaptive refinement
     // tests few objects on fine patches).
     void limit_to(const std::vector<Aabb>& boxes);
+    // clear() then limit_to(), resetting only the pixels of the limited region: the cost of a clear grows
+    // with the region, not with 6 R^2, so a fine cube (R = 256 and more) tested on a few boxes stays cheap.
+    // Pixels outside the region keep stale depths, which is_hidden() never reads: a box touching a pixel
+    // outside the region is visible (as after limit_to(), where they are +infinity).
+    void clear_for(glm::vec3 eye, const std::vector<Aabb>& boxes);
     // Rasterizes one occluder box (see the pixel rule above). Empty or non-finite boxes are ignored.
     void add_occluder(const Aabb& box);
     // Rasterizes one PANEL (occluders/panels.h: flat along exactly one axis, else ignored), only on the face
