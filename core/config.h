@@ -124,6 +124,10 @@ struct VerifyConfig {
                                // fresh eye points at the objects the uniform rays did not touch; the
                                // uniform rays get the rest. 0 = uniform rays only (the figures before aimed
                                // rays). With no budget (0), each cell aims from eyes_per_cell eye points
+    double aimed_listed_share = 0.5;  // [Limit: 0..1] [Units: share] of a cell's aimed rays for the untouched
+                                      // objects the PVS lists (they can only tighten the sampled set); the
+                                      // untouched objects it leaves out (where misses hide) get the rest,
+                                      // and either group gets what the other cannot use (pvs/verify.h)
 };
 
 struct BakeConfig {
@@ -285,6 +289,12 @@ void visit_options(Config& c, Visitor&& v) {
                  "(the uniform rays get the rest), 0 = uniform rays only",
                  0, 0.95},
       c.verify.aimed_share);
+    v(OptionSpec{"--verify-aimed-listed-share", "verify.aimed_listed_share", "share",
+                 "verification: share of a cell's aimed rays for the untouched objects the PVS lists (they "
+                 "tighten the overestimation figure); the objects it leaves out (where misses hide) get the "
+                 "rest, and each group gets what the other cannot use",
+                 0, 1},
+      c.verify.aimed_listed_share);
 }
 
 // Throws pvs::Error (bad input) naming the option when a value is outside its limits.

@@ -52,10 +52,19 @@ uint64_t row_triangles(const World& world, const PvsSet& set, uint32_t cell) {
 
 // Random streams of the aimed rays, apart from the uniform ones (whose eye stream is the cell index and
 // whose direction stream is (cell << 20) ^ eye).
-constexpr uint64_t kAimedEyeStream = uint64_t(0x41494d) << 40;     // | cell: eye points
-constexpr uint64_t kAimedSubsetStream = uint64_t(0x535542) << 40;  // | cell: which candidates, when few rays
+constexpr uint64_t kAimedEyeStream = uint64_t(0x41494d) << 40;     // | cell (no budget), ^ (cell, batch)
+constexpr uint64_t kAimedSubsetStream = uint64_t(0x535542) << 40;  // ^ (cell, round): which candidates
 constexpr uint64_t kAimedPointStream = uint64_t(0x505453) << 40;   // ^ (cell << 20) ^ eye: target points
 constexpr float kMinAimDistanceM = 1e-4f;                          // closer targets give no direction
+// The eye points of the aimed rounds of a cell come in batches of 16, stratified over the cell's eye region
+// and taken in bit-reversed order, so the first 2, 4, 8 rounds of a batch already spread over the region.
+constexpr uint32_t kRoundEyesPerBatch = 16;
+constexpr uint8_t kRoundEyeOrder[kRoundEyesPerBatch] = {0, 8, 4, 12, 2, 10, 6, 14, 1, 9, 5, 13, 3, 11, 7, 15};
+
+// A stream of (cell, index), one per pair, for a purpose tagged by `tag`.
+uint64_t cell_stream(uint64_t tag, uint32_t cell, uint32_t index) {
+    return tag ^ mix64((uint64_t(cell) << 32) | index);
+}
 
 // Per triangle: the running sum of triangle areas within its object (m2), to pick a triangle of an object
 // with probability proportional to its area.
@@ -88,42 +97,73 @@ glm::vec3 random_point_on(const World& world, const std::vector<double>& cum_are
            r * v * world.positions[t.v[2]];
 }
 
-// The aimed rays of one cell: eye e's rays are [first[e], first[e + 1]) in `directions`.
+// The aimed rays of one cell. Without a budget eye e's rays are [first[e], first[e + 1]) in `directions`;
+// with one, a round has one eye and its rays are all of `directions`.
 struct AimedRays {
-    std::vector<uint32_t> candidates;  // objects to aim at, increasing
+    std::vector<uint32_t> listed;    // candidates the PVS lists, increasing
+    std::vector<uint32_t> left_out;  // candidates the PVS leaves out, increasing
+    std::vector<uint32_t> targets;   // of a round (or every candidate without a budget), increasing
+    std::vector<uint8_t> aimed_at;   // per object: aimed at by a round of this cell
     std::vector<glm::vec3> eyes;
     std::vector<uint32_t> first;
     std::vector<glm::vec3> directions;
-    std::vector<RayTouch> touches;  // ray = index into directions
+    std::vector<RayTouch> touches;      // ray = index into directions
+    std::vector<glm::vec3> batch_eyes;  // the eye points of batch `batch` of the rounds
+    uint32_t batch = UINT32_MAX;
 };
 
-// Draws and traces the aimed rays of cell c: `full_eyes` eye points each aim one ray at a random point on
-// every object of `targets`, then, when `partial` is not empty, one more eye point aims at those objects.
+// Appends one ray per object of `targets` from `eye` at a random point on the object (none for an object
+// closer than kMinAimDistanceM).
+void aim_from(const World& world, const std::vector<double>& cum_area, const glm::vec3& eye,
+              const std::vector<uint32_t>& targets, Rng& rng, std::vector<glm::vec3>& directions) {
+    for (uint32_t o : targets) {
+        const glm::vec3 d = random_point_on(world, cum_area, o, rng) - eye;
+        const float len = glm::length(d);
+        if (len < kMinAimDistanceM) continue;
+        directions.push_back(d / len);
+    }
+}
+
+// Without a budget: `eye_count` eye points each aim one ray at a random point on every object of `targets`.
 void trace_aimed(const RayScene& scene, const World& world, const std::vector<double>& cum_area,
-                 const CellSet& cells, uint32_t c, const std::vector<uint32_t>& targets, uint32_t full_eyes,
-                 const std::vector<uint32_t>& partial, uint64_t seed, AimedRays& out) {
+                 const CellSet& cells, uint32_t c, uint32_t eye_count, uint64_t seed, AimedRays& out) {
     out.eyes.clear();
     out.first.assign(1, 0);
     out.directions.clear();
     out.touches.clear();
-    const uint32_t eye_count = full_eyes + (partial.empty() ? 0 : 1);
     sample_eye_points_in(cells, cells.cells[c].bounds, kAimedEyeStream | c, eye_count, seed, out.eyes);
     for (uint32_t e = 0; e < out.eyes.size(); ++e) {
         Rng rng(seed, kAimedPointStream ^ (uint64_t(c) << 20) ^ e);
-        const glm::vec3 eye = out.eyes[e];
         const uint32_t begin = uint32_t(out.directions.size());
-        for (uint32_t o : e < full_eyes ? targets : partial) {
-            const glm::vec3 d = random_point_on(world, cum_area, o, rng) - eye;
-            const float len = glm::length(d);
-            if (len < kMinAimDistanceM) continue;
-            out.directions.push_back(d / len);
-        }
+        aim_from(world, cum_area, out.eyes[e], out.targets, rng, out.directions);
         const uint32_t count = uint32_t(out.directions.size()) - begin;
         out.first.push_back(begin + count);
         const size_t t0 = out.touches.size();
-        scene.trace(eye, out.directions.data() + begin, count, out.touches);
+        scene.trace(out.eyes[e], out.directions.data() + begin, count, out.touches);
         for (size_t i = t0; i < out.touches.size(); ++i) out.touches[i].ray += begin;
     }
+}
+
+// Round `round` of cell c: one eye point (from its batch) aims one ray at every object of `out.targets`.
+// False when the cell has no eye point (no eye voxel in it): nothing traced.
+bool trace_round(const RayScene& scene, const World& world, const std::vector<double>& cum_area,
+                 const CellSet& cells, uint32_t c, uint32_t round, uint64_t seed, AimedRays& out) {
+    const uint32_t batch = round / kRoundEyesPerBatch, slot = kRoundEyeOrder[round % kRoundEyesPerBatch];
+    if (batch != out.batch) {
+        out.batch = batch;
+        out.batch_eyes.clear();
+        sample_eye_points_in(cells, cells.cells[c].bounds, cell_stream(kAimedEyeStream, c, batch),
+                             kRoundEyesPerBatch, seed, out.batch_eyes);
+    }
+    out.eyes.clear();
+    out.directions.clear();
+    out.touches.clear();
+    if (slot >= out.batch_eyes.size()) return false;
+    out.eyes.push_back(out.batch_eyes[slot]);
+    Rng rng(seed, cell_stream(kAimedPointStream, c, round));
+    aim_from(world, cum_area, out.eyes[0], out.targets, rng, out.directions);
+    scene.trace(out.eyes[0], out.directions.data(), uint32_t(out.directions.size()), out.touches);
+    return true;
 }
 
 }  // namespace
@@ -138,10 +178,16 @@ NamedValues VerifyResult::figures() const {
         {"missed_rays", double(missed_rays)},
         {"cells_with_misses", double(cells_with_misses)},
         {"aimed_rays", double(aimed_rays)},
+        {"aimed_listed_rays", double(aimed_listed_rays)},
         {"aimed_rays_per_cell", double(aimed_rays_per_cell)},
         {"aimed_candidates", double(aimed_candidates)},
+        {"aimed_listed_candidates", double(aimed_listed_candidates)},
         {"aimed_targets", double(aimed_targets)},
+        {"aimed_rounds", double(aimed_rounds)},
+        {"aimed_rounds_mean",
+         cell_sampled_visible.empty() ? 0.0 : double(aimed_rounds) / double(cell_sampled_visible.size())},
         {"aimed_new_pairs", double(aimed_new_pairs)},
+        {"aimed_listed_new_pairs", double(aimed_listed_new_pairs)},
         {"aimed_missed_pairs", double(aimed_missed_pairs)},
         {"overestimation_mean", overestimation_mean},
         {"overestimation_median", overestimation_median},
@@ -181,9 +227,9 @@ VerifyResult verify_pvs(Context& ctx, const VerifyConfig& config, const World& w
     if (aim && aim_capped) {
         ctx.info(
             fmt::format("verify: aimed rays: {} per cell ({:.1f} M, {:.0f}% of the budget) at the objects "
-                        "the uniform rays did not touch",
+                        "the uniform rays did not touch, {:.0f}% of them at those the PVS lists",
                         result.aimed_rays_per_cell, double(result.aimed_rays_per_cell * n_cells) * 1e-6,
-                        100.0 * config.aimed_share));
+                        100.0 * config.aimed_share, 100.0 * config.aimed_listed_share));
     } else if (aim) {
         ctx.info(
             fmt::format("verify: aimed rays: from {} eye points per cell at every object the uniform rays "
@@ -194,15 +240,16 @@ VerifyResult verify_pvs(Context& ctx, const VerifyConfig& config, const World& w
 
     std::vector<std::vector<Miss>> cell_misses(n_cells);
     std::vector<uint64_t> cell_missed_rays(n_cells, 0);
-    uint64_t rays_traced = 0, aimed_rays = 0, aimed_candidates = 0, aimed_targets = 0, aimed_new = 0,
-             aimed_missed = 0;
+    uint64_t rays_traced = 0, aimed_rays = 0, aimed_listed_rays = 0, aimed_candidates = 0,
+             aimed_listed_candidates = 0, aimed_targets = 0, aimed_new = 0, aimed_listed_new = 0,
+             aimed_missed = 0, aimed_rounds = 0;
     ctx.progress_begin("verify", n_cells, "cells");
-#pragma omp parallel reduction(+ : rays_traced, aimed_rays, aimed_candidates, aimed_targets, aimed_new, \
-                                   aimed_missed)
+#pragma omp parallel reduction(+ : rays_traced, aimed_rays, aimed_listed_rays, aimed_candidates, \
+                                   aimed_listed_candidates, aimed_targets, aimed_new, aimed_listed_new, \
+                                   aimed_missed, aimed_rounds)
     {
         CellRays rays;
         AimedRays aimed;
-        std::vector<uint32_t> partial;
         std::vector<uint8_t> reported;
 #pragma omp for schedule(dynamic, 4)
         for (int64_t ci = 0; ci < int64_t(n_cells); ++ci) {
@@ -224,55 +271,106 @@ VerifyResult verify_pvs(Context& ctx, const VerifyConfig& config, const World& w
                 record(t.object, rays.eyes[t.ray / rays.rays_per_eye], rays.directions[t.ray], t.t);
             }
             if (aim) {
-                // Candidates: what the uniform rays did not touch, but for listed objects every PVS lists.
-                aimed.candidates.clear();
+                // Candidates: what the uniform rays did not touch, but for listed objects every PVS lists;
+                // split into those the PVS lists and those it leaves out.
+                aimed.listed.clear();
+                aimed.left_out.clear();
                 const Aabb& cell_box = cells.cells[c].bounds;
                 for (uint32_t o = 0; o < n_objects; ++o) {
                     const WorldObject& obj = world.objects[o];
                     if (result.sampled.test(c, o) || obj.triangle_count == 0) continue;
                     if (cum_area[obj.first_triangle + obj.triangle_count - 1] <= 0.0) continue;
-                    if (pvs.test(c, o) &&
-                        ((obj.flags & kObjectAlwaysVisible) || cell_box.overlaps(obj.bounds)))
-                        continue;
-                    aimed.candidates.push_back(o);
-                }
-                // A eye points aim at every candidate, A = aimed rays per cell / candidates (eyes_per_cell
-                // without a budget); the rest of the cell's rays, fewer than the candidates, go from one
-                // more eye point to a seeded random subset of them.
-                const uint64_t k = aimed.candidates.size();
-                aimed_candidates += k;
-                uint32_t full_eyes = k > 0 ? config.rays.eyes_per_cell : 0;
-                partial.clear();
-                if (aim_capped && k > 0) {
-                    const uint64_t per_cell = result.aimed_rays_per_cell;
-                    full_eyes = uint32_t(std::min<uint64_t>(per_cell / k, UINT32_MAX - 1));
-                    const uint64_t rest = per_cell % k;
-                    if (rest > 0 && full_eyes < UINT32_MAX - 1) {
-                        partial = aimed.candidates;
-                        Rng rng(config.rays.seed, kAimedSubsetStream | c);
-                        for (uint64_t i = 0; i < rest; ++i)
-                            std::swap(partial[i], partial[i + rng.below(uint32_t(k - i))]);
-                        partial.resize(rest);
-                        std::sort(partial.begin(), partial.end());
+                    if (!pvs.test(c, o)) {
+                        aimed.left_out.push_back(o);
+                    } else if (!(obj.flags & kObjectAlwaysVisible) && !cell_box.overlaps(obj.bounds)) {
+                        aimed.listed.push_back(o);
                     }
                 }
-                if (full_eyes > 0 || !partial.empty()) {
-                    trace_aimed(scene, world, cum_area, cells, c, aimed.candidates, full_eyes, partial,
-                                config.rays.seed, aimed);
-                    if (!aimed.eyes.empty()) aimed_targets += full_eyes > 0 ? k : partial.size();
-                    aimed_rays += aimed.directions.size();
-                    rays_traced += aimed.directions.size();
-                    for (const RayTouch& t : aimed.touches) {
-                        if (!result.sampled.test(c, t.object)) {
-                            result.sampled.set(c, t.object);
-                            ++aimed_new;
+                aimed_candidates += aimed.listed.size() + aimed.left_out.size();
+                aimed_listed_candidates += aimed.listed.size();
+                // Every object an aimed ray touches counts as seen, and as a miss when unlisted.
+                auto take = [&](const RayTouch& t, const glm::vec3& eye) {
+                    if (!result.sampled.test(c, t.object)) {
+                        result.sampled.set(c, t.object);
+                        ++aimed_new;
+                        if (pvs.test(c, t.object)) ++aimed_listed_new;
+                    }
+                    if (pvs.test(c, t.object)) return;
+                    if (record(t.object, eye, aimed.directions[t.ray], t.t)) ++aimed_missed;
+                };
+                if (!aim_capped) {
+                    // No budget: eyes_per_cell eye points aim at every candidate.
+                    aimed.targets.resize(aimed.listed.size() + aimed.left_out.size());
+                    std::merge(aimed.listed.begin(), aimed.listed.end(), aimed.left_out.begin(),
+                               aimed.left_out.end(), aimed.targets.begin());
+                    if (!aimed.targets.empty()) {
+                        trace_aimed(scene, world, cum_area, cells, c, config.rays.eyes_per_cell,
+                                    config.rays.seed, aimed);
+                        if (!aimed.eyes.empty()) aimed_targets += aimed.targets.size();
+                        aimed_rounds += aimed.eyes.size();
+                        aimed_rays += aimed.directions.size();
+                        rays_traced += aimed.directions.size();
+                        for (const RayTouch& t : aimed.touches) {
+                            const uint32_t eye =
+                                uint32_t(std::upper_bound(aimed.first.begin(), aimed.first.end(), t.ray) -
+                                         aimed.first.begin() - 1);
+                            take(t, aimed.eyes[eye]);
                         }
-                        if (pvs.test(c, t.object)) continue;
-                        const uint32_t eye =
-                            uint32_t(std::upper_bound(aimed.first.begin(), aimed.first.end(), t.ray) -
-                                     aimed.first.begin() - 1);
-                        if (record(t.object, aimed.eyes[eye], aimed.directions[t.ray], t.t)) ++aimed_missed;
                     }
+                } else {
+                    // Rounds: one fresh eye point aims at every object of the group not seen yet (the last
+                    // round, short of rays, at a seeded random subset). Each round charges the group one ray
+                    // per target. Returns the rays charged: 0 when nothing of the group is left unseen.
+                    uint32_t round = 0;
+                    aimed.batch = UINT32_MAX;
+                    aimed.aimed_at.assign(n_objects, 0);
+                    auto aim_round = [&](const std::vector<uint32_t>& group, bool listed,
+                                         uint64_t rays_left) -> uint64_t {
+                        aimed.targets.clear();
+                        for (uint32_t o : group)
+                            if (!result.sampled.test(c, o)) aimed.targets.push_back(o);
+                        const uint64_t k = aimed.targets.size();
+                        if (k == 0 || rays_left == 0) return 0;
+                        if (k > rays_left) {
+                            Rng rng(config.rays.seed, cell_stream(kAimedSubsetStream, c, round));
+                            for (uint64_t i = 0; i < rays_left; ++i)
+                                std::swap(aimed.targets[i], aimed.targets[i + rng.below(uint32_t(k - i))]);
+                            aimed.targets.resize(rays_left);
+                            std::sort(aimed.targets.begin(), aimed.targets.end());
+                        }
+                        if (!trace_round(scene, world, cum_area, cells, c, round, config.rays.seed, aimed))
+                            return 0;
+                        ++round;
+                        for (uint32_t o : aimed.targets) {
+                            aimed_targets += !aimed.aimed_at[o];
+                            aimed.aimed_at[o] = 1;
+                        }
+                        aimed_rays += aimed.directions.size();
+                        rays_traced += aimed.directions.size();
+                        if (listed) aimed_listed_rays += aimed.directions.size();
+                        for (const RayTouch& t : aimed.touches) take(t, aimed.eyes[0]);
+                        return aimed.targets.size();
+                    };
+                    auto aim_group = [&](const std::vector<uint32_t>& group, bool listed, uint64_t budget) {
+                        uint64_t spent = 0;
+                        while (spent < budget) {
+                            const uint64_t rays = aim_round(group, listed, budget - spent);
+                            if (rays == 0) break;
+                            spent += rays;
+                        }
+                        return spent;
+                    };
+                    // The listed group's share first, then the left-out group gets the rest, then the listed
+                    // group what the left-out one could not use (its objects all seen: misses).
+                    const uint64_t budget = result.aimed_rays_per_cell;
+                    const uint64_t listed_budget =
+                        aimed.left_out.empty()
+                            ? budget
+                            : std::min(budget, uint64_t(double(budget) * config.aimed_listed_share));
+                    uint64_t spent = aim_group(aimed.listed, true, listed_budget);
+                    spent += aim_group(aimed.left_out, false, budget - spent);
+                    spent += aim_group(aimed.listed, true, budget - spent);
+                    aimed_rounds += round;
                 }
             }
             std::sort(cell_misses[c].begin(), cell_misses[c].end(),
@@ -283,7 +381,11 @@ VerifyResult verify_pvs(Context& ctx, const VerifyConfig& config, const World& w
     ctx.progress_end();
 
     result.aimed_rays = aimed_rays;
+    result.aimed_listed_rays = aimed_listed_rays;
     result.aimed_candidates = aimed_candidates;
+    result.aimed_listed_candidates = aimed_listed_candidates;
+    result.aimed_listed_new_pairs = aimed_listed_new;
+    result.aimed_rounds = aimed_rounds;
     result.aimed_targets = aimed_targets;
     result.aimed_new_pairs = aimed_new;
     result.aimed_missed_pairs = aimed_missed;
@@ -331,10 +433,15 @@ void log_verify_summary(Context& ctx, const VerifyResult& r, const World& world)
                          r.seconds, r.seconds > 0 ? double(r.rays) * 1e-6 / r.seconds : 0.0));
     if (r.aimed_rays > 0 || r.aimed_candidates > 0) {
         ctx.info(fmt::format(
-            "verify: aimed rays {:.1f} M at {} of {} untouched (cell, object) pairs: {} pairs seen only by "
-            "them, {} missed pairs found only by them",
-            double(r.aimed_rays) * 1e-6, r.aimed_targets, r.aimed_candidates, r.aimed_new_pairs,
-            r.aimed_missed_pairs));
+            "verify: aimed rays {:.1f} M ({:.1f} M at listed objects, {:.1f} eye points per cell) at {} of "
+            "{} "
+            "untouched (cell, object) pairs ({} listed): {} pairs seen only by them ({} listed), {} missed "
+            "pairs found only by them",
+            double(r.aimed_rays) * 1e-6, double(r.aimed_listed_rays) * 1e-6,
+            r.cell_sampled_visible.empty() ? 0.0
+                                           : double(r.aimed_rounds) / double(r.cell_sampled_visible.size()),
+            r.aimed_targets, r.aimed_candidates, r.aimed_listed_candidates, r.aimed_new_pairs,
+            r.aimed_listed_new_pairs, r.aimed_missed_pairs));
     }
     ctx.info(
         fmt::format("verify: overestimation |PVS|/|sampled| mean {:.2f}, median {:.2f}, max {:.2f}; "

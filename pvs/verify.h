@@ -16,15 +16,29 @@
 //   (another random stream), one ray at a random point ON every object the uniform rays did not touch
 //   (a triangle picked by area, a uniform point in it). Such a ray reaches its object unless something
 //   opaque is in the way, so the chance to see a visible object no longer shrinks with its solid angle.
-//   Unlisted untouched objects are the only place a miss can hide; listed untouched ones are aimed at
-//   too, to tighten the sampled set. Every object an aimed ray touches counts as seen (and as a miss
-//   when unlisted), whether or not it is the one aimed at. Objects every PVS lists (pvs_always_visible,
-//   or bounds meeting the cell) are not aimed at when the PVS lists them.
-//   Per cell (budget B = aimed_share x ray_budget / cells rays, K candidates): A = floor(B / K) eye
-//   points each aim one ray at every candidate, and the B mod K rays left go from one more eye point to a
-//   seeded random subset of B mod K candidates, so a cell spends its share and no more (when B < K only
-//   that subset is aimed at: aimed_targets < aimed_candidates). With no ray budget, A = eyes_per_cell.
-// Rays and eye points depend only on (seed, cell, eye): the result is the same for any thread count.
+//   Every object an aimed ray touches counts as seen (and as a miss when unlisted), whether or not it is
+//   the one aimed at. Objects every PVS lists (pvs_always_visible, or bounds meeting the cell) are not
+//   aimed at when the PVS lists them.
+//   The untouched objects ("candidates") of a cell fall in two groups that aimed rays serve for different
+//   ends: LEFT-OUT ones (the PVS leaves them out) are the only place a miss can hide, and a ray at them can
+//   only find a miss; LISTED ones can only be found visible, tightening the sampled set (the
+//   overestimation figure). A correct conservative PVS truly hides every left-out object, so rays at them
+//   find nothing unless there is a bug, and aimed at all candidates alike most rays went there (about 4
+//   left-out candidates for each listed one on oa_dm4 at 1 m cells) while listed objects that are truly
+//   visible stayed unseen: much of the figure's gap between 10 M and 200 M rays was that.
+//   Per cell (budget B = aimed_share x ray_budget / cells rays) the listed group gets
+//   floor(aimed_listed_share x B) rays and the left-out group the rest; a group that runs out of objects
+//   to aim at (all seen) gives what it did not spend to the other (listed first, then left-out, then
+//   listed again), so the cell spends B and no more unless every candidate has been seen. A group spends
+//   its rays in ROUNDS: round r draws one fresh eye point of the cell (in batches of 16 stratified over
+//   the eye region, taken in bit-reversed order) and aims one ray at every object of the group not SEEN
+//   yet (seen = touched by any ray of this cell so far, uniform or aimed); the last round, short of rays,
+//   aims at a seeded random subset. Rays thus move from listed objects already found visible to those
+//   still unfound; a left-out object leaves its group only when a miss touches it. aimed_listed_share < 1
+//   keeps rays on the left-out objects: a verification that cannot catch a miss is worthless.
+//   With no ray budget: eyes_per_cell eye points aim at every candidate of both groups (no rounds).
+// Rays and eye points depend only on (seed, cell, eye or round): the result is the same for any thread
+// count.
 // aimed_share = 0 traces exactly the uniform rays of before (same seed, same rays, same figures).
 #pragma once
 
@@ -50,11 +64,15 @@ struct VerifyResult {
     uint32_t cells_with_misses = 0;
     // Aimed rays (counted in `rays` too).
     uint64_t aimed_rays = 0;
-    uint64_t aimed_rays_per_cell = 0;  // the budget's share per cell; 0 = no budget (eyes_per_cell eyes)
-    uint64_t aimed_candidates = 0;     // (cell, object) pairs the uniform rays left untouched, to aim at
-    uint64_t aimed_targets = 0;        // of those, the pairs aimed at within the budget
-    uint64_t aimed_new_pairs = 0;      // (cell, object) pairs seen by aimed rays only
-    uint64_t aimed_missed_pairs = 0;   // missed pairs found by aimed rays only (part of missed_pairs)
+    uint64_t aimed_listed_rays = 0;        // of those, aimed at listed candidates (0 without a budget)
+    uint64_t aimed_rays_per_cell = 0;      // the budget's share per cell; 0 = no budget (eyes_per_cell eyes)
+    uint64_t aimed_candidates = 0;         // (cell, object) pairs the uniform rays left untouched, to aim at
+    uint64_t aimed_listed_candidates = 0;  // of those, the pairs the PVS lists
+    uint64_t aimed_targets = 0;            // of those, the pairs aimed at (at least once) within the budget
+    uint64_t aimed_rounds = 0;             // aimed eye points over all cells (one per round)
+    uint64_t aimed_new_pairs = 0;          // (cell, object) pairs seen by aimed rays only
+    uint64_t aimed_listed_new_pairs = 0;   // of those, the pairs the PVS lists (they tighten the figure)
+    uint64_t aimed_missed_pairs = 0;       // missed pairs found by aimed rays only (part of missed_pairs)
     std::vector<Miss> misses;  // the first ray of each missed pair, cell order, at most max_misses_reported
     std::vector<uint32_t> cell_sampled_visible;  // per cell: objects the rays touched
     PvsSet sampled;                              // per cell: which objects the rays touched

@@ -166,6 +166,8 @@ TEST(Cli, BadInputGetsStatusTwoAClearMessageAndNoOutput) {
         {{"bake", test::sample_world(), "-o", out, "--root-cell-size", "0.5", "--min-cell-size", "1"},
          "--root-cell-size"},
         {{"bake", test::sample_world(), "-o", out, "--verify-aimed-share", "0.99"}, "--verify-aimed-share"},
+        {{"bake", test::sample_world(), "-o", out, "--verify-aimed-listed-share", "1.5"},
+         "--verify-aimed-listed-share"},
         {{"occluders", dir.file("missing.glb"), "-o", dir.file("boxes.glb")}, "missing.glb"},
         {{"info", dir.file("notgltf.glb")}, "notgltf.glb"},
         {{"info", dir.file("missing.h5")}, "missing.h5"},
@@ -205,6 +207,7 @@ TEST(Cli, HelpOnEverySubcommandAndTheRealBinary) {
     EXPECT_TRUE(contains(bake_help.out, "[m]"));  // units in the help text
     const CliRun verify_help = run({"verify", "--help"});
     EXPECT_TRUE(contains(verify_help.out, "--verify-aimed-share")) << verify_help.out;
+    EXPECT_TRUE(contains(verify_help.out, "--verify-aimed-listed-share")) << verify_help.out;
     EXPECT_EQ(std::system((std::string(PVSBAKE_BINARY) + " --help > /dev/null").c_str()), 0);
 }
 

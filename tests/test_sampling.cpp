@@ -313,12 +313,16 @@ TEST(AimedRays, FindTheMissOfATinyObjectThroughASlitThatUniformRaysDoNot) {
     EXPECT_EQ(uniform.aimed_rays, 0u);
 
     const VerifyResult aimed = verify_pvs(ctx, small_budget(0.5), s.world, scene, kCell, pvs);
-    // The same total budget: 1,000 uniform rays (16 eyes x 62) and 1,000 aimed at the one untouched object.
+    // The same total budget: 1,000 uniform rays (16 eyes x 62) and up to 1,000 aimed at the one untouched
+    // object, one per round until a ray sees it; then nothing is left to aim at.
     EXPECT_LE(aimed.rays, 2000u);
     EXPECT_EQ(aimed.aimed_rays_per_cell, 1000u);
     EXPECT_EQ(aimed.aimed_candidates, 1u);
+    EXPECT_EQ(aimed.aimed_listed_candidates, 0u);
     EXPECT_EQ(aimed.aimed_targets, 1u);
-    EXPECT_EQ(aimed.aimed_rays, 1000u);
+    EXPECT_GT(aimed.aimed_rays, 0u);
+    EXPECT_LT(aimed.aimed_rays, 1000u);
+    EXPECT_EQ(aimed.aimed_rounds, aimed.aimed_rays);
     ASSERT_EQ(aimed.missed_pairs, 1u);
     EXPECT_EQ(aimed.aimed_missed_pairs, 1u);
     EXPECT_EQ(aimed.aimed_new_pairs, 1u);
@@ -378,6 +382,106 @@ TEST(AimedRays, NeverReportAMissForATrulyHiddenObject) {
             EXPECT_LE(r.aimed_rays, 50u);
         }
     }
+}
+
+// `count` 5 cm pebbles close behind the whole part of a wall at x = 0 (x in [0.5, 1.5], z >= 2, |y| < 1): a
+// line from kCell (x in [-2.5, -1.5], |z| < 0.5) to them crosses x = 0 at z > 0.7, where the wall is whole.
+std::vector<uint32_t> add_hidden_pebbles(World& world, uint32_t count) {
+    std::vector<uint32_t> out;
+    for (uint32_t i = 0; i < count; ++i) {
+        const glm::vec3 lo(0.5f + 0.1f * float(i % 10), -0.9f + 0.1f * float((i / 10) % 18),
+                           2.0f + 0.2f * float(i / 180));
+        out.push_back(add_box(world, "pebble" + std::to_string(i), Aabb::of(lo, lo + glm::vec3(0.05f))));
+    }
+    return out;
+}
+
+// A doorway (|z| < 0.5, |y| < 1) in a wall at x = 0; a 10 cm cube 12 m behind it that every eye of kCell
+// sees through the doorway (about 4e-6 of the sphere: uniform rays do not touch it), and 200 pebbles
+// hidden behind the wall.
+struct DoorwayScene {
+    World world;
+    uint32_t tiny = 0;
+    std::vector<uint32_t> pebbles;
+};
+
+DoorwayScene make_doorway_scene() {
+    DoorwayScene s;
+    add_box(s.world, "wall_left", Aabb::of({-0.1f, -5, -5}, {0.1f, 5, -0.5f}));
+    add_box(s.world, "wall_right", Aabb::of({-0.1f, -5, 0.5f}, {0.1f, 5, 5}));
+    add_box(s.world, "wall_above", Aabb::of({-0.1f, 1, -0.5f}, {0.1f, 5, 0.5f}));
+    add_box(s.world, "wall_below", Aabb::of({-0.1f, -5, -0.5f}, {0.1f, -1, 0.5f}));
+    s.tiny = add_box(s.world, "tiny", Aabb::of({12, -0.05f, -0.05f}, {12.1f, 0.05f, 0.05f}));
+    s.pebbles = add_hidden_pebbles(s.world, 200);
+    return s;
+}
+
+// The PVS lists the tiny cube (truly visible) and leaves out the 200 hidden pebbles (correctly): 201
+// untouched candidates for 10 aimed rays. Aimed at a random subset, the cube had 10 chances in 201 to get
+// a ray; with aimed_listed_share 0.5 the listed group (the cube) gets 5 rounds, the first one sees it and
+// the 4 rays it does not need go to the pebbles.
+TEST(AimedRays, ListedShareFindsASmallListedObjectAmongManyHiddenCandidates) {
+    Context ctx = quiet_context();
+    DoorwayScene s = make_doorway_scene();
+    RayScene scene(ctx, s.world);
+    PvsSet pvs = PvsSet::make(1, uint32_t(s.world.objects.size()));
+    for (uint32_t o = 0; o < s.world.objects.size(); ++o) pvs.set(0, o);
+    for (uint32_t o : s.pebbles) pvs.clear(0, o);
+    VerifyConfig v;
+    v.rays = SampleConfig{16, 1024, 20, 21};  // 10 aimed rays for the one cell
+    v.aimed_share = 0.5;
+    const VerifyResult r = verify_pvs(ctx, v, s.world, scene, kCell, pvs);
+    EXPECT_EQ(r.aimed_rays_per_cell, 10u);
+    EXPECT_EQ(r.aimed_rays, 10u);  // the whole aimed budget, no more
+    EXPECT_GE(r.aimed_candidates, 201u);
+    EXPECT_EQ(r.missed_pairs, 0u);
+    EXPECT_TRUE(r.sampled.test(0, s.tiny));
+    EXPECT_GE(r.aimed_new_pairs, 1u);
+    for (uint32_t o : s.pebbles) EXPECT_FALSE(r.sampled.test(0, o));
+    EXPECT_GE(r.aimed_listed_candidates, 1u);
+    EXPECT_EQ(r.aimed_listed_new_pairs, r.aimed_new_pairs);
+    EXPECT_LT(r.aimed_listed_rays, 5u);  // the cube is seen before the listed share is spent
+    EXPECT_GE(r.aimed_targets, 6u);      // the cube and the pebbles of the rays it left
+
+    // With no share for the listed objects every aimed ray goes to the pebbles: the cube goes unseen.
+    v.aimed_listed_share = 0.0;
+    const VerifyResult none = verify_pvs(ctx, v, s.world, scene, kCell, pvs);
+    EXPECT_EQ(none.aimed_rays, 10u);
+    EXPECT_EQ(none.aimed_listed_rays, 0u);
+    EXPECT_FALSE(none.sampled.test(0, s.tiny));
+    EXPECT_EQ(none.aimed_new_pairs, 0u);
+}
+
+// The slit scene's tiny cube, visible and left out (a miss), among 50 pebbles the PVS lists but the wall
+// hides (overestimation). With aimed_listed_share 0.5, 500 rays go to the pebbles in rounds that never see
+// them, and the cube still gets a round of its own per ray until one sees it through the slit; the rays it
+// leaves go back to the pebbles, so the cell spends its 1,000 aimed rays.
+TEST(AimedRays, HalfTheRaysForListedObjectsStillFindTheMissThroughASlit) {
+    Context ctx = quiet_context();
+    SlitScene s = make_slit_scene();
+    const std::vector<uint32_t> pebbles = add_hidden_pebbles(s.world, 50);
+    RayScene scene(ctx, s.world);
+    const PvsSet pvs = all_but(s.world, 1, s.tiny);
+    VerifyConfig v = small_budget(0.5);
+    v.aimed_listed_share = 0.5;
+    const VerifyResult r = verify_pvs(ctx, v, s.world, scene, kCell, pvs);
+    EXPECT_EQ(r.aimed_rays_per_cell, 1000u);
+    EXPECT_EQ(r.aimed_rays, 1000u);
+    EXPECT_GE(r.aimed_listed_candidates, 50u);
+    EXPECT_EQ(r.aimed_candidates, r.aimed_listed_candidates + 1);
+    EXPECT_GT(r.aimed_listed_rays, 500u);  // its share and what the cube's group did not need
+    EXPECT_EQ(r.aimed_listed_new_pairs, 0u);
+    for (uint32_t o : pebbles) EXPECT_FALSE(r.sampled.test(0, o));
+    ASSERT_EQ(r.missed_pairs, 1u);
+    EXPECT_EQ(r.aimed_missed_pairs, 1u);
+    ASSERT_EQ(r.misses.size(), 1u);
+    const Miss& m = r.misses[0];
+    EXPECT_EQ(m.object, s.tiny);
+    EXPECT_TRUE(kCell.cells[0].bounds.contains(m.eye));
+    const glm::vec3 hit = m.eye + m.distance_m * m.direction;
+    EXPECT_NEAR(hit.x, 20.0f, 1e-3f);
+    const float t_wall = -m.eye.x / m.direction.x;
+    EXPECT_LT(std::abs(m.eye.z + t_wall * m.direction.z), 0.1f);
 }
 
 // The grid world of SameSeedSameFiguresForOneAndTwoThreads: walls with gaps and crates, 2 m cells.
