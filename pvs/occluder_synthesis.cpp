@@ -311,9 +311,9 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
         PanelFigures pf;
         const std::vector<Aabb> panels = find_panels(world, &pf);
         ctx.info(
-            fmt::format("panels: {} opaque triangles lie in {} axis planes, covering {} cells of their "
-                        "vertex grids; {} maximal covered rectangles",
-                        pf.flat_triangles, pf.planes, pf.covered_cells, pf.panels));
+            fmt::format("panels: {} opaque triangles lie in axis planes, {} rectangles are covered by pairs "
+                        "of them, merged into {} panels",
+                        pf.flat_triangles, pf.rectangles, pf.panels));
         shrunk->boxes = shrunk_boxes(ctx, grid, proven, bc, shrunk->epsilon_m);
         for (const double eps : shrunk->epsilon_m) shrunk->panels.push_back(inset_panels(panels, kPanelInset * eps));
         std::vector<uint64_t> free_bits(proven.words.size());
