@@ -396,5 +396,54 @@ TEST(DepthCube, HiddenByPanelsMeansEveryRayCrossesOne) {
     EXPECT_GT(hidden, tested / 20) << hidden << " of " << tested << " hidden";
 }
 
+// clear_for() resets only the pixels of the boxes it is given, and the cube is reused from one scene to the
+// next with stale depths everywhere else: its answers on those boxes equal a fresh cube's (clear() then
+// limit_to()), and a box reaching past the region is never reported hidden from stale pixels.
+TEST(DepthCube, ClearForAnswersAsAFreshCubeAndNeverReadsStalePixels) {
+    Rng rng(23, 5);
+    DepthCube reused(48), fresh(48);
+    int hidden = 0, tested = 0, wide_hidden = 0;
+    for (int n = 0; n < (test::in_ci() ? 80 : 300); ++n) {
+        const Scene s = random_scene(rng);
+        // Interest: half the occludees.
+        const std::vector<Aabb> interest(s.occludees.begin(),
+                                         s.occludees.begin() + std::ptrdiff_t(s.occludees.size() / 2));
+        reused.clear_for(s.eye, interest);
+        fresh.clear(s.eye);
+        fresh.limit_to(interest);
+        for (const Aabb& b : s.occluders) {
+            reused.add_occluder(b);
+            fresh.add_occluder(b);
+        }
+        for (const Aabb& b : interest) {
+            const bool a = reused.is_hidden(b);
+            ASSERT_EQ(a, fresh.is_hidden(b)) << "scene " << n;
+            hidden += a;
+            ++tested;
+        }
+        // A box around everything touches pixels outside the region on some face: never hidden from them.
+        Aabb wide = Aabb::of(s.eye - glm::vec3(50.0f), s.eye + glm::vec3(50.0f));
+        wide.min.x = s.eye.x + 1.0f;  // not holding the eye
+        wide_hidden += reused.is_hidden(wide) && !fresh.is_hidden(wide);
+        // Fill every pixel of the reused cube with a near shell, so the next scene inherits stale depths;
+        // with nothing to test (an empty region) even a box wholly behind the shell is not hidden.
+        reused.clear(s.eye);
+        for (int a = 0; a < 3; ++a)
+            for (const float sign : {-1.0f, 1.0f}) {
+                Aabb slab = Aabb::of(s.eye - glm::vec3(100.0f), s.eye + glm::vec3(100.0f));
+                slab.min[a] = s.eye[a] + (sign > 0 ? 0.5f : -0.6f);
+                slab.max[a] = s.eye[a] + (sign > 0 ? 0.6f : -0.5f);
+                reused.add_occluder(slab);
+            }
+        const Aabb behind = Aabb::of(s.eye + glm::vec3(2.0f, -0.1f, -0.1f), s.eye + glm::vec3(3.0f, 0.1f, 0.1f));
+        ASSERT_TRUE(reused.is_hidden(behind));
+        reused.clear_for(s.eye, {});
+        wide_hidden += reused.is_hidden(behind) + reused.is_hidden(wide);
+    }
+    EXPECT_EQ(wide_hidden, 0);
+    EXPECT_GT(hidden, 0);
+    EXPECT_GT(tested, hidden);
+}
+
 }  // namespace
 }  // namespace pvs
