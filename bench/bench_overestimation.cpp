@@ -92,7 +92,8 @@ constexpr const char* kClassNames[kClasses] = {"visible", "rule", "no_box", "eps
 
 int main(int argc, char** argv) {
     if (argc < 3) {
-        std::fprintf(stderr, "usage: bench_overestimation WORLD.glb BAKE.h5 [--cells N] [--rays R] [--seed S]\n");
+        std::fprintf(stderr,
+                     "usage: bench_overestimation WORLD.glb BAKE.h5 [--cells N] [--rays R] [--seed S]\n");
         return 2;
     }
     const std::string world_path = argv[1], bake_path = argv[2];
@@ -160,7 +161,8 @@ int main(int argc, char** argv) {
         for (uint32_t c = 0; c < picks.size(); ++c) picks[c] = c;
         pvs::Rng pick_rng(seed, 0x43454c4c);
         n_cells = std::min<uint32_t>(n_cells, uint32_t(picks.size()));
-        for (uint32_t i = 0; i < n_cells; ++i) std::swap(picks[i], picks[i + pick_rng.below(uint32_t(picks.size()) - i)]);
+        for (uint32_t i = 0; i < n_cells; ++i)
+            std::swap(picks[i], picks[i + pick_rng.below(uint32_t(picks.size()) - i)]);
         picks.resize(n_cells);
         std::sort(picks.begin(), picks.end());
 
@@ -169,12 +171,15 @@ int main(int argc, char** argv) {
         // Solver pairs whose rays the shrunk boxes alone stop [0], or that need the panels too [1].
         std::vector<std::array<uint64_t, 2>> solver_needs_panels(n_cells, std::array<uint64_t, 2>{});
         // [no_box, epsilon][stopped within 0.5 m of the eye, within 0.3 m of the target, between]
-        std::vector<std::array<std::array<uint64_t, 3>, 2>> stops(n_cells, std::array<std::array<uint64_t, 3>, 2>{});
+        std::vector<std::array<std::array<uint64_t, 3>, 2>> stops(n_cells,
+                                                                  std::array<std::array<uint64_t, 3>, 2>{});
         // [no_box, epsilon][stopper in an uninset panel, in an axis plane but no panel]
         const std::vector<pvs::Aabb> raw_panels = pvs::find_panels(world);
-        std::vector<std::array<std::array<uint64_t, 3>, 2>> panel_hits(n_cells, std::array<std::array<uint64_t, 3>, 2>{});
+        std::vector<std::array<std::array<uint64_t, 3>, 2>> panel_hits(
+            n_cells, std::array<std::array<uint64_t, 3>, 2>{});
         // [no_box, epsilon][axis plane in the panel cone, axis plane grazing, other plane]
-        std::vector<std::array<std::array<uint64_t, 3>, 2>> kinds(n_cells, std::array<std::array<uint64_t, 3>, 2>{});
+        std::vector<std::array<std::array<uint64_t, 3>, 2>> kinds(n_cells,
+                                                                  std::array<std::array<uint64_t, 3>, 2>{});
         const uint32_t n_objects = uint32_t(world.objects.size());
 #pragma omp parallel for schedule(dynamic, 1)
         for (int64_t i = 0; i < int64_t(n_cells); ++i) {
@@ -193,24 +198,30 @@ int main(int argc, char** argv) {
             // Rays of one eye at every listed object; R eyes (eye e aims at every object once).
             std::vector<glm::vec3> dirs, origins;
             std::vector<float> lengths;
-            std::vector<uint32_t> target;
             std::vector<pvs::RayTouch> touches;
+            // Ray slot `slot` from `from` to a random point on `object` (area-weighted); its length stops a
+            // millimetre short of the point, so the object itself never blocks it.
+            auto aim_one = [&](glm::vec3 from, uint32_t object, pvs::Rng& rng, size_t slot) {
+                const glm::vec3 d = pvs::random_point_on(world, cum_area, object, rng) - from;
+                const float len = glm::length(d);
+                origins[slot] = from;
+                dirs[slot] = len > 0.0f ? d / len : glm::vec3(1, 0, 0);
+                lengths[slot] = std::max(0.0f, len - 1e-3f);
+            };
+            // One ray from `eye` at each of `objects`, in their order.
+            auto aim = [&](glm::vec3 eye, const std::vector<uint32_t>& objects, pvs::Rng& rng) {
+                origins.resize(objects.size());
+                dirs.resize(objects.size());
+                lengths.resize(objects.size());
+                for (size_t k = 0; k < objects.size(); ++k) aim_one(eye, objects[k], rng, k);
+            };
             for (uint32_t e = 0; e < eyes.size(); ++e) {
                 pvs::Rng rng(seed, (uint64_t(c) << 20) ^ e ^ 0x5a5a000000000000ULL);
-                dirs.clear();
-                lengths.clear();
-                target.clear();
-                for (uint32_t o : listed) {
-                    const glm::vec3 d = pvs::random_point_on(world, cum_area, o, rng) - eyes[e];
-                    const float len = glm::length(d);
-                    if (len < 1e-4f) continue;
-                    dirs.push_back(d / len);
-                    lengths.push_back(len);
-                    target.push_back(o);
-                }
+                aim(eyes[e], listed, rng);
                 touches.clear();
                 scene.trace(eyes[e], dirs.data(), uint32_t(dirs.size()), touches);
                 for (const pvs::RayTouch& t : touches) {
+                    if (lengths[t.ray] <= 0.0f) continue;  // a target at the eye: no direction to trust
                     if (!bake.pvs.test(c, t.object)) {
                         if (reached[t.object] == 0) ++misses[size_t(i)];
                         reached[t.object] = 2;
@@ -223,9 +234,8 @@ int main(int argc, char** argv) {
             std::vector<uint32_t> hidden;
             for (uint32_t o : listed)
                 if (!reached[o]) hidden.push_back(o);
-            std::vector<uint8_t> passes_full(n_objects, 0), passes_thin(n_objects, 0), passes_region(n_objects, 0),
-                needs_panels(n_objects, 0),
-                blocked;
+            std::vector<uint8_t> passes_full(n_objects, 0), passes_thin(n_objects, 0),
+                passes_region(n_objects, 0), needs_panels(n_objects, 0), blocked;
             const pvs::Aabb region = pvs::eye_region(cells.eyes, box);
             struct Ray {
                 glm::vec3 origin{0.0f}, direction{1.0f, 0.0f, 0.0f};
@@ -234,21 +244,13 @@ int main(int argc, char** argv) {
             std::vector<Ray> first_pass(hidden.size());
             for (uint32_t e = 0; e < eyes.size() && !hidden.empty(); ++e) {
                 pvs::Rng rng(seed, (uint64_t(c) << 20) ^ e ^ 0xa5a5000000000000ULL);
-                origins.clear();
-                dirs.clear();
-                lengths.clear();
-                for (uint32_t o : hidden) {
-                    const glm::vec3 d = pvs::random_point_on(world, cum_area, o, rng) - eyes[e];
-                    const float len = glm::length(d);
-                    origins.push_back(eyes[e]);
-                    dirs.push_back(len > 0.0f ? d / len : glm::vec3(1, 0, 0));
-                    lengths.push_back(std::max(0.0f, len - 1e-3f));
-                }
+                aim(eyes[e], hidden, rng);
                 blocked.assign(hidden.size(), 0);
                 full_scenes[size_t(set + 1)]->occluded_opaque(origins.data(), dirs.data(), lengths.data(),
                                                               uint32_t(hidden.size()), blocked.data());
                 for (size_t h = 0; h < hidden.size(); ++h) {
-                    if (!blocked[h] && !passes_full[hidden[h]]) first_pass[h] = {origins[h], dirs[h], lengths[h]};
+                    if (!blocked[h] && !passes_full[hidden[h]])
+                        first_pass[h] = {origins[h], dirs[h], lengths[h]};
                     passes_full[hidden[h]] |= !blocked[h];
                 }
                 blocked.assign(hidden.size(), 0);
@@ -260,21 +262,18 @@ int main(int argc, char** argv) {
                     passes_thin[hidden[h]] |= !blocked[h];
                 }
                 // From random points of the eye region.
-                for (size_t h = 0; h < hidden.size(); ++h) {
-                    origins[h] = region.min + region.size() * glm::vec3(rng.uniform(), rng.uniform(), rng.uniform());
-                    const glm::vec3 d = pvs::random_point_on(world, cum_area, hidden[h], rng) - origins[h];
-                    const float len = glm::length(d);
-                    dirs[h] = len > 0.0f ? d / len : glm::vec3(1, 0, 0);
-                    lengths[h] = std::max(0.0f, len - 1e-3f);
-                }
+                for (size_t h = 0; h < hidden.size(); ++h)
+                    aim_one(
+                        region.min + region.size() * glm::vec3(rng.uniform(), rng.uniform(), rng.uniform()),
+                        hidden[h], rng, h);
                 blocked.assign(hidden.size(), 0);
                 shrunk_scenes[size_t(set + 1)]->occluded_opaque(origins.data(), dirs.data(), lengths.data(),
                                                                 uint32_t(hidden.size()), blocked.data());
                 for (size_t h = 0; h < hidden.size(); ++h) passes_region[hidden[h]] |= !blocked[h];
                 // The same rays against the shrunk boxes without panels: do they need the panels?
                 blocked.assign(hidden.size(), 0);
-                boxes_only_scenes[size_t(set + 1)]->occluded_opaque(origins.data(), dirs.data(), lengths.data(),
-                                                                    uint32_t(hidden.size()), blocked.data());
+                boxes_only_scenes[size_t(set + 1)]->occluded_opaque(
+                    origins.data(), dirs.data(), lengths.data(), uint32_t(hidden.size()), blocked.data());
                 for (size_t h = 0; h < hidden.size(); ++h) needs_panels[hidden[h]] |= !blocked[h];
             }
             for (uint32_t o : listed) {
@@ -292,7 +291,8 @@ int main(int argc, char** argv) {
                     k = kRegion;
                 if (k == kNoBox || k == kEpsilon) {
                     // Where the real triangles stop the first ray the occluders let through.
-                    const size_t h = size_t(std::lower_bound(hidden.begin(), hidden.end(), o) - hidden.begin());
+                    const size_t h =
+                        size_t(std::lower_bound(hidden.begin(), hidden.end(), o) - hidden.begin());
                     const Ray& r = first_pass[h];
                     touches.clear();
                     scene.trace(r.origin, &r.direction, 1, touches);
@@ -312,7 +312,8 @@ int main(int argc, char** argv) {
                         const pvs::WorldObject& so = world.objects[stopper];
                         float best = 1e9f;
                         glm::vec3 normal(0.0f);
-                        for (uint32_t ti = so.first_triangle; ti < so.first_triangle + so.triangle_count; ++ti) {
+                        for (uint32_t ti = so.first_triangle; ti < so.first_triangle + so.triangle_count;
+                             ++ti) {
                             const pvs::Triangle& tr = world.triangles[ti];
                             const glm::vec3 a = world.positions[tr.v[0]], b = world.positions[tr.v[1]],
                                             cc = world.positions[tr.v[2]];
@@ -338,7 +339,8 @@ int main(int argc, char** argv) {
                                 if (ax < 0 || std::abs(pn.min[ax] - p[ax]) > 1e-3f) continue;
                                 bool inside = true;
                                 for (int d = 0; d < 3; ++d)
-                                    if (d != ax && (p[d] < pn.min[d] - 1e-4f || p[d] > pn.max[d] + 1e-4f)) inside = false;
+                                    if (d != ax && (p[d] < pn.min[d] - 1e-4f || p[d] > pn.max[d] + 1e-4f))
+                                        inside = false;
                                 if (inside) {
                                     in_panel = true;
                                     break;
@@ -400,7 +402,9 @@ int main(int argc, char** argv) {
             cls["pair_share"] = all_pairs ? double(pair_sum[size_t(k)]) / double(all_pairs) : 0.0;
             cls["triangles"] = tri_sum[size_t(k)];
             cls["triangle_share"] = all_tris ? double(tri_sum[size_t(k)]) / double(all_tris) : 0.0;
-            if (k > 0) cls["listed_over_visible_mean_if_culled"] = counted ? ratio_without[size_t(k)] / counted : 0.0;
+            if (k > 0)
+                cls["listed_over_visible_mean_if_culled"] =
+                    counted ? ratio_without[size_t(k)] / counted : 0.0;
             out["classes"][kClassNames[k]] = cls;
         }
         const char* where_names[3] = {"stopped_near_eye", "stopped_near_target", "stopped_between"};
@@ -417,7 +421,8 @@ int main(int argc, char** argv) {
                 if (w < 2) {
                     uint64_t q = 0;
                     for (uint32_t i = 0; i < n_cells; ++i) q += panel_hits[i][size_t(k)][size_t(w)];
-                    out["classes"][k == 0 ? "no_box" : "epsilon"][w == 0 ? "stopper_in_panel" : "stopper_in_no_panel"] = q;
+                    out["classes"][k == 0 ? "no_box" : "epsilon"]
+                       [w == 0 ? "stopper_in_panel" : "stopper_in_no_panel"] = q;
                 }
             }
         }

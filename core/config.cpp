@@ -129,8 +129,9 @@ BakeConfig config_from_parameters(const std::vector<std::pair<std::string, std::
         } else if (key == "view.boxes") {
             const std::vector<double> v = parse_groups(key, value, 6);
             for (size_t i = 0; i < v.size(); i += 6)
-                config.view.boxes.push_back(Aabb::of(glm::vec3(float(v[i]), float(v[i + 1]), float(v[i + 2])),
-                                                     glm::vec3(float(v[i + 3]), float(v[i + 4]), float(v[i + 5]))));
+                config.view.boxes.push_back(
+                    Aabb::of(glm::vec3(float(v[i]), float(v[i + 1]), float(v[i + 2])),
+                             glm::vec3(float(v[i + 3]), float(v[i + 4]), float(v[i + 5]))));
         } else if (key == "view.seeds") {
             const std::vector<double> v = parse_groups(key, value, 3);
             for (size_t i = 0; i < v.size(); i += 3)

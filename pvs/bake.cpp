@@ -43,12 +43,13 @@ void store_verification(const VerifyResult& result, VerificationRecord& record) 
 }
 
 std::vector<Occluder> solver_occluders(Context& ctx, const BakeConfig& config, const World& world,
-                                       const ViewVolume& view, const RayScene& scene, OccluderFigures& figures,
-                                       BlockFigures& blocks, ShrunkOccluders& shrunk) {
+                                       const ViewVolume& view, const RayScene& scene,
+                                       OccluderFigures& figures, BlockFigures& blocks,
+                                       ShrunkOccluders& shrunk) {
     const bool conservative = config.mode == BakeMode::kConservative;
-    std::vector<Occluder> boxes =
-        synthesize_occluders(ctx, config.occluders, world, view, scene, figures, config.conservative.epsilon_m,
-                             config.conservative.refine_levels, conservative ? &shrunk : nullptr);
+    std::vector<Occluder> boxes = synthesize_occluders(
+        ctx, config.occluders, world, view, scene, figures, config.conservative.epsilon_m,
+        config.conservative.refine_levels, conservative ? &shrunk : nullptr);
     if (conservative && config.occluders.block_m > 0.0) {
         // Blocks of whole cells from the cells' origin (the view bounds' corner, for the grid and the
         // octree's roots), so that every cell lies in one block.

@@ -283,7 +283,8 @@ public:
             }
             cube_.add_panels(near_panels_);
             cube_.add_occluders(near_);
-            for (int side = 0; side < 2; ++side) sides.open[size_t(side)] = unproven(cube_, sides.open[size_t(side)]);
+            for (int side = 0; side < 2; ++side)
+                sides.open[size_t(side)] = unproven(cube_, sides.open[size_t(side)]);
             if (k == 0) {  // the floor: whatever is not proven is listed
                 if (sh_.fine_cube_resolution > 0 && !sides.empty()) second_look(s, sides);
                 for (int side = 0; side < 2; ++side) {
@@ -375,7 +376,8 @@ private:
         fine_.add_panels(near_panels_);
         fine_.add_occluders(near_);
         ++counts_.fine_samples;
-        for (int side = 0; side < 2; ++side) sides.open[size_t(side)] = unproven(fine_, sides.open[size_t(side)]);
+        for (int side = 0; side < 2; ++side)
+            sides.open[size_t(side)] = unproven(fine_, sides.open[size_t(side)]);
     }
 
     // The objects of `open` the cube cannot prove hidden, in the order of `open`.
@@ -422,7 +424,7 @@ private:
     const Shared& sh_;
     const ShrunkOccluders* occ_ = &sh_.occ;
     DepthCube cube_;
-    DepthCube fine_;  // the second look at floor samples (1 pixel when off)
+    DepthCube fine_;                    // the second look at floor samples (1 pixel when off)
     std::vector<uint8_t> open_mark_;    // per object: 0 not open, 1 open, 2 open and not proven
     std::vector<uint32_t> open_under_;  // per tree node
     std::vector<int32_t> stack_;
@@ -568,12 +570,15 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
             if (row_lo && row_hi && f.set[0] != f.set[1]) {
                 // The regions on the two sides take their occluders from different blocks: once per side.
                 solver.use(occluders.set(f.set[0]));
-                solver.solve_face(f.rect, f.axis, solver.sides_of(leavable, f.axis, f.rect.min[f.axis], row_lo, nullptr));
+                solver.solve_face(f.rect, f.axis,
+                                  solver.sides_of(leavable, f.axis, f.rect.min[f.axis], row_lo, nullptr));
                 solver.use(occluders.set(f.set[1]));
-                solver.solve_face(f.rect, f.axis, solver.sides_of(leavable, f.axis, f.rect.min[f.axis], nullptr, row_hi));
+                solver.solve_face(f.rect, f.axis,
+                                  solver.sides_of(leavable, f.axis, f.rect.min[f.axis], nullptr, row_hi));
             } else {
                 solver.use(occluders.set(row_lo ? f.set[0] : f.set[1]));
-                solver.solve_face(f.rect, f.axis, solver.sides_of(leavable, f.axis, f.rect.min[f.axis], row_lo, row_hi));
+                solver.solve_face(f.rect, f.axis,
+                                  solver.sides_of(leavable, f.axis, f.rect.min[f.axis], row_lo, row_hi));
             }
             ctx.progress_advance();
         }
@@ -618,9 +623,9 @@ PvsSet bake_conservative_pvs(Context& ctx, const ConservativeConfig& config, con
         "conservative PVS: {} samples (per epsilon level {}; {} second looks at {} px), {} inside occluders "
         "and {} patches in solid skipped, {:.1f} M box tests, {:.1f} M sight rays, {:.1f} s ({:.0f} cells/s)",
         figures.samples, fmt::join(figures.samples_per_level, "/"), figures.fine_samples,
-        config.fine_cube_resolution, figures.samples_skipped,
-        figures.patches_in_solid, double(figures.object_tests) * 1e-6, double(figures.rays) * 1e-6,
-        figures.seconds, double(cells.size()) / std::max(1e-9, figures.seconds)));
+        config.fine_cube_resolution, figures.samples_skipped, figures.patches_in_solid,
+        double(figures.object_tests) * 1e-6, double(figures.rays) * 1e-6, figures.seconds,
+        double(cells.size()) / std::max(1e-9, figures.seconds)));
     return pvs;
 }
 

@@ -435,7 +435,8 @@ TEST(DepthCube, ClearForAnswersAsAFreshCubeAndNeverReadsStalePixels) {
                 slab.max[a] = s.eye[a] + (sign > 0 ? 0.6f : -0.5f);
                 reused.add_occluder(slab);
             }
-        const Aabb behind = Aabb::of(s.eye + glm::vec3(2.0f, -0.1f, -0.1f), s.eye + glm::vec3(3.0f, 0.1f, 0.1f));
+        const Aabb behind =
+            Aabb::of(s.eye + glm::vec3(2.0f, -0.1f, -0.1f), s.eye + glm::vec3(3.0f, 0.1f, 0.1f));
         ASSERT_TRUE(reused.is_hidden(behind));
         reused.clear_for(s.eye, {});
         wide_hidden += reused.is_hidden(behind) + reused.is_hidden(wide);

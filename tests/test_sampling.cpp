@@ -301,6 +301,23 @@ SlitScene make_slit_scene() {
     return s;
 }
 
+// The one reported miss is the tiny cube, from an eye of the cell, by a ray that really reaches it through
+// the slit: it hits the cube's near face (x = 20, |y|, |z| <= 5 cm) and crosses the wall (x = 0) at |z| <
+// 0.1.
+void expect_the_miss_through_the_slit(const VerifyResult& r, const SlitScene& s) {
+    ASSERT_EQ(r.misses.size(), 1u);
+    const Miss& m = r.misses[0];
+    EXPECT_EQ(m.object, s.tiny);
+    EXPECT_TRUE(kCell.cells[0].bounds.contains(m.eye));
+    const glm::vec3 hit = m.eye + m.distance_m * m.direction;
+    EXPECT_NEAR(hit.x, 20.0f, 1e-3f);
+    EXPECT_LE(std::abs(hit.y), 0.05f + 1e-3f);
+    EXPECT_LE(std::abs(hit.z), 0.05f + 1e-3f);
+    const float t_wall = -m.eye.x / m.direction.x;
+    EXPECT_LT(std::abs(m.eye.z + t_wall * m.direction.z), 0.1f);
+    EXPECT_NEAR(glm::length(m.direction), 1.0f, 1e-5f);
+}
+
 TEST(AimedRays, FindTheMissOfATinyObjectThroughASlitThatUniformRaysDoNot) {
     Context ctx = quiet_context();
     SlitScene s = make_slit_scene();
@@ -328,19 +345,7 @@ TEST(AimedRays, FindTheMissOfATinyObjectThroughASlitThatUniformRaysDoNot) {
     EXPECT_EQ(aimed.aimed_new_pairs, 1u);
     EXPECT_EQ(aimed.cells_with_misses, 1u);
     EXPECT_GT(aimed.missed_rays, 0u);
-    ASSERT_EQ(aimed.misses.size(), 1u);
-    const Miss& m = aimed.misses[0];
-    EXPECT_EQ(m.object, s.tiny);
-    EXPECT_TRUE(kCell.cells[0].bounds.contains(m.eye));
-    // The reported ray really reaches the cube through the slit: its near face at x = 20, and |z| < 0.1
-    // where it crosses the wall.
-    const glm::vec3 hit = m.eye + m.distance_m * m.direction;
-    EXPECT_NEAR(hit.x, 20.0f, 1e-3f);
-    EXPECT_LE(std::abs(hit.y), 0.05f + 1e-3f);
-    EXPECT_LE(std::abs(hit.z), 0.05f + 1e-3f);
-    const float t_wall = -m.eye.x / m.direction.x;
-    EXPECT_LT(std::abs(m.eye.z + t_wall * m.direction.z), 0.1f);
-    EXPECT_NEAR(glm::length(m.direction), 1.0f, 1e-5f);
+    expect_the_miss_through_the_slit(aimed, s);
 }
 
 TEST(AimedRays, NeverReportAMissForATrulyHiddenObject) {
@@ -474,14 +479,7 @@ TEST(AimedRays, HalfTheRaysForListedObjectsStillFindTheMissThroughASlit) {
     for (uint32_t o : pebbles) EXPECT_FALSE(r.sampled.test(0, o));
     ASSERT_EQ(r.missed_pairs, 1u);
     EXPECT_EQ(r.aimed_missed_pairs, 1u);
-    ASSERT_EQ(r.misses.size(), 1u);
-    const Miss& m = r.misses[0];
-    EXPECT_EQ(m.object, s.tiny);
-    EXPECT_TRUE(kCell.cells[0].bounds.contains(m.eye));
-    const glm::vec3 hit = m.eye + m.distance_m * m.direction;
-    EXPECT_NEAR(hit.x, 20.0f, 1e-3f);
-    const float t_wall = -m.eye.x / m.direction.x;
-    EXPECT_LT(std::abs(m.eye.z + t_wall * m.direction.z), 0.1f);
+    expect_the_miss_through_the_slit(r, s);
 }
 
 // The grid world of SameSeedSameFiguresForOneAndTwoThreads: walls with gaps and crates, 2 m cells.
