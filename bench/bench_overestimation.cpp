@@ -8,10 +8,11 @@
 // into the first class that holds:
 // - visible:  some ray reaches it past the real triangles: rightly listed;
 // - rule:     not reached, but every PVS lists it (pvs_always_visible, or bounds meeting the cell);
-// - no_box:   some ray passes the unshrunk proven boxes and the panels: the proven solid has no box where
+// - no_box:   some ray passes the unshrunk proven boxes and the (uninset) panels: no occluder stands where
 //             the real triangles block (thin walls, detail, voxel erosion, solid the sweep could not prove);
-// - epsilon:  every ray is stopped by the unshrunk boxes, some passes the boxes shrunk by the floor epsilon
-//             (and the panels): shrinking lost the blocker;
+// - epsilon:  every ray is stopped by the unshrunk boxes and panels, some passes the boxes shrunk by the
+//             floor epsilon and the panels inset by it (the least the solver insets them, at a face's
+//             centre): shrinking lost the blocker;
 // - region:   every ray is stopped by the shrunk occluders, but a ray from a random point of the cell's eye
 //             REGION (the box around its eye voxels, whose boundary the solver samples) passes them: the
 //             solver proves hiddenness for the whole box, not just the eye voxels in it;
@@ -145,8 +146,9 @@ int main(int argc, char** argv) {
         for (size_t s = 0; s < n_sets; ++s) {
             const pvs::ShrunkOccluders& set = shrunk.set(int32_t(s) - 1);
             // A block's unshrunk solid is not kept as boxes: its floor-level boxes stand in for it.
-            const pvs::World full = box_world(s == 0 ? unshrunk : set.boxes[0], set.panels[0]);
-            const pvs::World thin = box_world(set.boxes[0], set.panels[0]);
+            const pvs::World full = box_world(s == 0 ? unshrunk : set.boxes[0], set.panels);
+            const pvs::World thin =
+                box_world(set.boxes[0], pvs::inset_panels(set.panels, set.epsilon_m.front()));
             full_scenes.push_back(std::make_unique<pvs::RayScene>(ctx, full));
             shrunk_scenes.push_back(std::make_unique<pvs::RayScene>(ctx, thin));
             boxes_only_scenes.push_back(std::make_unique<pvs::RayScene>(ctx, box_world(set.boxes[0], {})));
@@ -174,7 +176,7 @@ int main(int argc, char** argv) {
         std::vector<std::array<std::array<uint64_t, 3>, 2>> stops(n_cells,
                                                                   std::array<std::array<uint64_t, 3>, 2>{});
         // [no_box, epsilon][stopper in an uninset panel, in an axis plane but no panel]
-        const std::vector<pvs::Aabb> raw_panels = pvs::find_panels(world);
+        const std::vector<pvs::Aabb>& raw_panels = shrunk.panels;  // as found, not inset
         std::vector<std::array<std::array<uint64_t, 3>, 2>> panel_hits(
             n_cells, std::array<std::array<uint64_t, 3>, 2>{});
         // [no_box, epsilon][axis plane in the panel cone, axis plane grazing, other plane]
@@ -332,7 +334,8 @@ int main(int argc, char** argv) {
                         const bool in_cone = std::abs(glm::dot(normal, r.direction)) >= 0.57735f;
                         ++kinds[size_t(i)][size_t(k == kNoBox ? 0 : 1)][size_t(!axis ? 2 : in_cone ? 0 : 1)];
                         if (axis) {
-                            // In an uninset panel of that plane? Then the inset lost it; else no panel.
+                            // In an uninset panel of that plane? Then the inset lost it (only in the
+                            // epsilon class: a no_box ray passed the uninset panels); else no panel.
                             bool in_panel = false;
                             for (const pvs::Aabb& pn : raw_panels) {
                                 const int ax = pvs::panel_axis(pn);

@@ -45,15 +45,12 @@ struct RankedOccluders {
 // The occluders of the conservative solver (pvs/conservative.h): the proven solid, and boxes of it shrunk
 // by each epsilon of a ladder (every point of a box of level k has its whole epsilon_m[k]-ball inside the
 // proven solid).
-// A panel is inset by this many epsilons: (1 + sqrt 2), so that it stays covered for every point of a
-// sample's epsilon ball when drawn only on the cube face along its normal (pvs/conservative.h, point 8).
-inline constexpr double kPanelInset = 2.4142135623730951;
-
 struct ShrunkOccluders {
-    std::vector<double> epsilon_m;          // ascending, epsilon_m[0] is the floor (--epsilon)
-    std::vector<std::vector<Aabb>> boxes;   // boxes[k]: shrunk by epsilon_m[k]
-    std::vector<std::vector<Aabb>> panels;  // panels[k]: flat rectangles covered by opaque triangles
-                                            // (occluders/panels.h), inset by kPanelInset * epsilon_m[k]
+    std::vector<double> epsilon_m;         // ascending, epsilon_m[0] is the floor (--epsilon)
+    std::vector<std::vector<Aabb>> boxes;  // boxes[k]: shrunk by epsilon_m[k]
+    // Flat rectangles covered by opaque triangles (occluders/panels.h), as found: the depth cube insets them
+    // per ray for each sample's ball (pvs/conservative.h, point 8).
+    std::vector<Aabb> panels;
     VoxelMask solid;  // the proven solid (sealed off from the eyes, untouched, passed the sight probe and the
                       // ray check): no sight line from the eye space enters it
     VoxelMask free;   // voxels no opaque triangle touches, outside the proven solid: where sight from the eye

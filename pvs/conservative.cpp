@@ -240,13 +240,21 @@ public:
             ++counts_.in_solid;
             return;
         }
-        const double r = 0.5 * glm::length(glm::dvec3(rect.size()));
+        // The ball around the sample s (the float centre) that holds the whole patch: its radius is the
+        // distance from s to the farthest corner, in double.
+        const glm::vec3 s = rect.center();
+        double r2 = 0.0;
+        for (int a = 0; a < 3; ++a) {
+            const double far =
+                std::max(double(s[a]) - double(rect.min[a]), double(rect.max[a]) - double(s[a]));
+            r2 += far * far;
+        }
+        const double r = std::sqrt(r2);
         const std::vector<double>& eps = occ_->epsilon_m;
         // The smallest epsilon >= r (a hair of slack for the float corners of the rectangle).
         size_t k = 0;
         while (k < eps.size() && eps[k] < r * (1.0 + 1e-6)) ++k;
         if (k < eps.size()) {
-            const glm::vec3 s = rect.center();
             bool inside = false;
             for (const Aabb& b : occ_->boxes[k]) inside = inside || b.contains(s);
             if (inside) {  // its ball, which holds the patch, lies in the solid
@@ -268,20 +276,17 @@ public:
             near_.clear();
             for (const Aabb& b : occ_->boxes[k])
                 if (b.overlaps(reach)) near_.push_back(b);
-            // Panels (argument 8) whose plane the patch's ball does not reach; drawn first, they are cheap
-            // and hide many boxes behind them, which add_occluders() then skips.
+            // Panels (argument 8) whose plane the patch's ball does not reach, inset per ray for that ball;
+            // drawn first, they are cheap and hide many boxes behind them, which add_occluders() then skips.
             near_panels_.clear();
-            if (k < occ_->panels.size()) {
-                const double clear_of_plane = eps[k] * (1.0 + 1e-6);
-                for (const Aabb& p : occ_->panels[k]) {
-                    const int a = panel_axis(p);
-                    if (a >= 0 && p.overlaps(reach) &&
-                        std::abs(double(p.min[a]) - double(s[a])) > clear_of_plane) {
-                        near_panels_.push_back(p);
-                    }
+            panel_ball_ = r * (1.0 + 1e-6);
+            for (const Aabb& p : occ_->panels) {
+                const int a = panel_axis(p);
+                if (a >= 0 && p.overlaps(reach) && std::abs(double(p.min[a]) - double(s[a])) > panel_ball_) {
+                    near_panels_.push_back(p);
                 }
             }
-            cube_.add_panels(near_panels_);
+            cube_.add_panels(near_panels_, panel_ball_);
             cube_.add_occluders(near_);
             for (int side = 0; side < 2; ++side)
                 sides.open[size_t(side)] = unproven(cube_, sides.open[size_t(side)]);
@@ -373,7 +378,7 @@ private:
         for (const std::vector<uint32_t>& open : sides.open)
             for (uint32_t o : open) interest_.push_back(sh_.world.objects[o].bounds);
         fine_.clear_for(s, interest_);
-        fine_.add_panels(near_panels_);
+        fine_.add_panels(near_panels_, panel_ball_);
         fine_.add_occluders(near_);
         ++counts_.fine_samples;
         for (int side = 0; side < 2; ++side)
@@ -431,6 +436,7 @@ private:
     std::vector<Aabb> interest_;     // bounds of the open objects: the only pixels worth drawing
     std::vector<Aabb> near_;         // the occluders drawn for the current sample
     std::vector<Aabb> near_panels_;  // the panels drawn for it
+    double panel_ball_ = 0.0;        // and the radius of the ball they are drawn for
     std::vector<glm::vec3> origins_, dirs_;
     std::vector<float> tfar_;
     std::vector<uint8_t> blocked_;

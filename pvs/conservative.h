@@ -17,9 +17,10 @@
 //    every eye of the cell. Sight from an eye either ends inside the region (objects whose bounds meet it
 //    are always listed) or leaves the region through a point q of its boundary. (Sampling the region, not
 //    the cell, keeps samples out of floors and walls the cell box cuts through, where they would see the
-//    backs of the level.) The boundary is cut into PATCHES (flat rectangles); a patch of half-diagonal r is
-//    covered by the r-ball around its centre s, so the part of the sight line beyond q is blocked whenever
-//    sx meets a box shrunk by some epsilon >= r.
+//    backs of the level.) The boundary is cut into PATCHES (flat rectangles); a patch is covered by the
+//    r-ball around its sample s (its centre, rounded to float), r the distance from s to its farthest
+//    corner (in double; the half-diagonal but for that rounding), so the part of the sight line beyond q is
+//    blocked whenever sx meets a box shrunk by some epsilon >= r.
 //    The segment from the eye to q is unobstructed, so q is not inside the proven solid (cracks aside,
 //    which the sight probe and the ray check of occluder synthesis handle): a patch all of whose voxels
 //    (closed, so a patch on a voxel face meets both sides) are proven solid lets no sight line out and is
@@ -46,18 +47,21 @@
 // 7. Objects a sight ray from a patch centre s reaches (Embree, against the real triangles) are listed at
 //    once instead of refined: no patch holding s can prove them hidden, so refining them only costs time.
 // 8. PANELS (occluders/panels.h) are flat rectangles wholly covered by opaque triangles: a segment that meets
-//    one is stopped. A panel is used for a patch of half-diagonal r <= epsilon_k only when its plane is
-//    farther than epsilon_k from the patch centre s (so the whole ball B(s, r) is on one side), only on the
-//    cube face along its normal (so a ray s -> x it hides makes an angle theta with the normal with
-//    tan(theta) <= sqrt 2), and inset by (1 + sqrt 2) epsilon_k. Why that is enough: put the plane at height
-//    0, s at height h_s > r, x behind it at height -h_x < 0, and let y(q) be where segment q -> x crosses the
-//    plane, for q in B(s, r). With mu_q = h_x / (h_x + h_q) in (0, 1),
-//    y(q) - y(s) = (q - s) mu_q + (s - x) (mu_q - mu_s), and in the plane
-//    |y(q) - y(s)| <= r + tan(theta) |h_s - h_q| mu_q <= r (1 + tan(theta)) <= (1 + sqrt 2) epsilon_k.
-//    The depth cube proves x hidden through a panel pixel only if y(s) lies in the inset rectangle, so y(q)
-//    lies in the covered one: every segment from the ball to x crosses an opaque triangle before x. Unlike a
-//    box, a panel needs no solid behind it: a wall thinner than 2 epsilon + 2 voxels, or a hollow shell,
-//    still occludes by its faces.
+//    one is stopped. A patch's sample s draws the panels whose plane is farther than the patch's radius r
+//    from s (so the whole ball B(s, r), which holds the patch, is on one side), only on the cube face along
+//    the panel's normal, inset per pixel corner ray of face coordinates (u, v) by r sqrt(1 + u^2) on the u
+//    axis and r sqrt(1 + v^2) on the v axis (pvs/depth_cube.h, add_panel, with the proof). Why that is
+//    enough: put the plane at height 0, s at height h_s > r, x behind it at height -h_x < 0, and let y(q) be
+//    where segment q -> x crosses the plane, for q in B(s, r). With l_q = h_q / (h_q + h_x),
+//    y(q) - y(s) = (1 - l_q)(q - s)_par + (l_q - l_s)(x - s)_par, |l_q - l_s| <= |h_q - h_s| / (h_s + h_x)
+//    and |x_u - s_u| / (h_s + h_x) = |u|, so |y(q)_u - y(s)_u| <= |q_u - s_u| + |u| |h_q - h_s|
+//    <= r sqrt(1 + u^2) by Cauchy-Schwarz (likewise on v). The depth cube proves x hidden through a panel
+//    pixel only if y(s) lies in the rectangle inset so for the ray s -> x (the inset test is concave in u
+//    and in v, so the corners decide for the whole pixel), so y(q) lies in the covered one: every segment
+//    from the ball to x crosses an opaque triangle before x. The inset is r at a face's centre and at most
+//    r sqrt 2 at its corners (an earlier bound, r (1 + tan theta), gave (1 + sqrt 2) r everywhere). Unlike
+//    a box, a panel needs no solid behind it and no epsilon: a wall thinner than 2 epsilon + 2 voxels, or a
+//    hollow shell, still occludes by its faces.
 // 9. OCCLUDERS PER BLOCK (pvs/occluder_synthesis.h, synthesize_block_occluders). Points 1 to 4 need the
 //    occluders only to lie where no sight line from the eyes of THIS region goes: the segment from an eye e
 //    through q to x, were it clear, would carry sight from e into the solid. So a region whose eyes all lie

@@ -284,17 +284,28 @@ PVS_AVX2_CLONES void DepthCube::add_occluder(const Aabb& box) {
 
 namespace {
 
+// How far inside a panel's rectangle, on one in-plane axis, the ray of grid value g on that axis must
+// cross the plane so that the segment from any point of the ball of radius `ball` around the eye to any
+// point beyond, along that ray, crosses the rectangle too: ball * sqrt(1 + g^2) (depth_cube.h), plus a
+// hair for rounding. THE definition, shared by the kernel and the reference.
+inline double panel_inset(double ball, double g) {
+    return ball > 0.0 ? ball * std::sqrt(1.0 + g * g) * (1.0 + 1e-9) : 0.0;
+}
+
 // Does the corner ray of grid value g (on an in-plane axis) cross a panel's plane, at depth t, inside
-// [lo, hi] on that axis with room to spare? The same slab as a box's, and the same slack.
-inline bool panel_corner_hits(double lo, double hi, double g, double t) {
+// [lo, hi] on that axis, inset by panel_inset(), with room to spare? The same slab as a box's, and the same
+// slack.
+inline bool panel_corner_hits(double lo, double hi, double g, double t, double ball) {
+    const double inset = panel_inset(ball, g);
     double enter, exit;
-    slab(lo, hi, g, enter, exit);
+    slab(lo + inset, hi - inset, g, enter, exit);
     return enter * (1.0 + kCubeDepthSlack) <= t && t * (1.0 + kCubeDepthSlack) <= exit;
 }
 
 // The panel's plane relative to the eye: the face along its normal that looks at it, and its depth there;
-// false when the panel is unusable (not flat along exactly one axis, not finite) or within the near plane.
-bool panel_face(const Aabb& panel, glm::vec3 eye, int& face, double& depth) {
+// false when the panel is unusable (not flat along exactly one axis, not finite) or its plane is within
+// the near plane or within the ball (radius * (1 + 1e-6)) of the eye.
+bool panel_face(const Aabb& panel, glm::vec3 eye, double ball, int& face, double& depth) {
     if (!is_finite(panel.min) || !is_finite(panel.max)) return false;
     int axis = -1;
     for (int a = 0; a < 3; ++a) {
@@ -306,7 +317,7 @@ bool panel_face(const Aabb& panel, glm::vec3 eye, int& face, double& depth) {
     }
     if (axis < 0) return false;
     const double h = double(panel.min[axis]) - double(eye[axis]);
-    if (!(std::abs(h) > kCubeNearPlane_m)) return false;
+    if (!(std::abs(h) > std::max(kCubeNearPlane_m, ball * (1.0 + 1e-6)))) return false;
     face = 2 * axis + (h > 0.0 ? 0 : 1);
     depth = std::abs(h);
     return true;
@@ -314,10 +325,10 @@ bool panel_face(const Aabb& panel, glm::vec3 eye, int& face, double& depth) {
 
 }  // namespace
 
-void DepthCube::add_panel(const Aabb& panel) {
+void DepthCube::add_panel(const Aabb& panel, double ball_radius) {
     int face = 0;
     double t = 0.0;
-    if (!panel_face(panel, eye_, face, t)) return;
+    if (!panel_face(panel, eye_, ball_radius, face, t)) return;
     const int r = resolution_, a = face / 2, ua = (a + 1) % 3, va = (a + 2) % 3;
     const double u_lo = double(panel.min[ua]) - double(eye_[ua]),
                  u_hi = double(panel.max[ua]) - double(eye_[ua]);
@@ -338,9 +349,9 @@ void DepthCube::add_panel(const Aabb& panel) {
     if (iv1 - iv0 < 1 || jv1 - jv0 < 1) return;
     // Vertices whose corner rays hit; a pixel is written when its four corners do.
     for (int iv = iv0; iv <= iv1; ++iv)
-        col_enter_[iv] = panel_corner_hits(u_lo, u_hi, grid(iv, r), t) ? 1.0 : 0.0;
+        col_enter_[iv] = panel_corner_hits(u_lo, u_hi, grid(iv, r), t, ball_radius) ? 1.0 : 0.0;
     for (int jv = jv0; jv <= jv1; ++jv)
-        row_enter_[jv] = panel_corner_hits(v_lo, v_hi, grid(jv, r), t) ? 1.0 : 0.0;
+        row_enter_[jv] = panel_corner_hits(v_lo, v_hi, grid(jv, r), t, ball_radius) ? 1.0 : 0.0;
     const float depth = float_up(t * (1.0 + kCubeDepthSlack));
     float* const face_depth = depth_.data() + size_t(face) * r * r;
     for (int j = jv0; j < jv1; ++j) {
@@ -351,8 +362,8 @@ void DepthCube::add_panel(const Aabb& panel) {
     }
 }
 
-void DepthCube::add_panels(const std::vector<Aabb>& panels) {
-    for (const Aabb& p : panels) add_panel(p);
+void DepthCube::add_panels(const std::vector<Aabb>& panels, double ball_radius) {
+    for (const Aabb& p : panels) add_panel(p, ball_radius);
 }
 
 void DepthCube::add_occluders(const std::vector<Aabb>& boxes) {
@@ -424,11 +435,11 @@ glm::dvec3 reference_direction(int face, double u, double v) {
 }  // namespace
 
 bool is_hidden_reference(const std::vector<Aabb>& occluders, glm::vec3 eye, const Aabb& box, int resolution) {
-    return is_hidden_reference(occluders, {}, eye, box, resolution);
+    return is_hidden_reference(occluders, {}, 0.0, eye, box, resolution);
 }
 
-bool is_hidden_reference(const std::vector<Aabb>& occluders, const std::vector<Aabb>& panels, glm::vec3 eye,
-                         const Aabb& box, int resolution) {
+bool is_hidden_reference(const std::vector<Aabb>& occluders, const std::vector<Aabb>& panels,
+                         double panel_ball_radius, glm::vec3 eye, const Aabb& box, int resolution) {
     const int r = resolution;
     if (!box_usable(box)) return false;
     // Visible when the box meets the closed near cube around the eye.
@@ -485,7 +496,7 @@ bool is_hidden_reference(const std::vector<Aabb>& occluders, const std::vector<A
                 for (const Aabb& panel : panels) {
                     int panel_f = 0;
                     double t = 0.0;
-                    if (!panel_face(panel, eye, panel_f, t) || panel_f != face) continue;
+                    if (!panel_face(panel, eye, panel_ball_radius, panel_f, t) || panel_f != face) continue;
                     // The four corner rays cross the plane at depth t: inside the rectangle with room to
                     // spare?
                     bool hits = true;
@@ -493,12 +504,15 @@ bool is_hidden_reference(const std::vector<Aabb>& occluders, const std::vector<A
                         for (int ci = i; ci <= i + 1; ++ci) {
                             const glm::dvec3 dir = reference_direction(face, grid(ci, r), grid(cj, r));
                             for (const int k : {ua, va}) {
-                                double lo = (double(panel.min[k]) - double(eye[k])) / dir[k];
-                                double hi = (double(panel.max[k]) - double(eye[k])) / dir[k];
+                                // The rectangle inset for this corner ray, relative to the eye.
+                                const double inset = panel_inset(panel_ball_radius, dir[k]);
+                                const double lo_k = double(panel.min[k]) - double(eye[k]) + inset;
+                                const double hi_k = double(panel.max[k]) - double(eye[k]) - inset;
+                                double lo = lo_k / dir[k];
+                                double hi = hi_k / dir[k];
                                 if (dir[k] < 0.0) std::swap(lo, hi);
                                 if (dir[k] == 0.0) {
-                                    const bool in = double(panel.min[k]) - double(eye[k]) <= 0.0 &&
-                                                    double(panel.max[k]) - double(eye[k]) >= 0.0;
+                                    const bool in = lo_k <= 0.0 && hi_k >= 0.0;
                                     lo = in ? -kInf : kInf;
                                     hi = in ? kInf : -kInf;
                                 }

@@ -95,13 +95,26 @@ public:
     void clear_for(glm::vec3 eye, const std::vector<Aabb>& boxes);
     // Rasterizes one occluder box (see the pixel rule above). Empty or non-finite boxes are ignored.
     void add_occluder(const Aabb& box);
-    // Rasterizes one PANEL (occluders/panels.h: flat along exactly one axis, else ignored), only on the face
-    // along its normal that looks at it, where its plane has the constant depth t = |plane - eye|: a pixel
-    // whose four corner rays cross the plane inside the rectangle (with the slack on both sides) gets
-    // t (1 + slack), rounded up to float. By the same convexity as for boxes, every ray through such a
-    // pixel crosses the rectangle at depth t. Panels within the near plane are ignored.
-    void add_panel(const Aabb& panel);
-    void add_panels(const std::vector<Aabb>& panels);
+    // Rasterizes one PANEL (occluders/panels.h: a rectangle flat along exactly one axis, else ignored) for
+    // every eye in the ball of radius `ball_radius` (metres, >= 0) around the cube's eye s. Only on the face
+    // along its normal that looks at it, where its plane has the constant depth t = |plane - s|: a pixel
+    // whose four corner rays cross the plane inside the rectangle inset per corner (with the slack on both
+    // sides) gets t (1 + slack), rounded up to float. The inset of a corner ray of face coordinates (u, v)
+    // is ball_radius sqrt(1 + u^2) on the u axis and ball_radius sqrt(1 + v^2) on the v axis (times
+    // 1 + 1e-9 for rounding). Panels whose plane is within the near plane, or within the ball
+    // (ball_radius (1 + 1e-6)), are ignored.
+    // Guarantee: if x lies beyond the plane (depth > t) in the direction of a written pixel, then for every
+    // q with |q - s| <= ball_radius the segment q -> x crosses the (uninset) rectangle. Proof: put the plane
+    // at height 0, s at height h_s = t > ball_radius, x at -h_x < 0, and let y(q) be where q -> x crosses
+    // it; with l_q = h_q / (h_q + h_x), y(q) - y(s) = (1 - l_q)(q - s)_par + (l_q - l_s)(x - s)_par, and
+    // |l_q - l_s| <= |h_q - h_s| / (h_s + h_x), while |x_u - s_u| / (h_s + h_x) = |u|. So on the u axis
+    // |y(q)_u - y(s)_u| <= |q_u - s_u| + |u| |h_q - h_s| <= ball_radius sqrt(1 + u^2) (Cauchy-Schwarz).
+    // The inset condition on u (t u - lo_u >= ball_radius sqrt(1 + u^2), likewise for hi_u) is concave in
+    // u, so holding at a pixel's two corner columns it holds for every ray between them: testing the
+    // vertices is exact, and the u and v tests stay separable. ball_radius = 0 is the plain from-point
+    // panel (every ray from s through a written pixel crosses the rectangle at depth t).
+    void add_panel(const Aabb& panel, double ball_radius = 0.0);
+    void add_panels(const std::vector<Aabb>& panels, double ball_radius = 0.0);
     // Rasterizes all the boxes, nearest first, skipping each box the ones before already hide (it could not
     // lower any pixel). Same depths as add_occluder() on every box, in far less time behind walls.
     void add_occluders(const std::vector<Aabb>& boxes);
@@ -132,8 +145,8 @@ private:
 // for touched pixels the minimum over all occluders of the four-corner slab tests. Slow (O(6 R^2 * N)); for
 // the differential test and the benchmark ratio only.
 bool is_hidden_reference(const std::vector<Aabb>& occluders, glm::vec3 eye, const Aabb& box, int resolution);
-// The same with panels (add_panel()) besides the boxes.
-bool is_hidden_reference(const std::vector<Aabb>& occluders, const std::vector<Aabb>& panels, glm::vec3 eye,
-                         const Aabb& box, int resolution);
+// The same with panels (add_panel(panel, panel_ball_radius)) besides the boxes.
+bool is_hidden_reference(const std::vector<Aabb>& occluders, const std::vector<Aabb>& panels,
+                         double panel_ball_radius, glm::vec3 eye, const Aabb& box, int resolution);
 
 }  // namespace pvs

@@ -309,13 +309,12 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
         *shrunk = ShrunkOccluders{};
         for (int level = 0; level <= levels; ++level) shrunk->epsilon_m.push_back(epsilon_m * std::ldexp(1.0, level));
         PanelFigures pf;
-        const std::vector<Aabb> panels = find_panels(world, &pf);
+        shrunk->panels = find_panels(world, &pf);
         ctx.info(
             fmt::format("panels: {} opaque triangles lie in axis planes, {} rectangles are covered by pairs "
                         "of them, merged into {} panels",
                         pf.flat_triangles, pf.rectangles, pf.panels));
         shrunk->boxes = shrunk_boxes(ctx, grid, proven, bc, shrunk->epsilon_m);
-        for (const double eps : shrunk->epsilon_m) shrunk->panels.push_back(inset_panels(panels, kPanelInset * eps));
         std::vector<uint64_t> free_bits(proven.words.size());
         for (size_t w = 0; w < proven.words.size(); ++w) free_bits[w] = ~(proven.words[w] | touched->words[w]);
         shrunk->free = mask_of(grid, std::move(free_bits));

@@ -311,13 +311,15 @@ TEST(DepthCube, PanelsMatchTheReferenceOnRandomScenes) {
             wall_faces(std::vector<Aabb>(s.occluders.begin(), s.occluders.begin() + std::ptrdiff_t(half)));
         s.occluders.erase(s.occluders.begin(), s.occluders.begin() + std::ptrdiff_t(half));
         const int r = resolutions[rng.below(7)];
+        // A third of the scenes from the point itself, the rest for a ball around it (per-ray insets).
+        const double ball = n % 3 == 0 ? 0.0 : 0.05 + 0.95 * double(rng.uniform());
         if (cube.resolution() != r) cube = DepthCube(r);
         cube.clear(s.eye);
-        cube.add_panels(panels);
+        cube.add_panels(panels, ball);
         for (const Aabb& b : s.occluders) cube.add_occluder(b);
         for (const Aabb& b : s.occludees) {
             const bool fast = cube.is_hidden(b);
-            const bool slow = is_hidden_reference(s.occluders, panels, s.eye, b, r);
+            const bool slow = is_hidden_reference(s.occluders, panels, ball, s.eye, b, r);
             hidden += fast;
             ++tested;
             if (fast != slow) {
@@ -358,6 +360,30 @@ TEST(DepthCube, APanelHidesWhatIsBehindItSeenFromEitherSideOnly) {
     EXPECT_EQ(cube.covered_pixel_count(), 0u);
 }
 
+// For a ball of radius 0.5 m around the eye, a 4 x 4 m panel 5 m away is inset by 0.5 sqrt(1 + u^2) m per
+// ray: about 0.52 m where the rays cross it 1.4 m off its centre (u = 0.28). The earlier uniform inset,
+// (1 + sqrt 2) 0.5 = 1.21 m, hid nothing there.
+TEST(DepthCube, APanelForABallIsInsetPerRay) {
+    const Aabb panel = Aabb::of({-2.0f, -2.0f, 5.0f}, {2.0f, 2.0f, 5.0f});
+    const Aabb off_centre = Aabb::of({1.6f, -0.5f, 7.0f}, {1.85f, 0.5f, 8.0f});      // u in [0.2, 0.27]
+    const Aabb nearer_the_edge = Aabb::of({2.0f, -0.5f, 7.0f}, {2.2f, 0.5f, 8.0f});  // u up to 0.31
+    DepthCube cube(64);
+    cube.clear(kOrigin);
+    cube.add_panel(panel, 0.5);
+    EXPECT_TRUE(cube.is_hidden(off_centre));
+    EXPECT_FALSE(cube.is_hidden(nearer_the_edge));
+    EXPECT_TRUE(is_hidden_reference({}, {panel}, 0.5, kOrigin, off_centre, 64));
+    EXPECT_FALSE(is_hidden_reference({}, {panel}, 0.5, kOrigin, nearer_the_edge, 64));
+    // From the point itself both are hidden.
+    cube.clear(kOrigin);
+    cube.add_panel(panel);
+    EXPECT_TRUE(cube.is_hidden(nearer_the_edge));
+    // A plane the ball reaches draws nothing.
+    cube.clear({0.0f, 0.0f, 4.6f});
+    cube.add_panel(panel, 0.5);
+    EXPECT_EQ(cube.covered_pixel_count(), 0u);
+}
+
 TEST(DepthCube, HiddenByPanelsMeansEveryRayCrossesOne) {
     const int scenes = test::in_ci() ? 80 : 400;
     const int rays_per_box = test::in_ci() ? 500 : 2000;
@@ -393,6 +419,101 @@ TEST(DepthCube, HiddenByPanelsMeansEveryRayCrossesOne) {
         }
     }
     EXPECT_EQ(violations, 0) << "of " << rays << " rays";
+    EXPECT_GT(hidden, tested / 20) << hidden << " of " << tested << " hidden";
+}
+
+// Where a panel's inset per ray is tightest: one panel just beyond the ball around the eye, along a random
+// axis and side, and small boxes far behind it in every direction of its cube face, many near its edges.
+// The bound r sqrt(1 + u^2) is nearly reached by an eye moved sideways and towards the plane at once, with
+// the target far behind the plane.
+Scene tight_panel_scene(Rng& rng, double ball, std::vector<Aabb>& panels) {
+    Scene s;
+    s.eye = glm::vec3(20.0f * rng.uniform(), 20.0f * rng.uniform(), 20.0f * rng.uniform());
+    const int a = int(rng.below(3)), ua = (a + 1) % 3, va = (a + 2) % 3;
+    const float sign = rng.uniform() < 0.5f ? -1.0f : 1.0f;
+    const float h = float(ball) + 0.05f + 2.0f * rng.uniform();
+    Aabb panel;
+    panel.min[a] = panel.max[a] = s.eye[a] + sign * h;
+    panel.min[ua] = s.eye[ua] - (0.3f + 3.0f * rng.uniform()) * h;
+    panel.max[ua] = s.eye[ua] + (0.3f + 3.0f * rng.uniform()) * h;
+    panel.min[va] = s.eye[va] - (0.3f + 3.0f * rng.uniform()) * h;
+    panel.max[va] = s.eye[va] + (0.3f + 3.0f * rng.uniform()) * h;
+    panels = {panel};
+    for (int k = 0; k < 60; ++k) {
+        const float depth = h + 2.0f + 30.0f * rng.uniform();
+        glm::vec3 c;
+        c[a] = s.eye[a] + sign * depth;
+        c[ua] = s.eye[ua] + depth * (2.0f * rng.uniform() - 1.0f);
+        c[va] = s.eye[va] + depth * (2.0f * rng.uniform() - 1.0f);
+        const glm::vec3 size(0.02f + 0.3f * rng.uniform(), 0.02f + 0.3f * rng.uniform(),
+                             0.02f + 0.3f * rng.uniform());
+        s.occludees.push_back(Aabb::of(c - 0.5f * size, c + 0.5f * size));
+    }
+    return s;
+}
+
+// Panels drawn for a ball around the eye: a box proven hidden is hidden from every point of the ball, each
+// segment from the ball to the box crossing a panel. Half the scenes are random walls, half the tight case
+// above. The eyes sampled are the ball's surface (where the bound is tightest), with the 45-degree tilts in
+// each pair of axes among them, since the inset per ray, r sqrt(1 + u^2), is reached by an eye moved
+// sideways and towards the plane at once. (With an inset of r per ray instead, this test fails.)
+TEST(DepthCube, HiddenByPanelsForABallMeansEverySegmentFromTheBallCrossesOne) {
+    const int scenes = test::in_ci() ? 200 : 600;
+    const int points_per_box = test::in_ci() ? 16 : 48;
+    const int eyes_per_point = test::in_ci() ? 24 : 48;
+    const int resolutions[] = {16, 32, 64, 128};
+    Rng rng(23, 4);
+    long long violations = 0, segments = 0;
+    int hidden = 0, tested = 0;
+    for (int n = 0; n < scenes; ++n) {
+        const double ball = 0.1 + 0.9 * double(rng.uniform());
+        std::vector<Aabb> panels;
+        Scene s;
+        if (n % 2 == 0) {
+            s = random_scene(rng);
+            panels = wall_faces(s.occluders);
+        } else {
+            s = tight_panel_scene(rng, ball, panels);
+        }
+        DepthCube cube(resolutions[rng.below(4)]);
+        cube.clear(s.eye);
+        cube.add_panels(panels, ball);
+        for (const Aabb& b : s.occludees) {
+            ++tested;
+            if (!cube.is_hidden(b)) continue;
+            ++hidden;
+            for (int k = 0; k < points_per_box; ++k) {
+                glm::dvec3 x;
+                for (int a = 0; a < 3; ++a) {
+                    const double t = k < 8 ? double((k >> a) & 1) : double(rng.uniform());
+                    x[a] = double(b.min[a]) + t * (double(b.max[a]) - double(b.min[a]));
+                }
+                for (int e = 0; e < eyes_per_point; ++e) {
+                    glm::dvec3 dir;
+                    if (e < 12) {  // tilted 45 degrees in each pair of axes, both signs
+                        const int a0 = e / 4, a1 = (a0 + 1) % 3;
+                        dir = glm::dvec3(0.0);
+                        dir[a0] = e & 1 ? 1.0 : -1.0;
+                        dir[a1] = e & 2 ? 1.0 : -1.0;
+                    } else {
+                        do {
+                            dir = glm::dvec3(rng.uniform(), rng.uniform(), rng.uniform()) * 2.0 - 1.0;
+                        } while (glm::length(dir) < 0.1 || glm::length(dir) > 1.0);
+                    }
+                    const glm::dvec3 q = glm::dvec3(s.eye) + ball * glm::normalize(dir);
+                    ++segments;
+                    const bool blocked = std::any_of(panels.begin(), panels.end(),
+                                                     [&](const Aabb& p) { return segment_blocked(q, x, p); });
+                    if (!blocked && ++violations <= 5) {
+                        ADD_FAILURE() << "scene " << n << ", ball " << ball << ": segment from (" << q.x
+                                      << ", " << q.y << ", " << q.z << ") to (" << x.x << ", " << x.y << ", "
+                                      << x.z << ") crosses no panel";
+                    }
+                }
+            }
+        }
+    }
+    EXPECT_EQ(violations, 0) << "of " << segments << " segments";
     EXPECT_GT(hidden, tested / 20) << hidden << " of " << tested << " hidden";
 }
 
