@@ -33,42 +33,197 @@ Aabb to_aabb(const Rect& r) {
     return b;
 }
 
-// Merges rectangles of one plane that share a whole edge (or overlap with the same extent across): along u
-// for equal v ranges, then along v for equal u ranges, while any merge happens. The union of two such
-// rectangles is their bounding rectangle, so covered stays covered.
-void merge_plane(std::vector<Rect>& rects) {
-    const auto merge_along = [&](bool along_u) {
-        std::sort(rects.begin(), rects.end(), [&](const Rect& a, const Rect& b) {
-            return along_u ? std::tie(a.v0, a.v1, a.u0, a.u1) < std::tie(b.v0, b.v1, b.u0, b.u1)
-                           : std::tie(a.u0, a.u1, a.v0, a.v1) < std::tie(b.u0, b.u1, b.v0, b.v1);
-        });
-        std::vector<Rect> out;
-        for (const Rect& r : rects) {
-            if (!out.empty()) {
-                Rect& last = out.back();
-                const bool same_across =
-                    along_u ? (last.v0 == r.v0 && last.v1 == r.v1) : (last.u0 == r.u0 && last.u1 == r.u1);
-                if (same_across && along_u && r.u0 <= last.u1) {
-                    last.u1 = std::max(last.u1, r.u1);
-                    continue;
+// A triangle of one plane in 2D (u, v), counter-clockwise, with its float corners for the cell grid.
+struct Tri2 {
+    std::array<std::array<double, 2>, 3> p;
+    std::array<float, 3> u, v;
+};
+
+using Point2 = std::array<double, 2>;
+using Poly2 = std::vector<Point2>;
+
+Point2 sub(const Point2& a, const Point2& b) {
+    return {a[0] - b[0], a[1] - b[1]};
+}
+double cross(const Point2& a, const Point2& b) {
+    return a[0] * b[1] - a[1] * b[0];
+}
+
+double area(const Poly2& poly) {
+    double s = 0.0;
+    for (size_t i = 0; i < poly.size(); ++i) s += cross(poly[i], poly[(i + 1) % poly.size()]);
+    return 0.5 * s;
+}
+
+// The part of convex `poly` on the left of a -> b (keep_left) or on its right.
+Poly2 clip(const Poly2& poly, const Point2& a, const Point2& b, bool keep_left) {
+    Poly2 out;
+    const Point2 e = sub(b, a);
+    auto side = [&](const Point2& q) {
+        const double s = cross(e, sub(q, a));
+        return keep_left ? s : -s;
+    };
+    for (size_t i = 0; i < poly.size(); ++i) {
+        const Point2& p = poly[i];
+        const Point2& q = poly[(i + 1) % poly.size()];
+        const double sp = side(p), sq = side(q);
+        if (sp >= 0.0) out.push_back(p);
+        if ((sp > 0.0 && sq < 0.0) || (sp < 0.0 && sq > 0.0)) {
+            const double t = sp / (sp - sq);
+            out.push_back({p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1])});
+        }
+    }
+    return out;
+}
+
+// Pieces of the leftover smaller than this (m2) are rounding slivers along shared edges, not gaps: a real
+// crack that thin would be under 1e-12 m wide for a cell a metre long.
+constexpr double kSliverArea = 1e-12;
+
+// Is the rectangle [u0, u1] x [v0, v1] wholly covered by the union of `tris`? Subtracts each triangle
+// from what is left (a convex piece minus a triangle is up to three convex pieces: what lies right of
+// each edge in turn); covered when nothing is left.
+bool union_covers(double u0, double u1, double v0, double v1, const std::vector<const Tri2*>& tris) {
+    std::vector<Poly2> left = {Poly2{{u0, v0}, {u1, v0}, {u1, v1}, {u0, v1}}}, next;
+    for (const Tri2* t : tris) {
+        next.clear();
+        for (const Poly2& piece : left) {
+            Poly2 rest = piece;
+            for (int e = 0; e < 3 && rest.size() >= 3; ++e) {
+                const Point2& a = t->p[size_t(e)];
+                const Point2& b = t->p[size_t((e + 1) % 3)];
+                Poly2 outside = clip(rest, a, b, false);
+                if (outside.size() >= 3 && area(outside) > kSliverArea) next.push_back(std::move(outside));
+                rest = clip(rest, a, b, true);
+            }
+        }
+        left.swap(next);
+        if (left.empty()) return true;
+    }
+    return false;
+}
+
+// The covered rectangles of one plane. The grid of every distinct vertex coordinate (u and v) cuts the
+// plane into cells; a cell is covered when one triangle holds its four corners (it is convex) or, failing
+// that, when the union of the triangles meeting it covers it (union_covers). Any triangulation of a face
+// (fans, T-junctions, several faces meeting) gives its covered cells. From every covered cell not yet in a
+// rectangle, two MAXIMAL rectangles of covered cells are grown (u first, then v; and v first): they
+// overlap, so a point deep inside the covered region lies deep inside some panel, and the inset a panel
+// gets at its edges (pvs/conservative.h point 8) costs only at the region's own edges, not where a
+// partition would cut it.
+std::vector<Rect> plane_rectangles(int axis, float plane, const std::vector<Tri2>& tris,
+                                   uint64_t& covered_cells) {
+    std::vector<float> us, vs;
+    for (const Tri2& t : tris)
+        for (int i = 0; i < 3; ++i) {
+            us.push_back(t.u[size_t(i)]);
+            vs.push_back(t.v[size_t(i)]);
+        }
+    std::sort(us.begin(), us.end());
+    us.erase(std::unique(us.begin(), us.end()), us.end());
+    std::sort(vs.begin(), vs.end());
+    vs.erase(std::unique(vs.begin(), vs.end()), vs.end());
+    const size_t nu = us.size() - 1, nv = vs.size() - 1;  // cells
+    if (us.size() < 2 || vs.size() < 2) return {};
+    std::vector<uint8_t> covered(nu * nv, 0);
+    std::map<size_t, std::vector<const Tri2*>> partial;  // cells some triangle meets but no one holds
+    for (const Tri2& t : tris) {
+        const float tu0 = std::min({t.u[0], t.u[1], t.u[2]}), tu1 = std::max({t.u[0], t.u[1], t.u[2]});
+        const float tv0 = std::min({t.v[0], t.v[1], t.v[2]}), tv1 = std::max({t.v[0], t.v[1], t.v[2]});
+        const size_t i0 = size_t(std::lower_bound(us.begin(), us.end(), tu0) - us.begin());
+        const size_t i1 = size_t(std::lower_bound(us.begin(), us.end(), tu1) - us.begin());
+        const size_t j0 = size_t(std::lower_bound(vs.begin(), vs.end(), tv0) - vs.begin());
+        const size_t j1 = size_t(std::lower_bound(vs.begin(), vs.end(), tv1) - vs.begin());
+        for (size_t j = j0; j < j1; ++j) {
+            for (size_t i = i0; i < i1; ++i) {
+                const size_t cell = i + nu * j;
+                if (covered[cell]) continue;
+                const Point2 corners[4] = {{double(us[i]), double(vs[j])},
+                                           {double(us[i + 1]), double(vs[j])},
+                                           {double(us[i + 1]), double(vs[j + 1])},
+                                           {double(us[i]), double(vs[j + 1])}};
+                bool all_in = true, apart = false;
+                for (int e = 0; e < 3; ++e) {
+                    const Point2& a = t.p[size_t(e)];
+                    const Point2 edge = sub(t.p[size_t((e + 1) % 3)], a);
+                    int in = 0;
+                    for (const Point2& c : corners) in += cross(edge, sub(c, a)) >= 0.0;
+                    all_in = all_in && in == 4;
+                    apart = apart || in == 0;
                 }
-                if (same_across && !along_u && r.v0 <= last.v1) {
-                    last.v1 = std::max(last.v1, r.v1);
-                    continue;
+                if (all_in) {
+                    covered[cell] = 1;
+                } else if (!apart) {
+                    partial[cell].push_back(&t);
                 }
             }
-            out.push_back(r);
         }
-        const bool merged = out.size() < rects.size();
-        rects = std::move(out);
-        return merged;
-    };
-    bool merged = true;
-    while (merged) {
-        const bool a = merge_along(true);
-        const bool b = merge_along(false);
-        merged = a || b;
     }
+    for (const auto& [cell, meeting] : partial) {
+        if (covered[cell]) continue;
+        const size_t i = cell % nu, j = cell / nu;
+        covered[cell] = union_covers(us[i], us[i + 1], vs[j], vs[j + 1], meeting);
+    }
+    // Summed counts of covered cells, for O(1) tests of whole strips.
+    std::vector<uint32_t> sum((nu + 1) * (nv + 1), 0);
+    for (size_t j = 0; j < nv; ++j)
+        for (size_t i = 0; i < nu; ++i)
+            sum[(i + 1) + (nu + 1) * (j + 1)] = covered[i + nu * j] + sum[i + (nu + 1) * (j + 1)] +
+                                                sum[(i + 1) + (nu + 1) * j] - sum[i + (nu + 1) * j];
+    auto full = [&](size_t i0, size_t i1, size_t j0, size_t j1) {  // cells [i0, i1) x [j0, j1)
+        const uint32_t n = sum[i1 + (nu + 1) * j1] - sum[i0 + (nu + 1) * j1] - sum[i1 + (nu + 1) * j0] +
+                           sum[i0 + (nu + 1) * j0];
+        return uint64_t(n) == uint64_t(i1 - i0) * uint64_t(j1 - j0);
+    };
+    struct Cells {
+        size_t i0, i1, j0, j1;
+        auto key() const { return std::tie(i0, i1, j0, j1); }
+    };
+    auto grow = [&](size_t i, size_t j, bool u_first) {
+        Cells c{i, i + 1, j, j + 1};
+        for (int pass = 0; pass < 2; ++pass) {
+            if ((pass == 0) == u_first) {
+                while (c.i0 > 0 && full(c.i0 - 1, c.i0, c.j0, c.j1)) --c.i0;
+                while (c.i1 < nu && full(c.i1, c.i1 + 1, c.j0, c.j1)) ++c.i1;
+            } else {
+                while (c.j0 > 0 && full(c.i0, c.i1, c.j0 - 1, c.j0)) --c.j0;
+                while (c.j1 < nv && full(c.i0, c.i1, c.j1, c.j1 + 1)) ++c.j1;
+            }
+        }
+        return c;
+    };
+    std::vector<uint8_t> used(nu * nv, 0);
+    std::vector<Cells> found;
+    for (size_t j = 0; j < nv; ++j) {
+        for (size_t i = 0; i < nu; ++i) {
+            if (!covered[i + nu * j]) continue;
+            ++covered_cells;
+            if (used[i + nu * j]) continue;
+            for (const bool u_first : {true, false}) {
+                const Cells c = grow(i, j, u_first);
+                if (!found.empty() && found.back().key() == c.key()) continue;
+                found.push_back(c);
+                for (size_t jj = c.j0; jj < c.j1; ++jj)
+                    for (size_t ii = c.i0; ii < c.i1; ++ii) used[ii + nu * jj] = 1;
+            }
+        }
+    }
+    // Drop rectangles inside another.
+    std::sort(found.begin(), found.end(), [](const Cells& a, const Cells& b) { return a.key() < b.key(); });
+    found.erase(std::unique(found.begin(), found.end(),
+                            [](const Cells& a, const Cells& b) { return a.key() == b.key(); }),
+                found.end());
+    std::vector<Rect> out;
+    for (size_t k = 0; k < found.size(); ++k) {
+        const Cells& a = found[k];
+        bool inside = false;
+        for (size_t m = 0; m < found.size() && !inside; ++m) {
+            const Cells& b = found[m];
+            inside = m != k && b.i0 <= a.i0 && a.i1 <= b.i1 && b.j0 <= a.j0 && a.j1 <= b.j1;
+        }
+        if (!inside) out.push_back(Rect{axis, plane, us[a.i0], us[a.i1], vs[a.j0], vs[a.j1]});
+    }
+    return out;
 }
 
 // Rounds x toward `toward` when the float conversion moved it away (insets must never grow a panel).
@@ -95,10 +250,8 @@ int panel_axis(const Aabb& panel) {
 
 std::vector<Aabb> find_panels(const World& world, PanelFigures* figures) {
     PanelFigures fig;
-    // Per rectangle, the corners missing from its half-triangles seen so far (bit c: corner c missing, with
-    // corner c = (u == u1) + 2 (v == v1)). A rectangle is covered when both halves of one diagonal are in:
-    // the halves along a diagonal miss opposite corners (c and c ^ 3).
-    std::map<Rect, uint8_t> halves;
+    // The opaque triangles of each axis plane (all three vertices on it, compared exactly), in 2D.
+    std::map<std::pair<int, float>, std::vector<Tri2>> planes;
     for (size_t t = 0; t < world.triangles.size(); ++t) {
         if (!world.triangle_opaque[t]) continue;
         const Triangle& tri = world.triangles[t];
@@ -110,34 +263,21 @@ std::vector<Aabb> find_panels(const World& world, PanelFigures* figures) {
         if (axis < 0) continue;
         ++fig.flat_triangles;
         const int ua = (axis + 1) % 3, va = (axis + 2) % 3;
-        Rect r{axis,
-               p[0][axis],
-               std::min({p[0][ua], p[1][ua], p[2][ua]}),
-               std::max({p[0][ua], p[1][ua], p[2][ua]}),
-               std::min({p[0][va], p[1][va], p[2][va]}),
-               std::max({p[0][va], p[1][va], p[2][va]})};
-        if (!(r.u0 < r.u1 && r.v0 < r.v1)) continue;
-        uint8_t present = 0;
-        bool corners = true;
-        for (const glm::vec3& q : p) {
-            const bool at_u0 = q[ua] == r.u0, at_u1 = q[ua] == r.u1;
-            const bool at_v0 = q[va] == r.v0, at_v1 = q[va] == r.v1;
-            if (!(at_u0 || at_u1) || !(at_v0 || at_v1)) corners = false;
-            present |= uint8_t(1u << (int(at_u1) + 2 * int(at_v1)));
+        Tri2 t2;
+        for (int i = 0; i < 3; ++i) t2.p[i] = {double(p[i][ua]), double(p[i][va])};
+        const double area2 = cross(sub(t2.p[1], t2.p[0]), sub(t2.p[2], t2.p[0]));
+        if (area2 == 0.0) continue;
+        if (area2 < 0.0) std::swap(t2.p[1], t2.p[2]);  // counter-clockwise: inside is left of each edge
+        for (int i = 0; i < 3; ++i) {
+            t2.u[i] = float(p[i][ua]);
+            t2.v[i] = float(p[i][va]);
         }
-        if (!corners || std::popcount(present) != 3) continue;  // not half of its bounding rectangle
-        halves[r] |= uint8_t(~present & 0xFu);
-    }
-    std::map<std::pair<int, float>, std::vector<Rect>> planes;
-    for (const auto& [r, missing] : halves) {
-        if ((missing & 0x9u) == 0x9u || (missing & 0x6u) == 0x6u) {
-            ++fig.rectangles;
-            planes[{r.axis, r.plane}].push_back(r);
-        }
+        planes[{axis, p[0][axis]}].push_back(t2);
     }
     std::vector<Aabb> out;
-    for (auto& [plane, rects] : planes) {
-        merge_plane(rects);
+    for (const auto& [plane, tris] : planes) {
+        ++fig.planes;
+        std::vector<Rect> rects = plane_rectangles(plane.first, plane.second, tris, fig.covered_cells);
         for (const Rect& r : rects) out.push_back(to_aabb(r));
     }
     fig.panels = out.size();

@@ -22,14 +22,20 @@ namespace pvs {
 
 struct PanelFigures {
     uint64_t flat_triangles = 0;  // opaque triangles lying in an axis-aligned plane
-    uint64_t rectangles = 0;      // rectangles covered by a pair of them (two halves of a rectangle)
-    uint64_t panels = 0;          // after merging rectangles that share a whole edge in the same plane
+    uint64_t planes = 0;          // distinct axis planes holding them
+    uint64_t covered_cells = 0;   // cells of the planes' vertex-coordinate grids the triangles cover
+    uint64_t panels = 0;          // maximal covered rectangles kept
 };
 
-// The covered rectangles of the world's opaque triangles: each is two triangles that are the halves of an
-// axis-aligned rectangle (cut along a diagonal), compared exactly; then rectangles of one plane that share
-// a whole edge are merged while any do. Deterministic; rectangles covered only by other triangulations are
-// not found (fewer panels is the safe side).
+// The covered rectangles of the world's opaque triangles. Per axis plane (vertices compared exactly), the
+// grid of the distinct vertex coordinates cuts the plane into cells; a cell is covered when one triangle
+// holds it or, failing that, the union of the triangles meeting it does (exact polygon subtraction in
+// double; leftover slivers under 1e-12 m2 count as rounding along shared edges). Any triangulation is
+// found: pairs of halves, fans of a brush face, T-junctions, faces of several meshes meeting. Panels are
+// MAXIMAL rectangles of covered cells, grown from every cell not yet in one (u first and v first), so they
+// overlap: a point deep in the covered region is deep in some panel, and the inset (point 8 of
+// pvs/conservative.h) costs only at the region's edges. Rectangles inside another are dropped.
+// Deterministic.
 std::vector<Aabb> find_panels(const World& world, PanelFigures* figures = nullptr);
 
 // Axis along which a panel is flat (min == max), or -1 when it is not a panel (flat along no axis, or along

@@ -379,7 +379,7 @@ void DepthCube::add_occluders(const std::vector<Aabb>& boxes) {
     }
 }
 
-bool DepthCube::is_hidden(const Aabb& box) const {
+PVS_AVX2_CLONES bool DepthCube::is_hidden(const Aabb& box) const {
     if (!box_usable(box) || meets_near_cube(box, eye_)) return false;
     const int r = resolution_;
     for (int face = 0; face < 6; ++face) {
@@ -388,12 +388,17 @@ bool DepthCube::is_hidden(const Aabb& box) const {
         // Pixels outside the drawn region hold no occluder (or, after clear_for(), stale depths): visible.
         const auto& reg = region_[size_t(face)];
         if (of.i0 < reg[0] || of.i1 > reg[1] || of.j0 < reg[2] || of.j1 > reg[3]) return false;
+        // double(x) < limit exactly when x < float_up(limit), for every float x; and stored depths are
+        // positive or +infinity, which order as their bit patterns. So the test is, a row at a time, an
+        // unsigned max that vectorizes.
+        const uint32_t limit = std::bit_cast<uint32_t>(float_up(of.limit));
         const float* const face_depth = depth_.data() + size_t(face) * r * r;
         for (int j = of.j0; j <= of.j1; ++j) {
-            const float* const row = face_depth + size_t(j) * r;
-            for (int i = of.i0; i <= of.i1; ++i) {
-                if (!(double(row[i]) < of.limit)) return false;
-            }
+            const float* __restrict const row = face_depth + size_t(j) * r;
+            uint32_t farthest = 0;
+            for (int i = of.i0; i <= of.i1; ++i)
+                farthest = std::max(farthest, std::bit_cast<uint32_t>(row[i]));
+            if (!(farthest < limit)) return false;
         }
     }
     return true;

@@ -311,9 +311,9 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
         PanelFigures pf;
         shrunk->panels = find_panels(world, &pf);
         ctx.info(
-            fmt::format("panels: {} opaque triangles lie in axis planes, {} rectangles are covered by pairs "
-                        "of them, merged into {} panels",
-                        pf.flat_triangles, pf.rectangles, pf.panels));
+            fmt::format("panels: {} opaque triangles lie in {} axis planes, covering {} cells of their "
+                        "vertex grids; {} maximal covered rectangles",
+                        pf.flat_triangles, pf.planes, pf.covered_cells, pf.panels));
         shrunk->boxes = shrunk_boxes(ctx, grid, proven, bc, shrunk->epsilon_m);
         std::vector<uint64_t> free_bits(proven.words.size());
         for (size_t w = 0; w < proven.words.size(); ++w) free_bits[w] = ~(proven.words[w] | touched->words[w]);

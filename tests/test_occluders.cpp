@@ -391,7 +391,8 @@ TEST(Panels, TwoHalvesOfARectangleMakeOneAndNeighboursMerge) {
     PanelFigures fig;
     const std::vector<Aabb> panels = find_panels(w, &fig);
     EXPECT_EQ(fig.flat_triangles, 8u);
-    EXPECT_EQ(fig.rectangles, 4u);
+    EXPECT_EQ(fig.planes, 2u);
+    EXPECT_EQ(fig.covered_cells, 4u + 1u);  // grid x {0, 2, 5} x y {0, 1, 4}, and one cell at z = 7
     ASSERT_EQ(panels.size(), 2u);
     EXPECT_EQ(panel_axis(panels[0]), 2);
     EXPECT_EQ(panels[0].min, glm::vec3(0, 0, 3));
@@ -420,6 +421,103 @@ TEST(Panels, OnlyWhatOpaqueTrianglesWhollyCover) {
     add_triangle(w, {0, 0, 5}, {1, 0, 5}, {1, 1, 5});
     add_triangle(w, {1, 1, 5}, {2, 2, 5}, {1, 2, 5});
     EXPECT_TRUE(find_panels(w).empty());
+}
+
+// Is p (in the plane z = z) inside some opaque triangle of w lying in that plane? Exact enough for test
+// points kept 1e-4 m inside panels.
+bool covered_at(const World& w, glm::vec3 p) {
+    for (size_t t = 0; t < w.triangles.size(); ++t) {
+        const Triangle& tri = w.triangles[t];
+        const glm::vec3 a = w.positions[tri.v[0]], b = w.positions[tri.v[1]], c = w.positions[tri.v[2]];
+        if (!w.triangle_opaque[t] || a.z != p.z || b.z != p.z || c.z != p.z) continue;
+        auto side = [&](glm::vec3 e0, glm::vec3 e1) {
+            return double(e1.x - e0.x) * double(p.y - e0.y) - double(e1.y - e0.y) * double(p.x - e0.x);
+        };
+        const double s0 = side(a, b), s1 = side(b, c), s2 = side(c, a);
+        if ((s0 >= 0 && s1 >= 0 && s2 >= 0) || (s0 <= 0 && s1 <= 0 && s2 <= 0)) return true;
+    }
+    return false;
+}
+
+TEST(Panels, AFanAndTJunctionsGiveTheMaximalRectanglesTheyCover) {
+    World w;
+    // A pentagon as a fan from (0, 0): covers [0, 4] x [0, 2] and [0, 2] x [0, 4], not the corner beyond
+    // the slanted edge from (4, 2) to (2, 4).
+    add_triangle(w, {0, 0, 1}, {4, 0, 1}, {4, 2, 1});
+    add_triangle(w, {0, 0, 1}, {4, 2, 1}, {2, 4, 1});
+    add_triangle(w, {0, 0, 1}, {2, 4, 1}, {0, 4, 1});
+    std::vector<Aabb> panels = find_panels(w);
+    ASSERT_EQ(panels.size(), 2u);
+    std::sort(panels.begin(), panels.end(), [](const Aabb& a, const Aabb& b) { return a.max.x > b.max.x; });
+    EXPECT_EQ(panels[0].min, glm::vec3(0, 0, 1));
+    EXPECT_EQ(panels[0].max, glm::vec3(4, 2, 1));
+    EXPECT_EQ(panels[1].min, glm::vec3(0, 0, 1));
+    EXPECT_EQ(panels[1].max, glm::vec3(2, 4, 1));
+
+    // A wall of three meshes with a T-junction: [0, 2] x [0, 1] as one pair, [2, 3] x [0, 1] as a fan
+    // whose middle vertex (2.5, 1) is nobody else's, and [0, 3] x [1, 2] above: one panel [0, 3] x [0, 2].
+    World t;
+    add_rect_z(t, 5.0f, 0, 2, 0, 1);
+    add_triangle(t, {2, 0, 5}, {3, 0, 5}, {2.5f, 1, 5});
+    add_triangle(t, {2, 0, 5}, {2.5f, 1, 5}, {2, 1, 5});
+    add_triangle(t, {3, 0, 5}, {3, 1, 5}, {2.5f, 1, 5});
+    add_rect_z(t, 5.0f, 0, 3, 1, 2);
+    panels = find_panels(t);
+    ASSERT_EQ(panels.size(), 1u);
+    EXPECT_EQ(panels[0].min, glm::vec3(0, 0, 5));
+    EXPECT_EQ(panels[0].max, glm::vec3(3, 2, 5));
+
+    // The same with a crack 1 mm wide between the pair and the fan: two panels, none across the crack.
+    World c;
+    add_rect_z(c, 5.0f, 0, 1.999f, 0, 1);
+    add_triangle(c, {2, 0, 5}, {3, 0, 5}, {2.5f, 1, 5});
+    add_triangle(c, {2, 0, 5}, {2.5f, 1, 5}, {2, 1, 5});
+    add_triangle(c, {3, 0, 5}, {3, 1, 5}, {2.5f, 1, 5});
+    for (const Aabb& p : find_panels(c)) EXPECT_FALSE(p.min.x < 1.9995f && p.max.x > 1.9995f) << p.min.x;
+}
+
+// Random soups of axis-plane triangles (fans of random convex polygons on a coarse grid, pairs, slivers,
+// overlaps, near misses): every point of every panel lies in some opaque triangle of its plane.
+TEST(PanelsProperty, EveryPointOfAPanelIsCovered) {
+    Rng rng(7, 1);
+    uint64_t checked = 0, panels_seen = 0;
+    for (int world = 0; world < 60; ++world) {
+        World w;
+        const float z = float(world % 3);
+        for (int poly = 0; poly < 6; ++poly) {
+            // A convex polygon: points on a circle, coordinates on a 1/8 grid (shared-edge exactness).
+            const float cx = float(rng.below(8)), cy = float(rng.below(8)), r = 0.5f + float(rng.below(4));
+            const int n = 3 + int(rng.below(5));
+            std::vector<glm::vec3> ring;
+            const float phase = rng.uniform() * 6.283f;
+            for (int k = 0; k < n; ++k) {
+                const float ang = phase + 6.2831853f * float(k) / float(n);
+                ring.emplace_back(std::round((cx + r * std::cos(ang)) * 8.0f) / 8.0f,
+                                  std::round((cy + r * std::sin(ang)) * 8.0f) / 8.0f, z);
+            }
+            for (int k = 1; k + 1 < n; ++k) add_triangle(w, ring[0], ring[size_t(k)], ring[size_t(k + 1)]);
+            // Sometimes a rectangle beside it, a hair apart or touching.
+            if (rng.below(2)) {
+                const float gap = rng.below(2) ? 0.0f : 1e-3f;
+                add_rect_z(w, z, cx + r + gap, cx + r + 2.0f, cy - 1.0f, cy + 1.0f);
+            }
+        }
+        for (const Aabb& p : find_panels(w)) {
+            ++panels_seen;
+            ASSERT_EQ(panel_axis(p), 2);
+            for (int k = 0; k < 200; ++k) {
+                // Points of the closed rectangle, corners and edges included, pulled 1e-4 m inside.
+                const float fu = rng.below(4) == 0 ? float(rng.below(2)) : rng.uniform();
+                const float fv = rng.below(4) == 0 ? float(rng.below(2)) : rng.uniform();
+                const glm::vec3 q(p.min.x + 1e-4f + fu * (p.max.x - p.min.x - 2e-4f),
+                                  p.min.y + 1e-4f + fv * (p.max.y - p.min.y - 2e-4f), p.min.z);
+                ASSERT_TRUE(covered_at(w, q)) << "world " << world << " point " << q.x << ", " << q.y;
+                ++checked;
+            }
+        }
+    }
+    EXPECT_GT(panels_seen, 100u);
+    EXPECT_GT(checked, 20000u);
 }
 
 TEST(Panels, InsetShrinksTheRectangleAndDropsWhatVanishes) {
