@@ -290,18 +290,6 @@ public:
             for (int side = 0; side < 2; ++side)
                 sides.open[size_t(side)] = unproven(cube_, sides.open[size_t(side)]);
             if (k == 0) {  // the floor: whatever is not proven is listed
-                if (!sides.empty() && !near_panels_.empty()) {
-                    // The panels on the cube's side faces too (rays more than 45 degrees from a panel's
-                    // normal), drawn only over what is still unproven: a subset of the open objects, so
-                    // its pixels lie in the region clear_for() cleared.
-                    interest_.clear();
-                    for (const std::vector<uint32_t>& open : sides.open)
-                        for (uint32_t o : open) interest_.push_back(sh_.world.objects[o].bounds);
-                    cube_.limit_to(interest_);
-                    for (const Aabb& p : near_panels_) cube_.add_panel_sides(p, panel_ball_);
-                    for (int side = 0; side < 2; ++side)
-                        sides.open[size_t(side)] = unproven(cube_, sides.open[size_t(side)]);
-                }
                 if (sh_.fine_cube_resolution > 0 && !sides.empty()) second_look(s, sides);
                 for (int side = 0; side < 2; ++side) {
                     for (uint32_t o : sides.open[size_t(side)])

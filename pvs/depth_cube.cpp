@@ -323,86 +323,7 @@ bool panel_face(const Aabb& panel, glm::vec3 eye, double ball, int& face, double
     return true;
 }
 
-// A corner ray of a SIDE face (axis != the panel's axis a): direction dir with |dir[face axis]| = 1 and
-// the grid values on the face's other two axes. The ray reaches the panel's plane (at h = plane - eye on
-// axis a, |h| > the ball) at parameter lambda = h / dir[a], which is also its depth on this face. Returns
-// lambda (1 + slack) when it crosses there inside the rectangle inset, on each in-plane axis k, by
-// panel_inset(ball, dir[k] / dir[a]) (the ray's tangent relative to the panel's normal, as on the normal
-// face; beyond 45 degrees from the normal the tangent exceeds 1 and the inset grows), with the slack on
-// both sides; +infinity otherwise. THE definition, shared by the kernel and the reference.
-double panel_side_corner_depth(const Aabb& panel, glm::vec3 eye, int axis, double h, int face, double gu,
-                               double gv, double ball) {
-    const int b = face / 2, ub = (b + 1) % 3, vb = (b + 2) % 3;
-    double dir[3];
-    dir[b] = face % 2 == 0 ? 1.0 : -1.0;
-    dir[ub] = gu;
-    dir[vb] = gv;
-    const double da = dir[axis];
-    if (!(h * da > 0.0)) return kInf;  // parallel to the plane, or away from it
-    const double lambda = h / da;
-    for (int k = 0; k < 3; ++k) {
-        if (k == axis) continue;
-        const double inset = panel_inset(ball, dir[k] / da);
-        double enter, exit;
-        slab(double(panel.min[k]) - double(eye[k]) + inset, double(panel.max[k]) - double(eye[k]) - inset,
-             dir[k], enter, exit);
-        if (!(enter * (1.0 + kCubeDepthSlack) <= lambda && lambda * (1.0 + kCubeDepthSlack) <= exit))
-            return kInf;
-    }
-    return lambda * (1.0 + kCubeDepthSlack);
-}
-
 }  // namespace
-
-// The panel on the four cube faces along its in-plane axes (rays more than 45 degrees from its normal): per
-// vertex the crossing depth of its corner ray (panel_side_corner_depth), per pixel the largest of its four
-// corners when all four cross (the rays through a pixel form a convex set, the rays crossing the inset
-// rectangle too: the inset conditions are convex in the tangents (dir[k] / dir[a]), which are a projective
-// image of the face coordinates; and the crossing depth h / dir[a] is monotone across the pixel).
-void DepthCube::add_panel_sides(const Aabb& panel, double ball_radius) {
-    int normal_face = 0;
-    double t = 0.0;
-    if (!panel_face(panel, eye_, ball_radius, normal_face, t)) return;
-    const int axis = normal_face / 2;
-    const double h = double(panel.min[axis]) - double(eye_[axis]);
-    const int r = resolution_;
-    for (int face = 0; face < 6; ++face) {
-        if (face / 2 == axis) continue;
-        const FaceBox fb = face_box(panel, eye_, face);
-        const double d_lo = std::max(fb.d_min, kCubeNearPlane_m);
-        if (d_lo > fb.d_max) continue;
-        const double u0 = fb.u_lo >= 0.0 ? fb.u_lo / fb.d_max : fb.u_lo / d_lo;
-        const double u1 = fb.u_hi >= 0.0 ? fb.u_hi / d_lo : fb.u_hi / fb.d_max;
-        const double v0 = fb.v_lo >= 0.0 ? fb.v_lo / fb.d_max : fb.v_lo / d_lo;
-        const double v1 = fb.v_hi >= 0.0 ? fb.v_hi / d_lo : fb.v_hi / fb.d_max;
-        if (u0 > 1.0 || u1 < -1.0 || v0 > 1.0 || v1 < -1.0) continue;
-        const auto vertex_lo = [r](double x) {
-            return std::max(0, int(std::floor((std::max(x, -1.0) + 1.0) * 0.5 * r)) - 1);
-        };
-        const auto vertex_hi = [r](double x) {
-            return std::min(r, int(std::ceil((std::min(x, 1.0) + 1.0) * 0.5 * r)) + 1);
-        };
-        const auto& reg = region_[size_t(face)];
-        const int iv0 = std::max(vertex_lo(u0), reg[0]), iv1 = std::min(vertex_hi(u1), reg[1] + 1);
-        const int jv0 = std::max(vertex_lo(v0), reg[2]), jv1 = std::min(vertex_hi(v1), reg[3] + 1);
-        if (iv1 - iv0 < 1 || jv1 - jv0 < 1) continue;
-        float* const face_depth = depth_.data() + size_t(face) * r * r;
-        for (int jv = jv0; jv <= jv1; ++jv) {
-            for (int iv = iv0; iv <= iv1; ++iv)
-                corner_cur_[iv] = panel_side_corner_depth(panel, eye_, axis, h, face, grid(iv, r),
-                                                          grid(jv, r), ball_radius);
-            if (jv > jv0) {
-                float* const row = face_depth + size_t(jv - 1) * r;
-                for (int i = iv0; i < iv1; ++i) {
-                    const double d = std::max(std::max(corner_prev_[i], corner_prev_[i + 1]),
-                                              std::max(corner_cur_[i], corner_cur_[i + 1]));
-                    if (d < kInf) row[i] = std::min(row[i], float_up(d));
-                }
-            }
-            std::swap(corner_prev_, corner_cur_);
-        }
-    }
-}
 
 void DepthCube::add_panel(const Aabb& panel, double ball_radius) {
     int face = 0;
@@ -523,8 +444,7 @@ bool is_hidden_reference(const std::vector<Aabb>& occluders, glm::vec3 eye, cons
 }
 
 bool is_hidden_reference(const std::vector<Aabb>& occluders, const std::vector<Aabb>& panels,
-                         double panel_ball_radius, glm::vec3 eye, const Aabb& box, int resolution,
-                         bool panel_sides) {
+                         double panel_ball_radius, glm::vec3 eye, const Aabb& box, int resolution) {
     const int r = resolution;
     if (!box_usable(box)) return false;
     // Visible when the box meets the closed near cube around the eye.
@@ -581,20 +501,7 @@ bool is_hidden_reference(const std::vector<Aabb>& occluders, const std::vector<A
                 for (const Aabb& panel : panels) {
                     int panel_f = 0;
                     double t = 0.0;
-                    if (!panel_face(panel, eye, panel_ball_radius, panel_f, t)) continue;
-                    if (panel_f / 2 != face / 2) {  // a side face: the general corner rule
-                        if (!panel_sides) continue;
-                        const int pa = panel_f / 2;
-                        const double h = double(panel.min[pa]) - double(eye[pa]);
-                        double d = 0.0;
-                        for (int cj = j; cj <= j + 1; ++cj)
-                            for (int ci = i; ci <= i + 1; ++ci)
-                                d = std::max(d, panel_side_corner_depth(panel, eye, pa, h, face, grid(ci, r),
-                                                                        grid(cj, r), panel_ball_radius));
-                        if (d < kInf) pixel = std::min(pixel, float_up(d));
-                        continue;
-                    }
-                    if (panel_f != face) continue;
+                    if (!panel_face(panel, eye, panel_ball_radius, panel_f, t) || panel_f != face) continue;
                     // The four corner rays cross the plane at depth t: inside the rectangle with room to
                     // spare?
                     bool hits = true;

@@ -115,16 +115,6 @@ public:
     // panel (every ray from s through a written pixel crosses the rectangle at depth t).
     void add_panel(const Aabb& panel, double ball_radius = 0.0);
     void add_panels(const std::vector<Aabb>& panels, double ball_radius = 0.0);
-    // The same panel on the four SIDE faces (rays more than 45 degrees from its normal), by the same bound:
-    // a pixel whose four corner rays cross the plane inside the rectangle inset per ray by
-    // ball_radius sqrt(1 + p^2) on each in-plane axis, p the ray's tangent on that axis relative to the
-    // normal (now > 1 on the face's own axis, so the inset grows towards grazing rays), gets the largest
-    // crossing depth of its corners times (1 + slack), rounded up. The rays through a pixel are a convex set
-    // and the inset conditions are convex in the tangents, a projective image of the face coordinates, so
-    // the corners decide; the crossing depth is monotone across the pixel. Per vertex and not separable:
-    // several times the cost of add_panel(), so the solver uses it only where the normal face left objects
-    // unproven.
-    void add_panel_sides(const Aabb& panel, double ball_radius);
     // Rasterizes all the boxes, nearest first, skipping each box the ones before already hide (it could not
     // lower any pixel). Same depths as add_occluder() on every box, in far less time behind walls.
     void add_occluders(const std::vector<Aabb>& boxes);
@@ -155,10 +145,8 @@ private:
 // for touched pixels the minimum over all occluders of the four-corner slab tests. Slow (O(6 R^2 * N)); for
 // the differential test and the benchmark ratio only.
 bool is_hidden_reference(const std::vector<Aabb>& occluders, glm::vec3 eye, const Aabb& box, int resolution);
-// The same with panels (add_panel(panel, panel_ball_radius), and add_panel_sides() when panel_sides)
-// besides the boxes.
+// The same with panels (add_panel(panel, panel_ball_radius)) besides the boxes.
 bool is_hidden_reference(const std::vector<Aabb>& occluders, const std::vector<Aabb>& panels,
-                         double panel_ball_radius, glm::vec3 eye, const Aabb& box, int resolution,
-                         bool panel_sides = false);
+                         double panel_ball_radius, glm::vec3 eye, const Aabb& box, int resolution);
 
 }  // namespace pvs
