@@ -218,6 +218,16 @@ TEST(DepthCube, MatchesTheReferenceOnRandomScenes) {
     EXPECT_LT(hidden, tested * 9 / 10);
 }
 
+// Target k of a box for the ray tests: its 8 corners first, then random points inside it.
+glm::dvec3 box_target(const Aabb& b, int k, Rng& rng) {
+    glm::dvec3 x;
+    for (int a = 0; a < 3; ++a) {
+        const double t = k < 8 ? double((k >> a) & 1) : double(rng.uniform());
+        x[a] = double(b.min[a]) + t * (double(b.max[a]) - double(b.min[a]));
+    }
+    return x;
+}
+
 // Does the segment from eye to x meet the box strictly before x? (double slab test over t in [0, 1))
 bool segment_blocked(glm::dvec3 eye, glm::dvec3 x, const Aabb& b) {
     double t0 = 0.0, t1 = 1.0;
@@ -257,12 +267,7 @@ TEST(DepthCube, HiddenMeansEveryRayIsBlocked) {
             if (!cube.is_hidden(b)) continue;
             ++hidden;
             for (int k = 0; k < rays_per_box; ++k) {
-                glm::dvec3 x;
-                for (int a = 0; a < 3; ++a) {
-                    // The first 8 targets are the corners; then random points, a share of them on faces.
-                    const double t = k < 8 ? double((k >> a) & 1) : double(rng.uniform());
-                    x[a] = double(b.min[a]) + t * (double(b.max[a]) - double(b.min[a]));
-                }
+                glm::dvec3 x = box_target(b, k, rng);  // then a share of the random ones on faces
                 if (k >= 8 && k % 4 == 0) {
                     const int a = int(rng.below(3));
                     x[a] = rng.uniform() < 0.5f ? double(b.min[a]) : double(b.max[a]);
@@ -402,11 +407,7 @@ TEST(DepthCube, HiddenByPanelsMeansEveryRayCrossesOne) {
             if (!cube.is_hidden(b)) continue;
             ++hidden;
             for (int k = 0; k < rays_per_box; ++k) {
-                glm::dvec3 x;
-                for (int a = 0; a < 3; ++a) {
-                    const double t = k < 8 ? double((k >> a) & 1) : double(rng.uniform());
-                    x[a] = double(b.min[a]) + t * (double(b.max[a]) - double(b.min[a]));
-                }
+                const glm::dvec3 x = box_target(b, k, rng);
                 ++rays;
                 const bool blocked = std::any_of(panels.begin(), panels.end(), [&](const Aabb& p) {
                     return segment_blocked(glm::dvec3(s.eye), x, p);
@@ -483,11 +484,7 @@ TEST(DepthCube, HiddenByPanelsForABallMeansEverySegmentFromTheBallCrossesOne) {
             if (!cube.is_hidden(b)) continue;
             ++hidden;
             for (int k = 0; k < points_per_box; ++k) {
-                glm::dvec3 x;
-                for (int a = 0; a < 3; ++a) {
-                    const double t = k < 8 ? double((k >> a) & 1) : double(rng.uniform());
-                    x[a] = double(b.min[a]) + t * (double(b.max[a]) - double(b.min[a]));
-                }
+                const glm::dvec3 x = box_target(b, k, rng);
                 for (int e = 0; e < eyes_per_point; ++e) {
                     glm::dvec3 dir;
                     if (e < 12) {  // tilted 45 degrees in each pair of axes, both signs

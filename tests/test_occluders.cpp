@@ -439,6 +439,13 @@ bool covered_at(const World& w, glm::vec3 p) {
     return false;
 }
 
+// [2, 3] x [0, 1] at z = 5 as a fan of three triangles around (2.5, 1), a vertex no neighbour shares.
+void add_t_junction_fan(World& w) {
+    add_triangle(w, {2, 0, 5}, {3, 0, 5}, {2.5f, 1, 5});
+    add_triangle(w, {2, 0, 5}, {2.5f, 1, 5}, {2, 1, 5});
+    add_triangle(w, {3, 0, 5}, {3, 1, 5}, {2.5f, 1, 5});
+}
+
 TEST(Panels, AFanAndTJunctionsGiveTheMaximalRectanglesTheyCover) {
     World w;
     // A pentagon as a fan from (0, 0): covers [0, 4] x [0, 2] and [0, 2] x [0, 4], not the corner beyond
@@ -458,9 +465,7 @@ TEST(Panels, AFanAndTJunctionsGiveTheMaximalRectanglesTheyCover) {
     // whose middle vertex (2.5, 1) is nobody else's, and [0, 3] x [1, 2] above: one panel [0, 3] x [0, 2].
     World t;
     add_rect_z(t, 5.0f, 0, 2, 0, 1);
-    add_triangle(t, {2, 0, 5}, {3, 0, 5}, {2.5f, 1, 5});
-    add_triangle(t, {2, 0, 5}, {2.5f, 1, 5}, {2, 1, 5});
-    add_triangle(t, {3, 0, 5}, {3, 1, 5}, {2.5f, 1, 5});
+    add_t_junction_fan(t);
     add_rect_z(t, 5.0f, 0, 3, 1, 2);
     panels = find_panels(t);
     ASSERT_EQ(panels.size(), 1u);
@@ -470,9 +475,7 @@ TEST(Panels, AFanAndTJunctionsGiveTheMaximalRectanglesTheyCover) {
     // The same with a crack 1 mm wide between the pair and the fan: two panels, none across the crack.
     World c;
     add_rect_z(c, 5.0f, 0, 1.999f, 0, 1);
-    add_triangle(c, {2, 0, 5}, {3, 0, 5}, {2.5f, 1, 5});
-    add_triangle(c, {2, 0, 5}, {2.5f, 1, 5}, {2, 1, 5});
-    add_triangle(c, {3, 0, 5}, {3, 1, 5}, {2.5f, 1, 5});
+    add_t_junction_fan(c);
     for (const Aabb& p : find_panels(c)) EXPECT_FALSE(p.min.x < 1.9995f && p.max.x > 1.9995f) << p.min.x;
 }
 
