@@ -290,6 +290,23 @@ public:
             for (int side = 0; side < 2; ++side)
                 sides.open[size_t(side)] = unproven(cube_, sides.open[size_t(side)]);
             if (k == 0) {  // the floor: whatever is not proven is listed
+                if (!sides.empty() && !near_panels_.empty()) {
+                    // The panels on the cube's side faces too (rays more than 45 degrees from a panel's
+                    // normal; argument 8), drawn only over what is still unproven and no sight ray reaches
+                    // (that is listed in any case): a subset of the open objects, so its pixels lie in the
+                    // region clear_for() cleared.
+                    interest_.clear();
+                    for (const std::vector<uint32_t>& open : sides.open)
+                        for (uint32_t o : open) interest_.push_back(sh_.world.objects[o].bounds);
+                    cube_.limit_to(interest_);
+                    // Only the panels that meet the box around s and what is left open.
+                    Aabb left = Aabb::of(s, s);
+                    for (const Aabb& b : interest_) left.extend(b);
+                    for (const Aabb& p : near_panels_)
+                        if (p.overlaps(left)) cube_.add_panel_sides(p, panel_ball_);
+                    for (int side = 0; side < 2; ++side)
+                        sides.open[size_t(side)] = unproven_each(cube_, sides.open[size_t(side)]);
+                }
                 if (sh_.fine_cube_resolution > 0 && !sides.empty()) second_look(s, sides);
                 for (int side = 0; side < 2; ++side) {
                     for (uint32_t o : sides.open[size_t(side)])
@@ -382,6 +399,23 @@ private:
         ++counts_.fine_samples;
         for (int side = 0; side < 2; ++side)
             sides.open[size_t(side)] = unproven(fine_, sides.open[size_t(side)]);
+    }
+
+    // The same as unproven(), one object at a time (no tree): for a few objects left after a first pass.
+    std::vector<uint32_t> unproven_each(const DepthCube& cube, const std::vector<uint32_t>& open) {
+        std::vector<uint32_t> out;
+        for (uint32_t o : open) {
+            ++counts_.tests;
+            if (cube.is_hidden(sh_.world.objects[o].bounds)) continue;
+            const std::vector<Aabb>& parts = sh_.parts[o];
+            bool hidden = parts.size() > 1;
+            for (size_t p = 0; hidden && p < parts.size(); ++p) {
+                ++counts_.tests;
+                hidden = cube.is_hidden(parts[p]);
+            }
+            if (!hidden) out.push_back(o);
+        }
+        return out;
     }
 
     // The objects of `open` the cube cannot prove hidden, in the order of `open`.

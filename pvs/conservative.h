@@ -61,7 +61,11 @@
 //    from the ball to x crosses an opaque triangle before x. The inset is r at a face's centre and at most
 //    r sqrt 2 at its corners (an earlier bound, r (1 + tan theta), gave (1 + sqrt 2) r everywhere). Unlike
 //    a box, a panel needs no solid behind it and no epsilon: a wall thinner than 2 epsilon + 2 voxels, or a
-//    hollow shell, still occludes by its faces.
+//    hollow shell, still occludes by its faces. The bound holds with u replaced by any ray's tangent
+//    relative to the panel's normal, (x - s)_k / (x - s)_normal, so at floor samples the panels are also
+//    drawn on the four SIDE faces of the cube (rays more than 45 degrees from the normal, tangents > 1),
+//    over what the other faces left unproven, inset per ray by r sqrt(1 + p_k^2) with p_k those tangents
+//    (add_panel_sides: the tangent ranges are intervals, so the test stays separable).
 // 9. OCCLUDERS PER BLOCK (pvs/occluder_synthesis.h, synthesize_block_occluders). Points 1 to 4 need the
 //    occluders only to lie where no sight line from the eyes of THIS region goes: the segment from an eye e
 //    through q to x, were it clear, would carry sight from e into the solid. So a region whose eyes all lie

@@ -107,6 +107,26 @@ inline bool box_usable(const Aabb& box) {
     return !box.is_empty() && is_finite(box.min) && is_finite(box.max);
 }
 
+// Candidate grid vertices along one face axis for a shape whose projection spans [x0, x1] there: those of
+// the region's pixels reg_lo..reg_hi within it, one vertex of slack each side (the test at the vertices
+// decides, so extra candidates change nothing, and the slack absorbs rounding). False when fewer than two
+// vertices remain (no whole pixel).
+inline bool candidate_vertices(double x0, double x1, int reg_lo, int reg_hi, int r, int& v0, int& v1) {
+    if (x0 > 1.0 || x1 < -1.0) return false;
+    v0 = std::max(std::max(0, int(std::floor((std::max(x0, -1.0) + 1.0) * 0.5 * r)) - 1), reg_lo);
+    v1 = std::min(std::min(r, int(std::ceil((std::min(x1, 1.0) + 1.0) * 0.5 * r)) + 1), reg_hi + 1);
+    return v1 - v0 >= 1;
+}
+
+// The bounding rectangle, in face coordinates, of the projection of a box's part at depths [d_lo, d_max]
+// (a product set, so each extreme is reached at a corner: the depth that pushes u outward).
+inline void projected_rect(const FaceBox& fb, double d_lo, double& u0, double& u1, double& v0, double& v1) {
+    u0 = fb.u_lo >= 0.0 ? fb.u_lo / fb.d_max : fb.u_lo / d_lo;
+    u1 = fb.u_hi >= 0.0 ? fb.u_hi / d_lo : fb.u_hi / fb.d_max;
+    v0 = fb.v_lo >= 0.0 ? fb.v_lo / fb.d_max : fb.v_lo / d_lo;
+    v1 = fb.v_hi >= 0.0 ? fb.v_hi / d_lo : fb.v_hi / fb.d_max;
+}
+
 inline bool meets_near_cube(const Aabb& box, glm::vec3 eye) {
     for (int k = 0; k < 3; ++k) {
         if (double(box.max[k]) - double(eye[k]) < -kCubeNearPlane_m) return false;
@@ -178,6 +198,10 @@ DepthCube::DepthCube(int resolution) : resolution_(resolution) {
     for (auto* v : {&col_enter_, &col_exit_, &row_enter_, &row_exit_, &corner_prev_, &corner_cur_}) {
         v->resize(size_t(resolution_) + 1);
     }
+    side_first_.resize(size_t(resolution_) + 1);
+    grid_.resize(size_t(resolution_) + 1);
+    for (int k = 0; k <= resolution_; ++k) grid_[size_t(k)] = grid(k, resolution_);
+    side_last_.resize(size_t(resolution_) + 1);
 }
 
 void DepthCube::clear(glm::vec3 eye) {
@@ -233,22 +257,14 @@ PVS_AVX2_CLONES void DepthCube::add_occluder(const Aabb& box) {
         // Candidate vertices: the bounding rectangle of the projection of box ∩ {d >= d_lo}; a pixel whose
         // four corners hit lies inside it. One vertex of slack each side absorbs rounding; the test at the
         // vertices decides, so extra candidates change nothing.
-        const double u0 = fb.u_lo >= 0.0 ? fb.u_lo / fb.d_max : fb.u_lo / d_lo;
-        const double u1 = fb.u_hi >= 0.0 ? fb.u_hi / d_lo : fb.u_hi / fb.d_max;
-        const double v0 = fb.v_lo >= 0.0 ? fb.v_lo / fb.d_max : fb.v_lo / d_lo;
-        const double v1 = fb.v_hi >= 0.0 ? fb.v_hi / d_lo : fb.v_hi / fb.d_max;
-        if (u0 > 1.0 || u1 < -1.0 || v0 > 1.0 || v1 < -1.0) continue;
-        const auto vertex_lo = [r](double x) {
-            return std::max(0, int(std::floor((std::max(x, -1.0) + 1.0) * 0.5 * r)) - 1);
-        };
-        const auto vertex_hi = [r](double x) {
-            return std::min(r, int(std::ceil((std::min(x, 1.0) + 1.0) * 0.5 * r)) + 1);
-        };
+        double u0, u1, v0, v1;
+        projected_rect(fb, d_lo, u0, u1, v0, v1);
         // Only the vertices of the pixels of the face's region (limit_to()).
         const auto& reg = region_[size_t(face)];
-        const int iv0 = std::max(vertex_lo(u0), reg[0]), iv1 = std::min(vertex_hi(u1), reg[1] + 1);
-        const int jv0 = std::max(vertex_lo(v0), reg[2]), jv1 = std::min(vertex_hi(v1), reg[3] + 1);
-        if (iv1 - iv0 < 1 || jv1 - jv0 < 1) continue;  // fewer than two vertices: no whole pixel
+        int iv0, iv1, jv0, jv1;
+        if (!candidate_vertices(u0, u1, reg[0], reg[1], r, iv0, iv1) ||
+            !candidate_vertices(v0, v1, reg[2], reg[3], r, jv0, jv1))
+            continue;
 
         // Separable slab test: a corner ray (u, v, 1) (depth-parameterized) enters at
         // max(d_lo, enter_u(u), enter_v(v)) and leaves at min(d_max, exit_u(u), exit_v(v)).
@@ -284,24 +300,6 @@ PVS_AVX2_CLONES void DepthCube::add_occluder(const Aabb& box) {
 
 namespace {
 
-// How far inside a panel's rectangle, on one in-plane axis, the ray of grid value g on that axis must
-// cross the plane so that the segment from any point of the ball of radius `ball` around the eye to any
-// point beyond, along that ray, crosses the rectangle too: ball * sqrt(1 + g^2) (depth_cube.h), plus a
-// hair for rounding. THE definition, shared by the kernel and the reference.
-inline double panel_inset(double ball, double g) {
-    return ball > 0.0 ? ball * std::sqrt(1.0 + g * g) * (1.0 + 1e-9) : 0.0;
-}
-
-// Does the corner ray of grid value g (on an in-plane axis) cross a panel's plane, at depth t, inside
-// [lo, hi] on that axis, inset by panel_inset(), with room to spare? The same slab as a box's, and the same
-// slack.
-inline bool panel_corner_hits(double lo, double hi, double g, double t, double ball) {
-    const double inset = panel_inset(ball, g);
-    double enter, exit;
-    slab(lo + inset, hi - inset, g, enter, exit);
-    return enter * (1.0 + kCubeDepthSlack) <= t && t * (1.0 + kCubeDepthSlack) <= exit;
-}
-
 // The panel's plane relative to the eye: the face along its normal that looks at it, and its depth there;
 // false when the panel is unusable (not flat along exactly one axis, not finite) or its plane is within
 // the near plane or within the ball (radius * (1 + 1e-6)) of the eye.
@@ -323,7 +321,191 @@ bool panel_face(const Aabb& panel, glm::vec3 eye, double ball, int& face, double
     return true;
 }
 
+// The tangents p (of a ray from the eye, relative to a panel's normal, along one in-plane axis k) whose ray
+// crosses the panel's plane, at signed height h from the eye on the normal axis, at h p, inside [lo, hi]
+// (relative to the eye, on axis k) inset by the ball's per-ray bound (depth_cube.h):
+//     lo + b sqrt(1 + p^2) <= h p <= hi - b sqrt(1 + p^2),   b = ball (1 + 1e-9) + 1e-9 |h|,
+// the second term of b covering rounding (of p, and of this test). Both sides are concave in p, so the set is
+// an interval; its ends solve (h p - lo)^2 = b^2 (1 + p^2) and (hi - h p)^2 = b^2 (1 + p^2), quadratics with
+// leading coefficient h^2 - b^2 > 0 (the panel is beyond the ball). The computed ends are then moved inward
+// until the test holds there as written, so every p in [lo, hi] passes it in exact arithmetic (concavity),
+// with the rounding margin of b to spare. Empty (lo > hi) when no ray crosses inside the inset rectangle.
+struct TangentRange {
+    double lo = 1.0, hi = 0.0;
+    bool contains(double p) const { return lo <= p && p <= hi; }
+};
+
+TangentRange panel_tangent_range(double h, double lo, double hi, double ball) {
+    const double b = ball * (1.0 + 1e-9) + 1e-9 * std::abs(h);
+    const auto passes = [&](double p) {
+        const double inset = b * std::sqrt(1.0 + p * p);
+        return h * p - lo >= inset && hi - h * p >= inset;
+    };
+    const double a = h * h - b * b;
+    const double root_lo = b * std::sqrt(std::max(0.0, h * h + lo * lo - b * b));
+    const double root_hi = b * std::sqrt(std::max(0.0, h * h + hi * hi - b * b));
+    TangentRange t;
+    if (h > 0.0) {
+        t.lo = (h * lo + root_lo) / a;
+        t.hi = (h * hi - root_hi) / a;
+    } else {
+        t.lo = (h * hi + root_hi) / a;
+        t.hi = (h * lo - root_lo) / a;
+    }
+    if (!(t.lo <= t.hi) || !std::isfinite(t.lo) || !std::isfinite(t.hi)) return TangentRange{};
+    for (double step = 1e-15 * std::max(1.0, std::abs(t.lo)); !passes(t.lo); step *= 2.0) {
+        t.lo += step;
+        if (!(t.lo <= t.hi)) return TangentRange{};
+    }
+    for (double step = 1e-15 * std::max(1.0, std::abs(t.hi)); !passes(t.hi); step *= 2.0) {
+        t.hi -= step;
+        if (!(t.lo <= t.hi)) return TangentRange{};
+    }
+    return t;
+}
+
+// The run of grid vertices k in [k0, k1] with lo <= g[k] <= hi, g growing with k: [first, last], empty when
+// first > last. Found from an estimate and walked to its exact ends with that very test.
+inline void vertex_run(const double* g, double lo, double hi, int k0, int k1, int r, int& first, int& last) {
+    if (!(lo <= hi)) {
+        first = 1;
+        last = 0;
+        return;
+    }
+    const auto index = [&](double x) {
+        return std::clamp(int(std::floor((std::clamp(x, -2.0, 2.0) + 1.0) * 0.5 * r)), k0, k1);
+    };
+    first = index(lo);
+    while (first > k0 && g[first - 1] >= lo) --first;
+    while (first <= k1 && g[first] < lo) ++first;
+    last = std::max(first - 1, index(hi));
+    while (last < k1 && g[last + 1] <= hi) ++last;
+    while (last >= first && g[last] > hi) --last;
+}
+
+// A panel's ranges of tangents on its two in-plane axes (for a ball around the eye), computed once for the
+// four side faces of the cube.
+struct PanelTangents {
+    int axis = 0;           // the panel's normal axis
+    double h = 0.0;         // signed height of its plane above the eye, on that axis
+    TangentRange range[3];  // per in-plane axis (range[axis] unused)
+};
+
+// False when the panel is unusable or its plane is within the near plane or the ball (panel_face()).
+bool panel_tangents(const Aabb& panel, glm::vec3 eye, double ball, PanelTangents& out) {
+    int normal_face = 0;
+    double t = 0.0;
+    if (!panel_face(panel, eye, ball, normal_face, t)) return false;
+    out.axis = normal_face / 2;
+    out.h = double(panel.min[out.axis]) - double(eye[out.axis]);
+    for (int k = 0; k < 3; ++k) {
+        if (k != out.axis) {
+            out.range[k] = panel_tangent_range(out.h, double(panel.min[k]) - double(eye[k]),
+                                               double(panel.max[k]) - double(eye[k]), ball);
+        }
+    }
+    return true;
+}
+
+// The panel on SIDE face `face` of the cube (one whose axis f lies in the panel's plane; depth_cube.h,
+// add_panel_sides()). There the panel's normal axis is one face coordinate, the "major" one (g_m), and its
+// other in-plane axis c the other, the "minor" one (g_n). A corner ray (+-1 on f, g_m, g_n) reaches the plane
+// at ray parameter h / g_m, which is also its depth on this face, with tangents +-1 / g_m along f and
+// g_n / g_m along c.
+struct PanelSide {
+    bool major_is_u = true;  // the major coordinate is u (columns); else v (rows)
+    double h = 0.0;          // signed height of the plane above the eye, on the panel's normal axis
+    double face_sign = 1.0;  // the f component of the face's rays
+    TangentRange along_face_axis, along_minor;
+};
+
+// THE rule of a panel on a side face, shared by the kernel and the reference: false when the face is along
+// the panel's normal or no ray of the face crosses the panel inside its inset rectangle.
+bool panel_side(const PanelTangents& pt, int face, PanelSide& out) {
+    const int f = face / 2;
+    if (f == pt.axis) return false;
+    out.major_is_u = (f + 1) % 3 == pt.axis;
+    out.h = pt.h;
+    out.face_sign = face % 2 == 0 ? 1.0 : -1.0;
+    out.along_face_axis = pt.range[f];
+    out.along_minor = pt.range[3 - pt.axis - f];
+    return out.along_face_axis.lo <= out.along_face_axis.hi && out.along_minor.lo <= out.along_minor.hi;
+}
+
+// Does the major grid value g_m pass (its rays reach the plane ahead, with a tangent along the face axis in
+// range)? Its crossing depth is h / g_m.
+inline bool panel_side_major(const PanelSide& ps, double g_m) {
+    return ps.h * g_m > 0.0 && ps.along_face_axis.contains(ps.face_sign / g_m);
+}
+
+// The minors that pass with major g_m: g_n / g_m in the minor range, tested as g_n between the products of
+// the range's ends with g_m (no division; the products' rounding, relative 1e-16, is far inside the margin
+// of panel_tangent_range()). Returns the interval [lo, hi] of g_n.
+inline void panel_side_minor_span(const PanelSide& ps, double g_m, double& lo, double& hi) {
+    const double a = ps.along_minor.lo * g_m, b = ps.along_minor.hi * g_m;
+    lo = g_m > 0.0 ? a : b;
+    hi = g_m > 0.0 ? b : a;
+}
+
 }  // namespace
+
+// Per major grid value: does it pass, and which minor vertices pass (g_n in an interval, and g_n grows with
+// n: a contiguous range, found from an estimate and walked to its exact ends with the reference's very
+// test); a pixel is written when both its majors pass and its two minors lie in both ranges, with the larger
+// crossing depth of its two majors.
+void DepthCube::add_panel_sides(const Aabb& panel, double ball_radius) {
+    int normal_face = 0;
+    double t = 0.0;
+    if (!panel_face(panel, eye_, ball_radius, normal_face, t)) return;
+    const int r = resolution_;
+    PanelTangents pt;
+    bool have_tangents = false;  // computed when a face first needs them (square roots)
+    for (int face = 0; face < 6; ++face) {
+        if (face / 2 == normal_face / 2) continue;
+        // Candidate vertices: a passing vertex's ray crosses the panel at depth >= |h| > near, so it lies in
+        // the projection of the panel's part beyond the near plane.
+        const FaceBox fb = face_box(panel, eye_, face);
+        const double d_lo = std::max(fb.d_min, kCubeNearPlane_m);
+        if (d_lo > fb.d_max) continue;
+        double u0, u1, v0, v1;
+        projected_rect(fb, d_lo, u0, u1, v0, v1);
+        const auto& reg = region_[size_t(face)];
+        int iv0, iv1, jv0, jv1;
+        if (!candidate_vertices(u0, u1, reg[0], reg[1], r, iv0, iv1) ||
+            !candidate_vertices(v0, v1, reg[2], reg[3], r, jv0, jv1))
+            continue;
+        if (!have_tangents) {
+            panel_tangents(panel, eye_, ball_radius, pt);
+            have_tangents = true;
+        }
+        PanelSide ps;
+        if (!panel_side(pt, face, ps)) continue;
+        const int mv0 = ps.major_is_u ? iv0 : jv0, mv1 = ps.major_is_u ? iv1 : jv1;
+        const int nv0 = ps.major_is_u ? jv0 : iv0, nv1 = ps.major_is_u ? jv1 : iv1;
+        const double* const g = grid_.data();
+        for (int m = mv0; m <= mv1; ++m) {
+            const double g_m = g[m];
+            side_first_[size_t(m)] = 1;
+            side_last_[size_t(m)] = 0;
+            if (!panel_side_major(ps, g_m)) continue;
+            corner_cur_[size_t(m)] = ps.h / g_m;
+            double lo, hi;
+            panel_side_minor_span(ps, g_m, lo, hi);
+            vertex_run(g, lo, hi, nv0, nv1, r, side_first_[size_t(m)], side_last_[size_t(m)]);
+        }
+        float* const face_depth = depth_.data() + size_t(face) * r * r;
+        const size_t step_major = ps.major_is_u ? 1 : size_t(r), step_minor = ps.major_is_u ? size_t(r) : 1;
+        for (int m = mv0; m < mv1; ++m) {
+            const int first = std::max(side_first_[size_t(m)], side_first_[size_t(m) + 1]);
+            const int last = std::min(side_last_[size_t(m)], side_last_[size_t(m) + 1]);  // vertices
+            if (first >= last) continue;  // no pixel has both minors in range
+            const float depth = float_up(std::max(corner_cur_[size_t(m)], corner_cur_[size_t(m) + 1]) *
+                                         (1.0 + kCubeDepthSlack));
+            float* p = face_depth + size_t(m) * step_major + size_t(first) * step_minor;
+            for (int n = first; n < last; ++n, p += step_minor) *p = std::min(*p, depth);
+        }
+    }
+}
 
 void DepthCube::add_panel(const Aabb& panel, double ball_radius) {
     int face = 0;
@@ -334,36 +516,34 @@ void DepthCube::add_panel(const Aabb& panel, double ball_radius) {
                  u_hi = double(panel.max[ua]) - double(eye_[ua]);
     const double v_lo = double(panel.min[va]) - double(eye_[va]),
                  v_hi = double(panel.max[va]) - double(eye_[va]);
-    // Candidate vertices: those of the region's pixels within the projected rectangle, one vertex of slack
-    // each side (the test at the vertices decides; extra candidates change nothing).
+    // Candidate vertices: those of the region's pixels within the projected rectangle.
     const auto& reg = region_[size_t(face)];
-    const auto vertex_lo = [r](double x) {
-        return std::max(0, int(std::floor((std::max(x, -1.0) + 1.0) * 0.5 * r)) - 1);
-    };
-    const auto vertex_hi = [r](double x) {
-        return std::min(r, int(std::ceil((std::min(x, 1.0) + 1.0) * 0.5 * r)) + 1);
-    };
-    if (u_lo / t > 1.0 || u_hi / t < -1.0 || v_lo / t > 1.0 || v_hi / t < -1.0) return;
-    const int iv0 = std::max(vertex_lo(u_lo / t), reg[0]), iv1 = std::min(vertex_hi(u_hi / t), reg[1] + 1);
-    const int jv0 = std::max(vertex_lo(v_lo / t), reg[2]), jv1 = std::min(vertex_hi(v_hi / t), reg[3] + 1);
-    if (iv1 - iv0 < 1 || jv1 - jv0 < 1) return;
-    // Vertices whose corner rays hit; a pixel is written when its four corners do.
-    for (int iv = iv0; iv <= iv1; ++iv)
-        col_enter_[iv] = panel_corner_hits(u_lo, u_hi, grid(iv, r), t, ball_radius) ? 1.0 : 0.0;
-    for (int jv = jv0; jv <= jv1; ++jv)
-        row_enter_[jv] = panel_corner_hits(v_lo, v_hi, grid(jv, r), t, ball_radius) ? 1.0 : 0.0;
+    int iv0, iv1, jv0, jv1;
+    if (!candidate_vertices(u_lo / t, u_hi / t, reg[0], reg[1], r, iv0, iv1) ||
+        !candidate_vertices(v_lo / t, v_hi / t, reg[2], reg[3], r, jv0, jv1))
+        return;
+    // The vertices whose corner rays cross inside the rectangle inset per ray: a run of columns and a run
+    // of rows (the tangent ranges of panel_tangent_range(), with the plane at height t along the face axis,
+    // where the tangents are the face coordinates); a pixel is written when its four corners pass.
+    const TangentRange range_u = panel_tangent_range(t, u_lo, u_hi, ball_radius);
+    const TangentRange range_v = panel_tangent_range(t, v_lo, v_hi, ball_radius);
+    int i_first, i_last, j_first, j_last;
+    vertex_run(grid_.data(), range_u.lo, range_u.hi, iv0, iv1, r, i_first, i_last);
+    vertex_run(grid_.data(), range_v.lo, range_v.hi, jv0, jv1, r, j_first, j_last);
     const float depth = float_up(t * (1.0 + kCubeDepthSlack));
     float* const face_depth = depth_.data() + size_t(face) * r * r;
-    for (int j = jv0; j < jv1; ++j) {
-        if (row_enter_[j] == 0.0 || row_enter_[j + 1] == 0.0) continue;
-        float* const row = face_depth + size_t(j) * r;
-        for (int i = iv0; i < iv1; ++i)
-            if (col_enter_[i] != 0.0 && col_enter_[i + 1] != 0.0) row[i] = std::min(row[i], depth);
+    for (int j = j_first; j < j_last; ++j) {
+        float* __restrict const row = face_depth + size_t(j) * r;
+        for (int i = i_first; i < i_last; ++i) row[i] = std::min(row[i], depth);
     }
 }
 
 void DepthCube::add_panels(const std::vector<Aabb>& panels, double ball_radius) {
     for (const Aabb& p : panels) add_panel(p, ball_radius);
+}
+
+void DepthCube::add_panels_sides(const std::vector<Aabb>& panels, double ball_radius) {
+    for (const Aabb& p : panels) add_panel_sides(p, ball_radius);
 }
 
 void DepthCube::add_occluders(const std::vector<Aabb>& boxes) {
@@ -444,7 +624,8 @@ bool is_hidden_reference(const std::vector<Aabb>& occluders, glm::vec3 eye, cons
 }
 
 bool is_hidden_reference(const std::vector<Aabb>& occluders, const std::vector<Aabb>& panels,
-                         double panel_ball_radius, glm::vec3 eye, const Aabb& box, int resolution) {
+                         double panel_ball_radius, glm::vec3 eye, const Aabb& box, int resolution,
+                         bool panel_sides) {
     const int r = resolution;
     if (!box_usable(box)) return false;
     // Visible when the box meets the closed near cube around the eye.
@@ -501,31 +682,38 @@ bool is_hidden_reference(const std::vector<Aabb>& occluders, const std::vector<A
                 for (const Aabb& panel : panels) {
                     int panel_f = 0;
                     double t = 0.0;
-                    if (!panel_face(panel, eye, panel_ball_radius, panel_f, t) || panel_f != face) continue;
-                    // The four corner rays cross the plane at depth t: inside the rectangle with room to
-                    // spare?
-                    bool hits = true;
-                    for (int cj = j; cj <= j + 1; ++cj) {
-                        for (int ci = i; ci <= i + 1; ++ci) {
-                            const glm::dvec3 dir = reference_direction(face, grid(ci, r), grid(cj, r));
-                            for (const int k : {ua, va}) {
-                                // The rectangle inset for this corner ray, relative to the eye.
-                                const double inset = panel_inset(panel_ball_radius, dir[k]);
-                                const double lo_k = double(panel.min[k]) - double(eye[k]) + inset;
-                                const double hi_k = double(panel.max[k]) - double(eye[k]) - inset;
-                                double lo = lo_k / dir[k];
-                                double hi = hi_k / dir[k];
-                                if (dir[k] < 0.0) std::swap(lo, hi);
-                                if (dir[k] == 0.0) {
-                                    const bool in = lo_k <= 0.0 && hi_k >= 0.0;
-                                    lo = in ? -kInf : kInf;
-                                    hi = in ? kInf : -kInf;
-                                }
-                                hits = hits && lo * (1.0 + kCubeDepthSlack) <= t &&
-                                       t * (1.0 + kCubeDepthSlack) <= hi;
+                    if (!panel_face(panel, eye, panel_ball_radius, panel_f, t)) continue;
+                    PanelTangents pt;
+                    PanelSide ps;
+                    if (panel_sides && panel_tangents(panel, eye, panel_ball_radius, pt) &&
+                        panel_side(pt, face, ps)) {
+                        // A side face: every corner's major passes and its minor is in that major's span.
+                        bool all = true;
+                        double d = 0.0;
+                        for (int cj = j; cj <= j + 1; ++cj) {
+                            for (int ci = i; ci <= i + 1; ++ci) {
+                                const double g_m = grid(ps.major_is_u ? ci : cj, r);
+                                const double g_n = grid(ps.major_is_u ? cj : ci, r);
+                                double lo = 0.0, hi = 0.0;
+                                panel_side_minor_span(ps, g_m, lo, hi);
+                                all = all && panel_side_major(ps, g_m) && lo <= g_n && g_n <= hi;
+                                if (all) d = std::max(d, ps.h / g_m);
                             }
                         }
+                        if (all) pixel = std::min(pixel, float_up(d * (1.0 + kCubeDepthSlack)));
+                        continue;
                     }
+                    if (panel_f != face) continue;
+                    // The four corner rays cross the plane, at depth t, inside the rectangle inset per ray:
+                    // their face coordinates in the tangent ranges?
+                    const TangentRange range_u =
+                        panel_tangent_range(t, double(panel.min[ua]) - double(eye[ua]),
+                                            double(panel.max[ua]) - double(eye[ua]), panel_ball_radius);
+                    const TangentRange range_v =
+                        panel_tangent_range(t, double(panel.min[va]) - double(eye[va]),
+                                            double(panel.max[va]) - double(eye[va]), panel_ball_radius);
+                    const bool hits = range_u.contains(grid(i, r)) && range_u.contains(grid(i + 1, r)) &&
+                                      range_v.contains(grid(j, r)) && range_v.contains(grid(j + 1, r));
                     if (hits) pixel = std::min(pixel, float_up(t * (1.0 + kCubeDepthSlack)));
                 }
                 if (!(double(pixel) < limit)) return false;

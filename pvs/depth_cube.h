@@ -98,10 +98,12 @@ public:
     // Rasterizes one PANEL (occluders/panels.h: a rectangle flat along exactly one axis, else ignored) for
     // every eye in the ball of radius `ball_radius` (metres, >= 0) around the cube's eye s. Only on the face
     // along its normal that looks at it, where its plane has the constant depth t = |plane - s|: a pixel
-    // whose four corner rays cross the plane inside the rectangle inset per corner (with the slack on both
-    // sides) gets t (1 + slack), rounded up to float. The inset of a corner ray of face coordinates (u, v)
-    // is ball_radius sqrt(1 + u^2) on the u axis and ball_radius sqrt(1 + v^2) on the v axis (times
-    // 1 + 1e-9 for rounding). Panels whose plane is within the near plane, or within the ball
+    // whose four corner rays cross the plane inside the rectangle inset per corner ray gets t (1 + slack),
+    // rounded up to float. The inset of a corner ray of face coordinates (u, v) is b sqrt(1 + u^2) on the u
+    // axis and b sqrt(1 + v^2) on the v axis, b = ball_radius (1 + 1e-9) + 1e-9 t (the margin covers
+    // rounding): a column passes when lo_u + b sqrt(1 + u^2) <= t u <= hi_u - b sqrt(1 + u^2), an interval
+    // of u solved once per panel (a quadratic; its ends checked with this very test), so the passing
+    // columns and rows are two runs. Panels whose plane is within the near plane, or within the ball
     // (ball_radius (1 + 1e-6)), are ignored.
     // Guarantee: if x lies beyond the plane (depth > t) in the direction of a written pixel, then for every
     // q with |q - s| <= ball_radius the segment q -> x crosses the (uninset) rectangle. Proof: put the plane
@@ -115,6 +117,20 @@ public:
     // panel (every ray from s through a written pixel crosses the rectangle at depth t).
     void add_panel(const Aabb& panel, double ball_radius = 0.0);
     void add_panels(const std::vector<Aabb>& panels, double ball_radius = 0.0);
+    // The same panel on the four SIDE faces, those whose axis lies in its plane (rays more than 45 degrees
+    // from its normal), by the same per-ray bound with the ray's TANGENTS relative to the normal in place
+    // of the face coordinates: along the face axis +-1 / g_m, along the other in-plane axis g_n / g_m, where
+    // g_m is the face coordinate along the panel's normal and g_n the other one (both > 1 in size towards
+    // grazing rays, so the inset grows there). A vertex passes when its ray reaches the plane ahead (at
+    // parameter, and depth, h / g_m, h the plane's signed height above the eye) and each tangent p lies in
+    // the interval where lo + b sqrt(1 + p^2) <= h p <= hi - b sqrt(1 + p^2) (b = ball_radius plus rounding
+    // margins; both sides concave in p). A pixel whose four vertices pass gets the larger crossing depth of
+    // its two majors times (1 + slack), rounded up. Why the vertices decide: the pixel's rays have g_m of
+    // one sign, over which the face-axis tangent is monotone (an interval of g_m), and the minor condition
+    // w_lo <= g_n / g_m <= w_hi is a wedge, convex (tested as g_n between w_lo g_m and w_hi g_m); the
+    // crossing depth h / g_m is monotone in g_m. Separable: per major value a contiguous range of minors.
+    void add_panel_sides(const Aabb& panel, double ball_radius);
+    void add_panels_sides(const std::vector<Aabb>& panels, double ball_radius);
     // Rasterizes all the boxes, nearest first, skipping each box the ones before already hide (it could not
     // lower any pixel). Same depths as add_occluder() on every box, in far less time behind walls.
     void add_occluders(const std::vector<Aabb>& boxes);
@@ -139,14 +155,18 @@ private:
     // parameter (depth) on the u / v axis; and the corner depths of two vertex rows.
     std::vector<std::pair<float, uint32_t>> order_;  // scratch of add_occluders()
     std::vector<double> col_enter_, col_exit_, row_enter_, row_exit_, corner_prev_, corner_cur_;
+    std::vector<int> side_first_, side_last_;  // scratch of add_panel_sides(): per major, its minor range
+    std::vector<double> grid_;                 // grid(k) for k = 0..R
 };
 
 // The plain reference of the same rules: for every pixel of every face, brute force "is it touched", and
 // for touched pixels the minimum over all occluders of the four-corner slab tests. Slow (O(6 R^2 * N)); for
 // the differential test and the benchmark ratio only.
 bool is_hidden_reference(const std::vector<Aabb>& occluders, glm::vec3 eye, const Aabb& box, int resolution);
-// The same with panels (add_panel(panel, panel_ball_radius)) besides the boxes.
+// The same with panels (add_panel(panel, panel_ball_radius), and add_panel_sides() too when panel_sides)
+// besides the boxes.
 bool is_hidden_reference(const std::vector<Aabb>& occluders, const std::vector<Aabb>& panels,
-                         double panel_ball_radius, glm::vec3 eye, const Aabb& box, int resolution);
+                         double panel_ball_radius, glm::vec3 eye, const Aabb& box, int resolution,
+                         bool panel_sides = false);
 
 }  // namespace pvs

@@ -321,10 +321,12 @@ TEST(DepthCube, PanelsMatchTheReferenceOnRandomScenes) {
         if (cube.resolution() != r) cube = DepthCube(r);
         cube.clear(s.eye);
         cube.add_panels(panels, ball);
+        const bool with_sides = n % 2 == 1;  // half the scenes draw the panels on the side faces too
+        if (with_sides) cube.add_panels_sides(panels, ball);
         for (const Aabb& b : s.occluders) cube.add_occluder(b);
         for (const Aabb& b : s.occludees) {
             const bool fast = cube.is_hidden(b);
-            const bool slow = is_hidden_reference(s.occluders, panels, ball, s.eye, b, r);
+            const bool slow = is_hidden_reference(s.occluders, panels, ball, s.eye, b, r, with_sides);
             hidden += fast;
             ++tested;
             if (fast != slow) {
@@ -424,7 +426,8 @@ TEST(DepthCube, HiddenByPanelsMeansEveryRayCrossesOne) {
 }
 
 // Where a panel's inset per ray is tightest: one panel just beyond the ball around the eye, along a random
-// axis and side, and small boxes far behind it in every direction of its cube face, many near its edges.
+// axis and side, and small boxes far behind it in every direction of its cube face, many near its edges, and
+// more seen through it at grazing angles (on the side faces).
 // The bound r sqrt(1 + u^2) is nearly reached by an eye moved sideways and towards the plane at once, with
 // the target far behind the plane.
 Scene tight_panel_scene(Rng& rng, double ball, std::vector<Aabb>& panels) {
@@ -446,6 +449,19 @@ Scene tight_panel_scene(Rng& rng, double ball, std::vector<Aabb>& panels) {
         c[a] = s.eye[a] + sign * depth;
         c[ua] = s.eye[ua] + depth * (2.0f * rng.uniform() - 1.0f);
         c[va] = s.eye[va] + depth * (2.0f * rng.uniform() - 1.0f);
+        const glm::vec3 size(0.02f + 0.3f * rng.uniform(), 0.02f + 0.3f * rng.uniform(),
+                             0.02f + 0.3f * rng.uniform());
+        s.occludees.push_back(Aabb::of(c - 0.5f * size, c + 0.5f * size));
+    }
+    // And boxes seen through the panel at grazing angles, more than 45 degrees from its normal (on the cube's
+    // side faces), where the tangents exceed 1 and the inset grows.
+    for (int k = 0; k < 40; ++k) {
+        const float depth = h + 0.5f + 10.0f * rng.uniform();
+        glm::vec3 c;
+        c[a] = s.eye[a] + sign * depth;
+        const float reach = 1.0f + 3.0f * rng.uniform(), angle = 6.2831853f * rng.uniform();
+        c[ua] = s.eye[ua] + depth * reach * std::cos(angle);
+        c[va] = s.eye[va] + depth * reach * std::sin(angle);
         const glm::vec3 size(0.02f + 0.3f * rng.uniform(), 0.02f + 0.3f * rng.uniform(),
                              0.02f + 0.3f * rng.uniform());
         s.occludees.push_back(Aabb::of(c - 0.5f * size, c + 0.5f * size));
@@ -479,6 +495,7 @@ TEST(DepthCube, HiddenByPanelsForABallMeansEverySegmentFromTheBallCrossesOne) {
         DepthCube cube(resolutions[rng.below(4)]);
         cube.clear(s.eye);
         cube.add_panels(panels, ball);
+        cube.add_panels_sides(panels, ball);
         for (const Aabb& b : s.occludees) {
             ++tested;
             if (!cube.is_hidden(b)) continue;
