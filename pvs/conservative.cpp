@@ -292,9 +292,8 @@ public:
             if (k == 0) {  // the floor: whatever is not proven is listed
                 if (!sides.empty() && !near_panels_.empty()) {
                     // The panels on the cube's side faces too (rays more than 45 degrees from a panel's
-                    // normal; argument 8), drawn only over what is still unproven and no sight ray reaches
-                    // (that is listed in any case): a subset of the open objects, so its pixels lie in the
-                    // region clear_for() cleared.
+                    // normal; argument 8), drawn only over what is still unproven: a subset of the open
+                    // objects, so its pixels lie in the region clear_for() cleared.
                     interest_.clear();
                     for (const std::vector<uint32_t>& open : sides.open)
                         for (uint32_t o : open) interest_.push_back(sh_.world.objects[o].bounds);
@@ -401,19 +400,23 @@ private:
             sides.open[size_t(side)] = unproven(fine_, sides.open[size_t(side)]);
     }
 
+    // Does the cube prove hidden every part of an object cut into several (its bounds alone were not)?
+    bool parts_hidden(const DepthCube& cube, uint32_t o) {
+        const std::vector<Aabb>& parts = sh_.parts[o];
+        bool hidden = parts.size() > 1;
+        for (size_t p = 0; hidden && p < parts.size(); ++p) {
+            ++counts_.tests;
+            hidden = cube.is_hidden(parts[p]);
+        }
+        return hidden;
+    }
+
     // The same as unproven(), one object at a time (no tree): for a few objects left after a first pass.
     std::vector<uint32_t> unproven_each(const DepthCube& cube, const std::vector<uint32_t>& open) {
         std::vector<uint32_t> out;
         for (uint32_t o : open) {
             ++counts_.tests;
-            if (cube.is_hidden(sh_.world.objects[o].bounds)) continue;
-            const std::vector<Aabb>& parts = sh_.parts[o];
-            bool hidden = parts.size() > 1;
-            for (size_t p = 0; hidden && p < parts.size(); ++p) {
-                ++counts_.tests;
-                hidden = cube.is_hidden(parts[p]);
-            }
-            if (!hidden) out.push_back(o);
+            if (!cube.is_hidden(sh_.world.objects[o].bounds) && !parts_hidden(cube, o)) out.push_back(o);
         }
         return out;
     }
@@ -443,13 +446,8 @@ private:
                 stack_.push_back(node.left);
                 continue;
             }
-            const std::vector<Aabb>& parts = sh_.parts[size_t(node.object)];
-            bool hidden = parts.size() > 1;
-            for (size_t p = 0; hidden && p < parts.size(); ++p) {
-                ++counts_.tests;
-                hidden = cube.is_hidden(parts[p]);
-            }
-            if (!hidden) open_mark_[size_t(node.object)] = 2;  // not proven from this sample
+            if (!parts_hidden(cube, uint32_t(node.object)))
+                open_mark_[size_t(node.object)] = 2;  // not proven from this sample
         }
         std::vector<uint32_t> out;
         for (uint32_t o : open) {
