@@ -127,6 +127,26 @@ inline void projected_rect(const FaceBox& fb, double d_lo, double& u0, double& u
     v1 = fb.v_hi >= 0.0 ? fb.v_hi / d_lo : fb.v_hi / fb.d_max;
 }
 
+// A box's candidate vertices on one face: the bounding rectangle of the projection of its part beyond the
+// near plane (box ∩ {d >= d_lo}, clipping being safe: a sub-box), as vertices of the region's pixels
+// (candidate_vertices()). False when no whole pixel can be written.
+struct FaceCandidates {
+    FaceBox fb;
+    double d_lo = 0.0;
+    int iv0 = 0, iv1 = -1, jv0 = 0, jv1 = -1;
+};
+
+inline bool face_candidates(const Aabb& box, glm::vec3 eye, int face, const std::array<int, 4>& reg, int r,
+                            FaceCandidates& out) {
+    out.fb = face_box(box, eye, face);
+    out.d_lo = std::max(out.fb.d_min, kCubeNearPlane_m);
+    if (out.d_lo > out.fb.d_max) return false;
+    double u0, u1, v0, v1;
+    projected_rect(out.fb, out.d_lo, u0, u1, v0, v1);
+    return candidate_vertices(u0, u1, reg[0], reg[1], r, out.iv0, out.iv1) &&
+           candidate_vertices(v0, v1, reg[2], reg[3], r, out.jv0, out.jv1);
+}
+
 inline bool meets_near_cube(const Aabb& box, glm::vec3 eye) {
     for (int k = 0; k < 3; ++k) {
         if (double(box.max[k]) - double(eye[k]) < -kCubeNearPlane_m) return false;
@@ -251,20 +271,13 @@ PVS_AVX2_CLONES void DepthCube::add_occluder(const Aabb& box) {
     if (!box_usable(box) || box.contains(eye_)) return;
     const int r = resolution_;
     for (int face = 0; face < 6; ++face) {
-        const FaceBox fb = face_box(box, eye_, face);
-        const double d_lo = std::max(fb.d_min, kCubeNearPlane_m);  // clip to d >= near (safe: a sub-box)
-        if (d_lo > fb.d_max) continue;
-        // Candidate vertices: the bounding rectangle of the projection of box ∩ {d >= d_lo}; a pixel whose
-        // four corners hit lies inside it. One vertex of slack each side absorbs rounding; the test at the
-        // vertices decides, so extra candidates change nothing.
-        double u0, u1, v0, v1;
-        projected_rect(fb, d_lo, u0, u1, v0, v1);
-        // Only the vertices of the pixels of the face's region (limit_to()).
-        const auto& reg = region_[size_t(face)];
-        int iv0, iv1, jv0, jv1;
-        if (!candidate_vertices(u0, u1, reg[0], reg[1], r, iv0, iv1) ||
-            !candidate_vertices(v0, v1, reg[2], reg[3], r, jv0, jv1))
-            continue;
+        // Candidate vertices: a pixel whose four corners hit lies in the projection of box ∩ {d >= d_lo},
+        // only the region's pixels (limit_to()).
+        FaceCandidates fc;
+        if (!face_candidates(box, eye_, face, region_[size_t(face)], r, fc)) continue;
+        const FaceBox& fb = fc.fb;
+        const double d_lo = fc.d_lo;
+        const int iv0 = fc.iv0, iv1 = fc.iv1, jv0 = fc.jv0, jv1 = fc.jv1;
 
         // Separable slab test: a corner ray (u, v, 1) (depth-parameterized) enters at
         // max(d_lo, enter_u(u), enter_v(v)) and leaves at min(d_max, exit_u(u), exit_v(v)).
@@ -464,16 +477,9 @@ void DepthCube::add_panel_sides(const Aabb& panel, double ball_radius) {
         if (face / 2 == normal_face / 2) continue;
         // Candidate vertices: a passing vertex's ray crosses the panel at depth >= |h| > near, so it lies in
         // the projection of the panel's part beyond the near plane.
-        const FaceBox fb = face_box(panel, eye_, face);
-        const double d_lo = std::max(fb.d_min, kCubeNearPlane_m);
-        if (d_lo > fb.d_max) continue;
-        double u0, u1, v0, v1;
-        projected_rect(fb, d_lo, u0, u1, v0, v1);
-        const auto& reg = region_[size_t(face)];
-        int iv0, iv1, jv0, jv1;
-        if (!candidate_vertices(u0, u1, reg[0], reg[1], r, iv0, iv1) ||
-            !candidate_vertices(v0, v1, reg[2], reg[3], r, jv0, jv1))
-            continue;
+        FaceCandidates fc;
+        if (!face_candidates(panel, eye_, face, region_[size_t(face)], r, fc)) continue;
+        const int iv0 = fc.iv0, iv1 = fc.iv1, jv0 = fc.jv0, jv1 = fc.jv1;
         if (!have_tangents) {
             panel_tangents(panel, eye_, ball_radius, pt);
             have_tangents = true;
