@@ -90,7 +90,7 @@ struct RankingConfig {
 // The conservative solver (pvs/conservative.h).
 struct ConservativeConfig {
     double epsilon_m = 0.125;  // [Limit: > 0] [Units: m] occluders shrink by this; cell faces are sampled
-                               // every epsilon * sqrt(2). Smaller: tighter PVS, slower bake (samples grow
+                               // every 2 epsilon. Smaller: tighter PVS, slower bake (samples grow
                                // as 1 / epsilon^2); walls thinner than 2 epsilon do not occlude
     int cube_resolution = 64;  // [Limit: 8..1024] depth cube pixels per face edge
     int fine_cube_resolution = 0;  // [Limit: 0..4096] floor samples take a second look at what the

@@ -207,14 +207,15 @@ public:
 
     // Lists in each side's row every object of its open list that some patch of the face `rect` (flat along
     // `axis`) cannot prove hidden. The face is first cut into n x n top patches so that halving them m
-    // times ends at patches of half-diagonal <= epsilon_0 with as few leaves as a plain grid would need
-    // (within 20% more), and with m as large as that allows and the ladder has levels for.
+    // times ends at patches of half-side <= epsilon_0 (the Chebyshev radius, argument 2) with as few leaves
+    // as a plain grid would need (within 20% more), and with m as large as that allows and the ladder has
+    // levels for.
     void solve_face(const Aabb& rect, int axis, const Sides& sides) {
         const int ua = (axis + 1) % 3, va = (axis + 2) % 3;
         const glm::vec3 size = rect.size();
         const double eps0 = occ_->epsilon_m.front();
         const double side = std::max(size[ua], size[va]);
-        const int need = std::max(1, int(std::ceil(side / (eps0 * std::sqrt(2.0)) - 1e-9)));
+        const int need = std::max(1, int(std::ceil(side / (2.0 * eps0) - 1e-9)));
         int m = 0;
         for (int t = 1; t < int(occ_->epsilon_m.size()) && (1 << t) <= need; ++t) {
             const int n_leaf = ((need + (1 << t) - 1) >> t) << t;
@@ -240,24 +241,24 @@ public:
             ++counts_.in_solid;
             return;
         }
-        // The ball around the sample s (the float centre) that holds the whole patch: its radius is the
-        // distance from s to the farthest corner, in double.
+        // The box around the sample s (the float centre) that holds the whole patch: its half-extent on
+        // each axis is the distance from s to the farther side, in double; r, the largest, is the patch's
+        // radius in the Chebyshev metric (argument 2).
         const glm::vec3 s = rect.center();
-        double r2 = 0.0;
-        for (int a = 0; a < 3; ++a) {
-            const double far =
-                std::max(double(s[a]) - double(rect.min[a]), double(rect.max[a]) - double(s[a]));
-            r2 += far * far;
-        }
-        const double r = std::sqrt(r2);
+        glm::dvec3 spread(0.0);
+        for (int a = 0; a < 3; ++a)
+            spread[a] = std::max(double(s[a]) - double(rect.min[a]), double(rect.max[a]) - double(s[a]));
+        const double r = std::max({spread.x, spread.y, spread.z});
         const std::vector<double>& eps = occ_->epsilon_m;
-        // The smallest epsilon >= r (a hair of slack for the float corners of the rectangle).
+        // The smallest epsilon >= r. r is exact: the differences of floats are exact in double (unless
+        // their exponents differ by more than 29), so a face cut in patches of exactly epsilon_0 a side, as
+        // voxel-aligned faces are, reaches the floor.
         size_t k = 0;
-        while (k < eps.size() && eps[k] < r * (1.0 + 1e-6)) ++k;
+        while (k < eps.size() && eps[k] < r) ++k;
         if (k < eps.size()) {
             bool inside = false;
             for (const Aabb& b : occ_->boxes[k]) inside = inside || b.contains(s);
-            if (inside) {  // its ball, which holds the patch, lies in the solid
+            if (inside) {  // its epsilon-cube, which holds the patch, lies in the solid
                 ++counts_.skipped;
                 return;
             }
@@ -275,17 +276,18 @@ public:
             near_.clear();
             for (const Aabb& b : occ_->boxes[k])
                 if (b.overlaps(reach)) near_.push_back(b);
-            // Panels (argument 8) whose plane the patch's ball does not reach, inset per ray for that ball;
+            // Panels (argument 8) whose plane the patch's box does not reach, inset per ray for that box;
             // drawn first, they are cheap and hide many boxes behind them, which add_occluders() then skips.
             near_panels_.clear();
-            panel_ball_ = r * (1.0 + 1e-6);
+            panel_spread_ = spread * (1.0 + 1e-6);
             for (const Aabb& p : occ_->panels) {
                 const int a = panel_axis(p);
-                if (a >= 0 && p.overlaps(reach) && std::abs(double(p.min[a]) - double(s[a])) > panel_ball_) {
+                if (a >= 0 && p.overlaps(reach) &&
+                    std::abs(double(p.min[a]) - double(s[a])) > panel_spread_[a]) {
                     near_panels_.push_back(p);
                 }
             }
-            cube_.add_panels(near_panels_, panel_ball_);
+            cube_.add_panels(near_panels_, panel_spread_);
             cube_.add_occluders(near_);
             for (int side = 0; side < 2; ++side)
                 sides.open[size_t(side)] = unproven(cube_, sides.open[size_t(side)]);
@@ -302,7 +304,7 @@ public:
                     Aabb left = Aabb::of(s, s);
                     for (const Aabb& b : interest_) left.extend(b);
                     for (const Aabb& p : near_panels_)
-                        if (p.overlaps(left)) cube_.add_panel_sides(p, panel_ball_);
+                        if (p.overlaps(left)) cube_.add_panel_sides(p, panel_spread_);
                     for (int side = 0; side < 2; ++side)
                         sides.open[size_t(side)] = unproven_each(cube_, sides.open[size_t(side)]);
                 }
@@ -393,7 +395,7 @@ private:
         for (const std::vector<uint32_t>& open : sides.open)
             for (uint32_t o : open) interest_.push_back(sh_.world.objects[o].bounds);
         fine_.clear_for(s, interest_);
-        fine_.add_panels(near_panels_, panel_ball_);
+        fine_.add_panels(near_panels_, panel_spread_);
         fine_.add_occluders(near_);
         ++counts_.fine_samples;
         for (int side = 0; side < 2; ++side)
@@ -467,7 +469,7 @@ private:
     std::vector<Aabb> interest_;     // bounds of the open objects: the only pixels worth drawing
     std::vector<Aabb> near_;         // the occluders drawn for the current sample
     std::vector<Aabb> near_panels_;  // the panels drawn for it
-    double panel_ball_ = 0.0;        // and the radius of the ball they are drawn for
+    glm::dvec3 panel_spread_{0.0};   // and the half-extents of the box around s they are drawn for
     std::vector<glm::vec3> origins_, dirs_;
     std::vector<float> tfar_;
     std::vector<uint8_t> blocked_;

@@ -4,23 +4,27 @@
 //
 // Why it is safe (the argument the code stands on):
 // 1. Occluders are boxes of the proven solid shrunk by epsilon (pvs/occluder_synthesis.h): every point of a
-//    box shrunk by epsilon has its whole epsilon-ball inside the proven solid, where no sight line goes.
+//    box shrunk by epsilon has its whole epsilon-CUBE (the ball of radius epsilon in the Chebyshev metric,
+//    |d|_inf = max_k |d_k|; the erosion is by whole voxels in that metric) inside the proven solid, where no
+//    sight line goes.
 //    The solid includes the inside of the union of closed box meshes (occluders/solid.h), so a wall
 //    standing on a floor fuses with it without a seam.
 // 2. If the segment from a sample point s to a point x meets a shrunk box at y = s + t (x - s), then for any
-//    q with |q - s| <= epsilon, the point q + t (x - q) of segment qx is within (1 - t) epsilon of y, so
-//    inside the solid: segment qx is blocked too. Pointwise, so it holds for the union of boxes: fusion for
-//    free.
+//    q with |q - s|_inf <= epsilon, the point q + t (x - q) of segment qx is within (1 - t) epsilon of y in
+//    that metric, so inside the solid: segment qx is blocked too. Pointwise, so it holds for the union of
+//    boxes: fusion for free. (In the Chebyshev metric a square patch of half-side e needs epsilon >= e, not
+//    its half-diagonal e sqrt 2: half the samples of the Euclidean ball for the same epsilon.)
 // 3. Eyes are points of the eye space (free voxels of the view volume, cells/view_volume.h; the lookup
 //    region `view` is one voxel larger, and an eye in that rim, within a voxel of a surface, is not covered).
 //    A cell's EYE REGION is the bounds of the eye voxels in it, clipped to the cell: convex, and it holds
 //    every eye of the cell. Sight from an eye either ends inside the region (objects whose bounds meet it
 //    are always listed) or leaves the region through a point q of its boundary. (Sampling the region, not
 //    the cell, keeps samples out of floors and walls the cell box cuts through, where they would see the
-//    backs of the level.) The boundary is cut into PATCHES (flat rectangles); a patch is covered by the
-//    r-ball around its sample s (its centre, rounded to float), r the distance from s to its farthest
-//    corner (in double; the half-diagonal but for that rounding), so the part of the sight line beyond q is
-//    blocked whenever sx meets a box shrunk by some epsilon >= r.
+//    backs of the level.) The boundary is cut into PATCHES (flat rectangles); a patch lies in the box of
+//    half-extents spread_k around its sample s (its centre, rounded to float), spread_k the distance from
+//    s_k to the patch's farther side on axis k (in double, exact; 0 along the face's axis), and
+//    r = max_k spread_k is its Chebyshev radius, so the part of the sight line beyond q is blocked whenever
+//    sx meets a box shrunk by some epsilon >= r.
 //    The segment from the eye to q is unobstructed, so q is not inside the proven solid (cracks aside,
 //    which the sight probe and the ray check of occluder synthesis handle): a patch all of whose voxels
 //    (closed, so a patch on a voxel face meets both sides) are proven solid lets no sight line out and is
@@ -33,7 +37,7 @@
 // 4. From s, the depth cube (pvs/depth_cube.h) proves a box hidden only when every segment from s to the box
 //    meets a shrunk occluder. So an object proven hidden from s at level k (boxes shrunk by epsilon_k >= r)
 //    is hidden from every eye whose sight leaves the cell through the patch. A sample inside a shrunk box
-//    needs no test: its ball, which holds the patch, lies in the solid. Drawing fewer occluders only
+//    needs no test: its epsilon-cube, which holds the patch, lies in the solid. Drawing fewer occluders only
 //    leaves more pixels open, so the cube is drawn with only those meeting the box around s and the
 //    objects still to prove (which holds every segment from s to them).
 // 5. Adaptive refinement (ALGORITHMS.md section 3): a face is first tested as patches with r <= the
@@ -47,25 +51,27 @@
 // 7. Objects a sight ray from a patch centre s reaches (Embree, against the real triangles) are listed at
 //    once instead of refined: no patch holding s can prove them hidden, so refining them only costs time.
 // 8. PANELS (occluders/panels.h) are flat rectangles wholly covered by opaque triangles: a segment that meets
-//    one is stopped. A patch's sample s draws the panels whose plane is farther than the patch's radius r
-//    from s (so the whole ball B(s, r), which holds the patch, is on one side), only on the cube face along
-//    the panel's normal, inset per pixel corner ray of face coordinates (u, v) by r sqrt(1 + u^2) on the u
-//    axis and r sqrt(1 + v^2) on the v axis (pvs/depth_cube.h, add_panel, with the proof). Why that is
-//    enough: put the plane at height 0, s at height h_s > r, x behind it at height -h_x < 0, and let y(q) be
-//    where segment q -> x crosses the plane, for q in B(s, r). With l_q = h_q / (h_q + h_x),
-//    y(q) - y(s) = (1 - l_q)(q - s)_par + (l_q - l_s)(x - s)_par, |l_q - l_s| <= |h_q - h_s| / (h_s + h_x)
-//    and |x_u - s_u| / (h_s + h_x) = |u|, so |y(q)_u - y(s)_u| <= |q_u - s_u| + |u| |h_q - h_s|
-//    <= r sqrt(1 + u^2) by Cauchy-Schwarz (likewise on v). The depth cube proves x hidden through a panel
-//    pixel only if y(s) lies in the rectangle inset so for the ray s -> x (the inset test is concave in u
-//    and in v, so the corners decide for the whole pixel), so y(q) lies in the covered one: every segment
-//    from the ball to x crosses an opaque triangle before x. The inset is r at a face's centre and at most
-//    r sqrt 2 at its corners (an earlier bound, r (1 + tan theta), gave (1 + sqrt 2) r everywhere). Unlike
-//    a box, a panel needs no solid behind it and no epsilon: a wall thinner than 2 epsilon + 2 voxels, or a
-//    hollow shell, still occludes by its faces. The bound holds with u replaced by any ray's tangent
-//    relative to the panel's normal, (x - s)_k / (x - s)_normal, so at floor samples the panels are also
-//    drawn on the four SIDE faces of the cube (rays more than 45 degrees from the normal, tangents > 1),
-//    over what the other faces left unproven, inset per ray by r sqrt(1 + p_k^2) with p_k those tangents
-//    (add_panel_sides: the tangent ranges are intervals, so the test stays separable).
+//    one is stopped. A patch's sample s draws the panels whose plane is farther from s than the patch's box
+//    reaches along their normal n (spread_n; so the whole box, which holds the patch, is on one side), only
+//    on the cube face along the panel's normal, inset per pixel corner ray of face coordinates (u, v) by
+//    spread_u + spread_n |u| on the u axis and spread_v + spread_n |v| on the v axis (pvs/depth_cube.h,
+//    add_panel, with the proof). Why that is enough: put the plane at height 0, s at height h_s > spread_n,
+//    x behind it at height -h_x < 0, and let y(q) be where segment q -> x crosses the plane, for q in the
+//    box. With l_q = h_q / (h_q + h_x), y(q) - y(s) = (1 - l_q)(q - s)_par + (l_q - l_s)(x - s)_par,
+//    |l_q - l_s| <= |h_q - h_s| / (h_s + h_x) and |x_u - s_u| / (h_s + h_x) = |u|, so
+//    |y(q)_u - y(s)_u| <= |q_u - s_u| + |u| |h_q - h_s| <= spread_u + |u| spread_n (likewise on v). The
+//    depth cube proves x hidden through a panel pixel only if y(s) lies in the rectangle inset so for the
+//    ray s -> x (the inset test is concave in u and in v, so the corners decide for the whole pixel), so
+//    y(q) lies in the covered one: every segment from the patch to x crosses an opaque triangle before x.
+//    A patch is flat, so a panel parallel to it is inset by the patch's half-size alone, at every angle;
+//    one across it by its half-size plus |u| times its half-size on one axis and by |u| times it on the
+//    other. (The Euclidean ball around the patch gave r sqrt(1 + u^2) on both, r the half-diagonal.)
+//    Unlike a box, a panel needs no solid behind it and no epsilon: a wall thinner than 2 epsilon + 2
+//    voxels, or a hollow shell, still occludes by its faces. The bound holds with u replaced by any ray's
+//    tangent relative to the panel's normal, (x - s)_k / (x - s)_normal, so at floor samples the panels are
+//    also drawn on the four SIDE faces of the cube (rays more than 45 degrees from the normal, tangents
+//    > 1), over what the other faces left unproven, inset per ray by spread_k + spread_n |p_k| with p_k
+//    those tangents (add_panel_sides: the tangent ranges are intervals, so the test stays separable).
 // 9. OCCLUDERS PER BLOCK (pvs/occluder_synthesis.h, synthesize_block_occluders). Points 1 to 4 need the
 //    occluders only to lie where no sight line from the eyes of THIS region goes: the segment from an eye e
 //    through q to x, were it clear, would carry sight from e into the solid. So a region whose eyes all lie

@@ -315,8 +315,8 @@ namespace {
 
 // The panel's plane relative to the eye: the face along its normal that looks at it, and its depth there;
 // false when the panel is unusable (not flat along exactly one axis, not finite) or its plane is within
-// the near plane or within the ball (radius * (1 + 1e-6)) of the eye.
-bool panel_face(const Aabb& panel, glm::vec3 eye, double ball, int& face, double& depth) {
+// the near plane or within the eye box (its half-extent along the normal, times 1 + 1e-6) of the eye.
+bool panel_face(const Aabb& panel, glm::vec3 eye, glm::dvec3 spread, int& face, double& depth) {
     if (!is_finite(panel.min) || !is_finite(panel.max)) return false;
     int axis = -1;
     for (int a = 0; a < 3; ++a) {
@@ -328,7 +328,7 @@ bool panel_face(const Aabb& panel, glm::vec3 eye, double ball, int& face, double
     }
     if (axis < 0) return false;
     const double h = double(panel.min[axis]) - double(eye[axis]);
-    if (!(std::abs(h) > std::max(kCubeNearPlane_m, ball * (1.0 + 1e-6)))) return false;
+    if (!(std::abs(h) > std::max(kCubeNearPlane_m, spread[axis] * (1.0 + 1e-6)))) return false;
     face = 2 * axis + (h > 0.0 ? 0 : 1);
     depth = std::abs(h);
     return true;
@@ -336,36 +336,41 @@ bool panel_face(const Aabb& panel, glm::vec3 eye, double ball, int& face, double
 
 // The tangents p (of a ray from the eye, relative to a panel's normal, along one in-plane axis k) whose ray
 // crosses the panel's plane, at signed height h from the eye on the normal axis, at h p, inside [lo, hi]
-// (relative to the eye, on axis k) inset by the ball's per-ray bound (depth_cube.h):
-//     lo + b sqrt(1 + p^2) <= h p <= hi - b sqrt(1 + p^2),   b = ball (1 + 1e-9) + 1e-9 |h|,
-// the second term of b covering rounding (of p, and of this test). Both sides are concave in p, so the set is
-// an interval; its ends solve (h p - lo)^2 = b^2 (1 + p^2) and (hi - h p)^2 = b^2 (1 + p^2), quadratics with
-// leading coefficient h^2 - b^2 > 0 (the panel is beyond the ball). The computed ends are then moved inward
-// until the test holds there as written, so every p in [lo, hi] passes it in exact arithmetic (concavity),
-// with the rounding margin of b to spare. Empty (lo > hi) when no ray crosses inside the inset rectangle.
+// (relative to the eye, on axis k) inset by the eye box's per-ray bound (depth_cube.h):
+//     lo + b_k + b_n |p| <= h p <= hi - b_k - b_n |p|,   b = spread (1 + 1e-9) + 1e-9 |h|,
+// b_k and b_n the box's half-extents along k and along the normal, the second term of b covering rounding
+// (of p, and of this test). Both sides are concave in p, so the set is an interval; each end solves a
+// linear equation on one side of p = 0 (the plane is beyond the box, |h| > b_n, so h p -+ b_n |p| is
+// monotone). The computed ends are then moved inward until the test holds there as written, so every p in
+// [lo, hi] passes it in exact arithmetic (concavity), with the rounding margin of b to spare. Empty
+// (lo > hi) when no ray crosses inside the inset rectangle.
 struct TangentRange {
     double lo = 1.0, hi = 0.0;
     bool contains(double p) const { return lo <= p && p <= hi; }
 };
 
-TangentRange panel_tangent_range(double h, double lo, double hi, double ball) {
-    const double b = ball * (1.0 + 1e-9) + 1e-9 * std::abs(h);
+TangentRange panel_tangent_range(double h, double lo, double hi, double spread_k, double spread_n) {
+    const double bk = spread_k * (1.0 + 1e-9) + 1e-9 * std::abs(h);
+    const double bn = spread_n * (1.0 + 1e-9) + 1e-9 * std::abs(h);
     const auto passes = [&](double p) {
-        const double inset = b * std::sqrt(1.0 + p * p);
+        const double inset = bk + bn * std::abs(p);
         return h * p - lo >= inset && hi - h * p >= inset;
     };
-    const double a = h * h - b * b;
-    const double root_lo = b * std::sqrt(std::max(0.0, h * h + lo * lo - b * b));
-    const double root_hi = b * std::sqrt(std::max(0.0, h * h + hi * hi - b * b));
+    // With H = |h| > bn, in q = p sign(h) (the crossing is at H q): the ends solve H q - bn |q| = lo + bk
+    // and H q + bn |q| = hi - bk, both sides increasing in q.
+    const double big_h = std::abs(h);
+    const auto lower_end = [&](double c) { return c >= 0.0 ? c / (big_h - bn) : c / (big_h + bn); };
+    const auto upper_end = [&](double d) { return d >= 0.0 ? d / (big_h + bn) : d / (big_h - bn); };
     TangentRange t;
     if (h > 0.0) {
-        t.lo = (h * lo + root_lo) / a;
-        t.hi = (h * hi - root_hi) / a;
+        t.lo = lower_end(lo + bk);
+        t.hi = upper_end(hi - bk);
     } else {
-        t.lo = (h * hi + root_hi) / a;
-        t.hi = (h * lo - root_lo) / a;
+        t.lo = -upper_end(hi - bk);
+        t.hi = -lower_end(lo + bk);
     }
-    if (!(t.lo <= t.hi) || !std::isfinite(t.lo) || !std::isfinite(t.hi)) return TangentRange{};
+    if (!(big_h > bn) || !(t.lo <= t.hi) || !std::isfinite(t.lo) || !std::isfinite(t.hi))
+        return TangentRange{};
     for (double step = 1e-15 * std::max(1.0, std::abs(t.lo)); !passes(t.lo); step *= 2.0) {
         t.lo += step;
         if (!(t.lo <= t.hi)) return TangentRange{};
@@ -396,7 +401,7 @@ inline void vertex_run(const double* g, double lo, double hi, int k0, int k1, in
     while (last >= first && g[last] > hi) --last;
 }
 
-// A panel's ranges of tangents on its two in-plane axes (for a ball around the eye), computed once for the
+// A panel's ranges of tangents on its two in-plane axes (for a box around the eye), computed once for the
 // four side faces of the cube.
 struct PanelTangents {
     int axis = 0;           // the panel's normal axis
@@ -404,17 +409,18 @@ struct PanelTangents {
     TangentRange range[3];  // per in-plane axis (range[axis] unused)
 };
 
-// False when the panel is unusable or its plane is within the near plane or the ball (panel_face()).
-bool panel_tangents(const Aabb& panel, glm::vec3 eye, double ball, PanelTangents& out) {
+// False when the panel is unusable or its plane is within the near plane or the eye box (panel_face()).
+bool panel_tangents(const Aabb& panel, glm::vec3 eye, glm::dvec3 spread, PanelTangents& out) {
     int normal_face = 0;
     double t = 0.0;
-    if (!panel_face(panel, eye, ball, normal_face, t)) return false;
+    if (!panel_face(panel, eye, spread, normal_face, t)) return false;
     out.axis = normal_face / 2;
     out.h = double(panel.min[out.axis]) - double(eye[out.axis]);
     for (int k = 0; k < 3; ++k) {
         if (k != out.axis) {
-            out.range[k] = panel_tangent_range(out.h, double(panel.min[k]) - double(eye[k]),
-                                               double(panel.max[k]) - double(eye[k]), ball);
+            out.range[k] =
+                panel_tangent_range(out.h, double(panel.min[k]) - double(eye[k]),
+                                    double(panel.max[k]) - double(eye[k]), spread[k], spread[out.axis]);
         }
     }
     return true;
@@ -466,10 +472,10 @@ inline void panel_side_minor_span(const PanelSide& ps, double g_m, double& lo, d
 // n: a contiguous range, found from an estimate and walked to its exact ends with the reference's very
 // test); a pixel is written when both its majors pass and its two minors lie in both ranges, with the larger
 // crossing depth of its two majors.
-void DepthCube::add_panel_sides(const Aabb& panel, double ball_radius) {
+void DepthCube::add_panel_sides(const Aabb& panel, glm::dvec3 spread) {
     int normal_face = 0;
     double t = 0.0;
-    if (!panel_face(panel, eye_, ball_radius, normal_face, t)) return;
+    if (!panel_face(panel, eye_, spread, normal_face, t)) return;
     const int r = resolution_;
     PanelTangents pt;
     bool have_tangents = false;  // computed when a face first needs them (square roots)
@@ -481,7 +487,7 @@ void DepthCube::add_panel_sides(const Aabb& panel, double ball_radius) {
         if (!face_candidates(panel, eye_, face, region_[size_t(face)], r, fc)) continue;
         const int iv0 = fc.iv0, iv1 = fc.iv1, jv0 = fc.jv0, jv1 = fc.jv1;
         if (!have_tangents) {
-            panel_tangents(panel, eye_, ball_radius, pt);
+            panel_tangents(panel, eye_, spread, pt);
             have_tangents = true;
         }
         PanelSide ps;
@@ -513,10 +519,10 @@ void DepthCube::add_panel_sides(const Aabb& panel, double ball_radius) {
     }
 }
 
-void DepthCube::add_panel(const Aabb& panel, double ball_radius) {
+void DepthCube::add_panel(const Aabb& panel, glm::dvec3 spread) {
     int face = 0;
     double t = 0.0;
-    if (!panel_face(panel, eye_, ball_radius, face, t)) return;
+    if (!panel_face(panel, eye_, spread, face, t)) return;
     const int r = resolution_, a = face / 2, ua = (a + 1) % 3, va = (a + 2) % 3;
     const double u_lo = double(panel.min[ua]) - double(eye_[ua]),
                  u_hi = double(panel.max[ua]) - double(eye_[ua]);
@@ -531,8 +537,8 @@ void DepthCube::add_panel(const Aabb& panel, double ball_radius) {
     // The vertices whose corner rays cross inside the rectangle inset per ray: a run of columns and a run
     // of rows (the tangent ranges of panel_tangent_range(), with the plane at height t along the face axis,
     // where the tangents are the face coordinates); a pixel is written when its four corners pass.
-    const TangentRange range_u = panel_tangent_range(t, u_lo, u_hi, ball_radius);
-    const TangentRange range_v = panel_tangent_range(t, v_lo, v_hi, ball_radius);
+    const TangentRange range_u = panel_tangent_range(t, u_lo, u_hi, spread[ua], spread[a]);
+    const TangentRange range_v = panel_tangent_range(t, v_lo, v_hi, spread[va], spread[a]);
     int i_first, i_last, j_first, j_last;
     vertex_run(grid_.data(), range_u.lo, range_u.hi, iv0, iv1, r, i_first, i_last);
     vertex_run(grid_.data(), range_v.lo, range_v.hi, jv0, jv1, r, j_first, j_last);
@@ -544,12 +550,12 @@ void DepthCube::add_panel(const Aabb& panel, double ball_radius) {
     }
 }
 
-void DepthCube::add_panels(const std::vector<Aabb>& panels, double ball_radius) {
-    for (const Aabb& p : panels) add_panel(p, ball_radius);
+void DepthCube::add_panels(const std::vector<Aabb>& panels, glm::dvec3 spread) {
+    for (const Aabb& p : panels) add_panel(p, spread);
 }
 
-void DepthCube::add_panels_sides(const std::vector<Aabb>& panels, double ball_radius) {
-    for (const Aabb& p : panels) add_panel_sides(p, ball_radius);
+void DepthCube::add_panels_sides(const std::vector<Aabb>& panels, glm::dvec3 spread) {
+    for (const Aabb& p : panels) add_panel_sides(p, spread);
 }
 
 void DepthCube::add_occluders(const std::vector<Aabb>& boxes) {
@@ -626,11 +632,11 @@ glm::dvec3 reference_direction(int face, double u, double v) {
 }  // namespace
 
 bool is_hidden_reference(const std::vector<Aabb>& occluders, glm::vec3 eye, const Aabb& box, int resolution) {
-    return is_hidden_reference(occluders, {}, 0.0, eye, box, resolution);
+    return is_hidden_reference(occluders, {}, glm::dvec3(0.0), eye, box, resolution);
 }
 
 bool is_hidden_reference(const std::vector<Aabb>& occluders, const std::vector<Aabb>& panels,
-                         double panel_ball_radius, glm::vec3 eye, const Aabb& box, int resolution,
+                         glm::dvec3 panel_spread, glm::vec3 eye, const Aabb& box, int resolution,
                          bool panel_sides) {
     const int r = resolution;
     if (!box_usable(box)) return false;
@@ -688,10 +694,10 @@ bool is_hidden_reference(const std::vector<Aabb>& occluders, const std::vector<A
                 for (const Aabb& panel : panels) {
                     int panel_f = 0;
                     double t = 0.0;
-                    if (!panel_face(panel, eye, panel_ball_radius, panel_f, t)) continue;
+                    if (!panel_face(panel, eye, panel_spread, panel_f, t)) continue;
                     PanelTangents pt;
                     PanelSide ps;
-                    if (panel_sides && panel_tangents(panel, eye, panel_ball_radius, pt) &&
+                    if (panel_sides && panel_tangents(panel, eye, panel_spread, pt) &&
                         panel_side(pt, face, ps)) {
                         // A side face: every corner's major passes and its minor is in that major's span.
                         bool all = true;
@@ -712,12 +718,12 @@ bool is_hidden_reference(const std::vector<Aabb>& occluders, const std::vector<A
                     if (panel_f != face) continue;
                     // The four corner rays cross the plane, at depth t, inside the rectangle inset per ray:
                     // their face coordinates in the tangent ranges?
-                    const TangentRange range_u =
-                        panel_tangent_range(t, double(panel.min[ua]) - double(eye[ua]),
-                                            double(panel.max[ua]) - double(eye[ua]), panel_ball_radius);
-                    const TangentRange range_v =
-                        panel_tangent_range(t, double(panel.min[va]) - double(eye[va]),
-                                            double(panel.max[va]) - double(eye[va]), panel_ball_radius);
+                    const TangentRange range_u = panel_tangent_range(
+                        t, double(panel.min[ua]) - double(eye[ua]), double(panel.max[ua]) - double(eye[ua]),
+                        panel_spread[ua], panel_spread[a]);
+                    const TangentRange range_v = panel_tangent_range(
+                        t, double(panel.min[va]) - double(eye[va]), double(panel.max[va]) - double(eye[va]),
+                        panel_spread[va], panel_spread[a]);
                     const bool hits = range_u.contains(grid(i, r)) && range_u.contains(grid(i + 1, r)) &&
                                       range_v.contains(grid(j, r)) && range_v.contains(grid(j + 1, r));
                     if (hits) pixel = std::min(pixel, float_up(t * (1.0 + kCubeDepthSlack)));

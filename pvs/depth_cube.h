@@ -96,41 +96,43 @@ public:
     // Rasterizes one occluder box (see the pixel rule above). Empty or non-finite boxes are ignored.
     void add_occluder(const Aabb& box);
     // Rasterizes one PANEL (occluders/panels.h: a rectangle flat along exactly one axis, else ignored) for
-    // every eye in the ball of radius `ball_radius` (metres, >= 0) around the cube's eye s. Only on the face
-    // along its normal that looks at it, where its plane has the constant depth t = |plane - s|: a pixel
-    // whose four corner rays cross the plane inside the rectangle inset per corner ray gets t (1 + slack),
-    // rounded up to float. The inset of a corner ray of face coordinates (u, v) is b sqrt(1 + u^2) on the u
-    // axis and b sqrt(1 + v^2) on the v axis, b = ball_radius (1 + 1e-9) + 1e-9 t (the margin covers
-    // rounding): a column passes when lo_u + b sqrt(1 + u^2) <= t u <= hi_u - b sqrt(1 + u^2), an interval
-    // of u solved once per panel (a quadratic; its ends checked with this very test), so the passing
-    // columns and rows are two runs. Panels whose plane is within the near plane, or within the ball
-    // (ball_radius (1 + 1e-6)), are ignored.
+    // every eye in the EYE BOX around the cube's eye s: the points q with |q_k - s_k| <= spread[k] on each
+    // axis k (metres, >= 0; a zero spread is s alone). Only on the face along its normal that looks at it,
+    // where its plane has the constant depth t = |plane - s|: a pixel whose four corner rays cross the
+    // plane inside the rectangle inset per corner ray gets t (1 + slack), rounded up to float. The inset of
+    // a corner ray of face coordinates (u, v) is b_u + b_n |u| on the u axis and b_v + b_n |v| on the v axis,
+    // with b = spread (1 + 1e-9) + 1e-9 t per axis (the margin covers rounding) and n the normal's axis: a
+    // column passes when lo_u + b_u + b_n |u| <= t u <= hi_u - b_u - b_n |u|, an interval of u solved once
+    // per panel (its ends checked with this very test), so the passing columns and rows are two runs. Panels
+    // whose plane is within the near plane, or within the eye box (spread[n] (1 + 1e-6)), are ignored.
     // Guarantee: if x lies beyond the plane (depth > t) in the direction of a written pixel, then for every
-    // q with |q - s| <= ball_radius the segment q -> x crosses the (uninset) rectangle. Proof: put the plane
-    // at height 0, s at height h_s = t > ball_radius, x at -h_x < 0, and let y(q) be where q -> x crosses
-    // it; with l_q = h_q / (h_q + h_x), y(q) - y(s) = (1 - l_q)(q - s)_par + (l_q - l_s)(x - s)_par, and
+    // q in the eye box the segment q -> x crosses the (uninset) rectangle. Proof: put the plane at height 0,
+    // s at height h_s = t > spread[n], x at -h_x < 0, and let y(q) be where q -> x crosses it; with
+    // l_q = h_q / (h_q + h_x) in [0, 1], y(q) - y(s) = (1 - l_q)(q - s)_par + (l_q - l_s)(x - s)_par, and
     // |l_q - l_s| <= |h_q - h_s| / (h_s + h_x), while |x_u - s_u| / (h_s + h_x) = |u|. So on the u axis
-    // |y(q)_u - y(s)_u| <= |q_u - s_u| + |u| |h_q - h_s| <= ball_radius sqrt(1 + u^2) (Cauchy-Schwarz).
-    // The inset condition on u (t u - lo_u >= ball_radius sqrt(1 + u^2), likewise for hi_u) is concave in
-    // u, so holding at a pixel's two corner columns it holds for every ray between them: testing the
-    // vertices is exact, and the u and v tests stay separable. ball_radius = 0 is the plain from-point
-    // panel (every ray from s through a written pixel crosses the rectangle at depth t).
-    void add_panel(const Aabb& panel, double ball_radius = 0.0);
-    void add_panels(const std::vector<Aabb>& panels, double ball_radius = 0.0);
+    // |y(q)_u - y(s)_u| <= |q_u - s_u| + |u| |h_q - h_s| <= spread[u] + |u| spread[n]. (For a ball of
+    // radius r, Cauchy-Schwarz gives r sqrt(1 + u^2); a patch of a cell face is flat, so its box has no
+    // extent along its own axis: a panel parallel to it gets the inset of its half-size alone.) The inset
+    // condition on u (t u - lo_u >= b_u + b_n |u|, likewise for hi_u) is concave in u, so holding at a
+    // pixel's two corner columns it holds for every ray between them: testing the vertices is exact, and
+    // the u and v tests stay separable.
+    void add_panel(const Aabb& panel, glm::dvec3 spread = glm::dvec3(0.0));
+    void add_panels(const std::vector<Aabb>& panels, glm::dvec3 spread = glm::dvec3(0.0));
     // The same panel on the four SIDE faces, those whose axis lies in its plane (rays more than 45 degrees
     // from its normal), by the same per-ray bound with the ray's TANGENTS relative to the normal in place
     // of the face coordinates: along the face axis +-1 / g_m, along the other in-plane axis g_n / g_m, where
     // g_m is the face coordinate along the panel's normal and g_n the other one (both > 1 in size towards
     // grazing rays, so the inset grows there). A vertex passes when its ray reaches the plane ahead (at
-    // parameter, and depth, h / g_m, h the plane's signed height above the eye) and each tangent p lies in
-    // the interval where lo + b sqrt(1 + p^2) <= h p <= hi - b sqrt(1 + p^2) (b = ball_radius plus rounding
-    // margins; both sides concave in p). A pixel whose four vertices pass gets the larger crossing depth of
-    // its two majors times (1 + slack), rounded up. Why the vertices decide: the pixel's rays have g_m of
-    // one sign, over which the face-axis tangent is monotone (an interval of g_m), and the minor condition
-    // w_lo <= g_n / g_m <= w_hi is a wedge, convex (tested as g_n between w_lo g_m and w_hi g_m); the
-    // crossing depth h / g_m is monotone in g_m. Separable: per major value a contiguous range of minors.
-    void add_panel_sides(const Aabb& panel, double ball_radius);
-    void add_panels_sides(const std::vector<Aabb>& panels, double ball_radius);
+    // parameter, and depth, h / g_m, h the plane's signed height above the eye) and each tangent p along an
+    // in-plane axis k lies in the interval where lo + b_k + b_n |p| <= h p <= hi - b_k - b_n |p| (b the
+    // spread plus rounding margins; both sides concave in p). A pixel whose four vertices pass gets the
+    // larger crossing depth of its two majors times (1 + slack), rounded up. Why the vertices decide: the
+    // pixel's rays have g_m of one sign, over which the face-axis tangent is monotone (an interval of g_m),
+    // and the minor condition w_lo <= g_n / g_m <= w_hi is a wedge, convex (tested as g_n between w_lo g_m
+    // and w_hi g_m); the crossing depth h / g_m is monotone in g_m. Separable: per major value a contiguous
+    // range of minors.
+    void add_panel_sides(const Aabb& panel, glm::dvec3 spread);
+    void add_panels_sides(const std::vector<Aabb>& panels, glm::dvec3 spread);
     // Rasterizes all the boxes, nearest first, skipping each box the ones before already hide (it could not
     // lower any pixel). Same depths as add_occluder() on every box, in far less time behind walls.
     void add_occluders(const std::vector<Aabb>& boxes);
@@ -163,10 +165,10 @@ private:
 // for touched pixels the minimum over all occluders of the four-corner slab tests. Slow (O(6 R^2 * N)); for
 // the differential test and the benchmark ratio only.
 bool is_hidden_reference(const std::vector<Aabb>& occluders, glm::vec3 eye, const Aabb& box, int resolution);
-// The same with panels (add_panel(panel, panel_ball_radius), and add_panel_sides() too when panel_sides)
-// besides the boxes.
+// The same with panels (add_panel(panel, panel_spread), and add_panel_sides() too when panel_sides) besides
+// the boxes.
 bool is_hidden_reference(const std::vector<Aabb>& occluders, const std::vector<Aabb>& panels,
-                         double panel_ball_radius, glm::vec3 eye, const Aabb& box, int resolution,
+                         glm::dvec3 panel_spread, glm::vec3 eye, const Aabb& box, int resolution,
                          bool panel_sides = false);
 
 }  // namespace pvs

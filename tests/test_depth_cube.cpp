@@ -302,6 +302,15 @@ std::vector<Aabb> wall_faces(const std::vector<Aabb>& walls) {
     return panels;
 }
 
+// The half-extents of an eye box: 0.05 to 1 m per axis, and flat along one axis (a patch of a cell face) in
+// half the draws.
+glm::dvec3 random_spread(Rng& rng) {
+    glm::dvec3 spread;
+    for (int a = 0; a < 3; ++a) spread[a] = 0.05 + 0.95 * double(rng.uniform());
+    if (rng.uniform() < 0.5f) spread[int(rng.below(3))] = 0.0;
+    return spread;
+}
+
 TEST(DepthCube, PanelsMatchTheReferenceOnRandomScenes) {
     const int scenes = test::in_ci() ? 60 : 300;
     const int resolutions[] = {16, 17, 24, 31, 32, 48, 64};
@@ -316,17 +325,17 @@ TEST(DepthCube, PanelsMatchTheReferenceOnRandomScenes) {
             wall_faces(std::vector<Aabb>(s.occluders.begin(), s.occluders.begin() + std::ptrdiff_t(half)));
         s.occluders.erase(s.occluders.begin(), s.occluders.begin() + std::ptrdiff_t(half));
         const int r = resolutions[rng.below(7)];
-        // A third of the scenes from the point itself, the rest for a ball around it (per-ray insets).
-        const double ball = n % 3 == 0 ? 0.0 : 0.05 + 0.95 * double(rng.uniform());
+        // A third of the scenes from the point itself, the rest for a box around it (per-ray insets).
+        const glm::dvec3 spread = n % 3 == 0 ? glm::dvec3(0.0) : random_spread(rng);
         if (cube.resolution() != r) cube = DepthCube(r);
         cube.clear(s.eye);
-        cube.add_panels(panels, ball);
+        cube.add_panels(panels, spread);
         const bool with_sides = n % 2 == 1;  // half the scenes draw the panels on the side faces too
-        if (with_sides) cube.add_panels_sides(panels, ball);
+        if (with_sides) cube.add_panels_sides(panels, spread);
         for (const Aabb& b : s.occluders) cube.add_occluder(b);
         for (const Aabb& b : s.occludees) {
             const bool fast = cube.is_hidden(b);
-            const bool slow = is_hidden_reference(s.occluders, panels, ball, s.eye, b, r, with_sides);
+            const bool slow = is_hidden_reference(s.occluders, panels, spread, s.eye, b, r, with_sides);
             hidden += fast;
             ++tested;
             if (fast != slow) {
@@ -367,28 +376,75 @@ TEST(DepthCube, APanelHidesWhatIsBehindItSeenFromEitherSideOnly) {
     EXPECT_EQ(cube.covered_pixel_count(), 0u);
 }
 
-// For a ball of radius 0.5 m around the eye, a 4 x 4 m panel 5 m away is inset by 0.5 sqrt(1 + u^2) m per
-// ray: about 0.52 m where the rays cross it 1.4 m off its centre (u = 0.28). The earlier uniform inset,
-// (1 + sqrt 2) 0.5 = 1.21 m, hid nothing there.
-TEST(DepthCube, APanelForABallIsInsetPerRay) {
+// For a patch of a cell face 0.5 m around the eye in x and y (flat in z), a 4 x 4 m panel 5 m away along z
+// is inset by 0.5 m on each ray: the crossing must lie 1.5 m from its centre (u <= 0.3). For an eye box as
+// deep as it is wide (0.5 m along z too) the inset grows with the ray's slope, 0.5 + 0.5 |u| m: the rays
+// through the pixels around u = 0.27 cross 1.36 m off the centre, inside the 1.5 m, but not inside the
+// 2 - 0.64 m the deeper box asks there.
+TEST(DepthCube, APanelForAnEyeBoxIsInsetPerRay) {
     const Aabb panel = Aabb::of({-2.0f, -2.0f, 5.0f}, {2.0f, 2.0f, 5.0f});
     const Aabb off_centre = Aabb::of({1.6f, -0.5f, 7.0f}, {1.85f, 0.5f, 8.0f});      // u in [0.2, 0.27]
     const Aabb nearer_the_edge = Aabb::of({2.0f, -0.5f, 7.0f}, {2.2f, 0.5f, 8.0f});  // u up to 0.31
+    const glm::dvec3 flat(0.5, 0.5, 0.0), deep(0.5, 0.5, 0.5);
     DepthCube cube(64);
     cube.clear(kOrigin);
-    cube.add_panel(panel, 0.5);
+    cube.add_panel(panel, flat);
     EXPECT_TRUE(cube.is_hidden(off_centre));
     EXPECT_FALSE(cube.is_hidden(nearer_the_edge));
-    EXPECT_TRUE(is_hidden_reference({}, {panel}, 0.5, kOrigin, off_centre, 64));
-    EXPECT_FALSE(is_hidden_reference({}, {panel}, 0.5, kOrigin, nearer_the_edge, 64));
+    EXPECT_TRUE(is_hidden_reference({}, {panel}, flat, kOrigin, off_centre, 64));
+    EXPECT_FALSE(is_hidden_reference({}, {panel}, flat, kOrigin, nearer_the_edge, 64));
+    cube.clear(kOrigin);
+    cube.add_panel(panel, deep);
+    EXPECT_FALSE(cube.is_hidden(off_centre));
+    EXPECT_FALSE(is_hidden_reference({}, {panel}, deep, kOrigin, off_centre, 64));
+    // The same from the other side of the plane (a negative height), with the panel reaching farther on
+    // the side away from the boxes (its two edges are not interchangeable).
+    const glm::vec3 beyond(0.0f, 0.0f, 10.0f);
+    const Aabb wider = Aabb::of({-3.0f, -2.0f, 5.0f}, {2.0f, 2.0f, 5.0f});
+    const auto mirrored = [](const Aabb& b) {
+        return Aabb::of({b.min.x, b.min.y, 10.0f - b.max.z}, {b.max.x, b.max.y, 10.0f - b.min.z});
+    };
+    cube.clear(beyond);
+    cube.add_panel(wider, flat);
+    EXPECT_TRUE(cube.is_hidden(mirrored(off_centre)));
+    EXPECT_FALSE(cube.is_hidden(mirrored(nearer_the_edge)));
+    cube.clear(beyond);
+    cube.add_panel(wider, deep);
+    EXPECT_FALSE(cube.is_hidden(mirrored(off_centre)));
     // From the point itself both are hidden.
     cube.clear(kOrigin);
     cube.add_panel(panel);
     EXPECT_TRUE(cube.is_hidden(nearer_the_edge));
-    // A plane the ball reaches draws nothing.
+    // A plane the box reaches draws nothing; one it does not reach does, however wide the box is across.
     cube.clear({0.0f, 0.0f, 4.6f});
-    cube.add_panel(panel, 0.5);
+    cube.add_panel(panel, deep);
     EXPECT_EQ(cube.covered_pixel_count(), 0u);
+    cube.add_panel(panel, glm::dvec3(0.5, 0.5, 0.3));
+    EXPECT_GT(cube.covered_pixel_count(), 0u);
+}
+
+// A floor panel 2 m below the eye (and a ceiling 2 m above), reaching 20 m to -x but only 6 m to +x: a box
+// seen through it at a grazing angle (4 m out per metre down: on the cube's -X face) is hidden by the side
+// pass, from the eye and from a patch around it, and not when it is in front of the plane. Its sight lines
+// cross the plane 6.4 to 8 m out on the long side (at the corners of the pixels they touch).
+TEST(DepthCube, APanelOnTheSideFacesHidesWhatIsSeenThroughItAtGrazingAngles) {
+    for (const float up : {-1.0f, 1.0f}) {
+        const Aabb panel = Aabb::of({-20.0f, 2.0f * up, -20.0f}, {6.0f, 2.0f * up, 20.0f});
+        const auto at = [&](float y0, float y1) {
+            return Aabb::of({-9.0f, std::min(y0 * up, y1 * up), -0.2f},
+                            {-8.6f, std::max(y0 * up, y1 * up), 0.2f});
+        };
+        for (const glm::dvec3 spread : {glm::dvec3(0.0), glm::dvec3(0.25, 0.0, 0.25), glm::dvec3(0.25)}) {
+            DepthCube cube(64);
+            cube.clear(kOrigin);
+            cube.add_panel(panel, spread);
+            EXPECT_FALSE(cube.is_hidden(at(2.4f, 2.6f)));  // the normal face alone cannot see it
+            cube.add_panel_sides(panel, spread);
+            EXPECT_TRUE(cube.is_hidden(at(2.4f, 2.6f))) << up << " " << spread.x;
+            EXPECT_FALSE(cube.is_hidden(at(1.5f, 1.9f)));
+            EXPECT_TRUE(is_hidden_reference({}, {panel}, spread, kOrigin, at(2.4f, 2.6f), 64, true));
+        }
+    }
 }
 
 TEST(DepthCube, HiddenByPanelsMeansEveryRayCrossesOne) {
@@ -425,17 +481,18 @@ TEST(DepthCube, HiddenByPanelsMeansEveryRayCrossesOne) {
     EXPECT_GT(hidden, tested / 20) << hidden << " of " << tested << " hidden";
 }
 
-// Where a panel's inset per ray is tightest: one panel just beyond the ball around the eye, along a random
+// Where a panel's inset per ray is tightest: one panel just beyond the eye box (`reach` is its largest
+// half-extent), along a random
 // axis and side, and small boxes far behind it in every direction of its cube face, many near its edges, and
 // more seen through it at grazing angles (on the side faces).
 // The bound r sqrt(1 + u^2) is nearly reached by an eye moved sideways and towards the plane at once, with
 // the target far behind the plane.
-Scene tight_panel_scene(Rng& rng, double ball, std::vector<Aabb>& panels) {
+Scene tight_panel_scene(Rng& rng, double reach, std::vector<Aabb>& panels) {
     Scene s;
     s.eye = glm::vec3(20.0f * rng.uniform(), 20.0f * rng.uniform(), 20.0f * rng.uniform());
     const int a = int(rng.below(3)), ua = (a + 1) % 3, va = (a + 2) % 3;
     const float sign = rng.uniform() < 0.5f ? -1.0f : 1.0f;
-    const float h = float(ball) + 0.05f + 2.0f * rng.uniform();
+    const float h = float(reach) + 0.05f + 2.0f * rng.uniform();
     Aabb panel;
     panel.min[a] = panel.max[a] = s.eye[a] + sign * h;
     panel.min[ua] = s.eye[ua] - (0.3f + 3.0f * rng.uniform()) * h;
@@ -469,12 +526,12 @@ Scene tight_panel_scene(Rng& rng, double ball, std::vector<Aabb>& panels) {
     return s;
 }
 
-// Panels drawn for a ball around the eye: a box proven hidden is hidden from every point of the ball, each
-// segment from the ball to the box crossing a panel. Half the scenes are random walls, half the tight case
-// above. The eyes sampled are the ball's surface (where the bound is tightest), with the 45-degree tilts in
-// each pair of axes among them, since the inset per ray, r sqrt(1 + u^2), is reached by an eye moved
-// sideways and towards the plane at once. (With an inset of r per ray instead, this test fails.)
-TEST(DepthCube, HiddenByPanelsForABallMeansEverySegmentFromTheBallCrossesOne) {
+// Panels drawn for an eye box around the eye: a box proven hidden is hidden from every point of the eye box,
+// each segment from it to the box crossing a panel. Half the scenes are random walls, half the tight case
+// above; half the eye boxes are flat along one axis, as the patches of cell faces are. The eyes sampled are
+// the box's 8 corners, where the inset per ray, b_u + b_n |u|, is reached (an eye moved sideways and towards
+// the plane at once), and random points of its surface. (With an inset of b_u alone, this test fails.)
+TEST(DepthCube, HiddenByPanelsForAnEyeBoxMeansEverySegmentFromTheBoxCrossesOne) {
     const int scenes = test::in_ci() ? 200 : 600;
     const int points_per_box = test::in_ci() ? 16 : 48;
     const int eyes_per_point = test::in_ci() ? 24 : 48;
@@ -483,19 +540,21 @@ TEST(DepthCube, HiddenByPanelsForABallMeansEverySegmentFromTheBallCrossesOne) {
     long long violations = 0, segments = 0;
     int hidden = 0, tested = 0;
     for (int n = 0; n < scenes; ++n) {
-        const double ball = 0.1 + 0.9 * double(rng.uniform());
+        glm::dvec3 spread;
+        for (int a = 0; a < 3; ++a) spread[a] = 0.1 + 0.9 * double(rng.uniform());
+        if (n % 4 >= 2) spread[int(rng.below(3))] = 0.0;
         std::vector<Aabb> panels;
         Scene s;
         if (n % 2 == 0) {
             s = random_scene(rng);
             panels = wall_faces(s.occluders);
         } else {
-            s = tight_panel_scene(rng, ball, panels);
+            s = tight_panel_scene(rng, std::max({spread.x, spread.y, spread.z}), panels);
         }
         DepthCube cube(resolutions[rng.below(4)]);
         cube.clear(s.eye);
-        cube.add_panels(panels, ball);
-        cube.add_panels_sides(panels, ball);
+        cube.add_panels(panels, spread);
+        cube.add_panels_sides(panels, spread);
         for (const Aabb& b : s.occludees) {
             ++tested;
             if (!cube.is_hidden(b)) continue;
@@ -503,25 +562,22 @@ TEST(DepthCube, HiddenByPanelsForABallMeansEverySegmentFromTheBallCrossesOne) {
             for (int k = 0; k < points_per_box; ++k) {
                 const glm::dvec3 x = box_target(b, k, rng);
                 for (int e = 0; e < eyes_per_point; ++e) {
-                    glm::dvec3 dir;
-                    if (e < 12) {  // tilted 45 degrees in each pair of axes, both signs
-                        const int a0 = e / 4, a1 = (a0 + 1) % 3;
-                        dir = glm::dvec3(0.0);
-                        dir[a0] = e & 1 ? 1.0 : -1.0;
-                        dir[a1] = e & 2 ? 1.0 : -1.0;
+                    glm::dvec3 corner;  // in [-1, 1]^3: a corner of the box, or a point of one of its faces
+                    if (e < 8) {
+                        for (int a = 0; a < 3; ++a) corner[a] = (e >> a) & 1 ? 1.0 : -1.0;
                     } else {
-                        do {
-                            dir = glm::dvec3(rng.uniform(), rng.uniform(), rng.uniform()) * 2.0 - 1.0;
-                        } while (glm::length(dir) < 0.1 || glm::length(dir) > 1.0);
+                        for (int a = 0; a < 3; ++a) corner[a] = 2.0 * double(rng.uniform()) - 1.0;
+                        corner[int(rng.below(3))] = rng.uniform() < 0.5f ? -1.0 : 1.0;
                     }
-                    const glm::dvec3 q = glm::dvec3(s.eye) + ball * glm::normalize(dir);
+                    const glm::dvec3 q = glm::dvec3(s.eye) + spread * corner;
                     ++segments;
                     const bool blocked = std::any_of(panels.begin(), panels.end(),
                                                      [&](const Aabb& p) { return segment_blocked(q, x, p); });
                     if (!blocked && ++violations <= 5) {
-                        ADD_FAILURE() << "scene " << n << ", ball " << ball << ": segment from (" << q.x
-                                      << ", " << q.y << ", " << q.z << ") to (" << x.x << ", " << x.y << ", "
-                                      << x.z << ") crosses no panel";
+                        ADD_FAILURE()
+                            << "scene " << n << ", eye box (" << spread.x << ", " << spread.y << ", "
+                            << spread.z << "): segment from (" << q.x << ", " << q.y << ", " << q.z
+                            << ") to (" << x.x << ", " << x.y << ", " << x.z << ") crosses no panel";
                     }
                 }
             }
