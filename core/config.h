@@ -96,6 +96,9 @@ struct ConservativeConfig {
     int fine_cube_resolution = 0;  // [Limit: 0..4096] floor samples take a second look at what the
                                      // cube could not prove on a cube this fine, drawn only over those
                                      // objects' pixels; 0 = off
+    int panel_refine_levels = 0;  // [Limit: 0..4] halvings of the floor patches, for what only the panels
+                                  // may still prove (their inset is the patch's half-size; the boxes keep
+                                  // epsilon); 0 = none
     int refine_levels = 4;     // [Limit: 0..8] adaptive refinement: patches of a face are first tested
                                // with occluders shrunk by epsilon * 2^levels (few samples), and only the
                                // objects not yet proven hidden go to patches half the size, down to epsilon
@@ -251,6 +254,11 @@ void visit_options(Config& c, Visitor&& v) {
                  "cube this fine (only over those objects' pixels); 0 = off",
                  0, 4096},
       c.conservative.fine_cube_resolution);
+    v(OptionSpec{"--panel-refine-levels", "conservative.panel_refine_levels", "levels",
+                 "conservative mode: floor patches are halved this many more times for the objects only the "
+                 "panels may still prove (a panel's inset is the patch's half-size; boxes keep epsilon)",
+                 0, 4},
+      c.conservative.panel_refine_levels);
     v(
         OptionSpec{
             "--refine-levels", "conservative.refine_levels", "levels",

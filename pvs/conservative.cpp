@@ -113,7 +113,7 @@ bool box_all_in_mask(const VoxelMask& mask, const Aabb& box) {
 }
 
 struct Counts {
-    uint64_t samples = 0, skipped = 0, in_solid = 0, tests = 0, rays = 0, fine_samples = 0;
+    uint64_t samples = 0, skipped = 0, in_solid = 0, tests = 0, rays = 0, fine_samples = 0, panel_splits = 0;
     std::vector<uint64_t> per_level;
     Counts& operator+=(const Counts& o) {
         samples += o.samples;
@@ -122,6 +122,7 @@ struct Counts {
         tests += o.tests;
         rays += o.rays;
         fine_samples += o.fine_samples;
+        panel_splits += o.panel_splits;
         per_level.resize(std::max(per_level.size(), o.per_level.size()), 0);
         for (size_t k = 0; k < o.per_level.size(); ++k) per_level[k] += o.per_level[k];
         return *this;
@@ -163,6 +164,7 @@ struct Shared {
     RayTargets targets;
     int cube_resolution;
     int fine_cube_resolution;  // 0: no second look at the floor
+    int panel_refine_levels;   // halvings below the floor for what panels may still prove
 };
 
 // Per thread: the depth cube and scratch. solve_patch() refines one patch.
@@ -173,6 +175,7 @@ public:
           cube_(shared.cube_resolution),
           fine_(std::max(shared.fine_cube_resolution, kMinCubeResolution)),
           open_mark_(shared.world.objects.size(), 0),
+          last_seen_part_(shared.world.objects.size(), 0),
           open_under_(shared.tree.nodes.size(), 0) {
         counts_.per_level.assign(shared.occ.epsilon_m.size(), 0);
     }
@@ -308,6 +311,20 @@ public:
                     for (int side = 0; side < 2; ++side)
                         sides.open[size_t(side)] = unproven_each(cube_, sides.open[size_t(side)]);
                 }
+                // Below the floor (argument 5): the boxes stay shrunk by epsilon_0, but panels need no
+                // epsilon, so a patch half the size insets them by half as much. While the panels are
+                // drawn here, what they left open goes down panel_refine_levels more halvings (sight rays
+                // first, as above the floor); what is left after them is listed.
+                if (!sides.empty() && !near_panels_.empty() &&
+                    r > eps[0] / double(1 << sh_.panel_refine_levels)) {
+                    for (int side = 0; side < 2; ++side)
+                        sides.open[size_t(side)] =
+                            list_seen(s, sides.open[size_t(side)], sides.row[size_t(side)]);
+                    if (sides.empty()) return;
+                    ++counts_.panel_splits;
+                    split(rect, axis, sides);
+                    return;
+                }
                 if (sh_.fine_cube_resolution > 0 && !sides.empty()) second_look(s, sides);
                 for (int side = 0; side < 2; ++side) {
                     for (uint32_t o : sides.open[size_t(side)])
@@ -320,24 +337,7 @@ public:
             for (int side = 0; side < 2; ++side)
                 sides.open[size_t(side)] = list_seen(s, sides.open[size_t(side)], sides.row[size_t(side)]);
         }
-        // Split into halves along the patch's long in-plane sides (both for a square).
-        const int ua = (axis + 1) % 3, va = (axis + 2) % 3;
-        const glm::vec3 size = rect.size();
-        const float longest = std::max(size[ua], size[va]);
-        const bool split_u = size[ua] >= 0.5f * longest, split_v = size[va] >= 0.5f * longest;
-        for (int iu = 0; iu < (split_u ? 2 : 1); ++iu)
-            for (int iv = 0; iv < (split_v ? 2 : 1); ++iv) {
-                Aabb child = rect;
-                if (split_u) {
-                    const float mid = 0.5f * (rect.min[ua] + rect.max[ua]);
-                    (iu == 0 ? child.max[ua] : child.min[ua]) = mid;
-                }
-                if (split_v) {
-                    const float mid = 0.5f * (rect.min[va] + rect.max[va]);
-                    (iv == 0 ? child.max[va] : child.min[va]) = mid;
-                }
-                solve_patch(child, axis, sides);
-            }
+        split(rect, axis, sides);
     }
 
     const Counts& counts() const { return counts_; }
@@ -381,6 +381,28 @@ public:
     }
 
 private:
+    // Solves the halves of a patch along its long in-plane sides (both for a square).
+    void split(const Aabb& rect, int axis, const Sides& sides) {
+        const int ua = (axis + 1) % 3, va = (axis + 2) % 3;
+        const glm::vec3 size = rect.size();
+        const float longest = std::max(size[ua], size[va]);
+        const bool split_u = size[ua] >= 0.5f * longest, split_v = size[va] >= 0.5f * longest;
+        for (int iu = 0; iu < (split_u ? 2 : 1); ++iu)
+            for (int iv = 0; iv < (split_v ? 2 : 1); ++iv) {
+                Aabb child = rect;
+                if (split_u) {
+                    const float mid = 0.5f * (rect.min[ua] + rect.max[ua]);
+                    (iu == 0 ? child.max[ua] : child.min[ua]) = mid;
+                }
+                if (split_v) {
+                    const float mid = 0.5f * (rect.min[va] + rect.max[va]);
+                    (iv == 0 ? child.max[va] : child.min[va]) = mid;
+                }
+                solve_patch(child, axis, sides);
+            }
+    }
+
+
     // At a floor sample, before listing what the cube could not prove: objects a sight ray from s reaches
     // are listed (no cube can prove them), and the rest get a second look on a finer cube (the same
     // occluders and panels, drawn only over their pixels). A pixel of the coarse cube is written only where
@@ -403,14 +425,23 @@ private:
     }
 
     // Does the cube prove hidden every part of an object cut into several (its bounds alone were not)?
+    // The part that was not hidden last time is tried first: the object's visible part, as a rule, from
+    // the neighbouring samples too (the order changes the cost, not the answer).
     bool parts_hidden(const DepthCube& cube, uint32_t o) {
         const std::vector<Aabb>& parts = sh_.parts[o];
-        bool hidden = parts.size() > 1;
-        for (size_t p = 0; hidden && p < parts.size(); ++p) {
+        if (parts.size() <= 1) return false;
+        const uint32_t first = last_seen_part_[o];
+        ++counts_.tests;
+        if (!cube.is_hidden(parts[first])) return false;
+        for (uint32_t p = 0; p < parts.size(); ++p) {
+            if (p == first) continue;
             ++counts_.tests;
-            hidden = cube.is_hidden(parts[p]);
+            if (!cube.is_hidden(parts[p])) {
+                last_seen_part_[o] = p;
+                return false;
+            }
         }
-        return hidden;
+        return true;
     }
 
     // The same as unproven(), one object at a time (no tree): for a few objects left after a first pass.
@@ -464,6 +495,7 @@ private:
     DepthCube cube_;
     DepthCube fine_;                    // the second look at floor samples (1 pixel when off)
     std::vector<uint8_t> open_mark_;    // per object: 0 not open, 1 open, 2 open and not proven
+    std::vector<uint32_t> last_seen_part_;  // per object: the part parts_hidden() last found not hidden
     std::vector<uint32_t> open_under_;  // per tree node
     std::vector<int32_t> stack_;
     std::vector<Aabb> interest_;     // bounds of the open objects: the only pixels worth drawing
@@ -491,6 +523,7 @@ void add_counts(ConservativeFigures& figures, const Counts& n, std::chrono::stea
     figures.object_tests += n.tests;
     figures.rays += n.rays;
     figures.fine_samples += n.fine_samples;
+    figures.panel_splits += n.panel_splits;
     figures.samples_per_level.resize(std::max(figures.samples_per_level.size(), n.per_level.size()), 0);
     for (size_t k = 0; k < n.per_level.size(); ++k) figures.samples_per_level[k] += n.per_level[k];
     figures.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -505,7 +538,8 @@ Shared make_shared(const ConservativeConfig& config, const World& world, const S
                   object_parts(world),
                   ray_targets(world),
                   config.cube_resolution,
-                  config.fine_cube_resolution};
+                  config.fine_cube_resolution,
+                  config.panel_refine_levels};
 }
 
 // One face of a box: the side at box.min[axis] (side 0) or box.max[axis] (side 1), flat along `axis`.
@@ -659,9 +693,10 @@ PvsSet bake_conservative_pvs(Context& ctx, const ConservativeConfig& config, con
     }
     add_always_listed(world, cells, pvs);
     ctx.info(fmt::format(
-        "conservative PVS: {} samples (per epsilon level {}; {} second looks at {} px), {} inside occluders "
-        "and {} patches in solid skipped, {:.1f} M box tests, {:.1f} M sight rays, {:.1f} s ({:.0f} cells/s)",
-        figures.samples, fmt::join(figures.samples_per_level, "/"), figures.fine_samples,
+        "conservative PVS: {} samples (per epsilon level {}; {} floor patches halved for panels; {} second "
+        "looks at {} px), {} inside occluders and {} patches in solid skipped, {:.1f} M box tests, {:.1f} M "
+        "sight rays, {:.1f} s ({:.0f} cells/s)",
+        figures.samples, fmt::join(figures.samples_per_level, "/"), figures.panel_splits, figures.fine_samples,
         config.fine_cube_resolution, figures.samples_skipped, figures.patches_in_solid,
         double(figures.object_tests) * 1e-6, double(figures.rays) * 1e-6, figures.seconds,
         double(cells.size()) / std::max(1e-9, figures.seconds)));

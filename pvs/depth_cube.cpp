@@ -49,22 +49,39 @@ struct FaceBox {
     double v_lo, v_hi;    // Δ[va] range
 };
 
-FaceBox face_box(const Aabb& box, glm::vec3 eye, int face) {
+// A box relative to the eye, per world axis (the differences computed once for all six faces).
+struct EyeBox {
+    double lo[3], hi[3];
+};
+
+inline EyeBox eye_box(const Aabb& box, glm::vec3 eye) {
+    EyeBox e;
+    for (int k = 0; k < 3; ++k) {
+        e.lo[k] = double(box.min[k]) - double(eye[k]);
+        e.hi[k] = double(box.max[k]) - double(eye[k]);
+    }
+    return e;
+}
+
+inline FaceBox face_box(const EyeBox& e, int face) {
     const int a = face / 2, ua = (a + 1) % 3, va = (a + 2) % 3;
-    const double lo = double(box.min[a]) - double(eye[a]), hi = double(box.max[a]) - double(eye[a]);
     FaceBox fb;
     if (face % 2 == 0) {
-        fb.d_min = lo;
-        fb.d_max = hi;
+        fb.d_min = e.lo[a];
+        fb.d_max = e.hi[a];
     } else {
-        fb.d_min = -hi;
-        fb.d_max = -lo;
+        fb.d_min = -e.hi[a];
+        fb.d_max = -e.lo[a];
     }
-    fb.u_lo = double(box.min[ua]) - double(eye[ua]);
-    fb.u_hi = double(box.max[ua]) - double(eye[ua]);
-    fb.v_lo = double(box.min[va]) - double(eye[va]);
-    fb.v_hi = double(box.max[va]) - double(eye[va]);
+    fb.u_lo = e.lo[ua];
+    fb.u_hi = e.hi[ua];
+    fb.v_lo = e.lo[va];
+    fb.v_hi = e.hi[va];
     return fb;
+}
+
+FaceBox face_box(const Aabb& box, glm::vec3 eye, int face) {
+    return face_box(eye_box(box, eye), face);
 }
 
 // Distance from 0 to the interval [lo, hi].
@@ -163,18 +180,19 @@ struct OccludeeFace {
 };
 
 // Smallest pixel index i in [0, r - 1] whose closed span [g(i), g(i + 1)] reaches up to lo (g(i + 1) >= lo).
-int first_pixel_reaching(double lo, int r) {
+// g is the table of grid(k, r), k = 0..r.
+inline int first_pixel_reaching(double lo, int r, const double* g) {
     int i = std::clamp(int(std::floor((lo + 1.0) * 0.5 * r)), 0, r - 1);
-    while (i > 0 && grid(i, r) >= lo) --i;
-    while (i < r - 1 && grid(i + 1, r) < lo) ++i;
+    while (i > 0 && g[i] >= lo) --i;
+    while (i < r - 1 && g[i + 1] < lo) ++i;
     return i;
 }
 
 // Largest pixel index i in [0, r - 1] with g(i) <= hi.
-int last_pixel_reaching(double hi, int r) {
+inline int last_pixel_reaching(double hi, int r, const double* g) {
     int i = std::clamp(int(std::floor((hi + 1.0) * 0.5 * r)), 0, r - 1);
-    while (i < r - 1 && grid(i + 1, r) <= hi) ++i;
-    while (i > 0 && grid(i, r) > hi) --i;
+    while (i < r - 1 && g[i + 1] <= hi) ++i;
+    while (i > 0 && g[i] > hi) --i;
     return i;
 }
 
@@ -185,9 +203,9 @@ inline double pad_high(double x) {
     return std::clamp(x + kRectPad * std::max(1.0, std::abs(x)), -1.0, 1.0);
 }
 
-OccludeeFace occludee_face(const Aabb& box, glm::vec3 eye, int face, int r) {
+OccludeeFace occludee_face(const EyeBox& e, int face, int r, const double* g) {
     OccludeeFace of;
-    const FaceBox fb = face_box(box, eye, face);
+    const FaceBox fb = face_box(e, face);
     const double lower = std::max(
         {fb.d_min, dist_to_zero(fb.u_lo, fb.u_hi), dist_to_zero(fb.v_lo, fb.v_hi), kCubeNearPlane_m});
     if (lower > fb.d_max) return of;  // no part of the box in this face's cone
@@ -197,10 +215,10 @@ OccludeeFace occludee_face(const Aabb& box, glm::vec3 eye, int face, int r) {
     const double u1 = fb.u_hi >= 0.0 ? fb.u_hi / lower : fb.u_hi / fb.d_max;
     const double v0 = fb.v_lo >= 0.0 ? fb.v_lo / fb.d_max : fb.v_lo / lower;
     const double v1 = fb.v_hi >= 0.0 ? fb.v_hi / lower : fb.v_hi / fb.d_max;
-    of.i0 = first_pixel_reaching(pad_low(u0), r);
-    of.i1 = last_pixel_reaching(pad_high(u1), r);
-    of.j0 = first_pixel_reaching(pad_low(v0), r);
-    of.j1 = last_pixel_reaching(pad_high(v1), r);
+    of.i0 = first_pixel_reaching(pad_low(u0), r, g);
+    of.i1 = last_pixel_reaching(pad_high(u1), r, g);
+    of.j0 = first_pixel_reaching(pad_low(v0), r, g);
+    of.j1 = last_pixel_reaching(pad_high(v1), r, g);
     of.touched = of.i0 <= of.i1 && of.j0 <= of.j1;
     of.limit = lower * (1.0 - kCubeDepthSlack);
     return of;
@@ -251,8 +269,9 @@ void DepthCube::limit_to(const std::vector<Aabb>& boxes) {
             for (auto& reg : region_) reg = {0, r - 1, 0, r - 1};  // tested as visible anyway; stay simple
             return;
         }
+        const EyeBox rel = eye_box(box, eye_);
         for (int face = 0; face < 6; ++face) {
-            const OccludeeFace of = occludee_face(box, eye_, face, r);
+            const OccludeeFace of = occludee_face(rel, face, r, grid_.data());
             if (!of.touched) continue;
             auto& reg = region_[size_t(face)];
             reg = {std::min(reg[0], of.i0), std::max(reg[1], of.i1), std::min(reg[2], of.j0),
@@ -574,8 +593,9 @@ void DepthCube::add_occluders(const std::vector<Aabb>& boxes) {
 PVS_AVX2_CLONES bool DepthCube::is_hidden(const Aabb& box) const {
     if (!box_usable(box) || meets_near_cube(box, eye_)) return false;
     const int r = resolution_;
+    const EyeBox rel = eye_box(box, eye_);
     for (int face = 0; face < 6; ++face) {
-        const OccludeeFace of = occludee_face(box, eye_, face, r);
+        const OccludeeFace of = occludee_face(rel, face, r, grid_.data());
         if (!of.touched) continue;
         // Pixels outside the drawn region hold no occluder (or, after clear_for(), stale depths): visible.
         const auto& reg = region_[size_t(face)];

@@ -543,6 +543,8 @@ BakeConfig property_config(uint64_t seed) {
     // The first world takes the second look on a fine cube at floor samples (--fine-cube-resolution; it
     // costs about 4x the PVS time, so only one).
     if (seed == 1) c.conservative.fine_cube_resolution = 256;
+    // The second world halves its floor patches twice more for the panels (--panel-refine-levels).
+    if (seed == 2) c.conservative.panel_refine_levels = 2;
     return c;
 }
 
@@ -550,7 +552,7 @@ TEST(ConservativeProperty, RandomBoxWorldsHaveNoMissAgainstDenseRays) {
     const uint64_t worlds = test::in_ci() ? 6 : 20;
     uint64_t cells_total = 0, listed_total = 0, pairs_total = 0, sampled_total = 0, rays_total = 0;
     uint32_t worlds_culling = 0;
-    uint64_t fine_samples = 0;
+    uint64_t fine_samples = 0, panel_splits = 0;
     for (uint64_t seed = 1; seed <= worlds; ++seed) {
         SCOPED_TRACE("world seed " + std::to_string(seed));
         const auto start = std::chrono::steady_clock::now();
@@ -579,6 +581,7 @@ TEST(ConservativeProperty, RandomBoxWorldsHaveNoMissAgainstDenseRays) {
         const uint32_t n_objects = uint32_t(w.objects.size());
 
         fine_samples += uint64_t(figure(bake.figures, "conservative_fine_samples"));
+        panel_splits += uint64_t(figure(bake.figures, "conservative_panel_splits"));
         const uint64_t missed_pairs = uint64_t(figure(bake.verification.figures, "missed_pairs"));
         EXPECT_EQ(missed_pairs, 0u) << "world seed " << seed << ": " << bake.verification.misses.size()
                                     << " misses reported";
@@ -632,6 +635,7 @@ TEST(ConservativeProperty, RandomBoxWorldsHaveNoMissAgainstDenseRays) {
     EXPECT_LT(listed_total, pairs_total) << "no world culls anything";
     EXPECT_GE(worlds_culling * 2, uint32_t(worlds)) << "fewer than half the worlds cull anything";
     EXPECT_GT(fine_samples, 0u) << "no world took the second look on the fine cube";
+    EXPECT_GT(panel_splits, 0u) << "no world halved a floor patch for the panels";
 }
 
 }  // namespace
