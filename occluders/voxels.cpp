@@ -112,37 +112,90 @@ struct Voxelizer {
 
 }  // namespace
 
+namespace {
+
+// out |= in shifted by `by` bits along the linear index (positive: to higher indices), bits shifted past
+// either end dropped. Word-wise: the bits of word w land in words w + q and w + q + 1.
+void or_shifted(const BitVolume& in, int64_t by, BitVolume& out) {
+    const int64_t n = int64_t(in.words.size());
+    const int64_t q = (by >= 0 ? by : -by) >> 6;
+    const int r = int((by >= 0 ? by : -by) & 63);
+    const uint64_t* src = in.words.data();
+    uint64_t* dst = out.words.data();
+    if (by >= 0) {
+        for (int64_t w = n - 1; w >= q; --w) {
+            const uint64_t lo = src[w - q], below = w - q - 1 >= 0 ? src[w - q - 1] : 0;
+            dst[w] |= r == 0 ? lo : (lo << r) | (below >> (64 - r));
+        }
+    } else {
+        for (int64_t w = 0; w + q < n; ++w) {
+            const uint64_t hi = src[w + q], above = w + q + 1 < n ? src[w + q + 1] : 0;
+            dst[w] |= r == 0 ? hi : (hi >> r) | (above << (64 - r));
+        }
+    }
+}
+
+// Sets bits [lo, hi) of the volume.
+void set_range(BitVolume& v, uint64_t lo, uint64_t hi) {
+    for (uint64_t i = lo; i < hi && (i & 63); ++i) v.set(i);
+    uint64_t i = std::max(lo, std::min(hi, (lo + 63) & ~uint64_t(63)));
+    for (; i + 64 <= hi; i += 64) v.words[i >> 6] = ~uint64_t(0);
+    for (; i < hi; ++i) v.set(i);
+}
+
+}  // namespace
+
+// Per axis, by doubling: a set grown by `reach` voxels along the axis, ORed with itself moved by up to `reach`
+// + 1 more voxels either way, is grown by twice that plus one (at most `radius`). A move along the axis is a
+// shift of the linear index by a multiple of the axis's stride; the bits that would cross the end of their
+// line (into the next row or plane) are masked off, so the result is exact.
 BitVolume dilate(const VoxelGrid& g, const BitVolume& in, int radius) {
     BitVolume a = in;
     if (radius <= 0) return a;
-    BitVolume b;
-    const uint64_t step[3] = {1, uint64_t(g.dims.x), uint64_t(g.dims.x) * uint64_t(g.dims.y)};
+    const uint64_t count = g.count();
+    const int64_t stride[3] = {1, int64_t(g.dims.x), int64_t(g.dims.x) * int64_t(g.dims.y)};
+    BitVolume moved, keep;
     for (int axis = 0; axis < 3; ++axis) {
-        b.reset(g.count());
-        const int n = g.dims[axis];
-        const int u_axis = axis == 0 ? 1 : 0, v_axis = axis == 2 ? 1 : 2;
-        // Every line along `axis`: a voxel is set when a set voxel lies within `radius` of it. Two sweeps
-        // (forward and backward) track the distance to the nearest set voxel on each side.
-        for (int v = 0; v < g.dims[v_axis]; ++v)
-            for (int u = 0; u < g.dims[u_axis]; ++u) {
-                glm::ivec3 c(0);
-                c[u_axis] = u;
-                c[v_axis] = v;
-                const uint64_t base = g.index(c.x, c.y, c.z);
-                int since = radius + 1;
-                for (int k = 0; k < n; ++k) {
-                    since = a.get(base + uint64_t(k) * step[axis]) ? 0 : since + 1;
-                    if (since <= radius) b.set(base + uint64_t(k) * step[axis]);
+        const int64_t n = g.dims[axis];
+        const uint64_t line_period = uint64_t(stride[axis] * n);  // a block of whole lines along the axis
+        int reach = 0;
+        while (reach < radius) {
+            const int step = std::min(reach + 1, radius - reach);
+            for (const int dir : {1, -1}) {
+                moved.reset(count);
+                or_shifted(a, dir * step * stride[axis], moved);
+                if (axis < 2) {
+                    // Keep only the voxels whose coordinate on the axis is >= step (moved up) or
+                    // <= n - 1 - step (moved down): the rest came from another line.
+                    keep.reset(count);
+                    const uint64_t band = uint64_t(stride[axis]) * uint64_t(std::max<int64_t>(0, n - step));
+                    for (uint64_t base = 0; base < count; base += line_period) {
+                        const uint64_t lo = dir > 0 ? base + uint64_t(stride[axis]) * uint64_t(step) : base;
+                        set_range(keep, lo, std::min(count, lo + band));
+                    }
+                    for (size_t w = 0; w < moved.words.size(); ++w) moved.words[w] &= keep.words[w];
                 }
-                since = radius + 1;
-                for (int k = n - 1; k >= 0; --k) {
-                    since = a.get(base + uint64_t(k) * step[axis]) ? 0 : since + 1;
-                    if (since <= radius) b.set(base + uint64_t(k) * step[axis]);
-                }
+                for (size_t w = 0; w < a.words.size(); ++w) a.words[w] |= moved.words[w];
             }
-        std::swap(a, b);
+            reach += step;
+        }
     }
+    if (count & 63) a.words.back() &= (uint64_t(1) << (count & 63)) - 1;  // moves along z past the end
     return a;
+}
+
+void clear_border(const VoxelGrid& g, BitVolume& v, int k) {
+    if (k <= 0) return;
+    BitVolume keep;
+    keep.reset(g.count());
+    if (2 * k < g.dims.x && 2 * k < g.dims.y && 2 * k < g.dims.z) {
+        for (int z = k; z < g.dims.z - k; ++z)
+            for (int y = k; y < g.dims.y - k; ++y) {
+                const uint64_t row = g.index(0, y, z);
+                set_range(keep, row + uint64_t(k), row + uint64_t(g.dims.x - k));
+            }
+    }
+    for (size_t w = 0; w < v.words.size(); ++w) v.words[w] &= keep.words[w];
 }
 
 void voxelize_opaque(Context& ctx, const World& world, const VoxelGrid& grid, BitVolume& touched,

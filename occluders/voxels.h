@@ -78,8 +78,11 @@ double default_voxel_size(const Aabb& bounds, double preferred_m, uint64_t max_v
 bool triangle_box_overlap(glm::vec3 box_center, glm::vec3 box_half, glm::vec3 a, glm::vec3 b, glm::vec3 c);
 
 // The set grown by `radius` voxels in the Chebyshev metric (the 26-neighbourhood applied `radius`
-// times): separable, one pass per axis, O(voxels) whatever the radius.
+// times): separable, per axis O(log radius) word-wise shifts of the whole volume.
 BitVolume dilate(const VoxelGrid& grid, const BitVolume& in, int radius);
+
+// Clears every voxel within k of the grid's faces (a coordinate < k or >= dims - k). Word-wise.
+void clear_border(const VoxelGrid& grid, BitVolume& volume, int k);
 
 // Marks every voxel an opaque triangle touches. When `upward` is given, also marks the voxels touched by
 // opaque triangles facing up (normal.y >= min_up_cos; floors a player can stand on); when `see_through` is

@@ -218,12 +218,7 @@ std::vector<std::vector<Aabb>> shrunk_boxes(Context& ctx, const VoxelGrid& grid,
         BitVolume eroded;
         eroded.reset(grid.count());
         for (size_t w = 0; w < proven.words.size(); ++w) eroded.words[w] = proven.words[w] & ~near_not.words[w];
-        for (uint64_t i = 0; i < grid.count(); ++i) {
-            if (!eroded.get(i)) continue;
-            const glm::ivec3 c = grid.coords(i);
-            if (glm::any(glm::lessThan(c, glm::ivec3(k))) || glm::any(glm::greaterThanEqual(c, grid.dims - k)))
-                eroded.clear(i);
-        }
+        clear_border(grid, eroded, k);
         std::vector<Aabb> level_boxes;
         for (const VoxelBox& vb : grow_boxes(ctx, grid, eroded, sc, nullptr)) level_boxes.push_back(box_bounds(grid, vb));
         ctx.info(fmt::format("occluders shrunk by {} m ({} voxels): {} boxes of {:.0f} m3 of solid", eps, k,

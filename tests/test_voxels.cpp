@@ -203,6 +203,55 @@ TEST(Dilate, GrowsBySoManyVoxelsInTheChebyshevMetric) {
     }
 }
 
+// Random sets, voxels on the grid's faces and row ends among them, against the definition: a voxel is set
+// when a set voxel lies within `radius` in the Chebyshev metric (nothing spills from one row or plane into
+// the next, whatever the dims' remainders modulo 64).
+TEST(Dilate, MatchesTheDefinitionOnRandomSets) {
+    Rng rng(31, 7);
+    for (int n = 0; n < 12; ++n) {
+        VoxelGrid g;
+        g.voxel_size_m = 1.0f;
+        g.dims = glm::ivec3(3 + int(rng.below(70)), 2 + int(rng.below(12)), 1 + int(rng.below(9)));
+        BitVolume in;
+        in.reset(g.count());
+        for (uint64_t i = 0; i < g.count(); ++i)
+            if (rng.uniform() < 0.01f) in.set(i);
+        in.set(g.index(g.dims.x - 1, 0, 0));  // a row's last voxel: moved up it would enter the next row
+        in.set(g.index(0, g.dims.y - 1, g.dims.z - 1));
+        const int radius = int(rng.below(6));
+        const BitVolume out = dilate(g, in, radius);
+        int wrong = 0;
+        for (uint64_t i = 0; i < g.count() && wrong < 5; ++i) {
+            const glm::ivec3 c = g.coords(i);
+            bool near = false;
+            for (int z = std::max(0, c.z - radius); z <= std::min(g.dims.z - 1, c.z + radius) && !near; ++z)
+                for (int y = std::max(0, c.y - radius); y <= std::min(g.dims.y - 1, c.y + radius) && !near; ++y)
+                    for (int x = std::max(0, c.x - radius); x <= std::min(g.dims.x - 1, c.x + radius) && !near;
+                         ++x)
+                        near = in.get(g.index(x, y, z));
+            if (out.get(i) != near) {
+                ++wrong;
+                ADD_FAILURE() << "dims " << g.dims.x << "x" << g.dims.y << "x" << g.dims.z << " radius " << radius
+                              << " at " << c.x << "," << c.y << "," << c.z << ": " << out.get(i);
+            }
+        }
+        EXPECT_EQ(out.count(), [&] {
+            uint64_t k = 0;
+            for (uint64_t i = 0; i < g.count(); ++i) k += out.get(i);
+            return k;
+        }()) << "bits set past the last voxel";
+        // clear_border() on the same set: exactly the voxels within `radius` of a face go.
+        BitVolume inner = in;
+        clear_border(g, inner, radius);
+        for (uint64_t i = 0; i < g.count(); ++i) {
+            const glm::ivec3 c = g.coords(i);
+            const bool border = glm::any(glm::lessThan(c, glm::ivec3(radius))) ||
+                                glm::any(glm::greaterThanEqual(c, g.dims - radius));
+            ASSERT_EQ(inner.get(i), in.get(i) && !border) << c.x << "," << c.y << "," << c.z << " k " << radius;
+        }
+    }
+}
+
 // A pocket open only at its top, beside a hole that sight enters from below: a flood turns the corner
 // into the pocket, straight sight cannot (it would have to go up through the hole and then down). A slice
 // one voxel thick (dims.z = 1), x to the right, y up.
