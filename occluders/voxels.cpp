@@ -145,10 +145,10 @@ void set_range(BitVolume& v, uint64_t lo, uint64_t hi) {
 
 }  // namespace
 
-// Per axis, by doubling: a set grown by `reach` voxels along the axis, ORed with itself moved by up to `reach`
-// + 1 more voxels either way, is grown by twice that plus one (at most `radius`). A move along the axis is a
-// shift of the linear index by a multiple of the axis's stride; the bits that would cross the end of their
-// line (into the next row or plane) are masked off, so the result is exact.
+// Per axis, by doubling: a set grown by `reach` voxels along the axis, ORed with itself moved by up to
+// `reach` + 1 more voxels either way, is grown by twice that plus one (at most `radius`). A move along the
+// axis is a shift of the linear index by a multiple of the axis's stride; the bits that would cross the end
+// of their line (into the next row or plane) are masked off, so the result is exact.
 BitVolume dilate(const VoxelGrid& g, const BitVolume& in, int radius) {
     BitVolume a = in;
     if (radius <= 0) return a;

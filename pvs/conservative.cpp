@@ -402,7 +402,6 @@ private:
             }
     }
 
-
     // At a floor sample, before listing what the cube could not prove: objects a sight ray from s reaches
     // are listed (no cube can prove them), and the rest get a second look on a finer cube (the same
     // occluders and panels, drawn only over their pixels). A pixel of the coarse cube is written only where
@@ -493,10 +492,10 @@ private:
     const Shared& sh_;
     const ShrunkOccluders* occ_ = &sh_.occ;
     DepthCube cube_;
-    DepthCube fine_;                    // the second look at floor samples (1 pixel when off)
-    std::vector<uint8_t> open_mark_;    // per object: 0 not open, 1 open, 2 open and not proven
+    DepthCube fine_;                        // the second look at floor samples (1 pixel when off)
+    std::vector<uint8_t> open_mark_;        // per object: 0 not open, 1 open, 2 open and not proven
     std::vector<uint32_t> last_seen_part_;  // per object: the part parts_hidden() last found not hidden
-    std::vector<uint32_t> open_under_;  // per tree node
+    std::vector<uint32_t> open_under_;      // per tree node
     std::vector<int32_t> stack_;
     std::vector<Aabb> interest_;     // bounds of the open objects: the only pixels worth drawing
     std::vector<Aabb> near_;         // the occluders drawn for the current sample
@@ -696,8 +695,8 @@ PvsSet bake_conservative_pvs(Context& ctx, const ConservativeConfig& config, con
         "conservative PVS: {} samples (per epsilon level {}; {} floor patches halved for panels; {} second "
         "looks at {} px), {} inside occluders and {} patches in solid skipped, {:.1f} M box tests, {:.1f} M "
         "sight rays, {:.1f} s ({:.0f} cells/s)",
-        figures.samples, fmt::join(figures.samples_per_level, "/"), figures.panel_splits, figures.fine_samples,
-        config.fine_cube_resolution, figures.samples_skipped, figures.patches_in_solid,
+        figures.samples, fmt::join(figures.samples_per_level, "/"), figures.panel_splits,
+        figures.fine_samples, config.fine_cube_resolution, figures.samples_skipped, figures.patches_in_solid,
         double(figures.object_tests) * 1e-6, double(figures.rays) * 1e-6, figures.seconds,
         double(cells.size()) / std::max(1e-9, figures.seconds)));
     return pvs;

@@ -225,14 +225,15 @@ TEST(Dilate, MatchesTheDefinitionOnRandomSets) {
             const glm::ivec3 c = g.coords(i);
             bool near = false;
             for (int z = std::max(0, c.z - radius); z <= std::min(g.dims.z - 1, c.z + radius) && !near; ++z)
-                for (int y = std::max(0, c.y - radius); y <= std::min(g.dims.y - 1, c.y + radius) && !near; ++y)
-                    for (int x = std::max(0, c.x - radius); x <= std::min(g.dims.x - 1, c.x + radius) && !near;
-                         ++x)
+                for (int y = std::max(0, c.y - radius); y <= std::min(g.dims.y - 1, c.y + radius) && !near;
+                     ++y)
+                    for (int x = std::max(0, c.x - radius);
+                         x <= std::min(g.dims.x - 1, c.x + radius) && !near; ++x)
                         near = in.get(g.index(x, y, z));
             if (out.get(i) != near) {
                 ++wrong;
-                ADD_FAILURE() << "dims " << g.dims.x << "x" << g.dims.y << "x" << g.dims.z << " radius " << radius
-                              << " at " << c.x << "," << c.y << "," << c.z << ": " << out.get(i);
+                ADD_FAILURE() << "dims " << g.dims.x << "x" << g.dims.y << "x" << g.dims.z << " radius "
+                              << radius << " at " << c.x << "," << c.y << "," << c.z << ": " << out.get(i);
             }
         }
         EXPECT_EQ(out.count(), [&] {
@@ -247,7 +248,8 @@ TEST(Dilate, MatchesTheDefinitionOnRandomSets) {
             const glm::ivec3 c = g.coords(i);
             const bool border = glm::any(glm::lessThan(c, glm::ivec3(radius))) ||
                                 glm::any(glm::greaterThanEqual(c, g.dims - radius));
-            ASSERT_EQ(inner.get(i), in.get(i) && !border) << c.x << "," << c.y << "," << c.z << " k " << radius;
+            ASSERT_EQ(inner.get(i), in.get(i) && !border)
+                << c.x << "," << c.y << "," << c.z << " k " << radius;
         }
     }
 }
