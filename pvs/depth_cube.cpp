@@ -304,28 +304,42 @@ PVS_AVX2_CLONES void DepthCube::add_occluder(const Aabb& box) {
         slabs(fb.v_lo, fb.v_hi, jv0, jv1, r, row_enter_.data(), row_exit_.data());
 
         float* const face_depth = depth_.data() + size_t(face) * r * r;
-        for (int jv = jv0; jv <= jv1; ++jv) {
-            // Corner depths of this vertex row (+inf where the corner ray does not certainly hit).
+        // Corner depths of vertex row jv (+inf where the corner ray does not certainly hit).
+        const auto vertex_row = [&](int jv, double* __restrict out) {
             const double re = std::max(d_lo, row_enter_[jv]), rx = std::min(fb.d_max, row_exit_[jv]);
             for (int iv = iv0; iv <= iv1; ++iv) {
                 const double enter = std::max(re, col_enter_[iv]);
                 const double exit = std::min(rx, col_exit_[iv]);
                 const double hit_depth = enter * (1.0 + kCubeDepthSlack);
-                corner_cur_[iv] = exit >= hit_depth ? hit_depth : kInf;
+                out[iv] = exit >= hit_depth ? hit_depth : kInf;
             }
-            if (jv > jv0) {
-                // Branch-free, so that it vectorizes: min with float_up(d) keeps the pixel when d >= it
-                // (float_up(d) >= d) and lowers it to float_up(d) otherwise.
-                float* __restrict const row = face_depth + size_t(jv - 1) * r;
-                const double* __restrict const cp = corner_prev_.data();
-                const double* __restrict const cc = corner_cur_.data();
-                for (int i = iv0; i < iv1; ++i) {
-                    const float f =
-                        float_up(std::max(std::max(cp[i], cp[i + 1]), std::max(cc[i], cc[i + 1])));
-                    row[i] = f < row[i] ? f : row[i];
-                }
+        };
+        bool prev_ready = false;  // corner_prev_ holds vertex row j
+        for (int j = jv0; j < jv1; ++j) {
+            float* __restrict const row = face_depth + size_t(j) * r;
+            // Every corner depth of pixel row j is at least `least` (entries are >= each vertex row's
+            // max(d_lo, row_enter_)), and so is what it could write (float_up rounds up). A row already
+            // as near everywhere keeps its depths: skip it (the same depths, less work behind walls).
+            const double least =
+                std::min(std::max(d_lo, row_enter_[j]), std::max(d_lo, row_enter_[j + 1]));
+            uint32_t farthest = 0;  // positive floats and +inf order as their bits
+            for (int i = iv0; i < iv1; ++i) farthest = std::max(farthest, std::bit_cast<uint32_t>(row[i]));
+            if (double(std::bit_cast<float>(farthest)) <= least) {
+                prev_ready = false;
+                continue;
+            }
+            if (!prev_ready) vertex_row(j, corner_prev_.data());
+            vertex_row(j + 1, corner_cur_.data());
+            // Branch-free, so that it vectorizes: min with float_up(d) keeps the pixel when d >= it
+            // (float_up(d) >= d) and lowers it to float_up(d) otherwise.
+            const double* __restrict const cp = corner_prev_.data();
+            const double* __restrict const cc = corner_cur_.data();
+            for (int i = iv0; i < iv1; ++i) {
+                const float f = float_up(std::max(std::max(cp[i], cp[i + 1]), std::max(cc[i], cc[i + 1])));
+                row[i] = f < row[i] ? f : row[i];
             }
             std::swap(corner_prev_, corner_cur_);
+            prev_ready = true;
         }
     }
 }
