@@ -167,6 +167,13 @@ struct Shared {
     int panel_refine_levels;   // halvings below the floor for what panels may still prove
 };
 
+// Does `box` meet the bounding box of the point s and the box `b` (every segment from s into b lies in it)?
+inline bool meets_hull(const Aabb& box, glm::vec3 s, const Aabb& b) {
+    for (int k = 0; k < 3; ++k)
+        if (box.min[k] > std::max(s[k], b.max[k]) || box.max[k] < std::min(s[k], b.min[k])) return false;
+    return true;
+}
+
 // Per thread: the depth cube and scratch. solve_patch() refines one patch.
 class PatchSolver {
 public:
@@ -303,11 +310,16 @@ public:
                     for (const std::vector<uint32_t>& open : sides.open)
                         for (uint32_t o : open) interest_.push_back(sh_.world.objects[o].bounds);
                     cube_.limit_to(interest_);
-                    // Only the panels that meet the box around s and what is left open.
-                    Aabb left = Aabb::of(s, s);
-                    for (const Aabb& b : interest_) left.extend(b);
-                    for (const Aabb& p : near_panels_)
-                        if (p.overlaps(left)) cube_.add_panel_sides(p, panel_spread_);
+                    // Only the panels that meet the box around s and some object left open: a panel
+                    // that lowers a pixel below an object's depth there has every ray of the pixel cross
+                    // it first, so on a segment from s into the object's bounds, which that box holds
+                    // (drawing fewer is always safe; the few objects left make the test cheap).
+                    for (const Aabb& p : near_panels_) {
+                        bool meets = false;
+                        for (size_t i = 0; i < interest_.size() && !meets; ++i)
+                            meets = meets_hull(p, s, interest_[i]);
+                        if (meets) cube_.add_panel_sides(p, panel_spread_);
+                    }
                     for (int side = 0; side < 2; ++side)
                         sides.open[size_t(side)] = unproven_each(cube_, sides.open[size_t(side)]);
                 }
