@@ -129,7 +129,7 @@ int main(int argc, char** argv) {
         // The occluders the solver used, rebuilt as the bake built them.
         const pvs::BakeConfig config = pvs::config_from_parameters(bake.parameters);
         pvs::ViewVolumeConfig view_config = config.view;
-        view_config.auto_voxel_size_m = std::min(pvs::kDefaultVoxelSizeM, config.conservative.epsilon_m);
+        view_config.auto_voxel_size_m = pvs::conservative_voxel_size_m(config.conservative.epsilon_m);
         const pvs::ViewVolume view = pvs::build_view_volume(ctx, view_config, world);
         const pvs::RayScene scene(ctx, world, pvs::BuildQuality::kMedium, config.run.threads);
         pvs::OccluderFigures occ_figures;

@@ -123,7 +123,7 @@ nlohmann::ordered_json bench_world(const std::string& path, const Args& args) {
     pvs::BakeConfig config;
     config.cells.cell_size_m = args.cell_size_m;
     config.view.voxel_size_m = args.voxel_size_m;
-    config.view.auto_voxel_size_m = std::min(pvs::kDefaultVoxelSizeM, config.conservative.epsilon_m);
+    config.view.auto_voxel_size_m = pvs::conservative_voxel_size_m(config.conservative.epsilon_m);
 
     auto t0 = std::chrono::steady_clock::now();
     const pvs::ViewVolume view = pvs::build_view_volume(ctx, config.view, world);

@@ -51,10 +51,18 @@ struct ViewVolumeConfig {
     std::vector<Aabb> boxes;            // --view-box, metres
     std::vector<glm::vec3> seeds;       // --view-seed, metres
     double auto_voxel_size_m = 0.25;  // [Units: m] what "automatic" aims at; not an option: the bake sets it
-                                      // to min(0.25, epsilon) in conservative mode, so walls thicker than
-                                      // about 2 epsilon + 2 voxels keep a shrunk occluder
+                                      // to conservative_voxel_size_m(epsilon) in conservative mode
 };
 constexpr double kDefaultVoxelSizeM = 0.25;
+
+// The automatic voxel edge of a conservative bake: epsilon / 2, at most kDefaultVoxelSizeM. Walls thicker
+// than about 2 epsilon + 2 voxels keep a shrunk occluder (the voxels their surfaces touch are not solid,
+// and the rest erodes by epsilon on each side), so half-epsilon voxels let thinner walls occlude than
+// epsilon voxels do. Measured on oa_dm4 at 1 m cells: the bake lets through 0.756x the map compiler's
+// triangles where epsilon voxels gave 0.779x, for 8x the voxels (still capped by max_voxels).
+inline double conservative_voxel_size_m(double epsilon_m) {
+    return std::min(kDefaultVoxelSizeM, 0.5 * epsilon_m);
+}
 
 // Occluder synthesis (occluders/, pvs/occluder_synthesis.h).
 struct OccluderConfig {
@@ -92,7 +100,9 @@ struct ConservativeConfig {
     double epsilon_m = 0.125;  // [Limit: > 0] [Units: m] occluders shrink by this; cell faces are sampled
                                // every 2 epsilon. Smaller: tighter PVS, slower bake (samples grow
                                // as 1 / epsilon^2); walls thinner than 2 epsilon do not occlude
-    int cube_resolution = 64;  // [Limit: 8..1024] depth cube pixels per face edge
+    int cube_resolution = 80;  // [Limit: 8..1024] depth cube pixels per face edge (near every occluder
+                               // edge about two pixels are lost; 80 against 64: oa_dm4 1 m lets through
+                               // 0.747x the compiler's triangles against 0.756x, in 1.1x the PVS time)
     int fine_cube_resolution = 0;  // [Limit: 0..4096] floor samples take a second look at what the
                                      // cube could not prove on a cube this fine, drawn only over those
                                      // objects' pixels; 0 = off
@@ -165,7 +175,7 @@ void visit_options(Config& c, Visitor&& v) {
     v(
         OptionSpec{
             "--voxel-size", "view.voxel_size_m", "m",
-            "voxel edge for the view volume and occluders, 0 = automatic (0.25 m, or epsilon if smaller in "
+            "voxel edge for the view volume and occluders, 0 = automatic (0.25 m, or epsilon / 2 if smaller in "
             "conservative mode; coarser for huge worlds)",
             0, 100},
         c.view.voxel_size_m);

@@ -80,7 +80,7 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
 
     ViewVolumeConfig view_config = config.view;
     if (config.mode == BakeMode::kConservative)
-        view_config.auto_voxel_size_m = std::min(kDefaultVoxelSizeM, config.conservative.epsilon_m);
+        view_config.auto_voxel_size_m = conservative_voxel_size_m(config.conservative.epsilon_m);
     const ViewVolume view = build_view_volume(ctx, view_config, world);
     RayScene scene(ctx, world, BuildQuality::kMedium, config.run.threads);
     bake.leak_path = view.leak_path;
