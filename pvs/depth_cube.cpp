@@ -320,8 +320,7 @@ PVS_AVX2_CLONES void DepthCube::add_occluder(const Aabb& box) {
             // Every corner depth of pixel row j is at least `least` (entries are >= each vertex row's
             // max(d_lo, row_enter_)), and so is what it could write (float_up rounds up). A row already
             // as near everywhere keeps its depths: skip it (the same depths, less work behind walls).
-            const double least =
-                std::min(std::max(d_lo, row_enter_[j]), std::max(d_lo, row_enter_[j + 1]));
+            const double least = std::min(std::max(d_lo, row_enter_[j]), std::max(d_lo, row_enter_[j + 1]));
             uint32_t farthest = 0;  // positive floats and +inf order as their bits
             for (int i = iv0; i < iv1; ++i) farthest = std::max(farthest, std::bit_cast<uint32_t>(row[i]));
             if (double(std::bit_cast<float>(farthest)) <= least) {
