@@ -336,7 +336,9 @@ TEST(Conservative, BehindAHollowWallOthersSeeIntoIsCulledByTheBlocksOwnOccluders
         double used = -1;
         for (const auto& [name, value] : bake.figures)
             if (name == "occluder_blocks_with_own_occluders") used = value;
-        if (blocks) EXPECT_GT(used, 0.0);
+        if (blocks) {
+            EXPECT_GT(used, 0.0);
+        }
     }
 }
 
