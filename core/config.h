@@ -7,6 +7,7 @@
 
 #include "core/math.h"
 
+#include <algorithm>
 #include <cstdint>
 #include <limits>
 #include <string>
