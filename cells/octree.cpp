@@ -36,9 +36,8 @@ CellSet build_octree(Context& ctx, const CellConfig& config, const CellSet& mask
                      uint32_t object_count, const RegionPvsOracle& oracle, PvsSet& leaf_pvs,
                      OctreeStats& stats) {
     ScopedTimer timer(ctx, "octree");
-    const int levels =
-        std::max(0, int(std::lround(std::log2(config.root_cell_size_m / config.min_cell_size_m))));
-    const double root_size = config.min_cell_size_m * std::ldexp(1.0, levels);
+    const double root_size = largest_cell_edge_m(config);
+    const int levels = int(std::lround(std::log2(root_size / config.min_cell_size_m)));
     CellConfig root_config = config;
     root_config.cell_size_m = root_size;
     CellSet roots = build_uniform_grid(ctx, root_config, region);

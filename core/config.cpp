@@ -4,6 +4,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <string>
@@ -23,6 +24,20 @@ const char* to_string(BakeMode mode) {
 
 const char* to_string(CellKind kind) {
     return kind == CellKind::kOctree ? "octree" : "grid";
+}
+
+double largest_cell_edge_m(const CellConfig& config) {
+    if (config.kind == CellKind::kGrid) return config.cell_size_m;
+    const int levels =
+        std::max(0, int(std::lround(std::log2(config.root_cell_size_m / config.min_cell_size_m))));
+    return config.min_cell_size_m * std::ldexp(1.0, levels);
+}
+
+int conservative_levels_used(const ConservativeConfig& config, double cell_edge_m) {
+    int levels = 0;
+    while (levels < config.refine_levels && std::ldexp(config.epsilon_m, levels) < 0.5 * cell_edge_m)
+        ++levels;
+    return levels;
 }
 
 void validate(const BakeConfig& config) {

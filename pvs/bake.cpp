@@ -47,19 +47,16 @@ std::vector<Occluder> solver_occluders(Context& ctx, const BakeConfig& config, c
                                        OccluderFigures& figures, BlockFigures& blocks,
                                        ShrunkOccluders& shrunk) {
     const bool conservative = config.mode == BakeMode::kConservative;
+    // The epsilon ladder only as high as the cells' faces can use (conservative_levels_used()).
+    const double largest_cell = largest_cell_edge_m(config.cells);
     std::vector<Occluder> boxes = synthesize_occluders(
         ctx, config.occluders, world, view, scene, figures, config.conservative.epsilon_m,
-        config.conservative.refine_levels, conservative ? &shrunk : nullptr);
+        conservative_levels_used(config.conservative, largest_cell), conservative ? &shrunk : nullptr);
     if (conservative && config.occluders.block_m > 0.0) {
         // Blocks of whole cells from the cells' origin (the view bounds' corner, for the grid and the
         // octree's roots), so that every cell lies in one block.
-        const double unit =
-            config.cells.kind == CellKind::kGrid
-                ? config.cells.cell_size_m
-                : config.cells.min_cell_size_m *
-                      std::ldexp(1.0, std::max(0, int(std::lround(std::log2(config.cells.root_cell_size_m /
-                                                                            config.cells.min_cell_size_m)))));
-        const double block = unit * std::max(1.0, std::round(config.occluders.block_m / unit));
+        const double block =
+            largest_cell * std::max(1.0, std::round(config.occluders.block_m / largest_cell));
         blocks = synthesize_block_occluders(ctx, config.occluders, world, view, scene, view.view_bounds.min,
                                             float(block), shrunk);
     }

@@ -4,6 +4,7 @@
 #include "core/random.h"
 #include "cells/view_volume.h"
 #include "pvs/bake.h"
+#include "pvs/conservative.h"
 #include "pvs/embree_scene.h"
 #include "pvs/occluder_synthesis.h"
 #include "tests/test_util.h"
@@ -532,6 +533,39 @@ double figure(const NamedValues& figures, const std::string& name) {
         if (key == name) return value;
     ADD_FAILURE() << "no figure " << name;
     return 0.0;
+}
+
+// The bake builds the epsilon ladder only as high as its cells' faces can use: on 1 m cells with epsilon
+// 0.1 m, the levels 0.1 to 0.8 m (a face's top patch has a half-side of 0.5 m). The rows are those of the
+// whole ladder of refine_levels, whose higher levels no patch is ever sampled at.
+TEST(Conservative, TheLadderStopsAtTheLevelTheCellsUseWithTheSameRows) {
+    BakeConfig c = conservative_config();
+    EXPECT_EQ(largest_cell_edge_m(c.cells), 1.0);
+    EXPECT_EQ(conservative_levels_used(c.conservative, 1.0), 3);
+    EXPECT_EQ(conservative_levels_used(c.conservative, 0.2), 0);
+    EXPECT_EQ(conservative_levels_used(c.conservative, 0.25), 1);
+    EXPECT_EQ(conservative_levels_used(c.conservative, 100.0), c.conservative.refine_levels);
+    CellConfig octree;
+    octree.kind = CellKind::kOctree;
+    octree.min_cell_size_m = 1.0;
+    octree.root_cell_size_m = 12.0;  // rounded to 16 = 1 m * 2^4, as build_octree() does
+    EXPECT_EQ(largest_cell_edge_m(octree), 16.0);
+
+    Context ctx = quiet_context();
+    const Scene s = make_scene(Middle::kFusedHalves);
+    const BakeData bake = bake_world(ctx, c, s.world, "test", "");
+    EXPECT_EQ(figure(bake.figures, "conservative_epsilon_levels"), 4.0);
+    const ViewVolume view = build_view_volume(ctx, c.view, s.world);
+    RayScene scene(ctx, s.world);
+    OccluderFigures f;
+    ShrunkOccluders whole;
+    synthesize_occluders(ctx, c.occluders, s.world, view, scene, f, c.conservative.epsilon_m,
+                         c.conservative.refine_levels, &whole);
+    ASSERT_EQ(whole.epsilon_m.size(), size_t(c.conservative.refine_levels) + 1);
+    ConservativeFigures cf;
+    const PvsSet rows = bake_conservative_pvs(ctx, c.conservative, s.world, bake.cells, whole, scene, cf);
+    EXPECT_TRUE(rows == bake.pvs);
+    EXPECT_FALSE(bake.pvs.test(uint32_t(bake.cells.find({2.5f, 1.5f, 1.0f})), s.target));
 }
 
 // The scene tests' settings (0.1 m voxels and epsilon, default cube maps) on 2 m cells, verified by many
