@@ -565,7 +565,9 @@ TEST(Conservative, TheLadderStopsAtTheLevelTheCellsUseWithTheSameRows) {
     ConservativeFigures cf;
     const PvsSet rows = bake_conservative_pvs(ctx, c.conservative, s.world, bake.cells, whole, scene, cf);
     EXPECT_TRUE(rows == bake.pvs);
-    EXPECT_FALSE(bake.pvs.test(uint32_t(bake.cells.find({2.5f, 1.5f, 1.0f})), s.target));
+    const int32_t cell = bake.cells.find({2.5f, 1.5f, 1.0f});
+    ASSERT_GE(cell, 0);
+    EXPECT_FALSE(bake.pvs.test(uint32_t(cell), s.target));
 }
 
 // The scene tests' settings (0.1 m voxels and epsilon, default cube maps) on 2 m cells, verified by many
