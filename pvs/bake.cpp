@@ -197,6 +197,7 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
         {"conservative_object_tests", double(cons.object_tests)},
         {"conservative_fine_samples", double(cons.fine_samples)},
         {"conservative_panel_splits", double(cons.panel_splits)},
+        {"conservative_known_listed", double(cons.known_listed)},
         {"conservative_seconds", cons.seconds},
         {"cells_per_second", cons.seconds > 0
                                  ? double(bake.cells.size()) / cons.seconds

@@ -113,9 +113,11 @@ bool box_all_in_mask(const VoxelMask& mask, const Aabb& box) {
 }
 
 struct Counts {
-    uint64_t samples = 0, skipped = 0, in_solid = 0, tests = 0, rays = 0, fine_samples = 0, panel_splits = 0;
+    uint64_t samples = 0, skipped = 0, in_solid = 0, tests = 0, rays = 0, fine_samples = 0, panel_splits = 0,
+             known = 0;
     std::vector<uint64_t> per_level;
     Counts& operator+=(const Counts& o) {
+        known += o.known;
         samples += o.samples;
         skipped += o.skipped;
         in_solid += o.in_solid;
@@ -195,15 +197,31 @@ public:
         bool empty() const { return open[0].empty() && open[1].empty(); }
     };
 
-    // The open objects of `candidates` on each wanted side of the face at `plane` along `axis`.
+    // The open objects of `candidates` on each wanted side of the face at `plane` along `axis`, less those
+    // the region of that side already lists (`known_lo`, `known_hi`: its row so far, or null; argument 5).
     Sides sides_of(const std::vector<uint32_t>& candidates, int axis, float plane, uint64_t* row_lo,
-                   uint64_t* row_hi) const {
+                   uint64_t* row_hi, const uint64_t* known_lo = nullptr, const uint64_t* known_hi = nullptr) {
         Sides out;
         out.row = {row_lo, row_hi};
+        const auto known = [](const uint64_t* row, uint32_t o) {
+            return row && ((row[o >> 6] >> (o & 63)) & 1u);
+        };
         for (uint32_t o : candidates) {
             const Aabb& b = sh_.world.objects[o].bounds;
-            if (row_lo && b.min[axis] <= plane) out.open[0].push_back(o);
-            if (row_hi && b.max[axis] >= plane) out.open[1].push_back(o);
+            if (row_lo && b.min[axis] <= plane) {
+                if (known(known_lo, o)) {
+                    ++counts_.known;
+                } else {
+                    out.open[0].push_back(o);
+                }
+            }
+            if (row_hi && b.max[axis] >= plane) {
+                if (known(known_hi, o)) {
+                    ++counts_.known;
+                } else {
+                    out.open[1].push_back(o);
+                }
+            }
         }
         return out;
     }
@@ -539,6 +557,7 @@ void add_counts(ConservativeFigures& figures, const Counts& n, std::chrono::stea
     figures.rays += n.rays;
     figures.fine_samples += n.fine_samples;
     figures.panel_splits += n.panel_splits;
+    figures.known_listed += n.known;
     figures.samples_per_level.resize(std::max(figures.samples_per_level.size(), n.per_level.size()), 0);
     for (size_t k = 0; k < n.per_level.size(); ++k) figures.samples_per_level[k] += n.per_level[k];
     figures.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -593,11 +612,13 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
                 solver.use(occluders.set(occluders.set_for(box)));
                 for (uint32_t o : leavable)
                     if (!world.objects[o].bounds.overlaps(box)) open.push_back(o);
+                // One face after another, each skipping what the faces before it listed (argument 5).
                 for (int axis = 0; axis < 3; ++axis)
                     for (int side = 0; side < 2; ++side)
-                        solver.solve_face(box_face(box, axis, side), axis,
-                                          solver.sides_of(open, axis, side ? box.max[axis] : box.min[axis],
-                                                          side ? nullptr : row, side ? row : nullptr));
+                        solver.solve_face(
+                            box_face(box, axis, side), axis,
+                            solver.sides_of(open, axis, side ? box.max[axis] : box.min[axis],
+                                            side ? nullptr : row, side ? row : nullptr, row, row));
             }
             ctx.progress_advance();
         }
@@ -609,7 +630,13 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
 
 // A grid: each face shared by two cells is computed once, for both sides (PatchSolver::Sides). A face
 // side's row lists every object on that side that some patch of the face cannot prove hidden; a cell's row
-// is the union of its six faces' outward rows and add_always_listed().
+// is the union of its six faces' outward rows, the objects whose bounds meet its region, and
+// add_always_listed().
+// The faces are solved in six PHASES, by axis and by the parity of the face's plane in the grid (a cell's min
+// face lies on plane i, its max face on plane i + 1): so each cell has at most one face in a phase. A face
+// side skips the objects its cell already lists when the phase starts (argument 5: they are in the row
+// anyway), and its row joins the cell's at the end of the phase. So the later faces of a cell test only
+// what the earlier ones proved hidden, and the result depends on the phases, not on the threads.
 static void conservative_grid_rows(Context& ctx, const ConservativeConfig& config, const World& world,
                                    const CellSet& cells, const ShrunkOccluders& occluders,
                                    const RayScene& scene, PvsSet& pvs, ConservativeFigures& figures) {
@@ -622,26 +649,44 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
         Aabb rect;                                 // flat along `axis`
         std::array<bool, 2> wanted{false, false};  // side 0: a region's min face (sight goes to -axis)
         std::array<int32_t, 2> set{-1, -1};        // each side's occluders (ShrunkOccluders::set_for)
+        std::array<int32_t, 2> cell{-1, -1};       // each side's cell
+        int phase = 0;                             // 2 * axis + the parity of its plane's grid index
     };
+    constexpr int kPhases = 6;
     std::vector<Face> faces;
     std::map<std::array<float, 6>, uint32_t> face_of;
-    std::vector<std::vector<uint32_t>> cell_faces(cells.size());  // face * 2 + side
     std::vector<Aabb> regions(cells.size());
     for (uint32_t c = 0; c < cells.size(); ++c) {
         regions[c] = eye_region(cells.eyes, cells.cells[c].bounds);
         if (regions[c].is_empty()) continue;
-        for (int axis = 0; axis < 3; ++axis)
+        for (int axis = 0; axis < 3; ++axis) {
+            const double at = (double(cells.cells[c].bounds.center()[axis]) - double(cells.origin[axis])) /
+                              cells.cell_size_m;
+            const int64_t index = cells.cell_size_m > 0.0f ? int64_t(std::floor(at)) : 0;
             for (int side = 0; side < 2; ++side) {
                 const Aabb rect = box_face(regions[c], axis, side);
                 std::array<float, 6> key{rect.min.x, rect.min.y, rect.min.z,
                                          rect.max.x, rect.max.y, rect.max.z};
                 auto [it, fresh] = face_of.emplace(key, uint32_t(faces.size()));
                 if (fresh) faces.push_back(Face{axis, rect});
-                faces[it->second].wanted[size_t(side)] = true;
-                faces[it->second].set[size_t(side)] = occluders.set_for(regions[c]);
-                cell_faces[c].push_back(it->second * 2 + uint32_t(side));
+                Face& f = faces[it->second];
+                f.wanted[size_t(side)] = true;
+                f.set[size_t(side)] = occluders.set_for(regions[c]);
+                f.cell[size_t(side)] = int32_t(c);
+                // A cell's min face (side 0) is on plane `index`, its max face on `index + 1`; a shared
+                // face gets the same parity from both cells.
+                f.phase = 2 * axis + int((index + side) & 1);
             }
+        }
     }
+    // Rows start with the objects whose bounds meet the region (always listed): no face tests them.
+    for (uint32_t c = 0; c < cells.size(); ++c) {
+        uint64_t* row = pvs.row(c);
+        for (uint32_t o = 0; o < n_objects; ++o)
+            if (world.objects[o].bounds.overlaps(regions[c])) row[o >> 6] |= uint64_t(1) << (o & 63);
+    }
+    std::array<std::vector<uint32_t>, kPhases> phase_faces;
+    for (uint32_t f = 0; f < faces.size(); ++f) phase_faces[size_t(faces[f].phase)].push_back(f);
     const Shared shared = make_shared(config, world, occluders, scene);
     const std::vector<uint32_t> leavable = leavable_objects(world);
     PvsSet face_rows = PvsSet::make(uint32_t(2 * faces.size()), n_objects);  // face * 2 + side
@@ -650,39 +695,50 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
 #pragma omp parallel
     {
         PatchSolver solver(shared);
+        for (const std::vector<uint32_t>& phase : phase_faces) {
 #pragma omp for schedule(dynamic, 4)
-        for (int64_t fi = 0; fi < int64_t(faces.size()); ++fi) {
-            const Face& f = faces[size_t(fi)];
-            uint64_t* row_lo = f.wanted[0] ? face_rows.row(uint32_t(2 * fi)) : nullptr;
-            uint64_t* row_hi = f.wanted[1] ? face_rows.row(uint32_t(2 * fi + 1)) : nullptr;
-            if (row_lo && row_hi && f.set[0] != f.set[1]) {
-                // The regions on the two sides take their occluders from different blocks: once per side.
-                solver.use(occluders.set(f.set[0]));
-                solver.solve_face(f.rect, f.axis,
-                                  solver.sides_of(leavable, f.axis, f.rect.min[f.axis], row_lo, nullptr));
-                solver.use(occluders.set(f.set[1]));
-                solver.solve_face(f.rect, f.axis,
-                                  solver.sides_of(leavable, f.axis, f.rect.min[f.axis], nullptr, row_hi));
-            } else {
-                solver.use(occluders.set(row_lo ? f.set[0] : f.set[1]));
-                solver.solve_face(f.rect, f.axis,
-                                  solver.sides_of(leavable, f.axis, f.rect.min[f.axis], row_lo, row_hi));
+            for (int64_t k = 0; k < int64_t(phase.size()); ++k) {
+                const uint32_t fi = phase[size_t(k)];
+                const Face& f = faces[fi];
+                uint64_t* row_lo = f.wanted[0] ? face_rows.row(2 * fi) : nullptr;
+                uint64_t* row_hi = f.wanted[1] ? face_rows.row(2 * fi + 1) : nullptr;
+                // The cells' rows as the phase started: only the merge below writes them.
+                const uint64_t* known_lo = f.wanted[0] ? pvs.row(uint32_t(f.cell[0])) : nullptr;
+                const uint64_t* known_hi = f.wanted[1] ? pvs.row(uint32_t(f.cell[1])) : nullptr;
+                const float plane = f.rect.min[f.axis];
+                if (row_lo && row_hi && f.set[0] != f.set[1]) {
+                    // The regions on the two sides take their occluders from different blocks: once per side.
+                    solver.use(occluders.set(f.set[0]));
+                    solver.solve_face(f.rect, f.axis,
+                                      solver.sides_of(leavable, f.axis, plane, row_lo, nullptr, known_lo));
+                    solver.use(occluders.set(f.set[1]));
+                    solver.solve_face(
+                        f.rect, f.axis,
+                        solver.sides_of(leavable, f.axis, plane, nullptr, row_hi, nullptr, known_hi));
+                } else {
+                    solver.use(occluders.set(row_lo ? f.set[0] : f.set[1]));
+                    solver.solve_face(
+                        f.rect, f.axis,
+                        solver.sides_of(leavable, f.axis, plane, row_lo, row_hi, known_lo, known_hi));
+                }
+                ctx.progress_advance();
             }
-            ctx.progress_advance();
+            // (After the implied barrier: every face of the phase is done.) One thread merges, a few words
+            // per face; the barrier after it starts the next phase on the merged rows.
+#pragma omp single
+            for (const uint32_t fi : phase) {
+                for (int side = 0; side < 2; ++side) {
+                    if (!faces[fi].wanted[size_t(side)]) continue;
+                    uint64_t* row = pvs.row(uint32_t(faces[fi].cell[size_t(side)]));
+                    const uint64_t* fr = face_rows.row(2 * fi + uint32_t(side));
+                    for (uint32_t w = 0; w < pvs.words_per_row; ++w) row[w] |= fr[w];
+                }
+            }
         }
 #pragma omp critical
         total += solver.counts();
     }
     ctx.progress_end();
-    for (uint32_t c = 0; c < cells.size(); ++c) {
-        uint64_t* row = pvs.row(c);
-        for (uint32_t o = 0; o < n_objects; ++o)
-            if (world.objects[o].bounds.overlaps(regions[c])) row[o >> 6] |= uint64_t(1) << (o & 63);
-        for (uint32_t f : cell_faces[c]) {
-            const uint64_t* fr = face_rows.row(f);
-            for (uint32_t w = 0; w < pvs.words_per_row; ++w) row[w] |= fr[w];
-        }
-    }
     add_counts(figures, total, start);
 }
 
@@ -710,11 +766,12 @@ PvsSet bake_conservative_pvs(Context& ctx, const ConservativeConfig& config, con
     ctx.info(fmt::format(
         "conservative PVS: {} samples (per epsilon level {}; {} floor patches halved for panels; {} second "
         "looks at {} px), {} inside occluders and {} patches in solid skipped, {:.1f} M box tests, {:.1f} M "
-        "sight rays, {:.1f} s ({:.0f} cells/s)",
+        "sight rays, {:.1f} M (face side, object) pairs already listed by the cell, {:.1f} s ({:.0f} "
+        "cells/s)",
         figures.samples, fmt::join(figures.samples_per_level, "/"), figures.panel_splits,
         figures.fine_samples, config.fine_cube_resolution, figures.samples_skipped, figures.patches_in_solid,
-        double(figures.object_tests) * 1e-6, double(figures.rays) * 1e-6, figures.seconds,
-        double(cells.size()) / std::max(1e-9, figures.seconds)));
+        double(figures.object_tests) * 1e-6, double(figures.rays) * 1e-6, double(figures.known_listed) * 1e-6,
+        figures.seconds, double(cells.size()) / std::max(1e-9, figures.seconds)));
     return pvs;
 }
 

@@ -45,11 +45,15 @@
 //    not yet proven go to the patch's four halves (r halves), down to r <= epsilon_0 (the floor), where an
 //    object not proven hidden is listed. Each patch uses the smallest epsilon >= its r (fewer shrunk-away
 //    walls). An object is left out of a cell's PVS only if every patch of the cell's boundary proved it.
+//    So a face need not test what its cell already lists (through another face, or because its bounds
+//    meet the region): the cell's row is the union of its faces' rows. The faces of a cell are solved one
+//    after another (on a grid: in six phases, each with at most one face per cell), each skipping what the
+//    cell listed before it.
 //    Optionally (--panel-refine-levels) what is left at the floor goes down a few more halvings while some
 //    panel is drawn: the boxes stay those of epsilon_0, still >= r, and the panels' inset halves with r.
 // 6. Objects are tested hierarchically: a bounding volume hierarchy over the objects' bounds; a node proven
 //    hidden proves every object under it (each point of those objects lies in the node's box). An object
-//    whose whole box is not proven may still be, part by part (its triangles in runs of 4, each run's box).
+//    whose whole box is not proven may still be, part by part (each of its triangles' boxes).
 // 7. Objects a sight ray from a patch centre s reaches (Embree, against the real triangles) are listed at
 //    once instead of refined: no patch holding s can prove them hidden, so refining them only costs time.
 // 8. PANELS (occluders/panels.h) are flat rectangles wholly covered by opaque triangles: a segment that meets
@@ -109,6 +113,7 @@ struct ConservativeFigures {
     uint64_t rays = 0;              // sight rays from patch centres (objects seen need no refinement)
     uint64_t fine_samples = 0;      // floor samples that took a second look on the fine cube
     uint64_t panel_splits = 0;      // patches at the floor epsilon halved once more for the panels' sake
+    uint64_t known_listed = 0;      // (face side, object) pairs not tested: the cell already listed them
     std::vector<uint64_t> samples_per_level;  // samples at each epsilon of the ladder
     double seconds = 0.0;
 };

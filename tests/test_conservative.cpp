@@ -11,6 +11,7 @@
 #include "tests/world_builder.h"
 
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include <algorithm>
 #include <array>
@@ -568,6 +569,54 @@ TEST(Conservative, TheLadderStopsAtTheLevelTheCellsUseWithTheSameRows) {
     const int32_t cell = bake.cells.find({2.5f, 1.5f, 1.0f});
     ASSERT_GE(cell, 0);
     EXPECT_FALSE(bake.pvs.test(uint32_t(cell), s.target));
+}
+
+// A face skips the objects its cell already lists (the grid solves its faces in six phases; the box path one
+// face after another). On the doorway scene, whose target some cells see and others do not: skips happen,
+// the rows are the same for any thread count, and the grid's shared faces give the same rows as solving
+// every cell's six faces on its own (conservative_box_rows), including who sees the target.
+TEST(Conservative, FacesSkipWhatTheirCellListsWithTheSameRowsForAnyThreadCount) {
+    Context ctx = quiet_context();
+    const Scene s = make_scene(Middle::kDoorway);
+    BakeConfig c = conservative_config();
+    const ViewVolume view = build_view_volume(ctx, c.view, s.world);
+    RayScene scene(ctx, s.world);
+    OccluderFigures f;
+    ShrunkOccluders occ;
+    synthesize_occluders(ctx, c.occluders, s.world, view, scene, f, c.conservative.epsilon_m,
+                         c.conservative.refine_levels, &occ);
+    const BakeData bake = bake_world(ctx, c, s.world, "test", "");
+    const CellSet& cells = bake.cells;
+    ASSERT_GT(cells.size(), 10u);
+
+    std::vector<PvsSet> by_threads;
+    for (int threads : {1, 3}) {
+        omp_set_num_threads(threads);
+        ConservativeFigures cf;
+        by_threads.push_back(bake_conservative_pvs(ctx, c.conservative, s.world, cells, occ, scene, cf));
+        EXPECT_GT(cf.known_listed, 0u) << threads << " threads";
+    }
+    omp_set_num_threads(omp_get_num_procs());
+    EXPECT_TRUE(by_threads[0] == by_threads[1]);
+
+    std::vector<Aabb> boxes;
+    for (const Cell& cell : cells.cells) boxes.push_back(cell.bounds);
+    PvsSet each = PvsSet::make(uint32_t(cells.size()), uint32_t(s.world.objects.size()));
+    ConservativeFigures cf;
+    conservative_box_rows(ctx, c.conservative, s.world, boxes, cells.eyes, occ, scene, each, cf);
+    EXPECT_GT(cf.known_listed, 0u);
+    EXPECT_TRUE(each == by_threads[1]);
+
+    // Who sees the target: the cell in front of the doorway (x in [4, 5], z in [0.5, 1.5]) and one on the
+    // target's side do; a cell in the far corner (x in [0, 1], z in [5, 6]) does not.
+    const auto lists_target = [&](glm::vec3 p) {
+        const int32_t cell = cells.find(p);
+        EXPECT_GE(cell, 0) << p.x << ", " << p.y << ", " << p.z;
+        return cell >= 0 && by_threads[1].test(uint32_t(cell), s.target);
+    };
+    EXPECT_TRUE(lists_target({4.5f, 1.5f, 1.0f}));
+    EXPECT_TRUE(lists_target({8.5f, 1.5f, 3.0f}));
+    EXPECT_FALSE(lists_target({0.5f, 1.5f, 5.5f}));
 }
 
 // The scene tests' settings (0.1 m voxels and epsilon, default cube maps) on 2 m cells, verified by many
