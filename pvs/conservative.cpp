@@ -257,6 +257,16 @@ public:
     // Lists in each side's row every object of its open list that some sub-patch of `rect` (flat along
     // `axis`) cannot prove hidden. `sides` is consumed.
     void solve_patch(const Aabb& rect, int axis, Sides sides) {
+        // What an earlier patch of the face listed needs no proof here (argument 5): patches are solved one
+        // after another, depth first, so the row holds what the patches before this one listed.
+        for (int side = 0; side < 2; ++side) {
+            const uint64_t* row = sides.row[size_t(side)];
+            if (!row) continue;
+            std::vector<uint32_t>& open = sides.open[size_t(side)];
+            const size_t before = open.size();
+            std::erase_if(open, [row](uint32_t o) { return (row[o >> 6] >> (o & 63)) & 1u; });
+            counts_.known += before - open.size();
+        }
         if (sides.empty()) return;
         if (box_all_in_mask(occ_->solid, rect)) {  // no sight line leaves through it (argument 3)
             ++counts_.in_solid;

@@ -48,7 +48,8 @@
 //    So a face need not test what its cell already lists (through another face, or because its bounds
 //    meet the region): the cell's row is the union of its faces' rows. The faces of a cell are solved one
 //    after another (on a grid: in six phases, each with at most one face per cell), each skipping what the
-//    cell listed before it.
+//    cell listed before it; and a face's patches one after another, depth first, each skipping what the
+//    patches before it listed.
 //    Optionally (--panel-refine-levels) what is left at the floor goes down a few more halvings while some
 //    panel is drawn: the boxes stay those of epsilon_0, still >= r, and the panels' inset halves with r.
 // 6. Objects are tested hierarchically: a bounding volume hierarchy over the objects' bounds; a node proven
