@@ -234,8 +234,9 @@ void visit_options(Config& c, Visitor&& v) {
       c.occluders.check_eyes);
     v(OptionSpec{"--occluder-block", "occluders.block_m", "m",
                  "conservative mode, opt-in (16 suits open levels): occluders per block of cells of this edge "
-                 "(rounded to whole cells), from the sight of the block's own eyes; their boxes rest on sampled "
-                 "ray checks (README); 0 = one set for all cells",
+                 "(rounded to whole cells), from the sight of the block's own eyes; NOT PROVEN: their boxes rest "
+                 "on sampled ray checks, and a ctf_inyard bake with it has misses (README); 0 = one set for all "
+                 "cells",
                  0, 1e5},
       c.occluders.block_m);
     v(OptionSpec{"--occluder-block-reach", "occluders.block_reach_m", "m",
