@@ -75,7 +75,7 @@
 //    other. (The Euclidean ball around the patch gave r sqrt(1 + u^2) on both, r the half-diagonal.)
 //    Unlike a box, a panel needs no solid behind it and no epsilon: a wall thinner than 2 epsilon + 2
 //    voxels, or a hollow shell, still occludes by its faces. The bound holds with u replaced by any ray's
-//    tangent relative to the panel's normal, (x - s)_k / (x - s)_normal, so at floor samples the panels are
+//    tangent relative to the panel's normal, (x - s)_k / (x - s)_normal, so at every sample the panels are
 //    also drawn on the four SIDE faces of the cube (rays more than 45 degrees from the normal, tangents
 //    > 1), over what the other faces left unproven, inset per ray by spread_k + spread_n |p_k| with p_k
 //    those tangents (add_panel_sides: the tangent ranges are intervals, so the test stays separable).
