@@ -90,6 +90,11 @@ ObjectTree object_tree(const World& world) {
     return tree;
 }
 
+// Does the row list object o?
+inline bool row_lists(const uint64_t* row, uint32_t o) {
+    return (row[o >> 6] >> (o & 63)) & 1u;
+}
+
 // Are all voxels that meet the closed box (grown by a hair) set in the mask? False when the box reaches
 // outside the mask's grid, or the mask is empty.
 bool box_all_in_mask(const VoxelMask& mask, const Aabb& box) {
@@ -203,9 +208,7 @@ public:
                    uint64_t* row_hi, const uint64_t* known_lo = nullptr, const uint64_t* known_hi = nullptr) {
         Sides out;
         out.row = {row_lo, row_hi};
-        const auto known = [](const uint64_t* row, uint32_t o) {
-            return row && ((row[o >> 6] >> (o & 63)) & 1u);
-        };
+        const auto known = [](const uint64_t* row, uint32_t o) { return row && row_lists(row, o); };
         for (uint32_t o : candidates) {
             const Aabb& b = sh_.world.objects[o].bounds;
             if (row_lo && b.min[axis] <= plane) {
@@ -264,7 +267,7 @@ public:
             if (!row) continue;
             std::vector<uint32_t>& open = sides.open[size_t(side)];
             const size_t before = open.size();
-            std::erase_if(open, [row](uint32_t o) { return (row[o >> 6] >> (o & 63)) & 1u; });
+            std::erase_if(open, [row](uint32_t o) { return row_lists(row, o); });
             counts_.known += before - open.size();
         }
         if (sides.empty()) return;
@@ -624,13 +627,13 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
                 solver.use(occluders.set(occluders.set_for(box)));
                 for (uint32_t o : leavable)
                     if (!world.objects[o].bounds.overlaps(box)) open.push_back(o);
-                // One face after another, each skipping what the faces before it listed (argument 5).
+                // One face after another into the cell's own row: solve_patch() skips what the faces (and
+                // patches) before it listed (argument 5).
                 for (int axis = 0; axis < 3; ++axis)
                     for (int side = 0; side < 2; ++side)
-                        solver.solve_face(
-                            box_face(box, axis, side), axis,
-                            solver.sides_of(open, axis, side ? box.max[axis] : box.min[axis],
-                                            side ? nullptr : row, side ? row : nullptr, row, row));
+                        solver.solve_face(box_face(box, axis, side), axis,
+                                          solver.sides_of(open, axis, side ? box.max[axis] : box.min[axis],
+                                                          side ? nullptr : row, side ? row : nullptr));
             }
             ctx.progress_advance();
         }

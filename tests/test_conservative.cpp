@@ -539,6 +539,17 @@ double figure(const NamedValues& figures, const std::string& name) {
 // The bake builds the epsilon ladder only as high as its cells' faces can use: on 1 m cells with epsilon
 // 0.1 m, the levels 0.1 to 0.8 m (a face's top patch has a half-side of 0.5 m). The rows are those of the
 // whole ladder of refine_levels, whose higher levels no patch is ever sampled at.
+// The global shrunk occluders a conservative bake of `world` with config `c` solves against.
+ShrunkOccluders shrunk_occluders(Context& ctx, const BakeConfig& c, const World& world,
+                                 const RayScene& scene) {
+    const ViewVolume view = build_view_volume(ctx, c.view, world);
+    OccluderFigures f;
+    ShrunkOccluders out;
+    synthesize_occluders(ctx, c.occluders, world, view, scene, f, c.conservative.epsilon_m,
+                         c.conservative.refine_levels, &out);
+    return out;
+}
+
 TEST(Conservative, TheLadderStopsAtTheLevelTheCellsUseWithTheSameRows) {
     BakeConfig c = conservative_config();
     EXPECT_EQ(largest_cell_edge_m(c.cells), 1.0);
@@ -556,12 +567,8 @@ TEST(Conservative, TheLadderStopsAtTheLevelTheCellsUseWithTheSameRows) {
     const Scene s = make_scene(Middle::kFusedHalves);
     const BakeData bake = bake_world(ctx, c, s.world, "test", "");
     EXPECT_EQ(figure(bake.figures, "conservative_epsilon_levels"), 4.0);
-    const ViewVolume view = build_view_volume(ctx, c.view, s.world);
     RayScene scene(ctx, s.world);
-    OccluderFigures f;
-    ShrunkOccluders whole;
-    synthesize_occluders(ctx, c.occluders, s.world, view, scene, f, c.conservative.epsilon_m,
-                         c.conservative.refine_levels, &whole);
+    const ShrunkOccluders whole = shrunk_occluders(ctx, c, s.world, scene);
     ASSERT_EQ(whole.epsilon_m.size(), size_t(c.conservative.refine_levels) + 1);
     ConservativeFigures cf;
     const PvsSet rows = bake_conservative_pvs(ctx, c.conservative, s.world, bake.cells, whole, scene, cf);
@@ -579,12 +586,8 @@ TEST(Conservative, FacesSkipWhatTheirCellListsWithTheSameRowsForAnyThreadCount) 
     Context ctx = quiet_context();
     const Scene s = make_scene(Middle::kDoorway);
     BakeConfig c = conservative_config();
-    const ViewVolume view = build_view_volume(ctx, c.view, s.world);
     RayScene scene(ctx, s.world);
-    OccluderFigures f;
-    ShrunkOccluders occ;
-    synthesize_occluders(ctx, c.occluders, s.world, view, scene, f, c.conservative.epsilon_m,
-                         c.conservative.refine_levels, &occ);
+    const ShrunkOccluders occ = shrunk_occluders(ctx, c, s.world, scene);
     const BakeData bake = bake_world(ctx, c, s.world, "test", "");
     const CellSet& cells = bake.cells;
     ASSERT_GT(cells.size(), 10u);
