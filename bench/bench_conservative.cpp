@@ -520,10 +520,10 @@ int run_scaling(const Args& args) {
     out["step_m"] = step_m;
     out["repeats"] = args.repeats;
     out["threads"] = omp_get_max_threads();
-    out["parameters"] =
-        parameters_json(args.config, {"verify.enabled", "verify.eyes_per_cell", "verify.rays_per_eye",
-                                      "verify.aimed_share", "verify.aimed_listed_share", "verify.ray_budget",
-                                      "verify.seed", "verify.max_misses_reported"});
+    out["parameters"] = parameters_json(
+        args.config, {"verify.enabled", "verify.eyes_per_cell", "verify.rays_per_eye", "verify.aimed_share",
+                      "verify.aimed_listed_share", "verify.neighbour_share", "verify.ray_budget",
+                      "verify.seed", "verify.max_misses_reported"});
     out["one"] = scale_figures(one, 1, b1);
     out["many"] = scale_figures(many, args.copies, bk);
     Json r;

@@ -156,6 +156,10 @@ struct VerifyConfig {
                                       // objects the PVS lists (they can only tighten the sampled set); the
                                       // untouched objects it leaves out (where misses hide) get the rest,
                                       // and either group gets what the other cannot use (pvs/verify.h)
+    double neighbour_share = 0.5;  // [Limit: 0..1] [Units: share] of a cell's aimed rays kept for the
+                                   // neighbour pass: rays from the cell at the points where the rays of the
+                                   // cells around first touched objects its own rays did not (pvs/verify.h).
+                                   // 0 = no neighbour pass
 };
 
 struct BakeConfig {
@@ -330,6 +334,12 @@ void visit_options(Config& c, Visitor&& v) {
                  "rest, and each group gets what the other cannot use",
                  0, 1},
       c.verify.aimed_listed_share);
+    v(OptionSpec{"--verify-neighbour-share", "verify.neighbour_share", "share",
+                 "verification: share of a cell's aimed rays for a second pass that aims from the cell at the "
+                 "points where the rays of the cells around saw objects its own rays did not, 0 = no second "
+                 "pass",
+                 0, 1},
+      c.verify.neighbour_share);
 }
 
 // Throws pvs::Error (bad input) naming the option when a value is outside its limits.

@@ -97,6 +97,27 @@ struct RayScene::Impl {
     }
 
     // Keeps see-through touches before the opaque hit and adds the opaque hit itself.
+    // Ray i starts at origins[i * origin_step] (step 0: one origin for all).
+    void trace_streams(const glm::vec3* origins, uint32_t origin_step, const glm::vec3* directions,
+                       uint32_t count, RTCIntersectContextFlags flags, std::vector<RayTouch>& touches) const {
+        ScopedFtz ftz;
+        RTCRayHit rays[kStreamSize];
+        for (uint32_t base = 0; base < count; base += kStreamSize) {
+            const uint32_t n = std::min(kStreamSize, count - base);
+            for (uint32_t i = 0; i < n; ++i)
+                init_rayhit(rays[i], origins[size_t(base + i) * origin_step], directions[base + i], 0.0f, i);
+            TraceContext tc;
+            rtcInitIntersectContext(&tc.rtc);
+            tc.rtc.flags = flags;
+            tc.touches = &touches;
+            tc.see_through_object = object_of[kSeeThroughGeom].data();
+            tc.ray_base = base;
+            const size_t first = touches.size();
+            rtcIntersect1M(scene, &tc.rtc, rays, n, sizeof(RTCRayHit));
+            finish(rays, n, base, first, touches);
+        }
+    }
+
     void finish(const RTCRayHit* rays, uint32_t n, uint32_t ray_base, size_t first_touch,
                 std::vector<RayTouch>& touches) const {
         size_t w = first_touch;
@@ -184,21 +205,12 @@ RayScene::~RayScene() = default;
 
 void RayScene::trace(glm::vec3 origin, const glm::vec3* directions, uint32_t count,
                      std::vector<RayTouch>& touches) const {
-    ScopedFtz ftz;
-    RTCRayHit rays[kStreamSize];
-    for (uint32_t base = 0; base < count; base += kStreamSize) {
-        const uint32_t n = std::min(kStreamSize, count - base);
-        for (uint32_t i = 0; i < n; ++i) init_rayhit(rays[i], origin, directions[base + i], 0.0f, i);
-        TraceContext tc;
-        rtcInitIntersectContext(&tc.rtc);
-        tc.rtc.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-        tc.touches = &touches;
-        tc.see_through_object = impl_->object_of[kSeeThroughGeom].data();
-        tc.ray_base = base;
-        const size_t first = touches.size();
-        rtcIntersect1M(impl_->scene, &tc.rtc, rays, n, sizeof(RTCRayHit));
-        impl_->finish(rays, n, base, first, touches);
-    }
+    impl_->trace_streams(&origin, 0, directions, count, RTC_INTERSECT_CONTEXT_FLAG_COHERENT, touches);
+}
+
+void RayScene::trace_from(const glm::vec3* origins, const glm::vec3* directions, uint32_t count,
+                          std::vector<RayTouch>& touches) const {
+    impl_->trace_streams(origins, 1, directions, count, RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT, touches);
 }
 
 void RayScene::trace_reference(glm::vec3 origin, const glm::vec3* directions, uint32_t count,

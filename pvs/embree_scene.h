@@ -41,6 +41,10 @@ public:
     void trace(glm::vec3 origin, const glm::vec3* directions, uint32_t count,
                std::vector<RayTouch>& touches) const;
 
+    // The same for rays with an origin each (origins[i] for directions[i]), traced as incoherent streams.
+    void trace_from(const glm::vec3* origins, const glm::vec3* directions, uint32_t count,
+                    std::vector<RayTouch>& touches) const;
+
     // Reference path for tests and benchmarks: the same answer, one rtcIntersect1 at a time.
     void trace_reference(glm::vec3 origin, const glm::vec3* directions, uint32_t count,
                          std::vector<RayTouch>& touches) const;

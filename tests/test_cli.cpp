@@ -168,6 +168,8 @@ TEST(Cli, BadInputGetsStatusTwoAClearMessageAndNoOutput) {
         {{"bake", test::sample_world(), "-o", out, "--verify-aimed-share", "0.99"}, "--verify-aimed-share"},
         {{"bake", test::sample_world(), "-o", out, "--verify-aimed-listed-share", "1.5"},
          "--verify-aimed-listed-share"},
+        {{"bake", test::sample_world(), "-o", out, "--verify-neighbour-share", "-0.1"},
+         "--verify-neighbour-share"},
         {{"occluders", dir.file("missing.glb"), "-o", dir.file("boxes.glb")}, "missing.glb"},
         {{"info", dir.file("notgltf.glb")}, "notgltf.glb"},
         {{"info", dir.file("missing.h5")}, "missing.h5"},
@@ -208,6 +210,7 @@ TEST(Cli, HelpOnEverySubcommandAndTheRealBinary) {
     const CliRun verify_help = run({"verify", "--help"});
     EXPECT_TRUE(contains(verify_help.out, "--verify-aimed-share")) << verify_help.out;
     EXPECT_TRUE(contains(verify_help.out, "--verify-aimed-listed-share")) << verify_help.out;
+    EXPECT_TRUE(contains(verify_help.out, "--verify-neighbour-share")) << verify_help.out;
     EXPECT_EQ(std::system((std::string(PVSBAKE_BINARY) + " --help > /dev/null").c_str()), 0);
 }
 

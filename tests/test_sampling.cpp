@@ -457,6 +457,73 @@ TEST(AimedRays, ListedShareFindsASmallListedObjectAmongManyHiddenCandidates) {
     EXPECT_EQ(none.aimed_new_pairs, 0u);
 }
 
+// Two cells beside a slit |z| < 0.1 (full height) in a wall at x = 0, and a 10 cm cube 10 m behind the slit
+// on its axis. An eye at distance d before the wall sees the cube only when |z| < 0.1 (1 + d / 10) (d is
+// 1.5 to 2.5 m here). Cell A (z in [-0.3, 0.1]) sees it from about half of its eyes; cell B beside it
+// (z in [0.1, 20.1]) only from a sliver z < 0.115..0.125 along their shared face: 0.1% of its eyes.
+struct SliverScene {
+    World world;
+    CellSet cells;
+    uint32_t tiny = 0;
+    static constexpr uint32_t kA = 0, kB = 1;
+};
+
+SliverScene make_sliver_scene() {
+    SliverScene s;
+    add_box(s.world, "wall_left", Aabb::of({-0.1f, -50, -50}, {0.1f, 50, -0.1f}));
+    add_box(s.world, "wall_right", Aabb::of({-0.1f, -50, 0.1f}, {0.1f, 50, 50}));
+    s.tiny = add_box(s.world, "tiny", Aabb::of({10, -0.05f, -0.05f}, {10.1f, 0.05f, 0.05f}));
+    s.cells.kind = CellSet::Kind::kGrid;
+    s.cells.cells.push_back(Cell{Aabb::of({-2.5f, -0.5f, -0.3f}, {-1.5f, 0.5f, 0.1f}), -1});
+    s.cells.cells.push_back(Cell{Aabb::of({-2.5f, -0.5f, 0.1f}, {-1.5f, 0.5f, 20.1f}), -1});
+    return s;
+}
+
+// A lists the cube, B leaves it out: a miss that only B's sliver sees. With 20 aimed rays per cell, B's
+// own rays are unlikely to touch it (about 2%); the neighbour pass aims from B at the point where A's ray saw
+// the cube, from the point of B nearest A's eye, and finds the miss.
+TEST(NeighbourPass, FindsAMissThatOnlyASliverOfTheCellBesideAWitnessSees) {
+    Context ctx = quiet_context();
+    const SliverScene s = make_sliver_scene();
+    RayScene scene(ctx, s.world);
+    PvsSet pvs = all_but(s.world, 2, s.tiny);
+    pvs.set(SliverScene::kA, s.tiny);
+    VerifyConfig v;
+    v.rays = SampleConfig{16, 1024, 80, 21};  // 20 aimed rays per cell (the uniform rays take at least 256)
+    v.aimed_share = 0.5;
+
+    v.neighbour_share = 0.0;
+    const VerifyResult own = verify_pvs(ctx, v, s.world, scene, s.cells, pvs);
+    EXPECT_EQ(own.aimed_rays_per_cell, 20u);
+    EXPECT_TRUE(own.sampled.test(SliverScene::kA, s.tiny));
+    EXPECT_FALSE(own.sampled.test(SliverScene::kB, s.tiny));
+    EXPECT_EQ(own.missed_pairs, 0u);
+    EXPECT_EQ(own.neighbour_passes, 0u);
+    EXPECT_EQ(own.neighbour_rays, 0u);
+
+    v.neighbour_share = 0.5;
+    const VerifyResult r = verify_pvs(ctx, v, s.world, scene, s.cells, pvs);
+    EXPECT_TRUE(r.sampled.test(SliverScene::kA, s.tiny));
+    EXPECT_GE(r.neighbour_passes, 1u);
+    EXPECT_GE(r.neighbour_rays, 1u);
+    EXPECT_LE(r.neighbour_rays, 10u);  // half of each cell's 20 aimed rays at most
+    EXPECT_LE(r.aimed_rays + r.neighbour_rays, 40u);
+    ASSERT_EQ(r.missed_pairs, 1u);
+    EXPECT_EQ(r.neighbour_missed_pairs, 1u);
+    EXPECT_EQ(r.neighbour_new_pairs, 1u);
+    ASSERT_EQ(r.misses.size(), 1u);
+    const Miss& m = r.misses[0];
+    EXPECT_EQ(m.cell, SliverScene::kB);
+    EXPECT_EQ(m.object, s.tiny);
+    // A real sight line from B's sliver: it crosses the wall in the slit and ends on the cube.
+    EXPECT_TRUE(s.cells.cells[SliverScene::kB].bounds.contains(m.eye));
+    EXPECT_LT(m.eye.z, 0.1f + 0.1f * (-m.eye.x) / 10.0f);
+    const float t_wall = -m.eye.x / m.direction.x;
+    EXPECT_LT(std::abs(m.eye.z + t_wall * m.direction.z), 0.1f);
+    const glm::vec3 hit = m.eye + m.distance_m * m.direction;
+    EXPECT_TRUE(Aabb::of({9.999f, -0.051f, -0.051f}, {10.101f, 0.051f, 0.051f}).contains(hit));
+}
+
 // The slit scene's tiny cube, visible and left out (a miss), among 50 pebbles the PVS lists but the wall
 // hides (overestimation). With aimed_listed_share 0.5, 500 rays go to the pebbles in rounds that never see
 // them, and the cube still gets a round of its own per ray until one sees it through the slit; the rays it
@@ -550,6 +617,7 @@ TEST(AimedRays, SameResultForOneAndTwoThreads) {
         omp_set_num_threads(2);
         const VerifyResult two = verify_pvs(ctx, vc, g.world, scene, g.cells, pvs);
         EXPECT_GT(one.aimed_rays, 0u) << "budget " << budget;
+        EXPECT_GT(one.neighbour_rays, 0u) << "budget " << budget;
         EXPECT_GT(one.missed_pairs, 0u) << "budget " << budget;
         EXPECT_EQ(one.sampled, two.sampled) << "budget " << budget;
         EXPECT_EQ(without_timing(one.figures()), without_timing(two.figures())) << "budget " << budget;
