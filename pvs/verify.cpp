@@ -219,7 +219,7 @@ public:
         bool aim_capped = false;
         PvsSet aimed_at;                              // per cell: the objects an aimed round aimed at
         std::vector<uint32_t> rounds_of;              // per cell: aimed rounds of the first pass
-        std::vector<std::vector<Witness>> witnesses;  // per cell: first touches of the first pass (or none)
+        std::vector<std::vector<Witness>> witnesses;  // per cell: first touches of the last pass (or none)
     };
 
     Counts counts;
@@ -347,7 +347,7 @@ public:
         counts.aimed_rounds += round_ - s_.rounds_of[c];
     }
 
-    uint32_t pass_ = 0;
+    uint32_t pass_ = 0;  // the neighbour pass this verifier runs (1, 2, ...): its rounds draw their own streams
 
 private:
     struct See {
