@@ -347,7 +347,8 @@ public:
         counts.aimed_rounds += round_ - s_.rounds_of[c];
     }
 
-    uint32_t pass_ = 0;  // the neighbour pass this verifier runs (1, 2, ...): its rounds draw their own streams
+    // The neighbour pass this verifier runs (1, 2, ...): its random subsets draw their own streams.
+    uint32_t pass_ = 0;
 
 private:
     struct See {
