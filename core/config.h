@@ -79,6 +79,8 @@ struct OccluderConfig {
     uint32_t probe_rays_per_eye = 4096;   // [Limit: >= 1] directions over the sphere per probe eye
     uint32_t check_eyes = 4096;           // [Limit: >= 1] eye points of the ray check of every box
     uint32_t check_rays_per_eye = 4;      // [Limit: >= 1] rays from each eye point to each box
+    uint32_t check_near_eyes = 256;       // [Limit: >= 0] and eye points within 4 m of each box, 16 rays
+                                          // each (0 = off): sight through a crack near a box
     uint64_t check_seed = 7;
     // Occluders per block of cells (conservative mode; pvs/occluder_synthesis.h synthesize_block_occluders).
     // OPT-IN: their boxes rest on sampled ray checks at grazing shadow edges (README, "Occluders per block").
@@ -236,6 +238,10 @@ void visit_options(Config& c, Visitor&& v) {
     v(OptionSpec{"--occluder-check-eyes", "occluders.check_eyes", "eyes",
                  "occluders: eye points whose rays check every box against the triangles", 1, 1e7},
       c.occluders.check_eyes);
+    v(OptionSpec{"--occluder-check-near-eyes", "occluders.check_near_eyes", "eyes",
+                 "occluders: eye points within 4 m of each box that check it too (16 rays each; 0 = off)", 0,
+                 1e6},
+      c.occluders.check_near_eyes);
     v(OptionSpec{"--occluder-block", "occluders.block_m", "m",
                  "conservative mode, opt-in (16 suits open levels): occluders per block of cells of this edge "
                  "(rounded to whole cells), from the sight of the block's own eyes; NOT PROVEN: their boxes rest "
