@@ -96,7 +96,6 @@ struct RayScene::Impl {
         if (device) rtcReleaseDevice(device);
     }
 
-    // Keeps see-through touches before the opaque hit and adds the opaque hit itself.
     // Ray i starts at origins[i * origin_step] (step 0: one origin for all).
     void trace_streams(const glm::vec3* origins, uint32_t origin_step, const glm::vec3* directions,
                        uint32_t count, RTCIntersectContextFlags flags, std::vector<RayTouch>& touches) const {
@@ -118,6 +117,7 @@ struct RayScene::Impl {
         }
     }
 
+    // Keeps see-through touches before the opaque hit and adds the opaque hit itself.
     void finish(const RTCRayHit* rays, uint32_t n, uint32_t ray_base, size_t first_touch,
                 std::vector<RayTouch>& touches) const {
         size_t w = first_touch;

@@ -133,7 +133,8 @@ constexpr uint32_t kNearCheckRays = 16;
 constexpr float kNearCheckReachM = 4.0f;
 std::vector<uint8_t> check_boxes(Context& ctx, const OccluderConfig& config, const std::vector<Aabb>& boxes,
                                  const std::vector<glm::vec3>& eyes, uint32_t rays_per_eye, uint64_t stream,
-                                 const RayScene& scene, uint64_t& rays, const VoxelMask* near_eyes = nullptr) {
+                                 const RayScene& scene, uint64_t& rays,
+                                 const VoxelMask* near_eyes = nullptr) {
     std::vector<uint8_t> rejected(boxes.size(), 0);
     uint64_t rays_total = 0;
     ctx.progress_begin("occluder check", boxes.size(), "boxes");
@@ -155,10 +156,10 @@ std::vector<uint8_t> check_boxes(Context& ctx, const OccluderConfig& config, con
                 // sampling: no walk over the voxels of a large box).
                 const Aabb around = Aabb::of(box.min - kNearCheckReachM, box.max + kNearCheckReachM);
                 Rng near_rng(config.check_seed, (stream + uint64_t(b)) ^ 0x4e454152ULL);
-                for (uint32_t tries = 0; tries < 16 * config.check_near_eyes && near.size() < config.check_near_eyes;
-                     ++tries) {
-                    const glm::vec3 p = around.min + around.size() * glm::vec3(near_rng.uniform(), near_rng.uniform(),
-                                                                               near_rng.uniform());
+                const uint32_t want = config.check_near_eyes;
+                for (uint32_t tries = 0; tries < 16 * want && near.size() < want; ++tries) {
+                    const glm::vec3 u(near_rng.uniform(), near_rng.uniform(), near_rng.uniform());
+                    const glm::vec3 p = around.min + around.size() * u;
                     if (near_eyes->contains(p)) near.push_back(p);
                 }
             }

@@ -272,9 +272,7 @@ public:
     uint64_t neighbour_pass(uint32_t c, const std::vector<uint32_t>& touching,
                             const std::vector<std::vector<Witness>>& last, std::vector<Witness>& found,
                             uint64_t budget) {
-        begin_cell(c, &found);
-        for (const Miss& m : s_.cell_misses[c]) reported_[m.object] = 1;
-        collect_candidates();
+        resume_cell(c, &found);
         want_.assign(n_objects_, 0);
         for (uint32_t o : aimed_.listed) want_[o] = 1;
         for (uint32_t o : aimed_.left_out) want_[o] = 1;
@@ -338,9 +336,7 @@ public:
 
     // After the neighbour passes: `budget` more aimed rounds, as in the first pass.
     void spare_rounds(uint32_t c, uint64_t budget) {
-        begin_cell(c, nullptr);
-        for (const Miss& m : s_.cell_misses[c]) reported_[m.object] = 1;
-        collect_candidates();
+        resume_cell(c, nullptr);
         round_ = s_.rounds_of[c];
         aimed_.batch = UINT32_MAX;
         spend_rounds(budget);
@@ -361,6 +357,14 @@ private:
         c_ = c;
         witnesses_ = witnesses;
         reported_.assign(n_objects_, 0);
+    }
+
+    // Back to cell c after an earlier pass: the misses it found stay reported, and its candidates are what
+    // its rays have not touched yet.
+    void resume_cell(uint32_t c, std::vector<Witness>* witnesses) {
+        begin_cell(c, witnesses);
+        for (const Miss& m : s_.cell_misses[c]) reported_[m.object] = 1;
+        collect_candidates();
     }
 
     // One touch of any ray of the cell: the object is seen; a witness when first; a miss when unlisted.
