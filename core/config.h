@@ -81,6 +81,10 @@ struct OccluderConfig {
     uint32_t check_rays_per_eye = 4;      // [Limit: >= 1] rays from each eye point to each box
     uint32_t check_near_eyes = 256;       // [Limit: >= 0] and eye points within 4 m of each box, 16 rays
                                           // each (0 = off): sight through a crack near a box
+    uint32_t seal_rays = 32;              // [Limit: >= 0] seal probe: rays from each voxel of the solid's
+                                          // frontier towards the eye space (pvs/seal_probe.h; 0 = off)
+    double seal_reach_m = 4.0;            // [Limit: > 0] [Units: m] seal probe: how far a ray looks for an
+                                          // eye voxel
     uint64_t check_seed = 7;
     // Occluders per block of cells (conservative mode; pvs/occluder_synthesis.h synthesize_block_occluders).
     // OPT-IN: their boxes rest on sampled ray checks at grazing shadow edges (README, "Occluders per block").
@@ -242,6 +246,14 @@ void visit_options(Config& c, Visitor&& v) {
                  "occluders: eye points within 4 m of each box that check it too (16 rays each; 0 = off)", 0,
                  1e6},
       c.occluders.check_near_eyes);
+    v(OptionSpec{"--occluder-seal-rays", "occluders.seal_rays", "rays",
+                 "occluders: rays from each voxel of the solid just behind a touched layer, looking for sight "
+                 "through cracks narrower than a voxel (0 = off)",
+                 0, 1e5},
+      c.occluders.seal_rays);
+    v(OptionSpec{"--occluder-seal-reach", "occluders.seal_reach_m", "m",
+                 "occluders: how far those rays look for eye space", 0.01, 1e5},
+      c.occluders.seal_reach_m);
     v(OptionSpec{"--occluder-block", "occluders.block_m", "m",
                  "conservative mode, opt-in (16 suits open levels): occluders per block of cells of this edge "
                  "(rounded to whole cells), from the sight of the block's own eyes; NOT PROVEN: their boxes rest "

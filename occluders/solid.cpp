@@ -18,23 +18,8 @@ Solid classify_solid(Context& ctx, const VoxelGrid& grid, const BitVolume& touch
     ScopedTimer timer(ctx, "solid");
     Solid out;
     out.grid = grid;
-    BitVolume sources;
-    sources.reset(grid.count());
-    if (!eyes.empty()) {
-        if (eyes.dims != grid.dims || eyes.origin != grid.origin || eyes.voxel_size_m != grid.voxel_size_m) {
-            throw internal_error("classify_solid: the eye mask is not on the voxel grid");
-        }
-        out.from_eye_space = true;
-        sources.words = eyes.bits;
-    } else {
-        for (int z = 0; z < grid.dims.z; ++z)
-            for (int y = 0; y < grid.dims.y; ++y)
-                for (int x = 0; x < grid.dims.x; ++x) {
-                    const bool border = x == 0 || y == 0 || z == 0 || x == grid.dims.x - 1 ||
-                                        y == grid.dims.y - 1 || z == grid.dims.z - 1;
-                    if (border) sources.set(grid.index(x, y, z));
-                }
-    }
+    out.from_eye_space = !eyes.empty();
+    const BitVolume sources = sight_sources(grid, eyes);
     const BitVolume reached = sight_reach(grid, touched, sources);
     out.solid.reset(grid.count());
     for (size_t w = 0; w < out.solid.words.size(); ++w)
@@ -47,6 +32,44 @@ Solid classify_solid(Context& ctx, const VoxelGrid& grid, const BitVolume& touch
     ctx.info(fmt::format("solid: {:.0f} m3 in {} voxels ({})", out.solid_m3, out.solid_voxels,
                          out.from_eye_space ? "sealed off from the eyes" : "inside closed meshes"));
     return out;
+}
+
+BitVolume sight_sources(const VoxelGrid& grid, const VoxelMask& eyes) {
+    BitVolume sources;
+    sources.reset(grid.count());
+    if (!eyes.empty()) {
+        if (eyes.dims != grid.dims || eyes.origin != grid.origin || eyes.voxel_size_m != grid.voxel_size_m) {
+            throw internal_error("sight_sources: the eye mask is not on the voxel grid");
+        }
+        sources.words = eyes.bits;
+        return sources;
+    }
+    for (int z = 0; z < grid.dims.z; ++z)
+        for (int y = 0; y < grid.dims.y; ++y)
+            for (int x = 0; x < grid.dims.x; ++x) {
+                const bool border = x == 0 || y == 0 || z == 0 || x == grid.dims.x - 1 ||
+                                    y == grid.dims.y - 1 || z == grid.dims.z - 1;
+                if (border) sources.set(grid.index(x, y, z));
+            }
+    return sources;
+}
+
+uint64_t reopen_leaks(const BitVolume& touched, const BitVolume& leaky, const BitVolume& sources,
+                      Solid& solid) {
+    BitVolume blocked;
+    blocked.words.resize(touched.words.size());
+    for (size_t w = 0; w < blocked.words.size(); ++w) blocked.words[w] = touched.words[w] & ~leaky.words[w];
+    const BitVolume reached = sight_reach(solid.grid, blocked, sources);
+    uint64_t removed = 0;
+    for (size_t w = 0; w < solid.solid.words.size(); ++w) {
+        const uint64_t gone = solid.solid.words[w] & (reached.words[w] | leaky.words[w]);
+        removed += uint64_t(__builtin_popcountll(gone));
+        solid.solid.words[w] &= ~gone;
+    }
+    solid.solid_voxels -= removed;
+    const double v = solid.grid.voxel_size_m;
+    solid.solid_m3 = double(solid.solid_voxels) * v * v * v;
+    return removed;
 }
 
 std::vector<Aabb> closed_box_objects(const World& world) {

@@ -10,7 +10,8 @@
 // Touched voxels are never solid (part of them is on the free side of their surface), except inside the
 // union of closed box meshes (add_closed_boxes()).
 // Not a proof: a crack narrower than a voxel between triangles seals in voxels while sight passes it.
-// Boxes built on this solid must be checked against the triangles before a conservative bake uses them.
+// Boxes built on this solid must be checked against the triangles before a conservative bake uses them;
+// pvs/seal_probe.h looks for such cracks from the solid's side and reopen_leaks() lets sight through them.
 #pragma once
 
 #include "core/cell_set.h"
@@ -32,6 +33,17 @@ struct Solid {
 
 // `eyes`: the view volume's eye mask on the same grid as `touched` (empty: flood from the grid border).
 Solid classify_solid(Context& ctx, const VoxelGrid& grid, const BitVolume& touched, const VoxelMask& eyes);
+
+// Where sight starts: the eye mask's voxels, or with an empty mask the grid's border layer (outside the
+// world). Throws internal_error when the mask is not on the grid.
+BitVolume sight_sources(const VoxelGrid& grid, const VoxelMask& eyes);
+
+// Sight again, letting through the `leaky` touched voxels (a line of sight was found passing them: a crack
+// or the free part of a touched voxel, pvs/seal_probe.h): every solid voxel it now reaches, and every leaky
+// one, leaves the solid. Only removes (the new blocked set is a subset of the old one). Returns the voxels
+// removed.
+uint64_t reopen_leaks(const BitVolume& touched, const BitVolume& leaky, const BitVolume& sources,
+                      Solid& solid);
 
 // Closed box meshes: the bounds of objects whose triangles are all opaque, all lie in the planes of the six
 // faces of the object's bounds, and add up on each face to exactly the face's area (a watertight box, as

@@ -195,6 +195,10 @@ int run_occluders(Context& ctx, const BakeConfig& config, const std::string& wor
         j["probe_rays"] = figures.probe_rays;
         j["probe_rays_into_solid"] = figures.probe_rays_into_solid;
         j["probe_carved_voxels"] = figures.probe_carved_voxels;
+        j["seal_frontier_voxels"] = figures.seal_frontier_voxels;
+        j["seal_rays"] = figures.seal_rays;
+        j["seal_leaks"] = figures.seal_leaks;
+        j["seal_removed_voxels"] = figures.seal_removed_voxels;
         nlohmann::ordered_json t = nlohmann::ordered_json::object();
         for (const auto& [k, v] : ctx.timings()) t[k] = v;
         j["timings_s"] = t;

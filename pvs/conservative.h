@@ -88,12 +88,14 @@
 //    regions of two blocks is solved once per side, each with its own set (argument 3 per side).
 // What it rests on beyond this argument: the solid being truly closed to sight. The voxel sweep treats a
 // voxel an opaque triangle touches as closed, so a line through a crack narrower than a voxel, or grazing
-// past a surface's edge through a touched voxel, goes where the sweep says sight does not. The sight probe
-// and the ray check of occluder synthesis (global and per block, from the eyes concerned; the global boxes
-// also from eyes near each, where a crack lines up with more rays) look for such lines with Embree rays
-// against the real triangles; they sample (ctf_inyard's octree once missed an object seen through a 5.7 mm
-// gap in a floor). A block's shadow has such grazing boundaries all along it, so verification
-// (pvs/verify.h) is the last word on every bake.
+// past a surface's edge through a touched voxel, goes where the sweep says sight does not. The sight probe,
+// the seal probe (global solid only: rays from the solid just behind touched voxels, where a crack
+// subtends a large angle; what they find is swept through again, pvs/seal_probe.h) and the ray check of
+// occluder synthesis (global and per block, from the eyes concerned; the global boxes also from eyes near
+// each, where a crack lines up with more rays) look for such lines with Embree rays against the real
+// triangles; they sample (ctf_inyard's octree once missed an object seen through a 5.7 mm gap in a floor;
+// the seal probe alone now finds that gap). A block's shadow has such grazing boundaries all along it, so
+// verification (pvs/verify.h) is the last word on every bake.
 #pragma once
 
 #include "core/cell_set.h"

@@ -6,6 +6,7 @@
 #include "occluders/boxes.h"
 #include "occluders/panels.h"
 #include "occluders/solid.h"
+#include "pvs/seal_probe.h"
 
 #include <fmt/format.h>
 
@@ -301,6 +302,9 @@ BitVolume crop(const VoxelGrid& grid, const std::vector<uint64_t>& bits, glm::iv
 
 }  // namespace
 
+// Rounds of the seal probe: each probes the frontier the leaks of the one before opened.
+constexpr int kSealRounds = 8;
+
 std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& config, const World& world,
                                            const ViewVolume& view, const RayScene& scene,
                                            OccluderFigures& figures, double epsilon_m, int levels,
@@ -322,6 +326,14 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
     figures.solid_m3 = solid.solid_m3;
     if (config.probe_eyes > 0)
         carve_seen_solid(ctx, config, config.probe_eyes, grid, *touched, view.eyes, scene, solid, figures);
+    if (config.seal_rays > 0) {
+        const SealProbeFigures sf = probe_seals(ctx, *touched, view.eyes, scene, config.seal_rays,
+                                                config.seal_reach_m, kSealRounds, config.check_seed, solid);
+        figures.seal_frontier_voxels = sf.frontier_voxels;
+        figures.seal_rays = sf.rays;
+        figures.seal_leaks = sf.leaks;
+        figures.seal_removed_voxels = sf.removed_voxels;
+    }
 
     const BoxConfig bc = box_config(config);
     BoxStats stats;

@@ -2,7 +2,10 @@
 // solid (ALGORITHMS.md sections 1 and 2):
 //   solid (occluders/solid.h: voxels sight from the eye space never reaches) -> SIGHT PROBE (rays over the
 //   sphere from eye points; every solid voxel a ray passes before its first opaque hit, and its 26
-//   neighbours, is carved out: sight got there through a crack narrower than a voxel) -> boxes
+//   neighbours, is carved out: sight got there through a crack narrower than a voxel) -> SEAL PROBE
+//   (pvs/seal_probe.h: rays from the solid just behind touched voxels towards the eye space; a line the
+//   triangles do not block makes the touched voxels it passed leaky, and the sweep runs again through
+//   them) -> boxes
 //   (occluders/boxes.h: greedy growth, sort and cut) -> RAY CHECK against the real triangles (Embree): from
 //   eye points spread over the view volume, segments to points on each box's faces; a box any segment reaches
 //   before an opaque triangle is rejected. This catches boxes sealed off only by a crack narrower than a
@@ -38,6 +41,10 @@ struct OccluderFigures {
     uint64_t probe_rays_escaped = 0;     // probe rays no opaque triangle stopped
     uint64_t probe_carved_voxels = 0;
     uint64_t check_rays = 0;
+    uint64_t seal_frontier_voxels = 0;  // the seal probe (pvs/seal_probe.h)
+    uint64_t seal_rays = 0;
+    uint64_t seal_leaks = 0;            // its rays that reached the solid from an eye voxel past the triangles
+    uint64_t seal_removed_voxels = 0;
     double seconds = 0.0;
 };
 

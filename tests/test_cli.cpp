@@ -170,6 +170,8 @@ TEST(Cli, BadInputGetsStatusTwoAClearMessageAndNoOutput) {
          "--verify-aimed-listed-share"},
         {{"bake", test::sample_world(), "-o", out, "--verify-neighbour-share", "-0.1"},
          "--verify-neighbour-share"},
+        {{"bake", test::sample_world(), "-o", out, "--occluder-seal-reach", "0"}, "--occluder-seal-reach"},
+        {{"bake", test::sample_world(), "-o", out, "--occluder-seal-rays", "-3"}, "--occluder-seal-rays"},
         {{"occluders", dir.file("missing.glb"), "-o", dir.file("boxes.glb")}, "missing.glb"},
         {{"info", dir.file("notgltf.glb")}, "notgltf.glb"},
         {{"info", dir.file("missing.h5")}, "missing.h5"},
@@ -207,6 +209,7 @@ TEST(Cli, HelpOnEverySubcommandAndTheRealBinary) {
     const CliRun bake_help = run({"bake", "--help"});
     EXPECT_TRUE(contains(bake_help.out, "--cell-size")) << bake_help.out;
     EXPECT_TRUE(contains(bake_help.out, "[m]"));  // units in the help text
+    EXPECT_TRUE(contains(bake_help.out, "--occluder-seal-rays")) << bake_help.out;
     const CliRun verify_help = run({"verify", "--help"});
     EXPECT_TRUE(contains(verify_help.out, "--verify-aimed-share")) << verify_help.out;
     EXPECT_TRUE(contains(verify_help.out, "--verify-aimed-listed-share")) << verify_help.out;
