@@ -8,12 +8,14 @@
 #include "occluders/solid.h"
 #include "pvs/embree_scene.h"
 #include "pvs/occluder_synthesis.h"
+#include "pvs/seal_probe.h"
 #include "tests/test_util.h"
 #include "tests/world_builder.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <omp.h>
 #include <cstdio>
 
 namespace pvs {
@@ -152,9 +154,7 @@ TEST(Occluders, TheSealProbeFindsASlitThroughAThickWall) {
 // 6.305], all along z), a twentieth of a voxel wide, over a closed trench 1 m wide (x in [5.8, 6.8]). The
 // touched voxels of the crack seal the trench for the sight sweep, as a 5.7 mm gap in a floor over a pit
 // did on ctf_inyard. Is any proven box cut by a sight line through the crack into the trench?
-bool a_box_cuts_the_sight_through_the_crack(uint64_t check_seed, uint32_t near_eyes, int& lines,
-                                            uint32_t seal_rays = 0, float crack_m = 0.005f) {
-    Context ctx = quiet_context();
+World trench_world(float crack_m) {
     World w;
     test::add_box(w, "base", Aabb::of({0, 0, 0}, {12.9f, 0.3f, 6.6f}));
     test::add_box(w, "fill_a", Aabb::of({0, 0.3f, 0}, {5.8f, 1.0f, 6.6f}));
@@ -166,10 +166,21 @@ bool a_box_cuts_the_sight_through_the_crack(uint64_t check_seed, uint32_t near_e
     test::add_box(w, "north", Aabb::of({0, 0, 6.3f}, {12.9f, 4.6f, 6.6f}));
     test::add_box(w, "east", Aabb::of({12.6f, 0, 0}, {12.9f, 4.6f, 6.6f}));
     test::add_box(w, "west", Aabb::of({0, 0, 0}, {0.3f, 4.6f, 6.6f}));
+    return w;
+}
+
+ViewVolume trench_view(Context& ctx, const World& w) {
     ViewVolumeConfig vc;
     vc.voxel_size_m = 0.1;
     vc.seeds = {{3, 2.5f, 3}};
-    const ViewVolume view = build_view_volume(ctx, vc, w);
+    return build_view_volume(ctx, vc, w);
+}
+
+bool a_box_cuts_the_sight_through_the_crack(uint64_t check_seed, uint32_t near_eyes, int& lines,
+                                            uint32_t seal_rays = 0, float crack_m = 0.005f) {
+    Context ctx = quiet_context();
+    const World w = trench_world(crack_m);
+    const ViewVolume view = trench_view(ctx, w);
     EXPECT_FALSE(view.view.contains({6.3f, 0.6f, 3.2f}));  // the trench is sealed off in voxels
     RayScene scene(ctx, w);
     OccluderConfig c = test_config();
@@ -216,6 +227,49 @@ TEST(Occluders, EyesNearEachBoxFindACrackInAFloorThatFarEyesMiss) {
     }
     EXPECT_GE(found_near, 3);
     EXPECT_EQ(found_far, 0);
+}
+
+// The seal probe on its own: the trench is solid after the sweep and open after the probe, through leaky
+// voxels at the crack; the same solid for 1 and 3 threads and twice over.
+TEST(SealProbe, OpensTheTrenchUnderACrackTheSameForAnyThreadCount) {
+    Context ctx = quiet_context();
+    const World w = trench_world(0.005f);
+    const ViewVolume view = trench_view(ctx, w);
+    RayScene scene(ctx, w);
+    const Solid before = classify_solid(ctx, view.grid, view.touched, view.eyes);
+    const glm::ivec3 in_trench = view.grid.voxel_of({6.3f, 0.6f, 3.2f});
+    const uint64_t trench_voxel = view.grid.index(in_trench.x, in_trench.y, in_trench.z);
+    ASSERT_TRUE(before.solid.get(trench_voxel));
+    auto probe = [&](int threads, SealProbeFigures& f) {
+        const int was = omp_get_max_threads();
+        omp_set_num_threads(threads);
+        Solid s = before;
+        f = probe_seals(ctx, view.touched, view.eyes, scene, 32, 4.0, 8, 7, s);
+        omp_set_num_threads(was);
+        return s;
+    };
+    SealProbeFigures f1, f1b, f3;
+    const Solid one = probe(1, f1), again = probe(1, f1b), three = probe(3, f3);
+    EXPECT_GT(f1.leaks, 0u);
+    EXPECT_GT(f1.leaky_voxels, 0u);
+    EXPECT_FALSE(one.solid.get(trench_voxel));
+    EXPECT_EQ(one.solid_voxels, before.solid_voxels - f1.removed_voxels);
+    EXPECT_EQ(one.solid_voxels, one.solid.count());
+    EXPECT_EQ(one.solid.words, again.solid.words);
+    EXPECT_EQ(one.solid.words, three.solid.words);
+    EXPECT_EQ(f1.leaks, f3.leaks);
+    EXPECT_EQ(f1.rounds, f3.rounds);
+    // Without a crack the probe finds nothing and leaves the solid as it was.
+    const World sealed = trench_world(0.0f);
+    const ViewVolume sealed_view = trench_view(ctx, sealed);
+    RayScene sealed_scene(ctx, sealed);
+    Solid s = classify_solid(ctx, sealed_view.grid, sealed_view.touched, sealed_view.eyes);
+    const std::vector<uint64_t> sealed_before = s.solid.words;
+    const SealProbeFigures fs =
+        probe_seals(ctx, sealed_view.touched, sealed_view.eyes, sealed_scene, 32, 4.0, 8, 7, s);
+    EXPECT_GT(fs.frontier_voxels, 1000u);
+    EXPECT_EQ(fs.leaks, 0u);
+    EXPECT_EQ(s.solid.words, sealed_before);
 }
 
 // The seal probe (pvs/seal_probe.h) looks from the trench's side: rays from the solid voxels under the
