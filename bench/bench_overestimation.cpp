@@ -31,6 +31,7 @@
 #include "occluders/panels.h"
 #include "pvs/bake.h"
 #include "pvs/embree_scene.h"
+#include "pvs/region_hiding.h"
 #include "pvs/surface_points.h"
 
 #include <nlohmann/json.hpp>
@@ -46,45 +47,6 @@
 #include <vector>
 
 namespace {
-
-// Opaque box meshes (a flat panel is a box of zero thickness) as a world to trace rays against.
-pvs::World box_world(const std::vector<pvs::Aabb>& boxes, const std::vector<pvs::Aabb>& flat) {
-    static constexpr std::array<std::array<uint32_t, 3>, 12> kFaces{{{0, 2, 1},
-                                                                     {1, 2, 3},
-                                                                     {4, 5, 6},
-                                                                     {5, 7, 6},
-                                                                     {0, 1, 4},
-                                                                     {1, 5, 4},
-                                                                     {2, 6, 3},
-                                                                     {3, 6, 7},
-                                                                     {0, 4, 2},
-                                                                     {2, 4, 6},
-                                                                     {1, 3, 5},
-                                                                     {3, 7, 5}}};
-    pvs::World w;
-    auto add = [&](const pvs::Aabb& b) {
-        if (b.is_empty()) return;
-        pvs::WorldObject o;
-        o.name = "box" + std::to_string(w.objects.size());
-        o.bounds = b;
-        o.first_triangle = uint32_t(w.triangles.size());
-        const uint32_t v0 = uint32_t(w.positions.size());
-        for (int i = 0; i < 8; ++i)
-            w.positions.emplace_back(i & 1 ? b.max.x : b.min.x, i & 2 ? b.max.y : b.min.y,
-                                     i & 4 ? b.max.z : b.min.z);
-        for (const auto& f : kFaces) {
-            w.triangles.push_back(pvs::Triangle{{v0 + f[0], v0 + f[1], v0 + f[2]}});
-            w.triangle_opaque.push_back(1);
-            w.triangle_double_sided.push_back(1);
-        }
-        o.triangle_count = 12;
-        w.objects.push_back(o);
-        w.bounds.extend(b);
-    };
-    for (const pvs::Aabb& b : boxes) add(b);
-    for (const pvs::Aabb& b : flat) add(b);
-    return w;
-}
 
 enum Class { kVisible, kRule, kNoBox, kEpsilon, kRegion, kSolver, kClasses };
 constexpr const char* kClassNames[kClasses] = {"visible", "rule", "no_box", "epsilon", "region", "solver"};
@@ -146,12 +108,12 @@ int main(int argc, char** argv) {
         for (size_t s = 0; s < n_sets; ++s) {
             const pvs::ShrunkOccluders& set = shrunk.set(int32_t(s) - 1);
             // A block's unshrunk solid is not kept as boxes: its floor-level boxes stand in for it.
-            const pvs::World full = box_world(s == 0 ? unshrunk : set.boxes[0], set.panels);
+            const pvs::World full = pvs::box_world(s == 0 ? unshrunk : set.boxes[0], set.panels);
             const pvs::World thin =
-                box_world(set.boxes[0], pvs::inset_panels(set.panels, set.epsilon_m.front()));
+                pvs::box_world(set.boxes[0], pvs::inset_panels(set.panels, set.epsilon_m.front()));
             full_scenes.push_back(std::make_unique<pvs::RayScene>(ctx, full));
             shrunk_scenes.push_back(std::make_unique<pvs::RayScene>(ctx, thin));
-            boxes_only_scenes.push_back(std::make_unique<pvs::RayScene>(ctx, box_world(set.boxes[0], {})));
+            boxes_only_scenes.push_back(std::make_unique<pvs::RayScene>(ctx, pvs::box_world(set.boxes[0], {})));
         }
         pvs::CellSet cells = bake.cells;
         cells.view = view.view;

@@ -120,6 +120,8 @@ struct ConservativeConfig {
     int panel_refine_levels = 0;  // [Limit: 0..4] halvings of the floor patches, for what only the panels
                                   // may still prove (their inset is the patch's half-size; the boxes keep
                                   // epsilon); 0 = none
+    bool single_occluder_pass = true;  // first, what ONE occluder hides from a cell's whole eye region is
+                                       // proven exactly (pvs/region_hiding.h); the faces skip it
     int refine_levels = 4;     // [Limit: 0..8] adaptive refinement: patches of a face are first tested
                                // with occluders shrunk by epsilon * 2^levels (few samples), and only the
                                // objects not yet proven hidden go to patches half the size, down to epsilon;
@@ -302,6 +304,10 @@ void visit_options(Config& c, Visitor&& v) {
                  "cube this fine (only over those objects' pixels); 0 = off",
                  0, 4096},
       c.conservative.fine_cube_resolution);
+    v(OptionSpec{"--single-occluder-pass", "conservative.single_occluder_pass", "",
+                 "conservative mode: first prove hidden, exactly, what one occluder (a panel or a box) hides "
+                 "from a cell's whole eye region (false: off; the same safety, a looser PVS)"},
+      c.conservative.single_occluder_pass);
     v(OptionSpec{"--panel-refine-levels", "conservative.panel_refine_levels", "levels",
                  "conservative mode: floor patches are halved this many more times for the objects only the "
                  "panels may still prove (a panel's inset is the patch's half-size; boxes keep epsilon)",

@@ -16,6 +16,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 
 #ifndef PVSBAKE_VERSION
 #define PVSBAKE_VERSION "0.0.0"
@@ -111,11 +112,14 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
         masks.view = view.view;
         masks.eyes = view.eyes;
         sampled.rays_per_eye = config.sampled.rays.rays_per_eye;
+        // Built once for all the boxes the octree considers (pvs/region_hiding.h).
+        std::optional<RegionHiders> hiders;
+        if (conservative && config.conservative.single_occluder_pass) hiders.emplace(ctx, shrunk);
         const RegionPvsOracle oracle = [&](const std::vector<Aabb>& boxes,
                                            const std::vector<uint64_t>& streams, PvsSet& rows) {
             if (conservative) {
                 conservative_box_rows(ctx, config.conservative, world, boxes, masks.eyes, shrunk, scene, rows,
-                                      cons);
+                                      cons, hiders ? &*hiders : nullptr);
                 return;
             }
             sample_box_rows(config.sampled, world, scene, masks, boxes, streams, sampled.rays_per_eye, rows,
@@ -200,6 +204,8 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
         {"conservative_fine_samples", double(cons.fine_samples)},
         {"conservative_panel_splits", double(cons.panel_splits)},
         {"conservative_known_listed", double(cons.known_listed)},
+        {"conservative_region_hidden", double(cons.region_hidden)},
+        {"conservative_region_seconds", cons.region_seconds},
         {"conservative_seconds", cons.seconds},
         {"cells_per_second", cons.seconds > 0
                                  ? double(bake.cells.size()) / cons.seconds

@@ -6,6 +6,7 @@
 #include "occluders/panels.h"
 #include "pvs/depth_cube.h"
 #include "pvs/ray_sampler.h"
+#include "pvs/region_hiding.h"
 
 #include <fmt/format.h>
 
@@ -14,6 +15,7 @@
 #include <chrono>
 #include <cmath>
 #include <map>
+#include <optional>
 
 namespace pvs {
 
@@ -204,22 +206,25 @@ public:
 
     // The open objects of `candidates` on each wanted side of the face at `plane` along `axis`, less those
     // the region of that side already lists (`known_lo`, `known_hi`: its row so far, or null; argument 5).
+    // Objects in `hidden_lo`, `hidden_hi` (the single-occluder pass proved them hidden from that side's
+    // region, pvs/region_hiding.h) are left out too.
     Sides sides_of(const std::vector<uint32_t>& candidates, int axis, float plane, uint64_t* row_lo,
-                   uint64_t* row_hi, const uint64_t* known_lo = nullptr, const uint64_t* known_hi = nullptr) {
+                   uint64_t* row_hi, const uint64_t* known_lo = nullptr, const uint64_t* known_hi = nullptr,
+                   const uint64_t* hidden_lo = nullptr, const uint64_t* hidden_hi = nullptr) {
         Sides out;
         out.row = {row_lo, row_hi};
-        const auto known = [](const uint64_t* row, uint32_t o) { return row && row_lists(row, o); };
+        const auto in = [](const uint64_t* row, uint32_t o) { return row && row_lists(row, o); };
         for (uint32_t o : candidates) {
             const Aabb& b = sh_.world.objects[o].bounds;
-            if (row_lo && b.min[axis] <= plane) {
-                if (known(known_lo, o)) {
+            if (row_lo && b.min[axis] <= plane && !in(hidden_lo, o)) {
+                if (in(known_lo, o)) {
                     ++counts_.known;
                 } else {
                     out.open[0].push_back(o);
                 }
             }
-            if (row_hi && b.max[axis] >= plane) {
-                if (known(known_hi, o)) {
+            if (row_hi && b.max[axis] >= plane && !in(hidden_hi, o)) {
+                if (in(known_hi, o)) {
                     ++counts_.known;
                 } else {
                     out.open[1].push_back(o);
@@ -603,15 +608,20 @@ Aabb box_face(const Aabb& box, int axis, int side) {
 void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const World& world,
                            const std::vector<Aabb>& boxes, const VoxelMask& eyes,
                            const ShrunkOccluders& occluders, const RayScene& scene, PvsSet& pvs,
-                           ConservativeFigures& figures) {
+                           ConservativeFigures& figures, const RegionHiders* hiders) {
     const auto start = std::chrono::steady_clock::now();
     const Shared shared = make_shared(config, world, occluders, scene);
     const std::vector<uint32_t> leavable = leavable_objects(world);
+    std::optional<RegionHiders> own_hiders;
+    if (config.single_occluder_pass && !hiders) hiders = &own_hiders.emplace(ctx, occluders);
+    if (!config.single_occluder_pass) hiders = nullptr;
     Counts total;
-#pragma omp parallel
+    uint64_t region_hidden = 0;
+#pragma omp parallel reduction(+ : region_hidden)
     {
         PatchSolver solver(shared);
         std::vector<uint32_t> open;
+        std::vector<uint64_t> hidden(pvs.words_per_row);
 #pragma omp for schedule(dynamic, 1)
         for (int64_t ci = 0; ci < int64_t(boxes.size()); ++ci) {
             const Aabb box = eye_region(eyes, boxes[size_t(ci)]);
@@ -624,9 +634,13 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
                 }
             }
             if (!box.is_empty()) {
-                solver.use(occluders.set(occluders.set_for(box)));
+                const int32_t set = occluders.set_for(box);
+                solver.use(occluders.set(set));
+                std::fill(hidden.begin(), hidden.end(), 0);
+                if (hiders) region_hidden += hiders->of(set).hide(world, box, leavable, hidden.data());
                 for (uint32_t o : leavable)
-                    if (!world.objects[o].bounds.overlaps(box)) open.push_back(o);
+                    if (!world.objects[o].bounds.overlaps(box) && !row_lists(hidden.data(), o))
+                        open.push_back(o);
                 // One face after another into the cell's own row: solve_patch() skips what the faces (and
                 // patches) before it listed (argument 5).
                 for (int axis = 0; axis < 3; ++axis)
@@ -640,6 +654,7 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
 #pragma omp critical
         total += solver.counts();
     }
+    figures.region_hidden += region_hidden;
     add_counts(figures, total, start);
 }
 
@@ -704,6 +719,25 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
     for (uint32_t f = 0; f < faces.size(); ++f) phase_faces[size_t(faces[f].phase)].push_back(f);
     const Shared shared = make_shared(config, world, occluders, scene);
     const std::vector<uint32_t> leavable = leavable_objects(world);
+    // The single-occluder pass: what one occluder hides from a cell's whole region, no face of it tests.
+    PvsSet hidden = PvsSet::make(config.single_occluder_pass ? uint32_t(cells.size()) : 0, n_objects);
+    if (config.single_occluder_pass) {
+        const auto pass_start = std::chrono::steady_clock::now();
+        const RegionHiders hiders(ctx, occluders);
+        uint64_t n_hidden = 0;
+#pragma omp parallel for schedule(dynamic, 16) reduction(+ : n_hidden)
+        for (int64_t c = 0; c < int64_t(cells.size()); ++c) {
+            if (regions[size_t(c)].is_empty()) continue;
+            n_hidden += hiders.of(occluders.set_for(regions[size_t(c)]))
+                            .hide(world, regions[size_t(c)], leavable, hidden.row(uint32_t(c)));
+        }
+        figures.region_hidden += n_hidden;
+        figures.region_seconds +=
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - pass_start).count();
+    }
+    const auto hidden_row = [&](int32_t cell) -> const uint64_t* {
+        return config.single_occluder_pass && cell >= 0 ? hidden.row(uint32_t(cell)) : nullptr;
+    };
     PvsSet face_rows = PvsSet::make(uint32_t(2 * faces.size()), n_objects);  // face * 2 + side
     Counts total;
     ctx.progress_begin("conservative PVS", faces.size(), "faces");
@@ -725,16 +759,18 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
                     // The regions on the two sides take their occluders from different blocks: once per side.
                     solver.use(occluders.set(f.set[0]));
                     solver.solve_face(f.rect, f.axis,
-                                      solver.sides_of(leavable, f.axis, plane, row_lo, nullptr, known_lo));
+                                      solver.sides_of(leavable, f.axis, plane, row_lo, nullptr, known_lo,
+                                                      nullptr, hidden_row(f.cell[0]), nullptr));
                     solver.use(occluders.set(f.set[1]));
-                    solver.solve_face(
-                        f.rect, f.axis,
-                        solver.sides_of(leavable, f.axis, plane, nullptr, row_hi, nullptr, known_hi));
+                    solver.solve_face(f.rect, f.axis,
+                                      solver.sides_of(leavable, f.axis, plane, nullptr, row_hi, nullptr,
+                                                      known_hi, nullptr, hidden_row(f.cell[1])));
                 } else {
                     solver.use(occluders.set(row_lo ? f.set[0] : f.set[1]));
-                    solver.solve_face(
-                        f.rect, f.axis,
-                        solver.sides_of(leavable, f.axis, plane, row_lo, row_hi, known_lo, known_hi));
+                    solver.solve_face(f.rect, f.axis,
+                                      solver.sides_of(leavable, f.axis, plane, row_lo, row_hi, known_lo,
+                                                      known_hi, row_lo ? hidden_row(f.cell[0]) : nullptr,
+                                                      row_hi ? hidden_row(f.cell[1]) : nullptr));
                 }
                 ctx.progress_advance();
             }
@@ -779,12 +815,15 @@ PvsSet bake_conservative_pvs(Context& ctx, const ConservativeConfig& config, con
     }
     add_always_listed(world, cells, pvs);
     ctx.info(fmt::format(
-        "conservative PVS: {} samples (per epsilon level {}; {} floor patches halved for panels; {} second "
+        "conservative PVS: {:.2f} M (cell, object) pairs hidden by one occluder from the whole region "
+        "({:.1f} "
+        "s); {} samples (per epsilon level {}; {} floor patches halved for panels; {} second "
         "looks at {} px), {} inside occluders and {} patches in solid skipped, {:.1f} M box tests, {:.1f} M "
         "sight rays, {:.1f} M (face side, object) pairs already listed by the cell, {:.1f} s ({:.0f} "
         "cells/s)",
-        figures.samples, fmt::join(figures.samples_per_level, "/"), figures.panel_splits,
-        figures.fine_samples, config.fine_cube_resolution, figures.samples_skipped, figures.patches_in_solid,
+        double(figures.region_hidden) * 1e-6, figures.region_seconds, figures.samples,
+        fmt::join(figures.samples_per_level, "/"), figures.panel_splits, figures.fine_samples,
+        config.fine_cube_resolution, figures.samples_skipped, figures.patches_in_solid,
         double(figures.object_tests) * 1e-6, double(figures.rays) * 1e-6, double(figures.known_listed) * 1e-6,
         figures.seconds, double(cells.size()) / std::max(1e-9, figures.seconds)));
     return pvs;

@@ -86,6 +86,12 @@
 //    superset of the global solid; in a level open to the sky, also the space behind walls out of those
 //    eyes' sight). ShrunkOccluders::set_for picks a region's set; a face shared by
 //    regions of two blocks is solved once per side, each with its own set (argument 3 per side).
+// 10. The SINGLE-OCCLUDER PASS (pvs/region_hiding.h, with its proof; --single-occluder-pass): before its
+//    faces, a region leaves out every object one panel or one box (of the floor epsilon) hides from the
+//    whole region, tested exactly on the 64 segments between the corners of the region and of the object's
+//    bounds. It needs no shrinking: convexity of the occluder, not a sample's epsilon-cube, covers every
+//    eye. No face of the region tests those objects (argument 5: a row is the union of what the faces list,
+//    and an object hidden from every eye of the region need be listed by none).
 // What it rests on beyond this argument: the solid being truly closed to sight. The voxel sweep treats a
 // voxel an opaque triangle touches as closed, so a line through a crack narrower than a voxel, or grazing
 // past a surface's edge through a touched voxel, goes where the sweep says sight does not. The sight probe,
@@ -105,6 +111,7 @@
 #include "core/pvs_set.h"
 #include "core/world.h"
 #include "pvs/embree_scene.h"
+#include "pvs/region_hiding.h"
 
 #include <vector>
 
@@ -119,6 +126,8 @@ struct ConservativeFigures {
     uint64_t fine_samples = 0;      // floor samples that took a second look on the fine cube
     uint64_t panel_splits = 0;      // patches at the floor epsilon halved once more for the panels' sake
     uint64_t known_listed = 0;      // (face side, object) pairs not tested: the cell already listed them
+    uint64_t region_hidden = 0;     // (cell, object) pairs the single-occluder pass proved hidden
+    double region_seconds = 0.0;    // its time (grid; on boxes it is part of `seconds`)
     std::vector<uint64_t> samples_per_level;  // samples at each epsilon of the ladder
     double seconds = 0.0;
 };
@@ -130,7 +139,7 @@ struct ConservativeFigures {
 void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const World& world,
                            const std::vector<Aabb>& boxes, const VoxelMask& eyes,
                            const ShrunkOccluders& occluders, const RayScene& scene, PvsSet& rows,
-                           ConservativeFigures& figures);
+                           ConservativeFigures& figures, const RegionHiders* hiders = nullptr);
 
 // The conservative PVS of every cell. On a grid each face shared by two cells is computed once.
 PvsSet bake_conservative_pvs(Context& ctx, const ConservativeConfig& config, const World& world,

@@ -68,8 +68,9 @@ void init_ray(RTCRay& r, glm::vec3 origin, glm::vec3 direction, float tnear, flo
     r.flags = 0;
 }
 
-void init_rayhit(RTCRayHit& rh, glm::vec3 origin, glm::vec3 direction, float tnear, unsigned id) {
-    init_ray(rh.ray, origin, direction, tnear, std::numeric_limits<float>::infinity(), id);
+void init_rayhit(RTCRayHit& rh, glm::vec3 origin, glm::vec3 direction, float tnear, unsigned id,
+                 float tfar = std::numeric_limits<float>::infinity()) {
+    init_ray(rh.ray, origin, direction, tnear, tfar, id);
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
@@ -98,13 +99,15 @@ struct RayScene::Impl {
 
     // Ray i starts at origins[i * origin_step] (step 0: one origin for all).
     void trace_streams(const glm::vec3* origins, uint32_t origin_step, const glm::vec3* directions,
-                       uint32_t count, RTCIntersectContextFlags flags, std::vector<RayTouch>& touches) const {
+                       uint32_t count, RTCIntersectContextFlags flags, std::vector<RayTouch>& touches,
+                       const float* tfar = nullptr) const {
         ScopedFtz ftz;
         RTCRayHit rays[kStreamSize];
         for (uint32_t base = 0; base < count; base += kStreamSize) {
             const uint32_t n = std::min(kStreamSize, count - base);
             for (uint32_t i = 0; i < n; ++i)
-                init_rayhit(rays[i], origins[size_t(base + i) * origin_step], directions[base + i], 0.0f, i);
+                init_rayhit(rays[i], origins[size_t(base + i) * origin_step], directions[base + i], 0.0f, i,
+                            tfar ? tfar[base + i] : std::numeric_limits<float>::infinity());
             TraceContext tc;
             rtcInitIntersectContext(&tc.rtc);
             tc.rtc.flags = flags;
@@ -206,6 +209,11 @@ RayScene::~RayScene() = default;
 void RayScene::trace(glm::vec3 origin, const glm::vec3* directions, uint32_t count,
                      std::vector<RayTouch>& touches) const {
     impl_->trace_streams(&origin, 0, directions, count, RTC_INTERSECT_CONTEXT_FLAG_COHERENT, touches);
+}
+
+void RayScene::trace_until(glm::vec3 origin, const glm::vec3* directions, const float* tfar, uint32_t count,
+                           std::vector<RayTouch>& touches) const {
+    impl_->trace_streams(&origin, 0, directions, count, RTC_INTERSECT_CONTEXT_FLAG_COHERENT, touches, tfar);
 }
 
 void RayScene::trace_from(const glm::vec3* origins, const glm::vec3* directions, uint32_t count,

@@ -40,6 +40,9 @@ public:
     // ray touches to `touches` (an object may appear more than once per ray). Thread-safe.
     void trace(glm::vec3 origin, const glm::vec3* directions, uint32_t count,
                std::vector<RayTouch>& touches) const;
+    // The same, ray i ending at tfar[i] (nothing beyond is touched).
+    void trace_until(glm::vec3 origin, const glm::vec3* directions, const float* tfar, uint32_t count,
+                     std::vector<RayTouch>& touches) const;
 
     // The same for rays with an origin each (origins[i] for directions[i]), traced as incoherent streams.
     void trace_from(const glm::vec3* origins, const glm::vec3* directions, uint32_t count,

@@ -1,8 +1,8 @@
 // The conservative mode on scenes whose visibility is known (who sees whom, fusion), and zero misses against
 // dense rays on random box worlds.
+#include "cells/view_volume.h"
 #include "core/error.h"
 #include "core/random.h"
-#include "cells/view_volume.h"
 #include "pvs/bake.h"
 #include "pvs/conservative.h"
 #include "pvs/embree_scene.h"
@@ -26,6 +26,13 @@ namespace {
 
 Context quiet_context() {
     return Context(Context::Options{LogLevel::kError, true, nullptr});
+}
+
+double figure(const NamedValues& figures, const std::string& name) {
+    for (const auto& [key, value] : figures)
+        if (key == name) return value;
+    ADD_FAILURE() << "no figure " << name;
+    return 0.0;
 }
 
 // A closed hall (inside x in [0, 12], y in [0, 4], z in [0, 6]; 0.5 m shell) split at x = 6 by a 0.6 m wall
@@ -69,17 +76,18 @@ Scene make_scene(Middle middle) {
         case Middle::kSolid:
             test::add_box(w, "near", Aabb::of({x0, 0, 0}, {x1, 4, 2}));
             break;
-        case Middle::kFusedHalves:  // a low wall in the divide and a high wall 1.2 m behind it, 0.6 m thick
-                                    // each: each alone leaves part of the target in sight, together they
-                                    // overlap in every sample's view (fusion on the depth buffer)
-            test::add_box(w, "near_low", Aabb::of({x0, 0, 0}, {x1, 1.9f, 2}));
-            test::add_box(w, "near_high", Aabb::of({7.2f, 0.8f, 0}, {7.8f, 4, 2}));
+        case Middle::kFusedHalves:  // a low wall in the divide and a high wall 0.9 m behind it, 0.6 m thick
+                                    // each: from the test cell each alone leaves part of the target in
+                                    // sight (rays check it), together they overlap in every view (fusion
+                                    // on the depth buffer; no single occluder hides it)
+            test::add_box(w, "near_low", Aabb::of({x0, 0, 0}, {x1, 1.7f, 2}));
+            test::add_box(w, "near_high", Aabb::of({7.2f, 1.1f, 0}, {7.8f, 4, 2}));
             break;
         case Middle::kLowHalfOnly:
-            test::add_box(w, "near_low", Aabb::of({x0, 0, 0}, {x1, 1.9f, 2}));
+            test::add_box(w, "near_low", Aabb::of({x0, 0, 0}, {x1, 1.7f, 2}));
             break;
         case Middle::kHighHalfOnly:
-            test::add_box(w, "near_high", Aabb::of({7.2f, 0.8f, 0}, {7.8f, 4, 2}));
+            test::add_box(w, "near_high", Aabb::of({7.2f, 1.1f, 0}, {7.8f, 4, 2}));
             break;
         case Middle::kGappedHalves:  // the same two walls, with a gap between them in every view
             test::add_box(w, "near_low", Aabb::of({x0, 0, 0}, {x1, 1.1f, 2}));
@@ -197,7 +205,30 @@ TEST(Conservative, BehindAWallIsCulled) {
 TEST(Conservative, BehindTwoOverlappingHalfWallsIsCulledByFusion) {
     EXPECT_FALSE(target_listed(Middle::kFusedHalves));
 }
+// Segments from random points of the test cell to random points of the target that reach it.
+uint64_t seen_from_the_test_cell(Middle middle) {
+    Context ctx = quiet_context();
+    const Scene s = make_scene(middle);
+    RayScene scene(ctx, s.world);
+    Rng rng(3, 3);
+    const Aabb cell = Aabb::of({2, 1, 0.5f}, {3, 2, 1.5f}), t = s.world.objects[s.target].bounds;
+    uint64_t seen = 0;
+    std::vector<RayTouch> touches;
+    for (int i = 0; i < 20000; ++i) {
+        const glm::vec3 e = cell.min + cell.size() * glm::vec3(rng.uniform(), rng.uniform(), rng.uniform());
+        const glm::vec3 d =
+            glm::normalize(t.min + t.size() * glm::vec3(rng.uniform(), rng.uniform(), rng.uniform()) - e);
+        touches.clear();
+        scene.trace(e, &d, 1, touches);
+        for (const RayTouch& h : touches) seen += h.stops && h.object == s.target;
+    }
+    return seen;
+}
+
 TEST(Conservative, EitherHalfWallAloneLeavesItListed) {
+    EXPECT_GT(seen_from_the_test_cell(Middle::kLowHalfOnly), 0u);  // the premise: really in sight
+    EXPECT_GT(seen_from_the_test_cell(Middle::kHighHalfOnly), 0u);
+    EXPECT_EQ(seen_from_the_test_cell(Middle::kFusedHalves), 0u);
     EXPECT_TRUE(target_listed(Middle::kLowHalfOnly));
     EXPECT_TRUE(target_listed(Middle::kHighHalfOnly));
 }
@@ -215,6 +246,38 @@ TEST(Conservative, ThroughADoorwayIsListed) {
 }
 TEST(Conservative, BehindGlassIsListed) {
     EXPECT_TRUE(target_listed(Middle::kGlass));
+}
+
+// The single-occluder pass (pvs/region_hiding.h) only ever leaves objects out that the faces would have
+// proved too, or that they could not for the shrinking and the pixels: with it, every row is a subset of
+// the row without it; it proves pairs on the wall scene; the target stays culled behind the wall and
+// listed through the doorway, with zero misses either way.
+TEST(Conservative, TheSingleOccluderPassOnlyNarrowsRows) {
+    for (Middle middle : {Middle::kSolid, Middle::kDoorway}) {
+        Context ctx = quiet_context();
+        const Scene s = make_scene(middle);
+        BakeConfig on = conservative_config(), off = conservative_config();
+        off.conservative.single_occluder_pass = false;
+        const BakeData with = bake_world(ctx, on, s.world, "test", "");
+        const BakeData without = bake_world(ctx, off, s.world, "test", "");
+        ASSERT_EQ(with.cells.size(), without.cells.size());
+        EXPECT_GT(figure(with.figures, "conservative_region_hidden"), 0.0);
+        EXPECT_EQ(figure(without.figures, "conservative_region_hidden"), 0.0);
+        uint64_t listed_with = 0, listed_without = 0;
+        for (uint32_t c = 0; c < with.cells.size(); ++c) {
+            for (uint32_t o = 0; o < s.world.objects.size(); ++o)
+                if (with.pvs.test(c, o))
+                    EXPECT_TRUE(without.pvs.test(c, o)) << "cell " << c << " object " << o;
+            listed_with += with.pvs.count(c);
+            listed_without += without.pvs.count(c);
+        }
+        EXPECT_LE(listed_with, listed_without);
+        EXPECT_TRUE(with.verification.misses.empty());
+        EXPECT_TRUE(without.verification.misses.empty());
+        const int32_t cell = with.cells.find({2.5f, 1.5f, 1.0f});
+        ASSERT_GE(cell, 0);
+        EXPECT_EQ(with.pvs.test(uint32_t(cell), s.target), middle == Middle::kDoorway);
+    }
 }
 
 // A prism standing on y0 up to y1 over the convex footprint `xz` (four corners, counterclockwise seen from
@@ -268,8 +331,10 @@ World blocked_yard(uint32_t& crate) {
     test::add_box(w, "south", Aabb::of({0, 0, -0.5f}, {36, 4, 0}));
     test::add_box(w, "north", Aabb::of({0, 0, 12}, {36, 4, 12.5f}));
     // From (12, 0) to (16, 12) on its west face, 1.2 m thick in x; side 1 (east face) open.
-    add_prism(w, "diagonal", {glm::vec2(12, -0.01f), glm::vec2(13.2f, -0.01f), glm::vec2(17.2f, 12.01f),
-                              glm::vec2(16, 12.01f)}, 0, 4, 1);
+    add_prism(
+        w, "diagonal",
+        {glm::vec2(12, -0.01f), glm::vec2(13.2f, -0.01f), glm::vec2(17.2f, 12.01f), glm::vec2(16, 12.01f)}, 0,
+        4, 1);
     // A sign hung behind the wall. (An object standing on the floor there stays listed: the floor's touched
     // voxels are in no solid, so the shadow's boxes stop a few voxels above it; README.)
     crate = test::add_box(w, "sign", Aabb::of({22, 1.4f, 5}, {23, 2.4f, 6}));
@@ -298,22 +363,22 @@ void with_yard_blocks(const Check& check) {
 // The same yard, one stage down: the west block's own occluders fill the space behind the wall (out of
 // its eyes' sight), the global ones and the east block's do not (east eyes see it).
 TEST(Conservative, AWestBlocksOwnOccludersFillTheSpaceBehindTheHollowWall) {
-    with_yard_blocks([](const ViewVolume&, const RayScene&, const ShrunkOccluders& shrunk,
-                        const BlockFigures& b) {
-        EXPECT_GT(b.blocks_used, 0u);
-        const glm::vec3 behind(19, 1.5f, 5.5f);
-        const auto holds = [&](const ShrunkOccluders& set) {
-            for (const Aabb& box : set.boxes[0])
-                if (box.contains(behind)) return true;
-            return false;
-        };
-        EXPECT_FALSE(holds(shrunk)) << "east eyes see the space behind the wall";
-        const int32_t west = shrunk.set_for(Aabb::of({2, 0.5f, 6}, {4, 2, 8}));
-        const int32_t east = shrunk.set_for(Aabb::of({26, 0.5f, 6}, {28, 2, 8}));
-        ASSERT_GE(west, 0);
-        EXPECT_TRUE(holds(shrunk.set(west))) << "no west eye sees the space behind the wall";
-        EXPECT_FALSE(holds(shrunk.set(east)));
-    });
+    with_yard_blocks(
+        [](const ViewVolume&, const RayScene&, const ShrunkOccluders& shrunk, const BlockFigures& b) {
+            EXPECT_GT(b.blocks_used, 0u);
+            const glm::vec3 behind(19, 1.5f, 5.5f);
+            const auto holds = [&](const ShrunkOccluders& set) {
+                for (const Aabb& box : set.boxes[0])
+                    if (box.contains(behind)) return true;
+                return false;
+            };
+            EXPECT_FALSE(holds(shrunk)) << "east eyes see the space behind the wall";
+            const int32_t west = shrunk.set_for(Aabb::of({2, 0.5f, 6}, {4, 2, 8}));
+            const int32_t east = shrunk.set_for(Aabb::of({26, 0.5f, 6}, {28, 2, 8}));
+            ASSERT_GE(west, 0);
+            EXPECT_TRUE(holds(shrunk.set(west))) << "no west eye sees the space behind the wall";
+            EXPECT_FALSE(holds(shrunk.set(east)));
+        });
 }
 
 TEST(Conservative, BehindAHollowWallOthersSeeIntoIsCulledByTheBlocksOwnOccluders) {
@@ -529,13 +594,6 @@ std::string text(const Aabb& b) {
     return text(b.min) + "-" + text(b.max);
 }
 
-double figure(const NamedValues& figures, const std::string& name) {
-    for (const auto& [key, value] : figures)
-        if (key == name) return value;
-    ADD_FAILURE() << "no figure " << name;
-    return 0.0;
-}
-
 // The bake builds the epsilon ladder only as high as its cells' faces can use: on 1 m cells with epsilon
 // 0.1 m, the levels 0.1 to 0.8 m (a face's top patch has a half-side of 0.5 m). The rows are those of the
 // whole ladder of refine_levels, whose higher levels no patch is ever sampled at.
@@ -643,7 +701,7 @@ TEST(ConservativeProperty, RandomBoxWorldsHaveNoMissAgainstDenseRays) {
     const uint64_t worlds = test::in_ci() ? 6 : 20;
     uint64_t cells_total = 0, listed_total = 0, pairs_total = 0, sampled_total = 0, rays_total = 0;
     uint32_t worlds_culling = 0;
-    uint64_t fine_samples = 0, panel_splits = 0;
+    uint64_t fine_samples = 0, panel_splits = 0, region_hidden = 0;
     for (uint64_t seed = 1; seed <= worlds; ++seed) {
         SCOPED_TRACE("world seed " + std::to_string(seed));
         const auto start = std::chrono::steady_clock::now();
@@ -673,6 +731,7 @@ TEST(ConservativeProperty, RandomBoxWorldsHaveNoMissAgainstDenseRays) {
 
         fine_samples += uint64_t(figure(bake.figures, "conservative_fine_samples"));
         panel_splits += uint64_t(figure(bake.figures, "conservative_panel_splits"));
+        region_hidden += uint64_t(figure(bake.figures, "conservative_region_hidden"));
         const uint64_t missed_pairs = uint64_t(figure(bake.verification.figures, "missed_pairs"));
         EXPECT_EQ(missed_pairs, 0u) << "world seed " << seed << ": " << bake.verification.misses.size()
                                     << " misses reported";
@@ -727,6 +786,7 @@ TEST(ConservativeProperty, RandomBoxWorldsHaveNoMissAgainstDenseRays) {
     EXPECT_GE(worlds_culling * 2, uint32_t(worlds)) << "fewer than half the worlds cull anything";
     EXPECT_GT(fine_samples, 0u) << "no world took the second look on the fine cube";
     EXPECT_GT(panel_splits, 0u) << "no world halved a floor patch for the panels";
+    EXPECT_GT(region_hidden, 0u) << "the single-occluder pass proved nothing in any world";
 }
 
 }  // namespace
