@@ -206,6 +206,7 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
         {"conservative_known_listed", double(cons.known_listed)},
         {"conservative_region_hidden", double(cons.region_hidden)},
         {"conservative_region_seconds", cons.region_seconds},
+        {"conservative_patch_hidden", double(cons.patch_hidden)},
         {"conservative_seconds", cons.seconds},
         {"cells_per_second", cons.seconds > 0
                                  ? double(bake.cells.size()) / cons.seconds

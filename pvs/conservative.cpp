@@ -121,10 +121,11 @@ bool box_all_in_mask(const VoxelMask& mask, const Aabb& box) {
 
 struct Counts {
     uint64_t samples = 0, skipped = 0, in_solid = 0, tests = 0, rays = 0, fine_samples = 0, panel_splits = 0,
-             known = 0;
+             known = 0, patch_hidden = 0;
     std::vector<uint64_t> per_level;
     Counts& operator+=(const Counts& o) {
         known += o.known;
+        patch_hidden += o.patch_hidden;
         samples += o.samples;
         skipped += o.skipped;
         in_solid += o.in_solid;
@@ -191,7 +192,12 @@ public:
 
     // The occluders of the next faces: those serving the eyes of the region whose face it is
     // (ShrunkOccluders::set_for; every set has the same epsilon ladder).
-    void use(const ShrunkOccluders& occluders) { occ_ = &occluders; }
+    // With `hider` (the single-occluder pass, pvs/region_hiding.h; of the same set), what a patch's cubes
+    // leave open is also tried against one occluder at a time, exactly, before it is refined or listed.
+    void use(const ShrunkOccluders& occluders, const RegionHider* hider = nullptr) {
+        occ_ = &occluders;
+        hider_ = hider;
+    }
 
     // Sight leaves a convex region through a face outward, so what it reaches through the face lies on the
     // face's outer side: for the side at the region's min along `axis` (side 0) only objects reaching down
@@ -364,6 +370,10 @@ public:
                 for (int side = 0; side < 2; ++side)
                     sides.open[size_t(side)] = unproven_each(cube_, sides.open[size_t(side)]);
             }
+            // Argument 10 for the patch (a sight line leaving through it meets the occluder beyond it).
+            if (hider_)
+                for (int side = 0; side < 2; ++side)
+                    sides.open[size_t(side)] = hidden_by_one(rect, sides.open[size_t(side)]);
             if (k == 0) {  // the floor: whatever is not proven is listed
                 // Below the floor (argument 5): the boxes stay shrunk by epsilon_0, but panels need no
                 // epsilon, so a patch half the size insets them by half as much. While the panels are
@@ -395,6 +405,17 @@ public:
     }
 
     const Counts& counts() const { return counts_; }
+
+    // The objects of `open` no single occluder hides from all of `rect` (pvs/region_hiding.h).
+    std::vector<uint32_t> hidden_by_one(const Aabb& rect, std::vector<uint32_t> open) {
+        if (open.empty()) return open;
+        hidden_.assign((sh_.world.objects.size() + 63) / 64, 0);
+        const uint32_t n = hider_->hide(sh_.world, rect, open, hidden_.data());
+        if (n == 0) return open;
+        counts_.patch_hidden += n;
+        std::erase_if(open, [this](uint32_t o) { return row_lists(hidden_.data(), o); });
+        return open;
+    }
 
     // Lists the objects of `open` a sight line from s reaches (a ray to a point of one of its triangles
     // that no opaque triangle stops) and returns the others. Such an object can never be proven hidden
@@ -545,6 +566,8 @@ private:
 
     const Shared& sh_;
     const ShrunkOccluders* occ_ = &sh_.occ;
+    const RegionHider* hider_ = nullptr;
+    std::vector<uint64_t> hidden_;  // scratch: one bit per object
     DepthCube cube_;
     DepthCube fine_;                        // the second look at floor samples (1 pixel when off)
     std::vector<uint8_t> open_mark_;        // per object: 0 not open, 1 open, 2 open and not proven
@@ -578,6 +601,7 @@ void add_counts(ConservativeFigures& figures, const Counts& n, std::chrono::stea
     figures.fine_samples += n.fine_samples;
     figures.panel_splits += n.panel_splits;
     figures.known_listed += n.known;
+    figures.patch_hidden += n.patch_hidden;
     figures.samples_per_level.resize(std::max(figures.samples_per_level.size(), n.per_level.size()), 0);
     for (size_t k = 0; k < n.per_level.size(); ++k) figures.samples_per_level[k] += n.per_level[k];
     figures.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -635,7 +659,7 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
             }
             if (!box.is_empty()) {
                 const int32_t set = occluders.set_for(box);
-                solver.use(occluders.set(set));
+                solver.use(occluders.set(set), hiders ? &hiders->of(set) : nullptr);
                 std::fill(hidden.begin(), hidden.end(), 0);
                 if (hiders) region_hidden += hiders->of(set).hide(world, box, leavable, hidden.data());
                 for (uint32_t o : leavable)
@@ -721,20 +745,22 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
     const std::vector<uint32_t> leavable = leavable_objects(world);
     // The single-occluder pass: what one occluder hides from a cell's whole region, no face of it tests.
     PvsSet hidden = PvsSet::make(config.single_occluder_pass ? uint32_t(cells.size()) : 0, n_objects);
+    std::optional<RegionHiders> hiders;
     if (config.single_occluder_pass) {
         const auto pass_start = std::chrono::steady_clock::now();
-        const RegionHiders hiders(ctx, occluders);
+        hiders.emplace(ctx, occluders);
         uint64_t n_hidden = 0;
 #pragma omp parallel for schedule(dynamic, 16) reduction(+ : n_hidden)
         for (int64_t c = 0; c < int64_t(cells.size()); ++c) {
             if (regions[size_t(c)].is_empty()) continue;
-            n_hidden += hiders.of(occluders.set_for(regions[size_t(c)]))
+            n_hidden += hiders->of(occluders.set_for(regions[size_t(c)]))
                             .hide(world, regions[size_t(c)], leavable, hidden.row(uint32_t(c)));
         }
         figures.region_hidden += n_hidden;
         figures.region_seconds +=
             std::chrono::duration<double>(std::chrono::steady_clock::now() - pass_start).count();
     }
+    const auto hider = [&](int32_t set) { return hiders ? &hiders->of(set) : nullptr; };
     const auto hidden_row = [&](int32_t cell) -> const uint64_t* {
         return config.single_occluder_pass && cell >= 0 ? hidden.row(uint32_t(cell)) : nullptr;
     };
@@ -757,16 +783,17 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
                 const float plane = f.rect.min[f.axis];
                 if (row_lo && row_hi && f.set[0] != f.set[1]) {
                     // The regions on the two sides take their occluders from different blocks: once per side.
-                    solver.use(occluders.set(f.set[0]));
+                    solver.use(occluders.set(f.set[0]), hider(f.set[0]));
                     solver.solve_face(f.rect, f.axis,
                                       solver.sides_of(leavable, f.axis, plane, row_lo, nullptr, known_lo,
                                                       nullptr, hidden_row(f.cell[0]), nullptr));
-                    solver.use(occluders.set(f.set[1]));
+                    solver.use(occluders.set(f.set[1]), hider(f.set[1]));
                     solver.solve_face(f.rect, f.axis,
                                       solver.sides_of(leavable, f.axis, plane, nullptr, row_hi, nullptr,
                                                       known_hi, nullptr, hidden_row(f.cell[1])));
                 } else {
-                    solver.use(occluders.set(row_lo ? f.set[0] : f.set[1]));
+                    solver.use(occluders.set(row_lo ? f.set[0] : f.set[1]),
+                               hider(row_lo ? f.set[0] : f.set[1]));
                     solver.solve_face(f.rect, f.axis,
                                       solver.sides_of(leavable, f.axis, plane, row_lo, row_hi, known_lo,
                                                       known_hi, row_lo ? hidden_row(f.cell[0]) : nullptr,
@@ -815,15 +842,15 @@ PvsSet bake_conservative_pvs(Context& ctx, const ConservativeConfig& config, con
     }
     add_always_listed(world, cells, pvs);
     ctx.info(fmt::format(
-        "conservative PVS: {:.2f} M (cell, object) pairs hidden by one occluder from the whole region "
-        "({:.1f} "
-        "s); {} samples (per epsilon level {}; {} floor patches halved for panels; {} second "
+        "conservative PVS: one occluder hides {:.2f} M (cell, object) pairs from the whole region ({:.1f} s) "
+        "and {:.2f} M (patch, object) pairs from a patch; {} samples (per epsilon level {}; {} floor patches "
+        "halved for panels; {} second "
         "looks at {} px), {} inside occluders and {} patches in solid skipped, {:.1f} M box tests, {:.1f} M "
         "sight rays, {:.1f} M (face side, object) pairs already listed by the cell, {:.1f} s ({:.0f} "
         "cells/s)",
-        double(figures.region_hidden) * 1e-6, figures.region_seconds, figures.samples,
-        fmt::join(figures.samples_per_level, "/"), figures.panel_splits, figures.fine_samples,
-        config.fine_cube_resolution, figures.samples_skipped, figures.patches_in_solid,
+        double(figures.region_hidden) * 1e-6, figures.region_seconds, double(figures.patch_hidden) * 1e-6,
+        figures.samples, fmt::join(figures.samples_per_level, "/"), figures.panel_splits,
+        figures.fine_samples, config.fine_cube_resolution, figures.samples_skipped, figures.patches_in_solid,
         double(figures.object_tests) * 1e-6, double(figures.rays) * 1e-6, double(figures.known_listed) * 1e-6,
         figures.seconds, double(cells.size()) / std::max(1e-9, figures.seconds)));
     return pvs;

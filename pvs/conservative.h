@@ -128,6 +128,7 @@ struct ConservativeFigures {
     uint64_t known_listed = 0;      // (face side, object) pairs not tested: the cell already listed them
     uint64_t region_hidden = 0;     // (cell, object) pairs the single-occluder pass proved hidden
     double region_seconds = 0.0;    // its time (grid; on boxes it is part of `seconds`)
+    uint64_t patch_hidden = 0;      // (patch, object) pairs it proved hidden, of what a patch's cubes left
     std::vector<uint64_t> samples_per_level;  // samples at each epsilon of the ladder
     double seconds = 0.0;
 };
