@@ -750,12 +750,16 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
         const auto pass_start = std::chrono::steady_clock::now();
         hiders.emplace(ctx, occluders);
         uint64_t n_hidden = 0;
+        ctx.progress_begin("single-occluder pass", cells.size(), "cells");
 #pragma omp parallel for schedule(dynamic, 16) reduction(+ : n_hidden)
         for (int64_t c = 0; c < int64_t(cells.size()); ++c) {
-            if (regions[size_t(c)].is_empty()) continue;
-            n_hidden += hiders->of(occluders.set_for(regions[size_t(c)]))
-                            .hide(world, regions[size_t(c)], leavable, hidden.row(uint32_t(c)));
+            if (!regions[size_t(c)].is_empty()) {
+                n_hidden += hiders->of(occluders.set_for(regions[size_t(c)]))
+                                .hide(world, regions[size_t(c)], leavable, hidden.row(uint32_t(c)));
+            }
+            ctx.progress_advance();
         }
+        ctx.progress_end();
         figures.region_hidden += n_hidden;
         figures.region_seconds +=
             std::chrono::duration<double>(std::chrono::steady_clock::now() - pass_start).count();
