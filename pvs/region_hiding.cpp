@@ -3,6 +3,8 @@
 
 #include "occluders/panels.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -112,10 +114,11 @@ bool box_hides(const Aabb& region, const Aabb& object, const Aabb& box) {
 RegionHider::RegionHider(Context& ctx, const ShrunkOccluders& set)
     : boxes_(set.boxes.empty() ? std::vector<Aabb>{} : set.boxes.front()), panels_(set.panels) {
     for (const Aabb& p : panels_) panel_axis_.push_back(panel_axis(p));
-    // Embree's own log lines would repeat per set: a quiet context.
+    // Embree's own log lines would repeat per set: a quiet context for the scene, one line here.
     Context quiet(Context::Options{LogLevel::kWarning, true, nullptr});
-    (void)ctx;
     scene_ = std::make_unique<RayScene>(quiet, box_world(boxes_, panels_, false), BuildQuality::kMedium, 1);
+    ctx.debug(fmt::format("single-occluder pass: {} boxes and {} panels as candidates", boxes_.size(),
+                          panels_.size()));
 }
 
 RegionHider::~RegionHider() = default;
