@@ -58,12 +58,18 @@ CellSet build_octree(Context& ctx, const CellConfig& config, const CellSet& mask
         if (node_ids.empty()) return;
         std::vector<Aabb> boxes;
         std::vector<uint64_t> streams;
+        std::vector<const uint64_t*> bounds;  // into `rows`, which grows only after the oracle returns
         for (int32_t n : node_ids) {
             boxes.push_back(out.nodes[size_t(n)].bounds);
             streams.push_back((uint64_t(1) << 40) + uint64_t(n));
+            const int32_t parent = out.nodes[size_t(n)].parent;
+            bounds.push_back(parent >= 0 && size_t(parent) < row_of_node.size() &&
+                                     row_of_node[size_t(parent)] != UINT32_MAX
+                                 ? rows.row(row_of_node[size_t(parent)])
+                                 : nullptr);
         }
         PvsSet batch = PvsSet::make(uint32_t(boxes.size()), object_count);
-        oracle(boxes, streams, batch);
+        oracle(boxes, streams, bounds, batch);
         const uint32_t first = rows.cell_count;
         rows.cell_count += batch.cell_count;
         rows.words.insert(rows.words.end(), batch.words.begin(), batch.words.end());

@@ -21,9 +21,13 @@
 namespace pvs {
 
 // Fills `rows` (boxes.size() rows of `rows.object_count` bits) with the PVS of each box; streams[i] is
-// a number unique to box i. Called from one thread; it may parallelize inside.
+// a number unique to box i. bounds[i] is the row the oracle gave the box's parent (a box that holds box i),
+// or null for a root: a conservative oracle proved every object that row leaves out hidden from every eye
+// of the parent, so from every eye of box i, and may leave it out without a test. Called from one thread;
+// it may parallelize inside.
 using RegionPvsOracle =
-    std::function<void(const std::vector<Aabb>& boxes, const std::vector<uint64_t>& streams, PvsSet& rows)>;
+    std::function<void(const std::vector<Aabb>& boxes, const std::vector<uint64_t>& streams,
+                       const std::vector<const uint64_t*>& bounds, PvsSet& rows)>;
 
 struct OctreeStats {
     uint32_t roots = 0;

@@ -115,11 +115,14 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
         // Built once for all the boxes the octree considers (pvs/region_hiding.h).
         std::optional<RegionHiders> hiders;
         if (conservative && config.conservative.single_occluder_pass) hiders.emplace(ctx, shrunk);
+        // A conservative box tests only what its parent lists (RegionPvsOracle); the sampled mode's rows
+        // prove nothing, so it samples every box afresh.
         const RegionPvsOracle oracle = [&](const std::vector<Aabb>& boxes,
-                                           const std::vector<uint64_t>& streams, PvsSet& rows) {
+                                           const std::vector<uint64_t>& streams,
+                                           const std::vector<const uint64_t*>& bounds, PvsSet& rows) {
             if (conservative) {
                 conservative_box_rows(ctx, config.conservative, world, boxes, masks.eyes, shrunk, scene, rows,
-                                      cons, hiders ? &*hiders : nullptr);
+                                      cons, hiders ? &*hiders : nullptr, &bounds);
                 return;
             }
             sample_box_rows(config.sampled, world, scene, masks, boxes, streams, sampled.rays_per_eye, rows,
@@ -129,6 +132,14 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
         bake.cells = build_octree(ctx, config.cells, masks, view.view_bounds, uint32_t(world.objects.size()),
                                   oracle, sampled.pvs, octree);
         add_always_listed(world, bake.cells, sampled.pvs);
+        if (conservative) {
+            ctx.info(
+                fmt::format("conservative PVS: {} boxes evaluated; {:.2f} M (box, object) pairs left out "
+                            "untested because the box's parent left them out, {:.2f} M proven hidden "
+                            "by one occluder, {:.1f} s",
+                            octree.evaluated, double(cons.parent_hidden) * 1e-6,
+                            double(cons.region_hidden) * 1e-6, cons.seconds));
+        }
         sampled.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     }
     bake.pvs = std::move(sampled.pvs);
@@ -205,6 +216,7 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
         {"conservative_panel_splits", double(cons.panel_splits)},
         {"conservative_known_listed", double(cons.known_listed)},
         {"conservative_region_hidden", double(cons.region_hidden)},
+        {"conservative_parent_hidden", double(cons.parent_hidden)},
         {"conservative_region_seconds", cons.region_seconds},
         {"conservative_patch_hidden", double(cons.patch_hidden)},
         {"conservative_seconds", cons.seconds},

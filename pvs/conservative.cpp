@@ -632,7 +632,8 @@ Aabb box_face(const Aabb& box, int axis, int side) {
 void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const World& world,
                            const std::vector<Aabb>& boxes, const VoxelMask& eyes,
                            const ShrunkOccluders& occluders, const RayScene& scene, PvsSet& pvs,
-                           ConservativeFigures& figures, const RegionHiders* hiders) {
+                           ConservativeFigures& figures, const RegionHiders* hiders,
+                           const std::vector<const uint64_t*>* bounds) {
     const auto start = std::chrono::steady_clock::now();
     const Shared shared = make_shared(config, world, occluders, scene);
     const std::vector<uint32_t> leavable = leavable_objects(world);
@@ -640,11 +641,11 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
     if (config.single_occluder_pass && !hiders) hiders = &own_hiders.emplace(ctx, occluders);
     if (!config.single_occluder_pass) hiders = nullptr;
     Counts total;
-    uint64_t region_hidden = 0;
-#pragma omp parallel reduction(+ : region_hidden)
+    uint64_t region_hidden = 0, skipped = 0;
+#pragma omp parallel reduction(+ : region_hidden, skipped)
     {
         PatchSolver solver(shared);
-        std::vector<uint32_t> open;
+        std::vector<uint32_t> open, candidates;
         std::vector<uint64_t> hidden(pvs.words_per_row);
 #pragma omp for schedule(dynamic, 1)
         for (int64_t ci = 0; ci < int64_t(boxes.size()); ++ci) {
@@ -660,9 +661,15 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
             if (!box.is_empty()) {
                 const int32_t set = occluders.set_for(box);
                 solver.use(occluders.set(set), hiders ? &hiders->of(set) : nullptr);
-                std::fill(hidden.begin(), hidden.end(), 0);
-                if (hiders) region_hidden += hiders->of(set).hide(world, box, leavable, hidden.data());
+                // Only what the box's bound lists (argument 11).
+                const uint64_t* bound = bounds ? (*bounds)[size_t(ci)] : nullptr;
+                candidates.clear();
                 for (uint32_t o : leavable)
+                    if (!bound || row_lists(bound, o)) candidates.push_back(o);
+                skipped += leavable.size() - candidates.size();
+                std::fill(hidden.begin(), hidden.end(), 0);
+                if (hiders) region_hidden += hiders->of(set).hide(world, box, candidates, hidden.data());
+                for (uint32_t o : candidates)
                     if (!world.objects[o].bounds.overlaps(box) && !row_lists(hidden.data(), o))
                         open.push_back(o);
                 // One face after another into the cell's own row: solve_patch() skips what the faces (and
@@ -679,6 +686,7 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
         total += solver.counts();
     }
     figures.region_hidden += region_hidden;
+    figures.parent_hidden += skipped;
     add_counts(figures, total, start);
 }
 

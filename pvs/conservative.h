@@ -92,6 +92,12 @@
 //    bounds. It needs no shrinking: convexity of the occluder, not a sample's epsilon-cube, covers every
 //    eye. No face of the region tests those objects (argument 5: a row is the union of what the faces list,
 //    and an object hidden from every eye of the region need be listed by none).
+// 11. OCTREE CHILDREN (conservative_box_rows with bounds): a child box lies in its parent, so the eye voxels
+//    meeting it meet the parent, and its eye region (their bounds, clipped to the box) lies in the parent's.
+//    Every eye of the child is an eye of the parent, so an object the parent's row leaves out (proven
+//    hidden from every eye of the parent, by this same argument and with the set serving the parent's eyes)
+//    is hidden from every eye of the child: the child neither lists nor tests it. The rule-listed objects
+//    (bounds meeting the child's region, which lies in the parent's) are listed by both.
 // What it rests on beyond this argument: the solid being truly closed to sight. The voxel sweep treats a
 // voxel an opaque triangle touches as closed, so a line through a crack narrower than a voxel, or grazing
 // past a surface's edge through a touched voxel, goes where the sweep says sight does not. The sight probe,
@@ -129,6 +135,7 @@ struct ConservativeFigures {
     uint64_t region_hidden = 0;     // (cell, object) pairs the single-occluder pass proved hidden
     double region_seconds = 0.0;    // its time (grid; on boxes it is part of `seconds`)
     uint64_t patch_hidden = 0;      // (patch, object) pairs it proved hidden, of what a patch's cubes left
+    uint64_t parent_hidden = 0;     // (octree box, object) pairs left out untested: its parent left them out
     std::vector<uint64_t> samples_per_level;  // samples at each epsilon of the ladder
     double seconds = 0.0;
 };
@@ -137,10 +144,14 @@ struct ConservativeFigures {
 // rows. Each box is first clipped to its eye region (the bounds of the `eyes` voxels in it; the whole box
 // when `eyes` is empty). Lists pvs_always_visible objects and objects whose bounds meet the region, then
 // every object some patch of the region's boundary cannot prove hidden. Parallel over boxes.
+// With `bounds` (one per box, null for none): bounds[i] is this function's row for a box that holds box i
+// (an octree node's parent). Its eye region holds box i's, so what that row leaves out is hidden from every
+// eye of box i too: it is left out without a test (argument 11).
 void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const World& world,
                            const std::vector<Aabb>& boxes, const VoxelMask& eyes,
                            const ShrunkOccluders& occluders, const RayScene& scene, PvsSet& rows,
-                           ConservativeFigures& figures, const RegionHiders* hiders = nullptr);
+                           ConservativeFigures& figures, const RegionHiders* hiders = nullptr,
+                           const std::vector<const uint64_t*>* bounds = nullptr);
 
 // The conservative PVS of every cell. On a grid each face shared by two cells is computed once.
 PvsSet bake_conservative_pvs(Context& ctx, const ConservativeConfig& config, const World& world,

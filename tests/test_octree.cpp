@@ -60,7 +60,7 @@ World field_and_maze() {
 RegionPvsOracle sampled_oracle(const SampledPvsConfig& sc, const World& w, const RayScene& scene,
                                const CellSet& masks) {
     return [&sc, &w, &scene, &masks](const std::vector<Aabb>& boxes, const std::vector<uint64_t>& streams,
-                                     PvsSet& rows) {
+                                     const std::vector<const uint64_t*>&, PvsSet& rows) {
         uint64_t guard = 0;
         sample_box_rows(sc, w, scene, masks, boxes, streams, sc.rays.rays_per_eye, rows, guard, nullptr);
     };
