@@ -609,6 +609,22 @@ ShrunkOccluders shrunk_occluders(Context& ctx, const BakeConfig& c, const World&
     return out;
 }
 
+// A scene baked with the scene tests' settings, with the global shrunk occluders its bake solved against:
+// for tests that call the solver directly on the bake's eye space.
+struct SolvedScene {
+    Context ctx = quiet_context();
+    Scene s;
+    BakeConfig c = conservative_config();
+    RayScene scene;
+    ShrunkOccluders occ;
+    BakeData bake;
+    explicit SolvedScene(Middle middle)
+        : s(make_scene(middle)),
+          scene(ctx, s.world),
+          occ(shrunk_occluders(ctx, c, s.world, scene)),
+          bake(bake_world(ctx, c, s.world, "test", "")) {}
+};
+
 TEST(Conservative, TheLadderStopsAtTheLevelTheCellsUseWithTheSameRows) {
     BakeConfig c = conservative_config();
     EXPECT_EQ(largest_cell_edge_m(c.cells), 1.0);
@@ -642,20 +658,17 @@ TEST(Conservative, TheLadderStopsAtTheLevelTheCellsUseWithTheSameRows) {
 // the rows are the same for any thread count, and the grid's shared faces give the same rows as solving
 // every cell's six faces on its own (conservative_box_rows), including who sees the target.
 TEST(Conservative, FacesSkipWhatTheirCellListsWithTheSameRowsForAnyThreadCount) {
-    Context ctx = quiet_context();
-    const Scene s = make_scene(Middle::kDoorway);
-    BakeConfig c = conservative_config();
-    RayScene scene(ctx, s.world);
-    const ShrunkOccluders occ = shrunk_occluders(ctx, c, s.world, scene);
-    const BakeData bake = bake_world(ctx, c, s.world, "test", "");
-    const CellSet& cells = bake.cells;
+    SolvedScene t(Middle::kDoorway);
+    Context& ctx = t.ctx;
+    const CellSet& cells = t.bake.cells;
     ASSERT_GT(cells.size(), 10u);
 
     std::vector<PvsSet> by_threads;
     for (int threads : {1, 3}) {
         omp_set_num_threads(threads);
         ConservativeFigures cf;
-        by_threads.push_back(bake_conservative_pvs(ctx, c.conservative, s.world, cells, occ, scene, cf));
+        by_threads.push_back(
+            bake_conservative_pvs(ctx, t.c.conservative, t.s.world, cells, t.occ, t.scene, cf));
         EXPECT_GT(cf.known_listed, 0u) << threads << " threads";
     }
     omp_set_num_threads(omp_get_num_procs());
@@ -663,9 +676,9 @@ TEST(Conservative, FacesSkipWhatTheirCellListsWithTheSameRowsForAnyThreadCount) 
 
     std::vector<Aabb> boxes;
     for (const Cell& cell : cells.cells) boxes.push_back(cell.bounds);
-    PvsSet each = PvsSet::make(uint32_t(cells.size()), uint32_t(s.world.objects.size()));
+    PvsSet each = PvsSet::make(uint32_t(cells.size()), uint32_t(t.s.world.objects.size()));
     ConservativeFigures cf;
-    conservative_box_rows(ctx, c.conservative, s.world, boxes, cells.eyes, occ, scene, each, cf);
+    conservative_box_rows(ctx, t.c.conservative, t.s.world, boxes, cells.eyes, t.occ, t.scene, each, cf);
     EXPECT_GT(cf.known_listed, 0u);
     EXPECT_TRUE(each == by_threads[1]);
 
@@ -674,7 +687,7 @@ TEST(Conservative, FacesSkipWhatTheirCellListsWithTheSameRowsForAnyThreadCount) 
     const auto lists_target = [&](glm::vec3 p) {
         const int32_t cell = cells.find(p);
         EXPECT_GE(cell, 0) << p.x << ", " << p.y << ", " << p.z;
-        return cell >= 0 && by_threads[1].test(uint32_t(cell), s.target);
+        return cell >= 0 && by_threads[1].test(uint32_t(cell), t.s.target);
     };
     EXPECT_TRUE(lists_target({4.5f, 1.5f, 1.0f}));
     EXPECT_TRUE(lists_target({8.5f, 1.5f, 3.0f}));
@@ -687,13 +700,9 @@ TEST(Conservative, FacesSkipWhatTheirCellListsWithTheSameRowsForAnyThreadCount) 
 // left out; and the bound is really applied: a bound that leaves out the far wall of the doorway, which
 // the child in front of it sees, leaves it out of that child's row.
 TEST(Conservative, AnOctreeBoxTestsOnlyWhatItsParentLists) {
-    Context ctx = quiet_context();
-    const Scene s = make_scene(Middle::kSolid);
-    BakeConfig c = conservative_config();
-    RayScene scene(ctx, s.world);
-    const ShrunkOccluders occ = shrunk_occluders(ctx, c, s.world, scene);
-    const BakeData bake = bake_world(ctx, c, s.world, "test", "");
-    const uint32_t n_objects = uint32_t(s.world.objects.size());
+    SolvedScene t(Middle::kSolid);
+    Context& ctx = t.ctx;
+    const uint32_t n_objects = uint32_t(t.s.world.objects.size());
     const Aabb parent = Aabb::of({0, 0, 0}, {4, 4, 4});
     std::vector<Aabb> children;
     for (int o = 0; o < 8; ++o)
@@ -702,8 +711,8 @@ TEST(Conservative, AnOctreeBoxTestsOnlyWhatItsParentLists) {
     const auto rows_of = [&](const std::vector<Aabb>& boxes, const std::vector<const uint64_t*>* bounds,
                              ConservativeFigures& cf) {
         PvsSet rows = PvsSet::make(uint32_t(boxes.size()), n_objects);
-        conservative_box_rows(ctx, c.conservative, s.world, boxes, bake.cells.eyes, occ, scene, rows, cf,
-                              nullptr, bounds);
+        conservative_box_rows(ctx, t.c.conservative, t.s.world, boxes, t.bake.cells.eyes, t.occ, t.scene,
+                              rows, cf, nullptr, bounds);
         return rows;
     };
     ConservativeFigures cf_parent, cf_free, cf_bound, cf_fake;
@@ -714,7 +723,7 @@ TEST(Conservative, AnOctreeBoxTestsOnlyWhatItsParentLists) {
     const PvsSet bound_rows = rows_of(children, &bounds, cf_bound);
     EXPECT_EQ(cf_free.parent_hidden, 0u);
     uint64_t with_eyes = 0;
-    for (const Aabb& child : children) with_eyes += eye_region(bake.cells.eyes, child).is_empty() ? 0 : 1;
+    for (const Aabb& child : children) with_eyes += eye_region(t.bake.cells.eyes, child).is_empty() ? 0 : 1;
     EXPECT_EQ(with_eyes, children.size());
     EXPECT_EQ(cf_bound.parent_hidden, uint64_t(n_objects - parent_row.count(0)) * with_eyes)
         << "every child skips exactly what the parent left out (no object is always visible here)";
@@ -726,11 +735,11 @@ TEST(Conservative, AnOctreeBoxTestsOnlyWhatItsParentLists) {
             EXPECT_TRUE(free_rows.test(i, o))
                 << "child " << i << " lists object " << o << " only with the bound";
         }
-    EXPECT_FALSE(parent_row.test(0, s.target));
+    EXPECT_FALSE(parent_row.test(0, t.s.target));
     // The child at x in [2, 4], z in [2, 4] (o = 5), low, sees the west face of the wall beyond the doorway.
     uint32_t far_wall = n_objects;
     for (uint32_t o = 0; o < n_objects; ++o)
-        if (s.world.objects[o].name == "wall_far") far_wall = o;
+        if (t.s.world.objects[o].name == "wall_far") far_wall = o;
     ASSERT_LT(far_wall, n_objects);
     ASSERT_TRUE(free_rows.test(5, far_wall));
     EXPECT_TRUE(bound_rows.test(5, far_wall));
