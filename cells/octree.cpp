@@ -111,8 +111,7 @@ CellSet build_octree(Context& ctx, const CellConfig& config, const CellSet& mask
             for (int o = 0; o < 8; ++o)
                 if (has_view(masks, out.nodes[size_t(first + o)].bounds)) children.push_back(first + o);
         }
-        evaluate(children);
-        ctx.progress_advance(children.size());
+        evaluate(children);  // the oracle advances the progress per box
         std::vector<int32_t> next;
         for (int32_t n : parents) {
             const int32_t first = out.nodes[size_t(n)].first_child;

@@ -42,6 +42,8 @@ public:
     void progress_begin(const std::string& stage, uint64_t total, const std::string& unit);
     void progress_advance(uint64_t n = 1);
     void progress_end();
+    // How far the current (or last) stage has advanced.
+    uint64_t progress_done() const { return done_.load(std::memory_order_relaxed); }
 
     // Stage timings, in the order stages finished, seconds of wall time.
     void add_timing(const std::string& stage, double seconds);

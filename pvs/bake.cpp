@@ -104,9 +104,10 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
             sampled = bake_sampled_pvs(ctx, config.sampled, world, scene, bake.cells);
         }
     } else {
-        // The octree asks the sampled mode for the PVS of every box it considers; the leaves' rows are
-        // the bake's rows. The ray budget does not apply: boxes are not known in advance.
-        ScopedTimer t(ctx, "sampled_pvs");
+        // The octree asks the bake's mode for the PVS of every box it considers; the leaves' rows are
+        // the bake's rows. The ray budget does not apply: boxes are not known in advance. The stage is
+        // timed under the mode's name, as on the grid.
+        ScopedTimer t(ctx, conservative ? "conservative_pvs" : "sampled_pvs");
         const auto start = std::chrono::steady_clock::now();
         CellSet masks;
         masks.view = view.view;

@@ -249,6 +249,31 @@ TEST(Conservative, BehindGlassIsListed) {
     EXPECT_TRUE(target_listed(Middle::kGlass));
 }
 
+// On the octree the same scene gives the same answers, and the stage is timed under the mode that computed
+// the rows (it was once named "sampled_pvs" whatever the mode).
+TEST(Conservative, TheOctreeCullsBehindTheWallAndIsTimedAsConservative) {
+    Context ctx = quiet_context();
+    const Scene s = make_scene(Middle::kSolid);
+    BakeConfig c = conservative_config();
+    c.cells.kind = CellKind::kOctree;
+    c.cells.root_cell_size_m = 4.0;
+    c.cells.min_cell_size_m = 1.0;
+    const BakeData bake = bake_world(ctx, c, s.world, "test", "");
+    EXPECT_EQ(bake.cells.kind, CellSet::Kind::kOctree);
+    EXPECT_TRUE(bake.verification.ran);
+    EXPECT_TRUE(bake.verification.misses.empty()) << bake.verification.misses.size() << " misses";
+    const int32_t cell = bake.cells.find({2.5f, 1.5f, 1.0f});
+    ASSERT_GE(cell, 0);
+    EXPECT_FALSE(bake.pvs.test(uint32_t(cell), s.target)) << "the target is behind the wall";
+    bool conservative_timed = false, sampled_timed = false;
+    for (const auto& [stage, seconds] : ctx.timings()) {
+        conservative_timed |= stage == "conservative_pvs";
+        sampled_timed |= stage == "sampled_pvs";
+    }
+    EXPECT_TRUE(conservative_timed);
+    EXPECT_FALSE(sampled_timed);
+}
+
 // The single-occluder pass (pvs/region_hiding.h) only ever leaves objects out that the faces would have
 // proved too, or that they could not for the shrinking and the pixels: with it, every row is a subset of
 // the row without it; it proves pairs on the wall scene; the target stays culled behind the wall and

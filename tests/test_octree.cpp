@@ -134,5 +134,32 @@ TEST(Octree, NeverSplitsBelowTheMinimumAndStopsAtTheBudget) {
     EXPECT_LT(few.size(), all.size());
 }
 
+TEST(Octree, CountsEachBoxOnceInItsProgress) {
+    // The oracle advances the "boxes" progress per box (RegionPvsOracle); the octree must not add its
+    // batches again, or the count and the boxes/s rate of a long bake read twice what they are.
+    Context ctx = quiet_context();
+    const RegionPvsOracle oracle = [&ctx](const std::vector<Aabb>& boxes, const std::vector<uint64_t>&,
+                                          const std::vector<const uint64_t*>&, PvsSet& rows) {
+        // Boxes at the region's left edge see object 0, the others object 1: the left edge splits.
+        for (uint32_t i = 0; i < boxes.size(); ++i) {
+            const uint32_t o = boxes[i].min.x < 0.5f ? 0u : 1u;
+            rows.row(i)[0] |= uint64_t(1) << o;
+            ctx.progress_advance();
+        }
+    };
+    CellConfig cc;
+    cc.kind = CellKind::kOctree;
+    cc.min_cell_size_m = 1.0;
+    cc.root_cell_size_m = 8.0;
+    PvsSet leaf;
+    OctreeStats stats;
+    const CellSet cells =
+        build_octree(ctx, cc, CellSet{}, Aabb::of({0, 0, 0}, {16, 8, 8}), 2, oracle, leaf, stats);
+    EXPECT_GT(stats.splits, 0u);
+    EXPECT_GT(stats.evaluated, stats.roots);
+    EXPECT_GT(cells.size(), 2u);
+    EXPECT_EQ(ctx.progress_done(), stats.evaluated);
+}
+
 }  // namespace
 }  // namespace pvs
