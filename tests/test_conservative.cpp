@@ -249,8 +249,8 @@ TEST(Conservative, BehindGlassIsListed) {
     EXPECT_TRUE(target_listed(Middle::kGlass));
 }
 
-// On the octree the same scene gives the same answers, and the stage is timed under the mode that computed
-// the rows (it was once named "sampled_pvs" whatever the mode).
+// On the octree the wall hides the target as on the grid, with zero misses, and the stage is timed under
+// the mode that computed the rows (it was once named "sampled_pvs" whatever the mode).
 TEST(Conservative, TheOctreeCullsBehindTheWallAndIsTimedAsConservative) {
     Context ctx = quiet_context();
     const Scene s = make_scene(Middle::kSolid);
