@@ -29,7 +29,8 @@ enum class CellKind { kGrid, kOctree };
 struct CellConfig {
     CellKind kind = CellKind::kGrid;
     double cell_size_m = 2.0;       // [Limit: > 0] [Units: m] grid: edge of a cell
-    double min_cell_size_m = 1.0;   // [Limit: > 0] [Units: m] octree: never split below this edge
+    double min_cell_size_m = 2.0;   // [Limit: > 0] [Units: m] octree: never split below this edge (the
+                                    // grid's cell: the octree is never finer than the default grid)
     double root_cell_size_m = 8.0;  // [Limit: >= min] [Units: m] octree: edge of the root cells (rounded to
                                     // min_cell_size_m times a power of two)
     double split_threshold = 0.2;  // [Limit: 0..1] octree: split when a child's PVS differs from its parent's

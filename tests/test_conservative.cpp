@@ -291,9 +291,11 @@ TEST(Conservative, TheSingleOccluderPassOnlyNarrowsRows) {
         EXPECT_EQ(figure(without.figures, "conservative_region_hidden"), 0.0);
         uint64_t listed_with = 0, listed_without = 0;
         for (uint32_t c = 0; c < with.cells.size(); ++c) {
-            for (uint32_t o = 0; o < s.world.objects.size(); ++o)
-                if (with.pvs.test(c, o))
+            for (uint32_t o = 0; o < s.world.objects.size(); ++o) {
+                if (with.pvs.test(c, o)) {
                     EXPECT_TRUE(without.pvs.test(c, o)) << "cell " << c << " object " << o;
+                }
+            }
             listed_with += with.pvs.count(c);
             listed_without += without.pvs.count(c);
         }
