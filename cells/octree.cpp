@@ -89,8 +89,10 @@ CellSet build_octree(Context& ctx, const CellConfig& config, const CellSet& mask
     stats.roots = uint32_t(frontier.size());
     ctx.info(fmt::format("octree: {} root cells of {} m, down to {} m ({} levels), split threshold {}",
                          frontier.size(), root_size, config.min_cell_size_m, levels, config.split_threshold));
-    ctx.progress_begin("octree", 0, "boxes");
+    // One progress per level, with its box count known in advance (an ETA for the long levels).
+    ctx.progress_begin(fmt::format("octree roots of {} m", root_size), frontier.size(), "boxes");
     evaluate(frontier);
+    ctx.progress_end();
     uint64_t leaves = frontier.size();
     for (uint32_t depth = 0; !frontier.empty(); ++depth) {
         // Children of every node that may split, evaluated in one batch.
@@ -111,7 +113,13 @@ CellSet build_octree(Context& ctx, const CellConfig& config, const CellSet& mask
             for (int o = 0; o < 8; ++o)
                 if (has_view(masks, out.nodes[size_t(first + o)].bounds)) children.push_back(first + o);
         }
-        evaluate(children);  // the oracle advances the progress per box
+        if (!children.empty()) {
+            ctx.progress_begin(fmt::format("octree level {} of {}, {} m", depth + 1, levels,
+                                           root_size / double(uint64_t(1) << (depth + 1))),
+                               children.size(), "boxes");
+            evaluate(children);  // the oracle advances the progress per box
+            ctx.progress_end();
+        }
         std::vector<int32_t> next;
         for (int32_t n : parents) {
             const int32_t first = out.nodes[size_t(n)].first_child;
@@ -140,7 +148,6 @@ CellSet build_octree(Context& ctx, const CellConfig& config, const CellSet& mask
         }
         frontier = std::move(next);
     }
-    ctx.progress_end();
 
     // Compact: keep reachable nodes (breadth-first from the roots, children consecutive), number the
     // leaves with view volume as cells.

@@ -24,8 +24,8 @@ namespace pvs {
 // a number unique to box i. bounds[i] is the row the oracle gave the box's parent (a box that holds box i),
 // or null for a root: a conservative oracle proved every object that row leaves out hidden from every eye
 // of the parent, so from every eye of box i, and may leave it out without a test. Called from one thread;
-// it may parallelize inside. It advances the Context's progress by one per box it finishes (the octree's
-// "boxes" counter; build_octree() does not count them again).
+// it may parallelize inside. It advances the Context's progress by one per box it finishes: build_octree()
+// begins one progress per call, whose total is the call's box count, and does not count them again.
 using RegionPvsOracle =
     std::function<void(const std::vector<Aabb>& boxes, const std::vector<uint64_t>& streams,
                        const std::vector<const uint64_t*>& bounds, PvsSet& rows)>;

@@ -42,8 +42,9 @@ public:
     void progress_begin(const std::string& stage, uint64_t total, const std::string& unit);
     void progress_advance(uint64_t n = 1);
     void progress_end();
-    // How far the current (or last) stage has advanced.
+    // How far the current (or last) stage has advanced, and its total (0: not known).
     uint64_t progress_done() const { return done_.load(std::memory_order_relaxed); }
+    uint64_t progress_total() const { return total_; }
 
     // Stage timings, in the order stages finished, seconds of wall time.
     void add_timing(const std::string& stage, double seconds);

@@ -135,17 +135,23 @@ TEST(Octree, NeverSplitsBelowTheMinimumAndStopsAtTheBudget) {
 }
 
 TEST(Octree, CountsEachBoxOnceInItsProgress) {
-    // The oracle advances the "boxes" progress per box (RegionPvsOracle); the octree must not add its
-    // batches again, or the count and the boxes/s rate of a long bake read twice what they are.
+    // The oracle advances the progress per box (RegionPvsOracle); the octree begins one progress per call
+    // whose total is that call's box count (a level's ETA), and must not add the batch again, or the
+    // count and the boxes/s rate of a long bake read twice what they are.
     Context ctx = quiet_context();
-    const RegionPvsOracle oracle = [&ctx](const std::vector<Aabb>& boxes, const std::vector<uint64_t>&,
-                                          const std::vector<const uint64_t*>&, PvsSet& rows) {
+    std::vector<uint64_t> totals;
+    const RegionPvsOracle oracle = [&ctx, &totals](const std::vector<Aabb>& boxes,
+                                                   const std::vector<uint64_t>&,
+                                                   const std::vector<const uint64_t*>&, PvsSet& rows) {
+        EXPECT_EQ(ctx.progress_done(), 0u) << "a call's progress starts at zero";
+        totals.push_back(ctx.progress_total());
         // Boxes at the region's left edge see object 0, the others object 1: the left edge splits.
         for (uint32_t i = 0; i < boxes.size(); ++i) {
             const uint32_t o = boxes[i].min.x < 0.5f ? 0u : 1u;
             rows.row(i)[0] |= uint64_t(1) << o;
             ctx.progress_advance();
         }
+        EXPECT_EQ(totals.back(), boxes.size()) << "the progress total is the call's box count";
     };
     CellConfig cc;
     cc.kind = CellKind::kOctree;
@@ -158,7 +164,12 @@ TEST(Octree, CountsEachBoxOnceInItsProgress) {
     EXPECT_GT(stats.splits, 0u);
     EXPECT_GT(stats.evaluated, stats.roots);
     EXPECT_GT(cells.size(), 2u);
-    EXPECT_EQ(ctx.progress_done(), stats.evaluated);
+    ASSERT_GE(totals.size(), 2u);
+    EXPECT_EQ(totals.front(), stats.roots);
+    EXPECT_EQ(ctx.progress_done(), totals.back()) << "the last level counted once";
+    uint64_t sum = 0;
+    for (uint64_t t : totals) sum += t;
+    EXPECT_EQ(sum, stats.evaluated);
 }
 
 }  // namespace
