@@ -1,26 +1,26 @@
 // bench_block_solid: how much solid sight leaves when it starts from one block of the eye space instead of
-// from all of it (issue 6, open levels).
+// from all of it (open levels).
 //
 //   bench_block_solid WORLD.glb [--play-height H] [--voxel-size V] [--block B] [--range R]
 //                     [--audit EYES [--audit-points P] [--epsilon E] [--reach R2]]
 //
 // The conservative solver's occluders live in the solid: voxels no straight line of sight from the eye
-// space reaches (occluders/flood.h sight_reach), less the voxels opaque triangles touch. One eye that sees
+// space reaches (voxels/flood.h sight_reach), less the voxels opaque triangles touch. One eye that sees
 // into a hollow wall (through a gap to the outside, or over a wall that lost its top face) unmakes that
 // wall as an occluder for every cell. Occluders per block of cells would only need the block's own eyes
 // to miss it. For every block (B x B metres in x and z, all heights) holding eyes, this prints the solid
 // within R metres of the block when sight starts from all eyes, and when it starts from the block's eyes
 // only. JSON on stdout.
-// --audit EYES also builds the bake's occluders per block (pvs/occluder_synthesis.h, blocks of B metres,
+// --audit EYES also builds the bake's occluders per block (occluders/synthesis.h, blocks of B metres,
 // --reach R2 around them, --epsilon E) and audits them (audit_block_occluders): EYES fresh eye points per
 // block, P random points in every box of its set; "audit_reached" counts rays that get inside one (each is
 // a failure of the argument).
 #include "cells/view_volume.h"
 #include "core/context.h"
 #include "io/gltf_loader.h"
-#include "occluders/flood.h"
-#include "pvs/embree_scene.h"
-#include "pvs/occluder_synthesis.h"
+#include "occluders/synthesis.h"
+#include "rays/ray_scene.h"
+#include "voxels/flood.h"
 
 #include <nlohmann/json.hpp>
 

@@ -8,6 +8,7 @@
 // the share of solid the kept boxes cover. On the first (smallest) grid of each family it also times
 // grow_boxes_reference once, checks that both give the same boxes and gives the ratio. Prints one JSON
 // object.
+#include "bench/bench_util.h"
 #include "core/random.h"
 #include "occluders/boxes.h"
 
@@ -24,14 +25,8 @@
 
 namespace {
 
-double median(std::vector<double> v) {
-    std::sort(v.begin(), v.end());
-    return v.empty() ? 0.0 : v[v.size() / 2];
-}
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
+using pvs::bench::median;
+using pvs::bench::seconds_since;
 
 void fill(const pvs::VoxelGrid& g, pvs::BitVolume& v, glm::ivec3 lo, glm::ivec3 hi, bool value) {
     lo = glm::max(lo, glm::ivec3(0));

@@ -9,7 +9,7 @@
 //
 // --suite: for each world (default: ../shared/worlds/oa_dm4.glb and ../shared/worlds/ctf_inyard.glb when
 //   they exist, then samples/rooms.glb) and each cell kind, bake_world without its own verification, then
-//   a verification (pvs/verify.h) whose rays per eye are set from the eye points the cells really get, so
+//   a verification (driver/verify.h) whose rays per eye are set from the eye points the cells really get, so
 //   that at least --verify-rays rays (default 10,000,000) are traced. Per run: cells, conservative and
 //   whole-bake seconds, seconds and share of the bake per stage (stages nest: view_volume holds voxelize
 //   and flood, occluders holds solid, boxes, sight_probe and shrink, so shares do not add up to 1), cells
@@ -23,15 +23,16 @@
 //   triangles and time per cell.
 // Times are medians of --repeats (default 1) bakes. Prints one JSON document on stdout; a line per bake on
 // stderr.
+#include "bench/bench_util.h"
 #include "cells/eyes.h"
 #include "core/config.h"
 #include "core/context.h"
 #include "core/error.h"
 #include "core/world.h"
+#include "driver/bake.h"
+#include "driver/verify.h"
 #include "io/gltf_loader.h"
-#include "pvs/bake.h"
-#include "pvs/embree_scene.h"
-#include "pvs/verify.h"
+#include "rays/ray_scene.h"
 
 #include <fmt/format.h>
 #include <omp.h>
@@ -59,6 +60,9 @@
 
 namespace {
 
+using pvs::bench::median;
+using pvs::bench::seconds_since;
+
 using Json = nlohmann::ordered_json;
 
 constexpr int kExitMisses = 3;
@@ -73,17 +77,6 @@ struct Args {
     double gap_m = 10.0;
     pvs::BakeConfig config;
 };
-
-double median(std::vector<double> v) {
-    if (v.empty()) return 0.0;
-    std::sort(v.begin(), v.end());
-    const size_t n = v.size();
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 double figure(const pvs::NamedValues& values, std::string_view key) {
     for (const auto& [k, v] : values)

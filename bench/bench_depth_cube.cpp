@@ -1,4 +1,4 @@
-// bench_depth_cube: speed of the conservative depth cube map (pvs/depth_cube.h), one thread.
+// bench_depth_cube: speed of the conservative depth cube map (solver/depth_cube.h), one thread.
 //
 //   bench_depth_cube [--repeats R]
 //
@@ -6,8 +6,9 @@
 // 64 and 128: median over R samples (different scenes, fixed seeds). Then the reference against the fast
 // kernel on a smaller case (100 occluders, 200 occludees, resolution 32), same scenes, ratio in one run.
 // Prints one JSON object.
+#include "bench/bench_util.h"
 #include "core/random.h"
-#include "pvs/depth_cube.h"
+#include "solver/depth_cube.h"
 
 #include <nlohmann/json.hpp>
 
@@ -20,14 +21,8 @@
 
 namespace {
 
-double median(std::vector<double> v) {
-    std::sort(v.begin(), v.end());
-    return v.empty() ? 0.0 : v[v.size() / 2];
-}
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
+using pvs::bench::median;
+using pvs::bench::seconds_since;
 
 struct Scene {
     glm::vec3 eye;

@@ -1,8 +1,8 @@
-// bench_overestimation: where a conservative bake's overestimation comes from (issue 6, tightness).
+// bench_overestimation: where a conservative bake's overestimation comes from (tightness).
 //
 //   bench_overestimation WORLD.glb BAKE.h5 [--cells N] [--rays R] [--seed S]
 //
-// Rebuilds the bake's occluders from its stored parameters (pvs/bake.h solver_occluders), then, for N
+// Rebuilds the bake's occluders from its stored parameters (driver/bake.h solver_occluders), then, for N
 // seeded random cells, aims R rays at every object the cell's PVS lists, each from a random eye point of
 // the cell to a random point on the object (area-weighted), and sorts each listed (cell, object) pair
 // into the first class that holds:
@@ -26,13 +26,13 @@
 #include "cells/eyes.h"
 #include "core/config.h"
 #include "core/random.h"
+#include "driver/bake.h"
 #include "io/bake_file.h"
 #include "io/gltf_loader.h"
 #include "occluders/panels.h"
-#include "pvs/bake.h"
-#include "pvs/embree_scene.h"
-#include "pvs/region_hiding.h"
-#include "pvs/surface_points.h"
+#include "rays/ray_scene.h"
+#include "rays/surface_points.h"
+#include "solver/region_hiding.h"
 
 #include <nlohmann/json.hpp>
 
@@ -113,7 +113,8 @@ int main(int argc, char** argv) {
                 pvs::box_world(set.boxes[0], pvs::inset_panels(set.panels, set.epsilon_m.front()));
             full_scenes.push_back(std::make_unique<pvs::RayScene>(ctx, full));
             shrunk_scenes.push_back(std::make_unique<pvs::RayScene>(ctx, thin));
-            boxes_only_scenes.push_back(std::make_unique<pvs::RayScene>(ctx, pvs::box_world(set.boxes[0], {})));
+            boxes_only_scenes.push_back(
+                std::make_unique<pvs::RayScene>(ctx, pvs::box_world(set.boxes[0], {})));
         }
         pvs::CellSet cells = bake.cells;
         cells.view = view.view;

@@ -1,4 +1,4 @@
-// bench_ranking: ranked occluders per cell (issue 9; occluders/ranking.h, pvs/occluder_ranking.h). The
+// bench_ranking: ranked occluders per cell (occluders/ranking.h, occluders/cell_ranking.h). The
 // time of the ranking stage against the sampled PVS of the same cells (one run, so the ratio holds on a
 // shared machine), and the "knee" of Hudson et al.: how much of what the FULL set of proven boxes hides,
 // the best k of a cell alone hide.
@@ -23,11 +23,11 @@
 #include "cells/grid.h"
 #include "cells/view_volume.h"
 #include "io/gltf_loader.h"
+#include "occluders/cell_ranking.h"
 #include "occluders/ranking.h"
-#include "pvs/embree_scene.h"
-#include "pvs/occluder_ranking.h"
-#include "pvs/occluder_synthesis.h"
-#include "pvs/ray_sampler.h"
+#include "occluders/synthesis.h"
+#include "rays/ray_sampler.h"
+#include "rays/ray_scene.h"
 
 #include <omp.h>
 #include <nlohmann/json.hpp>

@@ -10,10 +10,11 @@
 //   occluded1  a plain rtcOccluded1 loop (a cheaper question: is anything hit at all?)
 // all parallel over eyes with OpenMP. Prints one JSON object: medians of the repeats in M rays/s, and
 // ratios to occluded1 taken in the same run.
+#include "bench/bench_util.h"
 #include "cells/eyes.h"
 #include "core/random.h"
 #include "io/gltf_loader.h"
-#include "pvs/embree_scene.h"
+#include "rays/ray_scene.h"
 
 #include <omp.h>
 #include <nlohmann/json.hpp>
@@ -29,14 +30,8 @@
 
 namespace {
 
-double median(std::vector<double> v) {
-    std::sort(v.begin(), v.end());
-    return v.empty() ? 0.0 : v[v.size() / 2];
-}
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
+using pvs::bench::median;
+using pvs::bench::seconds_since;
 
 }  // namespace
 

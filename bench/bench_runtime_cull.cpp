@@ -25,7 +25,7 @@
 #include "io/bake_file.h"
 #include "io/gltf_loader.h"
 #include "io/loader/examples/walk.h"
-#include "pvs/embree_scene.h"
+#include "rays/ray_scene.h"
 
 #include <pvsbake/loader.h>
 #include <pvsbake/occlusion.h>
@@ -52,7 +52,7 @@ using pvsbake::Box;
 using Culler = pvsbake::OcclusionCuller;
 using Path = pvsbake::OcclusionCuller::Path;
 
-// Area-angle estimate of the solid angle of a box from a point (ALGORITHMS.md section 4): the sum over the
+// Area-angle estimate of the solid angle of a box from a point (docs/ALGORITHMS.md#ranking): the sum over the
 // faces facing the point of area * (n . v) / |v|^3, v from the point to the face centre. 0 when inside.
 double solid_angle_estimate(const Box& b, const float eye[3]) {
     double sum = 0.0;

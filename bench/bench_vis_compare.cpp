@@ -7,13 +7,14 @@
 // world) also calls playable. At each: the share of the world's triangles in the objects the bake's cell
 // lists, the share the compiler's cluster PVS lets through (cluster_visible_triangle_fraction), and the
 // share in the objects R rays over the sphere actually reach from that point (a floor no cell-based PVS
-// can go below). Prints JSON: means, medians, and the ratio bake / compiler (issue 6 asks <= 0.75 on
-// oa_dm4, <= 0.5 on ctf_inyard), and the share of the bake's eye voxels the compiler calls solid or outside.
+// can go below). Prints JSON: means, medians, and the ratio bake / compiler, and the share of the bake's
+// eye voxels the compiler calls solid or outside.
+#include "bench/bench_util.h"
 #include "cells/eyes.h"
 #include "core/random.h"
 #include "io/bake_file.h"
 #include "io/gltf_loader.h"
-#include "pvs/embree_scene.h"
+#include "rays/ray_scene.h"
 
 #include <nlohmann/json.hpp>
 
@@ -29,17 +30,8 @@
 
 namespace {
 
-double median(std::vector<double> v) {
-    if (v.empty()) return 0.0;
-    std::sort(v.begin(), v.end());
-    return v[v.size() / 2];
-}
-
-double mean(const std::vector<double>& v) {
-    double s = 0.0;
-    for (double x : v) s += x;
-    return v.empty() ? 0.0 : s / double(v.size());
-}
+using pvs::bench::mean;
+using pvs::bench::median;
 
 }  // namespace
 

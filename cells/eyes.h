@@ -1,5 +1,5 @@
-// pvsbake cells: where eyes can be. The ONE place that decides it: the sampled PVS, the verifier and
-// (later) occluder ranking all draw their eye points here.
+// pvsbake cells: where eyes can be. The ONE place that decides it: the sampled PVS, the verifier and the
+// occluder ranking all draw their eye points here (docs/ALGORITHMS.md#eye-points).
 //
 // With a view volume (CellSet::eyes, cells/view_volume.h) an eye is drawn in (free voxel of the eye space)
 // ∩ cell: never inside solid, never outside reachable space. A box no eye voxel meets gets no eye point
@@ -34,8 +34,8 @@ inline void sample_eye_points(const CellSet& cells, uint32_t cell, uint32_t coun
 bool mask_meets_box(const VoxelMask& mask, const Aabb& box);
 
 // The part of `box` eyes can be in: the bounds of the eye voxels (as in mask_meets_box) clipped to the box.
-// Convex, and it holds every eye point the box can get. The whole box when `eyes` is empty (no view
-// volume); an empty box when no eye voxel meets it.
+// Convex, and it holds every eye point the box can get (docs/ALGORITHMS.md#eye-region). The whole box when
+// `eyes` is empty (no view volume); an empty box when no eye voxel meets it.
 Aabb eye_region(const VoxelMask& eyes, const Aabb& box);
 
 // Appends `count` directions stratified over the whole sphere (equal-area strata in (cos theta, phi),

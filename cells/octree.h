@@ -1,4 +1,4 @@
-// pvsbake cells: a visibility-driven octree of view cells (ALGORITHMS.md section 6).
+// pvsbake cells: a visibility-driven octree of view cells (docs/ALGORITHMS.md#octree).
 //
 // Root cells of `root_cell_size_m` (min_cell_size_m times a power of two) cover the view region; a cell
 // is split into eight where visibility changes inside it: when some child's PVS differs from the
@@ -20,12 +20,13 @@
 
 namespace pvs {
 
-// Fills `rows` (boxes.size() rows of `rows.object_count` bits) with the PVS of each box; streams[i] is
-// a number unique to box i. bounds[i] is the row the oracle gave the box's parent (a box that holds box i),
-// or null for a root: a conservative oracle proved every object that row leaves out hidden from every eye
-// of the parent, so from every eye of box i, and may leave it out without a test. Called from one thread;
-// it may parallelize inside. It advances the Context's progress by one per box it finishes: build_octree()
-// begins one progress per call, whose total is the call's box count, and does not count them again.
+// Fills `rows` (boxes.size() rows of `rows.object_count` bits) with the PVS of each box; streams[i] is a
+// number unique to box i. bounds[i] is the row the oracle gave the box's parent (a box that holds box i), or
+// null for a root: a conservative oracle proved every object that row leaves out hidden from every eye of the
+// parent, so from every eye of box i, and may leave it out without a test
+// (docs/ALGORITHMS.md#octree-parent-bound). Called from one thread; it may parallelize inside. It advances
+// the Context's progress by one per box it finishes: build_octree() begins one progress per call, whose total
+// is the call's box count, and does not count them again.
 using RegionPvsOracle =
     std::function<void(const std::vector<Aabb>& boxes, const std::vector<uint64_t>& streams,
                        const std::vector<const uint64_t*>& bounds, PvsSet& rows)>;

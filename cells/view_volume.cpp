@@ -3,8 +3,8 @@
 #include "cells/view_volume.h"
 
 #include "core/error.h"
-#include "occluders/flood.h"
-#include "occluders/voxels.h"
+#include "voxels/flood.h"
+#include "voxels/voxels.h"
 
 #include <fmt/format.h>
 

@@ -1,4 +1,4 @@
-// pvsbake cells: the view volume, where a player's eye can be (ALGORITHMS.md sections 1 and 6).
+// pvsbake cells: the view volume, where a player's eye can be (docs/ALGORITHMS.md#view-volume).
 //
 // Sources, combined by INTERSECTION (each one only ever removes space):
 //   - explicit boxes: the world's pvs_view_volume nodes and --view-box;
@@ -6,25 +6,26 @@
 //     (the world's pvs_view_seed nodes and --view-seed); a flood that reaches the world's bounds LEAKS:
 //     reported with its path, and the bake carries on with all the flood reached;
 //   - play height: only space up to --play-height above an upward-facing opaque surface (the BAND). With
-//     a play height the flood from the seeds WALKS instead of flying (occluders/flood.h): it stays in the
+//     a play height the flood from the seeds WALKS instead of flying (voxels/flood.h): it stays in the
 //     band, steps off ledges and falls, and never walks sideways through a see-through surface. So eyes
 //     never get over a wall, out through the sky or through a window into the inside of walls or the
 //     void around a level: places a body cannot reach, where eyes would see the backs of everything.
 // None given: the world bounds, with a warning (the bake is larger and slower than it needs to be).
 //
-// Conventions: voxels as in occluders/voxels.h. Two masks come out:
+// Conventions: voxels as in voxels/voxels.h. Two masks come out:
 //   eyes  - the free voxels left after the intersection: eye points are drawn here (never in a voxel an
 //           opaque triangle touches, so never inside solid);
 //   view  - eyes grown by one voxel (26 neighbours): the view region, reaching up to the walls, which the
 //           cells cover and where a lookup finds a cell. Conservative for eyes: a point a player can reach
-//           is in `view` whenever it is within one voxel of free reachable space.
+//           is in `view` whenever it is within one voxel of free reachable space. The conservative bake's
+//           promise covers the eyes mask, not that rim (docs/ALGORITHMS.md#eye-space).
 #pragma once
 
 #include "core/cell_set.h"
 #include "core/config.h"
 #include "core/context.h"
 #include "core/world.h"
-#include "occluders/voxels.h"
+#include "voxels/voxels.h"
 
 #include <string>
 #include <vector>

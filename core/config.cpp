@@ -26,6 +26,32 @@ const char* to_string(CellKind kind) {
     return kind == CellKind::kOctree ? "octree" : "grid";
 }
 
+const char* to_string(OptionGroup group) {
+    switch (group) {
+        case OptionGroup::kGeneral:
+            return "General";
+        case OptionGroup::kOutput:
+            return "Output";
+        case OptionGroup::kViewVolume:
+            return "View volume";
+        case OptionGroup::kCells:
+            return "Cells";
+        case OptionGroup::kOccluders:
+            return "Occluders";
+        case OptionGroup::kRanking:
+            return "Ranked occluders (run-time culling of moving objects)";
+        case OptionGroup::kConservative:
+            return "Conservative solver";
+        case OptionGroup::kSampled:
+            return "Sampled mode (AGGRESSIVE: may miss visible objects)";
+        case OptionGroup::kVerification:
+            return "Verification";
+        case OptionGroup::kExperimental:
+            return "Experimental (not proven, or for measurement only)";
+    }
+    return "?";
+}
+
 double largest_cell_edge_m(const CellConfig& config) {
     if (config.kind == CellKind::kGrid) return config.cell_size_m;
     const int levels =

@@ -64,13 +64,12 @@ constexpr double kDefaultVoxelSizeM = 0.25;
 // The automatic voxel edge of a conservative bake: epsilon / 2, at most kDefaultVoxelSizeM. Walls thicker
 // than about 2 epsilon + 2 voxels keep a shrunk occluder (the voxels their surfaces touch are not solid,
 // and the rest erodes by epsilon on each side), so half-epsilon voxels let thinner walls occlude than
-// epsilon voxels do. Measured on oa_dm4 at 1 m cells: the bake lets through 0.756x the map compiler's
-// triangles where epsilon voxels gave 0.779x, for 8x the voxels (still capped by max_voxels).
+// epsilon voxels do, for 8x the voxels (still capped by max_voxels; docs/RESULTS.md has the trade).
 inline double conservative_voxel_size_m(double epsilon_m) {
     return std::min(kDefaultVoxelSizeM, 0.5 * epsilon_m);
 }
 
-// Occluder synthesis (occluders/, pvs/occluder_synthesis.h).
+// Occluder synthesis (occluders/, occluders/synthesis.h).
 struct OccluderConfig {
     bool enabled = true;                  // synthesize occluders in a bake (--no-occluders to skip)
     uint32_t max_occluders = 512;         // [Limit: >= 1] boxes kept at most
@@ -83,22 +82,23 @@ struct OccluderConfig {
     uint32_t check_near_eyes = 256;       // [Limit: >= 0] and eye points within 4 m of each box, 16 rays
                                           // each (0 = off): sight through a crack near a box
     uint32_t seal_rays = 32;              // [Limit: >= 0] seal probe: rays from each voxel of the solid's
-                                          // frontier towards the eye space (pvs/seal_probe.h; 0 = off)
+                                          // frontier towards the eye space (occluders/seal_probe.h; 0 = off)
     double seal_reach_m = 4.0;            // [Limit: > 0] [Units: m] seal probe: how far a ray looks for an
                                           // eye voxel
     uint64_t check_seed = 7;
-    // Occluders per block of cells (conservative mode; pvs/occluder_synthesis.h synthesize_block_occluders).
-    // OPT-IN: their boxes rest on sampled ray checks at grazing shadow edges (README, "Occluders per block").
-    double block_m = 0.0;           // [Limit: >= 0] [Units: m] block edge (rounded to whole cells); 0 = off
-    double block_reach_m = 64.0;    // [Limit: >= 0] [Units: m] a block's own solid is looked for this far
-                                    // around it
-    double block_min_gain = 0.25;   // [Limit: >= 0] a block keeps its own occluders only when its eyes leave
-                                    // more than (1 + this) times the solid all eyes leave in its window
+    // Occluders per block of cells (conservative mode; occluders/synthesis.h synthesize_block_occluders).
+    // EXPERIMENTAL, NOT PROVEN: their boxes rest on sampled ray checks at grazing shadow edges
+    // (docs/ALGORITHMS.md#block-occluders).
+    double block_m = 0.0;          // [Limit: >= 0] [Units: m] block edge (rounded to whole cells); 0 = off
+    double block_reach_m = 64.0;   // [Limit: >= 0] [Units: m] a block's own solid is looked for this far
+                                   // around it
+    double block_min_gain = 0.25;  // [Limit: >= 0] a block keeps its own occluders only when its eyes leave
+                                   // more than (1 + this) times the solid all eyes leave in its window
     uint32_t block_probe_eyes = 256;   // [Limit: >= 0] sight probe eyes per block (0 = off)
     uint32_t block_check_eyes = 1024;  // [Limit: >= 1] ray check eyes per block
 };
 
-// Ranked occluders per cell (occluders/ranking.h, pvs/occluder_ranking.h; ALGORITHMS.md section 4).
+// Ranked occluders per cell (occluders/ranking.h, occluders/cell_ranking.h; docs/ALGORITHMS.md#ranking).
 struct RankingConfig {
     uint32_t occluders_per_cell = 8;   // [Limit: 0..1024] boxes kept per cell, best first; 0 = off
     double min_solid_angle_sr = 0.01;  // [Limit: 0..4 pi] [Units: sr] a box is a candidate for a cell when
@@ -107,33 +107,31 @@ struct RankingConfig {
     uint64_t seed = 0x72616e6bULL;     // [Limit: any] the same seed gives the same ranking for any threads
 };
 
-// The conservative solver (pvs/conservative.h).
+// The conservative solver (solver/conservative.h).
 struct ConservativeConfig {
-    double epsilon_m = 0.125;  // [Limit: > 0] [Units: m] occluders shrink by this; cell faces are sampled
-                               // every 2 epsilon. Smaller: tighter PVS, slower bake (samples grow
-                               // as 1 / epsilon^2); walls thinner than 2 epsilon do not occlude
-    int cube_resolution = 80;  // [Limit: 8..1024] depth cube pixels per face edge (near every occluder
-                               // edge about two pixels are lost; 80 against 64: oa_dm4 1 m lets through
-                               // 0.747x the compiler's triangles against 0.756x, in 1.1x the PVS time)
+    double epsilon_m = 0.125;      // [Limit: > 0] [Units: m] occluders shrink by this; cell faces are sampled
+                                   // every 2 epsilon. Smaller: tighter PVS, slower bake (samples grow
+                                   // as 1 / epsilon^2); walls thinner than 2 epsilon do not occlude
+    int cube_resolution = 80;      // [Limit: 8..1024] depth cube pixels per face edge (near every occluder
+                                   // edge about two pixels are lost: finer is tighter and slower)
     int fine_cube_resolution = 0;  // [Limit: 0..4096] floor samples take a second look at what the
-                                     // cube could not prove on a cube this fine, drawn only over those
-                                     // objects' pixels; 0 = off
-    int panel_refine_levels = 0;  // [Limit: 0..4] halvings of the floor patches, for what only the panels
-                                  // may still prove (their inset is the patch's half-size; the boxes keep
-                                  // epsilon); 0 = none
+                                   // cube could not prove on a cube this fine, drawn only over those
+                                   // objects' pixels; 0 = off
+    int panel_refine_levels = 0;   // [Limit: 0..4] halvings of the floor patches, for what only the panels
+                                   // may still prove (their inset is the patch's half-size; the boxes keep
+                                   // epsilon); 0 = none
     bool single_occluder_pass = true;  // first, what ONE occluder hides from a cell's whole eye region is
-                                       // proven exactly (pvs/region_hiding.h); the faces skip it
-    int refine_levels = 4;     // [Limit: 0..8] adaptive refinement: patches of a face are first tested
-                               // with occluders shrunk by epsilon * 2^levels (few samples), and only the
-                               // objects not yet proven hidden go to patches half the size, down to epsilon;
-                               // at most: a bake stops at the level its largest cell can use
-                               // (conservative_levels_used())
+                                       // proven exactly (solver/region_hiding.h); the faces skip it
+    int refine_levels = 4;  // [Limit: 0..8] adaptive refinement: patches of a face are first tested
+                            // with occluders shrunk by epsilon * 2^levels (few samples), and only the
+                            // objects not yet proven hidden go to patches half the size, down to epsilon;
+                            // at most: a bake stops at the level its largest cell can use
+                            // (conservative_levels_used())
 };
 
 // The refinement levels a conservative bake of cells no larger than `cell_edge_m` can use: a cell face is
 // solved from top patches of half-side at most edge / 2, which the level epsilon * 2^L >= edge / 2 already
-// holds, so the levels above it would never be sampled, yet each costs a shrink of the whole solid (on
-// oa_dm4 at 1 m cells, 2 of 5 levels: the shrink stage 10.9 -> 5.5 s, the same rows). At most
+// holds, so the levels above it would never be sampled, yet each costs a shrink of the whole solid. At most
 // config.refine_levels; a patch larger than the top level is split before it is sampled, so fewer levels
 // are always safe.
 int conservative_levels_used(const ConservativeConfig& config, double cell_edge_m);
@@ -154,21 +152,22 @@ struct SampledPvsConfig {
 };
 
 struct VerifyConfig {
-    bool enabled = true;                                      // run verification after a bake
-    SampleConfig rays{16, 1024, 200'000'000, 0x5eed5eedULL};  // ctf_inyard: about 30 s on two cores
+    bool enabled = true;  // run verification after a bake
+    SampleConfig rays{16, 1024, 200'000'000, 0x5eed5eedULL};
     uint32_t max_misses_reported = 1000;  // [Limit: >= 0] misses kept in the report and the file
     double aimed_share = 0.5;  // [Limit: 0..0.95] [Units: share] of the ray budget spent on rays aimed from
                                // fresh eye points at the objects the uniform rays did not touch; the
                                // uniform rays get the rest. 0 = uniform rays only (the figures before aimed
                                // rays). With no budget (0), each cell aims from eyes_per_cell eye points
-    double aimed_listed_share = 0.5;  // [Limit: 0..1] [Units: share] of a cell's aimed rays for the untouched
-                                      // objects the PVS lists (they can only tighten the sampled set); the
-                                      // untouched objects it leaves out (where misses hide) get the rest,
-                                      // and either group gets what the other cannot use (pvs/verify.h)
+    double aimed_listed_share =
+        0.5;  // [Limit: 0..1] [Units: share] of a cell's aimed rays for the untouched
+              // objects the PVS lists (they can only tighten the sampled set); the
+              // untouched objects it leaves out (where misses hide) get the rest,
+              // and either group gets what the other cannot use (docs/ALGORITHMS.md#verification)
     double neighbour_share = 0.5;  // [Limit: 0..1] [Units: share] of a cell's aimed rays kept for the
                                    // neighbour pass: rays from the cell at the points where the rays of the
-                                   // cells around first touched objects its own rays did not (pvs/verify.h).
-                                   // 0 = no neighbour pass
+                                   // cells around first touched objects its own rays did not
+                                   // (docs/ALGORITHMS.md#verification). 0 = no neighbour pass
 };
 
 struct BakeConfig {
@@ -183,8 +182,31 @@ struct BakeConfig {
     VerifyConfig verify;
 };
 
-// One declared option: flag on the command line, key in the bake file, units, limits, help.
+// The groups of options in `pvsbake bake --help` and docs/USAGE.md, in the order they are shown.
+// kExperimental holds what is not proven or exists only to measure; its help says which.
+enum class OptionGroup {
+    kGeneral,
+    kOutput,
+    kViewVolume,
+    kCells,
+    kOccluders,
+    kRanking,
+    kConservative,
+    kSampled,
+    kVerification,
+    kExperimental,
+};
+inline constexpr OptionGroup kOptionGroups[] = {
+    OptionGroup::kGeneral,      OptionGroup::kOutput,      OptionGroup::kViewVolume,   OptionGroup::kCells,
+    OptionGroup::kOccluders,    OptionGroup::kRanking,     OptionGroup::kConservative, OptionGroup::kSampled,
+    OptionGroup::kVerification, OptionGroup::kExperimental};
+
+// The group's title: "Cells", "Conservative solver", ...
+const char* to_string(OptionGroup group);
+
+// One declared option: its group, flag on the command line, key in the bake file, units, limits, help.
 struct OptionSpec {
+    OptionGroup group;
     const char* flag;   // "--cell-size"
     const char* key;    // "cells.cell_size_m"
     const char* units;  // "m", "rays", "" ...
@@ -198,169 +220,172 @@ struct OptionSpec {
 template <class Config, class Visitor>
 void visit_options(Config& c, Visitor&& v) {
     constexpr double kInf = std::numeric_limits<double>::infinity();
-    v(OptionSpec{"--threads", "run.threads", "threads", "worker threads, 0 = every core", 0, 4096},
+    v(OptionSpec{OptionGroup::kGeneral, "--threads", "run.threads", "threads",
+                 "worker threads, 0 = every core", 0, 4096},
       c.run.threads);
-    v(
-        OptionSpec{
-            "--voxel-size", "view.voxel_size_m", "m",
-            "voxel edge for the view volume and occluders, 0 = automatic (0.25 m, or epsilon / 2 if smaller in "
-            "conservative mode; coarser for huge worlds)",
-            0, 100},
-        c.view.voxel_size_m);
-    v(OptionSpec{"--max-voxels", "view.max_voxels", "voxels", "voxels the automatic voxel size may use", 1000,
-                 1e10},
+    v(OptionSpec{OptionGroup::kViewVolume, "--voxel-size", "view.voxel_size_m", "m",
+                 "voxel edge for the view volume and occluders, 0 = automatic (0.25 m, or epsilon / 2 if "
+                 "smaller in "
+                 "conservative mode; coarser for huge worlds)",
+                 0, 100},
+      c.view.voxel_size_m);
+    v(OptionSpec{OptionGroup::kViewVolume, "--max-voxels", "view.max_voxels", "voxels",
+                 "voxels the automatic voxel size may use", 1000, 1e10},
       c.view.max_voxels);
-    v(OptionSpec{"--play-height", "view.play_height_m", "m",
+    v(OptionSpec{OptionGroup::kViewVolume, "--play-height", "view.play_height_m", "m",
                  "eyes only up to this height above upward-facing floors, 0 = anywhere", 0, 1e4},
       c.view.play_height_m);
-    v(OptionSpec{"--cell-size", "cells.cell_size_m", "m", "grid: edge of a cell", 0.01, 1e4},
+    v(OptionSpec{OptionGroup::kCells, "--cell-size", "cells.cell_size_m", "m", "grid: edge of a cell", 0.01,
+                 1e4},
       c.cells.cell_size_m);
-    v(OptionSpec{"--min-cell-size", "cells.min_cell_size_m", "m", "octree: never split below this cell edge",
-                 0.01, 1e4},
+    v(OptionSpec{OptionGroup::kCells, "--min-cell-size", "cells.min_cell_size_m", "m",
+                 "octree: never split below this cell edge", 0.01, 1e4},
       c.cells.min_cell_size_m);
-    v(OptionSpec{"--root-cell-size", "cells.root_cell_size_m", "m",
+    v(OptionSpec{OptionGroup::kCells, "--root-cell-size", "cells.root_cell_size_m", "m",
                  "octree: edge of the root cells (min cell size times a power of two)", 0.01, 1e5},
       c.cells.root_cell_size_m);
-    v(OptionSpec{"--split-threshold", "cells.split_threshold", "share",
+    v(OptionSpec{OptionGroup::kCells, "--split-threshold", "cells.split_threshold", "share",
                  "octree: split where a child's PVS differs from its parent's by more than this share", 0, 1},
       c.cells.split_threshold);
-    v(OptionSpec{"--max-cells", "cells.max_cells", "cells",
+    v(OptionSpec{OptionGroup::kCells, "--max-cells", "cells.max_cells", "cells",
                  "octree: stop splitting at this many cells, 0 = no limit", 0, 1e9},
       c.cells.max_cells);
-    v(OptionSpec{"--max-occluders", "occluders.max_occluders", "boxes", "occluders: boxes kept at most", 1,
-                 1e7},
+    v(OptionSpec{OptionGroup::kOccluders, "--max-occluders", "occluders.max_occluders", "boxes",
+                 "boxes kept at most", 1, 1e7},
       c.occluders.max_occluders);
-    v(OptionSpec{"--min-occluder-volume", "occluders.min_occluder_volume_m3", "m3",
-                 "occluders: drop boxes smaller than this", 0, 1e12},
+    v(OptionSpec{OptionGroup::kOccluders, "--min-occluder-volume", "occluders.min_occluder_volume_m3", "m3",
+                 "drop boxes smaller than this", 0, 1e12},
       c.occluders.min_occluder_volume_m3);
-    v(
-        OptionSpec{
-            "--occluder-probe-eyes", "occluders.probe_eyes", "eyes",
-            "occluders: eye points whose rays over the sphere carve seen voxels out of the solid, 0 = off", 0,
-            1e7},
-        c.occluders.probe_eyes);
-    v(OptionSpec{"--occluder-probe-rays", "occluders.probe_rays_per_eye", "rays",
-                 "occluders: rays per probe eye", 1, 1e8},
+    v(OptionSpec{OptionGroup::kOccluders, "--occluder-probe-eyes", "occluders.probe_eyes", "eyes",
+                 "eye points whose rays over the sphere carve seen voxels out of the solid, 0 = off", 0, 1e7},
+      c.occluders.probe_eyes);
+    v(OptionSpec{OptionGroup::kOccluders, "--occluder-probe-rays", "occluders.probe_rays_per_eye", "rays",
+                 "rays per probe eye", 1, 1e8},
       c.occluders.probe_rays_per_eye);
-    v(OptionSpec{"--occluder-check-eyes", "occluders.check_eyes", "eyes",
-                 "occluders: eye points whose rays check every box against the triangles", 1, 1e7},
+    v(OptionSpec{OptionGroup::kOccluders, "--occluder-check-eyes", "occluders.check_eyes", "eyes",
+                 "eye points whose rays check every box against the triangles", 1, 1e7},
       c.occluders.check_eyes);
-    v(OptionSpec{"--occluder-check-near-eyes", "occluders.check_near_eyes", "eyes",
-                 "occluders: eye points within 4 m of each box that check it too (16 rays each; 0 = off)", 0,
-                 1e6},
+    v(OptionSpec{OptionGroup::kOccluders, "--occluder-check-near-eyes", "occluders.check_near_eyes", "eyes",
+                 "eye points within 4 m of each box that check it too (16 rays each; 0 = off)", 0, 1e6},
       c.occluders.check_near_eyes);
-    v(OptionSpec{"--occluder-seal-rays", "occluders.seal_rays", "rays",
-                 "occluders: rays from each voxel of the solid just behind a touched layer, looking for sight "
+    v(OptionSpec{OptionGroup::kOccluders, "--occluder-seal-rays", "occluders.seal_rays", "rays",
+                 "rays from each voxel of the solid just behind a touched layer, looking for sight "
                  "through cracks narrower than a voxel (0 = off)",
                  0, 1e5},
       c.occluders.seal_rays);
-    v(OptionSpec{"--occluder-seal-reach", "occluders.seal_reach_m", "m",
-                 "occluders: how far those rays look for eye space", 0.01, 1e5},
+    v(OptionSpec{OptionGroup::kOccluders, "--occluder-seal-reach", "occluders.seal_reach_m", "m",
+                 "how far those rays look for eye space", 0.01, 1e5},
       c.occluders.seal_reach_m);
-    v(OptionSpec{"--occluder-block", "occluders.block_m", "m",
-                 "conservative mode, opt-in (16 suits open levels): occluders per block of cells of this edge "
-                 "(rounded to whole cells), from the sight of the block's own eyes; NOT PROVEN: their boxes rest "
-                 "on sampled ray checks, and a ctf_inyard bake with it has misses (README); 0 = one set for all "
-                 "cells",
+    v(OptionSpec{OptionGroup::kExperimental, "--occluder-block", "occluders.block_m", "m",
+                 "EXPERIMENTAL, NOT PROVEN (its boxes rest on sampled ray checks, and bakes with it have had "
+                 "misses: docs/RESULTS.md): occluders per block of cells of this edge (rounded to whole "
+                 "cells), from the sight of the block's own eyes; 0 = off, one set for all cells",
                  0, 1e5},
       c.occluders.block_m);
-    v(OptionSpec{"--occluder-block-reach", "occluders.block_reach_m", "m",
-                 "conservative mode: a block's own occluders are looked for this far around it", 0, 1e5},
+    v(OptionSpec{OptionGroup::kExperimental, "--occluder-block-reach", "occluders.block_reach_m", "m",
+                 "with --occluder-block: a block's own occluders are looked for this far around it", 0, 1e5},
       c.occluders.block_reach_m);
-    v(OptionSpec{"--occluder-block-min-gain", "occluders.block_min_gain", "share",
-                 "conservative mode: a block keeps its own occluders only when its eyes leave more than "
+    v(OptionSpec{OptionGroup::kExperimental, "--occluder-block-min-gain", "occluders.block_min_gain", "share",
+                 "with --occluder-block: a block keeps its own occluders only when its eyes leave more than "
                  "(1 + this) times the solid all eyes leave around it",
                  0, 1e6},
       c.occluders.block_min_gain);
-    v(OptionSpec{"--occluder-block-probe-eyes", "occluders.block_probe_eyes", "eyes",
-                 "conservative mode: sight probe eyes per block, 0 = off", 0, 1e7},
+    v(OptionSpec{OptionGroup::kExperimental, "--occluder-block-probe-eyes", "occluders.block_probe_eyes",
+                 "eyes", "with --occluder-block: sight probe eyes per block, 0 = off", 0, 1e7},
       c.occluders.block_probe_eyes);
-    v(OptionSpec{"--occluder-block-check-eyes", "occluders.block_check_eyes", "eyes",
-                 "conservative mode: ray check eyes per block", 1, 1e7},
+    v(OptionSpec{OptionGroup::kExperimental, "--occluder-block-check-eyes", "occluders.block_check_eyes",
+                 "eyes", "with --occluder-block: ray check eyes per block", 1, 1e7},
       c.occluders.block_check_eyes);
-    v(OptionSpec{"--occluders-per-cell", "ranking.occluders_per_cell", "boxes",
+    v(OptionSpec{OptionGroup::kRanking, "--occluders-per-cell", "ranking.occluders_per_cell", "boxes",
                  "ranked occluders kept per cell for run-time culling, best first; 0 = off", 0, 1024},
       c.ranking.occluders_per_cell);
-    v(OptionSpec{"--min-solid-angle", "ranking.min_solid_angle_sr", "sr",
-                 "ranked occluders: a box is a candidate for a cell when its solid angle from some sampled "
+    v(OptionSpec{OptionGroup::kRanking, "--min-solid-angle", "ranking.min_solid_angle_sr", "sr",
+                 "a box is a candidate for a cell when its solid angle from some sampled "
                  "eye of the cell reaches this",
                  0, 12.566370614359172},
       c.ranking.min_solid_angle_sr);
-    v(OptionSpec{"--ranking-eyes", "ranking.eyes_per_cell", "eyes",
-                 "ranked occluders: seeded eye points per cell for solid angle and depth complexity", 1,
-                 1024},
+    v(OptionSpec{OptionGroup::kRanking, "--ranking-eyes", "ranking.eyes_per_cell", "eyes",
+                 "seeded eye points per cell for solid angle and depth complexity", 1, 1024},
       c.ranking.eyes_per_cell);
-    v(OptionSpec{"--ranking-seed", "ranking.seed", "", "ranked occluders: random seed of the eye points", 0,
-                 kInf},
+    v(OptionSpec{OptionGroup::kRanking, "--ranking-seed", "ranking.seed", "", "random seed of the eye points",
+                 0, kInf},
       c.ranking.seed);
-    v(OptionSpec{"--epsilon", "conservative.epsilon_m", "m",
-                 "conservative mode: occluders shrink by this and cell faces are sampled within it", 0.01,
-                 100},
+    v(OptionSpec{OptionGroup::kConservative, "--epsilon", "conservative.epsilon_m", "m",
+                 "occluders shrink by this and cell faces are sampled within it", 0.01, 100},
       c.conservative.epsilon_m);
-    v(OptionSpec{"--cube-resolution", "conservative.cube_resolution", "pixels",
-                 "conservative mode: depth cube pixels per face edge", 8, 1024},
+    v(OptionSpec{OptionGroup::kConservative, "--cube-resolution", "conservative.cube_resolution", "pixels",
+                 "depth cube pixels per face edge", 8, 1024},
       c.conservative.cube_resolution);
-    v(OptionSpec{"--fine-cube-resolution", "conservative.fine_cube_resolution", "pixels",
-                 "conservative mode: floor samples take a second look at what the cube could not prove on a "
+    v(OptionSpec{OptionGroup::kConservative, "--fine-cube-resolution", "conservative.fine_cube_resolution",
+                 "pixels",
+                 "floor samples take a second look at what the cube could not prove on a "
                  "cube this fine (only over those objects' pixels); 0 = off",
                  0, 4096},
       c.conservative.fine_cube_resolution);
-    v(OptionSpec{"--single-occluder-pass", "conservative.single_occluder_pass", "",
-                 "conservative mode: first prove hidden, exactly, what one occluder (a panel or a box) hides "
-                 "from a cell's whole eye region (false: off; the same safety, a looser PVS)"},
-      c.conservative.single_occluder_pass);
-    v(OptionSpec{"--panel-refine-levels", "conservative.panel_refine_levels", "levels",
-                 "conservative mode: floor patches are halved this many more times for the objects only the "
+    v(
+        OptionSpec{
+            OptionGroup::kExperimental, "--single-occluder-pass", "conservative.single_occluder_pass", "",
+            "FOR MEASUREMENT ONLY: false turns off the exact single-occluder pass (what one panel or box "
+            "hides from a cell's whole eye region), to measure what it gives: the same safety, a looser "
+            "PVS"},
+        c.conservative.single_occluder_pass);
+    v(OptionSpec{OptionGroup::kConservative, "--panel-refine-levels", "conservative.panel_refine_levels",
+                 "levels",
+                 "floor patches are halved this many more times for the objects only the "
                  "panels may still prove (a panel's inset is the patch's half-size; boxes keep epsilon)",
                  0, 4},
       c.conservative.panel_refine_levels);
     v(
         OptionSpec{
-            "--refine-levels", "conservative.refine_levels", "levels",
-            "conservative mode: coarsest patches use occluders shrunk by epsilon * 2^levels; "
+            OptionGroup::kConservative, "--refine-levels", "conservative.refine_levels", "levels",
+            "coarsest patches use occluders shrunk by epsilon * 2^levels; "
             "objects they cannot prove hidden go to half-size patches, down to epsilon (0 = no refinement; "
             "at most: the bake stops at the level its largest cell can use)",
             0, 8},
         c.conservative.refine_levels);
-    v(OptionSpec{"--eyes", "sampled.eyes_per_cell", "eyes", "sampled mode: eye points per cell", 1, 1e6},
-      c.sampled.rays.eyes_per_cell);
-    v(OptionSpec{"--rays", "sampled.rays_per_eye", "rays", "sampled mode: rays per eye point", 1, 1e8},
-      c.sampled.rays.rays_per_eye);
-    v(OptionSpec{"--ray-budget", "sampled.ray_budget", "rays",
-                 "sampled mode: rays for the whole bake, 0 = no cap (rays per eye shrink to fit)", 0, kInf},
-      c.sampled.rays.ray_budget);
-    v(OptionSpec{"--seed", "sampled.seed", "", "sampled mode: random seed", 0, kInf}, c.sampled.rays.seed);
-    v(OptionSpec{"--guard-band", "sampled.guard_band_deg", "degrees",
-                 "sampled mode: also list objects a ray passed within this angle of, 0 = off", 0, 45},
-      c.sampled.guard_band_deg);
-    v(OptionSpec{"--verify-eyes", "verify.eyes_per_cell", "eyes", "verification: eye points per cell", 1,
+    v(OptionSpec{OptionGroup::kSampled, "--eyes", "sampled.eyes_per_cell", "eyes", "eye points per cell", 1,
                  1e6},
+      c.sampled.rays.eyes_per_cell);
+    v(OptionSpec{OptionGroup::kSampled, "--rays", "sampled.rays_per_eye", "rays", "rays per eye point", 1,
+                 1e8},
+      c.sampled.rays.rays_per_eye);
+    v(OptionSpec{OptionGroup::kSampled, "--ray-budget", "sampled.ray_budget", "rays",
+                 "rays for the whole bake, 0 = no cap (rays per eye shrink to fit)", 0, kInf},
+      c.sampled.rays.ray_budget);
+    v(OptionSpec{OptionGroup::kSampled, "--seed", "sampled.seed", "", "random seed", 0, kInf},
+      c.sampled.rays.seed);
+    v(OptionSpec{OptionGroup::kSampled, "--guard-band", "sampled.guard_band_deg", "degrees",
+                 "also list objects a ray passed within this angle of, 0 = off", 0, 45},
+      c.sampled.guard_band_deg);
+    v(OptionSpec{OptionGroup::kVerification, "--verify-eyes", "verify.eyes_per_cell", "eyes",
+                 "eye points per cell", 1, 1e6},
       c.verify.rays.eyes_per_cell);
-    v(OptionSpec{"--verify-rays-per-eye", "verify.rays_per_eye", "rays", "verification: rays per eye point",
-                 1, 1e8},
+    v(OptionSpec{OptionGroup::kVerification, "--verify-rays-per-eye", "verify.rays_per_eye", "rays",
+                 "rays per eye point", 1, 1e8},
       c.verify.rays.rays_per_eye);
-    v(OptionSpec{"--verify-rays", "verify.ray_budget", "rays",
-                 "verification: rays for the whole run, 0 = no cap (rays per eye shrink to fit)", 0, kInf},
+    v(OptionSpec{OptionGroup::kVerification, "--verify-rays", "verify.ray_budget", "rays",
+                 "rays for the whole run, 0 = no cap (rays per eye shrink to fit)", 0, kInf},
       c.verify.rays.ray_budget);
-    v(OptionSpec{"--verify-seed", "verify.seed", "", "verification: random seed (differs from the bake's)", 0,
-                 kInf},
+    v(OptionSpec{OptionGroup::kVerification, "--verify-seed", "verify.seed", "",
+                 "random seed (differs from the bake's)", 0, kInf},
       c.verify.rays.seed);
-    v(OptionSpec{"--max-misses", "verify.max_misses_reported", "misses",
-                 "verification: misses kept in the report and the file", 0, 1e7},
+    v(OptionSpec{OptionGroup::kVerification, "--max-misses", "verify.max_misses_reported", "misses",
+                 "misses kept in the report and the file", 0, 1e7},
       c.verify.max_misses_reported);
-    v(OptionSpec{"--verify-aimed-share", "verify.aimed_share", "share",
-                 "verification: share of the rays aimed at points on the objects the uniform rays missed "
+    v(OptionSpec{OptionGroup::kVerification, "--verify-aimed-share", "verify.aimed_share", "share",
+                 "share of the rays aimed at points on the objects the uniform rays missed "
                  "(the uniform rays get the rest), 0 = uniform rays only",
                  0, 0.95},
       c.verify.aimed_share);
-    v(OptionSpec{"--verify-aimed-listed-share", "verify.aimed_listed_share", "share",
-                 "verification: share of a cell's aimed rays for the untouched objects the PVS lists (they "
+    v(OptionSpec{OptionGroup::kVerification, "--verify-aimed-listed-share", "verify.aimed_listed_share",
+                 "share",
+                 "share of a cell's aimed rays for the untouched objects the PVS lists (they "
                  "tighten the overestimation figure); the objects it leaves out (where misses hide) get the "
                  "rest, and each group gets what the other cannot use",
                  0, 1},
       c.verify.aimed_listed_share);
-    v(OptionSpec{"--verify-neighbour-share", "verify.neighbour_share", "share",
-                 "verification: share of a cell's aimed rays for a second pass that aims from the cell at the "
+    v(OptionSpec{OptionGroup::kVerification, "--verify-neighbour-share", "verify.neighbour_share", "share",
+                 "share of a cell's aimed rays for a second pass that aims from the cell at the "
                  "points where the rays of the cells around saw objects its own rays did not, 0 = no second "
                  "pass",
                  0, 1},

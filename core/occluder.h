@@ -1,7 +1,7 @@
 // pvsbake core: a synthesized occluder, an axis-aligned box inside the opaque solid.
 //
 // Conventions: glTF axes, metres. `proven`: the box passed the ray check against the real triangles
-// (pvs/occluder_synthesis.h); only proven boxes may ever be used by a conservative bake.
+// (occluders/synthesis.h); only proven boxes may ever be used by a conservative bake.
 #pragma once
 
 #include "core/cell_set.h"
@@ -42,21 +42,22 @@ struct RankedOccluders {
     }
 };
 
-// The occluders of the conservative solver (pvs/conservative.h): the proven solid, and boxes of it shrunk
-// by each epsilon of a ladder (every point of a box of level k has its whole epsilon_m[k]-ball inside the
-// proven solid).
+// The occluders of the conservative solver (solver/conservative.h): the proven solid, and boxes of it shrunk
+// by each epsilon of a ladder (every point of a box of level k has its whole epsilon_m[k]-cube, the ball in
+// the Chebyshev metric, inside the proven solid: docs/ALGORITHMS.md#shrunk-occluders).
 struct ShrunkOccluders {
     std::vector<double> epsilon_m;         // ascending, epsilon_m[0] is the floor (--epsilon)
     std::vector<std::vector<Aabb>> boxes;  // boxes[k]: shrunk by epsilon_m[k]
     // Flat rectangles covered by opaque triangles (occluders/panels.h), as found: the depth cube insets them
-    // per ray for each sample's ball (pvs/conservative.h, point 8).
+    // per ray for each patch's box (docs/ALGORITHMS.md#panel-inset).
     std::vector<Aabb> panels;
     VoxelMask solid;  // the proven solid (sealed off from the eyes, untouched, passed the sight probe and the
                       // ray check): no sight line from the eye space enters it
+                      // (docs/ALGORITHMS.md#sampled-step)
     VoxelMask free;   // voxels no opaque triangle touches, outside the proven solid: where sight from the eye
                       // space can be, and a ray started there sees as an eye would
 
-    // Occluders per block of cells (pvs/occluder_synthesis.h, synthesize_block_occluders): squares of
+    // Occluders per block of cells (occluders/synthesis.h, synthesize_block_occluders): squares of
     // block_size_m in x and z from block_origin; block_set[bx + block_dims.x * bz] indexes block_sets, or is
     // -1 where the block uses these occluders. A block set has the same epsilon ladder, its own boxes, panels
     // and solid, and an empty `free` (use this one's).

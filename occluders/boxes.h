@@ -1,9 +1,9 @@
 // pvsbake occluders: occluder synthesis, few large axis-aligned boxes inside the solid voxels (after
 // Andújar, Saona-Vázquez, Navazo, Brunet, "Integrating Occlusion Culling and Levels of Detail through
 // Hardly-Visible Sets", 2000, and the "occluder skin" idea of taking the largest boxes of inner voxels;
-// see ../shared/design/ALGORITHMS.md, section 2).
+// see docs/ALGORITHMS.md#boxes).
 //
-// Conventions: voxels as in occluders/voxels.h (glTF axes, metres; voxel (x, y, z) has index
+// Conventions: voxels as in voxels/voxels.h (glTF axes, metres; voxel (x, y, z) has index
 // x + dims.x * (y + dims.y * z)). A VoxelBox is an inclusive voxel range lo..hi on every axis.
 // Conservative: every voxel of every returned box is solid (a hard rule: a box reaching outside the
 // solid would hide objects that can be seen). Boxes may overlap each other. box_bounds() is the union
@@ -28,7 +28,7 @@
 
 #include "core/context.h"
 #include "core/math.h"
-#include "occluders/voxels.h"
+#include "voxels/voxels.h"
 
 #include <cstdint>
 #include <vector>

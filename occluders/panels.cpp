@@ -109,7 +109,7 @@ bool union_covers(double u0, double u1, double v0, double v1, const std::vector<
 // (fans, T-junctions, several faces meeting) gives its covered cells. From every covered cell not yet in a
 // rectangle, two MAXIMAL rectangles of covered cells are grown (u first, then v; and v first): they
 // overlap, so a point deep inside the covered region lies deep inside some panel, and the inset a panel
-// gets at its edges (pvs/conservative.h point 8) costs only at the region's own edges, not where a
+// gets at its edges (docs/ALGORITHMS.md#panel-inset) costs only at the region's own edges, not where a
 // partition would cut it.
 std::vector<Rect> plane_rectangles(int axis, float plane, const std::vector<Tri2>& tris,
                                    uint64_t& covered_cells) {

@@ -2,9 +2,9 @@
 // walls, floors and ceilings, found exactly from the triangles (no voxels). A wall thinner than about
 // 2 epsilon + 2 voxels leaves no box in the solid once shrunk (occluders/boxes.h); its faces still give
 // panels. Planar occluders as in the original occluder-shrinking work (P. Wonka, M. Wimmer,
-// D. Schmalstieg, "Visibility Preprocessing with Occluder Fusion for Urban Walkthroughs", EGWR 2000);
-// how a panel is shrunk so that it stays safe for every point of a sample's ball is argued in
-// pvs/conservative.h, point 8.
+// D. Schmalstieg, "Visibility Preprocessing with Occluder Fusion for Urban Walkthroughs", EGWR 2000). How
+// panels are found and why they stop sight: docs/ALGORITHMS.md#panels; how the depth cube insets a panel so
+// that it stays safe for every point of a patch: docs/ALGORITHMS.md#panel-inset.
 //
 // Conventions: glTF axes (right-handed, +Y up, metres). A panel is an Aabb that is flat along one axis
 // (min[axis] == max[axis], its PLANE); its other two extents are its rectangle. "Covered" means every point
@@ -33,8 +33,8 @@ struct PanelFigures {
 // double; leftover slivers under 1e-12 m2 count as rounding along shared edges). Any triangulation is
 // found: pairs of halves, fans of a brush face, T-junctions, faces of several meshes meeting. Panels are
 // MAXIMAL rectangles of covered cells, grown from every cell not yet in one (u first and v first), so they
-// overlap: a point deep in the covered region is deep in some panel, and the inset (point 8 of
-// pvs/conservative.h) costs only at the region's edges. Rectangles inside another are dropped.
+// overlap: a point deep in the covered region is deep in some panel, and the inset
+// (docs/ALGORITHMS.md#panel-inset) costs only at the region's edges. Rectangles inside another are dropped.
 // Deterministic.
 std::vector<Aabb> find_panels(const World& world, PanelFigures* figures = nullptr);
 

@@ -1,7 +1,7 @@
-// pvsbake occluders: ranking occluder boxes for a view cell (ALGORITHMS.md section 4). After Hudson, Manocha,
-// Cohen, Lin, Hoff and Zhang, "Accelerated Occlusion Culling using Shadow Frusta" (SoCG 1997): for each
-// cell keep the few occluders worth testing at run time (for dynamic objects, which a PVS cannot list),
-// chosen by their solid angle and by how much of the world lies in their shadow frusta.
+// pvsbake occluders: ranking occluder boxes for a view cell (docs/ALGORITHMS.md#ranking). After Hudson,
+// Manocha, Cohen, Lin, Hoff and Zhang, "Accelerated Occlusion Culling using Shadow Frusta" (SoCG 1997): for
+// each cell keep the few occluders worth testing at run time (for dynamic objects, which a PVS cannot
+// list), chosen by their solid angle and by how much of the world lies in their shadow frusta.
 //
 // Conventions: glTF axes (right-handed, +Y up), metres, boxes closed (core/math.h). Solid angles in
 // steradians (a whole sphere is 4 pi).
@@ -9,27 +9,24 @@
 // - Solid angle: EXACT for a box seen from a point (not the area-angle estimate a (N.V)/|V|^2): the sum,
 //   over the faces the point sees (at most 3), of the exact solid angle of the face, each face two
 //   triangles by Van Oosterom and Strackee's formula (IEEE Trans. Biomed. Eng. 1983):
-//   tan(W / 2) = |a.(b x c)| / (|a||b||c| + (a.b)|c| + (a.c)|b| + (b.c)|a|). A box is convex, so the
-//   faces it shows do not overlap on the sphere and the sum is exact. A point in the closed box: 4 pi.
-// - Shadow frustum of box B from eye p: the points q such that the segment [p, q] meets B (B included).
-//   It is convex (q = p + t (b - p), t >= 1, b in B), and equals the cone from p over B (one plane
-//   through p and each silhouette edge of B) cut by the planes of the faces p sees (q on their far side).
-//   So an object's AABB lies WHOLLY in the shadow iff, for each of those at most 9 planes, the corner of
-//   the AABB farthest out of it is inside: an exact test (up to rounding), not an approximation; every
-//   ray from p to any point of the AABB passes through B. segment_meets_box() is the simple reference
-//   (tests compare the two). An object only partly in the shadow never counts: "hidden" here is
-//   conservative for an opaque box. From an eye inside B (the closed box) there is no shadow.
+//   tan(W / 2) = |a.(b x c)| / (|a||b||c| + (a.b)|c| + (a.c)|b| + (b.c)|a|). Exact for a box
+//   (docs/ALGORITHMS.md#solid-angle). A point in the closed box: 4 pi.
+// - Shadow frustum of box B from eye p: the points q such that the segment [p, q] meets B (B included):
+//   the cone from p over B (one plane through p and each silhouette edge of B) cut by the planes of the
+//   faces p sees (q on their far side). An object's AABB lies WHOLLY in the shadow iff, for each of those
+//   at most 9 planes, the corner of the AABB farthest out of it is inside: an exact test (up to rounding;
+//   docs/ALGORITHMS.md#shadow-frustum); every ray from p to any point of the AABB passes through B.
+//   segment_meets_box() is the simple reference (tests compare the two). An object only partly in the
+//   shadow never counts: "hidden" here is conservative for an opaque box. From an eye inside B (the closed
+//   box) there is no shadow.
 // - Depth complexity, sampled: for each eye of the cell, the objects (and their triangles) wholly in the
 //   box's shadow frustum; averaged over the cell's eyes (an eye inside the box counts as hiding nothing).
 // - Score, higher is better:  score = sqrt( (W_mean / 4 pi) * h ),  h = (O_mean / N + T_mean) / 2,
 //   with W_mean the mean solid angle over the cell's eyes, O_mean the mean number of objects wholly in the
-//   shadow (of the world's N), T_mean the mean share of the world's triangles in them. Why: the solid
-//   angle says how much of the view the box covers (what a dynamic object behind it needs), the depth
-//   complexity whether anything is really behind it (a wall with only void behind hides nothing, however
-//   big); a product wants both, and is blind to the units of either; the square root keeps it a share in
-//   [0, 1] (the geometric mean of two shares). Objects and triangles weigh half each: draw calls and
-//   vertex work. Ties (for example everything scoring 0 when no object is wholly hidden) break by the
-//   largest solid angle, then by the lower box index, so the order is total and the bake repeatable.
+//   shadow (of the world's N), T_mean the mean share of the world's triangles in them; a share in [0, 1]
+//   (why this score: docs/ALGORITHMS.md#ranking-score). Ties (for example everything scoring 0 when no
+//   object is wholly hidden) break by the largest solid angle, then by the lower box index, so the order is
+//   total and the bake repeatable.
 // - Candidates: boxes whose solid angle from SOME sampled eye of the cell reaches min_solid_angle_sr; the
 //   best occluders_per_cell of them are kept. The depth complexity (the costly part) is measured only for
 //   candidates that can still make the top K (a box scores at most sqrt(W_mean / 4 pi), as h <= 1): the

@@ -1,9 +1,9 @@
-// Solid classification: sight from the eye space through untouched voxels (occluders/flood.h sight_reach);
+// Solid classification: sight from the eye space through untouched voxels (voxels/flood.h sight_reach);
 // the rest, less the touched voxels, is solid.
 #include "occluders/solid.h"
 
 #include "core/error.h"
-#include "occluders/flood.h"
+#include "voxels/flood.h"
 
 #include <fmt/format.h>
 

@@ -4,7 +4,7 @@
 #include "core/error.h"
 #include "core/random.h"
 #include "occluders/boxes.h"
-#include "occluders/voxels.h"
+#include "voxels/voxels.h"
 
 #include <gtest/gtest.h>
 #include <omp.h>

@@ -1,8 +1,8 @@
 // The command line end to end, in-process: bake, info, query, verify, and bad input.
 #include "core/config.h"
 #include "core/error.h"
+#include "driver/cli.h"
 #include "io/bake_file.h"
-#include "pvs/cli.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
@@ -77,7 +77,7 @@ TEST(Cli, BakeInfoQueryOnTheSampleWorld) {
     ASSERT_EQ(info.status, 0) << info.log;
     EXPECT_TRUE(contains(info.out, "objects     149")) << info.out;
     EXPECT_FALSE(contains(info.out, "aggressive"));
-    // Every bake ranks its proven occluders per cell (issue 9), and info sums them up.
+    // Every bake ranks its proven occluders per cell (docs/ALGORITHMS.md#ranking), and info sums them up.
     EXPECT_TRUE(contains(info.out, "ranked      8.00 per cell")) << info.out;
     EXPECT_EQ(j["figures"]["ranked_occluders_per_cell_mean"].get<double>(), 8.0);
     const CliRun info_json = run({"info", out, "--json"});
@@ -215,6 +215,40 @@ TEST(Cli, HelpOnEverySubcommandAndTheRealBinary) {
     EXPECT_TRUE(contains(verify_help.out, "--verify-aimed-listed-share")) << verify_help.out;
     EXPECT_TRUE(contains(verify_help.out, "--verify-neighbour-share")) << verify_help.out;
     EXPECT_EQ(std::system((std::string(PVSBAKE_BINARY) + " --help > /dev/null").c_str()), 0);
+}
+
+// `bake --help` lists every declared option once, under its group's title, the groups in the order of
+// kOptionGroups; what is unproven or only measures sits under Experimental and says so.
+TEST(Cli, BakeHelpListsEveryOptionOnceUnderItsGroup) {
+    const std::string help = run({"bake", "--help"}).out;
+    std::vector<size_t> title_at;
+    for (const OptionGroup group : kOptionGroups) {
+        const std::string title = std::string("\n") + to_string(group) + ":\n";
+        const size_t at = help.find(title);
+        ASSERT_NE(at, std::string::npos) << "no group " << to_string(group) << " in\n" << help;
+        EXPECT_EQ(help.find(title, at + 1), std::string::npos) << "group listed twice: " << to_string(group);
+        if (!title_at.empty()) EXPECT_GT(at, title_at.back()) << to_string(group) << " out of order";
+        title_at.push_back(at);
+    }
+    BakeConfig config;
+    visit_options(config, [&](const OptionSpec& spec, auto&) {
+        const std::string flag = std::string("  ") + spec.flag + " ";
+        const size_t at = help.find(flag);
+        ASSERT_NE(at, std::string::npos) << spec.flag << " missing from\n" << help;
+        EXPECT_EQ(help.find(flag, at + 1), std::string::npos) << spec.flag << " listed twice";
+        // The option sits between its group's title and the next one.
+        size_t group_index = 0;
+        while (kOptionGroups[group_index] != spec.group) ++group_index;
+        EXPECT_GT(at, title_at[group_index]) << spec.flag;
+        if (group_index + 1 < title_at.size()) EXPECT_LT(at, title_at[group_index + 1]) << spec.flag;
+        if (spec.group == OptionGroup::kExperimental) {
+            const std::string text = spec.help;
+            EXPECT_TRUE(text.find("NOT PROVEN") != std::string::npos ||
+                        text.find("FOR MEASUREMENT ONLY") != std::string::npos ||
+                        text.find("with --occluder-block") != std::string::npos)
+                << spec.flag << ": an experimental option must say why it is one";
+        }
+    });
 }
 
 }  // namespace

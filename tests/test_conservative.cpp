@@ -4,10 +4,10 @@
 #include "cells/view_volume.h"
 #include "core/error.h"
 #include "core/random.h"
-#include "pvs/bake.h"
-#include "pvs/conservative.h"
-#include "pvs/embree_scene.h"
-#include "pvs/occluder_synthesis.h"
+#include "driver/bake.h"
+#include "occluders/synthesis.h"
+#include "rays/ray_scene.h"
+#include "solver/conservative.h"
 #include "tests/test_util.h"
 #include "tests/world_builder.h"
 
@@ -145,8 +145,8 @@ bool target_listed(Middle middle) {
 
 // A tall hall (8 m) with eyes only up to 1.5 m above the floor and 4 m cells, which reach far above the eye
 // space: a lamp hangs at 7 m. Eyes see it by looking up, so every cell under the open hall lists it, and a
-// crate behind a wall is still culled. (An earlier version skipped boundary samples far from the eye space,
-// which is wrong here: sight leaves the eye region upwards.)
+// crate behind a wall is still culled. No patch may be skipped for lying far from the eye space: sight
+// leaves the eye region upwards (docs/ALGORITHMS.md#eye-region).
 TEST(Conservative, SeenByLookingUpAboveThePlayHeightIsListed) {
     World w;
     test::add_box(w, "floor", Aabb::of({-0.5f, -0.5f, -0.5f}, {12.5f, 0, 8.5f}));
@@ -250,7 +250,7 @@ TEST(Conservative, BehindGlassIsListed) {
 }
 
 // On the octree the wall hides the target as on the grid, with zero misses, and the stage is timed under
-// the mode that computed the rows (it was once named "sampled_pvs" whatever the mode).
+// the mode that computed the rows ("conservative_pvs", not "sampled_pvs").
 TEST(Conservative, TheOctreeCullsBehindTheWallAndIsTimedAsConservative) {
     Context ctx = quiet_context();
     const Scene s = make_scene(Middle::kSolid);
@@ -274,7 +274,7 @@ TEST(Conservative, TheOctreeCullsBehindTheWallAndIsTimedAsConservative) {
     EXPECT_FALSE(sampled_timed);
 }
 
-// The single-occluder pass (pvs/region_hiding.h) only ever leaves objects out that the faces would have
+// The single-occluder pass (solver/region_hiding.h) only ever leaves objects out that the faces would have
 // proved too, or that they could not for the shrinking and the pixels: with it, every row is a subset of
 // the row without it; it proves pairs on the wall scene; the target stays culled behind the wall and
 // listed through the doorway, with zero misses either way.
@@ -344,7 +344,7 @@ uint32_t add_prism(World& w, const std::string& name, const std::array<glm::vec2
     return uint32_t(w.objects.size() - 1);
 }
 
-// OCCLUDERS PER BLOCK (pvs/occluder_synthesis.h synthesize_block_occluders). A yard 36 m long, open to the
+// OCCLUDERS PER BLOCK (occluders/synthesis.h synthesize_block_occluders). A yard 36 m long, open to the
 // sky, eyes up to 2 m above the floor, cut in two by a diagonal wall 1.2 m thick whose side facing the far
 // (east) half is missing, as a compiled level's hollow walls are. Eyes in the east half look into the
 // wall, so from ALL eyes the wall holds no solid; it is not axis-aligned, so it gives no panels: the one
@@ -364,7 +364,8 @@ World blocked_yard(uint32_t& crate) {
         {glm::vec2(12, -0.01f), glm::vec2(13.2f, -0.01f), glm::vec2(17.2f, 12.01f), glm::vec2(16, 12.01f)}, 0,
         4, 1);
     // A sign hung behind the wall. (An object standing on the floor there stays listed: the floor's touched
-    // voxels are in no solid, so the shadow's boxes stop a few voxels above it; README.)
+    // voxels are in no solid, so the shadow's boxes stop a few voxels above it;
+    // docs/ALGORITHMS.md#block-occluders.)
     crate = test::add_box(w, "sign", Aabb::of({22, 1.4f, 5}, {23, 2.4f, 6}));
     w.view_seeds = {{4, 1, 6}, {28, 1, 6}};
     return w;
@@ -721,11 +722,11 @@ TEST(Conservative, FacesSkipWhatTheirCellListsWithTheSameRowsForAnyThreadCount) 
     EXPECT_FALSE(lists_target({0.5f, 1.5f, 5.5f}));
 }
 
-// An octree box tests only what its parent's row lists (conservative.h, argument 11). On the solid-wall
-// scene, a 4 m box in the west half (from which the target is hidden) and its eight children: every child's
-// row lies in the parent's and in its own row without the bound; each child skips exactly what the parent
-// left out; and the bound is really applied: a bound that leaves out the far wall of the doorway, which
-// the child in front of it sees, leaves it out of that child's row.
+// An octree box tests only what its parent's row lists (docs/ALGORITHMS.md#octree-parent-bound). On the
+// solid-wall scene, a 4 m box in the west half (from which the target is hidden) and its eight children:
+// every child's row lies in the parent's and in its own row without the bound; each child skips exactly what
+// the parent left out; and the bound is really applied: a bound that leaves out the far wall of the doorway,
+// which the child in front of it sees, leaves it out of that child's row.
 TEST(Conservative, AnOctreeBoxTestsOnlyWhatItsParentLists) {
     SolvedScene t(Middle::kSolid);
     Context& ctx = t.ctx;
@@ -899,8 +900,8 @@ TEST(ConservativeProperty, RandomBoxWorldsHaveNoMissAgainstDenseRays) {
     random_worlds_have_no_miss(CellConfig{}, test::in_ci() ? 6 : 20, "conservative_region_hidden");
 }
 
-// The octree: its boxes test only what their parents list (conservative.h, argument 11), and its leaves
-// are verified as the grid's cells are.
+// The octree: its boxes test only what their parents list (docs/ALGORITHMS.md#octree-parent-bound), and its
+// leaves are verified as the grid's cells are.
 TEST(ConservativeProperty, RandomBoxWorldsOnTheOctreeHaveNoMissAgainstDenseRays) {
     CellConfig octree;
     octree.kind = CellKind::kOctree;

@@ -2,7 +2,7 @@
 // reference on fixed seeds (identical answers), and the conservative guarantee against dense ray sampling.
 #include "core/error.h"
 #include "core/random.h"
-#include "pvs/depth_cube.h"
+#include "solver/depth_cube.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>

@@ -5,10 +5,10 @@
 #include "core/random.h"
 #include "io/gltf_loader.h"
 #include "occluders/panels.h"
+#include "occluders/seal_probe.h"
 #include "occluders/solid.h"
-#include "pvs/embree_scene.h"
-#include "pvs/occluder_synthesis.h"
-#include "pvs/seal_probe.h"
+#include "occluders/synthesis.h"
+#include "rays/ray_scene.h"
 #include "tests/test_util.h"
 #include "tests/world_builder.h"
 
@@ -152,8 +152,8 @@ TEST(Occluders, TheSealProbeFindsASlitThroughAThickWall) {
 
 // A room over a trench: its floor is two plates 2 cm thick with a 5 mm crack between them (x in [6.3,
 // 6.305], all along z), a twentieth of a voxel wide, over a closed trench 1 m wide (x in [5.8, 6.8]). The
-// touched voxels of the crack seal the trench for the sight sweep, as a 5.7 mm gap in a floor over a pit
-// did on ctf_inyard. Is any proven box cut by a sight line through the crack into the trench?
+// touched voxels of the crack seal the trench for the sight sweep (docs/ALGORITHMS.md#cracks). Is any proven
+// box cut by a sight line through the crack into the trench?
 World trench_world(float crack_m) {
     World w;
     test::add_box(w, "base", Aabb::of({0, 0, 0}, {12.9f, 0.3f, 6.6f}));
@@ -215,7 +215,7 @@ bool a_box_cuts_the_sight_through_the_crack(uint64_t check_seed, uint32_t near_e
 }
 
 // The ray check from eyes near each box finds the crack for some seeds; without them, one far eye never
-// does. Sampling, not proof: this is why every bake is verified (README, "Cracks and grazing lines").
+// does. Sampling, not proof: this is why every bake is verified (docs/ALGORITHMS.md#sampled-step).
 // (The seal probe, off here, is the next test's.)
 TEST(Occluders, EyesNearEachBoxFindACrackInAFloorThatFarEyesMiss) {
     int found_near = 0, found_far = 0;
@@ -272,7 +272,7 @@ TEST(SealProbe, OpensTheTrenchUnderACrackTheSameForAnyThreadCount) {
     EXPECT_EQ(s.solid.words, sealed_before);
 }
 
-// The seal probe (pvs/seal_probe.h) looks from the trench's side: rays from the solid voxels under the
+// The seal probe (occluders/seal_probe.h) looks from the trench's side: rays from the solid voxels under the
 // floor find the crack, and the sweep through its touched voxels opens the trench, for every seed and for
 // cracks from 2 to 8 mm wide (a 50th to a 12th of a voxel), with no sight probe, no eyes near the boxes
 // and one far check eye. Still sampling; this measures that it is not luck.
@@ -338,9 +338,9 @@ uint64_t count_seen(const RayScene& scene, const std::vector<Occluder>& boxes,
 
 // Eye points the map compiler calls playable: random points of the bounds whose BSP leaf (the world's
 // .vis.json) has a cluster, kept when they are also in the eye space `eyes`. Both filters matter: the
-// compiler's playable space includes the outside of a level it found leaking (oa_dm4: about 40% of its
-// playable points see the sky box's outside), and the inside of detail brushes, which do not split its
-// BSP (a point 5 mm inside a wall is "playable" there).
+// compiler's playable space includes the outside of a level it found leaking (many of its playable points
+// may see the sky box's outside), and the inside of detail brushes, which do not split its BSP (a point
+// 5 mm inside a wall is "playable" there).
 std::vector<glm::vec3> bsp_eyes(const std::string& vis_path, const Aabb& bounds, const VoxelMask& eye_space,
                                 uint32_t count, uint32_t* outside_view) {
     std::vector<glm::vec3> eyes;

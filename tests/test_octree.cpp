@@ -1,8 +1,8 @@
 // The visibility-driven octree: small cells where visibility changes (a maze), big ones where it does
 // not (an open field); lookups descend to the right leaf.
 #include "cells/octree.h"
-#include "pvs/embree_scene.h"
-#include "pvs/ray_sampler.h"
+#include "rays/ray_sampler.h"
+#include "rays/ray_scene.h"
 #include "tests/world_builder.h"
 
 #include <gtest/gtest.h>

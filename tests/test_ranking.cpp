@@ -1,11 +1,11 @@
-// Ranked occluders per cell (occluders/ranking.h, pvs/occluder_ranking.h): the exact solid angle of a box
+// Ranked occluders per cell (occluders/ranking.h, occluders/cell_ranking.h): the exact solid angle of a box
 // against closed forms; the shadow frustum test against a scene (behind a wall: hidden; peeking past its
 // edge: not) and against the simple segment test on random inputs; the hierarchy's counts against brute
 // force; the ranking in a small world (a big near wall outranks a small far box); the stage's output the
 // same for any thread count.
 #include "core/context.h"
+#include "occluders/cell_ranking.h"
 #include "occluders/ranking.h"
-#include "pvs/occluder_ranking.h"
 #include "tests/test_util.h"
 #include "tests/world_builder.h"
 

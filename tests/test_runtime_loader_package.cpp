@@ -32,7 +32,7 @@ TEST(RuntimeLoader, RealBakeOfTheSampleWorld) {
     test::expect_same_lookup(loaded, bake.cells, 21);
     ASSERT_FALSE(bake.ranked.empty());
     EXPECT_GT(bake.ranked.entries.size(), bake.cells.size());  // more than one per cell on average
-    // Memory against the compressed rows (the figure issue 7 asks for; docs/FORMAT.md has the real worlds).
+    // Memory against the compressed rows (docs/FORMAT.md has the figures of real worlds).
     const pvsbake::PvsStats& s = loaded.pvs_stats();
     EXPECT_LT(s.bytes_code, s.bytes_raw);
 }

@@ -4,7 +4,7 @@
 // Embree rays on random box worlds (every box the culler hides: no ray from the eye reaches a point of it
 // before an occluder), including boxes grown to the edge of what the culler still hides.
 #include "core/context.h"
-#include "pvs/embree_scene.h"
+#include "rays/ray_scene.h"
 #include "tests/test_util.h"
 #include "tests/world_builder.h"
 

@@ -1,9 +1,9 @@
 // Ray sampling and verification on hand-built scenes whose visibility is known by construction.
 #include "cells/eyes.h"
 #include "core/error.h"
-#include "pvs/embree_scene.h"
-#include "pvs/ray_sampler.h"
-#include "pvs/verify.h"
+#include "driver/verify.h"
+#include "rays/ray_sampler.h"
+#include "rays/ray_scene.h"
 #include "tests/world_builder.h"
 
 #include <gtest/gtest.h>
@@ -281,7 +281,7 @@ TEST(Verify, RepeatedQueriesGiveTheFiltersAnswer) {
 }  // namespace
 }  // namespace pvs
 
-// Aimed rays (pvs/verify.h): rays from fresh eye points at points on the objects the uniform rays missed.
+// Aimed rays (driver/verify.h): rays from fresh eye points at points on the objects the uniform rays missed.
 namespace pvs {
 namespace {
 
@@ -649,7 +649,7 @@ TEST(AimedRays, SameResultForOneAndTwoThreads) {
     }
 }
 
-// Verification as it was before aimed rays, written out: uniform rays only.
+// Verification with uniform rays only, written out (aimed_share = 0 must trace exactly these).
 struct UniformOnly {
     PvsSet sampled;
     uint64_t rays = 0;

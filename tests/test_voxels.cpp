@@ -1,9 +1,9 @@
 // Conservative voxelization (against an independent clipping reference) and the flood of free space.
 #include "core/error.h"
 #include "core/random.h"
-#include "occluders/flood.h"
-#include "occluders/voxels.h"
 #include "tests/world_builder.h"
+#include "voxels/flood.h"
+#include "voxels/voxels.h"
 
 #include <gtest/gtest.h>
 

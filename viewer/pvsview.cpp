@@ -4,11 +4,11 @@
 
 #include "core/context.h"
 #include "core/error.h"
+#include "driver/bake.h"
 #include "io/atomic_file.h"
 #include "io/bake_file.h"
 #include "io/file_hash.h"
 #include "io/gltf_loader.h"
-#include "pvs/bake.h"
 #include "viewer/view_model.h"
 
 #include <fmt/format.h>

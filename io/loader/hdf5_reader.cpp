@@ -1,5 +1,5 @@
-// pvsbake loader (internal): checked HDF5 reading (see hdf5_reader.h). Every check here was added after a
-// damaged file crashed or exhausted HDF5 1.10.8 in our fuzzing (docs/FORMAT.md, "Reading").
+// pvsbake loader (internal): checked HDF5 reading (see hdf5_reader.h). Every check here guards against a
+// kind of damaged file that crashed or exhausted HDF5 1.10.8 in fuzzing (docs/FORMAT.md, "Reading").
 #include "hdf5_reader.h"
 
 #include <cstring>

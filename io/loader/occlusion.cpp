@@ -1,9 +1,10 @@
 // Run-time culling of moving objects: shadow frusta of single occluder boxes, then a conservative float
-// depth cube that fuses them. Conventions and the safety argument: include/pvsbake/occlusion.h.
+// depth cube that fuses them. Conventions: include/pvsbake/occlusion.h; the safety argument:
+// docs/ALGORITHMS.md#runtime-culler.
 //
 // After: T. Hudson et al. Accelerated Occlusion Culling using Shadow Frusta. SoCG 1997; H. Zhang et al.
 // Visibility Culling using Hierarchical Occlusion Maps. SIGGRAPH 1997; P. Wonka, M. Wimmer, D. Schmalstieg.
-// Visibility Preprocessing with Occluder Fusion for Urban Walkthroughs. EGWR 2000 (pvs/depth_cube.h, the
+// Visibility Preprocessing with Occluder Fusion for Urban Walkthroughs. EGWR 2000 (solver/depth_cube.h, the
 // baker's double-precision version of the same rules).
 #include <pvsbake/occlusion.h>
 

@@ -9,8 +9,7 @@
 //   bits          count Rice codes, bit 0 = lowest bit of the first byte: the gap g = index - previous - 1
 //                 (previous = -1 at the start) as q = g >> k zero bits, a one bit, then the k low bits of g
 // padded with zero bits to a whole byte. Varints hold 7 bits a byte, low first, high bit = more follows.
-// Measured on the real bakes (docs/FORMAT.md): 0.88 x the deflated rows on ctf_inyard, where plain rows
-// are 5 x and Quake's zero-run code 1.95 x.
+// Its size against plain rows, deflate and Quake's zero-run code on real bakes: docs/FORMAT.md.
 #pragma once
 
 #include <cstdint>

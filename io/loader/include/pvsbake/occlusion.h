@@ -1,14 +1,15 @@
 // pvsbake runtime loader: run-time culling of MOVING objects (characters, vehicles, props: what no PVS can
-// list) against a few occluder boxes, such as the ranked occluders a bake stores per cell (ALGORITHMS.md
-// section 4). Every frame: begin_frame(eye, occluders), then is_hidden(box) / classify(box) for each moving
-// object's bounding box. Part of pvsbake::loader: no exceptions leave it, no global state, no allocation
-// after construction (an OcclusionCuller whose buffers could not be allocated culls nothing: ok() false).
+// list) against a few occluder boxes, such as the ranked occluders a bake stores per cell
+// (docs/ALGORITHMS.md#ranking; why the culler is conservative: docs/ALGORITHMS.md#runtime-culler). Every
+// frame: begin_frame(eye, occluders), then is_hidden(box) / classify(box) for each moving object's bounding
+// box. Part of pvsbake::loader: no exceptions leave it, no global state, no allocation after construction (an
+// OcclusionCuller whose buffers could not be allocated culls nothing: ok() false).
 //
 // After: T. Hudson, D. Manocha, J. Cohen, M. Lin, K. Hoff, H. Zhang. Accelerated Occlusion Culling using
 // Shadow Frusta. SoCG 1997 (one occluder: is the box inside its shadow frustum?); fusing occluders on a
 // small conservative depth buffer as H. Zhang, D. Manocha, T. Hudson, K. Hoff. Visibility Culling using
 // Hierarchical Occlusion Maps. SIGGRAPH 1997 (a box is hidden when every pixel it touches is covered
-// nearer than it), with the coverage and depth rules of pvs/depth_cube.h (the baker's from-point test of
+// nearer than it), with the coverage and depth rules of solver/depth_cube.h (the baker's from-point test of
 // P. Wonka, M. Wimmer, D. Schmalstieg. Visibility Preprocessing with Occluder Fusion for Urban
 // Walkthroughs, EGWR 2000), written here in float with explicit margins, as a cube map so that every
 // direction around the eye is covered (the culler needs no view frustum).
@@ -28,10 +29,7 @@
 //   half-spaces behind B's front faces (those facing the eye) and of the planes through the eye and B's
 //   silhouette edges (4 or 6). Q is hidden by B when Q lies in S(B). Computed in double on the float
 //   inputs with margins: B is shrunk and Q grown by delta = kMargin_m + kMarginRel * (largest |coordinate|
-//   of the eye and the box), per box. Double rounding (~1e-16 relative) is far below these margins, so a
-//   computed "inside" proves Q grown a little lies in S(B shrunk a little): every segment to a point of Q
-//   passes through the interior of B before reaching the point (or the point itself is inside B's
-//   interior, behind B's surface).
+//   of the eye and the box), per box, far above double rounding (docs/ALGORITHMS.md#runtime-frusta).
 // - Path 2, the depth cube (fusion: several occluders together): six faces, in this order 0 = +X, 1 = -X,
 //   2 = +Y, 3 = -Y, 4 = +Z, 5 = -Z; face f has axis a = f / 2, sign s = +1 for even f, and side axes
 //   ua = (a + 1) % 3, va = (a + 2) % 3. Depth on face f: d = s * Δ[a] (along the face normal, not the
@@ -44,22 +42,16 @@
 // - Occluder pixel rule (writing less is always safe): occluder B writes pixel P of face f only when each
 //   of P's four corner rays, over depths [kNearPlane_m, inf), passes through B with room to spare
 //   (exit >= entry * (1 + kDepthSlack)); it writes the FARTHEST of the four entry depths times
-//   (1 + kDepthSlack), and a pixel keeps the nearest of what is written (min). Why the whole pixel is
-//   covered no farther than that: the entry depth of B' = B ∩ {d >= near} is quasi-convex over the convex
-//   set of directions hitting B' (depth_cube.h has the argument), so if the four corners hit, every ray
-//   through the (convex) pixel hits, no later than the largest corner entry.
+//   (1 + kDepthSlack), and a pixel keeps the nearest of what is written (min). Every ray through the pixel
+//   then meets B no farther than that (docs/ALGORITHMS.md#depth-cube).
 // - Occludee rule (touching more is always safe): on each face, L_f = the smallest depth of Q's part inside
 //   the face's cone (max(d_min, dist(0, Δu range), dist(0, Δv range), near)); the touched pixels are those
 //   whose closed square meets the bounding rectangle of the projection of Q ∩ {L_f <= d <= d_max}, widened
 //   by kRectPad (relative). The conservative comparison: hidden only if on every face, at every touched
 //   pixel, stored depth < L_f * (1 - kDepthSlack), STRICTLY nearer; +infinity (empty) is never nearer.
-// - Float: the depth cube is float. Each float operation errs by at most 2^-24 relative, and a corner
-//   depth or an occludee bound takes a few of them (a subtraction, a division, a max): under 1e-6
-//   relative in all. kDepthSlack = 1e-5 and kRectPad = 1e-5 exceed that tenfold, so a computed "the corner
-//   ray passes through B" is true, a written depth is >= the true entry, a computed limit is < the true
-//   L_f, and the touched pixels include every pixel the true projection meets. Then for x in Q: x lies in
-//   a face cone at depth >= L_f inside a touched pixel P whose depth D < L_f; the segment to x enters the
-//   occluder that wrote D at depth <= D < depth of x: strictly before x.
+// - Float: the depth cube is float. kDepthSlack and kRectPad exceed the float rounding of a corner depth
+//   or an occludee bound (under 1e-6 relative) tenfold, so the rules hold as if computed exactly
+//   (docs/ALGORITHMS.md#runtime-depth-cube).
 // - Costs: begin_frame() is O(occluders * pixels they cover) (the cube's written parts are cleared, not
 //   the whole cube); is_hidden() is O(occluders) for the frusta, then O(pixels the box touches).
 #pragma once

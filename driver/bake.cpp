@@ -1,0 +1,229 @@
+// The bake driver: wires the stages and gathers the figures of a bake.
+#include "driver/bake.h"
+
+#include "cells/grid.h"
+#include "cells/octree.h"
+#include "cells/view_volume.h"
+#include "core/error.h"
+#include "driver/report.h"
+#include "occluders/cell_ranking.h"
+#include "occluders/synthesis.h"
+#include "rays/ray_sampler.h"
+#include "rays/ray_scene.h"
+#include "solver/conservative.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <optional>
+
+#ifndef PVSBAKE_VERSION
+#define PVSBAKE_VERSION "0.0.0"
+#endif
+
+namespace pvs {
+
+const char* tool_version() {
+    return PVSBAKE_VERSION;
+}
+
+std::vector<ObjectRecord> object_records(const World& world) {
+    std::vector<ObjectRecord> out;
+    out.reserve(world.objects.size());
+    for (const WorldObject& o : world.objects)
+        out.push_back(ObjectRecord{o.name, o.bounds, o.triangle_count, o.flags});
+    return out;
+}
+
+void store_verification(const VerifyResult& result, VerificationRecord& record) {
+    record.ran = true;
+    record.figures = result.figures();
+    record.cell_sampled_visible = result.cell_sampled_visible;
+    record.misses = result.misses;
+}
+
+std::vector<Occluder> solver_occluders(Context& ctx, const BakeConfig& config, const World& world,
+                                       const ViewVolume& view, const RayScene& scene,
+                                       OccluderFigures& figures, BlockFigures& blocks,
+                                       ShrunkOccluders& shrunk) {
+    const bool conservative = config.mode == BakeMode::kConservative;
+    // The epsilon ladder only as high as the cells' faces can use (conservative_levels_used()).
+    const double largest_cell = largest_cell_edge_m(config.cells);
+    std::vector<Occluder> boxes = synthesize_occluders(
+        ctx, config.occluders, world, view, scene, figures, config.conservative.epsilon_m,
+        conservative_levels_used(config.conservative, largest_cell), conservative ? &shrunk : nullptr);
+    if (conservative && config.occluders.block_m > 0.0) {
+        // Blocks of whole cells from the cells' origin (the view bounds' corner, for the grid and the
+        // octree's roots), so that every cell lies in one block.
+        const double block =
+            largest_cell * std::max(1.0, std::round(config.occluders.block_m / largest_cell));
+        blocks = synthesize_block_occluders(ctx, config.occluders, world, view, scene, view.view_bounds.min,
+                                            float(block), shrunk);
+    }
+    return boxes;
+}
+
+namespace {
+
+// The header of a bake: the tool, the world, the mode, the resolved parameters and the objects.
+BakeData bake_header(const BakeConfig& config, const World& world, const std::string& world_path,
+                     const std::string& world_hash) {
+    BakeData bake;
+    bake.tool_version = tool_version();
+    bake.world_path = world_path;
+    bake.world_hash = world_hash;
+    bake.mode = to_string(config.mode);
+    bake.conservative = config.mode == BakeMode::kConservative;
+    bake.parameters = resolved_parameters(config);
+    bake.objects = object_records(world);
+    return bake;
+}
+
+// The view volume's config: the conservative mode's automatic voxel follows epsilon.
+ViewVolumeConfig view_volume_config(const BakeConfig& config) {
+    ViewVolumeConfig view = config.view;
+    if (config.mode == BakeMode::kConservative)
+        view.auto_voxel_size_m = conservative_voxel_size_m(config.conservative.epsilon_m);
+    return view;
+}
+
+// The grid's cells, clipped to the view volume, then every cell's PVS in the bake's mode.
+void grid_cells_and_pvs(Context& ctx, const BakeConfig& config, const World& world, const ViewVolume& view,
+                        const RayScene& scene, const ShrunkOccluders& shrunk, BakeData& bake,
+                        StageFigures& figures) {
+    bake.cells = build_uniform_grid(ctx, config.cells, view.view_bounds);
+    figures.cells_dropped = clip_grid_to_view(ctx, bake.cells, view.view, view.eyes);
+    if (config.mode == BakeMode::kConservative) {
+        bake.pvs = bake_conservative_pvs(ctx, config.conservative, world, bake.cells, shrunk, scene,
+                                         figures.conservative);
+    } else {
+        SampledPvs sampled = bake_sampled_pvs(ctx, config.sampled, world, scene, bake.cells);
+        bake.pvs = std::move(sampled.pvs);
+        figures.sampled = {sampled.rays, sampled.rays_per_eye, sampled.guard_band_added, sampled.seconds};
+    }
+}
+
+// The octree's cells and PVS together: the octree asks the bake's mode for the PVS of every box it
+// considers, and the leaves' rows are the bake's rows (docs/ALGORITHMS.md#octree). The ray budget does not
+// apply: boxes are not known in advance. Timed under the mode's name, as on the grid.
+void octree_cells_and_pvs(Context& ctx, const BakeConfig& config, const World& world, const ViewVolume& view,
+                          const RayScene& scene, const ShrunkOccluders& shrunk, BakeData& bake,
+                          StageFigures& figures) {
+    const bool conservative = config.mode == BakeMode::kConservative;
+    ScopedTimer t(ctx, conservative ? "conservative_pvs" : "sampled_pvs");
+    const auto start = std::chrono::steady_clock::now();
+    CellSet masks;
+    masks.view = view.view;
+    masks.eyes = view.eyes;
+    SampledFigures& sampled = figures.sampled;
+    sampled.rays_per_eye = config.sampled.rays.rays_per_eye;
+    // Built once for all the boxes the octree considers (solver/region_hiding.h).
+    std::optional<RegionHiders> hiders;
+    if (conservative && config.conservative.single_occluder_pass) hiders.emplace(ctx, shrunk);
+    // A conservative box tests only what its parent lists (docs/ALGORITHMS.md#octree-parent-bound); the
+    // sampled mode's rows prove nothing, so it samples every box afresh.
+    const RegionPvsOracle oracle = [&](const std::vector<Aabb>& boxes, const std::vector<uint64_t>& streams,
+                                       const std::vector<const uint64_t*>& bounds, PvsSet& rows) {
+        if (conservative) {
+            conservative_box_rows(ctx, config.conservative, world, boxes, masks.eyes, shrunk, scene, rows,
+                                  figures.conservative, hiders ? &*hiders : nullptr, &bounds);
+            return;
+        }
+        sample_box_rows(config.sampled, world, scene, masks, boxes, streams, sampled.rays_per_eye, rows,
+                        sampled.guard_band_added, &ctx);
+        sampled.rays += uint64_t(boxes.size()) * config.sampled.rays.eyes_per_cell * sampled.rays_per_eye;
+    };
+    bake.cells = build_octree(ctx, config.cells, masks, view.view_bounds, uint32_t(world.objects.size()),
+                              oracle, bake.pvs, figures.octree);
+    add_always_listed(world, bake.cells, bake.pvs);
+    if (conservative) {
+        const ConservativeFigures& cons = figures.conservative;
+        ctx.info(
+            fmt::format("conservative PVS: {} boxes evaluated; {:.2f} M (box, object) pairs left out "
+                        "untested because the box's parent left them out, {:.2f} M proven hidden "
+                        "by one occluder, {:.1f} s",
+                        figures.octree.evaluated, double(cons.parent_hidden) * 1e-6,
+                        double(cons.region_hidden) * 1e-6, cons.seconds));
+    }
+    sampled.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace
+
+BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, const std::string& world_path,
+                    const std::string& world_hash) {
+    validate(config);
+    const bool conservative = config.mode == BakeMode::kConservative;
+    BakeData bake = bake_header(config, world, world_path, world_hash);
+    StageFigures figures;
+
+    // 1. View volume: where eyes can be (docs/ALGORITHMS.md#view-volume).
+    const ViewVolume view = build_view_volume(ctx, view_volume_config(config), world);
+    bake.leak_path = view.leak_path;
+
+    // 2. The world as a ray-tracing scene, for every stage that traces rays.
+    RayScene scene(ctx, world, BuildQuality::kMedium, config.run.threads);
+
+    // 3. Occluders: the proven solid, its boxes (stored), and the solver's shrunk occluders.
+    ShrunkOccluders shrunk;
+    if (config.occluders.enabled || conservative) {
+        bake.occluders =
+            solver_occluders(ctx, config, world, view, scene, figures.occluders, figures.blocks, shrunk);
+    }
+
+    // 4. Cells and their PVS (docs/ALGORITHMS.md#conservative-pvs): a grid, then each cell's row; or an
+    //    octree, split where the rows of its children differ.
+    if (config.cells.kind == CellKind::kGrid) {
+        grid_cells_and_pvs(ctx, config, world, view, scene, shrunk, bake, figures);
+    } else {
+        octree_cells_and_pvs(ctx, config, world, view, scene, shrunk, bake, figures);
+    }
+
+    // 5. Ranked occluders per cell, once the cells are final (the octree's depend on the PVS).
+    if (!bake.occluders.empty()) {
+        bake.ranked = rank_occluders(ctx, config.ranking, world, bake.cells, bake.occluders, figures.ranking);
+    }
+
+    // 6. The figures of the bake (driver/report.h).
+    figures.shrunk_boxes = shrunk.boxes.empty() ? 0 : shrunk.boxes[0].size();
+    figures.epsilon_levels = shrunk.epsilon_m.size();
+    bake.figures = bake_figures(config, world, view, bake, figures);
+
+    // 7. Verification by rays (docs/ALGORITHMS.md#verification).
+    if (config.verify.enabled) {
+        if (config.verify.rays.seed == config.sampled.rays.seed) {
+            ctx.warn(
+                "verify: the verification seed equals the bake's: it will only replay the bake's own rays");
+        }
+        const VerifyResult result = verify_pvs(ctx, config.verify, world, scene, bake.cells, bake.pvs);
+        log_verify_summary(ctx, result, world);
+        store_verification(result, bake.verification);
+    }
+    return bake;
+}
+
+void check_bake_matches_world(Context& ctx, const BakeData& bake, const World& world,
+                              const std::string& world_hash) {
+    if (bake.objects.size() != world.objects.size()) {
+        throw bad_input(
+            fmt::format("the bake lists {} objects but the world {} has {}: not the world it was baked from",
+                        bake.objects.size(), world.source_path, world.objects.size()));
+    }
+    for (size_t i = 0; i < world.objects.size(); ++i) {
+        if (bake.objects[i].name != world.objects[i].name) {
+            throw bad_input(
+                fmt::format("object {} is '{}' in the bake but '{}' in the world {}: not the world it was "
+                            "baked from",
+                            i, bake.objects[i].name, world.objects[i].name, world.source_path));
+        }
+    }
+    if (!bake.world_hash.empty() && bake.world_hash != world_hash) {
+        ctx.warn(fmt::format(
+            "the world file {} changed since the bake (hash {} then, {} now); objects still match",
+            world.source_path, bake.world_hash, world_hash));
+    }
+}
+
+}  // namespace pvs

@@ -1,0 +1,50 @@
+// pvsbake driver: the bake pipeline, from a loaded World to the BakeData written to the bake file:
+//   view volume (cells/view_volume.h) -> ray scene (rays/ray_scene.h) -> occluders (occluders/synthesis.h)
+//   -> cells and PVS (cells/grid.h or cells/octree.h; solver/conservative.h, or rays/ray_sampler.h in the
+//   sampled mode) -> ranked occluders (occluders/cell_ranking.h) -> figures (driver/report.h)
+//   -> verification (driver/verify.h).
+// Each stage is a function over plain data; bake_world only calls them in order
+// (docs/ALGORITHMS.md#pipeline).
+#pragma once
+
+#include "cells/view_volume.h"
+#include "core/config.h"
+#include "core/context.h"
+#include "core/occluder.h"
+#include "core/world.h"
+#include "driver/verify.h"
+#include "io/bake_file.h"
+#include "occluders/synthesis.h"
+#include "rays/ray_scene.h"
+
+#include <string>
+
+namespace pvs {
+
+const char* tool_version();
+
+// Object records for the bake file.
+std::vector<ObjectRecord> object_records(const World& world);
+
+// The occluder stage of a bake: the synthesized boxes (returned, as stored in the bake file) and, in
+// conservative mode, the solver's occluders (`shrunk`; per block too when config.occluders.block_m > 0,
+// blocks of whole cells). Deterministic: the same config and world give the same occluders, so tools can
+// rebuild a bake's occluders from its stored parameters (core/config.h config_from_parameters).
+std::vector<Occluder> solver_occluders(Context& ctx, const BakeConfig& config, const World& world,
+                                       const ViewVolume& view, const RayScene& scene,
+                                       OccluderFigures& figures, BlockFigures& blocks,
+                                       ShrunkOccluders& shrunk);
+
+// Runs the bake of `world` (already loaded from world_path, whose content hash is world_hash).
+BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, const std::string& world_path,
+                    const std::string& world_hash);
+
+// Copies a verification's figures, per-cell sampled counts and misses into the bake's record.
+void store_verification(const VerifyResult& result, VerificationRecord& record);
+
+// Checks that a bake was made from this world (same objects, in the same order). Throws pvs::Error
+// (bad input) naming the first difference. A different content hash only warns.
+void check_bake_matches_world(Context& ctx, const BakeData& bake, const World& world,
+                              const std::string& world_hash);
+
+}  // namespace pvs

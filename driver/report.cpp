@@ -1,0 +1,171 @@
+// The figures of a bake and its JSON report.
+#include "driver/report.h"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+
+namespace pvs {
+
+NamedValues bake_figures(const BakeConfig& config, const World& world, const ViewVolume& view,
+                         const BakeData& bake, const StageFigures& stages) {
+    uint32_t occluders_proven = 0;
+    for (const Occluder& o : bake.occluders) occluders_proven += o.proven;
+    double edge_sum = 0.0, edge_max = 0.0;
+    for (const Cell& c : bake.cells.cells) {
+        edge_sum += c.bounds.size().x;
+        edge_max = std::max(edge_max, double(c.bounds.size().x));
+    }
+    const double edge_mean = bake.cells.size() ? edge_sum / double(bake.cells.size()) : 0.0;
+
+    uint64_t listed = 0, listed_max = 0;
+    for (uint32_t c = 0; c < bake.cells.size(); ++c) {
+        const uint64_t n = bake.pvs.count(c);
+        listed += n;
+        listed_max = std::max(listed_max, n);
+    }
+    const double n_cells = std::max<double>(1.0, double(bake.cells.size()));
+    return {
+        {"objects", double(world.objects.size())},
+        {"triangles", double(world.triangles.size())},
+        {"cells", double(bake.cells.size())},
+        {"cells_dropped_outside_view_volume", double(stages.cells_dropped)},
+        {"cells_octree", config.cells.kind == CellKind::kOctree ? 1.0 : 0.0},
+        {"cell_size_mean_m", edge_mean},
+        {"cell_size_max_m", edge_max},
+        {"octree_splits_by_visibility", double(stages.octree.splits)},
+        {"octree_merged_back", double(stages.octree.merged)},
+        {"octree_boxes_evaluated", double(stages.octree.evaluated)},
+        {"octree_depth", double(stages.octree.depth)},
+        {"view_volume_m3", view.view_volume_m3},
+        {"view_eye_space_m3", view.eye_volume_m3},
+        {"world_bounds_m3", view.world_bounds_m3},
+        {"view_volume_share_of_bounds", view.view_volume_m3 / std::max(1e-9, view.world_bounds_m3)},
+        {"view_voxel_size_m", view.voxelized ? double(view.view.voxel_size_m) : 0.0},
+        {"view_flooded", view.flooded ? 1.0 : 0.0},
+        {"view_leaked", view.leaked ? 1.0 : 0.0},
+        {"view_leak_path_points", double(view.leak_path.size())},
+        {"view_seeds_used", double(view.seeds_used)},
+        {"occluder_solid_m3", stages.occluders.solid_m3},
+        {"occluder_boxes", double(bake.occluders.size())},
+        {"occluder_boxes_proven", double(occluders_proven)},
+        {"occluder_covered_share_of_solid",
+         stages.occluders.solid_m3 > 0 ? stages.occluders.covered_m3 / stages.occluders.solid_m3 : 0.0},
+        {"occluder_covered_share_of_solid_near_view",
+         stages.occluders.near_m3 > 0 ? stages.occluders.near_covered_m3 / stages.occluders.near_m3 : 0.0},
+        {"occluder_probe_rays_into_solid", double(stages.occluders.probe_rays_into_solid)},
+        {"occluder_seal_leaks", double(stages.occluders.seal_leaks)},
+        {"occluder_seal_removed_voxels", double(stages.occluders.seal_removed_voxels)},
+        {"occluder_seconds", stages.occluders.seconds},
+        {"occluder_blocks", double(stages.blocks.blocks)},
+        {"occluder_blocks_with_own_occluders", double(stages.blocks.blocks_used)},
+        {"occluder_block_solid_m3", stages.blocks.solid_m3},
+        {"occluder_block_global_solid_m3", stages.blocks.global_solid_m3},
+        {"occluder_block_rays", double(stages.blocks.rays)},
+        {"occluder_block_seconds", stages.blocks.seconds},
+        {"ranked_occluders_per_cell_mean",
+         bake.cells.size() ? double(stages.ranking.ranked) / double(bake.cells.size()) : 0.0},
+        {"ranked_occluders_cells_with_none", double(stages.ranking.cells_with_none)},
+        {"ranked_occluder_score_mean", stages.ranking.score_mean},
+        {"ranked_occluder_solid_angle_mean_sr", stages.ranking.solid_angle_mean_sr},
+        {"ranked_occluder_hidden_triangle_share_mean", stages.ranking.hidden_triangle_share_mean},
+        {"ranking_seconds", stages.ranking.seconds},
+        {"conservative_shrunk_occluders", double(stages.shrunk_boxes)},
+        {"conservative_epsilon_levels", double(stages.epsilon_levels)},
+        {"conservative_samples", double(stages.conservative.samples)},
+        {"conservative_samples_in_occluders", double(stages.conservative.samples_skipped)},
+        {"conservative_patches_in_solid", double(stages.conservative.patches_in_solid)},
+        {"conservative_object_tests", double(stages.conservative.object_tests)},
+        {"conservative_fine_samples", double(stages.conservative.fine_samples)},
+        {"conservative_panel_splits", double(stages.conservative.panel_splits)},
+        {"conservative_known_listed", double(stages.conservative.known_listed)},
+        {"conservative_region_hidden", double(stages.conservative.region_hidden)},
+        {"conservative_parent_hidden", double(stages.conservative.parent_hidden)},
+        {"conservative_region_seconds", stages.conservative.region_seconds},
+        {"conservative_patch_hidden", double(stages.conservative.patch_hidden)},
+        {"conservative_seconds", stages.conservative.seconds},
+        {"cells_per_second",
+         stages.conservative.seconds > 0
+             ? double(bake.cells.size()) / stages.conservative.seconds
+             : (stages.sampled.seconds > 0 ? double(bake.cells.size()) / stages.sampled.seconds : 0.0)},
+        {"pvs_objects_mean", double(listed) / n_cells},
+        {"pvs_objects_max", double(listed_max)},
+        {"pvs_share_of_objects_mean",
+         double(listed) / n_cells / std::max<double>(1.0, double(world.objects.size()))},
+        {"sampled_rays", double(stages.sampled.rays)},
+        {"sampled_rays_per_eye", double(stages.sampled.rays_per_eye)},
+        {"sampled_eyes_per_cell", double(config.sampled.rays.eyes_per_cell)},
+        {"sampled_rays_per_second",
+         stages.sampled.seconds > 0 ? double(stages.sampled.rays) / stages.sampled.seconds : 0.0},
+        {"sampled_guard_band_added", double(stages.sampled.guard_band_added)},
+        {"degenerate_triangles_dropped", double(world.stats.degenerate_triangles_dropped)},
+    };
+}
+
+std::string pvs_kind(const BakeData& bake) {
+    return bake.conservative ? "conservative" : "aggressive (" + bake.mode + ": may miss visible objects)";
+}
+
+namespace {
+nlohmann::ordered_json values_json(const NamedValues& values) {
+    nlohmann::ordered_json j = nlohmann::ordered_json::object();
+    for (const auto& [k, v] : values) j[k] = v;
+    return j;
+}
+double figure(const NamedValues& values, const std::string& key, double fallback) {
+    for (const auto& [k, v] : values)
+        if (k == key) return v;
+    return fallback;
+}
+}  // namespace
+
+std::string bake_report_json(const BakeData& bake, const std::vector<std::string>& warnings) {
+    nlohmann::ordered_json j;
+    j["tool"] = "pvsbake";
+    j["version"] = bake.tool_version;
+    j["format"] = std::to_string(bake.format_major) + "." + std::to_string(bake.format_minor);
+    j["world"] = bake.world_path;
+    j["world_hash"] = bake.world_hash;
+    j["mode"] = bake.mode;
+    j["conservative"] = bake.conservative;
+    j["pvs_kind"] = pvs_kind(bake);
+    j["objects"] = bake.objects.size();
+    j["triangles"] = uint64_t(figure(bake.figures, "triangles", 0));
+    j["cells"] = bake.cells.size();
+    nlohmann::ordered_json params = nlohmann::ordered_json::object();
+    for (const auto& [k, v] : bake.parameters) params[k] = v;
+    j["parameters"] = params;
+    j["timings_s"] = values_json(bake.timings_s);
+    j["figures"] = values_json(bake.figures);
+    nlohmann::ordered_json ranked;
+    ranked["stored"] = !bake.ranked.empty();
+    ranked["entries"] = bake.ranked.entries.size();
+    ranked["per_cell_mean"] =
+        bake.cells.size() ? double(bake.ranked.entries.size()) / double(bake.cells.size()) : 0.0;
+    j["ranked_occluders"] = ranked;
+    nlohmann::ordered_json leak = nlohmann::ordered_json::array();
+    for (const glm::vec3& p : bake.leak_path) leak.push_back({p.x, p.y, p.z});
+    j["leak_path"] = leak;
+    nlohmann::ordered_json ver;
+    ver["ran"] = bake.verification.ran;
+    if (bake.verification.ran) {
+        ver["figures"] = values_json(bake.verification.figures);
+        nlohmann::ordered_json misses = nlohmann::ordered_json::array();
+        for (const Miss& m : bake.verification.misses) {
+            nlohmann::ordered_json mj;
+            mj["cell"] = m.cell;
+            mj["object"] = m.object;
+            mj["object_name"] = m.object < bake.objects.size() ? bake.objects[m.object].name : "";
+            mj["eye"] = {m.eye.x, m.eye.y, m.eye.z};
+            mj["direction"] = {m.direction.x, m.direction.y, m.direction.z};
+            mj["distance_m"] = m.distance_m;
+            misses.push_back(mj);
+        }
+        ver["misses"] = misses;
+    }
+    j["verification"] = ver;
+    j["warnings"] = warnings;
+    return j.dump(2) + "\n";
+}
+
+}  // namespace pvs

@@ -1,0 +1,54 @@
+// pvsbake driver: the figures of a bake (what its stages measured, stored in the bake file's /figures) and
+// the JSON report of a bake (and of `pvsbake info --json`).
+//
+// Keys: tool, version, world, world_hash, mode, pvs_kind ("conservative" or "aggressive"), objects,
+// triangles, cells, parameters{}, timings_s{}, figures{}, verification{ran, figures..., misses[]},
+// warnings[]. Numbers are plain JSON numbers; misses carry the object's name.
+#pragma once
+
+#include "cells/octree.h"
+#include "cells/view_volume.h"
+#include "core/config.h"
+#include "core/world.h"
+#include "io/bake_file.h"
+#include "occluders/cell_ranking.h"
+#include "occluders/synthesis.h"
+#include "solver/conservative.h"
+
+#include <string>
+#include <vector>
+
+namespace pvs {
+
+// What the sampled mode's rays did (zero in the conservative mode, except rays_per_eye on the octree).
+struct SampledFigures {
+    uint64_t rays = 0;
+    uint32_t rays_per_eye = 0;
+    uint64_t guard_band_added = 0;  // (cell, object) pairs listed by the guard band alone
+    double seconds = 0.0;           // the PVS stage (the octree's whole build on the octree)
+};
+
+// What the stages of one bake measured: the inputs of its figures table besides the bake itself.
+struct StageFigures {
+    uint64_t cells_dropped = 0;  // grid cells with no view volume in them
+    OctreeStats octree;
+    OccluderFigures occluders;
+    BlockFigures blocks;
+    size_t shrunk_boxes = 0;    // the solver's occluders at the smallest epsilon
+    size_t epsilon_levels = 0;  // epsilons of the refinement ladder
+    ConservativeFigures conservative;
+    SampledFigures sampled;
+    RankingFigures ranking;
+};
+
+// The figures of a bake, as stored in /figures and the report's figures{}: named numbers, in a fixed
+// order (docs/FORMAT.md lists them).
+NamedValues bake_figures(const BakeConfig& config, const World& world, const ViewVolume& view,
+                         const BakeData& bake, const StageFigures& stages);
+
+std::string bake_report_json(const BakeData& bake, const std::vector<std::string>& warnings);
+
+// "conservative" or "aggressive (sampled: may miss visible objects)".
+std::string pvs_kind(const BakeData& bake);
+
+}  // namespace pvs

@@ -1,0 +1,35 @@
+// pvsbake occluders: the ranking stage (docs/ALGORITHMS.md#ranking): for every view cell, the few synthesized
+// occluder boxes worth testing at run time, best first, with their scores (occluders/ranking.h defines the
+// solid angle, the shadow frustum test and the score; after Hudson et al., SoCG 1997).
+//
+// Conventions: glTF axes, metres, steradians. Only proven boxes (core/occluder.h) are ranked, as stored
+// (not shrunk). Eye points come from cells/eyes.h (free space of the cell, never inside solid), seeded by
+// (config.seed, cell): the same input gives the same ranking, byte for byte, for any thread count.
+#pragma once
+
+#include "core/cell_set.h"
+#include "core/config.h"
+#include "core/context.h"
+#include "core/occluder.h"
+#include "core/world.h"
+
+#include <vector>
+
+namespace pvs {
+
+struct RankingFigures {
+    uint32_t boxes_usable = 0;     // proven boxes
+    uint64_t ranked = 0;           // entries kept over all cells
+    uint32_t cells_with_none = 0;  // cells that kept no occluder
+    double score_mean = 0.0;       // of the kept entries
+    double solid_angle_mean_sr = 0.0;
+    double hidden_triangle_share_mean = 0.0;
+    double seconds = 0.0;
+};
+
+// Ranks the proven occluders for every cell. config.occluders_per_cell == 0 gives an empty result.
+RankedOccluders rank_occluders(Context& ctx, const RankingConfig& config, const World& world,
+                               const CellSet& cells, const std::vector<Occluder>& occluders,
+                               RankingFigures& figures);
+
+}  // namespace pvs

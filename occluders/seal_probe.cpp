@@ -1,0 +1,218 @@
+// The seal probe: rays from the solid's frontier voxels to the eye space, tested against the triangles.
+#include "occluders/seal_probe.h"
+
+#include "cells/eyes.h"
+#include "core/random.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+namespace pvs {
+
+namespace {
+
+// A ray may pass this many solid voxels (after its own) before it gives up: the frontier lies next to
+// non-solid space, so a ray that stays in the solid longer probes other frontier voxels' seals.
+constexpr int kMaxSolidSteps = 3;
+
+// After a round that found leaks, the frontier within kHotRadius voxels of them is probed again with
+// kHotRaysFactor times the rays (a crack along a seam or a slit is found in pieces).
+constexpr int kHotRadius = 2;
+constexpr uint32_t kHotRaysFactor = 4;
+
+// Exact voxel traversal (Amanatides and Woo) of the ray p + t d from p's voxel, t up to `reach`.
+class VoxelWalk {
+public:
+    VoxelWalk(const VoxelGrid& grid, glm::vec3 p, glm::vec3 d, float reach) : grid_(grid), reach_(reach) {
+        c_ = grid.voxel_of(p);
+        for (int a = 0; a < 3; ++a) {
+            const float lo = grid.origin[a] + float(c_[a]) * grid.voxel_size_m;
+            if (d[a] > 0.0f) {
+                step_[a] = 1;
+                t_max_[a] = (lo + grid.voxel_size_m - p[a]) / d[a];
+                t_delta_[a] = grid.voxel_size_m / d[a];
+            } else if (d[a] < 0.0f) {
+                step_[a] = -1;
+                t_max_[a] = (lo - p[a]) / d[a];
+                t_delta_[a] = -grid.voxel_size_m / d[a];
+            } else {
+                step_[a] = 0;
+                t_max_[a] = t_delta_[a] = std::numeric_limits<float>::infinity();
+            }
+        }
+    }
+    // Steps into the next voxel; false when the walk leaves the grid or its reach.
+    bool next() {
+        const int a = t_max_.x < t_max_.y ? (t_max_.x < t_max_.z ? 0 : 2) : (t_max_.y < t_max_.z ? 1 : 2);
+        t_enter_ = std::max(0.0f, t_max_[a]);
+        if (!(t_enter_ <= reach_)) return false;
+        c_[a] += step_[a];
+        t_max_[a] += t_delta_[a];
+        return grid_.inside(c_);
+    }
+    uint64_t index() const { return grid_.index(c_.x, c_.y, c_.z); }
+    float t_enter() const { return t_enter_; }
+    float t_exit() const { return std::min(t_max_.x, std::min(t_max_.y, t_max_.z)); }
+
+private:
+    const VoxelGrid& grid_;
+    float reach_;
+    glm::ivec3 c_{0}, step_{0};
+    glm::vec3 t_max_{0.0f}, t_delta_{0.0f};
+    float t_enter_ = 0.0f;
+};
+
+// How deep into touched voxels the frontier looks: a crack through a wall up to this many voxels thick.
+constexpr int kTouchedDepth = 8;
+
+// Solid voxels next to an OPEN voxel (neither solid nor touched), or to a touched voxel joined to an open
+// one by at most kTouchedDepth steps through touched voxels; less those already probed.
+std::vector<uint64_t> frontier_of(const Solid& solid, const BitVolume& touched, const BitVolume& probed) {
+    const VoxelGrid& grid = solid.grid;
+    BitVolume open;
+    open.words.resize(solid.solid.words.size());
+    for (size_t w = 0; w < open.words.size(); ++w) open.words[w] = ~(solid.solid.words[w] | touched.words[w]);
+    const uint64_t tail = grid.count() % 64;
+    if (tail) open.words.back() &= (uint64_t(1) << tail) - 1;
+    BitVolume near = open;  // grown through touched voxels only
+    for (int k = 0; k < kTouchedDepth; ++k) {
+        near = dilate(grid, near, 1);
+        for (size_t w = 0; w < near.words.size(); ++w) near.words[w] &= open.words[w] | touched.words[w];
+    }
+    near = dilate(grid, near, 1);
+    std::vector<uint64_t> out;
+    for (size_t w = 0; w < open.words.size(); ++w) {
+        uint64_t bits = solid.solid.words[w] & near.words[w] & ~probed.words[w];
+        while (bits) {
+            out.push_back(uint64_t(w) * 64 + uint64_t(__builtin_ctzll(bits)));
+            bits &= bits - 1;
+        }
+    }
+    return out;
+}
+
+void set_atomic(BitVolume& v, uint64_t i) {
+    __atomic_fetch_or(&v.words[i >> 6], uint64_t(1) << (i & 63), __ATOMIC_RELAXED);
+}
+
+}  // namespace
+
+SealProbeFigures probe_seals(Context& ctx, const BitVolume& touched, const VoxelMask& eyes,
+                             const RayScene& scene, uint32_t rays, double reach_m, int rounds, uint64_t seed,
+                             Solid& solid) {
+    ScopedTimer timer(ctx, "seal_probe");
+    const auto start = std::chrono::steady_clock::now();
+    SealProbeFigures figures;
+    if (rays == 0 || rounds <= 0) return figures;
+    const VoxelGrid& grid = solid.grid;
+    const BitVolume sources = sight_sources(grid, eyes);
+    const float reach = float(reach_m);
+    BitVolume probed, leaky;  // leaky: written by every thread (an atomic OR), read only between rounds
+    probed.reset(grid.count());
+    leaky.reset(grid.count());
+    for (int round = 0; round < rounds; ++round) {
+        const std::vector<uint64_t> frontier = frontier_of(solid, touched, probed);
+        // Rounds after the first probe only what the leaks before opened or came near: harder.
+        const uint32_t round_rays = round == 0 ? rays : kHotRaysFactor * rays;
+        const uint64_t round_seed = seed + uint64_t(round) * 0x9e3779b97f4a7c15ULL;
+        if (frontier.empty()) break;
+        ++figures.rounds;
+        for (uint64_t i : frontier) probed.set(i);
+        figures.frontier_voxels += frontier.size();
+        uint64_t walked = 0, segments = 0, leaks = 0;
+        BitVolume seen;  // written by every thread (an atomic OR), read only after the loop
+        seen.reset(grid.count());
+        ctx.progress_begin(fmt::format("seal probe, round {}", round + 1), frontier.size(), "voxels");
+#pragma omp parallel reduction(+ : walked, segments, leaks)
+        {
+            std::vector<glm::vec3> dirs, origins, seg_dirs;
+            std::vector<float> tfar;
+            std::vector<uint8_t> blocked;
+#pragma omp for schedule(dynamic, 256)
+            for (int64_t f = 0; f < int64_t(frontier.size()); ++f) {
+                const uint64_t vi = frontier[size_t(f)];
+                const Aabb box = grid.voxel_box(grid.coords(vi));
+                Rng rng(round_seed, vi ^ 0x5345414cULL);
+                dirs.clear();
+                sample_sphere_directions(round_rays, round_seed, vi, dirs);
+                origins.clear();
+                seg_dirs.clear();
+                tfar.clear();
+                for (const glm::vec3& d : dirs) {
+                    const glm::vec3 p =
+                        box.min + box.size() * glm::vec3(rng.uniform(), rng.uniform(), rng.uniform());
+                    ++walked;
+                    VoxelWalk walk(grid, p, d, reach);
+                    int solid_steps = 0;
+                    while (walk.next()) {
+                        const uint64_t i = walk.index();
+                        if (sources.get(i)) {
+                            origins.push_back(p);
+                            seg_dirs.push_back(d);
+                            tfar.push_back(0.5f * (walk.t_enter() + walk.t_exit()));
+                            break;
+                        }
+                        if (solid.solid.get(i) && ++solid_steps > kMaxSolidSteps) break;
+                    }
+                }
+                if (origins.empty()) {
+                    ctx.progress_advance();
+                    continue;
+                }
+                segments += origins.size();
+                blocked.resize(origins.size());
+                scene.occluded_opaque(origins.data(), seg_dirs.data(), tfar.data(), uint32_t(origins.size()),
+                                      blocked.data());
+                for (size_t s = 0; s < origins.size(); ++s) {
+                    if (blocked[s]) continue;
+                    ++leaks;
+                    // Sight from the eye voxel reaches the origin: what the segment passes is seen or leaky.
+                    set_atomic(seen, vi);
+                    VoxelWalk walk(grid, origins[s], seg_dirs[s], tfar[s]);
+                    while (walk.next()) {
+                        const uint64_t i = walk.index();
+                        if (sources.get(i)) break;
+                        if (touched.get(i)) set_atomic(leaky, i);
+                        if (solid.solid.get(i)) set_atomic(seen, i);
+                    }
+                }
+                ctx.progress_advance();
+            }
+        }
+        ctx.progress_end();
+        figures.rays += walked;
+        figures.segments += segments;
+        figures.leaks += leaks;
+        ctx.debug(fmt::format("seal probe round {}: {} frontier voxels, {} rays, {} segments, {} leaks",
+                              round + 1, frontier.size(), walked, segments, leaks));
+        if (leaks == 0) continue;  // the next round probes only a frontier this one opened: none
+        uint64_t seen_removed = 0;
+        for (size_t w = 0; w < seen.words.size(); ++w) {
+            const uint64_t gone = solid.solid.words[w] & seen.words[w];
+            seen_removed += uint64_t(__builtin_popcountll(gone));
+            solid.solid.words[w] &= ~gone;
+        }
+        solid.solid_voxels -= seen_removed;
+        figures.removed_voxels += seen_removed + reopen_leaks(touched, leaky, sources, solid);
+        // A crack runs on: the frontier voxels near what this round found are probed again.
+        BitVolume found = seen;
+        for (size_t w = 0; w < found.words.size(); ++w) found.words[w] |= leaky.words[w];
+        const BitVolume hot = dilate(grid, found, kHotRadius);
+        for (size_t w = 0; w < probed.words.size(); ++w) probed.words[w] &= ~hot.words[w];
+    }
+    figures.leaky_voxels = leaky.count();
+    figures.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    ctx.info(fmt::format(
+        "seal probe: {} rounds, {} frontier voxels, {:.1f} M rays, {} segments to eye voxels; {} reach the "
+        "solid past the triangles through {} touched voxels; {} voxels leave the solid ({:.0f} m3 left); "
+        "{:.2f} s",
+        figures.rounds, figures.frontier_voxels, double(figures.rays) * 1e-6, figures.segments, figures.leaks,
+        figures.leaky_voxels, figures.removed_voxels, solid.solid_m3, figures.seconds));
+    return figures;
+}
+
+}  // namespace pvs

@@ -1,0 +1,628 @@
+// Occluder synthesis: solid voxels, greedy boxes, and the ray check of every box against the triangles.
+#include "occluders/synthesis.h"
+
+#include "cells/eyes.h"
+#include "core/random.h"
+#include "occluders/boxes.h"
+#include "occluders/panels.h"
+#include "occluders/seal_probe.h"
+#include "occluders/solid.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <exception>
+#include <limits>
+#include <sstream>
+
+namespace pvs {
+
+namespace {
+
+// Distance at which the ray leaves the box (the box holds the origin).
+float exit_distance(glm::vec3 o, glm::vec3 d, const Aabb& b) {
+    float t0, t1;
+    return ray_box_interval(o, d, b, std::numeric_limits<float>::max(), t0, t1) ? t1 : 0.0f;
+}
+
+// Eye points for the check, spread over the eye mask's voxels (or, with none, over free voxels of the grid).
+std::vector<glm::vec3> check_eyes(const VoxelMask& eye_mask, const VoxelGrid& grid, const BitVolume& blocked,
+                                  uint32_t count, uint64_t seed) {
+    std::vector<uint64_t> candidates;
+    for (uint64_t i = 0; i < grid.count(); ++i) {
+        const bool ok = !eye_mask.empty() ? eye_mask.get(i) : !blocked.get(i);
+        if (ok) candidates.push_back(i);
+    }
+    std::vector<glm::vec3> eyes;
+    if (candidates.empty()) return eyes;
+    Rng rng(seed, 0x434845434bULL);
+    const uint64_t n = candidates.size();
+    for (uint32_t k = 0; k < count; ++k) {
+        const uint64_t a = uint64_t(k) * n / count, b = std::max(a + 1, uint64_t(k + 1) * n / count);
+        const uint64_t i = candidates[std::min<uint64_t>(n - 1, a + uint64_t(rng.uniform() * float(b - a)))];
+        eyes.push_back(grid.voxel_center(grid.coords(i)) +
+                       (glm::vec3(rng.uniform(), rng.uniform(), rng.uniform()) - 0.5f) * grid.voxel_size_m);
+    }
+    return eyes;
+}
+
+// The sight probe: rays over the sphere from eye points; solid voxels a ray passes before it stops are
+// seen (through a crack): carve them and their neighbours out of the solid.
+void carve_seen_solid(Context& ctx, const OccluderConfig& config, uint32_t probe_eyes, const VoxelGrid& grid,
+                      const BitVolume& touched, const VoxelMask& eye_mask, const RayScene& scene,
+                      Solid& solid, OccluderFigures& figures) {
+    ScopedTimer timer(ctx, "sight_probe");
+    const std::vector<glm::vec3> eyes =
+        check_eyes(eye_mask, grid, touched, probe_eyes, config.check_seed ^ 0x5052);
+    std::vector<uint8_t> seen(grid.count(), 0);
+    uint64_t into_solid = 0, escaped = 0;
+    const float step = grid.voxel_size_m;  // a corner a step skips is covered by the 26-neighbour carving
+    const Aabb gb = grid.bounds();
+#pragma omp parallel reduction(+ : into_solid, escaped)
+    {
+        std::vector<glm::vec3> dirs;
+        std::vector<RayTouch> touches;
+        std::vector<float> stop;
+#pragma omp for schedule(dynamic, 4)
+        for (int64_t e = 0; e < int64_t(eyes.size()); ++e) {
+            dirs.clear();
+            touches.clear();
+            sample_sphere_directions(config.probe_rays_per_eye, config.check_seed, uint64_t(e), dirs);
+            scene.trace(eyes[size_t(e)], dirs.data(), uint32_t(dirs.size()), touches);
+            stop.assign(dirs.size(), std::numeric_limits<float>::infinity());
+            for (const RayTouch& t : touches)
+                if (t.stops) stop[t.ray] = t.t;
+            for (size_t r = 0; r < dirs.size(); ++r) {
+                // March to the stop (or out of the grid), looking for solid voxels.
+                const float exit = exit_distance(eyes[size_t(e)], dirs[r], gb);
+                // The last voxel before the stop is not looked at: the surface that stops the ray may lie on
+                // a voxel face with solid right behind it, and rounding must not count that as a crack.
+                const float end = std::min(stop[r] - grid.voxel_size_m, exit);
+                escaped += !std::isfinite(stop[r]);
+                bool hit_solid = false;
+                for (float t = 0.0f; t < end; t += step) {
+                    const glm::vec3 p = eyes[size_t(e)] + t * dirs[r];
+                    const glm::ivec3 c = grid.voxel_of(p);
+                    const uint64_t i = grid.index(c.x, c.y, c.z);
+                    if (solid.solid.get(i)) {
+                        seen[i] = 1;  // a benign race: every writer writes 1
+                        hit_solid = true;
+                    }
+                }
+                into_solid += hit_solid;
+            }
+        }
+    }
+    uint64_t carved = 0;
+    for (uint64_t i = 0; i < grid.count(); ++i) {
+        if (!seen[i]) continue;
+        const glm::ivec3 c = grid.coords(i);
+        for (int dz = -1; dz <= 1; ++dz)
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx) {
+                    const glm::ivec3 n = c + glm::ivec3(dx, dy, dz);
+                    if (!grid.inside(n)) continue;
+                    const uint64_t j = grid.index(n.x, n.y, n.z);
+                    if (solid.solid.get(j)) {
+                        solid.solid.clear(j);
+                        ++carved;
+                    }
+                }
+    }
+    figures.probe_rays = uint64_t(eyes.size()) * config.probe_rays_per_eye;
+    figures.probe_rays_into_solid = into_solid;
+    figures.probe_rays_escaped = escaped;
+    figures.probe_carved_voxels = carved;
+    solid.solid_voxels -= carved;
+    ctx.info(fmt::format(
+        "sight probe: {:.1f} M rays from {} eyes; {} reached solid voxels through cracks ({} left the "
+        "world); {} voxels carved out of the solid",
+        double(figures.probe_rays) * 1e-6, eyes.size(), into_solid, escaped, carved));
+}
+
+// The ray check: every box against sight lines from `eyes` to random points of it; returns 1 per rejected
+// box (a segment reached a point of it before an opaque triangle, or an eye is inside it).
+// With `near_eyes`, each box is also checked from config.check_near_eyes eye points of that mask within
+// kNearCheckReachM of it, kNearCheckRays rays each: eyes spread over the whole eye space put few rays
+// where a crack narrower than a voxel lets sight into the solid near them, and most of those are stopped
+// far away. Still sampling: it finds such a crack often, not always (tests/test_occluders.cpp;
+// docs/ALGORITHMS.md#ray-check).
+constexpr uint32_t kNearCheckRays = 16;
+constexpr float kNearCheckReachM = 4.0f;
+std::vector<uint8_t> check_boxes(Context& ctx, const OccluderConfig& config, const std::vector<Aabb>& boxes,
+                                 const std::vector<glm::vec3>& eyes, uint32_t rays_per_eye, uint64_t stream,
+                                 const RayScene& scene, uint64_t& rays,
+                                 const VoxelMask* near_eyes = nullptr) {
+    std::vector<uint8_t> rejected(boxes.size(), 0);
+    uint64_t rays_total = 0;
+    ctx.progress_begin("occluder check", boxes.size(), "boxes");
+#pragma omp parallel reduction(+ : rays_total)
+    {
+        std::vector<glm::vec3> origins, dirs, near;
+        std::vector<float> tfar;
+        std::vector<uint8_t> blocked;
+#pragma omp for schedule(dynamic, 1)
+        for (int64_t b = 0; b < int64_t(boxes.size()); ++b) {
+            const Aabb& box = boxes[size_t(b)];
+            Rng rng(config.check_seed, stream + uint64_t(b));
+            origins.clear();
+            dirs.clear();
+            tfar.clear();
+            near.clear();
+            if (near_eyes && !near_eyes->empty()) {
+                // Uniform points of the box grown by the reach, kept where they are eye space (rejection
+                // sampling: no walk over the voxels of a large box).
+                const Aabb around = Aabb::of(box.min - kNearCheckReachM, box.max + kNearCheckReachM);
+                Rng near_rng(config.check_seed, (stream + uint64_t(b)) ^ 0x4e454152ULL);
+                const uint32_t want = config.check_near_eyes;
+                for (uint32_t tries = 0; tries < 16 * want && near.size() < want; ++tries) {
+                    const glm::vec3 u(near_rng.uniform(), near_rng.uniform(), near_rng.uniform());
+                    const glm::vec3 p = around.min + around.size() * u;
+                    if (near_eyes->contains(p)) near.push_back(p);
+                }
+            }
+            const size_t n_far = eyes.size();
+            for (size_t ei = 0; ei < n_far + near.size(); ++ei) {
+                const glm::vec3& e = ei < n_far ? eyes[ei] : near[ei - n_far];
+                if (box.contains(e)) {
+                    rejected[size_t(b)] = 1;  // an eye inside: not solid at all
+                    break;
+                }
+                const uint32_t n_rays = ei < n_far ? rays_per_eye : kNearCheckRays;
+                for (uint32_t k = 0; k < n_rays; ++k) {
+                    const glm::vec3 target =
+                        box.min + box.size() * glm::vec3(rng.uniform(), rng.uniform(), rng.uniform());
+                    const glm::vec3 d = glm::normalize(target - e);
+                    // The segment to the target point itself: a box whose face lies on the blocking surface
+                    // (internal faces are solid) is blocked at its face, before any point inside it.
+                    const float t = glm::length(target - e);
+                    if (t <= 0.0f) continue;
+                    origins.push_back(e);
+                    dirs.push_back(d);
+                    tfar.push_back(t);
+                }
+            }
+            if (!rejected[size_t(b)] && !origins.empty()) {
+                blocked.resize(origins.size());
+                scene.occluded_opaque(origins.data(), dirs.data(), tfar.data(), uint32_t(origins.size()),
+                                      blocked.data());
+                rays_total += origins.size();
+                for (uint8_t x : blocked)
+                    if (!x) {
+                        rejected[size_t(b)] = 1;
+                        break;
+                    }
+            }
+            ctx.progress_advance();
+        }
+    }
+    ctx.progress_end();
+    rays += rays_total;
+    return rejected;
+}
+
+std::vector<Aabb> bounds_of(const VoxelGrid& grid, const std::vector<VoxelBox>& boxes) {
+    std::vector<Aabb> out;
+    out.reserve(boxes.size());
+    for (const VoxelBox& b : boxes) out.push_back(box_bounds(grid, b));
+    return out;
+}
+
+// Sets (value true) or clears the voxels of every box whose flag in `rejected` equals `which`.
+void mark_boxes(const VoxelGrid& grid, const std::vector<VoxelBox>& boxes,
+                const std::vector<uint8_t>& rejected, uint8_t which, bool value, BitVolume& out) {
+    for (size_t b = 0; b < boxes.size(); ++b) {
+        if (rejected[b] != which) continue;
+        const VoxelBox& vb = boxes[b];
+        for (int z = vb.lo.z; z <= vb.hi.z; ++z)
+            for (int y = vb.lo.y; y <= vb.hi.y; ++y)
+                for (int x = vb.lo.x; x <= vb.hi.x; ++x) {
+                    const uint64_t i = grid.index(x, y, z);
+                    value ? out.set(i) : out.clear(i);
+                }
+    }
+}
+
+// Boxes of the proven solid eroded by each epsilon of the ladder: a voxel stays when every voxel within k
+// (Chebyshev) is proven solid; voxels within k of the grid's border go (outside the grid is unknown).
+// The levels are independent, so big grids grow them on all threads at once, one level a thread (each
+// grow_boxes() then holds its own table and seed cubes, about 3.2 bytes a voxel); the boxes do not depend
+// on the thread count.
+std::vector<std::vector<Aabb>> shrunk_boxes(Context& ctx, const VoxelGrid& grid, const BitVolume& proven,
+                                            const BoxConfig& bc, const std::vector<double>& epsilon_m) {
+    const double voxel_m3 = double(grid.voxel_size_m) * grid.voxel_size_m * grid.voxel_size_m;
+    BitVolume not_proven;
+    not_proven.reset(grid.count());
+    for (size_t w = 0; w < proven.words.size(); ++w) not_proven.words[w] = ~proven.words[w];
+    BoxConfig sc = bc;
+    sc.min_box_volume_m3 = 0.0;  // every shrunk box helps fusion
+    sc.max_boxes = std::max<uint32_t>(bc.max_boxes, 1024);
+    const int levels = int(epsilon_m.size());
+    std::vector<std::vector<Aabb>> out(static_cast<size_t>(levels));
+    std::vector<std::string> lines(static_cast<size_t>(levels));
+    // grow_boxes()'s own progress and timer would interleave across levels: they go to a quiet context.
+    Context quiet(Context::Options{LogLevel::kWarning, true, nullptr});
+    const bool parallel = grid.count() >= (uint64_t(1) << 22);
+    std::exception_ptr failure;  // the first exception of a level (none may leave an OpenMP region)
+#pragma omp parallel for schedule(dynamic, 1) if (parallel)
+    for (int level = 0; level < levels; ++level) try {
+            const double eps = epsilon_m[size_t(level)];
+            const int k = std::max(1, int(std::ceil(eps / double(grid.voxel_size_m) - 1e-9)));
+            const BitVolume near_not = dilate(grid, not_proven, k);
+            BitVolume eroded;
+            eroded.reset(grid.count());
+            for (size_t w = 0; w < proven.words.size(); ++w)
+                eroded.words[w] = proven.words[w] & ~near_not.words[w];
+            clear_border(grid, eroded, k);
+            std::vector<Aabb>& level_boxes = out[size_t(level)];
+            for (const VoxelBox& vb : grow_boxes(quiet, grid, eroded, sc, nullptr))
+                level_boxes.push_back(box_bounds(grid, vb));
+            lines[size_t(level)] =
+                fmt::format("occluders shrunk by {} m ({} voxels): {} boxes of {:.0f} m3 of solid", eps, k,
+                            level_boxes.size(), double(eroded.count()) * voxel_m3);
+        } catch (...) {
+#pragma omp critical(shrunk_boxes_failure)
+            if (!failure) failure = std::current_exception();
+        }
+    if (failure) std::rethrow_exception(failure);
+    for (const std::string& line : lines) ctx.info(line);
+    return out;
+}
+
+VoxelMask mask_of(const VoxelGrid& grid, std::vector<uint64_t> bits) {
+    VoxelMask m;
+    m.origin = grid.origin;
+    m.voxel_size_m = grid.voxel_size_m;
+    m.dims = grid.dims;
+    m.bits = std::move(bits);
+    return m;
+}
+
+BoxConfig box_config(const OccluderConfig& config) {
+    BoxConfig bc;
+    bc.max_boxes = config.max_occluders;
+    bc.min_box_volume_m3 = config.min_occluder_volume_m3;
+    bc.min_added_share = config.min_added_share;
+    return bc;
+}
+
+// The voxels of `grid` from `lo` over `window`'s dims, as a volume on `window` (the same voxel size).
+BitVolume crop(const VoxelGrid& grid, const std::vector<uint64_t>& bits, glm::ivec3 lo,
+               const VoxelGrid& window) {
+    BitVolume out;
+    out.reset(window.count());
+    for (int z = 0; z < window.dims.z; ++z)
+        for (int y = 0; y < window.dims.y; ++y)
+            for (int x = 0; x < window.dims.x; ++x) {
+                const uint64_t i = grid.index(lo.x + x, lo.y + y, lo.z + z);
+                if ((bits[i >> 6] >> (i & 63)) & 1u) out.set(window.index(x, y, z));
+            }
+    return out;
+}
+
+}  // namespace
+
+// Rounds of the seal probe: each probes the frontier the leaks of the one before opened.
+constexpr int kSealRounds = 8;
+
+std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& config, const World& world,
+                                           const ViewVolume& view, const RayScene& scene,
+                                           OccluderFigures& figures, double epsilon_m, int levels,
+                                           ShrunkOccluders* shrunk) {
+    ScopedTimer timer(ctx, "occluders");
+    const auto start = std::chrono::steady_clock::now();
+    // The voxels: the view volume's, or the world's at the default size when there is no view volume.
+    VoxelGrid grid = view.grid;
+    BitVolume touched_local;
+    const BitVolume* touched = &view.touched;
+    if (!view.voxelized) {
+        grid = make_voxel_grid(world.bounds,
+                               default_voxel_size(world.bounds, kDefaultVoxelSizeM, 200'000'000), 2);
+        voxelize_opaque(ctx, world, grid, touched_local);
+        touched = &touched_local;
+    }
+    Solid solid = classify_solid(ctx, grid, *touched, view.eyes);
+    add_closed_boxes(ctx, closed_box_objects(world), view.eyes, solid);
+    figures.solid_m3 = solid.solid_m3;
+    if (config.probe_eyes > 0)
+        carve_seen_solid(ctx, config, config.probe_eyes, grid, *touched, view.eyes, scene, solid, figures);
+    if (config.seal_rays > 0) {
+        const SealProbeFigures sf = probe_seals(ctx, *touched, view.eyes, scene, config.seal_rays,
+                                                config.seal_reach_m, kSealRounds, config.check_seed, solid);
+        figures.seal_frontier_voxels = sf.frontier_voxels;
+        figures.seal_rays = sf.rays;
+        figures.seal_leaks = sf.leaks;
+        figures.seal_removed_voxels = sf.removed_voxels;
+    }
+
+    const BoxConfig bc = box_config(config);
+    BoxStats stats;
+    const std::vector<VoxelBox> boxes = grow_boxes(ctx, grid, solid.solid, bc, &stats);
+    figures.grown = stats.grown;
+    figures.kept = uint32_t(boxes.size());
+    const double voxel_m3 = double(grid.voxel_size_m) * grid.voxel_size_m * grid.voxel_size_m;
+    figures.covered_m3 = double(stats.covered_voxels) * voxel_m3;
+
+    // The ray check: every box against sight lines from eyes spread over the eye space.
+    const std::vector<glm::vec3> eyes =
+        check_eyes(view.eyes, grid, *touched, config.check_eyes, config.check_seed);
+    const std::vector<uint8_t> rejected =
+        check_boxes(ctx, config, bounds_of(grid, boxes), eyes, config.check_rays_per_eye, 0, scene,
+                    figures.check_rays, &view.eyes);
+
+    if (shrunk != nullptr) {
+        // The proven solid: the carved solid less every rejected box, then eroded per epsilon.
+        ScopedTimer t(ctx, "shrink");
+        BitVolume proven = solid.solid;  // less every rejected box
+        mark_boxes(grid, boxes, rejected, 1, false, proven);
+        *shrunk = ShrunkOccluders{};
+        for (int level = 0; level <= levels; ++level)
+            shrunk->epsilon_m.push_back(epsilon_m * std::ldexp(1.0, level));
+        PanelFigures pf;
+        shrunk->panels = find_panels(world, &pf);
+        ctx.info(
+            fmt::format("panels: {} opaque triangles lie in {} axis planes, covering {} cells of their "
+                        "vertex grids; {} maximal covered rectangles",
+                        pf.flat_triangles, pf.planes, pf.covered_cells, pf.panels));
+        shrunk->boxes = shrunk_boxes(ctx, grid, proven, bc, shrunk->epsilon_m);
+        std::vector<uint64_t> free_bits(proven.words.size());
+        for (size_t w = 0; w < proven.words.size(); ++w)
+            free_bits[w] = ~(proven.words[w] | touched->words[w]);
+        shrunk->free = mask_of(grid, std::move(free_bits));
+        shrunk->solid = mask_of(grid, std::move(proven.words));
+    }
+
+    std::vector<Occluder> out;
+    for (size_t b = 0; b < boxes.size(); ++b) {
+        Occluder o;
+        o.box = box_bounds(grid, boxes[b]);
+        o.voxel_size_m = grid.voxel_size_m;
+        o.proven = !rejected[b];
+        figures.rejected_by_rays += rejected[b];
+        Aabb grown = o.box;
+        grown.min -= grid.voxel_size_m;
+        grown.max += grid.voxel_size_m;
+        for (uint32_t i = 0; i < world.objects.size(); ++i) {
+            if ((world.objects[i].flags & kObjectHasOpaque) && world.objects[i].bounds.overlaps(grown))
+                o.objects.push_back(i);
+        }
+        out.push_back(std::move(o));
+    }
+    // Coverage of the solid near the view region by the proven boxes.
+    {
+        BitVolume covered;
+        covered.reset(grid.count());
+        mark_boxes(grid, boxes, rejected, 0, true, covered);
+        BitVolume near;
+        if (!view.view.empty()) {
+            BitVolume region;
+            region.words = view.view.bits;
+            near = dilate(grid, region, int(std::ceil(kNearViewM / grid.voxel_size_m)));
+        }
+        uint64_t n = 0, c = 0;
+        for (size_t w = 0; w < solid.solid.words.size(); ++w) {
+            const uint64_t s_near =
+                solid.solid.words[w] & (near.words.empty() ? ~uint64_t(0) : near.words[w]);
+            n += uint64_t(__builtin_popcountll(s_near));
+            c += uint64_t(__builtin_popcountll(s_near & covered.words[w]));
+        }
+        figures.near_m3 = double(n) * voxel_m3;
+        figures.near_covered_m3 = double(c) * voxel_m3;
+    }
+    figures.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    ctx.info(fmt::format(
+        "occluders: {} boxes cover {:.0f} of {:.0f} m3 of solid ({:.1f}%), {:.1f}% of the {:.0f} m3 "
+        "within {} m of the view region; the ray check ({:.1f} M rays) rejected {}; {:.2f} s",
+        figures.kept, figures.covered_m3, figures.solid_m3,
+        figures.solid_m3 > 0 ? 100.0 * figures.covered_m3 / figures.solid_m3 : 0.0,
+        figures.near_m3 > 0 ? 100.0 * figures.near_covered_m3 / figures.near_m3 : 0.0, figures.near_m3,
+        kNearViewM, double(figures.check_rays) * 1e-6, figures.rejected_by_rays, figures.seconds));
+    return out;
+}
+
+// Boxes grown over the solid only a block's eyes leave, each ray-checked before its voxels count as proven.
+constexpr uint32_t kBlockCheckBoxes = 4096;
+
+BlockFigures synthesize_block_occluders(Context& ctx, const OccluderConfig& config, const World& world,
+                                        const ViewVolume& view, const RayScene& scene, glm::vec3 origin,
+                                        float block_m, ShrunkOccluders& shrunk) {
+    ScopedTimer timer(ctx, "block_occluders");
+    const auto start = std::chrono::steady_clock::now();
+    BlockFigures figures;
+    if (!view.voxelized || view.eyes.empty() || !(block_m > 0.0f) || shrunk.epsilon_m.empty() ||
+        shrunk.solid.empty()) {
+        return figures;
+    }
+    const VoxelGrid& grid = view.grid;
+    const float vs = grid.voxel_size_m;
+    const Aabb& vb = view.view_bounds;
+    const glm::ivec2 dims(std::max(1, int(std::ceil((vb.max.x - origin.x) / block_m))),
+                          std::max(1, int(std::ceil((vb.max.z - origin.z) / block_m))));
+    shrunk.block_size_m = block_m;
+    shrunk.block_origin = origin;
+    shrunk.block_dims = dims;
+    shrunk.block_tolerance_m = 0.5f * vs;
+    shrunk.block_set.assign(size_t(dims.x) * size_t(dims.y), -1);
+    shrunk.block_sets.clear();
+    const BoxConfig bc = box_config(config);
+    const std::vector<Aabb> closed = closed_box_objects(world);
+    const double voxel_m3 = double(vs) * vs * vs;
+    // The stages' own logs and timers would repeat once per block: they go to a quiet context.
+    Context quiet(Context::Options{LogLevel::kWarning, true, nullptr});
+    const auto voxel_lo = [&](float p, int a) {
+        return std::clamp(int(std::floor((p - grid.origin[a]) / vs)), 0, grid.dims[a]);
+    };
+    ctx.progress_begin("block occluders", shrunk.block_set.size(), "blocks");
+    for (int bz = 0; bz < dims.y; ++bz)
+        for (int bx = 0; bx < dims.x; ++bx) {
+            ctx.progress_advance();
+            const float x0 = origin.x + float(bx) * block_m, z0 = origin.z + float(bz) * block_m;
+            const float x1 = x0 + block_m, z1 = z0 + block_m;
+            // The window: the block's square grown by the reach, every height.
+            const float reach = float(config.block_reach_m);
+            const glm::ivec3 lo(voxel_lo(x0 - reach, 0), 0, voxel_lo(z0 - reach, 2));
+            const glm::ivec3 hi(std::min(grid.dims.x, voxel_lo(x1 + reach, 0) + 1), grid.dims.y,
+                                std::min(grid.dims.z, voxel_lo(z1 + reach, 2) + 1));
+            if (glm::any(glm::lessThanEqual(hi, lo))) continue;
+            VoxelGrid window;
+            window.origin = grid.origin + glm::vec3(lo) * vs;
+            window.voxel_size_m = vs;
+            window.dims = hi - lo;
+            // The sources: every eye voxel meeting the square grown by a voxel (a cell of the block, and so
+            // its eye region, lies in the square; more sources only mean less solid).
+            BitVolume sources;
+            sources.reset(window.count());
+            const int sx0 = std::max(lo.x, voxel_lo(x0 - vs, 0)),
+                      sx1 = std::min(hi.x, voxel_lo(x1 + vs, 0) + 1);
+            const int sz0 = std::max(lo.z, voxel_lo(z0 - vs, 2)),
+                      sz1 = std::min(hi.z, voxel_lo(z1 + vs, 2) + 1);
+            uint64_t n_sources = 0;
+            for (int z = sz0; z < sz1; ++z)
+                for (int y = 0; y < grid.dims.y; ++y)
+                    for (int x = sx0; x < sx1; ++x)
+                        if (view.eyes.get(grid.index(x, y, z))) {
+                            sources.set(window.index(x - lo.x, y, z - lo.z));
+                            ++n_sources;
+                        }
+            if (n_sources == 0) continue;
+            ++figures.blocks;
+            const BitVolume touched = crop(grid, view.touched.words, lo, window);
+            const VoxelMask eyes = mask_of(window, std::move(sources.words));
+            Solid solid = classify_solid(quiet, window, touched, eyes);
+            add_closed_boxes(quiet, closed, eyes, solid);
+            // Worth it only when the block's eyes leave clearly more solid than all eyes do.
+            const BitVolume global = crop(grid, shrunk.solid.bits, lo, window);
+            const uint64_t n_global = global.count(), n_block = solid.solid.count();
+            if (double(n_block) <= (1.0 + config.block_min_gain) * double(n_global)) continue;
+            OccluderFigures f;
+            if (config.block_probe_eyes > 0)
+                carve_seen_solid(quiet, config, config.block_probe_eyes, window, touched, eyes, scene, solid,
+                                 f);
+            // What only the block's eyes leave is proven box by box: boxes grown to cover it (up to
+            // kBlockCheckBoxes, however small), each checked with segments from the block's own eyes; the
+            // block's proven solid is the accepted boxes, with the global proven solid (proven for every
+            // eye). (Voxels no checked box covers are dropped: unlike the global solid, which is mostly
+            // sealed space, a block's is mostly shadow, whose edges are grazing lines.)
+            BoxConfig cover = bc;
+            cover.max_boxes = kBlockCheckBoxes;
+            cover.min_box_volume_m3 = 0.0;
+            const std::vector<VoxelBox> boxes = grow_boxes(quiet, window, solid.solid, cover, nullptr);
+            const uint64_t block_index = uint64_t(bx) + uint64_t(dims.x) * uint64_t(bz);
+            const std::vector<glm::vec3> check = check_eyes(eyes, window, touched, config.block_check_eyes,
+                                                            config.check_seed ^ (block_index << 8));
+            const std::vector<uint8_t> rejected =
+                check_boxes(quiet, config, bounds_of(window, boxes), check, config.check_rays_per_eye, 0,
+                            scene, f.check_rays);
+            BitVolume proven = global;
+            mark_boxes(window, boxes, rejected, 0, true, proven);
+            ShrunkOccluders set;
+            set.epsilon_m = shrunk.epsilon_m;
+            set.boxes = shrunk_boxes(quiet, window, proven, bc, shrunk.epsilon_m);
+            // The boxes the solver will draw are checked once more, from the same eyes at fresh points: a
+            // box any segment reaches is dropped (drawing fewer occluders is always safe).
+            for (size_t k = 0; k < set.boxes.size(); ++k) {
+                const std::vector<uint8_t> seen =
+                    check_boxes(quiet, config, set.boxes[k], check, config.check_rays_per_eye,
+                                uint64_t(k + 1) << 32, scene, f.check_rays);
+                std::vector<Aabb> kept;
+                for (size_t i = 0; i < seen.size(); ++i)
+                    if (!seen[i]) kept.push_back(set.boxes[k][i]);
+                figures.boxes_dropped += seen.size() - kept.size();
+                set.boxes[k] = std::move(kept);
+            }
+            figures.boxes += set.boxes.front().size();
+            // The global boxes still serve beyond the window; those inside one of the block's are dropped.
+            for (size_t k = 0; k < set.boxes.size(); ++k) {
+                const size_t own = set.boxes[k].size();
+                for (const Aabb& g : shrunk.boxes[k]) {
+                    bool inside = false;
+                    for (size_t i = 0; i < own && !inside; ++i) {
+                        const Aabb& b = set.boxes[k][i];
+                        inside = glm::all(glm::lessThanEqual(b.min, g.min)) &&
+                                 glm::all(glm::lessThanEqual(g.max, b.max));
+                    }
+                    if (!inside) set.boxes[k].push_back(g);
+                }
+            }
+            set.panels = shrunk.panels;
+            figures.solid_m3 += double(proven.count()) * voxel_m3;
+            figures.global_solid_m3 += double(n_global) * voxel_m3;
+            figures.rays += f.probe_rays + f.check_rays;
+            set.solid = mask_of(window, std::move(proven.words));  // `free` stays the global one
+            shrunk.block_set[block_index] = int32_t(shrunk.block_sets.size());
+            shrunk.block_sets.push_back(std::move(set));
+        }
+    ctx.progress_end();
+    figures.blocks_used = uint32_t(shrunk.block_sets.size());
+    figures.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    ctx.info(fmt::format(
+        "block occluders: {} m blocks (sight from the block's own eyes, {} m around it): {} of {} blocks "
+        "leave more solid and have their own occluders ({:.0f} m3 of proven solid where all eyes leave "
+        "{:.0f} m3; {} own boxes at the floor epsilon, {} shrunk boxes dropped by the second check); {:.1f} "
+        "s",
+        block_m, config.block_reach_m, figures.blocks_used, figures.blocks, figures.solid_m3,
+        figures.global_solid_m3, figures.boxes, figures.boxes_dropped, figures.seconds));
+    return figures;
+}
+
+BlockAudit audit_block_occluders(const ViewVolume& view, const RayScene& scene, const ShrunkOccluders& shrunk,
+                                 uint32_t eyes_per_block, uint32_t points_per_box, uint64_t seed) {
+    BlockAudit out;
+    CellSet masks;
+    masks.eyes = view.eyes;
+    Rng rng(seed, 0x415544);
+    std::vector<glm::vec3> eyes, origins, dirs;
+    std::vector<float> tfar;
+    std::vector<uint8_t> blocked;
+    for (int bz = 0; bz < shrunk.block_dims.y; ++bz)
+        for (int bx = 0; bx < shrunk.block_dims.x; ++bx) {
+            const size_t index = size_t(bx) + size_t(shrunk.block_dims.x) * size_t(bz);
+            const int32_t set = shrunk.block_set[index];
+            if (set < 0) continue;
+            ++out.blocks;
+            const float b = shrunk.block_size_m;
+            const float x0 = shrunk.block_origin.x + float(bx) * b,
+                        z0 = shrunk.block_origin.z + float(bz) * b;
+            const Aabb square =
+                Aabb::of({x0, view.view_bounds.min.y, z0}, {x0 + b, view.view_bounds.max.y, z0 + b});
+            eyes.clear();
+            sample_eye_points_in(masks, square, 7000 + index, eyes_per_block, seed, eyes);
+            for (const Aabb& box : shrunk.set(set).boxes.front()) {
+                origins.clear();
+                dirs.clear();
+                tfar.clear();
+                for (const glm::vec3& e : eyes)
+                    for (uint32_t k = 0; k < points_per_box; ++k) {
+                        const glm::vec3 p =
+                            box.min + box.size() * glm::vec3(rng.uniform(), rng.uniform(), rng.uniform());
+                        const float len = glm::length(p - e);
+                        if (!(len > 0.0f)) continue;
+                        origins.push_back(e);
+                        dirs.push_back((p - e) / len);
+                        tfar.push_back(len);
+                    }
+                blocked.resize(origins.size());
+                if (origins.empty()) continue;
+                scene.occluded_opaque(origins.data(), dirs.data(), tfar.data(), uint32_t(origins.size()),
+                                      blocked.data());
+                out.rays += origins.size();
+                for (size_t i = 0; i < blocked.size(); ++i) {
+                    if (blocked[i]) continue;
+                    if (out.reached++ == 0) {
+                        std::ostringstream m;
+                        m << "block " << index << ": eye (" << origins[i].x << ", " << origins[i].y << ", "
+                          << origins[i].z << ") reaches " << tfar[i] << " m along (" << dirs[i].x << ", "
+                          << dirs[i].y << ", " << dirs[i].z << ") into box (" << box.min.x << ", "
+                          << box.min.y << ", " << box.min.z << ")-(" << box.max.x << ", " << box.max.y << ", "
+                          << box.max.z << ")";
+                        out.first = m.str();
+                    }
+                }
+            }
+        }
+    return out;
+}
+
+}  // namespace pvs

@@ -1,8 +1,0 @@
-// pvsbake: bake, verify and inspect potentially-visible sets of glTF worlds. See README.md.
-#include "pvs/cli.h"
-
-#include <iostream>
-
-int main(int argc, char** argv) {
-    return pvs::run_cli(argc, argv, std::cout, stderr);
-}

@@ -1,0 +1,874 @@
+// The conservative solver: every cell's boundary cut into patches, refined where objects are not yet proven
+// hidden; a depth cube of the shrunk occluders from each patch centre. Safety argument:
+// docs/ALGORITHMS.md#conservative-pvs.
+#include "solver/conservative.h"
+
+#include "cells/eyes.h"
+#include "occluders/panels.h"
+#include "rays/ray_sampler.h"
+#include "solver/depth_cube.h"
+#include "solver/region_hiding.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <optional>
+
+namespace pvs {
+
+namespace {
+
+// Finer occludee boxes per object: its triangles in runs of kTrianglesPerPart, each run's bounds. An
+// object whose one box is not proven hidden may still be, part by part (all parts hidden = hidden).
+constexpr uint32_t kTrianglesPerPart = 1;
+
+std::vector<std::vector<Aabb>> object_parts(const World& world) {
+    std::vector<std::vector<Aabb>> parts(world.objects.size());
+    for (size_t o = 0; o < world.objects.size(); ++o) {
+        const WorldObject& obj = world.objects[o];
+        for (uint32_t t0 = 0; t0 < obj.triangle_count; t0 += kTrianglesPerPart) {
+            Aabb b;
+            for (uint32_t t = t0; t < std::min(obj.triangle_count, t0 + kTrianglesPerPart); ++t) {
+                for (uint32_t v : world.triangles[obj.first_triangle + t].v) b.extend(world.positions[v]);
+            }
+            parts[o].push_back(b);
+        }
+    }
+    return parts;
+}
+
+// A bounding volume hierarchy over the objects' bounds (median split on the longest axis of the centres).
+// Nodes are in pre-order: a node's children come after it, so a reverse walk sees children first.
+struct ObjectTree {
+    struct Node {
+        Aabb bounds;
+        int32_t left = -1, right = -1;  // children, -1 for a leaf
+        int32_t object = -1;            // the object of a leaf
+    };
+    std::vector<Node> nodes;
+};
+
+int32_t build_tree(const World& world, std::vector<uint32_t>& objects, size_t lo, size_t hi,
+                   ObjectTree& tree) {
+    const int32_t id = int32_t(tree.nodes.size());
+    tree.nodes.emplace_back();
+    Aabb bounds, centres;
+    for (size_t i = lo; i < hi; ++i) {
+        bounds.extend(world.objects[objects[i]].bounds);
+        centres.extend(world.objects[objects[i]].bounds.center());
+    }
+    tree.nodes[size_t(id)].bounds = bounds;
+    if (hi - lo == 1) {
+        tree.nodes[size_t(id)].object = int32_t(objects[lo]);
+        return id;
+    }
+    const glm::vec3 ext = centres.size();
+    const int axis = ext.x >= ext.y && ext.x >= ext.z ? 0 : (ext.y >= ext.z ? 1 : 2);
+    const size_t mid = (lo + hi) / 2;
+    std::nth_element(objects.begin() + std::ptrdiff_t(lo), objects.begin() + std::ptrdiff_t(mid),
+                     objects.begin() + std::ptrdiff_t(hi), [&](uint32_t a, uint32_t b) {
+                         const float ca = world.objects[a].bounds.center()[axis];
+                         const float cb = world.objects[b].bounds.center()[axis];
+                         return ca < cb || (ca == cb && a < b);
+                     });
+    const int32_t left = build_tree(world, objects, lo, mid, tree);
+    const int32_t right = build_tree(world, objects, mid, hi, tree);
+    tree.nodes[size_t(id)].left = left;
+    tree.nodes[size_t(id)].right = right;
+    return id;
+}
+
+// Over the objects that can ever be left out (not pvs_always_visible). An object with empty bounds is
+// never proven hidden (is_hidden() says visible), so it is listed: the safe side.
+ObjectTree object_tree(const World& world) {
+    std::vector<uint32_t> objects;
+    for (uint32_t o = 0; o < world.objects.size(); ++o)
+        if (!(world.objects[o].flags & kObjectAlwaysVisible)) objects.push_back(o);
+    ObjectTree tree;
+    if (!objects.empty()) build_tree(world, objects, 0, objects.size(), tree);
+    return tree;
+}
+
+// Does the row list object o?
+inline bool row_lists(const uint64_t* row, uint32_t o) {
+    return (row[o >> 6] >> (o & 63)) & 1u;
+}
+
+// Are all voxels that meet the closed box (grown by a hair) set in the mask? False when the box reaches
+// outside the mask's grid, or the mask is empty.
+bool box_all_in_mask(const VoxelMask& mask, const Aabb& box) {
+    if (mask.empty()) return false;
+    constexpr float kHair = 1e-4f;
+    glm::ivec3 lo, hi;
+    for (int a = 0; a < 3; ++a) {
+        const float l = (box.min[a] - kHair - mask.origin[a]) / mask.voxel_size_m;
+        const float h = (box.max[a] + kHair - mask.origin[a]) / mask.voxel_size_m;
+        if (!(l >= 0.0f) || !(h < float(mask.dims[a]))) return false;
+        lo[a] = int(std::floor(l));
+        hi[a] = int(std::floor(h));
+    }
+    for (int z = lo.z; z <= hi.z; ++z)
+        for (int y = lo.y; y <= hi.y; ++y)
+            for (int x = lo.x; x <= hi.x; ++x)
+                if (!mask.get(uint64_t(x) +
+                              uint64_t(mask.dims.x) * (uint64_t(y) + uint64_t(mask.dims.y) * uint64_t(z))))
+                    return false;
+    return true;
+}
+
+struct Counts {
+    uint64_t samples = 0, skipped = 0, in_solid = 0, tests = 0, rays = 0, fine_samples = 0, panel_splits = 0,
+             known = 0, patch_hidden = 0;
+    std::vector<uint64_t> per_level;
+    Counts& operator+=(const Counts& o) {
+        known += o.known;
+        patch_hidden += o.patch_hidden;
+        samples += o.samples;
+        skipped += o.skipped;
+        in_solid += o.in_solid;
+        tests += o.tests;
+        rays += o.rays;
+        fine_samples += o.fine_samples;
+        panel_splits += o.panel_splits;
+        per_level.resize(std::max(per_level.size(), o.per_level.size()), 0);
+        for (size_t k = 0; k < o.per_level.size(); ++k) per_level[k] += o.per_level[k];
+        return *this;
+    }
+};
+
+// Points on each object to aim sight rays at: the centroids of up to kRayTargets of its triangles, spread
+// over its triangle list. first[o]..first[o + 1] index `points`.
+constexpr uint32_t kRayTargets = 8;
+
+struct RayTargets {
+    std::vector<uint32_t> first;
+    std::vector<glm::vec3> points;
+};
+
+RayTargets ray_targets(const World& world) {
+    RayTargets out;
+    for (const WorldObject& obj : world.objects) {
+        out.first.push_back(uint32_t(out.points.size()));
+        const uint32_t n = std::min(obj.triangle_count, kRayTargets);
+        for (uint32_t k = 0; k < n; ++k) {
+            const Triangle& t =
+                world.triangles[obj.first_triangle + uint32_t(uint64_t(k) * obj.triangle_count / n)];
+            out.points.push_back(
+                (world.positions[t.v[0]] + world.positions[t.v[1]] + world.positions[t.v[2]]) / 3.0f);
+        }
+    }
+    out.first.push_back(uint32_t(out.points.size()));
+    return out;
+}
+
+// What every thread shares: the world, its object tree, parts and ray targets, the occluders, the rays.
+struct Shared {
+    const World& world;
+    const ShrunkOccluders& occ;
+    const RayScene& scene;
+    ObjectTree tree;
+    std::vector<std::vector<Aabb>> parts;
+    RayTargets targets;
+    int cube_resolution;
+    int fine_cube_resolution;  // 0: no second look at the floor
+    int panel_refine_levels;   // halvings below the floor for what panels may still prove
+};
+
+// Per thread: the depth cube and scratch. solve_patch() refines one patch.
+class PatchSolver {
+public:
+    explicit PatchSolver(const Shared& shared)
+        : sh_(shared),
+          cube_(shared.cube_resolution),
+          fine_(std::max(shared.fine_cube_resolution, kMinCubeResolution)),
+          open_mark_(shared.world.objects.size(), 0),
+          last_seen_part_(shared.world.objects.size(), 0),
+          open_under_(shared.tree.nodes.size(), 0) {
+        counts_.per_level.assign(shared.occ.epsilon_m.size(), 0);
+    }
+
+    // The occluders of the next faces: those serving the eyes of the region whose face it is
+    // (ShrunkOccluders::set_for; every set has the same epsilon ladder).
+    // With `hider` (the single-occluder pass, solver/region_hiding.h; of the same set), what a patch's cubes
+    // leave open is also tried against one occluder at a time, exactly, before it is refined or listed.
+    void use(const ShrunkOccluders& occluders, const RegionHider* hider = nullptr) {
+        occ_ = &occluders;
+        hider_ = hider;
+    }
+
+    // Sight leaves a convex region through a face outward (docs/ALGORITHMS.md#eye-region), so what it reaches
+    // through the face lies on the face's outer side: for the side at the region's min along `axis` (side 0)
+    // only objects reaching down to the face's plane matter, for side 1 only objects reaching up to it. A
+    // face shared by two regions is solved for both sides at once, on the same depth cubes: Sides holds the
+    // open objects and the row of each side (an empty list: that side is not wanted).
+    struct Sides {
+        std::array<std::vector<uint32_t>, 2> open;
+        std::array<uint64_t*, 2> row{nullptr, nullptr};
+        bool empty() const { return open[0].empty() && open[1].empty(); }
+    };
+
+    // The open objects of `candidates` on each wanted side of the face at `plane` along `axis`, less those
+    // the region of that side already lists (`known_lo`, `known_hi`: its row so far, or null;
+    // docs/ALGORITHMS.md#refinement). Objects in `hidden_lo`, `hidden_hi` (the single-occluder pass proved
+    // them hidden from that side's region, solver/region_hiding.h) are left out too.
+    Sides sides_of(const std::vector<uint32_t>& candidates, int axis, float plane, uint64_t* row_lo,
+                   uint64_t* row_hi, const uint64_t* known_lo = nullptr, const uint64_t* known_hi = nullptr,
+                   const uint64_t* hidden_lo = nullptr, const uint64_t* hidden_hi = nullptr) {
+        Sides out;
+        out.row = {row_lo, row_hi};
+        const auto in = [](const uint64_t* row, uint32_t o) { return row && row_lists(row, o); };
+        for (uint32_t o : candidates) {
+            const Aabb& b = sh_.world.objects[o].bounds;
+            if (row_lo && b.min[axis] <= plane && !in(hidden_lo, o)) {
+                if (in(known_lo, o)) {
+                    ++counts_.known;
+                } else {
+                    out.open[0].push_back(o);
+                }
+            }
+            if (row_hi && b.max[axis] >= plane && !in(hidden_hi, o)) {
+                if (in(known_hi, o)) {
+                    ++counts_.known;
+                } else {
+                    out.open[1].push_back(o);
+                }
+            }
+        }
+        return out;
+    }
+
+    // Lists in each side's row every object of its open list that some patch of the face `rect` (flat along
+    // `axis`) cannot prove hidden. The face is first cut into n x n top patches so that halving them m times
+    // ends at patches of half-side <= epsilon_0 (the Chebyshev radius, docs/ALGORITHMS.md#chebyshev) with as
+    // few leaves as a plain grid would need (within 20% more), and with m as large as that allows and the
+    // ladder has levels for.
+    void solve_face(const Aabb& rect, int axis, const Sides& sides) {
+        const int ua = (axis + 1) % 3, va = (axis + 2) % 3;
+        const glm::vec3 size = rect.size();
+        const double eps0 = occ_->epsilon_m.front();
+        const double side = std::max(size[ua], size[va]);
+        const int need = std::max(1, int(std::ceil(side / (2.0 * eps0) - 1e-9)));
+        int m = 0;
+        for (int t = 1; t < int(occ_->epsilon_m.size()) && (1 << t) <= need; ++t) {
+            const int n_leaf = ((need + (1 << t) - 1) >> t) << t;
+            if (double(n_leaf) * n_leaf <= 1.2 * double(need) * need) m = t;
+        }
+        const int n = (need + (1 << m) - 1) >> m;
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) {
+                Aabb p = rect;
+                p.min[ua] = rect.min[ua] + size[ua] * float(i) / float(n);
+                p.max[ua] = i + 1 == n ? rect.max[ua] : rect.min[ua] + size[ua] * float(i + 1) / float(n);
+                p.min[va] = rect.min[va] + size[va] * float(j) / float(n);
+                p.max[va] = j + 1 == n ? rect.max[va] : rect.min[va] + size[va] * float(j + 1) / float(n);
+                solve_patch(p, axis, sides);
+            }
+    }
+
+    // Lists in each side's row every object of its open list that some sub-patch of `rect` (flat along
+    // `axis`) cannot prove hidden. `sides` is consumed.
+    void solve_patch(const Aabb& rect, int axis, Sides sides) {
+        // What an earlier patch of the face listed needs no proof here (docs/ALGORITHMS.md#refinement):
+        // patches are solved one after another, depth first, so the row holds what the patches before this
+        // one listed.
+        for (int side = 0; side < 2; ++side) {
+            const uint64_t* row = sides.row[size_t(side)];
+            if (!row) continue;
+            std::vector<uint32_t>& open = sides.open[size_t(side)];
+            const size_t before = open.size();
+            std::erase_if(open, [row](uint32_t o) { return row_lists(row, o); });
+            counts_.known += before - open.size();
+        }
+        if (sides.empty()) return;
+        // No sight line leaves through it (docs/ALGORITHMS.md#patches).
+        if (box_all_in_mask(occ_->solid, rect)) {
+            ++counts_.in_solid;
+            return;
+        }
+        // The box around the sample s (the float centre) that holds the whole patch: its half-extent on
+        // each axis is the distance from s to the farther side, in double; r, the largest, is the patch's
+        // radius in the Chebyshev metric (docs/ALGORITHMS.md#chebyshev).
+        const glm::vec3 s = rect.center();
+        glm::dvec3 spread(0.0);
+        for (int a = 0; a < 3; ++a)
+            spread[a] = std::max(double(s[a]) - double(rect.min[a]), double(rect.max[a]) - double(s[a]));
+        const double r = std::max({spread.x, spread.y, spread.z});
+        const std::vector<double>& eps = occ_->epsilon_m;
+        // The smallest epsilon >= r. r is exact: the differences of floats are exact in double (unless
+        // their exponents differ by more than 29), so a face cut in patches of exactly epsilon_0 a side, as
+        // voxel-aligned faces are, reaches the floor.
+        size_t k = 0;
+        while (k < eps.size() && eps[k] < r) ++k;
+        if (k < eps.size()) {
+            bool inside = false;
+            for (const Aabb& b : occ_->boxes[k]) inside = inside || b.contains(s);
+            if (inside) {  // its epsilon-cube, which holds the patch, lies in the solid
+                ++counts_.skipped;
+                return;
+            }
+            ++counts_.samples;
+            ++counts_.per_level[k];
+            interest_.clear();
+            for (const std::vector<uint32_t>& open : sides.open)
+                for (uint32_t o : open) interest_.push_back(sh_.world.objects[o].bounds);
+            cube_.clear_for(s, interest_);  // only the open objects' pixels are drawn, cleared and read
+            // Only occluders meeting the box around s and the open objects (a segment from s to an open
+            // object stays in it): drawing fewer is always safe, and these are nearly all that matter.
+            Aabb reach = Aabb::of(s, s);
+            for (const Aabb& b : interest_) reach.extend(b);
+            near_.clear();
+            for (const Aabb& b : occ_->boxes[k])
+                if (b.overlaps(reach)) near_.push_back(b);
+            // Panels (docs/ALGORITHMS.md#panel-inset) whose plane the patch's box does not reach, inset per
+            // ray for that box; drawn first, they are cheap and hide many boxes behind them, which
+            // add_occluders() then skips.
+            near_panels_.clear();
+            panel_spread_ = spread * (1.0 + 1e-6);
+            for (const Aabb& p : occ_->panels) {
+                const int a = panel_axis(p);
+                if (a >= 0 && p.overlaps(reach) &&
+                    std::abs(double(p.min[a]) - double(s[a])) > panel_spread_[a]) {
+                    near_panels_.push_back(p);
+                }
+            }
+            cube_.add_panels(near_panels_, panel_spread_);
+            cube_.add_occluders(near_);
+            for (int side = 0; side < 2; ++side)
+                sides.open[size_t(side)] = unproven(cube_, sides.open[size_t(side)]);
+            // The panels on the cube's side faces too (rays more than 45 degrees from a panel's normal;
+            // docs/ALGORITHMS.md#panel-inset), drawn only over what is still unproven: a subset of the open
+            // objects, so its pixels lie in the region clear_for() cleared. At every level, not only the
+            // floor: what they prove on a large patch needs no smaller ones.
+            if (!sides.empty() && !near_panels_.empty()) {
+                interest_.clear();
+                for (const std::vector<uint32_t>& open : sides.open)
+                    for (uint32_t o : open) interest_.push_back(sh_.world.objects[o].bounds);
+                cube_.limit_to(interest_);
+                // Only the panels that meet the box around s and some object left open: a panel
+                // that lowers a pixel below an object's depth there has every ray of the pixel cross
+                // it first, so on a segment from s into the object's bounds, which that box holds
+                // (drawing fewer is always safe). Those boxes are gathered by the octant of the
+                // object's centre around s, and each panel is tested against the eight unions (a
+                // superset of the boxes it meets): not against every open object, which may be
+                // thousands on open levels.
+                std::array<Aabb, 8> hulls;
+                std::array<bool, 8> used{};
+                hulls.fill(Aabb::of(s, s));
+                for (const Aabb& b : interest_) {
+                    const glm::vec3 c = b.center();
+                    const int octant = (c.x > s.x ? 1 : 0) | (c.y > s.y ? 2 : 0) | (c.z > s.z ? 4 : 0);
+                    hulls[size_t(octant)].extend(b);
+                    used[size_t(octant)] = true;
+                }
+                for (const Aabb& p : near_panels_) {
+                    bool meets = false;
+                    for (size_t o = 0; o < 8 && !meets; ++o) meets = used[o] && p.overlaps(hulls[o]);
+                    if (meets) cube_.add_panel_sides(p, panel_spread_);
+                }
+                for (int side = 0; side < 2; ++side)
+                    sides.open[size_t(side)] = unproven_each(cube_, sides.open[size_t(side)]);
+            }
+            // The single-occluder pass for the patch (a sight line leaving through it meets the occluder
+            // beyond it; docs/ALGORITHMS.md#single-occluder).
+            if (hider_)
+                for (int side = 0; side < 2; ++side)
+                    sides.open[size_t(side)] = hidden_by_one(rect, sides.open[size_t(side)]);
+            if (k == 0) {  // the floor: whatever is not proven is listed
+                // Below the floor (docs/ALGORITHMS.md#refinement): the boxes stay shrunk by epsilon_0, but
+                // panels need no epsilon, so a patch half the size insets them by half as much. While the
+                // panels are drawn here, what they left open goes down panel_refine_levels more halvings
+                // (sight rays first, as above the floor); what is left after them is listed.
+                if (!sides.empty() && !near_panels_.empty() &&
+                    r > eps[0] / double(1 << sh_.panel_refine_levels)) {
+                    for (int side = 0; side < 2; ++side)
+                        sides.open[size_t(side)] =
+                            list_seen(s, sides.open[size_t(side)], sides.row[size_t(side)]);
+                    if (sides.empty()) return;
+                    ++counts_.panel_splits;
+                    split(rect, axis, sides);
+                    return;
+                }
+                if (sh_.fine_cube_resolution > 0 && !sides.empty()) second_look(s, sides);
+                for (int side = 0; side < 2; ++side) {
+                    for (uint32_t o : sides.open[size_t(side)])
+                        sides.row[size_t(side)][o >> 6] |= uint64_t(1) << (o & 63);
+                    sides.open[size_t(side)].clear();
+                }
+                return;
+            }
+            if (sides.empty()) return;
+            for (int side = 0; side < 2; ++side)
+                sides.open[size_t(side)] = list_seen(s, sides.open[size_t(side)], sides.row[size_t(side)]);
+        }
+        split(rect, axis, sides);
+    }
+
+    const Counts& counts() const { return counts_; }
+
+    // The objects of `open` no single occluder hides from all of `rect` (solver/region_hiding.h).
+    std::vector<uint32_t> hidden_by_one(const Aabb& rect, std::vector<uint32_t> open) {
+        if (open.empty()) return open;
+        hidden_.assign((sh_.world.objects.size() + 63) / 64, 0);
+        const uint32_t n = hider_->hide(sh_.world, rect, open, hidden_.data());
+        if (n == 0) return open;
+        counts_.patch_hidden += n;
+        std::erase_if(open, [this](uint32_t o) { return row_lists(hidden_.data(), o); });
+        return open;
+    }
+
+    // Lists the objects of `open` a sight line from s reaches (a ray to a point of one of its triangles that
+    // no opaque triangle stops) and returns the others (docs/ALGORITHMS.md#sight-rays). Such an object can
+    // never be proven hidden from a patch holding s, so refining it would only cost time: the PVS is the
+    // same, sooner. Only from free space (every voxel holding s free: untouched and not proven solid), or
+    // rays would start behind walls and reach the backs of triangles through the sealed void.
+    std::vector<uint32_t> list_seen(glm::vec3 s, const std::vector<uint32_t>& open, uint64_t* row) {
+        if (open.empty() || !box_all_in_mask(sh_.occ.free, Aabb::of(s, s))) return open;
+        origins_.clear();
+        dirs_.clear();
+        tfar_.clear();
+        for (uint32_t o : open)
+            for (uint32_t p = sh_.targets.first[o]; p < sh_.targets.first[o + 1]; ++p) {
+                const glm::vec3 d = sh_.targets.points[p] - s;
+                const float len = glm::length(d);
+                origins_.push_back(s);
+                dirs_.push_back(len > 0.0f ? d / len : glm::vec3(1.0f, 0.0f, 0.0f));
+                tfar_.push_back(len * (1.0f - 1e-4f));
+            }
+        blocked_.resize(origins_.size());
+        if (!origins_.empty())
+            sh_.scene.occluded_opaque(origins_.data(), dirs_.data(), tfar_.data(), uint32_t(origins_.size()),
+                                      blocked_.data());
+        counts_.rays += origins_.size();
+        std::vector<uint32_t> out;
+        size_t ray = 0;
+        for (uint32_t o : open) {
+            bool seen = false;
+            for (uint32_t p = sh_.targets.first[o]; p < sh_.targets.first[o + 1]; ++p, ++ray)
+                seen = seen || !blocked_[ray];
+            if (seen) {
+                row[o >> 6] |= uint64_t(1) << (o & 63);
+            } else {
+                out.push_back(o);
+            }
+        }
+        return out;
+    }
+
+private:
+    // Solves the halves of a patch along its long in-plane sides (both for a square).
+    void split(const Aabb& rect, int axis, const Sides& sides) {
+        const int ua = (axis + 1) % 3, va = (axis + 2) % 3;
+        const glm::vec3 size = rect.size();
+        const float longest = std::max(size[ua], size[va]);
+        const bool split_u = size[ua] >= 0.5f * longest, split_v = size[va] >= 0.5f * longest;
+        for (int iu = 0; iu < (split_u ? 2 : 1); ++iu)
+            for (int iv = 0; iv < (split_v ? 2 : 1); ++iv) {
+                Aabb child = rect;
+                if (split_u) {
+                    const float mid = 0.5f * (rect.min[ua] + rect.max[ua]);
+                    (iu == 0 ? child.max[ua] : child.min[ua]) = mid;
+                }
+                if (split_v) {
+                    const float mid = 0.5f * (rect.min[va] + rect.max[va]);
+                    (iv == 0 ? child.max[va] : child.min[va]) = mid;
+                }
+                solve_patch(child, axis, sides);
+            }
+    }
+
+    // At a floor sample, before listing what the cube could not prove: objects a sight ray from s reaches
+    // are listed (no cube can prove them), and the rest get a second look on a finer cube (the same
+    // occluders and panels, drawn only over their pixels). A pixel of the coarse cube is written only where
+    // a box covers all of it and an object claims every pixel its bounds touch, so near every occluder edge
+    // about two coarse pixels are lost; the fine cube loses the same count of pixels R_fine / R times
+    // smaller. Both tests are conservative (docs/ALGORITHMS.md#depth-cube), so proving on either is enough.
+    void second_look(glm::vec3 s, Sides& sides) {
+        for (int side = 0; side < 2; ++side)
+            sides.open[size_t(side)] = list_seen(s, sides.open[size_t(side)], sides.row[size_t(side)]);
+        if (sides.empty()) return;
+        interest_.clear();
+        for (const std::vector<uint32_t>& open : sides.open)
+            for (uint32_t o : open) interest_.push_back(sh_.world.objects[o].bounds);
+        fine_.clear_for(s, interest_);
+        fine_.add_panels(near_panels_, panel_spread_);
+        fine_.add_occluders(near_);
+        ++counts_.fine_samples;
+        for (int side = 0; side < 2; ++side)
+            sides.open[size_t(side)] = unproven(fine_, sides.open[size_t(side)]);
+    }
+
+    // Does the cube prove hidden every part of an object cut into several (its bounds alone were not)?
+    // The part that was not hidden last time is tried first: the object's visible part, as a rule, from
+    // the neighbouring samples too (the order changes the cost, not the answer).
+    bool parts_hidden(const DepthCube& cube, uint32_t o) {
+        const std::vector<Aabb>& parts = sh_.parts[o];
+        if (parts.size() <= 1) return false;
+        const uint32_t first = last_seen_part_[o];
+        ++counts_.tests;
+        if (!cube.is_hidden(parts[first])) return false;
+        for (uint32_t p = 0; p < parts.size(); ++p) {
+            if (p == first) continue;
+            ++counts_.tests;
+            if (!cube.is_hidden(parts[p])) {
+                last_seen_part_[o] = p;
+                return false;
+            }
+        }
+        return true;
+    }
+
+    // The same as unproven(), one object at a time (no tree): for a few objects left after a first pass.
+    std::vector<uint32_t> unproven_each(const DepthCube& cube, const std::vector<uint32_t>& open) {
+        std::vector<uint32_t> out;
+        for (uint32_t o : open) {
+            ++counts_.tests;
+            if (!cube.is_hidden(sh_.world.objects[o].bounds) && !parts_hidden(cube, o)) out.push_back(o);
+        }
+        return out;
+    }
+
+    // The objects of `open` the cube cannot prove hidden, in the order of `open`.
+    std::vector<uint32_t> unproven(const DepthCube& cube, const std::vector<uint32_t>& open) {
+        const std::vector<ObjectTree::Node>& nodes = sh_.tree.nodes;
+        for (uint32_t o : open) open_mark_[o] = 1;
+        // Open objects under each node (children after parents: walk backwards).
+        for (size_t n = nodes.size(); n-- > 0;) {
+            const ObjectTree::Node& node = nodes[n];
+            open_under_[n] = node.object >= 0
+                                 ? open_mark_[size_t(node.object)]
+                                 : open_under_[size_t(node.left)] + open_under_[size_t(node.right)];
+        }
+        stack_.clear();
+        if (!nodes.empty()) stack_.push_back(0);
+        while (!stack_.empty()) {
+            const int32_t n = stack_.back();
+            stack_.pop_back();
+            if (open_under_[size_t(n)] == 0) continue;
+            const ObjectTree::Node& node = nodes[size_t(n)];
+            ++counts_.tests;
+            if (cube.is_hidden(node.bounds)) continue;  // every open object under it stays proven
+            if (node.object < 0) {
+                stack_.push_back(node.right);
+                stack_.push_back(node.left);
+                continue;
+            }
+            if (!parts_hidden(cube, uint32_t(node.object)))
+                open_mark_[size_t(node.object)] = 2;  // not proven from this sample
+        }
+        std::vector<uint32_t> out;
+        for (uint32_t o : open) {
+            if (open_mark_[o] == 2) out.push_back(o);
+            open_mark_[o] = 0;
+        }
+        return out;
+    }
+
+    const Shared& sh_;
+    const ShrunkOccluders* occ_ = &sh_.occ;
+    const RegionHider* hider_ = nullptr;
+    std::vector<uint64_t> hidden_;  // scratch: one bit per object
+    DepthCube cube_;
+    DepthCube fine_;                        // the second look at floor samples (1 pixel when off)
+    std::vector<uint8_t> open_mark_;        // per object: 0 not open, 1 open, 2 open and not proven
+    std::vector<uint32_t> last_seen_part_;  // per object: the part parts_hidden() last found not hidden
+    std::vector<uint32_t> open_under_;      // per tree node
+    std::vector<int32_t> stack_;
+    std::vector<Aabb> interest_;     // bounds of the open objects: the only pixels worth drawing
+    std::vector<Aabb> near_;         // the occluders drawn for the current sample
+    std::vector<Aabb> near_panels_;  // the panels drawn for it
+    glm::dvec3 panel_spread_{0.0};   // and the half-extents of the box around s they are drawn for
+    std::vector<glm::vec3> origins_, dirs_;
+    std::vector<float> tfar_;
+    std::vector<uint8_t> blocked_;
+    Counts counts_;
+};
+
+// The objects that start open for a face or box: all but pvs_always_visible ones (listed anyway).
+std::vector<uint32_t> leavable_objects(const World& world) {
+    std::vector<uint32_t> out;
+    for (uint32_t o = 0; o < world.objects.size(); ++o)
+        if (!(world.objects[o].flags & kObjectAlwaysVisible)) out.push_back(o);
+    return out;
+}
+
+void add_counts(ConservativeFigures& figures, const Counts& n, std::chrono::steady_clock::time_point start) {
+    figures.samples += n.samples;
+    figures.samples_skipped += n.skipped;
+    figures.patches_in_solid += n.in_solid;
+    figures.object_tests += n.tests;
+    figures.rays += n.rays;
+    figures.fine_samples += n.fine_samples;
+    figures.panel_splits += n.panel_splits;
+    figures.known_listed += n.known;
+    figures.patch_hidden += n.patch_hidden;
+    figures.samples_per_level.resize(std::max(figures.samples_per_level.size(), n.per_level.size()), 0);
+    for (size_t k = 0; k < n.per_level.size(); ++k) figures.samples_per_level[k] += n.per_level[k];
+    figures.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+Shared make_shared(const ConservativeConfig& config, const World& world, const ShrunkOccluders& occluders,
+                   const RayScene& scene) {
+    return Shared{world,
+                  occluders,
+                  scene,
+                  object_tree(world),
+                  object_parts(world),
+                  ray_targets(world),
+                  config.cube_resolution,
+                  config.fine_cube_resolution,
+                  config.panel_refine_levels};
+}
+
+// One face of a box: the side at box.min[axis] (side 0) or box.max[axis] (side 1), flat along `axis`.
+Aabb box_face(const Aabb& box, int axis, int side) {
+    Aabb f = box;
+    f.min[axis] = f.max[axis] = side ? box.max[axis] : box.min[axis];
+    return f;
+}
+
+}  // namespace
+
+void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const World& world,
+                           const std::vector<Aabb>& boxes, const VoxelMask& eyes,
+                           const ShrunkOccluders& occluders, const RayScene& scene, PvsSet& pvs,
+                           ConservativeFigures& figures, const RegionHiders* hiders,
+                           const std::vector<const uint64_t*>* bounds) {
+    const auto start = std::chrono::steady_clock::now();
+    const Shared shared = make_shared(config, world, occluders, scene);
+    const std::vector<uint32_t> leavable = leavable_objects(world);
+    std::optional<RegionHiders> own_hiders;
+    if (config.single_occluder_pass && !hiders) hiders = &own_hiders.emplace(ctx, occluders);
+    if (!config.single_occluder_pass) hiders = nullptr;
+    Counts total;
+    uint64_t region_hidden = 0, skipped = 0;
+#pragma omp parallel reduction(+ : region_hidden, skipped)
+    {
+        PatchSolver solver(shared);
+        std::vector<uint32_t> open, candidates;
+        std::vector<uint64_t> hidden(pvs.words_per_row);
+#pragma omp for schedule(dynamic, 1)
+        for (int64_t ci = 0; ci < int64_t(boxes.size()); ++ci) {
+            const Aabb box = eye_region(eyes, boxes[size_t(ci)]);
+            uint64_t* row = pvs.row(uint32_t(ci));
+            open.clear();
+            for (uint32_t o = 0; o < world.objects.size(); ++o) {
+                if ((world.objects[o].flags & kObjectAlwaysVisible) ||
+                    world.objects[o].bounds.overlaps(box)) {
+                    row[o >> 6] |= uint64_t(1) << (o & 63);
+                }
+            }
+            if (!box.is_empty()) {
+                const int32_t set = occluders.set_for(box);
+                solver.use(occluders.set(set), hiders ? &hiders->of(set) : nullptr);
+                // Only what the box's bound lists (docs/ALGORITHMS.md#octree-parent-bound).
+                const uint64_t* bound = bounds ? (*bounds)[size_t(ci)] : nullptr;
+                candidates.clear();
+                for (uint32_t o : leavable)
+                    if (!bound || row_lists(bound, o)) candidates.push_back(o);
+                skipped += leavable.size() - candidates.size();
+                std::fill(hidden.begin(), hidden.end(), 0);
+                if (hiders) region_hidden += hiders->of(set).hide(world, box, candidates, hidden.data());
+                for (uint32_t o : candidates)
+                    if (!world.objects[o].bounds.overlaps(box) && !row_lists(hidden.data(), o))
+                        open.push_back(o);
+                // One face after another into the cell's own row: solve_patch() skips what the faces (and
+                // patches) before it listed (docs/ALGORITHMS.md#refinement).
+                for (int axis = 0; axis < 3; ++axis)
+                    for (int side = 0; side < 2; ++side)
+                        solver.solve_face(box_face(box, axis, side), axis,
+                                          solver.sides_of(open, axis, side ? box.max[axis] : box.min[axis],
+                                                          side ? nullptr : row, side ? row : nullptr));
+            }
+            ctx.progress_advance();
+        }
+#pragma omp critical
+        total += solver.counts();
+    }
+    figures.region_hidden += region_hidden;
+    figures.parent_hidden += skipped;
+    add_counts(figures, total, start);
+}
+
+// A grid: each face shared by two cells is computed once, for both sides (PatchSolver::Sides). A face
+// side's row lists every object on that side that some patch of the face cannot prove hidden; a cell's row
+// is the union of its six faces' outward rows, the objects whose bounds meet its region, and
+// add_always_listed().
+// The faces are solved in six PHASES, by axis and by the parity of the face's plane in the grid (a cell's min
+// face lies on plane i, its max face on plane i + 1): so each cell has at most one face in a phase. A face
+// side skips the objects its cell already lists when the phase starts (docs/ALGORITHMS.md#refinement: they
+// are in the row anyway), and its row joins the cell's at the end of the phase. So the later faces of a cell
+// test only what the earlier ones proved hidden, and the result depends on the phases, not on the threads.
+static void conservative_grid_rows(Context& ctx, const ConservativeConfig& config, const World& world,
+                                   const CellSet& cells, const ShrunkOccluders& occluders,
+                                   const RayScene& scene, PvsSet& pvs, ConservativeFigures& figures) {
+    const auto start = std::chrono::steady_clock::now();
+    const uint32_t n_objects = uint32_t(world.objects.size());
+    // Faces of each cell's eye region (eye_region()); neighbours whose regions fill both cells share the
+    // face between them, found by its exact corners. In cell order, so the result is deterministic.
+    struct Face {
+        int axis;
+        Aabb rect;                                 // flat along `axis`
+        std::array<bool, 2> wanted{false, false};  // side 0: a region's min face (sight goes to -axis)
+        std::array<int32_t, 2> set{-1, -1};        // each side's occluders (ShrunkOccluders::set_for)
+        std::array<int32_t, 2> cell{-1, -1};       // each side's cell
+        int phase = 0;                             // 2 * axis + the parity of its plane's grid index
+    };
+    constexpr int kPhases = 6;
+    std::vector<Face> faces;
+    std::map<std::array<float, 6>, uint32_t> face_of;
+    std::vector<Aabb> regions(cells.size());
+    for (uint32_t c = 0; c < cells.size(); ++c) {
+        regions[c] = eye_region(cells.eyes, cells.cells[c].bounds);
+        if (regions[c].is_empty()) continue;
+        for (int axis = 0; axis < 3; ++axis) {
+            const double at = (double(cells.cells[c].bounds.center()[axis]) - double(cells.origin[axis])) /
+                              cells.cell_size_m;
+            const int64_t index = cells.cell_size_m > 0.0f ? int64_t(std::floor(at)) : 0;
+            for (int side = 0; side < 2; ++side) {
+                const Aabb rect = box_face(regions[c], axis, side);
+                std::array<float, 6> key{rect.min.x, rect.min.y, rect.min.z,
+                                         rect.max.x, rect.max.y, rect.max.z};
+                auto [it, fresh] = face_of.emplace(key, uint32_t(faces.size()));
+                if (fresh) faces.push_back(Face{axis, rect});
+                Face& f = faces[it->second];
+                f.wanted[size_t(side)] = true;
+                f.set[size_t(side)] = occluders.set_for(regions[c]);
+                f.cell[size_t(side)] = int32_t(c);
+                // A cell's min face (side 0) is on plane `index`, its max face on `index + 1`; a shared
+                // face gets the same parity from both cells.
+                f.phase = 2 * axis + int((index + side) & 1);
+            }
+        }
+    }
+    // Rows start with the objects whose bounds meet the region (always listed): no face tests them.
+    for (uint32_t c = 0; c < cells.size(); ++c) {
+        uint64_t* row = pvs.row(c);
+        for (uint32_t o = 0; o < n_objects; ++o)
+            if (world.objects[o].bounds.overlaps(regions[c])) row[o >> 6] |= uint64_t(1) << (o & 63);
+    }
+    std::array<std::vector<uint32_t>, kPhases> phase_faces;
+    for (uint32_t f = 0; f < faces.size(); ++f) phase_faces[size_t(faces[f].phase)].push_back(f);
+    const Shared shared = make_shared(config, world, occluders, scene);
+    const std::vector<uint32_t> leavable = leavable_objects(world);
+    // The single-occluder pass: what one occluder hides from a cell's whole region, no face of it tests.
+    PvsSet hidden = PvsSet::make(config.single_occluder_pass ? uint32_t(cells.size()) : 0, n_objects);
+    std::optional<RegionHiders> hiders;
+    if (config.single_occluder_pass) {
+        const auto pass_start = std::chrono::steady_clock::now();
+        hiders.emplace(ctx, occluders);
+        uint64_t n_hidden = 0;
+        ctx.progress_begin("single-occluder pass", cells.size(), "cells");
+#pragma omp parallel for schedule(dynamic, 16) reduction(+ : n_hidden)
+        for (int64_t c = 0; c < int64_t(cells.size()); ++c) {
+            if (!regions[size_t(c)].is_empty()) {
+                n_hidden += hiders->of(occluders.set_for(regions[size_t(c)]))
+                                .hide(world, regions[size_t(c)], leavable, hidden.row(uint32_t(c)));
+            }
+            ctx.progress_advance();
+        }
+        ctx.progress_end();
+        figures.region_hidden += n_hidden;
+        figures.region_seconds +=
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - pass_start).count();
+    }
+    const auto hider = [&](int32_t set) { return hiders ? &hiders->of(set) : nullptr; };
+    const auto hidden_row = [&](int32_t cell) -> const uint64_t* {
+        return config.single_occluder_pass && cell >= 0 ? hidden.row(uint32_t(cell)) : nullptr;
+    };
+    PvsSet face_rows = PvsSet::make(uint32_t(2 * faces.size()), n_objects);  // face * 2 + side
+    Counts total;
+    ctx.progress_begin("conservative PVS", faces.size(), "faces");
+#pragma omp parallel
+    {
+        PatchSolver solver(shared);
+        for (const std::vector<uint32_t>& phase : phase_faces) {
+#pragma omp for schedule(dynamic, 4)
+            for (int64_t k = 0; k < int64_t(phase.size()); ++k) {
+                const uint32_t fi = phase[size_t(k)];
+                const Face& f = faces[fi];
+                uint64_t* row_lo = f.wanted[0] ? face_rows.row(2 * fi) : nullptr;
+                uint64_t* row_hi = f.wanted[1] ? face_rows.row(2 * fi + 1) : nullptr;
+                // The cells' rows as the phase started: only the merge below writes them.
+                const uint64_t* known_lo = f.wanted[0] ? pvs.row(uint32_t(f.cell[0])) : nullptr;
+                const uint64_t* known_hi = f.wanted[1] ? pvs.row(uint32_t(f.cell[1])) : nullptr;
+                const float plane = f.rect.min[f.axis];
+                if (row_lo && row_hi && f.set[0] != f.set[1]) {
+                    // The regions on the two sides take their occluders from different blocks: once per side.
+                    solver.use(occluders.set(f.set[0]), hider(f.set[0]));
+                    solver.solve_face(f.rect, f.axis,
+                                      solver.sides_of(leavable, f.axis, plane, row_lo, nullptr, known_lo,
+                                                      nullptr, hidden_row(f.cell[0]), nullptr));
+                    solver.use(occluders.set(f.set[1]), hider(f.set[1]));
+                    solver.solve_face(f.rect, f.axis,
+                                      solver.sides_of(leavable, f.axis, plane, nullptr, row_hi, nullptr,
+                                                      known_hi, nullptr, hidden_row(f.cell[1])));
+                } else {
+                    solver.use(occluders.set(row_lo ? f.set[0] : f.set[1]),
+                               hider(row_lo ? f.set[0] : f.set[1]));
+                    solver.solve_face(f.rect, f.axis,
+                                      solver.sides_of(leavable, f.axis, plane, row_lo, row_hi, known_lo,
+                                                      known_hi, row_lo ? hidden_row(f.cell[0]) : nullptr,
+                                                      row_hi ? hidden_row(f.cell[1]) : nullptr));
+                }
+                ctx.progress_advance();
+            }
+            // (After the implied barrier: every face of the phase is done.) One thread merges, a few words
+            // per face; the barrier after it starts the next phase on the merged rows.
+#pragma omp single
+            for (const uint32_t fi : phase) {
+                for (int side = 0; side < 2; ++side) {
+                    if (!faces[fi].wanted[size_t(side)]) continue;
+                    uint64_t* row = pvs.row(uint32_t(faces[fi].cell[size_t(side)]));
+                    const uint64_t* fr = face_rows.row(2 * fi + uint32_t(side));
+                    for (uint32_t w = 0; w < pvs.words_per_row; ++w) row[w] |= fr[w];
+                }
+            }
+        }
+#pragma omp critical
+        total += solver.counts();
+    }
+    ctx.progress_end();
+    add_counts(figures, total, start);
+}
+
+PvsSet bake_conservative_pvs(Context& ctx, const ConservativeConfig& config, const World& world,
+                             const CellSet& cells, const ShrunkOccluders& occluders, const RayScene& scene,
+                             ConservativeFigures& figures) {
+    ScopedTimer timer(ctx, "conservative_pvs");
+    ctx.info(fmt::format(
+        "conservative PVS: {} cells, epsilon {} m to {} m ({} levels), {} shrunk occluders "
+        "at the floor, cube {} px",
+        cells.size(), occluders.epsilon_m.empty() ? 0.0 : occluders.epsilon_m.front(),
+        occluders.epsilon_m.empty() ? 0.0 : occluders.epsilon_m.back(), occluders.epsilon_m.size(),
+        occluders.boxes.empty() ? 0 : occluders.boxes[0].size(), config.cube_resolution));
+    PvsSet pvs = PvsSet::make(uint32_t(cells.size()), uint32_t(world.objects.size()));
+    if (cells.kind == CellSet::Kind::kGrid) {
+        conservative_grid_rows(ctx, config, world, cells, occluders, scene, pvs, figures);
+    } else {
+        std::vector<Aabb> boxes;
+        for (const Cell& c : cells.cells) boxes.push_back(c.bounds);
+        ctx.progress_begin("conservative PVS", cells.size(), "cells");
+        conservative_box_rows(ctx, config, world, boxes, cells.eyes, occluders, scene, pvs, figures);
+        ctx.progress_end();
+    }
+    add_always_listed(world, cells, pvs);
+    ctx.info(fmt::format(
+        "conservative PVS: one occluder hides {:.2f} M (cell, object) pairs from the whole region ({:.1f} s) "
+        "and {:.2f} M (patch, object) pairs from a patch; {} samples (per epsilon level {}; {} floor patches "
+        "halved for panels; {} second "
+        "looks at {} px), {} inside occluders and {} patches in solid skipped, {:.1f} M box tests, {:.1f} M "
+        "sight rays, {:.1f} M (face side, object) pairs already listed by the cell, {:.1f} s ({:.0f} "
+        "cells/s)",
+        double(figures.region_hidden) * 1e-6, figures.region_seconds, double(figures.patch_hidden) * 1e-6,
+        figures.samples, fmt::join(figures.samples_per_level, "/"), figures.panel_splits,
+        figures.fine_samples, config.fine_cube_resolution, figures.samples_skipped, figures.patches_in_solid,
+        double(figures.object_tests) * 1e-6, double(figures.rays) * 1e-6, double(figures.known_listed) * 1e-6,
+        figures.seconds, double(cells.size()) / std::max(1e-9, figures.seconds)));
+    return pvs;
+}
+
+}  // namespace pvs

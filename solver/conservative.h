@@ -1,0 +1,79 @@
+// pvsbake solver: the conservative PVS with occluder fusion, by occluder shrinking (after P. Wonka,
+// M. Wimmer, D. Schmalstieg, "Visibility Preprocessing with Occluder Fusion for Urban Walkthroughs",
+// EGWR 2000).
+//
+// Conventions: glTF axes (right-handed, +Y up), metres. Epsilons and patch radii are in the Chebyshev metric
+// (|d|_inf = max_k |d_k|). A box's EYE REGION is the bounds of the eye voxels in it, clipped to it
+// (cells/eyes.h, eye_region). "Conservative": a row leaves an object out only if no sight line from an eye
+// of the region reaches it, given that no sight line from the eye space meets the proven solid (the one
+// sampled step: docs/ALGORITHMS.md#sampled-step). Every bake is verified by rays (driver/verify.h).
+//
+// How a row is made; the argument, step by step, is docs/ALGORITHMS.md#conservative-pvs:
+// - always listed: pvs_always_visible objects and objects whose bounds meet the region
+//   (docs/ALGORITHMS.md#eye-region);
+// - the region's faces are cut into patches; a patch of Chebyshev radius r is tested from its centre s on a
+//   depth cube (solver/depth_cube.h) of the boxes shrunk by the smallest epsilon >= r
+//   (docs/ALGORITHMS.md#shrunk-occluders, docs/ALGORITHMS.md#chebyshev, docs/ALGORITHMS.md#patches,
+//   docs/ALGORITHMS.md#depth-cube); a patch wholly in the proven solid, or whose s lies in a shrunk box, is
+//   skipped;
+// - what a patch does not prove goes to its halves, down to the floor epsilon_0, where it is listed; a test
+//   skips what the row already lists (docs/ALGORITHMS.md#refinement); objects are tested through a
+//   hierarchy and by parts (docs/ALGORITHMS.md#object-bvh); what a sight ray from s reaches is listed at
+//   once (docs/ALGORITHMS.md#sight-rays);
+// - panels (occluders/panels.h) are drawn inset per ray for the patch's box (docs/ALGORITHMS.md#panel-inset);
+// - with --single-occluder-pass, what one panel or one box hides from the whole region (or patch) is left
+//   out first, proven exactly (solver/region_hiding.h, docs/ALGORITHMS.md#single-occluder);
+// - a region whose eyes lie in one block uses that block's occluders, ShrunkOccluders::set_for (opt-in
+//   --occluder-block, unproven: docs/ALGORITHMS.md#block-occluders);
+// - an octree box tests only what its parent's row lists (docs/ALGORITHMS.md#octree-parent-bound).
+#pragma once
+
+#include "core/cell_set.h"
+#include "core/config.h"
+#include "core/context.h"
+#include "core/occluder.h"
+#include "core/pvs_set.h"
+#include "core/world.h"
+#include "rays/ray_scene.h"
+#include "solver/region_hiding.h"
+
+#include <vector>
+
+namespace pvs {
+
+struct ConservativeFigures {
+    uint64_t samples = 0;           // patch centres a depth cube was drawn from
+    uint64_t samples_skipped = 0;   // patch centres inside a shrunk occluder (nothing passes the patch)
+    uint64_t patches_in_solid = 0;  // patches wholly in the proven solid
+    uint64_t object_tests = 0;      // box tests on a depth cube (hierarchy nodes, objects and parts)
+    uint64_t rays = 0;              // sight rays from patch centres (objects seen need no refinement)
+    uint64_t fine_samples = 0;      // floor samples that took a second look on the fine cube
+    uint64_t panel_splits = 0;      // patches at the floor epsilon halved once more for the panels' sake
+    uint64_t known_listed = 0;      // (face side, object) pairs not tested: the cell already listed them
+    uint64_t region_hidden = 0;     // (cell, object) pairs the single-occluder pass proved hidden
+    double region_seconds = 0.0;    // its time (grid; on boxes it is part of `seconds`)
+    uint64_t patch_hidden = 0;      // (patch, object) pairs it proved hidden, of what a patch's cubes left
+    uint64_t parent_hidden = 0;     // (octree box, object) pairs left out untested: its parent left them out
+    std::vector<uint64_t> samples_per_level;  // samples at each epsilon of the ladder
+    double seconds = 0.0;
+};
+
+// The conservative rows of arbitrary boxes (cells, or octree nodes being considered): rows has boxes.size()
+// rows. Each box is first clipped to its eye region (the bounds of the `eyes` voxels in it; the whole box
+// when `eyes` is empty). Lists pvs_always_visible objects and objects whose bounds meet the region, then
+// every object some patch of the region's boundary cannot prove hidden. Parallel over boxes.
+// With `bounds` (one per box, null for none): bounds[i] is this function's row for a box that holds box i
+// (an octree node's parent). Its eye region holds box i's, so what that row leaves out is hidden from every
+// eye of box i too: it is left out without a test (docs/ALGORITHMS.md#octree-parent-bound).
+void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const World& world,
+                           const std::vector<Aabb>& boxes, const VoxelMask& eyes,
+                           const ShrunkOccluders& occluders, const RayScene& scene, PvsSet& rows,
+                           ConservativeFigures& figures, const RegionHiders* hiders = nullptr,
+                           const std::vector<const uint64_t*>* bounds = nullptr);
+
+// The conservative PVS of every cell. On a grid each face shared by two cells is computed once.
+PvsSet bake_conservative_pvs(Context& ctx, const ConservativeConfig& config, const World& world,
+                             const CellSet& cells, const ShrunkOccluders& occluders, const RayScene& scene,
+                             ConservativeFigures& figures);
+
+}  // namespace pvs

@@ -1,0 +1,772 @@
+// Conservative depth cube map: occluder boxes written where they cover whole pixels, occludee boxes tested
+// against every pixel they touch. Conventions: depth_cube.h; the safety argument:
+// docs/ALGORITHMS.md#depth-cube and docs/ALGORITHMS.md#panel-inset.
+//
+// After: P. Wonka, M. Wimmer, D. Schmalstieg. Visibility Preprocessing with Occluder Fusion for Urban
+// Walkthroughs. EGWR 2000 (the from-point test on shrunk occluders); H. Zhang et al. Visibility Culling
+// using Hierarchical Occlusion Maps, SIGGRAPH 1997 (conservative depth comparisons on an occlusion map).
+#include "solver/depth_cube.h"
+
+#include "core/error.h"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <string>
+
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define PVS_AVX2_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define PVS_AVX2_CLONES
+#endif
+
+namespace pvs {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr float kInfF = std::numeric_limits<float>::infinity();
+// Widening of the occludee's projected rectangle, relative to max(1, |u|): covers rounding of Δu / d.
+constexpr double kRectPad = 1e-9;
+
+// The pixel grid: edge k of R along u or v. THE definition, shared by kernel and reference.
+inline double grid(int k, int r) {
+    return -1.0 + 2.0 * double(k) / double(r);
+}
+
+// Round a non-negative finite double up to a float (larger stored depth is the safe side). The next float up
+// of a positive finite float is the one whose bits are one more (IEEE 754 orders positive floats as their
+// bit patterns); much cheaper than std::nextafter.
+inline float float_up(double x) {
+    const float f = float(x);
+    return std::bit_cast<float>(std::bit_cast<uint32_t>(f) + uint32_t(double(f) < x));
+}
+
+// The box relative to the eye, in face f's axes (double; differences of floats are exact in practice).
+struct FaceBox {
+    double d_min, d_max;  // depth range along the face axis
+    double u_lo, u_hi;    // Δ[ua] range
+    double v_lo, v_hi;    // Δ[va] range
+};
+
+// A box relative to the eye, per world axis (the differences computed once for all six faces).
+struct EyeBox {
+    double lo[3], hi[3];
+};
+
+inline EyeBox eye_box(const Aabb& box, glm::vec3 eye) {
+    EyeBox e;
+    for (int k = 0; k < 3; ++k) {
+        e.lo[k] = double(box.min[k]) - double(eye[k]);
+        e.hi[k] = double(box.max[k]) - double(eye[k]);
+    }
+    return e;
+}
+
+inline FaceBox face_box(const EyeBox& e, int face) {
+    const int a = face / 2, ua = (a + 1) % 3, va = (a + 2) % 3;
+    FaceBox fb;
+    if (face % 2 == 0) {
+        fb.d_min = e.lo[a];
+        fb.d_max = e.hi[a];
+    } else {
+        fb.d_min = -e.hi[a];
+        fb.d_max = -e.lo[a];
+    }
+    fb.u_lo = e.lo[ua];
+    fb.u_hi = e.hi[ua];
+    fb.v_lo = e.lo[va];
+    fb.v_hi = e.hi[va];
+    return fb;
+}
+
+FaceBox face_box(const Aabb& box, glm::vec3 eye, int face) {
+    return face_box(eye_box(box, eye), face);
+}
+
+// Distance from 0 to the interval [lo, hi].
+inline double dist_to_zero(double lo, double hi) {
+    return std::max({0.0, lo, -hi});
+}
+
+// Interval of ray depths t with lo <= t * c <= hi (c is the ray direction's component); empty as [inf, -inf].
+inline void slab(double lo, double hi, double c, double& enter, double& exit) {
+    if (c > 0.0) {
+        enter = lo / c;
+        exit = hi / c;
+    } else if (c < 0.0) {
+        enter = hi / c;
+        exit = lo / c;
+    } else if (lo <= 0.0 && 0.0 <= hi) {
+        enter = -kInf;
+        exit = kInf;
+    } else {
+        enter = kInf;
+        exit = -kInf;
+    }
+}
+
+// slab() for the grid values g(k), k = k0..k1, branch-free so that it vectorizes (the same divisions, so
+// the same values; the quotients of a lane with g = 0 are computed and not used).
+inline void slabs(double lo, double hi, int k0, int k1, int r, double* __restrict enter,
+                  double* __restrict exit) {
+    const bool inside = lo <= 0.0 && 0.0 <= hi;
+    const double zero_enter = inside ? -kInf : kInf, zero_exit = inside ? kInf : -kInf;
+    for (int k = k0; k <= k1; ++k) {
+        const double c = grid(k, r);
+        const double a = lo / c, b = hi / c;
+        enter[k] = c > 0.0 ? a : (c < 0.0 ? b : zero_enter);
+        exit[k] = c > 0.0 ? b : (c < 0.0 ? a : zero_exit);
+    }
+}
+
+inline bool box_usable(const Aabb& box) {
+    return !box.is_empty() && is_finite(box.min) && is_finite(box.max);
+}
+
+// Candidate grid vertices along one face axis for a shape whose projection spans [x0, x1] there: those of
+// the region's pixels reg_lo..reg_hi within it, one vertex of slack each side (the test at the vertices
+// decides, so extra candidates change nothing, and the slack absorbs rounding). False when fewer than two
+// vertices remain (no whole pixel).
+inline bool candidate_vertices(double x0, double x1, int reg_lo, int reg_hi, int r, int& v0, int& v1) {
+    if (x0 > 1.0 || x1 < -1.0) return false;
+    v0 = std::max(std::max(0, int(std::floor((std::max(x0, -1.0) + 1.0) * 0.5 * r)) - 1), reg_lo);
+    v1 = std::min(std::min(r, int(std::ceil((std::min(x1, 1.0) + 1.0) * 0.5 * r)) + 1), reg_hi + 1);
+    return v1 - v0 >= 1;
+}
+
+// The bounding rectangle, in face coordinates, of the projection of a box's part at depths [d_lo, d_max]
+// (a product set, so each extreme is reached at a corner: the depth that pushes u outward).
+inline void projected_rect(const FaceBox& fb, double d_lo, double& u0, double& u1, double& v0, double& v1) {
+    u0 = fb.u_lo >= 0.0 ? fb.u_lo / fb.d_max : fb.u_lo / d_lo;
+    u1 = fb.u_hi >= 0.0 ? fb.u_hi / d_lo : fb.u_hi / fb.d_max;
+    v0 = fb.v_lo >= 0.0 ? fb.v_lo / fb.d_max : fb.v_lo / d_lo;
+    v1 = fb.v_hi >= 0.0 ? fb.v_hi / d_lo : fb.v_hi / fb.d_max;
+}
+
+// A box's candidate vertices on one face: the bounding rectangle of the projection of its part beyond the
+// near plane (box ∩ {d >= d_lo}, clipping being safe: a sub-box), as vertices of the region's pixels
+// (candidate_vertices()). False when no whole pixel can be written.
+struct FaceCandidates {
+    FaceBox fb;
+    double d_lo = 0.0;
+    int iv0 = 0, iv1 = -1, jv0 = 0, jv1 = -1;
+};
+
+inline bool face_candidates(const Aabb& box, glm::vec3 eye, int face, const std::array<int, 4>& reg, int r,
+                            FaceCandidates& out) {
+    out.fb = face_box(box, eye, face);
+    out.d_lo = std::max(out.fb.d_min, kCubeNearPlane_m);
+    if (out.d_lo > out.fb.d_max) return false;
+    double u0, u1, v0, v1;
+    projected_rect(out.fb, out.d_lo, u0, u1, v0, v1);
+    return candidate_vertices(u0, u1, reg[0], reg[1], r, out.iv0, out.iv1) &&
+           candidate_vertices(v0, v1, reg[2], reg[3], r, out.jv0, out.jv1);
+}
+
+inline bool meets_near_cube(const Aabb& box, glm::vec3 eye) {
+    for (int k = 0; k < 3; ++k) {
+        if (double(box.max[k]) - double(eye[k]) < -kCubeNearPlane_m) return false;
+        if (double(box.min[k]) - double(eye[k]) > kCubeNearPlane_m) return false;
+    }
+    return true;
+}
+
+// The occludee's per-face rule (depth_cube.h): lower depth bound and the touched pixel range on the face.
+struct OccludeeFace {
+    bool touched = false;
+    double limit = 0.0;  // stored depth must be < limit
+    int i0 = 0, i1 = -1, j0 = 0, j1 = -1;
+};
+
+// Smallest pixel index i in [0, r - 1] whose closed span [g(i), g(i + 1)] reaches up to lo (g(i + 1) >= lo).
+// g is the table of grid(k, r), k = 0..r.
+inline int first_pixel_reaching(double lo, int r, const double* g) {
+    int i = std::clamp(int(std::floor((lo + 1.0) * 0.5 * r)), 0, r - 1);
+    while (i > 0 && g[i] >= lo) --i;
+    while (i < r - 1 && g[i + 1] < lo) ++i;
+    return i;
+}
+
+// Largest pixel index i in [0, r - 1] with g(i) <= hi.
+inline int last_pixel_reaching(double hi, int r, const double* g) {
+    int i = std::clamp(int(std::floor((hi + 1.0) * 0.5 * r)), 0, r - 1);
+    while (i < r - 1 && g[i + 1] <= hi) ++i;
+    while (i > 0 && g[i] > hi) --i;
+    return i;
+}
+
+inline double pad_low(double x) {
+    return std::clamp(x - kRectPad * std::max(1.0, std::abs(x)), -1.0, 1.0);
+}
+inline double pad_high(double x) {
+    return std::clamp(x + kRectPad * std::max(1.0, std::abs(x)), -1.0, 1.0);
+}
+
+OccludeeFace occludee_face(const EyeBox& e, int face, int r, const double* g) {
+    OccludeeFace of;
+    const FaceBox fb = face_box(e, face);
+    const double lower = std::max(
+        {fb.d_min, dist_to_zero(fb.u_lo, fb.u_hi), dist_to_zero(fb.v_lo, fb.v_hi), kCubeNearPlane_m});
+    if (lower > fb.d_max) return of;  // no part of the box in this face's cone
+    // Bounding rectangle of the projection of the box restricted to depths [lower, d_max] (a product set,
+    // so each extreme is reached at a corner: pick the depth that pushes u outward).
+    const double u0 = fb.u_lo >= 0.0 ? fb.u_lo / fb.d_max : fb.u_lo / lower;
+    const double u1 = fb.u_hi >= 0.0 ? fb.u_hi / lower : fb.u_hi / fb.d_max;
+    const double v0 = fb.v_lo >= 0.0 ? fb.v_lo / fb.d_max : fb.v_lo / lower;
+    const double v1 = fb.v_hi >= 0.0 ? fb.v_hi / lower : fb.v_hi / fb.d_max;
+    of.i0 = first_pixel_reaching(pad_low(u0), r, g);
+    of.i1 = last_pixel_reaching(pad_high(u1), r, g);
+    of.j0 = first_pixel_reaching(pad_low(v0), r, g);
+    of.j1 = last_pixel_reaching(pad_high(v1), r, g);
+    of.touched = of.i0 <= of.i1 && of.j0 <= of.j1;
+    of.limit = lower * (1.0 - kCubeDepthSlack);
+    return of;
+}
+
+}  // namespace
+
+DepthCube::DepthCube(int resolution) : resolution_(resolution) {
+    if (resolution < kMinCubeResolution || resolution > kMaxCubeResolution) {
+        throw bad_input("DepthCube: resolution " + std::to_string(resolution) + " is outside [" +
+                        std::to_string(kMinCubeResolution) + ", " + std::to_string(kMaxCubeResolution) +
+                        "] pixels per face edge");
+    }
+    depth_.assign(size_t(6) * resolution_ * resolution_, kInfF);
+    for (auto* v : {&col_enter_, &col_exit_, &row_enter_, &row_exit_, &corner_prev_, &corner_cur_}) {
+        v->resize(size_t(resolution_) + 1);
+    }
+    side_first_.resize(size_t(resolution_) + 1);
+    grid_.resize(size_t(resolution_) + 1);
+    for (int k = 0; k <= resolution_; ++k) grid_[size_t(k)] = grid(k, resolution_);
+    side_last_.resize(size_t(resolution_) + 1);
+}
+
+void DepthCube::clear(glm::vec3 eye) {
+    eye_ = eye;
+    std::fill(depth_.begin(), depth_.end(), kInfF);
+    for (auto& r : region_) r = {0, resolution_ - 1, 0, resolution_ - 1};
+}
+
+void DepthCube::clear_for(glm::vec3 eye, const std::vector<Aabb>& boxes) {
+    eye_ = eye;
+    limit_to(boxes);
+    const int r = resolution_;
+    for (int face = 0; face < 6; ++face) {
+        const auto& reg = region_[size_t(face)];
+        for (int j = reg[2]; j <= reg[3]; ++j) {
+            float* const row = depth_.data() + (size_t(face) * r + size_t(j)) * r;
+            std::fill(row + reg[0], row + reg[1] + 1, kInfF);
+        }
+    }
+}
+
+void DepthCube::limit_to(const std::vector<Aabb>& boxes) {
+    const int r = resolution_;
+    for (auto& reg : region_) reg = {r, -1, r, -1};
+    for (const Aabb& box : boxes) {
+        if (!box_usable(box) || meets_near_cube(box, eye_)) {
+            for (auto& reg : region_) reg = {0, r - 1, 0, r - 1};  // tested as visible anyway; stay simple
+            return;
+        }
+        const EyeBox rel = eye_box(box, eye_);
+        for (int face = 0; face < 6; ++face) {
+            const OccludeeFace of = occludee_face(rel, face, r, grid_.data());
+            if (!of.touched) continue;
+            auto& reg = region_[size_t(face)];
+            reg = {std::min(reg[0], of.i0), std::max(reg[1], of.i1), std::min(reg[2], of.j0),
+                   std::max(reg[3], of.j1)};
+        }
+    }
+}
+
+size_t DepthCube::covered_pixel_count() const {
+    return size_t(std::count_if(depth_.begin(), depth_.end(), [](float d) { return d < kInfF; }));
+}
+
+// Built twice, for AVX2 and for plain x86-64, and chosen when the program loads (GCC target_clones): the
+// pixel loops vectorize four doubles wide with AVX2. Same arithmetic, same results.
+PVS_AVX2_CLONES void DepthCube::add_occluder(const Aabb& box) {
+    if (!box_usable(box) || box.contains(eye_)) return;
+    const int r = resolution_;
+    for (int face = 0; face < 6; ++face) {
+        // Candidate vertices: a pixel whose four corners hit lies in the projection of box ∩ {d >= d_lo},
+        // only the region's pixels (limit_to()).
+        FaceCandidates fc;
+        if (!face_candidates(box, eye_, face, region_[size_t(face)], r, fc)) continue;
+        const FaceBox& fb = fc.fb;
+        const double d_lo = fc.d_lo;
+        const int iv0 = fc.iv0, iv1 = fc.iv1, jv0 = fc.jv0, jv1 = fc.jv1;
+
+        // Separable slab test: a corner ray (u, v, 1) (depth-parameterized) enters at
+        // max(d_lo, enter_u(u), enter_v(v)) and leaves at min(d_max, exit_u(u), exit_v(v)).
+        slabs(fb.u_lo, fb.u_hi, iv0, iv1, r, col_enter_.data(), col_exit_.data());
+        slabs(fb.v_lo, fb.v_hi, jv0, jv1, r, row_enter_.data(), row_exit_.data());
+
+        float* const face_depth = depth_.data() + size_t(face) * r * r;
+        // Corner depths of vertex row jv (+inf where the corner ray does not certainly hit).
+        const auto vertex_row = [&](int jv, double* __restrict out) {
+            const double re = std::max(d_lo, row_enter_[jv]), rx = std::min(fb.d_max, row_exit_[jv]);
+            for (int iv = iv0; iv <= iv1; ++iv) {
+                const double enter = std::max(re, col_enter_[iv]);
+                const double exit = std::min(rx, col_exit_[iv]);
+                const double hit_depth = enter * (1.0 + kCubeDepthSlack);
+                out[iv] = exit >= hit_depth ? hit_depth : kInf;
+            }
+        };
+        bool prev_ready = false;  // corner_prev_ holds vertex row j
+        for (int j = jv0; j < jv1; ++j) {
+            float* __restrict const row = face_depth + size_t(j) * r;
+            // Every corner depth of pixel row j is at least `least` (entries are >= each vertex row's
+            // max(d_lo, row_enter_)), and so is what it could write (float_up rounds up). A row already
+            // as near everywhere keeps its depths: skip it (the same depths, less work behind walls).
+            const double least = std::min(std::max(d_lo, row_enter_[j]), std::max(d_lo, row_enter_[j + 1]));
+            uint32_t farthest = 0;  // positive floats and +inf order as their bits
+            for (int i = iv0; i < iv1; ++i) farthest = std::max(farthest, std::bit_cast<uint32_t>(row[i]));
+            if (double(std::bit_cast<float>(farthest)) <= least) {
+                prev_ready = false;
+                continue;
+            }
+            if (!prev_ready) vertex_row(j, corner_prev_.data());
+            vertex_row(j + 1, corner_cur_.data());
+            // Branch-free, so that it vectorizes: min with float_up(d) keeps the pixel when d >= it
+            // (float_up(d) >= d) and lowers it to float_up(d) otherwise.
+            const double* __restrict const cp = corner_prev_.data();
+            const double* __restrict const cc = corner_cur_.data();
+            for (int i = iv0; i < iv1; ++i) {
+                const float f = float_up(std::max(std::max(cp[i], cp[i + 1]), std::max(cc[i], cc[i + 1])));
+                row[i] = f < row[i] ? f : row[i];
+            }
+            std::swap(corner_prev_, corner_cur_);
+            prev_ready = true;
+        }
+    }
+}
+
+namespace {
+
+// The panel's plane relative to the eye: the face along its normal that looks at it, and its depth there;
+// false when the panel is unusable (not flat along exactly one axis, not finite) or its plane is within
+// the near plane or within the eye box (its half-extent along the normal, times 1 + 1e-6) of the eye.
+bool panel_face(const Aabb& panel, glm::vec3 eye, glm::dvec3 spread, int& face, double& depth) {
+    if (!is_finite(panel.min) || !is_finite(panel.max)) return false;
+    int axis = -1;
+    for (int a = 0; a < 3; ++a) {
+        if (!(panel.min[a] <= panel.max[a])) return false;
+        if (panel.min[a] == panel.max[a]) {
+            if (axis >= 0) return false;
+            axis = a;
+        }
+    }
+    if (axis < 0) return false;
+    const double h = double(panel.min[axis]) - double(eye[axis]);
+    if (!(std::abs(h) > std::max(kCubeNearPlane_m, spread[axis] * (1.0 + 1e-6)))) return false;
+    face = 2 * axis + (h > 0.0 ? 0 : 1);
+    depth = std::abs(h);
+    return true;
+}
+
+// The tangents p (of a ray from the eye, relative to a panel's normal, along one in-plane axis k) whose ray
+// crosses the panel's plane, at signed height h from the eye on the normal axis, at h p, inside [lo, hi]
+// (relative to the eye, on axis k) inset by the eye box's per-ray bound (docs/ALGORITHMS.md#panel-inset):
+//     lo + b_k + b_n |p| <= h p <= hi - b_k - b_n |p|,   b = spread (1 + 1e-9) + 1e-9 |h|,
+// b_k and b_n the box's half-extents along k and along the normal, the second term of b covering rounding
+// (of p, and of this test). Both sides are concave in p, so the set is an interval; each end solves a
+// linear equation on one side of p = 0 (the plane is beyond the box, |h| > b_n, so h p -+ b_n |p| is
+// monotone). The computed ends are then moved inward until the test holds there as written, so every p in
+// [lo, hi] passes it in exact arithmetic (concavity), with the rounding margin of b to spare. Empty
+// (lo > hi) when no ray crosses inside the inset rectangle.
+struct TangentRange {
+    double lo = 1.0, hi = 0.0;
+    bool contains(double p) const { return lo <= p && p <= hi; }
+};
+
+TangentRange panel_tangent_range(double h, double lo, double hi, double spread_k, double spread_n) {
+    const double bk = spread_k * (1.0 + 1e-9) + 1e-9 * std::abs(h);
+    const double bn = spread_n * (1.0 + 1e-9) + 1e-9 * std::abs(h);
+    const auto passes = [&](double p) {
+        const double inset = bk + bn * std::abs(p);
+        return h * p - lo >= inset && hi - h * p >= inset;
+    };
+    // With H = |h| > bn, in q = p sign(h) (the crossing is at H q): the ends solve H q - bn |q| = lo + bk
+    // and H q + bn |q| = hi - bk, both sides increasing in q.
+    const double big_h = std::abs(h);
+    const auto lower_end = [&](double c) { return c >= 0.0 ? c / (big_h - bn) : c / (big_h + bn); };
+    const auto upper_end = [&](double d) { return d >= 0.0 ? d / (big_h + bn) : d / (big_h - bn); };
+    TangentRange t;
+    if (h > 0.0) {
+        t.lo = lower_end(lo + bk);
+        t.hi = upper_end(hi - bk);
+    } else {
+        t.lo = -upper_end(hi - bk);
+        t.hi = -lower_end(lo + bk);
+    }
+    if (!(big_h > bn) || !(t.lo <= t.hi) || !std::isfinite(t.lo) || !std::isfinite(t.hi))
+        return TangentRange{};
+    for (double step = 1e-15 * std::max(1.0, std::abs(t.lo)); !passes(t.lo); step *= 2.0) {
+        t.lo += step;
+        if (!(t.lo <= t.hi)) return TangentRange{};
+    }
+    for (double step = 1e-15 * std::max(1.0, std::abs(t.hi)); !passes(t.hi); step *= 2.0) {
+        t.hi -= step;
+        if (!(t.lo <= t.hi)) return TangentRange{};
+    }
+    return t;
+}
+
+// The run of grid vertices k in [k0, k1] with lo <= g[k] <= hi, g growing with k: [first, last], empty when
+// first > last. Found from an estimate and walked to its exact ends with that very test.
+inline void vertex_run(const double* g, double lo, double hi, int k0, int k1, int r, int& first, int& last) {
+    if (!(lo <= hi)) {
+        first = 1;
+        last = 0;
+        return;
+    }
+    const auto index = [&](double x) {
+        return std::clamp(int(std::floor((std::clamp(x, -2.0, 2.0) + 1.0) * 0.5 * r)), k0, k1);
+    };
+    first = index(lo);
+    while (first > k0 && g[first - 1] >= lo) --first;
+    while (first <= k1 && g[first] < lo) ++first;
+    last = std::max(first - 1, index(hi));
+    while (last < k1 && g[last + 1] <= hi) ++last;
+    while (last >= first && g[last] > hi) --last;
+}
+
+// A panel's ranges of tangents on its two in-plane axes (for a box around the eye), computed once for the
+// four side faces of the cube.
+struct PanelTangents {
+    int axis = 0;           // the panel's normal axis
+    double h = 0.0;         // signed height of its plane above the eye, on that axis
+    TangentRange range[3];  // per in-plane axis (range[axis] unused)
+};
+
+// False when the panel is unusable or its plane is within the near plane or the eye box (panel_face()).
+bool panel_tangents(const Aabb& panel, glm::vec3 eye, glm::dvec3 spread, PanelTangents& out) {
+    int normal_face = 0;
+    double t = 0.0;
+    if (!panel_face(panel, eye, spread, normal_face, t)) return false;
+    out.axis = normal_face / 2;
+    out.h = double(panel.min[out.axis]) - double(eye[out.axis]);
+    for (int k = 0; k < 3; ++k) {
+        if (k != out.axis) {
+            out.range[k] =
+                panel_tangent_range(out.h, double(panel.min[k]) - double(eye[k]),
+                                    double(panel.max[k]) - double(eye[k]), spread[k], spread[out.axis]);
+        }
+    }
+    return true;
+}
+
+// The panel on SIDE face `face` of the cube (one whose axis f lies in the panel's plane; depth_cube.h,
+// add_panel_sides()). There the panel's normal axis is one face coordinate, the "major" one (g_m), and its
+// other in-plane axis c the other, the "minor" one (g_n). A corner ray (+-1 on f, g_m, g_n) reaches the plane
+// at ray parameter h / g_m, which is also its depth on this face, with tangents +-1 / g_m along f and
+// g_n / g_m along c.
+struct PanelSide {
+    bool major_is_u = true;  // the major coordinate is u (columns); else v (rows)
+    double h = 0.0;          // signed height of the plane above the eye, on the panel's normal axis
+    double face_sign = 1.0;  // the f component of the face's rays
+    TangentRange along_face_axis, along_minor;
+};
+
+// THE rule of a panel on a side face, shared by the kernel and the reference: false when the face is along
+// the panel's normal or no ray of the face crosses the panel inside its inset rectangle.
+bool panel_side(const PanelTangents& pt, int face, PanelSide& out) {
+    const int f = face / 2;
+    if (f == pt.axis) return false;
+    out.major_is_u = (f + 1) % 3 == pt.axis;
+    out.h = pt.h;
+    out.face_sign = face % 2 == 0 ? 1.0 : -1.0;
+    out.along_face_axis = pt.range[f];
+    out.along_minor = pt.range[3 - pt.axis - f];
+    return out.along_face_axis.lo <= out.along_face_axis.hi && out.along_minor.lo <= out.along_minor.hi;
+}
+
+// Does the major grid value g_m pass (its rays reach the plane ahead, with a tangent along the face axis in
+// range)? Its crossing depth is h / g_m.
+inline bool panel_side_major(const PanelSide& ps, double g_m) {
+    return ps.h * g_m > 0.0 && ps.along_face_axis.contains(ps.face_sign / g_m);
+}
+
+// The minors that pass with major g_m: g_n / g_m in the minor range, tested as g_n between the products of
+// the range's ends with g_m (no division; the products' rounding, relative 1e-16, is far inside the margin
+// of panel_tangent_range()). Returns the interval [lo, hi] of g_n.
+inline void panel_side_minor_span(const PanelSide& ps, double g_m, double& lo, double& hi) {
+    const double a = ps.along_minor.lo * g_m, b = ps.along_minor.hi * g_m;
+    lo = g_m > 0.0 ? a : b;
+    hi = g_m > 0.0 ? b : a;
+}
+
+}  // namespace
+
+// Per major grid value: does it pass, and which minor vertices pass (g_n in an interval, and g_n grows with
+// n: a contiguous range, found from an estimate and walked to its exact ends with the reference's very
+// test); a pixel is written when both its majors pass and its two minors lie in both ranges, with the larger
+// crossing depth of its two majors.
+void DepthCube::add_panel_sides(const Aabb& panel, glm::dvec3 spread) {
+    int normal_face = 0;
+    double t = 0.0;
+    if (!panel_face(panel, eye_, spread, normal_face, t)) return;
+    const int r = resolution_;
+    PanelTangents pt;
+    bool have_tangents = false;  // computed when a face first needs them (square roots)
+    for (int face = 0; face < 6; ++face) {
+        if (face / 2 == normal_face / 2) continue;
+        // Candidate vertices: a passing vertex's ray crosses the panel at depth >= |h| > near, so it lies in
+        // the projection of the panel's part beyond the near plane.
+        FaceCandidates fc;
+        if (!face_candidates(panel, eye_, face, region_[size_t(face)], r, fc)) continue;
+        const int iv0 = fc.iv0, iv1 = fc.iv1, jv0 = fc.jv0, jv1 = fc.jv1;
+        if (!have_tangents) {
+            panel_tangents(panel, eye_, spread, pt);
+            have_tangents = true;
+        }
+        PanelSide ps;
+        if (!panel_side(pt, face, ps)) continue;
+        const int mv0 = ps.major_is_u ? iv0 : jv0, mv1 = ps.major_is_u ? iv1 : jv1;
+        const int nv0 = ps.major_is_u ? jv0 : iv0, nv1 = ps.major_is_u ? jv1 : iv1;
+        const double* const g = grid_.data();
+        for (int m = mv0; m <= mv1; ++m) {
+            const double g_m = g[m];
+            side_first_[size_t(m)] = 1;
+            side_last_[size_t(m)] = 0;
+            if (!panel_side_major(ps, g_m)) continue;
+            corner_cur_[size_t(m)] = ps.h / g_m;
+            double lo, hi;
+            panel_side_minor_span(ps, g_m, lo, hi);
+            vertex_run(g, lo, hi, nv0, nv1, r, side_first_[size_t(m)], side_last_[size_t(m)]);
+        }
+        float* const face_depth = depth_.data() + size_t(face) * r * r;
+        const size_t step_major = ps.major_is_u ? 1 : size_t(r), step_minor = ps.major_is_u ? size_t(r) : 1;
+        for (int m = mv0; m < mv1; ++m) {
+            const int first = std::max(side_first_[size_t(m)], side_first_[size_t(m) + 1]);
+            const int last = std::min(side_last_[size_t(m)], side_last_[size_t(m) + 1]);  // vertices
+            if (first >= last) continue;  // no pixel has both minors in range
+            const float depth = float_up(std::max(corner_cur_[size_t(m)], corner_cur_[size_t(m) + 1]) *
+                                         (1.0 + kCubeDepthSlack));
+            float* p = face_depth + size_t(m) * step_major + size_t(first) * step_minor;
+            for (int n = first; n < last; ++n, p += step_minor) *p = std::min(*p, depth);
+        }
+    }
+}
+
+void DepthCube::add_panel(const Aabb& panel, glm::dvec3 spread) {
+    int face = 0;
+    double t = 0.0;
+    if (!panel_face(panel, eye_, spread, face, t)) return;
+    const int r = resolution_, a = face / 2, ua = (a + 1) % 3, va = (a + 2) % 3;
+    const double u_lo = double(panel.min[ua]) - double(eye_[ua]),
+                 u_hi = double(panel.max[ua]) - double(eye_[ua]);
+    const double v_lo = double(panel.min[va]) - double(eye_[va]),
+                 v_hi = double(panel.max[va]) - double(eye_[va]);
+    // Candidate vertices: those of the region's pixels within the projected rectangle.
+    const auto& reg = region_[size_t(face)];
+    int iv0, iv1, jv0, jv1;
+    if (!candidate_vertices(u_lo / t, u_hi / t, reg[0], reg[1], r, iv0, iv1) ||
+        !candidate_vertices(v_lo / t, v_hi / t, reg[2], reg[3], r, jv0, jv1))
+        return;
+    // The vertices whose corner rays cross inside the rectangle inset per ray: a run of columns and a run
+    // of rows (the tangent ranges of panel_tangent_range(), with the plane at height t along the face axis,
+    // where the tangents are the face coordinates); a pixel is written when its four corners pass.
+    const TangentRange range_u = panel_tangent_range(t, u_lo, u_hi, spread[ua], spread[a]);
+    const TangentRange range_v = panel_tangent_range(t, v_lo, v_hi, spread[va], spread[a]);
+    int i_first, i_last, j_first, j_last;
+    vertex_run(grid_.data(), range_u.lo, range_u.hi, iv0, iv1, r, i_first, i_last);
+    vertex_run(grid_.data(), range_v.lo, range_v.hi, jv0, jv1, r, j_first, j_last);
+    const float depth = float_up(t * (1.0 + kCubeDepthSlack));
+    float* const face_depth = depth_.data() + size_t(face) * r * r;
+    for (int j = j_first; j < j_last; ++j) {
+        float* __restrict const row = face_depth + size_t(j) * r;
+        for (int i = i_first; i < i_last; ++i) row[i] = std::min(row[i], depth);
+    }
+}
+
+void DepthCube::add_panels(const std::vector<Aabb>& panels, glm::dvec3 spread) {
+    for (const Aabb& p : panels) add_panel(p, spread);
+}
+
+void DepthCube::add_panels_sides(const std::vector<Aabb>& panels, glm::dvec3 spread) {
+    for (const Aabb& p : panels) add_panel_sides(p, spread);
+}
+
+void DepthCube::add_occluders(const std::vector<Aabb>& boxes) {
+    order_.clear();
+    for (uint32_t b = 0; b < boxes.size(); ++b) {
+        const Aabb& box = boxes[b];
+        const glm::vec3 q = glm::clamp(eye_, box.min, box.max);
+        order_.push_back({glm::dot(q - eye_, q - eye_), b});
+    }
+    std::sort(order_.begin(), order_.end());
+    for (const auto& [dist2, b] : order_) {
+        if (!is_hidden(boxes[b])) add_occluder(boxes[b]);
+    }
+}
+
+PVS_AVX2_CLONES bool DepthCube::is_hidden(const Aabb& box) const {
+    if (!box_usable(box) || meets_near_cube(box, eye_)) return false;
+    const int r = resolution_;
+    const EyeBox rel = eye_box(box, eye_);
+    for (int face = 0; face < 6; ++face) {
+        const OccludeeFace of = occludee_face(rel, face, r, grid_.data());
+        if (!of.touched) continue;
+        // Pixels outside the drawn region hold no occluder (or, after clear_for(), stale depths): visible.
+        const auto& reg = region_[size_t(face)];
+        if (of.i0 < reg[0] || of.i1 > reg[1] || of.j0 < reg[2] || of.j1 > reg[3]) return false;
+        // double(x) < limit exactly when x < float_up(limit), for every float x; and stored depths are
+        // positive or +infinity, which order as their bit patterns. So the test is, a row at a time, an
+        // unsigned max that vectorizes.
+        const uint32_t limit = std::bit_cast<uint32_t>(float_up(of.limit));
+        const float* const face_depth = depth_.data() + size_t(face) * r * r;
+        for (int j = of.j0; j <= of.j1; ++j) {
+            const float* __restrict const row = face_depth + size_t(j) * r;
+            uint32_t farthest = 0;
+            for (int i = of.i0; i <= of.i1; ++i)
+                farthest = std::max(farthest, std::bit_cast<uint32_t>(row[i]));
+            if (!(farthest < limit)) return false;
+        }
+    }
+    return true;
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Reference: every pixel of every face, every occluder, four corner rays with a textbook slab test.
+
+namespace {
+
+// Textbook ray-box slab test over the ray eye + t * dir, t in [near, inf). Returns the entry t, or +inf
+// when the ray does not certainly pass through the box (exit < entry * (1 + slack)). With |dir[a]| = 1 on
+// the face axis, t is the depth.
+double reference_corner_depth(const Aabb& box, glm::vec3 eye, glm::dvec3 dir) {
+    double t_enter = kCubeNearPlane_m, t_exit = kInf;
+    for (int k = 0; k < 3; ++k) {
+        const double lo = double(box.min[k]) - double(eye[k]), hi = double(box.max[k]) - double(eye[k]);
+        if (dir[k] == 0.0) {
+            if (lo > 0.0 || hi < 0.0) return kInf;
+            continue;
+        }
+        const double t1 = lo / dir[k], t2 = hi / dir[k];
+        t_enter = std::max(t_enter, std::min(t1, t2));
+        t_exit = std::min(t_exit, std::max(t1, t2));
+    }
+    const double hit_depth = t_enter * (1.0 + kCubeDepthSlack);
+    return t_exit >= hit_depth ? hit_depth : kInf;
+}
+
+glm::dvec3 reference_direction(int face, double u, double v) {
+    const int a = face / 2;
+    glm::dvec3 dir(0.0);
+    dir[a] = face % 2 == 0 ? 1.0 : -1.0;
+    dir[(a + 1) % 3] = u;
+    dir[(a + 2) % 3] = v;
+    return dir;
+}
+
+}  // namespace
+
+bool is_hidden_reference(const std::vector<Aabb>& occluders, glm::vec3 eye, const Aabb& box, int resolution) {
+    return is_hidden_reference(occluders, {}, glm::dvec3(0.0), eye, box, resolution);
+}
+
+bool is_hidden_reference(const std::vector<Aabb>& occluders, const std::vector<Aabb>& panels,
+                         glm::dvec3 panel_spread, glm::vec3 eye, const Aabb& box, int resolution,
+                         bool panel_sides) {
+    const int r = resolution;
+    if (!box_usable(box)) return false;
+    // Visible when the box meets the closed near cube around the eye.
+    bool near = true;
+    for (int k = 0; k < 3; ++k) {
+        near = near && box.min[k] - double(eye[k]) <= kCubeNearPlane_m &&
+               box.max[k] - double(eye[k]) >= -kCubeNearPlane_m;
+    }
+    if (near) return false;
+
+    for (int face = 0; face < 6; ++face) {
+        const int a = face / 2, ua = (a + 1) % 3, va = (a + 2) % 3;
+        const double s = face % 2 == 0 ? 1.0 : -1.0;
+        // Depth range and side ranges, straight from the definitions.
+        const double da = s * (double(box.min[a]) - double(eye[a])),
+                     db = s * (double(box.max[a]) - double(eye[a]));
+        const double d_min = std::min(da, db), d_max = std::max(da, db);
+        const double ulo = double(box.min[ua]) - double(eye[ua]), uhi = double(box.max[ua]) - double(eye[ua]);
+        const double vlo = double(box.min[va]) - double(eye[va]), vhi = double(box.max[va]) - double(eye[va]);
+        // Nearest depth of the box's part inside the face's cone |Δu| <= d, |Δv| <= d.
+        double lower = std::max(d_min, kCubeNearPlane_m);
+        if (ulo > 0.0) lower = std::max(lower, ulo);
+        if (uhi < 0.0) lower = std::max(lower, -uhi);
+        if (vlo > 0.0) lower = std::max(lower, vlo);
+        if (vhi < 0.0) lower = std::max(lower, -vhi);
+        if (lower > d_max) continue;
+        // Projected rectangle: extremes over the four (side, depth) corner combinations.
+        const double us[4] = {ulo / lower, ulo / d_max, uhi / lower, uhi / d_max};
+        const double vs[4] = {vlo / lower, vlo / d_max, vhi / lower, vhi / d_max};
+        const double u0 = pad_low(*std::min_element(us, us + 4)),
+                     u1 = pad_high(*std::max_element(us, us + 4));
+        const double v0 = pad_low(*std::min_element(vs, vs + 4)),
+                     v1 = pad_high(*std::max_element(vs, vs + 4));
+        const double limit = lower * (1.0 - kCubeDepthSlack);
+
+        for (int j = 0; j < r; ++j) {
+            for (int i = 0; i < r; ++i) {
+                const bool touched =
+                    grid(i, r) <= u1 && grid(i + 1, r) >= u0 && grid(j, r) <= v1 && grid(j + 1, r) >= v0;
+                if (!touched) continue;
+                float pixel = kInfF;
+                for (const Aabb& occ : occluders) {
+                    if (!box_usable(occ) || occ.contains(eye)) continue;
+                    double d = 0.0;
+                    for (int cj = j; cj <= j + 1; ++cj) {
+                        for (int ci = i; ci <= i + 1; ++ci) {
+                            d = std::max(d,
+                                         reference_corner_depth(
+                                             occ, eye, reference_direction(face, grid(ci, r), grid(cj, r))));
+                        }
+                    }
+                    if (d < kInf) pixel = std::min(pixel, float_up(d));
+                }
+                for (const Aabb& panel : panels) {
+                    int panel_f = 0;
+                    double t = 0.0;
+                    if (!panel_face(panel, eye, panel_spread, panel_f, t)) continue;
+                    PanelTangents pt;
+                    PanelSide ps;
+                    if (panel_sides && panel_tangents(panel, eye, panel_spread, pt) &&
+                        panel_side(pt, face, ps)) {
+                        // A side face: every corner's major passes and its minor is in that major's span.
+                        bool all = true;
+                        double d = 0.0;
+                        for (int cj = j; cj <= j + 1; ++cj) {
+                            for (int ci = i; ci <= i + 1; ++ci) {
+                                const double g_m = grid(ps.major_is_u ? ci : cj, r);
+                                const double g_n = grid(ps.major_is_u ? cj : ci, r);
+                                double lo = 0.0, hi = 0.0;
+                                panel_side_minor_span(ps, g_m, lo, hi);
+                                all = all && panel_side_major(ps, g_m) && lo <= g_n && g_n <= hi;
+                                if (all) d = std::max(d, ps.h / g_m);
+                            }
+                        }
+                        if (all) pixel = std::min(pixel, float_up(d * (1.0 + kCubeDepthSlack)));
+                        continue;
+                    }
+                    if (panel_f != face) continue;
+                    // The four corner rays cross the plane, at depth t, inside the rectangle inset per ray:
+                    // their face coordinates in the tangent ranges?
+                    const TangentRange range_u = panel_tangent_range(
+                        t, double(panel.min[ua]) - double(eye[ua]), double(panel.max[ua]) - double(eye[ua]),
+                        panel_spread[ua], panel_spread[a]);
+                    const TangentRange range_v = panel_tangent_range(
+                        t, double(panel.min[va]) - double(eye[va]), double(panel.max[va]) - double(eye[va]),
+                        panel_spread[va], panel_spread[a]);
+                    const bool hits = range_u.contains(grid(i, r)) && range_u.contains(grid(i + 1, r)) &&
+                                      range_v.contains(grid(j, r)) && range_v.contains(grid(j + 1, r));
+                    if (hits) pixel = std::min(pixel, float_up(t * (1.0 + kCubeDepthSlack)));
+                }
+                if (!(double(pixel) < limit)) return false;
+            }
+        }
+    }
+    return true;
+}
+
+}  // namespace pvs

@@ -1,0 +1,180 @@
+// Objects one occluder hides from a whole region: the 64 corner segments, candidates by Embree.
+#include "solver/region_hiding.h"
+
+#include "occluders/panels.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <string>
+
+namespace pvs {
+
+namespace {
+
+std::array<glm::dvec3, 8> corners(const Aabb& b) {
+    std::array<glm::dvec3, 8> c;
+    for (int i = 0; i < 8; ++i)
+        c[size_t(i)] =
+            glm::dvec3(i & 1 ? b.max.x : b.min.x, i & 2 ? b.max.y : b.min.y, i & 4 ? b.max.z : b.min.z);
+    return c;
+}
+
+// Does the segment q -> x meet the closed box [lo, hi]? (Slabs, in double.)
+bool segment_meets(const glm::dvec3& q, const glm::dvec3& x, const glm::dvec3& lo, const glm::dvec3& hi) {
+    double t0 = 0.0, t1 = 1.0;
+    for (int k = 0; k < 3; ++k) {
+        const double d = x[k] - q[k];
+        if (d == 0.0) {
+            if (q[k] < lo[k] || q[k] > hi[k]) return false;
+            continue;
+        }
+        double a = (lo[k] - q[k]) / d, b = (hi[k] - q[k]) / d;
+        if (a > b) std::swap(a, b);
+        t0 = std::max(t0, a);
+        t1 = std::min(t1, b);
+        if (t0 > t1) return false;
+    }
+    return true;
+}
+
+}  // namespace
+
+World box_world(const std::vector<Aabb>& boxes, const std::vector<Aabb>& flat, bool opaque) {
+    static constexpr std::array<std::array<uint32_t, 3>, 12> kFaces{{{0, 2, 1},
+                                                                     {1, 2, 3},
+                                                                     {4, 5, 6},
+                                                                     {5, 7, 6},
+                                                                     {0, 1, 4},
+                                                                     {1, 5, 4},
+                                                                     {2, 6, 3},
+                                                                     {3, 6, 7},
+                                                                     {0, 4, 2},
+                                                                     {2, 4, 6},
+                                                                     {1, 3, 5},
+                                                                     {3, 7, 5}}};
+    World w;
+    auto add = [&](const Aabb& b) {
+        WorldObject o;
+        o.name = "box" + std::to_string(w.objects.size());
+        o.bounds = b;
+        o.first_triangle = uint32_t(w.triangles.size());
+        if (!b.is_empty()) {
+            const uint32_t v0 = uint32_t(w.positions.size());
+            for (int i = 0; i < 8; ++i)
+                w.positions.emplace_back(i & 1 ? b.max.x : b.min.x, i & 2 ? b.max.y : b.min.y,
+                                         i & 4 ? b.max.z : b.min.z);
+            for (const auto& f : kFaces) {
+                w.triangles.push_back(Triangle{{v0 + f[0], v0 + f[1], v0 + f[2]}});
+                w.triangle_opaque.push_back(opaque ? 1 : 0);
+                w.triangle_double_sided.push_back(1);
+            }
+            o.triangle_count = 12;
+            o.flags = opaque ? kObjectHasOpaque : kObjectHasSeeThrough;
+            w.bounds.extend(b);
+        }
+        w.objects.push_back(o);  // empty boxes too: object i is box i
+    };
+    for (const Aabb& b : boxes) add(b);
+    for (const Aabb& b : flat) add(b);
+    return w;
+}
+
+bool panel_hides(const Aabb& region, const Aabb& object, const Aabb& panel, int axis) {
+    const int a = axis, u = (axis + 1) % 3, v = (axis + 2) % 3;
+    const double c = panel.min[a], tol = kHideToleranceM;
+    const bool region_below = double(region.max[a])<c - tol&& double(object.min[a])> c + tol;
+    const bool region_above = double(region.min[a]) > c + tol && double(object.max[a]) < c - tol;
+    if (!region_below && !region_above) return false;
+    const double u0 = double(panel.min[u]) + tol, u1 = double(panel.max[u]) - tol;
+    const double v0 = double(panel.min[v]) + tol, v1 = double(panel.max[v]) - tol;
+    if (!(u0 <= u1 && v0 <= v1)) return false;
+    const std::array<glm::dvec3, 8> rc = corners(region), oc = corners(object);
+    for (const glm::dvec3& q : rc)
+        for (const glm::dvec3& x : oc) {
+            const double t = (c - q[a]) / (x[a] - q[a]);  // in (0, 1): q and x are on opposite sides
+            const double yu = q[u] + t * (x[u] - q[u]), yv = q[v] + t * (x[v] - q[v]);
+            if (!(yu >= u0 && yu <= u1 && yv >= v0 && yv <= v1)) return false;
+        }
+    return true;
+}
+
+bool box_hides(const Aabb& region, const Aabb& object, const Aabb& box) {
+    const glm::dvec3 lo = glm::dvec3(box.min) + kHideToleranceM, hi = glm::dvec3(box.max) - kHideToleranceM;
+    if (!(lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z)) return false;
+    const std::array<glm::dvec3, 8> rc = corners(region), oc = corners(object);
+    for (const glm::dvec3& q : rc)
+        for (const glm::dvec3& x : oc)
+            if (!segment_meets(q, x, lo, hi)) return false;
+    return true;
+}
+
+RegionHider::RegionHider(Context& ctx, const ShrunkOccluders& set)
+    : boxes_(set.boxes.empty() ? std::vector<Aabb>{} : set.boxes.front()), panels_(set.panels) {
+    for (const Aabb& p : panels_) panel_axis_.push_back(panel_axis(p));
+    // Embree's own log lines would repeat per set: a quiet context for the scene, one line here.
+    Context quiet(Context::Options{LogLevel::kWarning, true, nullptr});
+    scene_ = std::make_unique<RayScene>(quiet, box_world(boxes_, panels_, false), BuildQuality::kMedium, 1);
+    ctx.debug(fmt::format("single-occluder pass: {} boxes and {} panels as candidates", boxes_.size(),
+                          panels_.size()));
+}
+
+RegionHider::~RegionHider() = default;
+
+RegionHiders::RegionHiders(Context& ctx, const ShrunkOccluders& occluders) {
+    hiders_.push_back(std::make_unique<RegionHider>(ctx, occluders));
+    for (const ShrunkOccluders& set : occluders.block_sets)
+        hiders_.push_back(std::make_unique<RegionHider>(ctx, set));
+}
+
+uint32_t RegionHider::hide(const World& world, const Aabb& region, const std::vector<uint32_t>& objects,
+                           uint64_t* hidden) const {
+    if (region.is_empty() || (boxes_.empty() && panels_.empty())) return 0;
+    const glm::vec3 from = region.center();
+    std::vector<uint32_t> tried;
+    std::vector<glm::vec3> dirs;
+    std::vector<float> tfar;
+    for (uint32_t o : objects) {
+        const Aabb& b = world.objects[o].bounds;
+        if (b.is_empty() || b.overlaps(region)) continue;
+        const glm::vec3 d = b.center() - from;
+        const float len = glm::length(d);
+        if (!(len > 0.0f)) continue;
+        tried.push_back(o);
+        dirs.push_back(d / len);
+        tfar.push_back(len);
+    }
+    if (tried.empty()) return 0;
+    std::vector<RayTouch> touches;
+    scene_->trace_until(from, dirs.data(), tfar.data(), uint32_t(dirs.size()), touches);
+    // Touches come grouped by stream, not by ray: sort by ray, then by distance (nearer first).
+    std::sort(touches.begin(), touches.end(), [](const RayTouch& x, const RayTouch& y) {
+        return x.ray != y.ray ? x.ray < y.ray : x.t < y.t;
+    });
+    uint32_t n = 0;
+    const uint32_t n_boxes = uint32_t(boxes_.size());
+    for (size_t i = 0; i < touches.size();) {
+        const uint32_t ray = touches[i].ray;
+        const uint32_t o = tried[ray];
+        const Aabb& b = world.objects[o].bounds;
+        bool is_hidden = false;
+        for (; i < touches.size() && touches[i].ray == ray; ++i) {
+            if (is_hidden) continue;
+            const uint32_t k = touches[i].object;
+            if (i > 0 && touches[i - 1].ray == ray && touches[i - 1].object == k) continue;  // its other face
+            is_hidden = k < n_boxes
+                            ? box_hides(region, b, boxes_[k])
+                            : panel_axis_[k - n_boxes] >= 0 &&
+                                  panel_hides(region, b, panels_[k - n_boxes], panel_axis_[k - n_boxes]);
+        }
+        if (is_hidden) {
+            hidden[o >> 6] |= uint64_t(1) << (o & 63);
+            ++n;
+        }
+    }
+    return n;
+}
+
+}  // namespace pvs

@@ -1,0 +1,230 @@
+// Conservative voxelization: Akenine-Möller's triangle-box separating-axis test, applied hierarchically
+// (a box of voxels the triangle misses is skipped whole; one it overlaps is halved until single voxels).
+#include "voxels/voxels.h"
+
+#include "core/error.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+
+namespace pvs {
+
+VoxelGrid make_voxel_grid(const Aabb& bounds, double voxel_size_m, int pad_voxels) {
+    if (!(voxel_size_m > 0.0) || !std::isfinite(voxel_size_m)) {
+        throw bad_input(fmt::format("make_voxel_grid: --voxel-size must be > 0 m (got {})", voxel_size_m));
+    }
+    if (bounds.is_empty()) throw bad_input("make_voxel_grid: the world has no extent");
+    VoxelGrid g;
+    g.voxel_size_m = float(voxel_size_m);
+    g.origin = bounds.min - glm::vec3(float(pad_voxels) * g.voxel_size_m);
+    uint64_t total = 1;
+    for (int a = 0; a < 3; ++a) {
+        const double n = std::ceil(double(bounds.max[a] - bounds.min[a]) / voxel_size_m) + 2.0 * pad_voxels;
+        g.dims[a] = int(std::clamp(n, 1.0, 2e9));
+        total *= uint64_t(g.dims[a]);
+        if (total > kMaxVoxels) {
+            const glm::vec3 e = bounds.size();
+            throw bad_input(
+                fmt::format("make_voxel_grid: {} m voxels over {:.1f} x {:.1f} x {:.1f} m need more than {} "
+                            "voxels; use a larger --voxel-size",
+                            voxel_size_m, e.x, e.y, e.z, kMaxVoxels));
+        }
+    }
+    return g;
+}
+
+double default_voxel_size(const Aabb& bounds, double preferred_m, uint64_t max_voxels) {
+    const glm::dvec3 e = glm::dvec3(bounds.size()) + 4.0 * preferred_m;
+    const double voxels = e.x * e.y * e.z / (preferred_m * preferred_m * preferred_m);
+    if (voxels <= double(max_voxels)) return preferred_m;
+    return preferred_m * std::cbrt(voxels / double(max_voxels)) * 1.01;
+}
+
+namespace {
+
+bool axis_separates(glm::vec3 axis, glm::vec3 v0, glm::vec3 v1, glm::vec3 v2, glm::vec3 half) {
+    const float p0 = glm::dot(axis, v0), p1 = glm::dot(axis, v1), p2 = glm::dot(axis, v2);
+    const float r = half.x * std::fabs(axis.x) + half.y * std::fabs(axis.y) + half.z * std::fabs(axis.z);
+    return std::min({p0, p1, p2}) > r || std::max({p0, p1, p2}) < -r;
+}
+
+}  // namespace
+
+bool triangle_box_overlap(glm::vec3 center, glm::vec3 half, glm::vec3 a, glm::vec3 b, glm::vec3 c) {
+    const glm::vec3 v0 = a - center, v1 = b - center, v2 = c - center;
+    // 1. The box's three face normals (the triangle's bounds against the box).
+    for (int i = 0; i < 3; ++i) {
+        if (std::min({v0[i], v1[i], v2[i]}) > half[i] || std::max({v0[i], v1[i], v2[i]}) < -half[i])
+            return false;
+    }
+    // 2. The triangle's normal.
+    const glm::vec3 e0 = v1 - v0, e1 = v2 - v1, e2 = v0 - v2;
+    const glm::vec3 n = glm::cross(e0, e1);
+    if (axis_separates(n, v0, v1, v2, half)) return false;
+    // 3. The nine cross products of box axes and triangle edges.
+    const glm::vec3 edges[3] = {e0, e1, e2};
+    for (const glm::vec3& e : edges) {
+        if (axis_separates(glm::vec3(0, -e.z, e.y), v0, v1, v2, half)) return false;
+        if (axis_separates(glm::vec3(e.z, 0, -e.x), v0, v1, v2, half)) return false;
+        if (axis_separates(glm::vec3(-e.y, e.x, 0), v0, v1, v2, half)) return false;
+    }
+    return true;
+}
+
+namespace {
+
+void set_atomic(BitVolume& bits, uint64_t i) {
+    std::atomic_ref<uint64_t> word(bits.words[i >> 6]);
+    word.fetch_or(uint64_t(1) << (i & 63), std::memory_order_relaxed);
+}
+
+struct Voxelizer {
+    const VoxelGrid& grid;
+    glm::vec3 a, b, c;
+    float grow;  // added to every box half size: rounding can only add voxels
+    BitVolume& touched;
+    BitVolume* upward;
+
+    void visit(glm::ivec3 lo, glm::ivec3 hi) {  // voxels lo..hi inclusive
+        const glm::vec3 box_lo = grid.origin + glm::vec3(lo) * grid.voxel_size_m;
+        const glm::vec3 box_hi = grid.origin + glm::vec3(hi + 1) * grid.voxel_size_m;
+        const glm::vec3 half = 0.5f * (box_hi - box_lo) + grow;
+        if (!triangle_box_overlap(0.5f * (box_lo + box_hi), half, a, b, c)) return;
+        const glm::ivec3 n = hi - lo + 1;
+        if (n.x == 1 && n.y == 1 && n.z == 1) {
+            const uint64_t i = grid.index(lo.x, lo.y, lo.z);
+            set_atomic(touched, i);
+            if (upward) set_atomic(*upward, i);
+            return;
+        }
+        const int axis = n.x >= n.y && n.x >= n.z ? 0 : (n.y >= n.z ? 1 : 2);
+        const int mid = lo[axis] + n[axis] / 2;
+        glm::ivec3 hi0 = hi, lo1 = lo;
+        hi0[axis] = mid - 1;
+        lo1[axis] = mid;
+        visit(lo, hi0);
+        visit(lo1, hi);
+    }
+};
+
+}  // namespace
+
+namespace {
+
+// out |= in shifted by `by` bits along the linear index (positive: to higher indices), bits shifted past
+// either end dropped. Word-wise: the bits of word w land in words w + q and w + q + 1.
+void or_shifted(const BitVolume& in, int64_t by, BitVolume& out) {
+    const int64_t n = int64_t(in.words.size());
+    const int64_t q = (by >= 0 ? by : -by) >> 6;
+    const int r = int((by >= 0 ? by : -by) & 63);
+    const uint64_t* src = in.words.data();
+    uint64_t* dst = out.words.data();
+    if (by >= 0) {
+        for (int64_t w = n - 1; w >= q; --w) {
+            const uint64_t lo = src[w - q], below = w - q - 1 >= 0 ? src[w - q - 1] : 0;
+            dst[w] |= r == 0 ? lo : (lo << r) | (below >> (64 - r));
+        }
+    } else {
+        for (int64_t w = 0; w + q < n; ++w) {
+            const uint64_t hi = src[w + q], above = w + q + 1 < n ? src[w + q + 1] : 0;
+            dst[w] |= r == 0 ? hi : (hi >> r) | (above << (64 - r));
+        }
+    }
+}
+
+// Sets bits [lo, hi) of the volume.
+void set_range(BitVolume& v, uint64_t lo, uint64_t hi) {
+    for (uint64_t i = lo; i < hi && (i & 63); ++i) v.set(i);
+    uint64_t i = std::max(lo, std::min(hi, (lo + 63) & ~uint64_t(63)));
+    for (; i + 64 <= hi; i += 64) v.words[i >> 6] = ~uint64_t(0);
+    for (; i < hi; ++i) v.set(i);
+}
+
+}  // namespace
+
+// Per axis, by doubling: a set grown by `reach` voxels along the axis, ORed with itself moved by up to
+// `reach` + 1 more voxels either way, is grown by twice that plus one (at most `radius`). A move along the
+// axis is a shift of the linear index by a multiple of the axis's stride; the bits that would cross the end
+// of their line (into the next row or plane) are masked off, so the result is exact.
+BitVolume dilate(const VoxelGrid& g, const BitVolume& in, int radius) {
+    BitVolume a = in;
+    if (radius <= 0) return a;
+    const uint64_t count = g.count();
+    const int64_t stride[3] = {1, int64_t(g.dims.x), int64_t(g.dims.x) * int64_t(g.dims.y)};
+    BitVolume moved, keep;
+    for (int axis = 0; axis < 3; ++axis) {
+        const int64_t n = g.dims[axis];
+        const uint64_t line_period = uint64_t(stride[axis] * n);  // a block of whole lines along the axis
+        int reach = 0;
+        while (reach < radius) {
+            const int step = std::min(reach + 1, radius - reach);
+            for (const int dir : {1, -1}) {
+                moved.reset(count);
+                or_shifted(a, dir * step * stride[axis], moved);
+                if (axis < 2) {
+                    // Keep only the voxels whose coordinate on the axis is >= step (moved up) or
+                    // <= n - 1 - step (moved down): the rest came from another line.
+                    keep.reset(count);
+                    const uint64_t band = uint64_t(stride[axis]) * uint64_t(std::max<int64_t>(0, n - step));
+                    for (uint64_t base = 0; base < count; base += line_period) {
+                        const uint64_t lo = dir > 0 ? base + uint64_t(stride[axis]) * uint64_t(step) : base;
+                        set_range(keep, lo, std::min(count, lo + band));
+                    }
+                    for (size_t w = 0; w < moved.words.size(); ++w) moved.words[w] &= keep.words[w];
+                }
+                for (size_t w = 0; w < a.words.size(); ++w) a.words[w] |= moved.words[w];
+            }
+            reach += step;
+        }
+    }
+    if (count & 63) a.words.back() &= (uint64_t(1) << (count & 63)) - 1;  // moves along z past the end
+    return a;
+}
+
+void clear_border(const VoxelGrid& g, BitVolume& v, int k) {
+    if (k <= 0) return;
+    BitVolume keep;
+    keep.reset(g.count());
+    if (2 * k < g.dims.x && 2 * k < g.dims.y && 2 * k < g.dims.z) {
+        for (int z = k; z < g.dims.z - k; ++z)
+            for (int y = k; y < g.dims.y - k; ++y) {
+                const uint64_t row = g.index(0, y, z);
+                set_range(keep, row + uint64_t(k), row + uint64_t(g.dims.x - k));
+            }
+    }
+    for (size_t w = 0; w < v.words.size(); ++w) v.words[w] &= keep.words[w];
+}
+
+void voxelize_opaque(Context& ctx, const World& world, const VoxelGrid& grid, BitVolume& touched,
+                     BitVolume* upward, float min_up_cos, BitVolume* see_through) {
+    ScopedTimer timer(ctx, "voxelize");
+    touched.reset(grid.count());
+    if (upward) upward->reset(grid.count());
+    if (see_through) see_through->reset(grid.count());
+    const float grow = grid.voxel_size_m * 1e-4f;
+    const int64_t n = int64_t(world.triangles.size());
+#pragma omp parallel for schedule(dynamic, 256)
+    for (int64_t t = 0; t < n; ++t) {
+        const bool opaque = world.triangle_opaque[size_t(t)];
+        if (!opaque && !see_through) continue;
+        const Triangle& tri = world.triangles[size_t(t)];
+        const glm::vec3 a = world.positions[tri.v[0]], b = world.positions[tri.v[1]],
+                        c = world.positions[tri.v[2]];
+        Aabb tb;
+        tb.extend(a);
+        tb.extend(b);
+        tb.extend(c);
+        const glm::ivec3 lo = grid.voxel_of(tb.min - grow), hi = grid.voxel_of(tb.max + grow);
+        const glm::vec3 normal = glm::cross(b - a, c - a);
+        const float len = glm::length(normal);
+        const bool up = opaque && upward && len > 0.0f && normal.y / len >= min_up_cos;
+        Voxelizer v{grid, a, b, c, grow, opaque ? touched : *see_through, up ? upward : nullptr};
+        v.visit(lo, hi);
+    }
+    ctx.debug(fmt::format("voxelize: {} of {} voxels touched", touched.count(), grid.count()));
+}
+
+}  // namespace pvs
