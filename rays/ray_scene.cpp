@@ -90,7 +90,8 @@ struct ScopedFtz {
 struct RayScene::Impl {
     RTCDevice device = nullptr;
     RTCScene scene = nullptr;
-    std::vector<uint32_t> object_of[2];  // per geometry: primID -> object
+    std::vector<uint32_t> object_of[2];     // per geometry: primID -> object
+    const float* opaque_corners = nullptr;  // the opaque geometry's vertex buffer: 9 floats per primID
 
     ~Impl() {
         if (scene) rtcReleaseScene(scene);
@@ -187,6 +188,7 @@ RayScene::RayScene(Context& ctx, const World& world, BuildQuality quality, int t
                 ++k;
             }
         }
+        if (want_opaque) impl_->opaque_corners = verts;
         if (!want_opaque) {
             rtcSetGeometryIntersectFilterFunction(geom, see_through_filter);
             rtcSetGeometryOccludedFilterFunction(geom, reject_all_filter);
@@ -290,6 +292,48 @@ uint64_t RayScene::occluded_baseline(glm::vec3 origin, const glm::vec3* directio
         hits += r.tfar < 0.0f;
     }
     return hits;
+}
+
+namespace {
+
+// Collects the opaque primitives a point query's sphere meets (by their bounds).
+bool collect_opaque(RTCPointQueryFunctionArguments* args) {
+    if (args->geomID == kOpaqueGeom)
+        static_cast<std::vector<uint32_t>*>(args->userPtr)->push_back(args->primID);
+    return false;  // the radius is not changed
+}
+
+}  // namespace
+
+void RayScene::opaque_triangles_near(glm::vec3 p, glm::vec3 q, float radius_m,
+                                     std::vector<TriangleCorners>& out) const {
+    // Sample points p + k s (q - p) / |q - p| with both ends included and spacing s: every point within r of
+    // the segment is within r + s / 2 of a sample point. The spacing trades queries against their size.
+    const float length = glm::length(q - p);
+    const float spacing = std::max({radius_m, length / 256.0f, 1e-4f});
+    const int steps = std::max(1, int(std::ceil(length / spacing)));
+    const float query_radius = radius_m + 0.5f * (length / float(steps)) + 1e-5f;
+    std::vector<uint32_t> prims;
+    RTCPointQueryContext context;
+    rtcInitPointQueryContext(&context);
+    for (int k = 0; k <= steps; ++k) {
+        const glm::vec3 c = p + (q - p) * (float(k) / float(steps));
+        RTCPointQuery query;
+        query.x = c.x;
+        query.y = c.y;
+        query.z = c.z;
+        query.time = 0.0f;
+        query.radius = query_radius;
+        rtcPointQuery(impl_->scene, &query, &context, collect_opaque, &prims);
+    }
+    std::sort(prims.begin(), prims.end());
+    prims.erase(std::unique(prims.begin(), prims.end()), prims.end());
+    const float* v = impl_->opaque_corners;
+    for (uint32_t prim : prims) {
+        const float* t = v + size_t(prim) * 9;
+        out.push_back(TriangleCorners{glm::vec3(t[0], t[1], t[2]), glm::vec3(t[3], t[4], t[5]),
+                                      glm::vec3(t[6], t[7], t[8])});
+    }
 }
 
 }  // namespace pvs

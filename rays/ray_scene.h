@@ -26,6 +26,11 @@ struct RayTouch {
     bool stops = false;   // an opaque triangle: the ray ends here
 };
 
+// A triangle as its three corners.
+struct TriangleCorners {
+    glm::vec3 a, b, c;
+};
+
 enum class BuildQuality { kLow, kMedium, kHigh };
 
 class RayScene {
@@ -61,6 +66,12 @@ public:
     // (See-through triangles never block.) Writes 1 (blocked) or 0 into blocked[i]. Thread-safe.
     void occluded_opaque(const glm::vec3* origins, const glm::vec3* directions, const float* tfar,
                          uint32_t count, uint8_t* blocked) const;
+
+    // Appends to `out` every opaque triangle within `radius_m` of the segment [p, q], and maybe a few more
+    // (those whose bounds come that near); none twice. Embree point queries at points spaced along the
+    // segment, each with a radius that covers the capsule around its piece. Thread-safe.
+    void opaque_triangles_near(glm::vec3 p, glm::vec3 q, float radius_m,
+                               std::vector<TriangleCorners>& out) const;
 
     // Benchmark baseline: plain rtcOccluded1 per ray (is any opaque triangle hit?). Returns the
     // number of rays that hit something.
