@@ -24,6 +24,13 @@ struct RunConfig {
     int threads = 0;  // [Limit: >= 0] worker threads; 0 = every core
 };
 
+// The gap tolerance: the conservative promise covers every object seen through an opening at least this
+// wide (docs/ALGORITHMS.md#openings); a miss through a narrower one is reported apart and does not fail.
+constexpr double kDefaultGapToleranceM = 0.001;
+struct GapConfig {
+    double tolerance_m = kDefaultGapToleranceM;  // [Limit: 1e-6..10] [Units: m]
+};
+
 enum class CellKind { kGrid, kOctree };
 
 struct CellConfig {
@@ -86,6 +93,9 @@ struct OccluderConfig {
     double seal_reach_m = 4.0;            // [Limit: > 0] [Units: m] seal probe: how far a ray looks for an
                                           // eye voxel
     uint64_t check_seed = 7;
+    // Not an option of its own: the driver copies GapConfig::tolerance_m. The probes and the ray check count
+    // a line of sight only when its width is at least half of it (occluders/synthesis.h).
+    double gap_tolerance_m = kDefaultGapToleranceM;
     // Occluders per block of cells (conservative mode; occluders/synthesis.h synthesize_block_occluders).
     // EXPERIMENTAL, NOT PROVEN: their boxes rest on sampled ray checks at grazing shadow edges
     // (docs/ALGORITHMS.md#block-occluders).
@@ -153,6 +163,8 @@ struct SampledPvsConfig {
 
 struct VerifyConfig {
     bool enabled = true;  // run verification after a bake
+    // Not an option of its own: the driver copies GapConfig::tolerance_m (the bake's, when verifying a file).
+    double gap_tolerance_m = kDefaultGapToleranceM;  // misses through narrower openings are reported apart
     SampleConfig rays{16, 1024, 200'000'000, 0x5eed5eedULL};
     uint32_t max_misses_reported = 1000;  // [Limit: >= 0] misses kept in the report and the file
     double aimed_share = 0.5;  // [Limit: 0..0.95] [Units: share] of the ray budget spent on rays aimed from
@@ -173,6 +185,7 @@ struct VerifyConfig {
 struct BakeConfig {
     BakeMode mode = BakeMode::kConservative;
     RunConfig run;
+    GapConfig gap;
     ViewVolumeConfig view;
     CellConfig cells;
     OccluderConfig occluders;
@@ -223,6 +236,12 @@ void visit_options(Config& c, Visitor&& v) {
     v(OptionSpec{OptionGroup::kGeneral, "--threads", "run.threads", "threads",
                  "worker threads, 0 = every core", 0, 4096},
       c.run.threads);
+    v(OptionSpec{OptionGroup::kGeneral, "--gap-tolerance", "gap.tolerance_m", "m",
+                 "the promise: every object seen through an opening at least this wide is listed (a tube of "
+                 "this diameter around the sight line clear of opaque triangles, ends excepted); "
+                 "verification reports misses through narrower openings apart, and they do not fail it",
+                 1e-6, 10},
+      c.gap.tolerance_m);
     v(OptionSpec{OptionGroup::kViewVolume, "--voxel-size", "view.voxel_size_m", "m",
                  "voxel edge for the view volume and occluders, 0 = automatic (0.25 m, or epsilon / 2 if "
                  "smaller in "

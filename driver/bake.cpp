@@ -51,15 +51,17 @@ std::vector<Occluder> solver_occluders(Context& ctx, const BakeConfig& config, c
     const bool conservative = config.mode == BakeMode::kConservative;
     // The epsilon ladder only as high as the cells' faces can use (conservative_levels_used()).
     const double largest_cell = largest_cell_edge_m(config.cells);
+    OccluderConfig occluders = config.occluders;
+    occluders.gap_tolerance_m = config.gap.tolerance_m;
     std::vector<Occluder> boxes = synthesize_occluders(
-        ctx, config.occluders, world, view, scene, figures, config.conservative.epsilon_m,
+        ctx, occluders, world, view, scene, figures, config.conservative.epsilon_m,
         conservative_levels_used(config.conservative, largest_cell), conservative ? &shrunk : nullptr);
     if (conservative && config.occluders.block_m > 0.0) {
         // Blocks of whole cells from the cells' origin (the view bounds' corner, for the grid and the
         // octree's roots), so that every cell lies in one block.
         const double block =
             largest_cell * std::max(1.0, std::round(config.occluders.block_m / largest_cell));
-        blocks = synthesize_block_occluders(ctx, config.occluders, world, view, scene, view.view_bounds.min,
+        blocks = synthesize_block_occluders(ctx, occluders, world, view, scene, view.view_bounds.min,
                                             float(block), shrunk);
     }
     return boxes;
@@ -197,7 +199,9 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
             ctx.warn(
                 "verify: the verification seed equals the bake's: it will only replay the bake's own rays");
         }
-        const VerifyResult result = verify_pvs(ctx, config.verify, world, scene, bake.cells, bake.pvs);
+        VerifyConfig verify = config.verify;
+        verify.gap_tolerance_m = config.gap.tolerance_m;
+        const VerifyResult result = verify_pvs(ctx, verify, world, scene, bake.cells, bake.pvs);
         log_verify_summary(ctx, result, world);
         store_verification(result, bake.verification);
     }

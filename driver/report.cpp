@@ -55,6 +55,8 @@ NamedValues bake_figures(const BakeConfig& config, const World& world, const Vie
          stages.occluders.near_m3 > 0 ? stages.occluders.near_covered_m3 / stages.occluders.near_m3 : 0.0},
         {"occluder_probe_rays_into_solid", double(stages.occluders.probe_rays_into_solid)},
         {"occluder_seal_leaks", double(stages.occluders.seal_leaks)},
+        {"occluder_seal_narrow", double(stages.occluders.seal_narrow)},
+        {"occluder_probe_rays_narrow", double(stages.occluders.probe_rays_narrow)},
         {"occluder_seal_removed_voxels", double(stages.occluders.seal_removed_voxels)},
         {"occluder_seconds", stages.occluders.seconds},
         {"occluder_blocks", double(stages.blocks.blocks)},
@@ -151,6 +153,7 @@ std::string bake_report_json(const BakeData& bake, const std::vector<std::string
     if (bake.verification.ran) {
         ver["figures"] = values_json(bake.verification.figures);
         nlohmann::ordered_json misses = nlohmann::ordered_json::array();
+        const double tolerance = config_from_parameters(bake.parameters).gap.tolerance_m;
         for (const Miss& m : bake.verification.misses) {
             nlohmann::ordered_json mj;
             mj["cell"] = m.cell;
@@ -159,6 +162,10 @@ std::string bake_report_json(const BakeData& bake, const std::vector<std::string
             mj["eye"] = {m.eye.x, m.eye.y, m.eye.z};
             mj["direction"] = {m.direction.x, m.direction.y, m.direction.z};
             mj["distance_m"] = m.distance_m;
+            // The widest sight line found through the opening (-1: not measured); narrow: below the bake's
+            // gap tolerance, outside its promise.
+            mj["opening_width_m"] = m.opening_width_m;
+            mj["narrow"] = m.opening_width_m >= 0.0f && double(m.opening_width_m) < tolerance;
             misses.push_back(mj);
         }
         ver["misses"] = misses;

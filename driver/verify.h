@@ -78,7 +78,19 @@ struct VerifyResult {
     uint64_t neighbour_new_pairs = 0;         // (cell, object) pairs seen by neighbour-pass rays only
     uint64_t neighbour_listed_new_pairs = 0;  // of those, the pairs the PVS lists
     uint64_t neighbour_missed_pairs = 0;      // missed pairs found by neighbour-pass rays only
+    // Misses by the width of the opening they pass (docs/ALGORITHMS.md#miss-widths): the first ray of each
+    // reported pair is measured; a pair whose widest line found is narrower than the gap tolerance is NARROW
+    // (reported apart, does not fail), every other pair WIDE (unmeasured pairs count as wide).
+    double gap_tolerance_m = 0.0;  // the tolerance the misses were measured against
+    uint64_t narrow_missed_pairs = 0;
+    uint64_t wide_missed_pairs = 0;
+    float narrow_width_max_m = 0.0f;  // the widest line found through a narrow miss's opening
+    double width_seconds = 0.0;       // spent measuring
     std::vector<Miss> misses;  // the first ray of each missed pair, cell order, at most max_misses_reported
+    // A measured miss through an opening narrower than the tolerance.
+    bool is_narrow(const Miss& m) const {
+        return m.opening_width_m >= 0.0f && double(m.opening_width_m) < gap_tolerance_m;
+    }
     std::vector<uint32_t> cell_sampled_visible;  // per cell: objects the rays touched
     PvsSet sampled;                              // per cell: which objects the rays touched
 

@@ -229,17 +229,19 @@ struct MissRecord {
     float eye[3];
     float direction[3];
     float distance_m;
+    float opening_width_m;
 };
 
 // The compound type of /verification/misses: native (in memory) or packed little-endian (on file).
 // Site: the writer's Site or the reader's Reader (both name the file and add what HDF5 said).
+// `with_width`: the member opening_width_m (format 1.3) is part of the type.
 template <class Site>
-Handle miss_type(const Site& site, bool on_file) {
+Handle miss_type(const Site& site, bool on_file, bool with_width = true) {
     const hsize_t three[1] = {3};
     const hid_t u32 = on_file ? H5T_STD_U32LE : H5T_NATIVE_UINT32;
     const hid_t f32 = on_file ? H5T_IEEE_F32LE : H5T_NATIVE_FLOAT;
     Handle vec3 = site.handle(H5Tarray_create2(f32, 1, three), H5Tclose, "cannot create the float[3] type");
-    const size_t size = on_file ? 36 : sizeof(MissRecord);
+    const size_t size = on_file ? (with_width ? 40 : 36) : sizeof(MissRecord);
     Handle t = site.handle(H5Tcreate(H5T_COMPOUND, size), H5Tclose, "cannot create the miss type");
     const size_t off_cell = on_file ? 0 : offsetof(MissRecord, cell);
     const size_t off_object = on_file ? 4 : offsetof(MissRecord, object);
@@ -251,6 +253,8 @@ Handle miss_type(const Site& site, bool on_file) {
     ok = ok && H5Tinsert(t.get(), "eye", off_eye, vec3.get()) >= 0;
     ok = ok && H5Tinsert(t.get(), "direction", off_direction, vec3.get()) >= 0;
     ok = ok && H5Tinsert(t.get(), "distance_m", off_distance, f32) >= 0;
+    const size_t off_width = on_file ? 36 : offsetof(MissRecord, opening_width_m);
+    if (with_width) ok = ok && H5Tinsert(t.get(), "opening_width_m", off_width, f32) >= 0;
     if (!ok) site.fail_hdf5("cannot build the miss type");
     return t;
 }
@@ -651,7 +655,8 @@ void write_verification(Writer& w, hid_t root, const VerificationRecord& v) {
                           m.object,
                           {m.eye.x, m.eye.y, m.eye.z},
                           {m.direction.x, m.direction.y, m.direction.z},
-                          m.distance_m});
+                          m.distance_m,
+                          m.opening_width_m});
     }
     Handle file_type = miss_type(w.site(), true);
     Handle mem_type = miss_type(w.site(), false);
@@ -809,8 +814,15 @@ void read_verification(const Reader& r, hid_t root, BakeData& bake) {
     r.check_budget(dims[0], 64, full);
     r.check_storage(ds.get(), full);
     std::vector<MissRecord> misses(static_cast<size_t>(dims[0]));
+    bool with_width = false;
+    {
+        Handle file_type = r.handle(H5Dget_type(ds.get()), H5Tclose, "cannot read the type of " + full);
+        with_width = H5Tget_member_index(file_type.get(), "opening_width_m") >= 0;
+    }
     if (!misses.empty()) {
-        Handle mem_type = miss_type(r, false);
+        // Older files have no opening width: it is read as "not measured".
+        for (MissRecord& m : misses) m.opening_width_m = -1.0f;
+        Handle mem_type = miss_type(r, false, with_width);
         r.check(H5Dread(ds.get(), mem_type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, misses.data()),
                 "cannot read " + full);
     }
@@ -824,7 +836,8 @@ void read_verification(const Reader& r, hid_t root, BakeData& bake) {
                                 m.object,
                                 {m.eye[0], m.eye[1], m.eye[2]},
                                 {m.direction[0], m.direction[1], m.direction[2]},
-                                m.distance_m});
+                                m.distance_m,
+                                m.opening_width_m});
     }
 }
 

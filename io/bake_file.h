@@ -22,7 +22,8 @@
 namespace pvs {
 
 constexpr int kBakeFormatMajor = 1;
-constexpr int kBakeFormatMinor = 2;  // 1.1 added the PVS code (/pvs/code), 1.2 ranked occluders per cell
+constexpr int kBakeFormatMinor = 3;  // 1.1 added the PVS code (/pvs/code), 1.2 ranked occluders per cell,
+                                     // 1.3 the opening width of each verification miss
 
 struct ObjectRecord {
     std::string name;
@@ -38,6 +39,10 @@ struct Miss {
     glm::vec3 eye{0.0f};
     glm::vec3 direction{0.0f};  // unit
     float distance_m = 0.0f;    // from eye to where the ray touched the object
+    // The widest sight line the verifier found to the object near this ray (docs/ALGORITHMS.md#openings),
+    // metres; a width at or above the bake's gap tolerance makes the miss fail verification. -1: not
+    // measured (format 1.2 and older, or beyond the misses measured).
+    float opening_width_m = -1.0f;
 };
 
 struct VerificationRecord {

@@ -1,6 +1,8 @@
 // The seal probe: rays from the solid's frontier voxels to the eye space, tested against the triangles.
 #include "occluders/seal_probe.h"
 
+#include "rays/clearance.h"
+
 #include "cells/eyes.h"
 #include "core/random.h"
 
@@ -95,6 +97,9 @@ std::vector<uint64_t> frontier_of(const Solid& solid, const BitVolume& touched, 
     return out;
 }
 
+// Lines tried around an unblocked segment narrower than the least width, looking for the opening's middle.
+constexpr uint32_t kOpeningTries = 256;
+
 void set_atomic(BitVolume& v, uint64_t i) {
     __atomic_fetch_or(&v.words[i >> 6], uint64_t(1) << (i & 63), __ATOMIC_RELAXED);
 }
@@ -103,7 +108,7 @@ void set_atomic(BitVolume& v, uint64_t i) {
 
 SealProbeFigures probe_seals(Context& ctx, const BitVolume& touched, const VoxelMask& eyes,
                              const RayScene& scene, uint32_t rays, double reach_m, int rounds, uint64_t seed,
-                             Solid& solid) {
+                             double min_width_m, Solid& solid) {
     ScopedTimer timer(ctx, "seal_probe");
     const auto start = std::chrono::steady_clock::now();
     SealProbeFigures figures;
@@ -111,6 +116,11 @@ SealProbeFigures probe_seals(Context& ctx, const BitVolume& touched, const Voxel
     const VoxelGrid& grid = solid.grid;
     const BitVolume sources = sight_sources(grid, eyes);
     const float reach = float(reach_m);
+    // Where the eye end of a line may move while looking for an opening's middle: the eye space.
+    const auto in_sources = [&](glm::vec3 p) {
+        const glm::ivec3 c = grid.voxel_of(p);
+        return grid.inside(c) && sources.get(grid.index(c.x, c.y, c.z));
+    };
     BitVolume probed, leaky;  // leaky: written by every thread (an atomic OR), read only between rounds
     probed.reset(grid.count());
     leaky.reset(grid.count());
@@ -123,11 +133,11 @@ SealProbeFigures probe_seals(Context& ctx, const BitVolume& touched, const Voxel
         ++figures.rounds;
         for (uint64_t i : frontier) probed.set(i);
         figures.frontier_voxels += frontier.size();
-        uint64_t walked = 0, segments = 0, leaks = 0;
+        uint64_t walked = 0, segments = 0, leaks = 0, narrow = 0;
         BitVolume seen;  // written by every thread (an atomic OR), read only after the loop
         seen.reset(grid.count());
         ctx.progress_begin(fmt::format("seal probe, round {}", round + 1), frontier.size(), "voxels");
-#pragma omp parallel reduction(+ : walked, segments, leaks)
+#pragma omp parallel reduction(+ : walked, segments, leaks, narrow)
         {
             std::vector<glm::vec3> dirs, origins, seg_dirs;
             std::vector<float> tfar;
@@ -169,6 +179,15 @@ SealProbeFigures probe_seals(Context& ctx, const BitVolume& touched, const Voxel
                                       blocked.data());
                 for (size_t s = 0; s < origins.size(); ++s) {
                     if (blocked[s]) continue;
+                    // An opening narrower than the tolerance allows stays closed
+                    // (docs/ALGORITHMS.md#gap-tolerance).
+                    const glm::vec3 eye_end = origins[s] + seg_dirs[s] * tfar[s];
+                    if (min_width_m > 0.0 &&
+                        !opening_at_least(scene, eye_end, origins[s], float(min_width_m), kOpeningTries,
+                                          round_seed ^ (vi << 8) ^ s, in_sources, {})) {
+                        ++narrow;
+                        continue;
+                    }
                     ++leaks;
                     // Sight from the eye voxel reaches the origin: what the segment passes is seen or leaky.
                     set_atomic(seen, vi);
@@ -187,6 +206,7 @@ SealProbeFigures probe_seals(Context& ctx, const BitVolume& touched, const Voxel
         figures.rays += walked;
         figures.segments += segments;
         figures.leaks += leaks;
+        figures.narrow += narrow;
         ctx.debug(fmt::format("seal probe round {}: {} frontier voxels, {} rays, {} segments, {} leaks",
                               round + 1, frontier.size(), walked, segments, leaks));
         if (leaks == 0) continue;  // the next round probes only a frontier this one opened: none

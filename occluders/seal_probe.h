@@ -37,15 +37,18 @@ struct SealProbeFigures {
     uint64_t frontier_voxels = 0;  // probed, all rounds
     uint64_t rays = 0;             // walked
     uint64_t segments = 0;         // tested against the triangles (the walk met an eye voxel in reach)
-    uint64_t leaks = 0;            // segments no opaque triangle blocked: sight into the solid
+    uint64_t leaks = 0;            // segments no opaque triangle blocked, at least min_width_m wide
+    uint64_t narrow = 0;           // unblocked segments narrower than that: openings closed on purpose
     uint64_t leaky_voxels = 0;     // touched voxels such a segment passed
     uint64_t removed_voxels = 0;   // left the solid (seen, or reached again through the leaky voxels)
     double seconds = 0.0;
 };
 
 // `eyes`: the view volume's eye mask on the solid's grid (empty: sight starts outside the world).
+// `min_width_m`: an unblocked segment counts as a leak only when its sight line is at least this wide
+// (rays/clearance.h; 0: every unblocked segment); narrower ones are counted in `narrow`.
 SealProbeFigures probe_seals(Context& ctx, const BitVolume& touched, const VoxelMask& eyes,
                              const RayScene& scene, uint32_t rays, double reach_m, int rounds, uint64_t seed,
-                             Solid& solid);
+                             double min_width_m, Solid& solid);
 
 }  // namespace pvs

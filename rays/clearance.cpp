@@ -2,6 +2,8 @@
 // The closest-point routines follow C. Ericson, "Real-Time Collision Detection" (2005), 5.1.5 and 5.1.9.
 #include "rays/clearance.h"
 
+#include "core/random.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -105,6 +107,14 @@ bool core_of(dvec3 e, dvec3 x, double w, dvec3& p, dvec3& q) {
     return true;
 }
 
+// The object triangle t belongs to (objects hold contiguous ranges of triangles).
+uint32_t object_of_triangle(const World& world, uint32_t t) {
+    const auto it =
+        std::upper_bound(world.objects.begin(), world.objects.end(), t,
+                         [](uint32_t tri, const WorldObject& o) { return tri < o.first_triangle; });
+    return uint32_t(it - world.objects.begin()) - 1;
+}
+
 }  // namespace
 
 double segment_triangle_distance(dvec3 p, dvec3 q, dvec3 a, dvec3 b, dvec3 c) {
@@ -124,24 +134,26 @@ std::vector<TriangleCorners> opaque_triangles_near_segment_reference(const World
         if (!world.triangle_opaque[t]) continue;
         const Triangle& tri = world.triangles[t];
         const TriangleCorners corners{world.positions[tri.v[0]], world.positions[tri.v[1]],
-                                      world.positions[tri.v[2]]};
+                                      world.positions[tri.v[2]], object_of_triangle(world, uint32_t(t))};
         if (segment_triangle_distance(p, q, corners.a, corners.b, corners.c) <= double(radius))
             out.push_back(corners);
     }
     return out;
 }
 
-double distance_to_triangles(dvec3 p, dvec3 q, const std::vector<TriangleCorners>& triangles, double cap) {
+double distance_to_triangles(dvec3 p, dvec3 q, const std::vector<TriangleCorners>& triangles, double cap,
+                             uint32_t ignore) {
     double best = cap;
     for (const TriangleCorners& t : triangles) {
+        if (t.object == ignore) continue;
         best = std::min(best, segment_triangle_distance(p, q, t.a, t.b, t.c));
         if (best <= 0.0) break;
     }
     return best;
 }
 
-float sight_line_width(glm::vec3 eye, glm::vec3 seen, const std::vector<TriangleCorners>& triangles,
-                       float max_width_m, float resolution_m) {
+float sight_line_width(glm::vec3 eye, glm::vec3 seen, uint32_t seen_object,
+                       const std::vector<TriangleCorners>& triangles, float max_width_m, float resolution_m) {
     // holds(w): the core for w keeps w / 2 from every triangle. Not monotone in w in general (a longer core
     // for a smaller w may pass nearer a triangle), so the bisection finds a w that holds, within the
     // resolution of a change; the definition asks only for the existence of such a w.
@@ -149,7 +161,7 @@ float sight_line_width(glm::vec3 eye, glm::vec3 seen, const std::vector<Triangle
     const auto holds = [&](double w) {
         dvec3 p, q;
         if (!core_of(e, x, w, p, q)) return false;
-        return distance_to_triangles(p, q, triangles, 0.5 * w) >= 0.5 * w;
+        return distance_to_triangles(p, q, triangles, 0.5 * w, seen_object) >= 0.5 * w;
     };
     double lo = 0.0, hi = std::min(double(max_width_m), glm::length(x - e));
     if (hi <= 0.0) return 0.0;
@@ -162,20 +174,102 @@ float sight_line_width(glm::vec3 eye, glm::vec3 seen, const std::vector<Triangle
     return float(lo);
 }
 
-float sight_line_width(const RayScene& scene, glm::vec3 eye, glm::vec3 seen, float max_width_m,
-                       float resolution_m) {
+float sight_line_width(const RayScene& scene, glm::vec3 eye, glm::vec3 seen, uint32_t seen_object,
+                       float max_width_m, float resolution_m) {
     std::vector<TriangleCorners> near;
     scene.opaque_triangles_near(eye, seen, 0.5f * max_width_m, near);
-    return sight_line_width(eye, seen, near, max_width_m, resolution_m);
+    return sight_line_width(eye, seen, seen_object, near, max_width_m, resolution_m);
 }
 
-bool sight_line_at_least(const RayScene& scene, glm::vec3 eye, glm::vec3 seen, float width_m) {
+bool sight_line_at_least(const RayScene& scene, glm::vec3 eye, glm::vec3 seen, uint32_t seen_object,
+                         float width_m) {
     const dvec3 e(eye), x(seen);
     dvec3 p, q;
     if (!core_of(e, x, double(width_m), p, q)) return false;
     std::vector<TriangleCorners> near;
     scene.opaque_triangles_near(glm::vec3(p), glm::vec3(q), 0.5f * width_m, near);
-    return distance_to_triangles(p, q, near, 0.5 * double(width_m)) >= 0.5 * double(width_m);
+    return distance_to_triangles(p, q, near, 0.5 * double(width_m), seen_object) >= 0.5 * double(width_m);
+}
+
+namespace {
+
+// Where the ray from `eye` along unit `direction` first touches `object` before it is stopped, if it does.
+bool touches_object(const RayScene& scene, glm::vec3 eye, glm::vec3 direction, uint32_t object, float& t,
+                    std::vector<RayTouch>& touches) {
+    touches.clear();
+    scene.trace(eye, &direction, 1, touches);
+    bool found = false;
+    for (const RayTouch& touch : touches) {
+        if (touch.object == object && (!found || touch.t < t)) {
+            t = touch.t;
+            found = true;
+        }
+    }
+    return found;
+}
+
+}  // namespace
+
+SightLine widest_sight_line_near(const RayScene& scene, uint32_t object, glm::vec3 eye, glm::vec3 direction,
+                                 float distance_m, float max_width_m,
+                                 const std::function<bool(glm::vec3)>& eye_allowed, uint32_t tries,
+                                 uint64_t seed) {
+    const float resolution = max_width_m * 1e-3f;
+    SightLine best{eye, eye + direction * distance_m, 0.0f};
+    best.width_m = sight_line_width(scene, best.eye, best.seen, object, max_width_m, resolution);
+    Rng rng(seed, object);
+    std::vector<RayTouch> touches;
+    const auto gaussian3 = [&rng]() {
+        // Sum of uniforms: cheap, bounded, near enough to a normal for a local search.
+        glm::vec3 v;
+        for (int a = 0; a < 3; ++a) v[a] = rng.uniform() + rng.uniform() + rng.uniform() - 1.5f;
+        return v;
+    };
+    for (uint32_t i = 0; i < tries && best.width_m < max_width_m; ++i) {
+        // Scales from the largest width asked down to 1e-4 of it, log-uniform: the lines through a seam a
+        // few micrometres wide are found at small scales, the middle of a wide opening at large ones.
+        const float scale = max_width_m * std::pow(10.0f, -4.0f * rng.uniform());
+        const glm::vec3 e = best.eye + gaussian3() * scale;
+        if (!eye_allowed(e)) continue;
+        const glm::vec3 aim = best.seen + gaussian3() * scale;
+        const glm::vec3 d = aim - e;
+        const float length = glm::length(d);
+        if (!(length > 0.0f)) continue;
+        float t = 0.0f;
+        if (!touches_object(scene, e, d / length, object, t, touches)) continue;
+        const glm::vec3 seen = e + d / length * t;
+        const float w = sight_line_width(scene, e, seen, object, max_width_m, resolution);
+        if (w > best.width_m) best = SightLine{e, seen, w};
+    }
+    return best;
+}
+
+bool opening_at_least(const RayScene& scene, glm::vec3 a, glm::vec3 b, float width_m, uint32_t tries,
+                      uint64_t seed, const std::function<bool(glm::vec3)>& a_ok,
+                      const std::function<bool(glm::vec3)>& b_ok) {
+    if (sight_line_at_least(scene, a, b, kNoObject, width_m)) return true;
+    Rng rng(seed, 0x6f70656eULL);
+    const float resolution = width_m * 1e-3f;
+    const float largest = std::clamp(0.05f * glm::length(b - a), width_m, std::max(width_m, 0.25f));
+    const float decades = std::log10(largest / (width_m * 1e-4f));
+    glm::vec3 best_a = a, best_b = b;
+    float best = sight_line_width(scene, a, b, kNoObject, width_m, resolution);
+    for (uint32_t i = 0; i < tries; ++i) {
+        const float scale = largest * std::pow(10.0f, -decades * rng.uniform());
+        glm::vec3 d;
+        for (int k = 0; k < 3; ++k) d[k] = (rng.uniform() + rng.uniform() + rng.uniform() - 1.5f) * scale;
+        const bool move_a = (i & 1) == 0;
+        const glm::vec3 na = move_a ? best_a + d : best_a, nb = move_a ? best_b : best_b + d;
+        if (move_a ? (a_ok && !a_ok(na)) : (b_ok && !b_ok(nb))) continue;
+        const float w = sight_line_width(scene, na, nb, kNoObject, width_m, resolution);
+        if (w > best) {
+            best = w;
+            best_a = na;
+            best_b = nb;
+            if (best >= width_m) return true;
+        }
+    }
+    return false;
 }
 
 }  // namespace pvs

@@ -332,7 +332,7 @@ void RayScene::opaque_triangles_near(glm::vec3 p, glm::vec3 q, float radius_m,
     for (uint32_t prim : prims) {
         const float* t = v + size_t(prim) * 9;
         out.push_back(TriangleCorners{glm::vec3(t[0], t[1], t[2]), glm::vec3(t[3], t[4], t[5]),
-                                      glm::vec3(t[6], t[7], t[8])});
+                                      glm::vec3(t[6], t[7], t[8]), impl_->object_of[kOpaqueGeom][prim]});
     }
 }
 

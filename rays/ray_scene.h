@@ -26,9 +26,10 @@ struct RayTouch {
     bool stops = false;   // an opaque triangle: the ray ends here
 };
 
-// A triangle as its three corners.
+// A triangle as its three corners, and the object it belongs to.
 struct TriangleCorners {
     glm::vec3 a, b, c;
+    uint32_t object = 0;
 };
 
 enum class BuildQuality { kLow, kMedium, kHigh };

@@ -111,7 +111,7 @@ BakeData make_bake(uint32_t objects, glm::ivec3 dims, int drop_every, uint32_t d
     v.figures = {{"rays", 1e6}, {"misses", 2.0}, {"overestimation", 1.75}};
     for (uint32_t c = 0; c < n_cells; ++c) v.cell_sampled_visible.push_back(c * 3 % 17);
     if (n_cells > 0 && objects > 0) {
-        v.misses.push_back({0, objects - 1, {1.0f, 2.0f, 3.0f}, {0.0f, 0.6f, 0.8f}, 12.5f});
+        v.misses.push_back({0, objects - 1, {1.0f, 2.0f, 3.0f}, {0.0f, 0.6f, 0.8f}, 12.5f, 0.0004f});
         v.misses.push_back({n_cells - 1, 0, {-1.0f, 0.5f, 7.0f}, {1.0f, 0.0f, 0.0f}, 0.001f});
     }
     return b;
@@ -208,6 +208,7 @@ void expect_same(const BakeData& a, const BakeData& b) {
         EXPECT_EQ(x.eye, y.eye);
         EXPECT_EQ(x.direction, y.direction);
         EXPECT_EQ(x.distance_m, y.distance_m);
+        EXPECT_EQ(x.opening_width_m, y.opening_width_m);
     }
 }
 
@@ -916,7 +917,7 @@ TEST(BakeFile, RankedOccludersRoundTrip) {
     const BakeData bake = ranked_bake();
     const std::string path = dir.file("ranked.h5");
     write_bake_file(path, bake);
-    EXPECT_EQ(int_attr(path, "/", "format_minor"), 2);
+    EXPECT_EQ(int_attr(path, "/", "format_minor"), kBakeFormatMinor);
     const BakeData back = read_bake_file(path);
     expect_same(bake, back);
     EXPECT_EQ(back.ranked.count(0), 2u);

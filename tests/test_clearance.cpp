@@ -114,16 +114,19 @@ TEST(Clearance, ALineThroughASlitIsAsWideAsTheSlitLessTwiceItsOffset) {
         const RayScene scene(ctx, world);
         const float resolution = gap * 0.01f;
         // Through the middle, perpendicular to the wall: exactly the gap.
-        EXPECT_NEAR(sight_line_width(scene, {-2, 0, 0}, {2, 0, 0}, 1.0f, resolution), gap, 2 * resolution)
+        EXPECT_NEAR(sight_line_width(scene, {-2, 0, 0}, {2, 0, 0}, kNoObject, 1.0f, resolution), gap,
+                    2 * resolution)
             << "gap " << gap;
         // Offset by a quarter of the gap: half the gap.
-        EXPECT_NEAR(sight_line_width(scene, {-2, 0, 0.25f * gap}, {2, 0, 0.25f * gap}, 1.0f, resolution),
-                    0.5f * gap, 2 * resolution)
+        EXPECT_NEAR(
+            sight_line_width(scene, {-2, 0, 0.25f * gap}, {2, 0, 0.25f * gap}, kNoObject, 1.0f, resolution),
+            0.5f * gap, 2 * resolution)
             << "gap " << gap;
-        EXPECT_TRUE(sight_line_at_least(scene, {-2, 0, 0}, {2, 0, 0}, 0.99f * gap)) << gap;
-        EXPECT_FALSE(sight_line_at_least(scene, {-2, 0, 0}, {2, 0, 0}, 1.01f * gap)) << gap;
+        EXPECT_TRUE(sight_line_at_least(scene, {-2, 0, 0}, {2, 0, 0}, kNoObject, 0.99f * gap)) << gap;
+        EXPECT_FALSE(sight_line_at_least(scene, {-2, 0, 0}, {2, 0, 0}, kNoObject, 1.01f * gap)) << gap;
         // Aslant through a slit in a wall 0.2 m thick: narrower than the slit.
-        const float slant = sight_line_width(scene, {-2, 0, -0.5f}, {2, 0, 0.5f}, 1.0f, resolution);
+        const float slant =
+            sight_line_width(scene, {-2, 0, -0.5f}, {2, 0, 0.5f}, kNoObject, 1.0f, resolution);
         EXPECT_LT(slant, gap);
     }
 }
@@ -136,7 +139,43 @@ TEST(Clearance, TheEndsOfTheLineMayTouchSurfaces) {
     test::add_box(world, "behind_eye", Aabb::of({-1.101f, -1, -1}, {-1.001f, 1, 1}));
     Context ctx;
     const RayScene scene(ctx, world);
-    EXPECT_NEAR(sight_line_width(scene, {-1, 0, 0}, {1, 0, 0}, 0.5f, 1e-4f), 0.5f, 1e-4f);
+    EXPECT_NEAR(sight_line_width(scene, {-1, 0, 0}, {1, 0, 0}, kNoObject, 0.5f, 1e-4f), 0.5f, 1e-4f);
+    // Met aslant, the surface seen comes nearer the core than half the width: its own triangles do not
+    // count, another object's do.
+    const glm::vec3 aslant_eye(-0.5f, 0, -0.8f);
+    EXPECT_NEAR(sight_line_width(scene, aslant_eye, {1, 0, 0}, 0, 0.5f, 1e-4f), 0.5f, 1e-4f);
+    EXPECT_LT(sight_line_width(scene, aslant_eye, {1, 0, 0}, kNoObject, 0.5f, 1e-4f), 0.5f);
+}
+
+}  // namespace
+}  // namespace pvs
+
+namespace pvs {
+namespace {
+
+// The verifier's measure of a miss: the widest line found near its ray, to the object it touched.
+TEST(Clearance, TheSearchNearAWitnessFindsTheWidthOfTheSlitItPassed) {
+    Context ctx;
+    const float tolerance = 0.001f;
+    const auto anywhere = [](glm::vec3) { return true; };
+    for (const float gap : {0.0002f, 0.0005f, 0.004f, 0.05f}) {
+        World world = slit_world(gap);
+        const uint32_t target = test::add_box(world, "target", Aabb::of({3, -1, -1}, {3.5f, 1, 1}));
+        const RayScene scene(ctx, world);
+        // A witness grazing one side of the slit (a tenth of the gap from the left wall).
+        const glm::vec3 eye(-2, 0.3f, -0.4f * gap);
+        const glm::vec3 seen(3, 0.3f, -0.4f * gap);
+        const glm::vec3 dir = glm::normalize(seen - eye);
+        const SightLine line = widest_sight_line_near(scene, target, eye, dir, glm::length(seen - eye),
+                                                      tolerance, anywhere, 256, 9);
+        if (gap >= tolerance) {
+            EXPECT_GE(line.width_m, tolerance) << "gap " << gap << ": a wide opening must be found wide";
+        } else {
+            EXPECT_LT(line.width_m, tolerance) << "gap " << gap;
+            EXPECT_LE(line.width_m, gap * 1.001f) << "gap " << gap << ": never wider than the slit";
+            EXPECT_GE(line.width_m, 0.5f * gap) << "gap " << gap << ": the search moves towards the middle";
+        }
+    }
 }
 
 }  // namespace

@@ -244,7 +244,7 @@ TEST(SealProbe, OpensTheTrenchUnderACrackTheSameForAnyThreadCount) {
         const int was = omp_get_max_threads();
         omp_set_num_threads(threads);
         Solid s = before;
-        f = probe_seals(ctx, view.touched, view.eyes, scene, 32, 4.0, 8, 7, s);
+        f = probe_seals(ctx, view.touched, view.eyes, scene, 32, 4.0, 8, 7, 0.0005, s);
         omp_set_num_threads(was);
         return s;
     };
@@ -266,10 +266,31 @@ TEST(SealProbe, OpensTheTrenchUnderACrackTheSameForAnyThreadCount) {
     Solid s = classify_solid(ctx, sealed_view.grid, sealed_view.touched, sealed_view.eyes);
     const std::vector<uint64_t> sealed_before = s.solid.words;
     const SealProbeFigures fs =
-        probe_seals(ctx, sealed_view.touched, sealed_view.eyes, sealed_scene, 32, 4.0, 8, 7, s);
+        probe_seals(ctx, sealed_view.touched, sealed_view.eyes, sealed_scene, 32, 4.0, 8, 7, 0.0005, s);
     EXPECT_GT(fs.frontier_voxels, 1000u);
     EXPECT_EQ(fs.leaks, 0u);
     EXPECT_EQ(s.solid.words, sealed_before);
+}
+
+// An opening narrower than the gap tolerance allows stays closed: a 5 mm crack over the trench, probed with
+// lines that must be at least 1 cm wide, opens nothing (its rays through the crack are counted as narrow);
+// with lines of 0.5 mm it opens.
+TEST(SealProbe, LeavesACrackNarrowerThanTheToleranceClosed) {
+    Context ctx = quiet_context();
+    const World w = trench_world(0.005f);
+    const ViewVolume view = trench_view(ctx, w);
+    RayScene scene(ctx, w);
+    const Solid before = classify_solid(ctx, view.grid, view.touched, view.eyes);
+    Solid narrow = before, wide = before;
+    const SealProbeFigures closed =
+        probe_seals(ctx, view.touched, view.eyes, scene, 32, 4.0, 8, 7, 0.01, narrow);
+    EXPECT_GT(closed.narrow, 0u);
+    EXPECT_EQ(closed.leaks, 0u);
+    EXPECT_EQ(narrow.solid.words, before.solid.words);
+    const SealProbeFigures open =
+        probe_seals(ctx, view.touched, view.eyes, scene, 32, 4.0, 8, 7, 0.0005, wide);
+    EXPECT_GT(open.leaks, 0u);
+    EXPECT_LT(wide.solid_voxels, before.solid_voxels);
 }
 
 // The seal probe (occluders/seal_probe.h) looks from the trench's side: rays from the solid voxels under the

@@ -129,6 +129,20 @@ TEST(Verify, FindsTheMissInAWrongPvsAndNoneInARightOne) {
     const glm::vec3 hit = m.eye + m.distance_m * m.direction;
     EXPECT_NEAR(hit.x, 3.0f, 1e-3f);
     EXPECT_GT(bad.missed_rays, 0u);
+    // Seen through a doorway 1 m wide (glass is see-through): wider than the default gap tolerance, so the
+    // miss fails; with a tolerance wider than the doorway it is reported apart as narrow.
+    EXPECT_GE(m.opening_width_m, float(kDefaultGapToleranceM));
+    EXPECT_EQ(bad.wide_missed_pairs, 1u);
+    EXPECT_EQ(bad.narrow_missed_pairs, 0u);
+    VerifyConfig wide_tolerance = dense_verify();
+    wide_tolerance.gap_tolerance_m = 2.5;
+    const VerifyResult narrow = verify_pvs(ctx, wide_tolerance, s.world, scene, kCell, wrong);
+    ASSERT_EQ(narrow.missed_pairs, 1u);
+    EXPECT_EQ(narrow.narrow_missed_pairs, 1u);
+    EXPECT_EQ(narrow.wide_missed_pairs, 0u);
+    EXPECT_TRUE(narrow.is_narrow(narrow.misses[0]));
+    EXPECT_GT(narrow.narrow_width_max_m, 0.5f);  // the doorway's middle is found, whatever the witness
+    EXPECT_LT(narrow.narrow_width_max_m, 2.5f);
 
     PvsSet overfull = right;
     overfull.set(0, s.far_behind);  // listed though hidden: overestimation, not a miss
@@ -598,13 +612,19 @@ GridWorld make_grid_world() {
 }
 
 NamedValues without_timing(NamedValues v) {
-    std::erase_if(v, [](const auto& kv) { return kv.first == "seconds" || kv.first == "rays_per_second"; });
+    // Times and rates: every key that ends in "seconds" or "per_second".
+    std::erase_if(v, [](const auto& kv) {
+        const std::string& k = kv.first;
+        return k.ends_with("seconds") || k.ends_with("per_second");
+    });
     return v;
 }
 
-void expect_same_misses(const VerifyResult& a, const VerifyResult& b) {
+// `widths`: the opening widths too (both results measured them).
+void expect_same_misses(const VerifyResult& a, const VerifyResult& b, bool widths = true) {
     ASSERT_EQ(a.misses.size(), b.misses.size());
     for (size_t i = 0; i < a.misses.size(); ++i) {
+        if (widths) EXPECT_EQ(a.misses[i].opening_width_m, b.misses[i].opening_width_m);
         EXPECT_EQ(a.misses[i].cell, b.misses[i].cell);
         EXPECT_EQ(a.misses[i].object, b.misses[i].object);
         EXPECT_EQ(a.misses[i].eye, b.misses[i].eye);
@@ -703,7 +723,7 @@ TEST(AimedRays, ShareZeroReproducesTheUniformOnlyResult) {
         EXPECT_EQ(r.missed_pairs, u.first_misses.size());
         VerifyResult expected;
         expected.misses = u.first_misses;
-        expect_same_misses(r, expected);
+        expect_same_misses(r, expected, false);
         if (budget > 0) {  // 1,000 rays per cell over 4 eyes
             EXPECT_EQ(r.rays_per_eye, 250u);
         }

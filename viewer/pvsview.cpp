@@ -55,9 +55,11 @@ namespace {
 
 constexpr double kViewAngleDeg = 30.0;  // VTK's default vertical view angle; project_to_pixel uses it too
 constexpr size_t kOverlayNames = 12;    // object names listed in the overlay
-constexpr double kCutAboveCellM = 1.0;
-constexpr size_t kMaxOutlineCells = 4000;  // more cells than this start as a slice (key x, --outlines)  //
-                                           // the cut (key k) clips the world this far above the picked cell
+constexpr double kCutAboveCellM = 1.0;  // the cut (key k) clips the world this far above the picked cell
+constexpr Rgba kMissColor = {255, 30, 30, 255};  // a verification miss
+// A miss through an opening narrower than the gap tolerance (outside the promise).
+constexpr Rgba kNarrowMissColor = {255, 170, 0, 255};
+constexpr size_t kMaxOutlineCells = 4000;  // more cells than this start as a slice (key x, --outlines)
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -465,7 +467,7 @@ private:
     }
 
     void build_misses() {
-        misses_actor_ = make_line_actor(misses_data_, {255, 30, 30, 255}, 2.0f, top_);
+        misses_actor_ = make_line_actor(misses_data_, kMissColor, 2.0f, top_);
         misses_actor_->GetProperty()->SetPointSize(6.0f);  // the eye points
         update_misses();
 
@@ -529,9 +531,13 @@ private:
     }
 
     // Every miss with no cell picked, else the picked cell's: the rays that prove what its PVS left out.
+    // Misses through openings narrower than the bake's gap tolerance (outside its promise) are amber, the
+    // others red (kMissColor, kNarrowMissColor).
     void update_misses() {
         vtkNew<vtkPoints> points;
         vtkNew<vtkCellArray> lines, verts;
+        std::vector<Rgba> colors;
+        const double tolerance = config_from_parameters(bake_.parameters).gap.tolerance_m;
         for (const Miss& m : bake_.verification.misses) {
             if (cell_ >= 0 && m.cell != uint32_t(cell_)) continue;
             const glm::vec3 end = m.eye + m.direction * m.distance_m;
@@ -540,10 +546,18 @@ private:
             const vtkIdType ids[2] = {a, b};
             lines->InsertNextCell(2, ids);
             verts->InsertNextCell(1, &a);
+            const bool narrow = m.opening_width_m >= 0.0f && double(m.opening_width_m) < tolerance;
+            colors.push_back(narrow ? kNarrowMissColor : kMissColor);
         }
+        // Cell data runs over the vertices first, then the lines.
+        vtkNew<vtkUnsignedCharArray> cell_colors;
+        cell_colors->SetNumberOfComponents(4);
+        for (int pass = 0; pass < 2; ++pass)
+            for (const Rgba& c : colors) cell_colors->InsertNextTypedTuple(c.data());
         misses_data_->SetPoints(points);
         misses_data_->SetLines(lines);
         misses_data_->SetVerts(verts);
+        misses_data_->GetCellData()->SetScalars(cell_colors);
         misses_data_->Modified();
     }
 

@@ -34,7 +34,9 @@ struct Scene {
     std::string world = dir.file("two_boxes.glb");
     std::string bake = dir.file("two_boxes.h5");
 
-    Scene() {
+    // `miss_width_m`: the opening width stored with the miss (-1: not measured; below the default gap
+    // tolerance of 1 mm: a narrow miss).
+    explicit Scene(float miss_width_m = -1.0f) {
         SceneDesc desc;
         desc.nodes.push_back(make_box_node("a", kBoxA));
         desc.nodes.push_back(make_box_node("b", kBoxB));
@@ -66,6 +68,7 @@ struct Scene {
         b.verification.ran = true;
         b.verification.cell_sampled_visible = {1, 1, 1, 1};
         b.verification.misses = {kMiss};
+        b.verification.misses[0].opening_width_m = miss_width_m;
         write_bake_file(bake, b);
     }
 };
@@ -194,6 +197,22 @@ TEST(PvsviewScreenshot, NoPickShowsTheWorldNeutralAndMissesInRed) {
     const RgbImage without = screenshot(s, "--no-text --no-misses");
     const auto c = without.at(int(p->x), int(p->y));
     EXPECT_FALSE(c[0] > 180 && c[1] < 90 && c[2] < 90) << str(c);
+}
+
+// A miss through an opening narrower than the gap tolerance is drawn amber, not red.
+TEST(PvsviewScreenshot, NarrowMissesAreAmber) {
+    Scene s(0.0001f);
+    const RgbImage img = screenshot(s, "--no-text");
+    const glm::vec3 mid = kMiss.eye + kMiss.direction * (0.5f * kMiss.distance_m);
+    const auto p = project_to_pixel(kPose, 30.0, kWidth, kHeight, mid);
+    bool amber = false, red = false;
+    for (int dy = -3; dy <= 3; ++dy) {
+        const auto c = img.at(int(p->x), int(p->y) + dy);
+        amber |= c[0] > 180 && c[1] > 110 && c[1] < 220 && c[2] < 90;
+        red |= c[0] > 180 && c[1] < 90 && c[2] < 90;
+    }
+    EXPECT_TRUE(amber) << "no amber miss ray near " << p->x << "," << p->y;
+    EXPECT_FALSE(red);
 }
 
 TEST(PvsviewScreenshot, SeeThroughObjectsAreTranslucent) {
