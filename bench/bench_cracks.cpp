@@ -1,7 +1,7 @@
 // bench_cracks: the crack test set at full size (samples/crack_set.h; docs/ALGORITHMS.md#crack-test-set).
 //
 //   bench_cracks [--tolerance T] [--widths w1,w2,...] [--cases N] [--seeds s1,s2,...] [--threads N]
-//                [--keep DIR] [pvsbake bake options: --epsilon 0.125 ...]
+//                [--keep DIR] [--epsilon E]
 //
 // For each seed and each width (default: 0.5 T, T, 2 T, 5 mm, 1 cm, 5 cm, 50 cm at T = 1 mm) a world of N
 // cases (default 200; slits, L-slits, seams and T-junction seams in turn, walls 2, 10 and 30 cm thick, at
@@ -124,9 +124,8 @@ int main(int argc, char** argv) {
                 const pvs::BakeData bake = pvs::bake_world(ctx, config, world, path, "");
                 const double seconds = seconds_since(t0);
                 // The proven solid of the same occluder stage (deterministic).
-                pvs::ViewVolumeConfig view_config = config.view;
-                view_config.auto_voxel_size_m = pvs::conservative_voxel_size_m(config.conservative.epsilon_m);
-                const pvs::ViewVolume view = pvs::build_view_volume(ctx, view_config, world);
+                const pvs::ViewVolume view =
+                    pvs::build_view_volume(ctx, pvs::view_volume_config(config), world);
                 const pvs::RayScene scene(ctx, world);
                 pvs::OccluderFigures figures;
                 pvs::BlockFigures blocks;

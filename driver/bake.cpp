@@ -37,6 +37,17 @@ std::vector<ObjectRecord> object_records(const World& world) {
     return out;
 }
 
+ViewVolumeConfig view_volume_config(const BakeConfig& config) {
+    ViewVolumeConfig view = config.view;
+    if (config.mode == BakeMode::kConservative)
+        view.auto_voxel_size_m = conservative_voxel_size_m(config.conservative.epsilon_m);
+    return view;
+}
+
+double gap_tolerance_of(const BakeData& bake) {
+    return config_from_parameters(bake.parameters).gap.tolerance_m;
+}
+
 void store_verification(const VerifyResult& result, VerificationRecord& record) {
     record.ran = true;
     record.figures = result.figures();
@@ -81,14 +92,6 @@ BakeData bake_header(const BakeConfig& config, const World& world, const std::st
     bake.parameters = resolved_parameters(config);
     bake.objects = object_records(world);
     return bake;
-}
-
-// The view volume's config: the conservative mode's automatic voxel follows epsilon.
-ViewVolumeConfig view_volume_config(const BakeConfig& config) {
-    ViewVolumeConfig view = config.view;
-    if (config.mode == BakeMode::kConservative)
-        view.auto_voxel_size_m = conservative_voxel_size_m(config.conservative.epsilon_m);
-    return view;
 }
 
 // The grid's cells, clipped to the view volume, then every cell's PVS in the bake's mode.

@@ -39,6 +39,13 @@ std::vector<Occluder> solver_occluders(Context& ctx, const BakeConfig& config, c
 BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, const std::string& world_path,
                     const std::string& world_hash);
 
+// The view volume's config of a bake: the conservative mode's automatic voxel follows epsilon.
+ViewVolumeConfig view_volume_config(const BakeConfig& config);
+
+// The gap tolerance a bake was made with (its parameter gap.tolerance_m; the default for bakes made before
+// it was recorded). Throws pvs::Error (bad input) when the stored parameters do not parse.
+double gap_tolerance_of(const BakeData& bake);
+
 // Copies a verification's figures, per-cell sampled counts and misses into the bake's record.
 void store_verification(const VerifyResult& result, VerificationRecord& record);
 

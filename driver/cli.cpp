@@ -215,7 +215,6 @@ int run_occluders(Context& ctx, const BakeConfig& config, const std::string& wor
         j["seal_rays"] = figures.seal_rays;
         j["seal_leaks"] = figures.seal_leaks;
         j["seal_narrow"] = figures.seal_narrow;
-        j["probe_rays_narrow"] = figures.probe_rays_narrow;
         j["seal_removed_voxels"] = figures.seal_removed_voxels;
         nlohmann::ordered_json t = nlohmann::ordered_json::object();
         for (const auto& [k, v] : ctx.timings()) t[k] = v;
@@ -279,7 +278,7 @@ int run_verify(Context& ctx, BakeConfig config, const std::string& world_path, c
                const std::string& report_path, bool write_back, bool tolerance_given) {
     set_threads(config.run.threads);
     BakeData bake = read_bake_file(bake_path);
-    if (!tolerance_given) config.gap.tolerance_m = config_from_parameters(bake.parameters).gap.tolerance_m;
+    if (!tolerance_given) config.gap.tolerance_m = gap_tolerance_of(bake);
     config.verify.gap_tolerance_m = config.gap.tolerance_m;
     const World world = load_world(ctx, world_path);
     const std::string hash = hash_file_hex(world_path);
@@ -364,10 +363,10 @@ int run_info(const std::string& bake_path, bool json, std::ostream& out) {
         out << "verification\n";
         for (const auto& [k, v] : bake.verification.figures) out << fmt::format("  {:<32} {:g}\n", k, v);
         constexpr size_t kMissesShown = 20;
-        const double tolerance = config_from_parameters(bake.parameters).gap.tolerance_m;
+        const double tolerance = gap_tolerance_of(bake);
         for (size_t i = 0; i < bake.verification.misses.size() && i < kMissesShown; ++i) {
             const Miss& m = bake.verification.misses[i];
-            const bool narrow = m.opening_width_m >= 0.0f && double(m.opening_width_m) < tolerance;
+            const bool narrow = is_narrow_miss(m, tolerance);
             out << fmt::format(
                 "  {}: cell {} object '{}' eye ({:.3f}, {:.3f}, {:.3f}) dir ({:.4f}, {:.4f}, {:.4f}) "
                 "at {:.3f} m{}\n",

@@ -1,6 +1,8 @@
 // The figures of a bake and its JSON report.
 #include "driver/report.h"
 
+#include "driver/bake.h"
+
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -56,7 +58,6 @@ NamedValues bake_figures(const BakeConfig& config, const World& world, const Vie
         {"occluder_probe_rays_into_solid", double(stages.occluders.probe_rays_into_solid)},
         {"occluder_seal_leaks", double(stages.occluders.seal_leaks)},
         {"occluder_seal_narrow", double(stages.occluders.seal_narrow)},
-        {"occluder_probe_rays_narrow", double(stages.occluders.probe_rays_narrow)},
         {"occluder_seal_removed_voxels", double(stages.occluders.seal_removed_voxels)},
         {"occluder_seconds", stages.occluders.seconds},
         {"occluder_blocks", double(stages.blocks.blocks)},
@@ -153,7 +154,7 @@ std::string bake_report_json(const BakeData& bake, const std::vector<std::string
     if (bake.verification.ran) {
         ver["figures"] = values_json(bake.verification.figures);
         nlohmann::ordered_json misses = nlohmann::ordered_json::array();
-        const double tolerance = config_from_parameters(bake.parameters).gap.tolerance_m;
+        const double tolerance = gap_tolerance_of(bake);
         for (const Miss& m : bake.verification.misses) {
             nlohmann::ordered_json mj;
             mj["cell"] = m.cell;
@@ -165,7 +166,7 @@ std::string bake_report_json(const BakeData& bake, const std::vector<std::string
             // The widest sight line found through the opening (-1: not measured); narrow: below the bake's
             // gap tolerance, outside its promise.
             mj["opening_width_m"] = m.opening_width_m;
-            mj["narrow"] = m.opening_width_m >= 0.0f && double(m.opening_width_m) < tolerance;
+            mj["narrow"] = is_narrow_miss(m, tolerance);
             misses.push_back(mj);
         }
         ver["misses"] = misses;

@@ -544,7 +544,7 @@ NamedValues VerifyResult::figures() const {
 namespace {
 
 // Lines tried near each reported miss's ray when measuring its opening (docs/ALGORITHMS.md#miss-widths).
-constexpr uint32_t kWidthTries = 256;
+constexpr uint32_t kWidthTries = 1024;
 
 // Measures the opening of every reported miss and splits the missed pairs into narrow and wide.
 void measure_miss_widths(Context& ctx, const VerifyConfig& config, const RayScene& scene,

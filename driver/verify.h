@@ -88,9 +88,7 @@ struct VerifyResult {
     double width_seconds = 0.0;       // spent measuring
     std::vector<Miss> misses;  // the first ray of each missed pair, cell order, at most max_misses_reported
     // A measured miss through an opening narrower than the tolerance.
-    bool is_narrow(const Miss& m) const {
-        return m.opening_width_m >= 0.0f && double(m.opening_width_m) < gap_tolerance_m;
-    }
+    bool is_narrow(const Miss& m) const { return is_narrow_miss(m, gap_tolerance_m); }
     std::vector<uint32_t> cell_sampled_visible;  // per cell: objects the rays touched
     PvsSet sampled;                              // per cell: which objects the rays touched
 

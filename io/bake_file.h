@@ -45,6 +45,12 @@ struct Miss {
     float opening_width_m = -1.0f;
 };
 
+// A measured miss through an opening narrower than the gap tolerance: outside the promise, it does not fail
+// verification (docs/ALGORITHMS.md#miss-widths). Unmeasured misses are never narrow.
+inline bool is_narrow_miss(const Miss& m, double gap_tolerance_m) {
+    return m.opening_width_m >= 0.0f && double(m.opening_width_m) < gap_tolerance_m;
+}
+
 struct VerificationRecord {
     bool ran = false;
     std::vector<std::pair<std::string, double>> figures;  // rays, misses, overestimation ...

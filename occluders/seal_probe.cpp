@@ -116,10 +116,16 @@ SealProbeFigures probe_seals(Context& ctx, const BitVolume& touched, const Voxel
     const VoxelGrid& grid = solid.grid;
     const BitVolume sources = sight_sources(grid, eyes);
     const float reach = float(reach_m);
-    // Where the eye end of a line may move while looking for an opening's middle: the eye space.
+    // Where the ends of a line may move while looking for an opening's middle: the eye end in the eye space
+    // (the sight sources) ...
     const auto in_sources = [&](glm::vec3 p) {
         const glm::ivec3 c = grid.voxel_of(p);
         return grid.inside(c) && sources.get(grid.index(c.x, c.y, c.z));
+    };
+    // ... and the solid end: the solid (a line must still join the eye space to the solid).
+    const auto in_solid = [&](glm::vec3 p) {
+        const glm::ivec3 c = grid.voxel_of(p);
+        return grid.inside(c) && solid.solid.get(grid.index(c.x, c.y, c.z));
     };
     BitVolume probed, leaky;  // leaky: written by every thread (an atomic OR), read only between rounds
     probed.reset(grid.count());
@@ -184,7 +190,7 @@ SealProbeFigures probe_seals(Context& ctx, const BitVolume& touched, const Voxel
                     const glm::vec3 eye_end = origins[s] + seg_dirs[s] * tfar[s];
                     if (min_width_m > 0.0 &&
                         !opening_at_least(scene, eye_end, origins[s], float(min_width_m), kOpeningTries,
-                                          round_seed ^ (vi << 8) ^ s, in_sources, {})) {
+                                          round_seed ^ (vi << 8) ^ s, in_sources, in_solid)) {
                         ++narrow;
                         continue;
                     }

@@ -7,7 +7,6 @@
 #include "occluders/panels.h"
 #include "occluders/seal_probe.h"
 #include "occluders/solid.h"
-#include "rays/clearance.h"
 
 #include <fmt/format.h>
 
@@ -49,15 +48,9 @@ std::vector<glm::vec3> check_eyes(const VoxelMask& eye_mask, const VoxelGrid& gr
     return eyes;
 }
 
-// Lines tried around a line of sight narrower than the least width, looking for the opening's middle
-// (rays/clearance.h opening_at_least).
-constexpr uint32_t kOpeningTries = 256;
-
-// The least width of a line of sight the samplers count, as a share of the gap tolerance
+// The least width of a line the seal probe counts, as a share of the gap tolerance
 // (docs/ALGORITHMS.md#gap-tolerance). 0: every unblocked line counts, so openings narrower than the
-// tolerance are opened too (safe, looser). Not yet T / 2: through a wide opening the samplers' lines are
-// mostly oblique and narrow, and the local search (one end moved at a time) does not turn them to the
-// opening's middle reliably, so 2 mm cracks were found less often (docs/RESULTS.md, "Tried and dropped").
+// tolerance are opened too (safe, looser); the sight probe and the ray check count every line always.
 constexpr double kProbeWidthShare = 0.0;
 
 // The sight probe: rays over the sphere from eye points; solid voxels a ray passes before it stops are
@@ -72,14 +65,11 @@ void carve_seen_solid(Context& ctx, const OccluderConfig& config, uint32_t probe
     uint64_t into_solid = 0, escaped = 0;
     const float step = grid.voxel_size_m;  // a corner a step skips is covered by the 26-neighbour carving
     const Aabb gb = grid.bounds();
-    const float min_width = float(kProbeWidthShare * config.gap_tolerance_m);
-    uint64_t narrow = 0;
-#pragma omp parallel reduction(+ : into_solid, escaped, narrow)
+#pragma omp parallel reduction(+ : into_solid, escaped)
     {
         std::vector<glm::vec3> dirs;
         std::vector<RayTouch> touches;
         std::vector<float> stop;
-        std::vector<std::pair<float, uint64_t>> hits;  // solid voxels a ray passes: (t, voxel)
 #pragma omp for schedule(dynamic, 4)
         for (int64_t e = 0; e < int64_t(eyes.size()); ++e) {
             dirs.clear();
@@ -96,40 +86,17 @@ void carve_seen_solid(Context& ctx, const OccluderConfig& config, uint32_t probe
                 // a voxel face with solid right behind it, and rounding must not count that as a crack.
                 const float end = std::min(stop[r] - grid.voxel_size_m, exit);
                 escaped += !std::isfinite(stop[r]);
-                hits.clear();
+                bool hit_solid = false;
                 for (float t = 0.0f; t < end; t += step) {
                     const glm::vec3 p = eyes[size_t(e)] + t * dirs[r];
                     const glm::ivec3 c = grid.voxel_of(p);
                     const uint64_t i = grid.index(c.x, c.y, c.z);
-                    if (solid.solid.get(i)) hits.emplace_back(t, i);
-                }
-                if (hits.empty()) continue;
-                // Only sight through an opening at least min_width wide counts
-                // (docs/ALGORITHMS.md#gap-tolerance). A longer prefix of the ray is never wider than a
-                // shorter one (its core holds the shorter one's), so the solid voxels seen are a first run of
-                // the hits: find where it ends.
-                const auto wide_to = [&](size_t k) {
-                    return min_width <= 0.0f ||
-                           opening_at_least(scene, eyes[size_t(e)], eyes[size_t(e)] + hits[k].first * dirs[r],
-                                            min_width, kOpeningTries, (uint64_t(e) << 32) ^ (r << 8) ^ k);
-                };
-                size_t seen_count = hits.size();
-                if (!wide_to(hits.size() - 1)) {
-                    size_t lo = 0, hi = hits.size() - 1;  // wide_to(hi) is false; find the first false
-                    if (!wide_to(0)) {
-                        hi = 0;
-                    } else {
-                        while (hi - lo > 1) {
-                            const size_t mid = (lo + hi) / 2;
-                            (wide_to(mid) ? lo : hi) = mid;
-                        }
+                    if (solid.solid.get(i)) {
+                        seen[i] = 1;  // a benign race: every writer writes 1
+                        hit_solid = true;
                     }
-                    seen_count = hi;
-                    narrow += 1;
                 }
-                for (size_t k = 0; k < seen_count; ++k)
-                    seen[hits[k].second] = 1;  // a benign race: all write 1
-                into_solid += seen_count > 0;
+                into_solid += hit_solid;
             }
         }
     }
@@ -151,7 +118,6 @@ void carve_seen_solid(Context& ctx, const OccluderConfig& config, uint32_t probe
     }
     figures.probe_rays = uint64_t(eyes.size()) * config.probe_rays_per_eye;
     figures.probe_rays_into_solid = into_solid;
-    figures.probe_rays_narrow = narrow;
     figures.probe_rays_escaped = escaped;
     figures.probe_carved_voxels = carved;
     solid.solid_voxels -= carved;
@@ -228,18 +194,11 @@ std::vector<uint8_t> check_boxes(Context& ctx, const OccluderConfig& config, con
                 scene.occluded_opaque(origins.data(), dirs.data(), tfar.data(), uint32_t(origins.size()),
                                       blocked.data());
                 rays_total += origins.size();
-                // An unblocked segment rejects the box only through an opening at least min_width wide
-                // (docs/ALGORITHMS.md#gap-tolerance).
-                const float min_width = float(kProbeWidthShare * config.gap_tolerance_m);
-                for (size_t k = 0; k < blocked.size(); ++k) {
-                    if (blocked[k]) continue;
-                    if (min_width > 0.0f &&
-                        !opening_at_least(scene, origins[k], origins[k] + dirs[k] * tfar[k], min_width,
-                                          kOpeningTries, (uint64_t(b) << 20) ^ k))
-                        continue;
-                    rejected[size_t(b)] = 1;
-                    break;
-                }
+                for (uint8_t x : blocked)
+                    if (!x) {
+                        rejected[size_t(b)] = 1;
+                        break;
+                    }
             }
             ctx.progress_advance();
         }

@@ -37,8 +37,6 @@ struct OccluderFigures {
     uint32_t rejected_by_rays = 0;  // boxes a sight line reached
     uint64_t probe_rays = 0;
     uint64_t probe_rays_into_solid = 0;  // probe rays that passed a solid voxel (through a crack)
-    uint64_t probe_rays_narrow = 0;      // of the rays that reached solid, those that passed an opening
-                                         // narrower than half the gap tolerance first (closed on purpose)
     uint64_t probe_rays_escaped = 0;     // probe rays no opaque triangle stopped
     uint64_t probe_carved_voxels = 0;
     uint64_t check_rays = 0;

@@ -208,6 +208,56 @@ bool touches_object(const RayScene& scene, glm::vec3 eye, glm::vec3 direction, u
     return found;
 }
 
+// The steps of the local searches around a line of `length` for a width of `width_m`: one end moved at a
+// time by a near-normal offset whose scale is log-uniform from a twentieth of the length (at least the
+// width, at most 0.25 m: large enough to turn an oblique line towards an opening's normal) down to 1e-4 of
+// the width (to stay in a seam a few micrometres wide).
+class SearchSteps {
+public:
+    SearchSteps(float length, float width_m, Rng& rng)
+        : rng_(rng),
+          largest_(std::clamp(0.05f * length, width_m, std::max(width_m, 0.25f))),
+          decades_(std::log10(largest_ / (width_m * 1e-4f))) {}
+
+    glm::vec3 next() {
+        const float scale = largest_ * std::pow(10.0f, -decades_ * rng_.uniform());
+        glm::vec3 d;
+        // Sum of uniforms: cheap, bounded, near enough to a normal for a local search.
+        for (int k = 0; k < 3; ++k) d[k] = (rng_.uniform() + rng_.uniform() + rng_.uniform() - 1.5f) * scale;
+        return d;
+    }
+
+private:
+    Rng& rng_;
+    float largest_, decades_;
+};
+
+// Where along the segment [a, b] a line may be turned about: the points of the segment nearest the corners,
+// edge midpoints and centroids of the opaque triangles within `radius` of it (the walls of the opening it
+// passes), as parameters in [0, 1]. Turning about such a point keeps the line in the opening while it
+// straightens.
+std::vector<float> pivots_along(const RayScene& scene, glm::vec3 a, glm::vec3 b, float radius) {
+    std::vector<TriangleCorners> near;
+    scene.opaque_triangles_near(a, b, radius, near);
+    std::vector<float> out;
+    const glm::vec3 ab = b - a;
+    const float ab2 = glm::dot(ab, ab);
+    if (!(ab2 > 0.0f)) return out;
+    for (const TriangleCorners& t : near) {
+        for (const glm::vec3& p : {t.a, t.b, t.c, 0.5f * (t.a + t.b), 0.5f * (t.b + t.c), 0.5f * (t.c + t.a),
+                                   (t.a + t.b + t.c) / 3.0f})
+            out.push_back(std::clamp(glm::dot(p - a, ab) / ab2, 0.0f, 1.0f));
+    }
+    return out;
+}
+
+// The line through `pivot` from `from`, as far beyond the pivot as `old_end` was.
+glm::vec3 through(glm::vec3 from, glm::vec3 pivot, glm::vec3 old_end) {
+    const glm::vec3 d = pivot - from;
+    const float len = glm::length(d);
+    return len > 0.0f ? pivot + d / len * glm::length(old_end - pivot) : old_end;
+}
+
 }  // namespace
 
 SightLine widest_sight_line_near(const RayScene& scene, uint32_t object, glm::vec3 eye, glm::vec3 direction,
@@ -218,20 +268,22 @@ SightLine widest_sight_line_near(const RayScene& scene, uint32_t object, glm::ve
     SightLine best{eye, eye + direction * distance_m, 0.0f};
     best.width_m = sight_line_width(scene, best.eye, best.seen, object, max_width_m, resolution);
     Rng rng(seed, object);
+    SearchSteps steps(distance_m, max_width_m, rng);
     std::vector<RayTouch> touches;
-    const auto gaussian3 = [&rng]() {
-        // Sum of uniforms: cheap, bounded, near enough to a normal for a local search.
-        glm::vec3 v;
-        for (int a = 0; a < 3; ++a) v[a] = rng.uniform() + rng.uniform() + rng.uniform() - 1.5f;
-        return v;
-    };
+    std::vector<float> pivots = pivots_along(scene, best.eye, best.seen, max_width_m);
     for (uint32_t i = 0; i < tries && best.width_m < max_width_m; ++i) {
-        // Scales from the largest width asked down to 1e-4 of it, log-uniform: the lines through a seam a
-        // few micrometres wide are found at small scales, the middle of a wide opening at large ones.
-        const float scale = max_width_m * std::pow(10.0f, -4.0f * rng.uniform());
-        const glm::vec3 e = best.eye + gaussian3() * scale;
-        if (!eye_allowed(e)) continue;
-        const glm::vec3 aim = best.seen + gaussian3() * scale;
+        // In turn: move the eye (within the eyes allowed), move the point aimed at, or move the eye and
+        // turn the line about a point near the walls it passes (an oblique line through a wide opening is
+        // narrow until it is turned).
+        const uint32_t move = i % 3;
+        const glm::vec3 e = move != 1 ? best.eye + steps.next() : best.eye;
+        glm::vec3 aim = move == 1 ? best.seen + steps.next() : best.seen;
+        if (move == 2) {
+            if (pivots.empty()) continue;
+            const float u = pivots[rng.below(uint32_t(pivots.size()))];
+            aim = through(e, best.eye + (best.seen - best.eye) * u, best.seen);
+        }
+        if (move != 1 && !eye_allowed(e)) continue;
         const glm::vec3 d = aim - e;
         const float length = glm::length(d);
         if (!(length > 0.0f)) continue;
@@ -239,7 +291,10 @@ SightLine widest_sight_line_near(const RayScene& scene, uint32_t object, glm::ve
         if (!touches_object(scene, e, d / length, object, t, touches)) continue;
         const glm::vec3 seen = e + d / length * t;
         const float w = sight_line_width(scene, e, seen, object, max_width_m, resolution);
-        if (w > best.width_m) best = SightLine{e, seen, w};
+        if (w > best.width_m) {
+            best = SightLine{e, seen, w};
+            pivots = pivots_along(scene, best.eye, best.seen, max_width_m);
+        }
     }
     return best;
 }
@@ -249,24 +304,28 @@ bool opening_at_least(const RayScene& scene, glm::vec3 a, glm::vec3 b, float wid
                       const std::function<bool(glm::vec3)>& b_ok) {
     if (sight_line_at_least(scene, a, b, kNoObject, width_m)) return true;
     Rng rng(seed, 0x6f70656eULL);
+    SearchSteps steps(glm::length(b - a), width_m, rng);
     const float resolution = width_m * 1e-3f;
-    const float largest = std::clamp(0.05f * glm::length(b - a), width_m, std::max(width_m, 0.25f));
-    const float decades = std::log10(largest / (width_m * 1e-4f));
     glm::vec3 best_a = a, best_b = b;
     float best = sight_line_width(scene, a, b, kNoObject, width_m, resolution);
+    std::vector<float> pivots = pivots_along(scene, a, b, width_m);
     for (uint32_t i = 0; i < tries; ++i) {
-        const float scale = largest * std::pow(10.0f, -decades * rng.uniform());
-        glm::vec3 d;
-        for (int k = 0; k < 3; ++k) d[k] = (rng.uniform() + rng.uniform() + rng.uniform() - 1.5f) * scale;
-        const bool move_a = (i & 1) == 0;
-        const glm::vec3 na = move_a ? best_a + d : best_a, nb = move_a ? best_b : best_b + d;
-        if (move_a ? (a_ok && !a_ok(na)) : (b_ok && !b_ok(nb))) continue;
+        // In turn: move a, move b, or move a and turn the line about a point near the walls it passes.
+        const uint32_t move = i % 3;
+        const glm::vec3 na = move != 1 ? best_a + steps.next() : best_a;
+        glm::vec3 nb = move == 1 ? best_b + steps.next() : best_b;
+        if (move == 2) {
+            if (pivots.empty()) continue;
+            nb = through(na, best_a + (best_b - best_a) * pivots[rng.below(uint32_t(pivots.size()))], best_b);
+        }
+        if ((move != 1 && a_ok && !a_ok(na)) || (move != 0 && b_ok && !b_ok(nb))) continue;
         const float w = sight_line_width(scene, na, nb, kNoObject, width_m, resolution);
         if (w > best) {
             best = w;
             best_a = na;
             best_b = nb;
             if (best >= width_m) return true;
+            pivots = pivots_along(scene, best_a, best_b, width_m);
         }
     }
     return false;

@@ -153,6 +153,31 @@ TEST(Clearance, TheEndsOfTheLineMayTouchSurfaces) {
 namespace pvs {
 namespace {
 
+// A witness aslant through a slit wider than the tolerance, in a thick wall, is itself narrow: the search
+// must turn the line towards the slit's normal, not only shift it, or a real miss would pass as narrow.
+TEST(Clearance, TheSearchNearAWitnessTurnsAnObliqueLineThroughAWideSlit) {
+    Context ctx;
+    const float tolerance = 0.001f, gap = 0.004f;  // the wall is 0.2 m thick
+    World world = slit_world(gap);
+    const uint32_t target = test::add_box(world, "target", Aabb::of({3, -1, -1}, {3.5f, 1, 1}));
+    const RayScene scene(ctx, world);
+    const auto anywhere = [](glm::vec3) { return true; };
+    for (const float slope : {0.016f, 0.0175f}) {
+        // Through the middle of the slit at x = 0.1, climbing `slope` in z per metre of x.
+        const glm::vec3 eye(-2, 0.3f, -2.1f * slope);
+        const glm::vec3 seen(3, 0.3f, 2.9f * slope);
+        const float witness = sight_line_width(scene, eye, seen, target, tolerance, tolerance * 1e-3f);
+        ASSERT_LT(witness, tolerance) << "the witness itself must be narrow for this test";
+        for (uint64_t seed = 1; seed <= 8; ++seed) {
+            const SightLine line =
+                widest_sight_line_near(scene, target, eye, glm::normalize(seen - eye),
+                                       glm::length(seen - eye), tolerance, anywhere, 1024, seed);
+            EXPECT_GE(line.width_m, tolerance)
+                << "slope " << slope << " seed " << seed << ": the witness was " << witness << " m wide";
+        }
+    }
+}
+
 // The verifier's measure of a miss: the widest line found near its ray, to the object it touched.
 TEST(Clearance, TheSearchNearAWitnessFindsTheWidthOfTheSlitItPassed) {
     Context ctx;

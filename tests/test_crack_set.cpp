@@ -96,9 +96,7 @@ TEST(CrackSet, AConservativeBakeFindsTheWideOpeningsOfASmallSet) {
     Context ctx = quiet_context();
     const BakeData bake = bake_world(ctx, config, world, dir.file("cracks.glb"), "");
     // The proven solid of the same bake's occluder stage (deterministic: the same as the bake's).
-    ViewVolumeConfig view_config = config.view;
-    view_config.auto_voxel_size_m = conservative_voxel_size_m(config.conservative.epsilon_m);
-    const ViewVolume view = build_view_volume(ctx, view_config, world);
+    const ViewVolume view = build_view_volume(ctx, view_volume_config(config), world);
     const RayScene scene(ctx, world);
     OccluderFigures figures;
     BlockFigures blocks;

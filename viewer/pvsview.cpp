@@ -167,6 +167,7 @@ class Viewer {
 public:
     Viewer(Options options, World world, BakeData bake)
         : options_(std::move(options)), world_(std::move(world)), bake_(std::move(bake)) {
+        gap_tolerance_ = gap_tolerance_of(bake_);
         hide_others_ = options_.hide_others;
         show_cells_ = !options_.no_cells;
         // Outlines of tens of thousands of cells are a fog: big bakes start with the slice.
@@ -537,7 +538,6 @@ private:
         vtkNew<vtkPoints> points;
         vtkNew<vtkCellArray> lines, verts;
         std::vector<Rgba> colors;
-        const double tolerance = config_from_parameters(bake_.parameters).gap.tolerance_m;
         for (const Miss& m : bake_.verification.misses) {
             if (cell_ >= 0 && m.cell != uint32_t(cell_)) continue;
             const glm::vec3 end = m.eye + m.direction * m.distance_m;
@@ -546,8 +546,7 @@ private:
             const vtkIdType ids[2] = {a, b};
             lines->InsertNextCell(2, ids);
             verts->InsertNextCell(1, &a);
-            const bool narrow = m.opening_width_m >= 0.0f && double(m.opening_width_m) < tolerance;
-            colors.push_back(narrow ? kNarrowMissColor : kMissColor);
+            colors.push_back(is_narrow_miss(m, gap_tolerance_) ? kNarrowMissColor : kMissColor);
         }
         // Cell data runs over the vertices first, then the lines.
         vtkNew<vtkUnsignedCharArray> cell_colors;
@@ -621,6 +620,7 @@ private:
     Options options_;
     World world_;
     BakeData bake_;
+    double gap_tolerance_ = kDefaultGapToleranceM;  // the bake's: which misses are narrow
     std::vector<uint32_t> pvs_counts_;
     int32_t cell_ = -1;
     bool hide_others_ = false, show_cells_ = true, slice_ = false, show_occluders_ = false;
