@@ -88,6 +88,8 @@ struct OccluderConfig {
     uint32_t check_rays_per_eye = 4;      // [Limit: >= 1] rays from each eye point to each box
     uint32_t check_near_eyes = 256;       // [Limit: >= 0] and eye points within 4 m of each box, 16 rays
                                           // each (0 = off): sight through a crack near a box
+    uint32_t gap_lines = 8;               // [Limit: >= 0] gap probe: lines across each gap between nearby
+                                          // triangles near the solid (occluders/gap_probe.h; 0 = off)
     uint32_t seal_rays = 32;              // [Limit: >= 0] seal probe: rays from each voxel of the solid's
                                           // frontier towards the eye space (occluders/seal_probe.h; 0 = off)
     double seal_reach_m = 4.0;            // [Limit: > 0] [Units: m] seal probe: how far a ray looks for an
@@ -287,6 +289,11 @@ void visit_options(Config& c, Visitor&& v) {
     v(OptionSpec{OptionGroup::kOccluders, "--occluder-check-near-eyes", "occluders.check_near_eyes", "eyes",
                  "eye points within 4 m of each box that check it too (16 rays each; 0 = off)", 0, 1e6},
       c.occluders.check_near_eyes);
+    v(OptionSpec{OptionGroup::kOccluders, "--occluder-gap-lines", "occluders.gap_lines", "lines",
+                 "lines across each gap between two triangles near the solid, looking for openings at least "
+                 "the gap tolerance wide (0 = off)",
+                 0, 1e4},
+      c.occluders.gap_lines);
     v(OptionSpec{OptionGroup::kOccluders, "--occluder-seal-rays", "occluders.seal_rays", "rays",
                  "rays from each voxel of the solid just behind a touched layer, looking for sight "
                  "through cracks narrower than a voxel (0 = off)",

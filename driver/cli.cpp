@@ -210,7 +210,13 @@ int run_occluders(Context& ctx, const BakeConfig& config, const std::string& wor
         j["check_rays"] = figures.check_rays;
         j["probe_rays"] = figures.probe_rays;
         j["probe_rays_into_solid"] = figures.probe_rays_into_solid;
+        j["probe_rays_narrow"] = figures.probe_rays_narrow;
         j["probe_carved_voxels"] = figures.probe_carved_voxels;
+        j["gap_voxels"] = figures.gap_voxels;
+        j["gap_gaps"] = figures.gap_gaps;
+        j["gap_lines"] = figures.gap_lines;
+        j["gap_leaks"] = figures.gap_leaks;
+        j["gap_removed_voxels"] = figures.gap_removed_voxels;
         j["seal_frontier_voxels"] = figures.seal_frontier_voxels;
         j["seal_rays"] = figures.seal_rays;
         j["seal_leaks"] = figures.seal_leaks;

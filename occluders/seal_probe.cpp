@@ -5,6 +5,7 @@
 
 #include "cells/eyes.h"
 #include "core/random.h"
+#include "voxels/voxel_walk.h"
 
 #include <fmt/format.h>
 
@@ -25,48 +26,6 @@ constexpr int kMaxSolidSteps = 3;
 // kHotRaysFactor times the rays (a crack along a seam or a slit is found in pieces).
 constexpr int kHotRadius = 2;
 constexpr uint32_t kHotRaysFactor = 4;
-
-// Exact voxel traversal (Amanatides and Woo) of the ray p + t d from p's voxel, t up to `reach`.
-class VoxelWalk {
-public:
-    VoxelWalk(const VoxelGrid& grid, glm::vec3 p, glm::vec3 d, float reach) : grid_(grid), reach_(reach) {
-        c_ = grid.voxel_of(p);
-        for (int a = 0; a < 3; ++a) {
-            const float lo = grid.origin[a] + float(c_[a]) * grid.voxel_size_m;
-            if (d[a] > 0.0f) {
-                step_[a] = 1;
-                t_max_[a] = (lo + grid.voxel_size_m - p[a]) / d[a];
-                t_delta_[a] = grid.voxel_size_m / d[a];
-            } else if (d[a] < 0.0f) {
-                step_[a] = -1;
-                t_max_[a] = (lo - p[a]) / d[a];
-                t_delta_[a] = -grid.voxel_size_m / d[a];
-            } else {
-                step_[a] = 0;
-                t_max_[a] = t_delta_[a] = std::numeric_limits<float>::infinity();
-            }
-        }
-    }
-    // Steps into the next voxel; false when the walk leaves the grid or its reach.
-    bool next() {
-        const int a = t_max_.x < t_max_.y ? (t_max_.x < t_max_.z ? 0 : 2) : (t_max_.y < t_max_.z ? 1 : 2);
-        t_enter_ = std::max(0.0f, t_max_[a]);
-        if (!(t_enter_ <= reach_)) return false;
-        c_[a] += step_[a];
-        t_max_[a] += t_delta_[a];
-        return grid_.inside(c_);
-    }
-    uint64_t index() const { return grid_.index(c_.x, c_.y, c_.z); }
-    float t_enter() const { return t_enter_; }
-    float t_exit() const { return std::min(t_max_.x, std::min(t_max_.y, t_max_.z)); }
-
-private:
-    const VoxelGrid& grid_;
-    float reach_;
-    glm::ivec3 c_{0}, step_{0};
-    glm::vec3 t_max_{0.0f}, t_delta_{0.0f};
-    float t_enter_ = 0.0f;
-};
 
 // How deep into touched voxels the frontier looks: a crack through a wall up to this many voxels thick.
 constexpr int kTouchedDepth = 8;

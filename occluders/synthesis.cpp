@@ -4,9 +4,11 @@
 #include "cells/eyes.h"
 #include "core/random.h"
 #include "occluders/boxes.h"
+#include "occluders/gap_probe.h"
 #include "occluders/panels.h"
 #include "occluders/seal_probe.h"
 #include "occluders/solid.h"
+#include "rays/clearance.h"
 
 #include <fmt/format.h>
 
@@ -48,10 +50,11 @@ std::vector<glm::vec3> check_eyes(const VoxelMask& eye_mask, const VoxelGrid& gr
     return eyes;
 }
 
-// The least width of a line the seal probe counts, as a share of the gap tolerance
-// (docs/ALGORITHMS.md#gap-tolerance). 0: every unblocked line counts, so openings narrower than the
-// tolerance are opened too (safe, looser); the sight probe and the ray check count every line always.
-constexpr double kProbeWidthShare = 0.0;
+// The least width of a line the probes count: kGapWidthShare of the gap tolerance
+// (docs/ALGORITHMS.md#gap-tolerance). The ray check counts every line.
+double least_width_m(const OccluderConfig& config) {
+    return kGapWidthShare * config.gap_tolerance_m;
+}
 
 // The sight probe: rays over the sphere from eye points; solid voxels a ray passes before it stops are
 // seen (through a crack): carve them and their neighbours out of the solid.
@@ -62,10 +65,11 @@ void carve_seen_solid(Context& ctx, const OccluderConfig& config, uint32_t probe
     const std::vector<glm::vec3> eyes =
         check_eyes(eye_mask, grid, touched, probe_eyes, config.check_seed ^ 0x5052);
     std::vector<uint8_t> seen(grid.count(), 0);
-    uint64_t into_solid = 0, escaped = 0;
+    uint64_t into_solid = 0, escaped = 0, narrow = 0;
+    const float min_width_m = float(least_width_m(config));
     const float step = grid.voxel_size_m;  // a corner a step skips is covered by the 26-neighbour carving
     const Aabb gb = grid.bounds();
-#pragma omp parallel reduction(+ : into_solid, escaped)
+#pragma omp parallel reduction(+ : into_solid, escaped, narrow)
     {
         std::vector<glm::vec3> dirs;
         std::vector<RayTouch> touches;
@@ -91,10 +95,15 @@ void carve_seen_solid(Context& ctx, const OccluderConfig& config, uint32_t probe
                     const glm::vec3 p = eyes[size_t(e)] + t * dirs[r];
                     const glm::ivec3 c = grid.voxel_of(p);
                     const uint64_t i = grid.index(c.x, c.y, c.z);
-                    if (solid.solid.get(i)) {
-                        seen[i] = 1;  // a benign race: every writer writes 1
-                        hit_solid = true;
+                    if (!solid.solid.get(i)) continue;
+                    // Sight through an opening narrower than the tolerance carves nothing.
+                    if (!hit_solid && min_width_m > 0.0f &&
+                        !sight_line_at_least(scene, eyes[size_t(e)], p, kNoObject, min_width_m)) {
+                        ++narrow;
+                        break;
                     }
+                    seen[i] = 1;  // a benign race: every writer writes 1
+                    hit_solid = true;
                 }
                 into_solid += hit_solid;
             }
@@ -119,6 +128,7 @@ void carve_seen_solid(Context& ctx, const OccluderConfig& config, uint32_t probe
     figures.probe_rays = uint64_t(eyes.size()) * config.probe_rays_per_eye;
     figures.probe_rays_into_solid = into_solid;
     figures.probe_rays_escaped = escaped;
+    figures.probe_rays_narrow = narrow;
     figures.probe_carved_voxels = carved;
     solid.solid_voxels -= carved;
     ctx.info(fmt::format(
@@ -333,10 +343,19 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
     figures.solid_m3 = solid.solid_m3;
     if (config.probe_eyes > 0)
         carve_seen_solid(ctx, config, config.probe_eyes, grid, *touched, view.eyes, scene, solid, figures);
+    if (config.gap_lines > 0) {
+        const GapProbeFigures gf =
+            probe_gaps(ctx, *touched, view.eyes, scene, config.gap_tolerance_m, config.gap_lines, solid);
+        figures.gap_voxels = gf.voxels;
+        figures.gap_gaps = gf.gaps;
+        figures.gap_lines = gf.lines;
+        figures.gap_leaks = gf.leaks;
+        figures.gap_removed_voxels = gf.removed_voxels;
+    }
     if (config.seal_rays > 0) {
         const SealProbeFigures sf =
             probe_seals(ctx, *touched, view.eyes, scene, config.seal_rays, config.seal_reach_m, kSealRounds,
-                        config.check_seed, kProbeWidthShare * config.gap_tolerance_m, solid);
+                        config.check_seed, least_width_m(config), solid);
         figures.seal_frontier_voxels = sf.frontier_voxels;
         figures.seal_narrow = sf.narrow;
         figures.seal_rays = sf.rays;

@@ -38,12 +38,19 @@ struct OccluderFigures {
     uint64_t probe_rays = 0;
     uint64_t probe_rays_into_solid = 0;  // probe rays that passed a solid voxel (through a crack)
     uint64_t probe_rays_escaped = 0;     // probe rays no opaque triangle stopped
+    uint64_t probe_rays_narrow = 0;      // probe rays into the solid through openings narrower than the
+                                         // probes' least width: they carve nothing
     uint64_t probe_carved_voxels = 0;
     uint64_t check_rays = 0;
+    uint64_t gap_voxels = 0;  // the gap probe (occluders/gap_probe.h): voxels looked in
+    uint64_t gap_gaps = 0;    // gaps between triangles at least the tolerance wide
+    uint64_t gap_lines = 0;
+    uint64_t gap_leaks = 0;  // lines across them that saw into the solid
+    uint64_t gap_removed_voxels = 0;
     uint64_t seal_frontier_voxels = 0;  // the seal probe (occluders/seal_probe.h)
     uint64_t seal_rays = 0;
     uint64_t seal_leaks = 0;   // its rays that reached the solid from an eye voxel past the triangles
-    uint64_t seal_narrow = 0;  // its unblocked rays through openings narrower than half the gap tolerance
+    uint64_t seal_narrow = 0;  // its unblocked rays through openings narrower than the probes' least width
     uint64_t seal_removed_voxels = 0;
     double seconds = 0.0;
 };

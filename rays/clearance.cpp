@@ -18,39 +18,9 @@ double sq(dvec3 v) {
     return glm::dot(v, v);
 }
 
-// Squared distance from point p to the closed triangle abc (Voronoi regions of the corners and edges).
+// Squared distance from point p to the closed triangle abc.
 double point_triangle_sq(dvec3 p, dvec3 a, dvec3 b, dvec3 c) {
-    const dvec3 ab = b - a, ac = c - a, ap = p - a;
-    const double d1 = glm::dot(ab, ap), d2 = glm::dot(ac, ap);
-    if (d1 <= 0.0 && d2 <= 0.0) return sq(p - a);
-    const dvec3 bp = p - b;
-    const double d3 = glm::dot(ab, bp), d4 = glm::dot(ac, bp);
-    if (d3 >= 0.0 && d4 <= d3) return sq(p - b);
-    const double vc = d1 * d4 - d3 * d2;
-    if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
-        const double v = d1 / (d1 - d3);
-        return sq(p - (a + v * ab));
-    }
-    const dvec3 cp = p - c;
-    const double d5 = glm::dot(ab, cp), d6 = glm::dot(ac, cp);
-    if (d6 >= 0.0 && d5 <= d6) return sq(p - c);
-    const double vb = d5 * d2 - d1 * d6;
-    if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
-        const double w = d2 / (d2 - d6);
-        return sq(p - (a + w * ac));
-    }
-    const double va = d3 * d6 - d5 * d4;
-    if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {
-        const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-        return sq(p - (b + w * (c - b)));
-    }
-    const double denom = va + vb + vc;
-    if (!(std::abs(denom) > 0.0)) {
-        // A degenerate triangle: its nearest point is on one of its edges.
-        return std::numeric_limits<double>::infinity();
-    }
-    const double v = vb / denom, w = vc / denom;
-    return sq(p - (a + ab * v + ac * w));
+    return sq(p - closest_point_on_triangle(p, a, b, c));
 }
 
 // Squared distance between the segments [p1, q1] and [p2, q2] (either may be a point).
@@ -115,7 +85,44 @@ uint32_t object_of_triangle(const World& world, uint32_t t) {
     return uint32_t(it - world.objects.begin()) - 1;
 }
 
+// The nearest point of segment [a, b] to p.
+dvec3 closest_point_on_segment(dvec3 p, dvec3 a, dvec3 b) {
+    const dvec3 ab = b - a;
+    const double len2 = glm::dot(ab, ab);
+    if (!(len2 > 0.0)) return a;
+    return a + std::clamp(glm::dot(p - a, ab) / len2, 0.0, 1.0) * ab;
+}
+
 }  // namespace
+
+dvec3 closest_point_on_triangle(dvec3 p, dvec3 a, dvec3 b, dvec3 c) {
+    // Voronoi regions of the corners and edges (Ericson 5.1.5).
+    const dvec3 ab = b - a, ac = c - a, ap = p - a;
+    const double d1 = glm::dot(ab, ap), d2 = glm::dot(ac, ap);
+    if (d1 <= 0.0 && d2 <= 0.0) return a;
+    const dvec3 bp = p - b;
+    const double d3 = glm::dot(ab, bp), d4 = glm::dot(ac, bp);
+    if (d3 >= 0.0 && d4 <= d3) return b;
+    const double vc = d1 * d4 - d3 * d2;
+    if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) return a + (d1 / (d1 - d3)) * ab;
+    const dvec3 cp = p - c;
+    const double d5 = glm::dot(ab, cp), d6 = glm::dot(ac, cp);
+    if (d6 >= 0.0 && d5 <= d6) return c;
+    const double vb = d5 * d2 - d1 * d6;
+    if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) return a + (d2 / (d2 - d6)) * ac;
+    const double va = d3 * d6 - d5 * d4;
+    if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0)
+        return b + ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b);
+    const double denom = va + vb + vc;
+    if (!(std::abs(denom) > 0.0)) {
+        // A degenerate triangle: its nearest point is on one of its edges.
+        const dvec3 q[3] = {closest_point_on_segment(p, a, b), closest_point_on_segment(p, b, c),
+                            closest_point_on_segment(p, c, a)};
+        const double s0 = sq(p - q[0]), s1 = sq(p - q[1]), s2 = sq(p - q[2]);
+        return s0 <= s1 && s0 <= s2 ? q[0] : (s1 <= s2 ? q[1] : q[2]);
+    }
+    return a + ab * (vb / denom) + ac * (vc / denom);
+}
 
 double segment_triangle_distance(dvec3 p, dvec3 q, dvec3 a, dvec3 b, dvec3 c) {
     if (segment_crosses_triangle(p, q, a, b, c)) return 0.0;

@@ -19,6 +19,9 @@
 
 namespace pvs {
 
+// The nearest point of the closed triangle abc to p (degenerate triangles: of their edges).
+glm::dvec3 closest_point_on_triangle(glm::dvec3 p, glm::dvec3 a, glm::dvec3 b, glm::dvec3 c);
+
 // Exact distance between the segment [p, q] and the triangle (0 when they meet). Degenerate segments (p ==
 // q) and degenerate triangles are handled (the distance to a point, to an edge).
 double segment_triangle_distance(glm::dvec3 p, glm::dvec3 q, glm::dvec3 a, glm::dvec3 b, glm::dvec3 c);

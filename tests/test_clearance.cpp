@@ -52,6 +52,32 @@ TEST(Clearance, SegmentTriangleDistanceAgreesWithDenseSampling) {
     }
 }
 
+// The nearest point of a triangle against a fine barycentric lattice of it: on the triangle, never
+// farther than the best lattice point, and the lattice's best within its spacing.
+TEST(Clearance, ClosestPointOnTriangleAgreesWithDenseSampling) {
+    Rng rng(23, 0);
+    for (int trial = 0; trial < 300; ++trial) {
+        const dvec3 p = random_point(rng, 1.0);
+        const dvec3 a = random_point(rng, 1.0), b = random_point(rng, 1.0), c = random_point(rng, 1.0);
+        const dvec3 q = closest_point_on_triangle(p, a, b, c);
+        const int n = 200;
+        double best = 1e300;
+        for (int i = 0; i <= n; ++i)
+            for (int j = 0; i + j <= n; ++j) {
+                const dvec3 s = a + (b - a) * (double(i) / n) + (c - a) * (double(j) / n);
+                best = std::min(best, glm::length(p - s));
+            }
+        const double spacing = (glm::length(b - a) + glm::length(c - a)) / n;
+        EXPECT_LE(glm::length(p - q), best + 1e-9) << "trial " << trial;
+        EXPECT_GE(glm::length(p - q), best - spacing) << "trial " << trial;
+        // q lies in the triangle's plane and within it (its distance to the triangle is 0).
+        EXPECT_NEAR(segment_triangle_distance(q, q, a, b, c), 0.0, 1e-9) << "trial " << trial;
+    }
+    // A degenerate triangle (a segment): the nearest point of that segment.
+    const dvec3 q = closest_point_on_triangle({0.5, 1, 0}, {0, 0, 0}, {1, 0, 0}, {0.25, 0, 0});
+    EXPECT_NEAR(glm::length(q - dvec3(0.5, 0, 0)), 0.0, 1e-12);
+}
+
 TEST(Clearance, CrossingTouchingAndParallelCases) {
     const dvec3 a(0, 0, 0), b(1, 0, 0), c(0, 1, 0);
     EXPECT_EQ(segment_triangle_distance({0.2, 0.2, -1}, {0.2, 0.2, 1}, a, b, c), 0.0);  // through it
