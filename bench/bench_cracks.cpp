@@ -4,8 +4,8 @@
 //                [--keep DIR] [--epsilon E] [--solid-only]
 //
 // For each seed and each width (default: 0.5 T, T, 2 T, 5 mm, 1 cm, 5 cm, 50 cm at T = 1 mm) a world of N
-// cases (default 200; slits, L-slits, seams and T-junction seams in turn, walls 2, 10 and 30 cm thick, at
-// random orientations and positions) is baked in the conservative mode with gap tolerance T and no
+// cases (default 200; slits, L-slits, seams, T-junction seams and holes in turn, walls 2, 10 and 30 cm thick,
+// at random orientations and positions) is baked in the conservative mode with gap tolerance T and no
 // verification; a case is FOUND when room B left the proven solid (the occluder stage opened the opening;
 // its PVS must then list the target: "listed" counts that too). Prints JSON: per width and kind, cases found
 // of cases, listed, and the time; "pass" is true when every case at or above T was found and none below

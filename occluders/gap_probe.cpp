@@ -63,9 +63,61 @@ void basis_of(glm::vec3 n, glm::vec3& u, glm::vec3& v) {
     v = glm::cross(n, u);
 }
 
+// Does a triangle of `tris` other than the i-th have both p and q as corners?
+bool edge_shared(const std::vector<TriangleCorners>& tris, size_t i, glm::vec3 p, glm::vec3 q) {
+    for (size_t j = 0; j < tris.size(); ++j) {
+        if (j == i) continue;
+        const TriangleCorners& t = tris[j];
+        const bool has_p = t.a == p || t.b == p || t.c == p, has_q = t.a == q || t.b == q || t.c == q;
+        if (has_p && has_q) return true;
+    }
+    return false;
+}
+
+// The distance from c to the nearest of `tris` (at most cap), and that nearest point.
+double room_at(dvec3 c, const std::vector<TriangleCorners>& tris, double cap, dvec3* nearest) {
+    double best = cap * cap;
+    for (const TriangleCorners& t : tris) {
+        const dvec3 q = closest_point_on_triangle(c, dvec3(t.a), dvec3(t.b), dvec3(t.c));
+        const double d2 = glm::dot(c - q, c - q);
+        if (d2 < best) {
+            best = d2;
+            if (nearest) *nearest = q;
+        }
+    }
+    return std::sqrt(best);
+}
+
+// A point of locally most room near `start`: steps away from the nearest triangle, as long as the room
+// grows (halving a step that does not), for a few steps. Returns start when it has no room at all.
+dvec3 most_room_near(dvec3 start, const std::vector<TriangleCorners>& tris, double least, double cap) {
+    dvec3 c = start, q(0.0);
+    double room = room_at(c, tris, cap, &q);
+    if (!(room > 0.0)) return start;
+    for (int step = 0; step < 12 && room < cap; ++step) {
+        const dvec3 away = (c - q) / std::max(glm::length(c - q), 1e-12);
+        double move = std::max(room, least);
+        bool moved = false;
+        for (int half = 0; half < 4 && !moved; ++half, move *= 0.5) {
+            dvec3 q2(0.0);
+            const dvec3 c2 = c + away * move;
+            const double room2 = room_at(c2, tris, cap, &q2);
+            if (room2 > room) {
+                c = c2;
+                q = q2;
+                room = room2;
+                moved = true;
+            }
+        }
+        if (!moved) break;
+    }
+    return c;
+}
+
 struct Gap {
     glm::vec3 middle{0.0f};
     glm::vec3 across{0.0f};  // unit, from one side to the other
+    glm::vec3 square{0.0f};  // a hole's: its sheet's unit normal, traced too (0: none)
 };
 
 }  // namespace
@@ -112,9 +164,9 @@ GapProbeFigures probe_gaps(Context& ctx, const BitVolume& touched, const VoxelMa
     BitVolume seen, leaky;  // written by every thread (an atomic OR), read after the loop
     seen.reset(grid.count());
     leaky.reset(grid.count());
-    uint64_t pairs = 0, gaps_found = 0, traced = 0, leaks = 0;
+    uint64_t pairs = 0, open_edges = 0, gaps_found = 0, traced = 0, leaks = 0;
     ctx.progress_begin("gap probe", blocks.size(), "blocks");
-#pragma omp parallel reduction(+ : pairs, gaps_found, traced, leaks)
+#pragma omp parallel reduction(+ : pairs, open_edges, gaps_found, traced, leaks)
     {
         std::vector<TriangleCorners> tris;
         std::vector<Gap> gaps;
@@ -155,6 +207,31 @@ GapProbeFigures probe_gaps(Context& ctx, const BitVolume& touched, const VoxelMa
                         continue;
                     gaps.push_back(Gap{m, glm::vec3((b - a) / g)});
                 }
+            // Holes: past an open edge (no other triangle near has both its corners), outward in the
+            // triangle's plane from the edge's middle (a short edge) or its point nearest the block's centre,
+            // climbing the distance to the triangles to the point of most room.
+            for (size_t i = 0; i < tris.size(); ++i) {
+                const TriangleCorners& t = tris[i];
+                const glm::vec3 corner[3] = {t.a, t.b, t.c};
+                const glm::vec3 n = glm::cross(t.b - t.a, t.c - t.a);
+                if (!(glm::length(n) > 0.0f)) continue;
+                for (int e = 0; e < 3; ++e) {
+                    const glm::vec3 p = corner[e], q = corner[(e + 1) % 3], r = corner[(e + 2) % 3];
+                    if (edge_shared(tris, i, p, q)) continue;
+                    ++open_edges;
+                    glm::vec3 out = glm::normalize(glm::cross(q - p, n));
+                    if (glm::dot(out, r - p) > 0.0f) out = -out;
+                    const dvec3 foot = glm::length(q - p) < max_gap
+                                           ? 0.5 * (dvec3(p) + dvec3(q))
+                                           : closest_point_on_segment(dvec3(centre), dvec3(p), dvec3(q));
+                    const dvec3 start = foot + dvec3(out) * (0.5 * double(min_gap));
+                    const dvec3 best =
+                        most_room_near(start, tris, 0.5 * double(min_gap), 0.5 * double(max_gap));
+                    if (!box.contains(glm::vec3(best))) continue;
+                    if (room_at(best, tris, 0.5 * double(max_gap), nullptr) >= 0.5 * double(min_gap))
+                        gaps.push_back(Gap{glm::vec3(best), out, glm::normalize(n)});
+                }
+            }
             gaps_found += gaps.size();
             if (gaps.empty()) {
                 ctx.progress_advance();
@@ -167,9 +244,12 @@ GapProbeFigures probe_gaps(Context& ctx, const BitVolume& touched, const VoxelMa
             for (const Gap& gap : gaps) {
                 glm::vec3 u, v;
                 basis_of(gap.across, u, v);
-                for (uint32_t l = 0; l < lines; ++l) {
+                // A hole's line square to its sheet first: it threads holes in line in the sheets of a
+                // hollow wall, which a fan line aslant by a few degrees misses.
+                const bool square = gap.square != glm::vec3(0.0f);
+                for (uint32_t l = 0; l < lines + (square ? 1 : 0); ++l) {
                     const float angle = kPi * (float(l) + 0.5f) / float(lines);
-                    const glm::vec3 d = std::cos(angle) * u + std::sin(angle) * v;
+                    const glm::vec3 d = l == lines ? gap.square : std::cos(angle) * u + std::sin(angle) * v;
                     origins.push_back(gap.middle);
                     dirs.push_back(d);
                     origins.push_back(gap.middle);
@@ -221,6 +301,7 @@ GapProbeFigures probe_gaps(Context& ctx, const BitVolume& touched, const VoxelMa
     }
     ctx.progress_end();
     figures.pairs = pairs;
+    figures.open_edges = open_edges;
     figures.gaps = gaps_found;
     figures.lines = traced;
     figures.leaks = leaks;
@@ -237,10 +318,11 @@ GapProbeFigures probe_gaps(Context& ctx, const BitVolume& touched, const VoxelMa
     }
     figures.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     ctx.info(fmt::format(
-        "gap probe: {} voxels, {} triangle pairs, {} gaps {:.1f}..{:.1f} mm wide, {} lines; {} see into "
+        "gap probe: {} voxels, {} triangle pairs, {} open edges, {} gaps {:.1f}..{:.1f} mm wide, {} lines; "
+        "{} see into "
         "the solid through {} touched voxels; {} voxels leave the solid; {:.2f} s",
-        figures.voxels, figures.pairs, figures.gaps, 1e3 * min_gap, 1e3 * max_gap, figures.lines,
-        figures.leaks, figures.leaky_voxels, figures.removed_voxels, figures.seconds));
+        figures.voxels, figures.pairs, figures.open_edges, figures.gaps, 1e3 * min_gap, 1e3 * max_gap,
+        figures.lines, figures.leaks, figures.leaky_voxels, figures.removed_voxels, figures.seconds));
     return figures;
 }
 

@@ -41,6 +41,7 @@ constexpr double kMaxGapVoxels = 3.6;
 struct GapProbeFigures {
     uint64_t voxels = 0;        // touched voxels next to the solid, probed
     uint64_t pairs = 0;         // triangle pairs looked at
+    uint64_t open_edges = 0;    // triangle edges no other triangle near shares
     uint64_t gaps = 0;          // local gaps in range with a clear midpoint
     uint64_t lines = 0;         // lines traced (each both ways)
     uint64_t leaks = 0;         // lines of sight into the solid found

@@ -85,15 +85,14 @@ uint32_t object_of_triangle(const World& world, uint32_t t) {
     return uint32_t(it - world.objects.begin()) - 1;
 }
 
-// The nearest point of segment [a, b] to p.
+}  // namespace
+
 dvec3 closest_point_on_segment(dvec3 p, dvec3 a, dvec3 b) {
     const dvec3 ab = b - a;
     const double len2 = glm::dot(ab, ab);
     if (!(len2 > 0.0)) return a;
     return a + std::clamp(glm::dot(p - a, ab) / len2, 0.0, 1.0) * ab;
 }
-
-}  // namespace
 
 dvec3 closest_point_on_triangle(dvec3 p, dvec3 a, dvec3 b, dvec3 c) {
     // Voronoi regions of the corners and edges (Ericson 5.1.5).

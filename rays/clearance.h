@@ -19,6 +19,9 @@
 
 namespace pvs {
 
+// The nearest point of the segment [a, b] to p.
+glm::dvec3 closest_point_on_segment(glm::dvec3 p, glm::dvec3 a, glm::dvec3 b);
+
 // The nearest point of the closed triangle abc to p (degenerate triangles: of their edges).
 glm::dvec3 closest_point_on_triangle(glm::dvec3 p, glm::dvec3 a, glm::dvec3 b, glm::dvec3 c);
 

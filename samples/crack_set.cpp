@@ -40,6 +40,27 @@ struct Compartment {
 
     glm::vec3 place(glm::vec3 local) const { return rotation * local + centre; }
 
+    // A sheet in the plane x = x of the wall's extent (z in [-d, d], y in [0, top]) as a 3 x 3 grid of quads
+    // with shared corners, less one triangle: the right triangle with its right angle at (y0, z0) and legs
+    // `leg` along +y and +z.
+    void holed_sheet(const std::string& name, float x, float d, float top, float y0, float z0, float leg) {
+        SceneNode node;
+        node.name = prefix + name;
+        node.material = 0;
+        const float ys[4] = {0.0f, y0, y0 + leg, top}, zs[4] = {-d, z0, z0 + leg, d};
+        for (int j = 0; j < 4; ++j)
+            for (int i = 0; i < 4; ++i) node.positions.push_back(place({x, ys[j], zs[i]}));
+        auto at = [](int i, int j) { return uint32_t(j * 4 + i); };
+        for (int j = 0; j < 3; ++j)
+            for (int i = 0; i < 3; ++i) {
+                // The quad's two halves, split along the diagonal from (i + 1, j) to (i, j + 1).
+                if (!(i == 1 && j == 1))
+                    node.indices.insert(node.indices.end(), {at(i, j), at(i + 1, j), at(i, j + 1)});
+                node.indices.insert(node.indices.end(), {at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)});
+            }
+        scene.nodes.push_back(std::move(node));
+    }
+
     // A closed box of local bounds [lo, hi], turned and placed; skipped when empty.
     void box(const std::string& name, glm::vec3 lo, glm::vec3 hi) {
         if (hi.x - lo.x <= 1e-6f || hi.y - lo.y <= 1e-6f || hi.z - lo.z <= 1e-6f) return;
@@ -80,6 +101,14 @@ void crack_wall(Compartment& c, CrackKind kind, float g, float wall, float z0) {
             c.box("wall_b_mid", {x0, 0.7f, z0 + h}, {x1, 1.3f, d});
             c.box("wall_b_high", {x0, 1.3f, z0 + h}, {x1, top, d});
             break;
+        case CrackKind::kHole: {
+            // The inscribed circle of a right triangle of legs a has diameter a (2 - sqrt 2): centred on
+            // (y = 1, z = z0), the witness line's, when the right angle is at (1 - g / 2, z0 - g / 2).
+            const float leg = g / (2.0f - std::sqrt(2.0f));
+            c.holed_sheet("sheet_a", x0, d, top, 1.0f - h, z0 - h, leg);
+            c.holed_sheet("sheet_b", x1, d, top, 1.0f - h, z0 - h, leg);
+            break;
+        }
     }
 }
 
@@ -95,6 +124,8 @@ const char* to_string(CrackKind kind) {
             return "seam";
         case CrackKind::kTJunction:
             return "t_junction";
+        case CrackKind::kHole:
+            return "hole";
     }
     return "?";
 }

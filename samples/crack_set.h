@@ -25,9 +25,11 @@ enum class CrackKind {
     kLSlit,      // an L-shaped slit (a vertical arm and a horizontal one, both of the width)
     kSeam,       // a seam from floor to ceiling between two closed box meshes with matching vertices
     kTJunction,  // the same seam, one side cut into three boxes: its vertices fall mid-edge on the other's
+    kHole,       // a hollow wall of two sheets (one mesh each, shared vertices), each missing one triangle: a
+                 // right triangle whose inscribed circle is the opening, the two holes in line
 };
 inline constexpr CrackKind kCrackKinds[] = {CrackKind::kSlit, CrackKind::kLSlit, CrackKind::kSeam,
-                                            CrackKind::kTJunction};
+                                            CrackKind::kTJunction, CrackKind::kHole};
 const char* to_string(CrackKind kind);
 
 struct CrackCase {
