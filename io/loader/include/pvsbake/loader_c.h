@@ -19,6 +19,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "pvsbake/export.h"
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -40,39 +42,43 @@ typedef enum pvsbake_status {
 /* Loads and validates the bake at path. On success *out is a new handle (free it with pvsbake_free);
  * on failure *out is NULL. message (may be NULL) receives a NUL-terminated, possibly shortened, one-line
  * message naming the file and what is wrong ("" on success). */
-pvsbake_status pvsbake_load(const char* path, pvsbake_bake** out, char* message, size_t message_size);
-void pvsbake_free(pvsbake_bake* bake);
-const char* pvsbake_status_name(pvsbake_status status); /* "ok", "file missing", ... */
+PVSBAKE_API pvsbake_status pvsbake_load(const char* path, pvsbake_bake** out, char* message,
+                                        size_t message_size);
+PVSBAKE_API void pvsbake_free(pvsbake_bake* bake);
+PVSBAKE_API const char* pvsbake_status_name(pvsbake_status status); /* "ok", "file missing", ... */
 
-uint32_t pvsbake_cell_count(const pvsbake_bake* bake);
-uint32_t pvsbake_object_count(const pvsbake_bake* bake);
-size_t pvsbake_words_per_row(const pvsbake_bake* bake);
+PVSBAKE_API uint32_t pvsbake_cell_count(const pvsbake_bake* bake);
+PVSBAKE_API uint32_t pvsbake_object_count(const pvsbake_bake* bake);
+PVSBAKE_API size_t pvsbake_words_per_row(const pvsbake_bake* bake);
 
 /* The cell holding (x, y, z), or -1 outside the view volume (then draw everything). */
-int32_t pvsbake_find_cell(const pvsbake_bake* bake, float x, float y, float z);
+PVSBAKE_API int32_t pvsbake_find_cell(const pvsbake_bake* bake, float x, float y, float z);
 /* 1 when the point is in the eye space, where the bake's promises hold (Bake::in_eye_space), else 0. */
-int pvsbake_in_eye_space(const pvsbake_bake* bake, float x, float y, float z);
+PVSBAKE_API int pvsbake_in_eye_space(const pvsbake_bake* bake, float x, float y, float z);
 /* The box of a cell; 0 when cell is out of range. 0 = grid, 1 = octree. */
-int pvsbake_cell_bounds(const pvsbake_bake* bake, uint32_t cell, float box[6]);
-int pvsbake_cell_kind(const pvsbake_bake* bake);
+PVSBAKE_API int pvsbake_cell_bounds(const pvsbake_bake* bake, uint32_t cell, float box[6]);
+PVSBAKE_API int pvsbake_cell_kind(const pvsbake_bake* bake);
 
 /* Calls visit(user, object) for every object visible from cell, in increasing order; returns how many. */
 typedef void (*pvsbake_visit_fn)(void* user, uint32_t object);
-uint32_t pvsbake_visit_visible(const pvsbake_bake* bake, uint32_t cell, pvsbake_visit_fn visit, void* user);
+PVSBAKE_API uint32_t pvsbake_visit_visible(const pvsbake_bake* bake, uint32_t cell, pvsbake_visit_fn visit,
+                                           void* user);
 /* Writes up to capacity visible object indices to objects; returns how many there are (may be more). */
-uint32_t pvsbake_visible_objects(const pvsbake_bake* bake, uint32_t cell, uint32_t* objects, size_t capacity);
+PVSBAKE_API uint32_t pvsbake_visible_objects(const pvsbake_bake* bake, uint32_t cell, uint32_t* objects,
+                                             size_t capacity);
 /* Fills a bit set of word_count >= pvsbake_words_per_row() words; returns the number of visible objects,
  * or UINT32_MAX (words untouched) when the buffer is too small or cell is out of range. */
-uint32_t pvsbake_fill_bitset(const pvsbake_bake* bake, uint32_t cell, uint64_t* words, size_t word_count);
-int pvsbake_is_visible(const pvsbake_bake* bake, uint32_t cell, uint32_t object);
+PVSBAKE_API uint32_t pvsbake_fill_bitset(const pvsbake_bake* bake, uint32_t cell, uint64_t* words,
+                                         size_t word_count);
+PVSBAKE_API int pvsbake_is_visible(const pvsbake_bake* bake, uint32_t cell, uint32_t object);
 
 /* Objects: name (UTF-8, lives as long as the bake; "" out of range), bounds, triangles, flags
  * (bit 0 opaque, 1 see-through, 2 always visible, 3 never occludes). */
-const char* pvsbake_object_name(const pvsbake_bake* bake, uint32_t object);
-int pvsbake_object_bounds(const pvsbake_bake* bake, uint32_t object, float box[6]);
-uint32_t pvsbake_object_triangles(const pvsbake_bake* bake, uint32_t object);
-uint32_t pvsbake_object_flags(const pvsbake_bake* bake, uint32_t object);
-uint64_t pvsbake_total_triangles(const pvsbake_bake* bake);
+PVSBAKE_API const char* pvsbake_object_name(const pvsbake_bake* bake, uint32_t object);
+PVSBAKE_API int pvsbake_object_bounds(const pvsbake_bake* bake, uint32_t object, float box[6]);
+PVSBAKE_API uint32_t pvsbake_object_triangles(const pvsbake_bake* bake, uint32_t object);
+PVSBAKE_API uint32_t pvsbake_object_flags(const pvsbake_bake* bake, uint32_t object);
+PVSBAKE_API uint64_t pvsbake_total_triangles(const pvsbake_bake* bake);
 
 /* Ranked occluders of a cell (format 1.2), best first: as pvsbake::RankedOccluder. box is float[6]
  * (min x, y, z, max x, y, z), world metres; score higher is better; solid_angle_sr the largest solid angle
@@ -85,35 +91,36 @@ typedef struct pvsbake_ranked_occluder {
     float hidden_objects;
     float hidden_triangle_share;
 } pvsbake_ranked_occluder;
-uint32_t pvsbake_occluder_count(const pvsbake_bake* bake, uint32_t cell);
+PVSBAKE_API uint32_t pvsbake_occluder_count(const pvsbake_bake* bake, uint32_t cell);
 /* Writes the occluder of that rank (0 = best) to *out; returns 1, or 0 (out untouched) when the cell or
  * rank is out of range or a pointer is NULL. */
-int pvsbake_occluder(const pvsbake_bake* bake, uint32_t cell, uint32_t rank, pvsbake_ranked_occluder* out);
+PVSBAKE_API int pvsbake_occluder(const pvsbake_bake* bake, uint32_t cell, uint32_t rank,
+                                 pvsbake_ranked_occluder* out);
 
 /* What the bake is. Strings live as long as the bake. */
-const char* pvsbake_mode(const pvsbake_bake* bake);       /* "sampled" or "conservative" */
-const char* pvsbake_mode_label(const pvsbake_bake* bake); /* "conservative" or "aggressive" */
-int pvsbake_is_conservative(const pvsbake_bake* bake);
-const char* pvsbake_tool_version(const pvsbake_bake* bake);
-const char* pvsbake_world_path(const pvsbake_bake* bake);
-const char* pvsbake_world_hash(const pvsbake_bake* bake);
-void pvsbake_format_version(const pvsbake_bake* bake, int* major, int* minor);
+PVSBAKE_API const char* pvsbake_mode(const pvsbake_bake* bake);       /* "sampled" or "conservative" */
+PVSBAKE_API const char* pvsbake_mode_label(const pvsbake_bake* bake); /* "conservative" or "aggressive" */
+PVSBAKE_API int pvsbake_is_conservative(const pvsbake_bake* bake);
+PVSBAKE_API const char* pvsbake_tool_version(const pvsbake_bake* bake);
+PVSBAKE_API const char* pvsbake_world_path(const pvsbake_bake* bake);
+PVSBAKE_API const char* pvsbake_world_hash(const pvsbake_bake* bake);
+PVSBAKE_API void pvsbake_format_version(const pvsbake_bake* bake, int* major, int* minor);
 /* Figures and parameters by index (name and value; NULL out of range) or by name (0 when absent). */
-uint32_t pvsbake_figure_count(const pvsbake_bake* bake);
-const char* pvsbake_figure_name(const pvsbake_bake* bake, uint32_t i);
-double pvsbake_figure_value(const pvsbake_bake* bake, uint32_t i);
-int pvsbake_find_figure(const pvsbake_bake* bake, const char* name, double* value);
-uint32_t pvsbake_parameter_count(const pvsbake_bake* bake);
-const char* pvsbake_parameter_key(const pvsbake_bake* bake, uint32_t i);
-const char* pvsbake_parameter_value(const pvsbake_bake* bake, uint32_t i);
-const char* pvsbake_find_parameter(const pvsbake_bake* bake, const char* key);
+PVSBAKE_API uint32_t pvsbake_figure_count(const pvsbake_bake* bake);
+PVSBAKE_API const char* pvsbake_figure_name(const pvsbake_bake* bake, uint32_t i);
+PVSBAKE_API double pvsbake_figure_value(const pvsbake_bake* bake, uint32_t i);
+PVSBAKE_API int pvsbake_find_figure(const pvsbake_bake* bake, const char* name, double* value);
+PVSBAKE_API uint32_t pvsbake_parameter_count(const pvsbake_bake* bake);
+PVSBAKE_API const char* pvsbake_parameter_key(const pvsbake_bake* bake, uint32_t i);
+PVSBAKE_API const char* pvsbake_parameter_value(const pvsbake_bake* bake, uint32_t i);
+PVSBAKE_API const char* pvsbake_find_parameter(const pvsbake_bake* bake, const char* key);
 
 /* PVS sizes, as pvsbake::PvsStats. */
 typedef struct pvsbake_pvs_stats {
     uint64_t cell_count, object_count, unique_rows, bytes_per_row;
     uint64_t bytes_raw, bytes_stored, bytes_code, memory_bytes;
 } pvsbake_pvs_stats;
-int pvsbake_get_pvs_stats(const pvsbake_bake* bake, pvsbake_pvs_stats* stats);
+PVSBAKE_API int pvsbake_get_pvs_stats(const pvsbake_bake* bake, pvsbake_pvs_stats* stats);
 
 #ifdef __cplusplus
 }

@@ -15,6 +15,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "pvsbake/export.h"
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -30,14 +32,15 @@ typedef enum pvsbake_cull_path {
 
 /* A new culler (free it with pvsbake_culler_free). resolution: pixels per cube face edge, 0 = default
  * (32), negative = shadow frusta only. NULL when out of memory. */
-pvsbake_culler* pvsbake_culler_create(int resolution);
-void pvsbake_culler_free(pvsbake_culler* culler);
+PVSBAKE_API pvsbake_culler* pvsbake_culler_create(int resolution);
+PVSBAKE_API void pvsbake_culler_free(pvsbake_culler* culler);
 /* Prepares a frame: eye float[3] and `count` occluder boxes (float[6] each, count * 6 floats). */
-void pvsbake_culler_begin_frame(pvsbake_culler* culler, const float eye[3], const float* boxes, size_t count);
+PVSBAKE_API void pvsbake_culler_begin_frame(pvsbake_culler* culler, const float eye[3], const float* boxes,
+                                            size_t count);
 /* 1 only if box (float[6]) is certainly hidden from this frame's eye. */
-int pvsbake_culler_is_hidden(const pvsbake_culler* culler, const float box[6]);
+PVSBAKE_API int pvsbake_culler_is_hidden(const pvsbake_culler* culler, const float box[6]);
 /* Which test proved it (pvsbake_cull_path). */
-int pvsbake_culler_classify(const pvsbake_culler* culler, const float box[6]);
+PVSBAKE_API int pvsbake_culler_classify(const pvsbake_culler* culler, const float box[6]);
 
 #ifdef __cplusplus
 }
