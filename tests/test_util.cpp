@@ -33,7 +33,11 @@ std::string shared_world(const std::string& name) {
 }
 
 std::string sample_world() {
-    return std::string(PVSBAKE_SOURCE_DIR) + "/samples/rooms.glb";
+    return source_file("samples/rooms.glb");
+}
+
+std::string source_file(const std::string& relative) {
+    return std::string(PVSBAKE_SOURCE_DIR) + "/" + relative;
 }
 
 bool in_ci() {

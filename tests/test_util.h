@@ -25,6 +25,9 @@ std::string shared_world(const std::string& name);
 // The committed sample world (samples/rooms.glb).
 std::string sample_world();
 
+// A file of the source tree, by its path from the top ("tests/install/game.c").
+std::string source_file(const std::string& relative);
+
 // True under CI (CI=true): long checks run smaller there and full size in bench/.
 bool in_ci();
 
