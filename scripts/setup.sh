@@ -20,6 +20,7 @@ PACKAGES=(
   libxxhash-dev       # content hash of the world in the bake file
   libvtk9-dev         # pvsview, the viewer (optional: the rest builds without it)
   xvfb xauth          # xvfb-run: pvsview's headless screenshots and their tests without a display
+  python3             # the loader's install tests: a ctypes game, the exported-symbol check
 )
 
 missing=()
