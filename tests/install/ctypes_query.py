@@ -4,9 +4,10 @@
     ctypes_query.py LIB BAKE PVSBAKE POINTS SEED
 
 Loads BAKE with the shared library LIB, then for POINTS random points (fixed SEED) in and around the
-bake's cells (most in a random cell's box) finds the cell and walks its PVS (visit callback, list and bit set), and checks every answer
-against `PVSBAKE query BAKE X Y Z --json` on the same point: the cell, its box and the names of the
-visible objects. Prints one summary line; exit status 1 with the first difference.
+bake's cells (most in a random cell's box) finds the cell and walks its PVS (visit callback, list and
+bit set), and checks every answer against `PVSBAKE query BAKE --json -- X Y Z` on the same point: the
+cell, its box and the names of the visible objects. Prints one summary line; exit status 1 with the
+first difference.
 """
 import ctypes
 import json
