@@ -95,8 +95,9 @@ struct OccluderConfig {
     double seal_reach_m = 4.0;            // [Limit: > 0] [Units: m] seal probe: how far a ray looks for an
                                           // eye voxel
     uint64_t check_seed = 7;
-    // Not an option of its own: the driver copies GapConfig::tolerance_m. The probes and the ray check count
-    // a line of sight only when its width is at least half of it (occluders/synthesis.h).
+    // Not an option of its own: the driver copies GapConfig::tolerance_m. The probes count a line of sight
+    // only when its width is at least kGapWidthShare of it (occluders/gap_probe.h); the ray check, every
+    // line.
     double gap_tolerance_m = kDefaultGapToleranceM;
     // Occluders per block of cells (conservative mode; occluders/synthesis.h synthesize_block_occluders).
     // EXPERIMENTAL, NOT PROVEN: their boxes rest on sampled ray checks at grazing shadow edges

@@ -1,24 +1,30 @@
 // pvsbake occluders: the GAP PROBE, openings at least the gap tolerance wide looked for where the triangles
-// leave them: between two triangles near the solid (why, and what it finds: docs/ALGORITHMS.md#gap-probe).
+// leave them (why, and what it finds: docs/ALGORITHMS.md#gap-probe).
 //
 // The sight sweep (occluders/solid.h) takes every voxel an opaque triangle touches as a wall, so an opening
 // narrower than a few voxels can seal in voxels while sight passes it (docs/ALGORITHMS.md#cracks). Such an
-// opening is a gap between triangles: between the two sides of a slit, two meshes that nearly meet, the
-// edges of a hole. Its narrowest place lies in a touched voxel, and a line through the middle of that place,
-// across the gap, passes it as widely as the gap is wide.
+// opening is a gap between triangles: the two sides of a slit, two meshes that nearly meet, the edges of a
+// hole. A line through the middle of its narrowest place, across the gap, passes it as widely as it is wide.
 //
-// How: for every touched voxel next to the solid, every pair of opaque triangles near it, the pair's LOCAL
-// closest points (alternating nearest points, started at the voxel's centre); when they are between the
-// least width (kGapWidthShare of the tolerance) and max_gap_m apart and their midpoint lies in or next to the
-// voxel, with no other triangle nearer to it than half the gap, `lines` lines through the midpoint across the
-// gap (a fan over the plane perpendicular to it) are traced both ways to the first opaque triangle. A line
-// whose clear part meets both an EYE voxel (the sight sources) and a solid voxel is a line of sight into the
-// solid: the solid voxels it passes leave the solid (when the line is at least the least width wide,
-// rays/clearance.h), the touched ones it passes are leaky, and the sweep runs again through them
-// (reopen_leaks). Only ever removes solid: safe whatever it finds; deterministic (no sampling).
+// How: the voxels within kNearSolidVoxels of the solid and of a touched voxel, in blocks of kBlockVoxels^3;
+// in each block, the opaque triangles near it, and
+// - for every pair of them with no corner in common, their LOCAL closest points (alternating nearest points
+//   from the block's centre): a GAP when they are between the least width (kGapWidthShare of the tolerance)
+//   and max_gap_m apart, their midpoint lies in the block and no third triangle comes nearer to it than half
+//   the least width;
+// - past every OPEN edge (no other triangle near has both its corners), in its triangle's plane, a climb of
+//   the distance to the triangles to the hole's middle: a gap when the room there is at least half the least
+//   width and it lies in the block.
+// Through each gap's middle, `lines` lines across the gap (a fan over the plane perpendicular to it; for a
+// hole, also the line square to its sheet) are traced both ways to the first opaque triangle. A line whose
+// clear part meets both an EYE voxel (the sight sources) and a solid voxel, and is at least the least width
+// wide between them (rays/clearance.h), is a line of sight into the solid: the solid voxels it passes leave
+// the solid, the touched ones it passes are leaky, and the sweep runs again through them (reopen_leaks).
+// Only ever removes solid: safe whatever it finds. Deterministic: no sampling, and the same answer for any
+// number of threads.
 //
 // max_gap_m = kMaxGapVoxels voxels: an opening that wide lets the sight sweep through by construction
-// (docs/ALGORITHMS.md#gap-probe), so wider gaps are not looked at.
+// (docs/ALGORITHMS.md#wide-openings), so wider gaps are not looked at.
 #pragma once
 
 #include "core/context.h"
