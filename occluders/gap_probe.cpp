@@ -25,10 +25,6 @@ constexpr int kNearSolidVoxels = 2;
 // so along a long slit one line fan every kBlockVoxels voxels.
 constexpr int kBlockVoxels = 2;
 
-void set_atomic(BitVolume& v, uint64_t i) {
-    __atomic_fetch_or(&v.words[i >> 6], uint64_t(1) << (i & 63), __ATOMIC_RELAXED);
-}
-
 bool shares_corner(const TriangleCorners& s, const TriangleCorners& t) {
     const glm::vec3 a[3] = {s.a, s.b, s.c}, b[3] = {t.a, t.b, t.c};
     for (const glm::vec3& p : a)
@@ -291,8 +287,8 @@ GapProbeFigures probe_gaps(Context& ctx, const BitVolume& touched, const VoxelMa
                     VoxelWalk walk(grid, origins[s], dirs[s], reach);
                     do {
                         const uint64_t i = walk.index();
-                        if (touched.get(i)) set_atomic(leaky, i);
-                        if (solid.solid.get(i)) set_atomic(seen, i);
+                        if (touched.get(i)) leaky.set_atomic(i);
+                        if (solid.solid.get(i)) seen.set_atomic(i);
                     } while (walk.next());
                 }
             }
@@ -306,16 +302,7 @@ GapProbeFigures probe_gaps(Context& ctx, const BitVolume& touched, const VoxelMa
     figures.lines = traced;
     figures.leaks = leaks;
     figures.leaky_voxels = leaky.count();
-    if (leaks > 0) {
-        uint64_t seen_removed = 0;
-        for (size_t w = 0; w < seen.words.size(); ++w) {
-            const uint64_t gone = solid.solid.words[w] & seen.words[w];
-            seen_removed += uint64_t(__builtin_popcountll(gone));
-            solid.solid.words[w] &= ~gone;
-        }
-        solid.solid_voxels -= seen_removed;
-        figures.removed_voxels = seen_removed + reopen_leaks(touched, leaky, sources, solid);
-    }
+    if (leaks > 0) figures.removed_voxels = open_seen_and_leaky(touched, seen, leaky, sources, solid);
     figures.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     ctx.info(fmt::format(
         "gap probe: {} voxels, {} triangle pairs, {} open edges, {} gaps {:.1f}..{:.1f} mm wide, {} lines; "

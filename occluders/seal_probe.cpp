@@ -59,10 +59,6 @@ std::vector<uint64_t> frontier_of(const Solid& solid, const BitVolume& touched, 
 // Lines tried around an unblocked segment narrower than the least width, looking for the opening's middle.
 constexpr uint32_t kOpeningTries = 256;
 
-void set_atomic(BitVolume& v, uint64_t i) {
-    __atomic_fetch_or(&v.words[i >> 6], uint64_t(1) << (i & 63), __ATOMIC_RELAXED);
-}
-
 }  // namespace
 
 SealProbeFigures probe_seals(Context& ctx, const BitVolume& touched, const VoxelMask& eyes,
@@ -155,13 +151,13 @@ SealProbeFigures probe_seals(Context& ctx, const BitVolume& touched, const Voxel
                     }
                     ++leaks;
                     // Sight from the eye voxel reaches the origin: what the segment passes is seen or leaky.
-                    set_atomic(seen, vi);
+                    seen.set_atomic(vi);
                     VoxelWalk walk(grid, origins[s], seg_dirs[s], tfar[s]);
                     while (walk.next()) {
                         const uint64_t i = walk.index();
                         if (sources.get(i)) break;
-                        if (touched.get(i)) set_atomic(leaky, i);
-                        if (solid.solid.get(i)) set_atomic(seen, i);
+                        if (touched.get(i)) leaky.set_atomic(i);
+                        if (solid.solid.get(i)) seen.set_atomic(i);
                     }
                 }
                 ctx.progress_advance();
@@ -175,14 +171,7 @@ SealProbeFigures probe_seals(Context& ctx, const BitVolume& touched, const Voxel
         ctx.debug(fmt::format("seal probe round {}: {} frontier voxels, {} rays, {} segments, {} leaks",
                               round + 1, frontier.size(), walked, segments, leaks));
         if (leaks == 0) continue;  // the next round probes only a frontier this one opened: none
-        uint64_t seen_removed = 0;
-        for (size_t w = 0; w < seen.words.size(); ++w) {
-            const uint64_t gone = solid.solid.words[w] & seen.words[w];
-            seen_removed += uint64_t(__builtin_popcountll(gone));
-            solid.solid.words[w] &= ~gone;
-        }
-        solid.solid_voxels -= seen_removed;
-        figures.removed_voxels += seen_removed + reopen_leaks(touched, leaky, sources, solid);
+        figures.removed_voxels += open_seen_and_leaky(touched, seen, leaky, sources, solid);
         // A crack runs on: the frontier voxels near what this round found are probed again.
         BitVolume found = seen;
         for (size_t w = 0; w < found.words.size(); ++w) found.words[w] |= leaky.words[w];

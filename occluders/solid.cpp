@@ -72,6 +72,18 @@ uint64_t reopen_leaks(const BitVolume& touched, const BitVolume& leaky, const Bi
     return removed;
 }
 
+uint64_t open_seen_and_leaky(const BitVolume& touched, const BitVolume& seen, const BitVolume& leaky,
+                             const BitVolume& sources, Solid& solid) {
+    uint64_t seen_removed = 0;
+    for (size_t w = 0; w < seen.words.size(); ++w) {
+        const uint64_t gone = solid.solid.words[w] & seen.words[w];
+        seen_removed += uint64_t(__builtin_popcountll(gone));
+        solid.solid.words[w] &= ~gone;
+    }
+    solid.solid_voxels -= seen_removed;
+    return seen_removed + reopen_leaks(touched, leaky, sources, solid);
+}
+
 std::vector<Aabb> closed_box_objects(const World& world) {
     std::vector<Aabb> out;
     for (const WorldObject& obj : world.objects) {

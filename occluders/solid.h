@@ -46,6 +46,11 @@ BitVolume sight_sources(const VoxelGrid& grid, const VoxelMask& eyes);
 uint64_t reopen_leaks(const BitVolume& touched, const BitVolume& leaky, const BitVolume& sources,
                       Solid& solid);
 
+// What a probe found: the `seen` voxels (a line of sight passed them) leave the solid, then reopen_leaks()
+// through the `leaky` ones. Returns the voxels removed by both.
+uint64_t open_seen_and_leaky(const BitVolume& touched, const BitVolume& seen, const BitVolume& leaky,
+                             const BitVolume& sources, Solid& solid);
+
 // Closed box meshes: the bounds of objects whose triangles are all opaque, all lie in the planes of the six
 // faces of the object's bounds, and add up on each face to exactly the face's area (a watertight box, as
 // modular walls, floors, pillars and crates are; overlapping triangles that also leave a hole are not

@@ -179,6 +179,23 @@ ViewVolume trench_view(Context& ctx, const World& w) {
     return build_view_volume(ctx, vc, w);
 }
 
+// The voxel in the middle of the trench, under the crack.
+uint64_t trench_voxel_of(const VoxelGrid& grid) {
+    const glm::ivec3 c = grid.voxel_of({6.3f, 0.6f, 3.2f});
+    return grid.index(c.x, c.y, c.z);
+}
+
+// `probe` (Solid& -> figures) run on a copy of `before` with `threads` OpenMP threads; the copy, probed.
+template <class Probe, class Figures>
+Solid probed_with(int threads, const Solid& before, Probe probe, Figures& figures) {
+    const int was = omp_get_max_threads();
+    omp_set_num_threads(threads);
+    Solid s = before;
+    figures = probe(s);
+    omp_set_num_threads(was);
+    return s;
+}
+
 bool a_box_cuts_the_sight_through_the_crack(uint64_t check_seed, uint32_t near_eyes, int& lines,
                                             uint32_t seal_rays = 0, float crack_m = 0.005f,
                                             uint32_t gap_lines = 0,
@@ -244,16 +261,15 @@ TEST(SealProbe, OpensTheTrenchUnderACrackTheSameForAnyThreadCount) {
     const ViewVolume view = trench_view(ctx, w);
     RayScene scene(ctx, w);
     const Solid before = classify_solid(ctx, view.grid, view.touched, view.eyes);
-    const glm::ivec3 in_trench = view.grid.voxel_of({6.3f, 0.6f, 3.2f});
-    const uint64_t trench_voxel = view.grid.index(in_trench.x, in_trench.y, in_trench.z);
+    const uint64_t trench_voxel = trench_voxel_of(view.grid);
     ASSERT_TRUE(before.solid.get(trench_voxel));
     auto probe = [&](int threads, SealProbeFigures& f) {
-        const int was = omp_get_max_threads();
-        omp_set_num_threads(threads);
-        Solid s = before;
-        f = probe_seals(ctx, view.touched, view.eyes, scene, 32, 4.0, 8, 7, 0.0005, s);
-        omp_set_num_threads(was);
-        return s;
+        return probed_with(
+            threads, before,
+            [&](Solid& s) {
+                return probe_seals(ctx, view.touched, view.eyes, scene, 32, 4.0, 8, 7, 0.0005, s);
+            },
+            f);
     };
     SealProbeFigures f1, f1b, f3;
     const Solid one = probe(1, f1), again = probe(1, f1b), three = probe(3, f3);
@@ -329,16 +345,12 @@ TEST(GapProbe, OpensTheTrenchUnderACrackTheSameForAnyThreadCount) {
     const ViewVolume view = trench_view(ctx, w);
     RayScene scene(ctx, w);
     const Solid before = classify_solid(ctx, view.grid, view.touched, view.eyes);
-    const glm::ivec3 in_trench = view.grid.voxel_of({6.3f, 0.6f, 3.2f});
-    const uint64_t trench_voxel = view.grid.index(in_trench.x, in_trench.y, in_trench.z);
+    const uint64_t trench_voxel = trench_voxel_of(view.grid);
     ASSERT_TRUE(before.solid.get(trench_voxel));
     auto probe = [&](int threads, GapProbeFigures& f) {
-        const int was = omp_get_max_threads();
-        omp_set_num_threads(threads);
-        Solid s = before;
-        f = probe_gaps(ctx, view.touched, view.eyes, scene, 0.001, 8, s);
-        omp_set_num_threads(was);
-        return s;
+        return probed_with(
+            threads, before,
+            [&](Solid& s) { return probe_gaps(ctx, view.touched, view.eyes, scene, 0.001, 8, s); }, f);
     };
     GapProbeFigures f1, f1b, f3;
     const Solid one = probe(1, f1), again = probe(1, f1b), three = probe(3, f3);
@@ -372,8 +384,7 @@ TEST(GapProbe, OpensEveryCrackAtLeastTheToleranceWideAndNoNarrowerOne) {
         const ViewVolume view = trench_view(ctx, w);
         RayScene scene(ctx, w);
         Solid s = classify_solid(ctx, view.grid, view.touched, view.eyes);
-        const glm::ivec3 in_trench = view.grid.voxel_of({6.3f, 0.6f, 3.2f});
-        const uint64_t trench_voxel = view.grid.index(in_trench.x, in_trench.y, in_trench.z);
+        const uint64_t trench_voxel = trench_voxel_of(view.grid);
         if (!s.solid.get(trench_voxel)) {
             EXPECT_GT(crack, 0.1f) << "the sweep alone sees through a crack of " << crack << " m";
             continue;  // wide enough for the sweep itself

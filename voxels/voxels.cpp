@@ -76,11 +76,6 @@ bool triangle_box_overlap(glm::vec3 center, glm::vec3 half, glm::vec3 a, glm::ve
 
 namespace {
 
-void set_atomic(BitVolume& bits, uint64_t i) {
-    std::atomic_ref<uint64_t> word(bits.words[i >> 6]);
-    word.fetch_or(uint64_t(1) << (i & 63), std::memory_order_relaxed);
-}
-
 struct Voxelizer {
     const VoxelGrid& grid;
     glm::vec3 a, b, c;
@@ -96,8 +91,8 @@ struct Voxelizer {
         const glm::ivec3 n = hi - lo + 1;
         if (n.x == 1 && n.y == 1 && n.z == 1) {
             const uint64_t i = grid.index(lo.x, lo.y, lo.z);
-            set_atomic(touched, i);
-            if (upward) set_atomic(*upward, i);
+            touched.set_atomic(i);
+            if (upward) upward->set_atomic(i);
             return;
         }
         const int axis = n.x >= n.y && n.x >= n.z ? 0 : (n.y >= n.z ? 1 : 2);

@@ -16,6 +16,7 @@
 #include "core/math.h"
 #include "core/world.h"
 
+#include <atomic>
 #include <cstdint>
 #include <vector>
 
@@ -59,6 +60,10 @@ struct BitVolume {
     void reset(uint64_t bits) { words.assign((bits + 63) / 64, 0); }
     bool get(uint64_t i) const { return (words[i >> 6] >> (i & 63)) & 1u; }
     void set(uint64_t i) { words[i >> 6] |= uint64_t(1) << (i & 63); }
+    // set(), safe while other threads set bits of the same volume (an atomic OR; read only after they stop).
+    void set_atomic(uint64_t i) {
+        std::atomic_ref<uint64_t>(words[i >> 6]).fetch_or(uint64_t(1) << (i & 63), std::memory_order_relaxed);
+    }
     void clear(uint64_t i) { words[i >> 6] &= ~(uint64_t(1) << (i & 63)); }
     uint64_t count() const {
         uint64_t n = 0;
