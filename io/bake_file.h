@@ -22,8 +22,9 @@
 namespace pvs {
 
 constexpr int kBakeFormatMajor = 1;
-constexpr int kBakeFormatMinor = 3;  // 1.1 added the PVS code (/pvs/code), 1.2 ranked occluders per cell,
-                                     // 1.3 the opening width of each verification miss
+constexpr int kBakeFormatMinor = 4;  // 1.1 added the PVS code (/pvs/code), 1.2 ranked occluders per cell,
+                                     // 1.3 the opening width of each verification miss, 1.4 the voxel
+                                     // masks as bricks
 
 struct ObjectRecord {
     std::string name;

@@ -13,7 +13,6 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
-#include <span>
 #include <string>
 
 namespace pvs::test {
@@ -128,7 +127,7 @@ inline void expect_same_ranked(const pvsbake::Bake& got, const BakeData& want) {
     for (uint32_t c = 0; c <= got.cell_count(); ++c) {  // one past the end too: 0, empty
         const uint32_t n = want.ranked.count(c);
         ASSERT_EQ(got.occluder_count(c), n) << "cell " << c;
-        const std::span<const pvsbake::RankedOccluder> list = got.occluders(c);
+        const pvsbake::OccluderList list = got.occluders(c);
         ASSERT_EQ(list.size(), n);
         for (uint32_t k = 0; k < n; ++k) {
             const RankedOccluder& w = want.ranked.entries[want.ranked.offsets[c] + k];

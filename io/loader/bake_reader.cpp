@@ -1,6 +1,7 @@
 // pvsbake loader (internal): the validated sections of a bake file (bake_reader.h).
 #include "bake_reader.h"
 
+#include "mask_bricks.h"
 #include "row_code.h"
 
 #include <cerrno>
@@ -31,7 +32,7 @@ std::vector<float> read_bounds(const Reader& r, hid_t loc, const std::string& wh
     return flat;
 }
 
-FileMask read_mask(const Reader& r, hid_t cells_group, const std::string& where) {
+FileMask read_mask(const Reader& r, hid_t cells_group, const std::string& where, bool bricks) {
     Handle g = r.open_group(cells_group, where);
     FileMask mask;
     const std::vector<float> origin = r.numeric_attr<float>(g.get(), where, "origin", H5T_NATIVE_FLOAT, 3);
@@ -41,6 +42,33 @@ FileMask read_mask(const Reader& r, hid_t cells_group, const std::string& where)
     std::copy(dims.begin(), dims.end(), mask.dims);
     mask.voxels = volume_of(mask.dims);
     if (mask.voxels == UINT64_MAX) r.fail(where + " attribute dims is negative or too large");
+    if (bricks && r.has_link(g.get(), "brick_index")) {
+        const uint64_t count =
+            bricks_along(mask.dims[0]) * bricks_along(mask.dims[1]) * bricks_along(mask.dims[2]);
+        std::vector<int64_t> index_shape = {-1};
+        mask.brick_index = r.numeric_dataset<uint32_t>(g.get(), where, "brick_index", H5T_NATIVE_UINT32,
+                                                       index_shape, H5T_INTEGER);
+        if (mask.brick_index.empty()) return mask;  // no mask
+        if (uint64_t(mask.brick_index.size()) != count) {
+            r.fail(cat(where, "/brick_index has ", mask.brick_index.size(), " entries, expected 0 or ", count,
+                       " (8 x 8 x 8 bricks of ", mask.dims[0], " x ", mask.dims[1], " x ", mask.dims[2],
+                       " voxels)"));
+        }
+        std::vector<int64_t> bytes_shape = {-1};
+        mask.brick_bytes = r.numeric_dataset<uint8_t>(g.get(), where, "brick_bits", H5T_NATIVE_UINT8,
+                                                      bytes_shape, H5T_INTEGER);
+        if (mask.brick_bytes.size() % kBrickBytes != 0)
+            r.fail(cat(where, "/brick_bits has ", mask.brick_bytes.size(), " bytes, not a multiple of 64"));
+        const uint64_t limit = kFirstBrick + mask.brick_bytes.size() / kBrickBytes;
+        for (size_t b = 0; b < mask.brick_index.size(); ++b) {
+            if (mask.brick_index[b] >= limit) {
+                r.fail(cat(where, "/brick_index[", b, "] = ", mask.brick_index[b],
+                           " is not 0, 1 or 2 + a brick below ", limit - kFirstBrick));
+            }
+        }
+        mask.present = true;
+        return mask;
+    }
     std::vector<int64_t> shape = {-1};
     mask.bytes = r.numeric_dataset<uint8_t>(g.get(), where, "bits", H5T_NATIVE_UINT8, shape, H5T_INTEGER);
     if (mask.bytes.empty()) return mask;  // no mask
@@ -51,6 +79,7 @@ FileMask read_mask(const Reader& r, hid_t cells_group, const std::string& where)
     if (mask.voxels % 8 != 0 && (mask.bytes.back() >> (mask.voxels % 8)) != 0) {
         r.fail(cat(where, "/bits sets bits beyond voxel ", mask.voxels - 1));
     }
+    mask.present = true;
     return mask;
 }
 
@@ -176,7 +205,7 @@ FileObjects read_objects(const Reader& r, hid_t root) {
     return o;
 }
 
-FileCells read_cells(const Reader& r, hid_t root, bool read_eyes) {
+FileCells read_cells(const Reader& r, hid_t root, bool read_eyes, bool bricks) {
     const std::string where = "/cells";
     Handle g = r.open_group(root, where);
     FileCells cells;
@@ -226,8 +255,8 @@ FileCells read_cells(const Reader& r, hid_t root, bool read_eyes) {
                        cells.kind == 1 ? "root node" : "cell", " index below ", target));
         }
     }
-    cells.view = read_mask(r, g.get(), "/cells/view");
-    if (read_eyes) cells.eyes = read_mask(r, g.get(), "/cells/eyes");
+    cells.view = read_mask(r, g.get(), "/cells/view", bricks);
+    if (read_eyes) cells.eyes = read_mask(r, g.get(), "/cells/eyes", bricks);
     return cells;
 }
 
@@ -256,10 +285,24 @@ FilePvs read_pvs(const Reader& r, hid_t root, uint32_t objects, uint32_t cells, 
         if (offsets_shape[0] < 1) r.fail("/pvs/code_offsets is empty");
         unique_rows = offsets_shape[0] - 1;
         std::vector<int64_t> code_shape = {-1};
+        if (objects >= kMaxCodedObjects) r.fail("/pvs: too many objects for the PVS code");
         pvs.code = r.numeric_dataset<uint8_t>(g.get(), where, "code", H5T_NATIVE_UINT8, code_shape,
-                                              H5T_INTEGER, kCodePadding);
-        const std::string bad = check_row_code(pvs.code.data(), uint64_t(code_shape[0]),
-                                               pvs.code_offsets.data(), uint64_t(unique_rows), objects);
+                                              H5T_INTEGER, code_padding(objects));
+        const uint64_t code_size = uint64_t(code_shape[0]);
+        // Format 1.4 files carry the code's checksum: then each row's head is checked and the bounded
+        // decoders need no more (row_code.h). Older files: every index is decoded and checked.
+        std::string bad;
+        if (r.has_attr(g.get(), "code_xxh3")) {
+            const uint64_t want =
+                r.numeric_attr<uint64_t>(g.get(), where, "code_xxh3", H5T_NATIVE_UINT64, 1)[0];
+            if (code_checksum(pvs.code.data(), code_size) != want)
+                r.fail("/pvs/code does not match its checksum (attribute code_xxh3): damaged file");
+            bad = check_row_heads(pvs.code.data(), code_size, pvs.code_offsets.data(), uint64_t(unique_rows),
+                                  objects);
+        } else {
+            bad = check_row_code(pvs.code.data(), code_size, pvs.code_offsets.data(), uint64_t(unique_rows),
+                                 objects);
+        }
         if (!bad.empty()) r.fail(bad);
     } else {
         std::vector<int64_t> rows_shape = {-1, pvs.row_bytes};
@@ -351,32 +394,42 @@ FileOccluders read_occluders(const Reader& r, hid_t root, uint32_t objects, uint
         if (off[c + 1] < off[c]) r.fail(cat("/occluders/ranked_offsets[", c + 1, "] decreases"));
     }
     constexpr double kFourPi = 12.566370614359172;
+    // Each box once (a proven, finite box with min <= max), then each entry against that.
+    std::vector<uint8_t> usable(size_t(o.count), 0);
+    for (uint64_t box = 0; box < o.count; ++box) {
+        const float* b = &o.bounds[size_t(box) * 6];
+        bool ok = o.proven[size_t(box)] == 1;
+        for (int a = 0; a < 3; ++a)
+            ok = ok && std::isfinite(b[a]) && std::isfinite(b[a + 3]) && b[a] <= b[a + 3];
+        usable[size_t(box)] = ok ? 1 : 0;
+    }
     for (int64_t k = 0; k < m; ++k) {
         const size_t i = size_t(k);
         const uint32_t box = o.ranked_box[i];
+        const float score = o.ranked_score[i], solid = o.ranked_solid_angle_sr[i];
+        const float hidden = o.ranked_hidden_objects[i], share = o.ranked_hidden_triangle_share[i];
+        const bool ok = box < o.count && usable[box] && std::isfinite(score) && score >= 0.0f &&
+                        solid >= 0.0f && double(solid) <= kFourPi && hidden >= 0.0f &&
+                        double(hidden) <= double(objects) && share >= 0.0f && share <= 1.0f;
+        if (ok) continue;
+        // Say what is wrong (cold).
         if (box >= o.count) {
             r.fail(cat("/occluders/ranked_box[", k, "] = ", box, " is not a box index below ", o.count));
         }
         if (o.proven[box] != 1) {
             r.fail(cat("/occluders/ranked_box[", k, "] = ", box, " names a box that is not proven"));
         }
-        const float* b = &o.bounds[size_t(box) * 6];
-        for (int a = 0; a < 3; ++a) {
-            if (!std::isfinite(b[a]) || !std::isfinite(b[a + 3]) || b[a] > b[a + 3]) {
-                r.fail(cat("/occluders/bounds[", box, "] (ranked_box[", k,
-                           "]) is not a finite box with min <= max"));
-            }
+        if (!usable[box]) {
+            r.fail(cat("/occluders/bounds[", box, "] (ranked_box[", k,
+                       "]) is not a finite box with min <= max"));
         }
-        const float score = o.ranked_score[i], solid = o.ranked_solid_angle_sr[i];
-        const float hidden = o.ranked_hidden_objects[i], share = o.ranked_hidden_triangle_share[i];
         if (!std::isfinite(score) || score < 0.0f)
             r.fail(cat("/occluders/ranked_score[", k, "] is not a finite number >= 0"));
         if (!(solid >= 0.0f && double(solid) <= kFourPi))
             r.fail(cat("/occluders/ranked_solid_angle_sr[", k, "] is not in [0, 4 pi]"));
         if (!(hidden >= 0.0f && double(hidden) <= double(objects)))
             r.fail(cat("/occluders/ranked_hidden_objects[", k, "] is not in [0, ", objects, "]"));
-        if (!(share >= 0.0f && share <= 1.0f))
-            r.fail(cat("/occluders/ranked_hidden_triangle_share[", k, "] is not in [0, 1]"));
+        r.fail(cat("/occluders/ranked_hidden_triangle_share[", k, "] is not in [0, 1]"));
     }
     for (uint32_t c = 0; c < cells; ++c) {
         for (uint32_t k = off[c] + 1; k < off[c + 1]; ++k) {

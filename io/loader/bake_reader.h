@@ -18,7 +18,7 @@ namespace pvsbake::detail {
 
 constexpr const char* kFormatName = "pvsbake";
 constexpr int kFormatMajor = 1;
-constexpr int kFormatMinor = 3;
+constexpr int kFormatMinor = 4;
 
 // The root attributes. Throws kNotBakeFile without format = "pvsbake", kVersionTooNew for a newer major.
 BakeInfo read_header(const Reader& r, hid_t root);
@@ -36,11 +36,17 @@ FileObjects read_objects(const Reader& r, hid_t root);
 uint64_t volume_of(const int32_t dims[3]);
 
 struct FileMask {
+    bool present = false;  // false: no mask
     float origin[3] = {0, 0, 0};
     float voxel_size_m = 0;
     int32_t dims[3] = {0, 0, 0};
     uint64_t voxels = 0;
-    std::vector<uint8_t> bytes;  // empty (no mask) or ceil(voxels / 8), bits past the voxels zero
+    std::vector<uint8_t>
+        bytes;  // empty (no mask, or read as bricks) or ceil(voxels / 8), bits past the voxels zero
+    // As bricks (mask_bricks.h), when they were asked for and the file has them (format 1.4): every index
+    // below kFirstBrick + brick_bytes.size() / 64. Else empty.
+    std::vector<uint32_t> brick_index;
+    std::vector<uint8_t> brick_bytes;
 };
 
 struct FileCells {
@@ -57,12 +63,13 @@ struct FileCells {
     std::vector<int32_t> node_first_child, node_cell, node_parent;
     FileMask view, eyes;
 };
-// read_eyes false skips /cells/eyes.
-FileCells read_cells(const Reader& r, hid_t root, bool read_eyes);
+// read_eyes false skips /cells/eyes. With bricks, a mask the file also stores as bricks (format 1.4) is read
+// as bricks only, not as bits.
+FileCells read_cells(const Reader& r, hid_t root, bool read_eyes, bool bricks = false);
 
 // /pvs. With want_rows, `rows` holds the distinct rows (format 1.0 and later); else, when the file has
 // the code (format 1.1), `code` and `code_offsets` hold it, validated, and rows stays empty (old files
-// without the code always give rows). The code is followed by kCodePadding zero bytes (row_code.h).
+// without the code always give rows). The code is followed by code_padding(objects) zero bytes (row_code.h).
 struct FilePvs {
     uint32_t row_bytes = 0;
     uint64_t unique_rows = 0;

@@ -4,17 +4,18 @@
 #include "pvsbake/loader.h"
 
 #include "bake_reader.h"
+#include "mask_bricks.h"
 #include "row_code.h"
 
+#include <algorithm>
 #include <cmath>
 #include <new>
 
 namespace pvsbake {
 namespace {
 
-constexpr uint32_t kBrickEmpty = 0;
-constexpr uint32_t kBrickFull = 1;
-constexpr uint32_t kFirstBrick = 2;  // brick_[b] - kFirstBrick = index of the brick's 64 bytes
+using detail::kBrickFull;
+using detail::kFirstBrick;
 
 Box empty_box() {
     const float inf = INFINITY;
@@ -66,7 +67,7 @@ public:
         b.info_ = detail::read_header(r, root.get());
         b.parameters_ = detail::read_parameters(r, root.get());
         objects(detail::read_objects(r, root.get()), b);
-        detail::FileCells file_cells = detail::read_cells(r, root.get(), /*read_eyes=*/true);
+        detail::FileCells file_cells = detail::read_cells(r, root.get(), /*read_eyes=*/true, /*bricks=*/true);
         const uint32_t cell_count = file_cells.count;
         cells(std::move(file_cells), b);
         pvs(detail::read_pvs(r, root.get(), b.object_count_, cell_count, /*want_rows=*/false), b);
@@ -144,70 +145,37 @@ private:
         for (uint32_t c = 0; c < count; ++c) b.cell_bounds_[c] = box_at(f.bounds, c);
     }
 
-    // The view mask as 8 x 8 x 8 bricks: empty and full bricks cost 4 bytes, mixed ones 68. The eye mask
-    // (on the same voxels) the same way, when the file has one.
-    static void view_bricks(const detail::FileMask& m, const detail::FileMask& eyes, Bake& b) {
-        b.has_view_ = !m.bytes.empty();
+    // The view mask as 8 x 8 x 8 bricks (detail/mask_bricks.h): empty and full bricks cost 4 bytes, mixed
+    // ones 68. The eye mask (on the same voxels) the same way, when the file has one. Files before format
+    // 1.4 store only the bits: their bricks are made here.
+    static void view_bricks(detail::FileMask& m, detail::FileMask& eyes, Bake& b) {
+        b.has_view_ = m.present;
         if (!b.has_view_) return;
         std::copy(m.origin, m.origin + 3, b.view_origin_);
         b.view_voxel_m_ = m.voxel_size_m;
         std::copy(m.dims, m.dims + 3, b.view_dims_);
-        for (int a = 0; a < 3; ++a) b.brick_dims_[a] = (m.dims[a] + 7) / 8;
-        bricks(m, b.brick_dims_, b.brick_, b.brick_bytes_);
-        b.has_eyes_ = !eyes.bytes.empty() && eyes.voxel_size_m == m.voxel_size_m &&
+        for (int a = 0; a < 3; ++a) b.brick_dims_[a] = int32_t(detail::bricks_along(m.dims[a]));
+        bricks(m, b.brick_, b.brick_bytes_);
+        b.has_eyes_ = eyes.present && eyes.voxel_size_m == m.voxel_size_m &&
                       std::equal(eyes.origin, eyes.origin + 3, m.origin) &&
                       std::equal(eyes.dims, eyes.dims + 3, m.dims);
-        if (b.has_eyes_) bricks(eyes, b.brick_dims_, b.eye_brick_, b.eye_brick_bytes_);
+        if (b.has_eyes_) bricks(eyes, b.eye_brick_, b.eye_brick_bytes_);
     }
 
-    static void bricks(const detail::FileMask& m, const int32_t brick_dims[3],
-                       std::vector<uint32_t>& brick_of, std::vector<uint8_t>& bytes) {
-        const uint64_t dx = uint64_t(m.dims[0]), dy = uint64_t(m.dims[1]), dz = uint64_t(m.dims[2]);
-        brick_of.assign(size_t(brick_dims[0]) * size_t(brick_dims[1]) * size_t(brick_dims[2]), kBrickEmpty);
-        uint8_t brick[64];
-        size_t at = 0;
-        for (uint64_t bz = 0; bz < uint64_t(brick_dims[2]); ++bz) {
-            for (uint64_t by = 0; by < uint64_t(brick_dims[1]); ++by) {
-                for (uint64_t bx = 0; bx < uint64_t(brick_dims[0]); ++bx, ++at) {
-                    const uint64_t x0 = bx * 8;
-                    const uint32_t width = uint32_t(std::min<uint64_t>(8, dx - x0));
-                    const uint8_t valid = uint8_t((1u << width) - 1);
-                    bool any = false, full = true;
-                    for (uint64_t zz = 0; zz < 8; ++zz) {
-                        for (uint64_t yy = 0; yy < 8; ++yy) {
-                            const uint64_t y = by * 8 + yy, z = bz * 8 + zz;
-                            uint8_t v = 0;
-                            if (y < dy && z < dz) {
-                                const uint64_t i = x0 + dx * (y + dy * z);
-                                const size_t byte = size_t(i >> 3);
-                                const unsigned shift = unsigned(i & 7);
-                                unsigned w = m.bytes[byte] >> shift;
-                                if (shift != 0 && byte + 1 < m.bytes.size())
-                                    w |= unsigned(m.bytes[byte + 1]) << (8 - shift);
-                                v = uint8_t(w) & valid;
-                                full = full && v == valid;
-                            }
-                            any = any || v != 0;
-                            brick[zz * 8 + yy] = v;
-                        }
-                    }
-                    if (!any) continue;
-                    if (full) {
-                        brick_of[at] = kBrickFull;
-                        continue;
-                    }
-                    brick_of[at] = kFirstBrick + uint32_t(bytes.size() / 64);
-                    bytes.insert(bytes.end(), brick, brick + 64);
-                }
-            }
+    static void bricks(detail::FileMask& m, std::vector<uint32_t>& index, std::vector<uint8_t>& bytes) {
+        if (!m.brick_index.empty()) {
+            index = std::move(m.brick_index);
+            bytes = std::move(m.brick_bytes);
+            return;
         }
+        detail::make_bricks(m.bytes, m.dims, index, bytes);
     }
 
     static void pvs(detail::FilePvs f, Bake& b) {
         if (f.code_offsets.empty()) {  // a format 1.0 file: code its rows now
             detail::RowCode code =
                 detail::encode_rows(f.rows.data(), f.unique_rows, f.row_bytes, b.object_count_);
-            code.code.resize(code.code.size() + detail::kCodePadding, 0);  // GapReader reads whole words
+            code.code.resize(code.code.size() + detail::code_padding(b.object_count_), 0);  // row_code.h
             f.code = std::move(code.code);
             f.code_offsets = std::move(code.offsets);
             std::vector<uint8_t>().swap(f.rows);
@@ -225,15 +193,17 @@ private:
         s.bytes_code = b.code_.size() + b.row_offset_.bytes() + b.cell_row_.bytes();
     }
 
-    // The ranked occluders, each entry with its box (the runtime culler wants them as they are).
+    // The ranked occluders as the file stores them (validated by read_occluders): the boxes they name, and
+    // per entry a box index and four measures.
     static void ranked(detail::FileOccluders f, Bake& b) {
         if (f.ranked_offsets.empty()) return;
-        b.ranked_.resize(f.ranked_box.size());
-        for (size_t k = 0; k < b.ranked_.size(); ++k) {
-            b.ranked_[k] = RankedOccluder{box_at(f.bounds, f.ranked_box[k]), f.ranked_score[k],
-                                          f.ranked_solid_angle_sr[k], f.ranked_hidden_objects[k],
-                                          f.ranked_hidden_triangle_share[k]};
-        }
+        b.ranked_boxes_.resize(size_t(f.count));
+        for (size_t i = 0; i < b.ranked_boxes_.size(); ++i) b.ranked_boxes_[i] = box_at(f.bounds, i);
+        b.ranked_box_ = std::move(f.ranked_box);
+        b.ranked_score_ = std::move(f.ranked_score);
+        b.ranked_solid_angle_sr_ = std::move(f.ranked_solid_angle_sr);
+        b.ranked_hidden_objects_ = std::move(f.ranked_hidden_objects);
+        b.ranked_hidden_triangle_share_ = std::move(f.ranked_hidden_triangle_share);
         b.ranked_offset_.assign(std::move(f.ranked_offsets));
     }
 
@@ -251,7 +221,10 @@ private:
                bytes(b.object_triangles_) + bytes(b.object_flags_) + bytes(b.grid_to_cell_) +
                bytes(b.nodes_) + bytes(b.cell_bounds_) + bytes(b.cell_grid_) + bytes(b.brick_) +
                bytes(b.brick_bytes_) + bytes(b.eye_brick_) + bytes(b.eye_brick_bytes_) + bytes(b.code_) +
-               b.row_offset_.bytes() + b.cell_row_.bytes() + b.ranked_offset_.bytes() + bytes(b.ranked_);
+               b.row_offset_.bytes() + b.cell_row_.bytes() + b.ranked_offset_.bytes() +
+               bytes(b.ranked_boxes_) + bytes(b.ranked_box_) + bytes(b.ranked_score_) +
+               bytes(b.ranked_solid_angle_sr_) + bytes(b.ranked_hidden_objects_) +
+               bytes(b.ranked_hidden_triangle_share_);
     }
 };
 
@@ -420,13 +393,17 @@ uint32_t Bake::occluder_count(uint32_t c) const noexcept {
     return ranked_offset_[size_t(c) + 1] - ranked_offset_[c];
 }
 
-#if defined(__cpp_lib_span)
-std::span<const RankedOccluder> Bake::occluders(uint32_t c) const noexcept {
+OccluderList Bake::occluders(uint32_t c) const noexcept {
     const uint32_t n = occluder_count(c);
-    if (n == 0) return {};
-    return std::span<const RankedOccluder>(ranked_.data() + ranked_offset_[c], n);
+    return n == 0 ? OccluderList() : OccluderList(this, ranked_offset_[c], n);
 }
-#endif
+
+uint32_t Bake::occluder_boxes(uint32_t c, Box* out, uint32_t capacity) const noexcept {
+    if (out == nullptr) return 0;
+    const uint32_t n = std::min(occluder_count(c), capacity);
+    for (uint32_t k = 0; k < n; ++k) out[k] = ranked_boxes_[ranked_box_[ranked_offset_[c] + k]];
+    return n;
+}
 
 const double* Bake::figure(std::string_view name) const noexcept {
     for (const auto& [k, v] : figures_)

@@ -140,7 +140,7 @@ uint32_t pvsbake_occluder_count(const pvsbake_bake* b, uint32_t cell) {
 }
 int pvsbake_occluder(const pvsbake_bake* b, uint32_t cell, uint32_t rank, pvsbake_ranked_occluder* out) {
     if (b == nullptr || out == nullptr || rank >= b->bake.occluder_count(cell)) return 0;
-    const pvsbake::RankedOccluder& r = b->bake.occluders(cell)[rank];
+    const pvsbake::RankedOccluder r = b->bake.occluders(cell)[rank];
     copy_box(r.box, out->box);
     out->score = r.score;
     out->solid_angle_sr = r.solid_angle_sr;

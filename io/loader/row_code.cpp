@@ -8,6 +8,10 @@
 #include <algorithm>
 #include <cstring>
 
+// Compiled into the loader (no library to link for games): xxHash's header-only mode.
+#define XXH_INLINE_ALL
+#include <xxhash.h>
+
 namespace pvsbake::detail {
 namespace {
 
@@ -131,40 +135,76 @@ RowCode encode_rows(const uint8_t* rows, uint64_t row_count, uint32_t row_bytes,
     return out;
 }
 
-std::string check_row_code(const uint8_t* code, uint64_t code_size, const uint32_t* offsets,
-                           uint64_t row_count, uint32_t objects) {
+namespace {
+
+// The head of row r (code[offsets[r] ..)): "" and its fields and where its bits start, or what is wrong.
+struct RowHead {
+    uint32_t ref = 0, count = 0, k = 0;
+    const uint8_t* bits = nullptr;
+    const uint8_t* stop = nullptr;
+};
+
+std::string check_offsets(const uint8_t* code, uint64_t code_size, const uint32_t* offsets,
+                          uint64_t row_count, uint32_t objects) {
+    (void)code;
     if (offsets[0] != 0 || offsets[row_count] != code_size) {
         return "/pvs/code_offsets does not start at 0 and end at the size of /pvs/code";
     }
     if (objects >= kMaxCodedObjects) return "/pvs: too many objects for the PVS code";
-    std::vector<bool> is_key(size_t(row_count), false);
-    for (uint64_t r = 0; r < row_count; ++r) {
-        const uint64_t begin = offsets[r], end = offsets[r + 1];
-        const std::string where = "/pvs/code row " + std::to_string(r);
-        if (end < begin + 2) return where + ": offsets decrease or leave no room for a row";
-        const uint8_t* p = code + begin;
-        const uint8_t* const stop = code + end;
-        uint32_t fields[2];
-        for (uint32_t& f : fields) {
-            uint64_t v = 0;
-            for (int shift = 0;; shift += 7) {
-                if (p == stop || shift > 28) return where + ": a damaged varint";
-                const uint8_t b = *p++;
-                v |= uint64_t(b & 0x7f) << shift;
-                if ((b & 0x80) == 0) break;
-            }
-            if (v > UINT32_MAX) return where + ": a damaged varint";
-            f = uint32_t(v);
+    return "";
+}
+
+std::string read_head(const uint8_t* code, const uint32_t* offsets, uint64_t r, uint32_t objects,
+                      const std::vector<bool>& is_key, RowHead& h) {
+    const uint64_t begin = offsets[r], end = offsets[r + 1];
+    if (end < begin + 2)
+        return "/pvs/code row " + std::to_string(r) + ": offsets decrease or leave no room for a row";
+    const uint8_t* p = code + begin;
+    h.stop = code + end;
+    uint32_t fields[2];
+    for (uint32_t& f : fields) {
+        uint64_t v = 0;
+        for (int shift = 0;; shift += 7) {
+            if (p == h.stop || shift > 28) return "/pvs/code row " + std::to_string(r) + ": a damaged varint";
+            const uint8_t b = *p++;
+            v |= uint64_t(b & 0x7f) << shift;
+            if ((b & 0x80) == 0) break;
         }
-        const uint32_t ref = fields[0], count = fields[1] >> 5, k = fields[1] & 31;
-        if (ref > r || (ref > 0 && !is_key[size_t(r - ref)]))
-            return where + ": refers to a row that is not a key row before it";
-        is_key[size_t(r)] = ref == 0;
-        if (k > kMaxRiceK) return where + ": Rice parameter above 24";
-        if (count > objects) return where + ": more indices than objects";
+        if (v > UINT32_MAX) return "/pvs/code row " + std::to_string(r) + ": a damaged varint";
+        f = uint32_t(v);
+    }
+    h.ref = fields[0];
+    h.count = fields[1] >> 5;
+    h.k = fields[1] & 31;
+    h.bits = p;
+    const char* wrong = nullptr;
+    if (h.ref > r || (h.ref > 0 && !is_key[size_t(r - h.ref)]))
+        wrong = ": refers to a row that is not a key row before it";
+    else if (h.k > kMaxRiceK)
+        wrong = ": Rice parameter above 24";
+    else if (h.count > objects)
+        wrong = ": more indices than objects";
+    return wrong == nullptr ? std::string() : "/pvs/code row " + std::to_string(r) + wrong;
+}
+
+}  // namespace
+
+std::string check_row_code(const uint8_t* code, uint64_t code_size, const uint32_t* offsets,
+                           uint64_t row_count, uint32_t objects) {
+    std::string bad = check_offsets(code, code_size, offsets, row_count, objects);
+    if (!bad.empty()) return bad;
+    std::vector<bool> is_key(size_t(row_count), false);
+    RowHead h;
+    for (uint64_t r = 0; r < row_count; ++r) {
+        bad = read_head(code, offsets, r, objects, is_key, h);
+        if (!bad.empty()) return bad;
+        is_key[size_t(r)] = h.ref == 0;
+        const std::string where = "/pvs/code row " + std::to_string(r);  // the full check's cost is decoding
+        const uint32_t count = h.count, k = h.k;
+        const uint8_t* const p = h.bits;
         // Decode with bounds: every bit used must lie before `stop` (reads may look up to 8 bytes past it:
         // the buffer is padded).
-        const uint64_t limit = uint64_t(stop - p) * 8;
+        const uint64_t limit = uint64_t(h.stop - p) * 8;
         const uint64_t mask = (uint64_t(1) << k) - 1;
         uint64_t pos = 0, last = UINT64_MAX;
         for (uint32_t n = 0; n < count; ++n) {
@@ -192,11 +232,32 @@ std::string check_row_code(const uint8_t* code, uint64_t code_size, const uint32
     return "";
 }
 
-void decode_row(const uint8_t* code, const uint32_t* offsets, uint64_t r, uint8_t* out, uint32_t row_bytes) {
+std::string check_row_heads(const uint8_t* code, uint64_t code_size, const uint32_t* offsets,
+                            uint64_t row_count, uint32_t objects) {
+    std::string bad = check_offsets(code, code_size, offsets, row_count, objects);
+    if (!bad.empty()) return bad;
+    std::vector<bool> is_key(size_t(row_count), false);
+    RowHead h;
+    for (uint64_t r = 0; r < row_count; ++r) {
+        bad = read_head(code, offsets, r, objects, is_key, h);
+        if (!bad.empty()) return bad;
+        is_key[size_t(r)] = h.ref == 0;
+        if (uint64_t(h.count) * (1 + h.k) > uint64_t(h.stop - h.bits) * 8)
+            return "/pvs/code row " + std::to_string(r) + ": the code runs past the row";
+    }
+    return "";
+}
+
+uint64_t code_checksum(const uint8_t* code, uint64_t code_size) {
+    return XXH3_64bits(code, size_t(code_size));
+}
+
+void decode_row(const uint8_t* code, const uint32_t* offsets, uint64_t r, uint32_t objects, uint8_t* out,
+                uint32_t row_bytes) {
     if (row_bytes > 0) std::memset(out, 0, row_bytes);
     auto flip = [&](const uint8_t* p) {
         const uint32_t head = read_varint(p);
-        GapReader g(p, head >> 5, head & 31);
+        GapReader g(p, head >> 5, head & 31, objects);
         for (uint32_t i = g.next(); i != kEnd; i = g.next()) out[i / 8] ^= uint8_t(1u << (i % 8));
     };
     const uint8_t* p = code + offsets[r];

@@ -35,14 +35,33 @@ RowCode encode_rows(const uint8_t* rows, uint64_t row_count, uint32_t row_bytes,
 // "" when code and offsets are a sound code of row_count rows of `objects` objects: offsets start at 0,
 // increase, end at code_size; every varint is whole, every reference is a key row before it, every index
 // is below `objects` and increasing, and every row's bits end in its last byte. Else what is wrong.
-// code must be followed by 8 readable bytes (padding).
+// code must be followed by code_padding(objects) readable bytes. Decodes every index: the check of files
+// without a code checksum (before format 1.4).
 std::string check_row_code(const uint8_t* code, uint64_t code_size, const uint32_t* offsets,
                            uint64_t row_count, uint32_t objects);
 
-// Bytes of padding the decoders need after the code (they read whole 8-byte words).
-constexpr size_t kCodePadding = 8;
+// The check of files with a code checksum (format 1.4): the same as check_row_code for the offsets and each
+// row's head (varints whole, references to earlier key rows, Rice parameter <= 24, count <= objects, and
+// count * (1 + k) bits fitting the row), without decoding the indices. What it leaves unchecked cannot
+// take a decoder out of range (detail::GapReader is bounded: docs/FORMAT.md, "The PVS code"); that the
+// bytes are the writer's is what the checksum checks.
+std::string check_row_heads(const uint8_t* code, uint64_t code_size, const uint32_t* offsets,
+                            uint64_t row_count, uint32_t objects);
 
-// Row r decoded into row_bytes bytes (validated code, padded with 8 bytes). For tests and old files.
-void decode_row(const uint8_t* code, const uint32_t* offsets, uint64_t r, uint8_t* out, uint32_t row_bytes);
+// XXH3 (64 bits, seed 0) of the code's bytes: /pvs attribute code_xxh3 (format 1.4).
+uint64_t code_checksum(const uint8_t* code, uint64_t code_size);
+
+// Bytes of padding the decoders need after the code: they read whole 8-byte words, and a bounded decode of
+// any row whose head passed check_row_heads reads less than 27 bits an object plus 16 bytes past the row's
+// start (the unary parts advance the index, which stops below `objects`, at most once more by up to
+// objects + 64 bits; count <= objects codes carry 1 + k <= 25 more bits each).
+inline size_t code_padding(uint32_t objects) {
+    return 4 * size_t(objects) + 24;
+}
+
+// Row r decoded into row_bytes bytes (a code whose heads passed check_row_heads, padded with
+// code_padding(objects) bytes): bits of indices below `objects` only. For tests and old files.
+void decode_row(const uint8_t* code, const uint32_t* offsets, uint64_t r, uint32_t objects, uint8_t* out,
+                uint32_t row_bytes);
 
 }  // namespace pvsbake::detail

@@ -21,7 +21,6 @@
 #include <cstdlib>
 #include <cstring>
 #include <random>
-#include <span>
 #include <string>
 #include <vector>
 
@@ -101,13 +100,12 @@ int main(int argc, char** argv) {
         // only when the eye is in the eye space, where the bake promises what they hide (in the rim
         // around it, up to and into thin walls, it does not: cull nothing there).
         const bool can_cull = cell >= 0 && bake.in_eye_space(eye.x, eye.y, eye.z);
-        const std::span<const pvsbake::RankedOccluder> occluders =
-            can_cull ? bake.occluders(uint32_t(cell)) : std::span<const pvsbake::RankedOccluder>();
+        pvsbake::Box occluders[8];
+        const uint32_t occluder_count = can_cull ? bake.occluder_boxes(uint32_t(cell), occluders, 8) : 0;
         frames_culling += can_cull;
         const auto c0 = std::chrono::steady_clock::now();
         const float eye_m[3] = {eye.x, eye.y, eye.z};
-        culler.begin_frame(eye_m, occluders.empty() ? nullptr : &occluders.front().box, occluders.size(),
-                           sizeof(pvsbake::RankedOccluder));
+        culler.begin_frame(eye_m, occluders, occluder_count);
         uint32_t culled = 0;
         for (const pvsbake::walk::Mover& m : movers) {
             const pvsbake::OcclusionCuller::Path path = culler.classify(pvsbake::walk::mover_box(m));

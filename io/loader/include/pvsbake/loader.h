@@ -11,8 +11,9 @@
 // A point outside the view volume (where eyes can be) has no cell: find_cell() returns -1, and a game
 // should then draw everything.
 //
-// Costs: load() reads and validates everything (indices in range, sizes consistent), so queries check
-// nothing but the index they are given, and never allocate. find_cell() is O(1) on a grid, O(depth) on an
+// Costs: load() reads and validates everything (indices in range, sizes consistent; the PVS code by its
+// checksum in format 1.4 files, and its walks are bounded), so queries check nothing but the index they
+// are given, and never allocate. find_cell() is O(1) on a grid, O(depth) on an
 // octree. Walking a cell's PVS costs O(visible objects); is_visible() is O(visible objects) too.
 //
 // The PVS rows are held compressed (docs/FORMAT.md, "The PVS code"): each distinct row once, as the gaps
@@ -23,9 +24,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
-#if __has_include(<span>)
-#include <span>
-#endif
+#include <iterator>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -111,11 +110,15 @@ inline uint64_t peek_bits(const uint8_t* p, uint64_t at) {
 }
 
 // Reads the Rice-coded gaps of one row (docs/FORMAT.md, "The PVS code"): object indices in increasing
-// order, then kEnd. The code was validated at load, and the buffer has 8 bytes of padding after it.
+// order, then kEnd. Bounded: it never returns an index >= limit (the object count) and ends there, and it
+// reads at most 27 bits an object plus 16 bytes past the row's start, whatever the bits (the loader pads
+// the code that much: row_code.h, code_padding), so even code that passed only the heads' check
+// (check_row_heads) cannot take it out of range.
 class GapReader {
 public:
     GapReader() = default;
-    GapReader(const uint8_t* bits, uint32_t count, uint32_t k) : bits_(bits), left_(count), k_(k) {}
+    GapReader(const uint8_t* bits, uint32_t count, uint32_t k, uint32_t limit)
+        : bits_(bits), left_(count), k_(k), limit_(limit) {}
 
     uint32_t next() {
         if (left_ == 0) return kEnd;
@@ -126,11 +129,11 @@ public:
             if (z + 1 + k_ <= 57) {
                 const uint32_t low = uint32_t(w >> (z + 1)) & ((uint32_t(1) << k_) - 1);
                 pos_ += z + 1 + k_;
-                last_ += 1 + ((z << k_) | low);
-                return last_;
+                last_ += 1 + ((z << k_) | low);  // < 2^31: last_ < limit_ <= 2^27, z < 57, k_ <= 24
+                return last_ < limit_ ? last_ : stop();
             }
         }
-        uint32_t q = 0;
+        uint64_t q = 0;
         for (;;) {
             w = peek();
             if (w != 0) {
@@ -142,20 +145,29 @@ public:
             const uint32_t valid = 64 - uint32_t(pos_ & 7);  // all real bits seen were zero
             q += valid;
             pos_ += valid;
+            if (q > limit_) return stop();
         }
-        const uint32_t low = uint32_t(peek()) & ((uint32_t(1) << k_) - 1);
+        if (q > limit_) return stop();
+        const uint64_t low = peek() & ((uint64_t(1) << k_) - 1);
         pos_ += k_;
-        last_ += 1 + ((q << k_) | low);
+        const uint64_t next = uint64_t(last_) + 1 + ((q << k_) | low);  // last_ + 1 wraps to 0 at the start
+        if ((next & 0xffffffffu) >= limit_ || (q << k_) >= limit_) return stop();
+        last_ = uint32_t(next);
         return last_;
     }
 
 private:
     uint64_t peek() const { return peek_bits(bits_, pos_); }
+    uint32_t stop() {
+        left_ = 0;
+        return kEnd;
+    }
 
     const uint8_t* bits_ = nullptr;
     uint64_t pos_ = 0;  // bit position, bit 0 = lowest bit of byte 0
     uint32_t left_ = 0;
     uint32_t k_ = 0;
+    uint32_t limit_ = 0;
     uint32_t last_ = UINT32_MAX;  // + 1 wraps to 0
 };
 
@@ -200,6 +212,49 @@ private:
 };
 
 }  // namespace detail
+
+class Bake;
+
+// A cell's ranked occluders, best first: a view into a Bake (valid while it lives and is not reloaded).
+// Entries are made on access from the Bake's compact arrays, so they come by value.
+class OccluderList {
+public:
+    class Iterator {
+    public:
+        using iterator_category = std::input_iterator_tag;
+        using value_type = RankedOccluder;
+        using difference_type = std::ptrdiff_t;
+        using pointer = void;
+        using reference = RankedOccluder;
+        RankedOccluder operator*() const noexcept;
+        Iterator& operator++() noexcept {
+            ++at_;
+            return *this;
+        }
+        bool operator==(const Iterator& o) const noexcept { return at_ == o.at_; }
+        bool operator!=(const Iterator& o) const noexcept { return at_ != o.at_; }
+
+    private:
+        friend class OccluderList;
+        Iterator(const Bake* bake, uint32_t at) : bake_(bake), at_(at) {}
+        const Bake* bake_;
+        uint32_t at_;
+    };
+
+    OccluderList() = default;
+    uint32_t size() const noexcept { return count_; }
+    bool empty() const noexcept { return count_ == 0; }
+    RankedOccluder operator[](uint32_t rank) const noexcept;  // rank < size(); 0 = best
+    Iterator begin() const noexcept { return Iterator(bake_, first_); }
+    Iterator end() const noexcept { return Iterator(bake_, first_ + count_); }
+
+private:
+    friend class Bake;
+    OccluderList(const Bake* bake, uint32_t first, uint32_t count)
+        : bake_(bake), first_(first), count_(count) {}
+    const Bake* bake_ = nullptr;
+    uint32_t first_ = 0, count_ = 0;
+};
 
 // A loaded bake. Default-constructed (or after a failed load) it is empty: no cells, no objects.
 class Bake {
@@ -302,58 +357,33 @@ public:
     // --occluders-per-cell 0 have none. Every entry was validated at load (a proven, finite box; finite
     // measures; scores never increasing), so a culler may use them as they are.
     uint32_t occluder_count(uint32_t c) const noexcept;  // 0 for old files / out of range
-#if defined(__cpp_lib_span)  // C++20; a C++17 game reads them with pvsbake_occluder() (loader_c.h)
-    std::span<const RankedOccluder> occluders(uint32_t c) const noexcept;  // best first; empty if none
-#endif
+    OccluderList occluders(uint32_t c) const noexcept;   // best first; empty if none
+    // The boxes of the best min(occluder_count(c), capacity) occluders of cell c into out, best first (as
+    // OcclusionCuller::begin_frame takes them); returns how many were written.
+    uint32_t occluder_boxes(uint32_t c, Box* out, uint32_t capacity) const noexcept;
 
     // ---- What the bake is
-    const BakeInfo& info() const {
-        return info_;
-    }
-    int format_major() const {
-        return info_.format_major;
-    }
-    int format_minor() const {
-        return info_.format_minor;
-    }
-    const std::string& mode() const {
-        return info_.mode;
-    }  // "sampled" or "conservative"
-    bool is_conservative() const {
-        return info_.conservative;
-    }
-    const char* mode_label() const {
-        return info_.conservative ? "conservative" : "aggressive";
-    }
-    const std::string& tool_version() const {
-        return info_.tool_version;
-    }
-    const std::string& world_path() const {
-        return info_.world_path;
-    }
-    const std::string& world_hash() const {
-        return info_.world_hash;
-    }
+    const BakeInfo& info() const { return info_; }
+    int format_major() const { return info_.format_major; }
+    int format_minor() const { return info_.format_minor; }
+    const std::string& mode() const { return info_.mode; }  // "sampled" or "conservative"
+    bool is_conservative() const { return info_.conservative; }
+    const char* mode_label() const { return info_.conservative ? "conservative" : "aggressive"; }
+    const std::string& tool_version() const { return info_.tool_version; }
+    const std::string& world_path() const { return info_.world_path; }
+    const std::string& world_hash() const { return info_.world_hash; }
     // Every resolved option of the bake (name, value as text), in the file's order.
-    const std::vector<std::pair<std::string, std::string>>& parameters() const {
-        return parameters_;
-    }
+    const std::vector<std::pair<std::string, std::string>>& parameters() const { return parameters_; }
     // The bake's figures (name, value), in the file's order, and the verification's (empty if none ran).
-    const std::vector<std::pair<std::string, double>>& figures() const {
-        return figures_;
-    }
+    const std::vector<std::pair<std::string, double>>& figures() const { return figures_; }
     const std::vector<std::pair<std::string, double>>& verification_figures() const {
         return verification_figures_;
     }
-    bool verification_ran() const {
-        return verification_ran_;
-    }
+    bool verification_ran() const { return verification_ran_; }
     // The first figure or parameter of that name; nullptr when there is none.
     const double* figure(std::string_view name) const noexcept;
     const std::string* parameter(std::string_view name) const noexcept;
-    const PvsStats& pvs_stats() const {
-        return stats_;
-    }
+    const PvsStats& pvs_stats() const { return stats_; }
 
 private:
     friend class Loading;
@@ -371,14 +401,14 @@ private:
         const uint32_t ref = detail::read_varint(p);
         const uint32_t head = detail::read_varint(p);
         if (ref == 0) {
-            key = detail::GapReader(p, head >> 5, head & 31);
+            key = detail::GapReader(p, head >> 5, head & 31, object_count_);
             return false;
         }
-        diff = detail::GapReader(p, head >> 5, head & 31);
+        diff = detail::GapReader(p, head >> 5, head & 31, object_count_);
         const uint8_t* q = code_.data() + row_offset_[row - ref];
         detail::read_varint(q);  // 0: a key row (validated)
         const uint32_t key_head = detail::read_varint(q);
-        key = detail::GapReader(q, key_head >> 5, key_head & 31);
+        key = detail::GapReader(q, key_head >> 5, key_head & 31, object_count_);
         return true;
     }
     Box grid_box(uint32_t grid_index) const;
@@ -419,14 +449,32 @@ private:
     bool has_eyes_ = false;
     std::vector<uint32_t> eye_brick_;
     std::vector<uint8_t> eye_brick_bytes_;
-    // Ranked occluders: cell c has ranked_[ranked_offset_[c] .. ranked_offset_[c + 1]); empty offsets: none.
+    // Ranked occluders, as the file stores them: cell c has entries ranked_offset_[c] ..
+    // ranked_offset_[c + 1] (empty offsets: none); entry k is the box ranked_boxes_[ranked_box_[k]] and
+    // four measures.
+    friend class OccluderList;
+    RankedOccluder ranked_entry(uint32_t k) const noexcept {
+        return RankedOccluder{ranked_boxes_[ranked_box_[k]], ranked_score_[k], ranked_solid_angle_sr_[k],
+                              ranked_hidden_objects_[k], ranked_hidden_triangle_share_[k]};
+    }
     detail::IndexArray ranked_offset_;
-    std::vector<RankedOccluder> ranked_;
+    std::vector<Box> ranked_boxes_;
+    std::vector<uint32_t> ranked_box_;
+    std::vector<float> ranked_score_, ranked_solid_angle_sr_, ranked_hidden_objects_,
+        ranked_hidden_triangle_share_;
     // The PVS: row code (plus 8 bytes of padding), where each distinct row starts, and each cell's row.
     std::vector<uint8_t> code_;
     detail::IndexArray row_offset_;
     detail::IndexArray cell_row_;
     PvsStats stats_;
 };
+
+inline RankedOccluder OccluderList::Iterator::operator*() const noexcept {
+    return bake_->ranked_entry(at_);
+}
+
+inline RankedOccluder OccluderList::operator[](uint32_t rank) const noexcept {
+    return bake_->ranked_entry(first_ + rank);
+}
 
 }  // namespace pvsbake
