@@ -2,18 +2,24 @@
 // eye points.
 //
 //   bench_vis_compare WORLD.glb BAKE.h5 [--vis WORLD.vis.json] [--eyes N] [--rays R] [--seed S]
+//                     [--lower-bound-eyes E]
 //
 // Eye points: random points of the bake's eye space that the compiler's BSP (the .vis.json beside the
 // world) also calls playable. At each: the share of the world's triangles in the objects the bake's cell
-// lists, the share the compiler's cluster PVS lets through (cluster_visible_triangle_fraction), and the
-// share in the objects R rays over the sphere actually reach from that point (a floor no cell-based PVS
-// can go below). Prints JSON: means, medians, and the ratio bake / compiler, and the share of the bake's
-// eye voxels the compiler calls solid or outside.
+// lists, the share the compiler's cluster PVS lets through (cluster_visible_triangle_fraction), the share
+// in the objects R rays over the sphere actually reach from that point (a floor no cell-based PVS can go
+// below), and the share the lower bound of the same cell lets through: the AGGRESSIVE sampled PVS of the
+// bake's own cells with E eye points each (default 64; what `pvsbake bake --mode sampled --eyes E` lists
+// for them, 250 M rays at most; 0 = not computed): what the cells really see, as far as E eyes tell, and so
+// what no conservative PVS of these cells can go below. Prints JSON: means, medians, the ratios bake /
+// compiler and bake / lower bound, and the share of the bake's eye voxels the compiler calls solid or
+// outside.
 #include "bench/bench_util.h"
 #include "cells/eyes.h"
 #include "core/random.h"
 #include "io/bake_file.h"
 #include "io/gltf_loader.h"
+#include "rays/ray_sampler.h"
 #include "rays/ray_scene.h"
 
 #include <nlohmann/json.hpp>
@@ -39,12 +45,13 @@ int main(int argc, char** argv) {
     if (argc < 3) {
         std::fprintf(
             stderr,
-            "usage: bench_vis_compare WORLD.glb BAKE.h5 [--vis V.json] [--eyes N] [--rays R] [--seed S]\n");
+            "usage: bench_vis_compare WORLD.glb BAKE.h5 [--vis V.json] [--eyes N] [--rays R] [--seed S] "
+            "[--lower-bound-eyes E]\n");
         return 2;
     }
     const std::string world_path = argv[1], bake_path = argv[2];
     std::string vis_path = world_path.substr(0, world_path.rfind('.')) + ".vis.json";
-    uint32_t n_eyes = 200, n_rays = 100000;
+    uint32_t n_eyes = 200, n_rays = 100000, lower_bound_eyes = 64;
     uint64_t seed = 1;
     for (int a = 3; a + 1 < argc; a += 2) {
         if (!std::strcmp(argv[a], "--vis"))
@@ -55,6 +62,8 @@ int main(int argc, char** argv) {
             n_rays = uint32_t(std::atoi(argv[a + 1]));
         else if (!std::strcmp(argv[a], "--seed"))
             seed = std::strtoull(argv[a + 1], nullptr, 10);
+        else if (!std::strcmp(argv[a], "--lower-bound-eyes"))
+            lower_bound_eyes = uint32_t(std::atoi(argv[a + 1]));
     }
     try {
         pvs::Context ctx(pvs::Context::Options{pvs::LogLevel::kWarning, true, stderr});
@@ -85,10 +94,18 @@ int main(int argc, char** argv) {
         };
         const double total = double(world.triangles.size());
         pvs::RayScene scene(ctx, world);
+        // The lower bound: the sampled PVS of the bake's cells (rays/ray_sampler.h), as the CLI's sampled
+        // mode makes it with --eyes lower_bound_eyes.
+        pvs::SampledPvs lower;
+        if (lower_bound_eyes > 0) {
+            pvs::SampledPvsConfig sampled;
+            sampled.rays.eyes_per_cell = lower_bound_eyes;
+            lower = pvs::bake_sampled_pvs(ctx, sampled, world, scene, bake.cells);
+        }
         std::vector<glm::vec3> dirs;
         pvs::sample_sphere_directions(n_rays, seed, 0, dirs);
         pvs::Rng rng(seed, 3);
-        std::vector<double> ours, compiler, seen, ratio;
+        std::vector<double> ours, compiler, seen, ratio, bound, over_bound;
         const pvs::Aabb box = world.bounds;
         for (uint32_t tries = 0; ours.size() < n_eyes && tries < 1000 * n_eyes; ++tries) {
             const glm::vec3 p = box.min + box.size() * glm::vec3(rng.uniform(), rng.uniform(), rng.uniform());
@@ -97,9 +114,12 @@ int main(int argc, char** argv) {
             if (cell < 0) continue;
             const int cluster = cluster_of(p);
             if (cluster < 0 || !fraction.contains(std::to_string(cluster))) continue;
-            double listed = 0.0;
-            for (uint32_t o = 0; o < bake.objects.size(); ++o)
+            double listed = 0.0, bound_listed = 0.0;
+            for (uint32_t o = 0; o < bake.objects.size(); ++o) {
                 if (bake.pvs.test(uint32_t(cell), o)) listed += bake.objects[o].triangle_count;
+                if (lower_bound_eyes > 0 && lower.pvs.test(uint32_t(cell), o))
+                    bound_listed += bake.objects[o].triangle_count;
+            }
             std::vector<pvs::RayTouch> touches;
             scene.trace(p, dirs.data(), uint32_t(dirs.size()), touches);
             std::vector<uint8_t> hit(world.objects.size(), 0);
@@ -112,6 +132,10 @@ int main(int argc, char** argv) {
             compiler.push_back(c);
             seen.push_back(visible / total);
             if (c > 0) ratio.push_back(listed / total / c);
+            if (lower_bound_eyes > 0) {
+                bound.push_back(bound_listed / total);
+                if (bound_listed > 0) over_bound.push_back(listed / bound_listed);
+            }
         }
         // How much of the bake's eye space the compiler calls solid or outside (cluster -1): eyes there,
         // inside walls or out in the void of a leaking level, see the backs of everything.
@@ -141,6 +165,17 @@ int main(int argc, char** argv) {
         out["rays_triangle_share_mean"] = mean(seen);
         out["bake_over_compiler_of_means"] = mean(compiler) > 0 ? mean(ours) / mean(compiler) : 0.0;
         out["bake_over_compiler_median"] = median(ratio);
+        out["lower_bound_eyes_per_cell"] = lower_bound_eyes;
+        if (lower_bound_eyes > 0) {
+            out["lower_bound_rays_per_eye"] = lower.rays_per_eye;
+            out["lower_bound_triangle_share_mean"] = mean(bound);
+            out["lower_bound_triangle_share_median"] = median(bound);
+            out["lower_bound_over_compiler_of_means"] =
+                mean(compiler) > 0 ? mean(bound) / mean(compiler) : 0.0;
+            out["bake_over_lower_bound_of_means"] = mean(bound) > 0 ? mean(ours) / mean(bound) : 0.0;
+            out["bake_over_lower_bound_median"] = median(over_bound);
+            out["lower_bound_seconds"] = lower.seconds;
+        }
         out["eye_voxels"] = eye_voxels;
         out["eye_voxels_in_compiler_solid_share"] =
             eye_voxels ? double(eye_voxels_outside) / double(eye_voxels) : 0.0;
