@@ -7,6 +7,7 @@
 #include "occluders/gap_probe.h"
 #include "occluders/panels.h"
 #include "occluders/seal_probe.h"
+#include "occluders/slanted_panels.h"
 #include "occluders/solid.h"
 #include "occluders/synthesis.h"
 #include "rays/ray_scene.h"
@@ -801,6 +802,163 @@ TEST(PanelsProperty, EveryPointOfAPanelIsCovered) {
     }
     EXPECT_GT(panels_seen, 100u);
     EXPECT_GT(checked, 20000u);
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Slanted panels: convex polygons tiled by coplanar opaque triangles off the axis planes.
+
+// Maps (u, v) of a plane tilted 37 degrees about x (and turned 20 degrees about y), lifted by h along its
+// normal, to world space.
+glm::vec3 tilted(float u, float v, float h = 0.0f) {
+    const float a = glm::radians(37.0f), b = glm::radians(20.0f);
+    const glm::vec3 e1(std::cos(b), 0.0f, -std::sin(b));
+    const glm::vec3 e2 = glm::vec3(std::sin(b) * std::sin(a), std::cos(a), std::cos(b) * std::sin(a));
+    return glm::vec3(1, 2, 3) + u * e1 + v * e2 + h * glm::normalize(glm::cross(e1, e2));
+}
+
+bool convex_ccw(const SlantedPanel& p) {
+    const size_t n = p.corners.size();
+    for (size_t i = 0; i < n; ++i) {
+        const glm::dvec3 a = p.corners[i], b = p.corners[(i + 1) % n], c = p.corners[(i + 2) % n];
+        if (glm::dot(glm::cross(b - a, c - b), p.normal) < -1e-9) return false;
+    }
+    return n >= 3;
+}
+
+double total_area(const std::vector<SlantedPanel>& panels) {
+    double a = 0.0;
+    for (const SlantedPanel& p : panels) a += p.area_m2;
+    return a;
+}
+
+TEST(SlantedPanels, ATiltedRectangleOfTwoTrianglesIsOneConvexPanel) {
+    World w;
+    add_triangle(w, tilted(0, 0), tilted(3, 0), tilted(3, 2));
+    add_triangle(w, tilted(0, 0), tilted(3, 2), tilted(0, 2));
+    SlantedPanelFigures fig;
+    const std::vector<SlantedPanel> panels = find_slanted_panels(w, 1e-4, 0.0, &fig);
+    EXPECT_EQ(fig.slanted_triangles, 2u);
+    ASSERT_EQ(panels.size(), 1u);
+    EXPECT_EQ(panels[0].corners.size(), 4u);
+    EXPECT_EQ(panels[0].triangles, 2u);
+    EXPECT_NEAR(panels[0].area_m2, 6.0, 1e-5);
+    EXPECT_TRUE(convex_ccw(panels[0]));
+    EXPECT_LT(panels[0].thickness, 1e-5);
+    const glm::dvec3 want = glm::normalize(
+        glm::cross(glm::dvec3(tilted(1, 0) - tilted(0, 0)), glm::dvec3(tilted(0, 1) - tilted(0, 0))));
+    EXPECT_GT(std::abs(glm::dot(panels[0].normal, want)), 1.0 - 1e-9);
+}
+
+TEST(SlantedPanels, ShapesSplitIntoConvexPiecesThatTileThemAndFoldsAreNotMerged) {
+    World w;
+    // An L of three unit squares: not convex, so at least two pieces, of area 3 together.
+    for (const auto& [u, v] : {std::pair{0, 0}, std::pair{1, 0}, std::pair{0, 1}}) {
+        add_triangle(w, tilted(float(u), float(v)), tilted(float(u + 1), float(v)),
+                     tilted(float(u + 1), float(v + 1)));
+        add_triangle(w, tilted(float(u), float(v)), tilted(float(u + 1), float(v + 1)),
+                     tilted(float(u), float(v + 1)));
+    }
+    std::vector<SlantedPanel> panels = find_slanted_panels(w, 1e-4, 0.0);
+    EXPECT_GE(panels.size(), 2u);
+    EXPECT_NEAR(total_area(panels), 3.0, 1e-5);
+    for (const SlantedPanel& p : panels) EXPECT_TRUE(convex_ccw(p));
+    // A fan of six triangles (a hexagon): its centre stays a corner until the last triangle, so the fan
+    // grows into pieces of at most half of it (the limit of growing convex polygons one triangle at a
+    // time); whether a half closes at exactly 180 degrees depends on rounding.
+    World fan;
+    std::vector<glm::vec3> rim;
+    for (int k = 0; k < 6; ++k)
+        rim.push_back(
+            tilted(std::cos(glm::radians(60.0f * float(k))), std::sin(glm::radians(60.0f * float(k)))));
+    for (int k = 0; k < 6; ++k) add_triangle(fan, tilted(0, 0), rim[size_t(k)], rim[size_t(k + 1) % 6]);
+    panels = find_slanted_panels(fan, 1e-4, 0.0);
+    EXPECT_GE(panels.size(), 2u);
+    EXPECT_LE(panels.size(), 3u);
+    EXPECT_NEAR(total_area(panels), 1.5 * std::sqrt(3.0), 1e-5);
+    // A ridge: two slopes sharing an edge are two panels. A triangle lifted by 1 mm off the plane of its
+    // neighbour joins it only when the thickness allows.
+    World ridge;
+    add_triangle(ridge, {0, 0, 0}, {4, 0, 0}, {2, 1, 1});
+    add_triangle(ridge, {0, 0, 0}, {2, 1, 1}, {0, 1, 1});
+    add_triangle(ridge, {0, 1, 1}, {2, 1, 1}, {2, 0, 2});
+    EXPECT_EQ(find_slanted_panels(ridge, 1e-4, 0.0).size(), 2u);
+    World lifted;
+    add_triangle(lifted, tilted(0, 0), tilted(2, 0), tilted(2, 2));
+    add_triangle(lifted, tilted(0, 0), tilted(2, 2), tilted(0, 2, 0.001f));
+    EXPECT_EQ(find_slanted_panels(lifted, 1e-4, 0.0).size(), 2u);
+    ASSERT_EQ(find_slanted_panels(lifted, 0.002, 0.0).size(), 1u);
+    EXPECT_NEAR(find_slanted_panels(lifted, 0.002, 0.0)[0].thickness, 0.001, 1e-4);
+}
+
+TEST(SlantedPanels, AxisPlanesGlassHalfEdgesAndSmallPiecesAreLeftOut) {
+    World w;
+    add_rect_z(w, 1.0f, 0, 2, 0, 2);                                              // an axis plane
+    add_triangle(w, tilted(0, 0), tilted(2, 0), tilted(2, 2), /*opaque=*/false);  // glass
+    // A T-junction: the long edge of one triangle is two edges of the others: not shared whole.
+    add_triangle(w, tilted(10, 0), tilted(12, 0), tilted(11, -1));
+    add_triangle(w, tilted(10, 0), tilted(11, 1), tilted(11, 0));
+    add_triangle(w, tilted(11, 0), tilted(11, 1), tilted(12, 0));
+    SlantedPanelFigures fig;
+    const std::vector<SlantedPanel> panels = find_slanted_panels(w, 1e-4, 0.0, &fig);
+    EXPECT_EQ(fig.slanted_triangles, 3u);
+    EXPECT_EQ(panels.size(), 2u);  // the lower triangle alone, the upper two together
+    EXPECT_EQ(find_slanted_panels(w, 1e-4, 1.5).size(), 0u);  // each piece is 1 m2
+}
+
+// Random tilted sheets of quads, each split along a random diagonal, some lifted off the plane: the panels
+// are convex, no triangle is in two, together they hold exactly the triangles' area, and every point of a
+// panel lies in one of its plane's triangles.
+TEST(SlantedPanelsProperty, PanelsAreConvexAndExactlyTiledByTheirTriangles) {
+    Rng rng(41, 0);
+    for (int trial = 0; trial < (test::in_ci() ? 20 : 200); ++trial) {
+        World w;
+        const int nu = 1 + int(rng.uniform() * 5), nv = 1 + int(rng.uniform() * 5);
+        double want = 0.0;
+        std::vector<std::vector<bool>> laid(size_t(nu), std::vector<bool>(size_t(nv), false));
+        for (int i = 0; i < nu; ++i) {
+            for (int j = 0; j < nv; ++j) {
+                if (rng.uniform() < 0.2) continue;  // holes make the sheet non-convex
+                laid[size_t(i)][size_t(j)] = true;
+                const float u = float(i), v = float(j);
+                if (rng.uniform() < 0.5) {
+                    add_triangle(w, tilted(u, v), tilted(u + 1, v), tilted(u + 1, v + 1));
+                    add_triangle(w, tilted(u, v), tilted(u + 1, v + 1), tilted(u, v + 1));
+                } else {
+                    add_triangle(w, tilted(u, v), tilted(u + 1, v), tilted(u, v + 1));
+                    add_triangle(w, tilted(u + 1, v), tilted(u + 1, v + 1), tilted(u, v + 1));
+                }
+                want += 1.0;
+            }
+        }
+        const std::vector<SlantedPanel> panels = find_slanted_panels(w, 1e-4, 0.0);
+        EXPECT_NEAR(total_area(panels), want, 1e-4 * (want + 1.0)) << "trial " << trial;
+        uint32_t members = 0;
+        for (const SlantedPanel& p : panels) {
+            members += p.triangles;
+            ASSERT_TRUE(convex_ccw(p)) << "trial " << trial;
+            // Random points of the panel (convex combinations of its corners) lie on the sheet.
+            for (int k = 0; k < 20; ++k) {
+                glm::dvec3 q(0.0);
+                double sum = 0.0;
+                for (const glm::dvec3& c : p.corners) {
+                    const double wgt = rng.uniform();
+                    q += wgt * c;
+                    sum += wgt;
+                }
+                q /= sum;
+                // Back to (u, v): the sheet's square holding it must be one that was laid.
+                const glm::dvec3 o = glm::dvec3(tilted(0, 0));
+                const glm::dvec3 e1 = glm::dvec3(tilted(1, 0)) - o, e2 = glm::dvec3(tilted(0, 1)) - o;
+                const double u = glm::dot(q - o, e1) / glm::dot(e1, e1),
+                             v = glm::dot(q - o, e2) / glm::dot(e2, e2);
+                EXPECT_LT(std::abs(glm::dot(q - o, glm::normalize(glm::cross(e1, e2)))), 1e-5);
+                const int iu = int(std::floor(u)), iv = int(std::floor(v));
+                ASSERT_TRUE(iu >= 0 && iv >= 0 && iu < nu && iv < nv && laid[size_t(iu)][size_t(iv)])
+                    << "trial " << trial << ": (" << u << ", " << v << ") is not on the sheet";
+            }
+        }
+        EXPECT_EQ(members, uint32_t(w.triangles.size()));
+    }
 }
 
 TEST(Panels, InsetShrinksTheRectangleAndDropsWhatVanishes) {

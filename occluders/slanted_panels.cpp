@@ -1,0 +1,152 @@
+// Slanted panels: convex polygons tiled by coplanar opaque triangles. Conventions: slanted_panels.h.
+#include "occluders/slanted_panels.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
+#include <numeric>
+#include <tuple>
+
+namespace pvs {
+
+namespace {
+
+using Key = std::tuple<float, float, float>;
+Key key_of(const glm::vec3& p) {
+    return {p.x, p.y, p.z};
+}
+using EdgeKey = std::pair<Key, Key>;
+EdgeKey edge_of(const glm::vec3& a, const glm::vec3& b) {
+    const Key ka = key_of(a), kb = key_of(b);
+    return ka < kb ? EdgeKey{ka, kb} : EdgeKey{kb, ka};
+}
+
+bool in_axis_plane(const std::array<glm::vec3, 3>& p) {
+    for (int a = 0; a < 3; ++a)
+        if (p[0][a] == p[1][a] && p[1][a] == p[2][a]) return true;
+    return false;
+}
+
+double cross2(const glm::dvec2& a, const glm::dvec2& b) {
+    return a.x * b.y - a.y * b.x;
+}
+
+// A polygon being grown: its corners (as the float vertices they are, and in the plane's 2D frame),
+// counter-clockwise.
+struct Growing {
+    glm::dvec3 origin, e1, e2, normal;
+    double offset = 0.0;
+    std::vector<glm::vec3> corners;
+    std::vector<glm::dvec2> flat;
+    glm::dvec2 to2d(const glm::vec3& p) const {
+        const glm::dvec3 d = glm::dvec3(p) - origin;
+        return {glm::dot(d, e1), glm::dot(d, e2)};
+    }
+};
+
+}  // namespace
+
+std::vector<SlantedPanel> find_slanted_panels(const World& world, double max_thickness_m, double min_area_m2,
+                                              SlantedPanelFigures* figures) {
+    SlantedPanelFigures fig;
+    std::vector<uint32_t> slanted;
+    std::vector<double> area;
+    std::map<EdgeKey, std::vector<uint32_t>> by_edge;
+    auto corners_of = [&](uint32_t t) {
+        const Triangle& tri = world.triangles[t];
+        return std::array<glm::vec3, 3>{world.positions[tri.v[0]], world.positions[tri.v[1]],
+                                        world.positions[tri.v[2]]};
+    };
+    for (uint32_t t = 0; t < world.triangles.size(); ++t) {
+        if (!world.triangle_opaque[t]) continue;
+        const std::array<glm::vec3, 3> p = corners_of(t);
+        if (in_axis_plane(p)) continue;
+        const double a = 0.5 * glm::length(glm::cross(glm::dvec3(p[1]) - glm::dvec3(p[0]),
+                                                      glm::dvec3(p[2]) - glm::dvec3(p[0])));
+        if (!(a > 0.0)) continue;
+        ++fig.slanted_triangles;
+        fig.slanted_area_m2 += a;
+        slanted.push_back(t);
+        area.push_back(a);
+        for (int i = 0; i < 3; ++i) by_edge[edge_of(p[i], p[(i + 1) % 3])].push_back(t);
+    }
+    std::vector<size_t> order(slanted.size());
+    std::iota(order.begin(), order.end(), size_t(0));
+    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return area[a] > area[b]; });
+    std::vector<uint8_t> used(world.triangles.size(), 1);  // only slanted triangles may join
+    for (uint32_t t : slanted) used[t] = 0;
+
+    std::vector<SlantedPanel> out;
+    for (size_t s : order) {
+        const uint32_t seed = slanted[s];
+        if (used[seed]) continue;
+        used[seed] = 1;
+        const std::array<glm::vec3, 3> p = corners_of(seed);
+        Growing g;
+        g.origin = glm::dvec3(p[0]);
+        g.normal = glm::normalize(glm::cross(glm::dvec3(p[1]) - g.origin, glm::dvec3(p[2]) - g.origin));
+        g.offset = glm::dot(g.normal, g.origin);
+        g.e1 = glm::normalize(glm::dvec3(p[1]) - g.origin);
+        g.e2 = glm::cross(g.normal, g.e1);
+        g.corners.assign(p.begin(), p.end());  // counter-clockwise about normal by construction
+        for (const glm::vec3& c : g.corners) g.flat.push_back(g.to2d(c));
+        uint32_t members = 1;
+        double thickness = 0.0;
+        for (bool grew = true; grew;) {
+            grew = false;
+            for (size_t i = 0; i < g.corners.size() && !grew; ++i) {
+                const size_t j = (i + 1) % g.corners.size();
+                const auto it = by_edge.find(edge_of(g.corners[i], g.corners[j]));
+                if (it == by_edge.end()) continue;
+                for (uint32_t u : it->second) {
+                    if (used[u]) continue;
+                    const std::array<glm::vec3, 3> q = corners_of(u);
+                    int third = -1;
+                    for (int k = 0; k < 3; ++k)
+                        if (key_of(q[k]) != key_of(g.corners[i]) && key_of(q[k]) != key_of(g.corners[j]))
+                            third = k;
+                    if (third < 0) continue;
+                    const glm::vec3 c = q[size_t(third)];
+                    const double off = std::abs(glm::dot(g.normal, glm::dvec3(c)) - g.offset);
+                    if (!(off <= max_thickness_m)) continue;
+                    const glm::dvec2 a2 = g.flat[i], b2 = g.flat[j], c2 = g.to2d(c);
+                    if (!(cross2(b2 - a2, c2 - a2) < 0.0)) continue;  // beyond the edge, not folded back
+                    const size_t n = g.corners.size();
+                    const glm::dvec2 before_a = g.flat[(i + n - 1) % n], after_b = g.flat[(j + 1) % n];
+                    if (cross2(a2 - before_a, c2 - a2) < 0.0) continue;  // convex at a
+                    if (cross2(b2 - c2, after_b - b2) < 0.0) continue;   // convex at b
+                    g.corners.insert(g.corners.begin() + ptrdiff_t(j == 0 ? n : j), c);
+                    g.flat.insert(g.flat.begin() + ptrdiff_t(j == 0 ? n : j), c2);
+                    used[u] = 1;
+                    ++members;
+                    thickness = std::max(thickness, off);
+                    grew = true;
+                    break;
+                }
+            }
+        }
+        double a = 0.0;
+        for (size_t i = 0; i < g.flat.size(); ++i) a += cross2(g.flat[i], g.flat[(i + 1) % g.flat.size()]);
+        a *= 0.5;
+        if (a < min_area_m2) continue;
+        SlantedPanel panel;
+        panel.normal = g.normal;
+        panel.offset = g.offset;
+        panel.thickness = thickness;
+        panel.area_m2 = a;
+        panel.triangles = members;
+        for (const glm::vec3& c : g.corners) {
+            panel.corners.emplace_back(c);
+            panel.bounds.extend(c);
+        }
+        fig.triangles_in_panels += members;
+        fig.panel_area_m2 += a;
+        out.push_back(std::move(panel));
+    }
+    fig.panels = out.size();
+    if (figures) *figures = fig;
+    return out;
+}
+
+}  // namespace pvs

@@ -1,0 +1,47 @@
+// pvsbake occluders: SLANTED PANELS, convex polygons in planes that are not axis planes, tiled exactly by
+// opaque triangles that share whole edges: the slopes, ramps and roofs that axis-aligned boxes and panels
+// (occluders/panels.h) cannot cover. docs/ALGORITHMS.md#slanted-panels says how they are grown and what
+// they promise; they are not yet drawn by the solver.
+//
+// Conventions: glTF axes (right-handed, +Y up, metres). A slanted panel's triangles all lie within
+// `thickness` of its plane dot(normal, x) = offset, and their union is exactly its polygon (each triangle
+// added across an edge of the polygon so far, on the far side of that edge): a segment from one side of the
+// slab |dot(normal, x) - offset| <= thickness to the other whose slab part stays over the polygon meets an
+// opaque triangle.
+#pragma once
+
+#include "core/math.h"
+#include "core/world.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace pvs {
+
+struct SlantedPanel {
+    glm::dvec3 normal{0.0};           // unit
+    double offset = 0.0;              // the plane: dot(normal, x) = offset
+    double thickness = 0.0;           // the largest distance of a corner of its triangles from the plane
+    std::vector<glm::dvec3> corners;  // convex, counter-clockwise seen from the side normal points to
+    double area_m2 = 0.0;
+    uint32_t triangles = 0;
+    Aabb bounds;
+};
+
+struct SlantedPanelFigures {
+    uint64_t slanted_triangles = 0;  // opaque triangles not in an axis plane
+    double slanted_area_m2 = 0.0;
+    uint64_t panels = 0;  // polygons kept (at least min_area_m2)
+    uint64_t triangles_in_panels = 0;
+    double panel_area_m2 = 0.0;
+};
+
+// The slanted panels of the world's opaque triangles, largest triangle first as seed: a polygon grows by
+// a triangle that shares one of its edges (vertex positions compared exactly), whose third corner lies
+// beyond that edge and within max_thickness_m of the seed's plane, and that keeps it convex. Each triangle
+// joins at most one polygon. Polygons under min_area_m2 are dropped. T-junctions stop the growth (an
+// edge must be shared whole). Deterministic.
+std::vector<SlantedPanel> find_slanted_panels(const World& world, double max_thickness_m, double min_area_m2,
+                                              SlantedPanelFigures* figures = nullptr);
+
+}  // namespace pvs
