@@ -30,6 +30,19 @@ struct RankedOccluder {
                                          // in objects wholly in its shadow
 };
 
+// A slanted panel (occluders/slanted_panels.h): a convex polygon in a plane that is not an axis plane, tiled
+// exactly by opaque triangles sharing whole edges, all within `thickness` of the plane
+// (docs/ALGORITHMS.md#slanted-panels).
+struct SlantedPanel {
+    glm::dvec3 normal{0.0};           // unit
+    double offset = 0.0;              // the plane: dot(normal, x) = offset
+    double thickness = 0.0;           // the largest distance of a corner of its triangles from the plane
+    std::vector<glm::dvec3> corners;  // convex, counter-clockwise seen from the side normal points to
+    double area_m2 = 0.0;
+    uint32_t triangles = 0;
+    Aabb bounds;
+};
+
 // The ranked occluders of every cell: cell c has entries[offsets[c] .. offsets[c + 1]), best first.
 // Empty offsets = no ranking (a bake made without it, or read from a file older than format 1.2).
 struct RankedOccluders {
@@ -51,6 +64,9 @@ struct ShrunkOccluders {
     // Flat rectangles covered by opaque triangles (occluders/panels.h), as found: the depth cube insets them
     // per ray for each patch's box (docs/ALGORITHMS.md#panel-inset).
     std::vector<Aabb> panels;
+    // Convex polygons in other planes (occluders/slanted_panels.h), as found: only the single-occluder test
+    // (solver/region_hiding.h) uses them.
+    std::vector<SlantedPanel> slanted;
     VoxelMask solid;  // the proven solid (sealed off from the eyes, untouched, passed the sight probe and the
                       // ray check): no sight line from the eye space enters it
                       // (docs/ALGORITHMS.md#sampled-step)

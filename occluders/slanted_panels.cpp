@@ -28,6 +28,12 @@ bool in_axis_plane(const std::array<glm::vec3, 3>& p) {
     return false;
 }
 
+// Sines of angles: a new corner must lie beyond the edge by at least kBeyond (far above double rounding, so
+// no triangle folds back over the polygon), and a corner may turn the wrong way by at most kStraight (a
+// straight run of edges, rounded), far less than kBeyond.
+constexpr double kBeyond = 1e-9;
+constexpr double kStraight = 1e-12;
+
 double cross2(const glm::dvec2& a, const glm::dvec2& b) {
     return a.x * b.y - a.y * b.x;
 }
@@ -111,11 +117,19 @@ std::vector<SlantedPanel> find_slanted_panels(const World& world, double max_thi
                     const double off = std::abs(glm::dot(g.normal, glm::dvec3(c)) - g.offset);
                     if (!(off <= max_thickness_m)) continue;
                     const glm::dvec2 a2 = g.flat[i], b2 = g.flat[j], c2 = g.to2d(c);
-                    if (!(cross2(b2 - a2, c2 - a2) < 0.0)) continue;  // beyond the edge, not folded back
+                    // Beyond the edge by more than rounding (so the triangle cannot fold back over the
+                    // polygon), and convex at both ends of it, up to rounding
+                    // (docs/ALGORITHMS.md#slanted-panels).
+                    if (!(cross2(b2 - a2, c2 - a2) < -kBeyond * glm::length(b2 - a2) * glm::length(c2 - a2)))
+                        continue;
                     const size_t n = g.corners.size();
                     const glm::dvec2 before_a = g.flat[(i + n - 1) % n], after_b = g.flat[(j + 1) % n];
-                    if (cross2(a2 - before_a, c2 - a2) < 0.0) continue;  // convex at a
-                    if (cross2(b2 - c2, after_b - b2) < 0.0) continue;   // convex at b
+                    if (cross2(a2 - before_a, c2 - a2) <
+                        -kStraight * glm::length(a2 - before_a) * glm::length(c2 - a2))
+                        continue;
+                    if (cross2(b2 - c2, after_b - b2) <
+                        -kStraight * glm::length(b2 - c2) * glm::length(after_b - b2))
+                        continue;
                     g.corners.insert(g.corners.begin() + ptrdiff_t(j == 0 ? n : j), c);
                     g.flat.insert(g.flat.begin() + ptrdiff_t(j == 0 ? n : j), c2);
                     used[u] = 1;

@@ -1,7 +1,8 @@
 // pvsbake occluders: SLANTED PANELS, convex polygons in planes that are not axis planes, tiled exactly by
 // opaque triangles that share whole edges: the slopes, ramps and roofs that axis-aligned boxes and panels
 // (occluders/panels.h) cannot cover. docs/ALGORITHMS.md#slanted-panels says how they are grown and what
-// they promise; they are not yet drawn by the solver.
+// they promise; the solver's single-occluder test uses them (solver/region_hiding.h). The struct is
+// core/occluder.h's SlantedPanel.
 //
 // Conventions: glTF axes (right-handed, +Y up, metres). A slanted panel's triangles all lie within
 // `thickness` of its plane dot(normal, x) = offset, and their union is exactly its polygon (each triangle
@@ -11,22 +12,13 @@
 #pragma once
 
 #include "core/math.h"
+#include "core/occluder.h"
 #include "core/world.h"
 
 #include <cstdint>
 #include <vector>
 
 namespace pvs {
-
-struct SlantedPanel {
-    glm::dvec3 normal{0.0};           // unit
-    double offset = 0.0;              // the plane: dot(normal, x) = offset
-    double thickness = 0.0;           // the largest distance of a corner of its triangles from the plane
-    std::vector<glm::dvec3> corners;  // convex, counter-clockwise seen from the side normal points to
-    double area_m2 = 0.0;
-    uint32_t triangles = 0;
-    Aabb bounds;
-};
 
 struct SlantedPanelFigures {
     uint64_t slanted_triangles = 0;  // opaque triangles not in an axis plane

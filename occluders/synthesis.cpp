@@ -7,6 +7,7 @@
 #include "occluders/gap_probe.h"
 #include "occluders/panels.h"
 #include "occluders/seal_probe.h"
+#include "occluders/slanted_panels.h"
 #include "occluders/solid.h"
 #include "rays/clearance.h"
 
@@ -322,6 +323,12 @@ BitVolume crop(const VoxelGrid& grid, const std::vector<uint64_t>& bits, glm::iv
 // Rounds of the seal probe: each probes the frontier the leaks of the one before opened.
 constexpr int kSealRounds = 8;
 
+// Slanted panels: their triangles within 0.1 mm of the plane (the slab the single-occluder test checks both
+// faces of: any thickness is safe, a thin one keeps the test tight), and polygons of at least 0.25 m2 (the
+// smaller ones, a third of them on ctf_inyard, hold little of the area and cost candidate tests).
+constexpr double kSlantedThicknessM = 1e-4;
+constexpr double kSlantedMinAreaM2 = 0.25;
+
 std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& config, const World& world,
                                            const ViewVolume& view, const RayScene& scene,
                                            OccluderFigures& figures, double epsilon_m, int levels,
@@ -392,6 +399,12 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
             fmt::format("panels: {} opaque triangles lie in {} axis planes, covering {} cells of their "
                         "vertex grids; {} maximal covered rectangles",
                         pf.flat_triangles, pf.planes, pf.covered_cells, pf.panels));
+        SlantedPanelFigures sf;
+        shrunk->slanted = find_slanted_panels(world, kSlantedThicknessM, kSlantedMinAreaM2, &sf);
+        ctx.info(fmt::format(
+            "slanted panels: {} opaque triangles off the axis planes ({:.0f} m2) give {} convex "
+            "polygons of at least {} m2 ({:.0f} m2)",
+            sf.slanted_triangles, sf.slanted_area_m2, sf.panels, kSlantedMinAreaM2, sf.panel_area_m2));
         shrunk->boxes = shrunk_boxes(ctx, grid, proven, bc, shrunk->epsilon_m);
         std::vector<uint64_t> free_bits(proven.words.size());
         for (size_t w = 0; w < proven.words.size(); ++w)
@@ -573,6 +586,7 @@ BlockFigures synthesize_block_occluders(Context& ctx, const OccluderConfig& conf
                 }
             }
             set.panels = shrunk.panels;
+            set.slanted = shrunk.slanted;
             figures.solid_m3 += double(proven.count()) * voxel_m3;
             figures.global_solid_m3 += double(n_global) * voxel_m3;
             figures.rays += f.probe_rays + f.check_rays;

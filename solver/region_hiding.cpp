@@ -42,7 +42,8 @@ bool segment_meets(const glm::dvec3& q, const glm::dvec3& x, const glm::dvec3& l
 
 }  // namespace
 
-World box_world(const std::vector<Aabb>& boxes, const std::vector<Aabb>& flat, bool opaque) {
+World box_world(const std::vector<Aabb>& boxes, const std::vector<Aabb>& flat, bool opaque,
+                const std::vector<SlantedPanel>& slanted) {
     static constexpr std::array<std::array<uint32_t, 3>, 12> kFaces{{{0, 2, 1},
                                                                      {1, 2, 3},
                                                                      {4, 5, 6},
@@ -79,6 +80,23 @@ World box_world(const std::vector<Aabb>& boxes, const std::vector<Aabb>& flat, b
     };
     for (const Aabb& b : boxes) add(b);
     for (const Aabb& b : flat) add(b);
+    for (const SlantedPanel& p : slanted) {
+        WorldObject o;
+        o.name = "slanted" + std::to_string(w.objects.size());
+        o.bounds = p.bounds;
+        o.first_triangle = uint32_t(w.triangles.size());
+        const uint32_t v0 = uint32_t(w.positions.size());
+        for (const glm::dvec3& c : p.corners) w.positions.emplace_back(c);
+        for (uint32_t i = 1; i + 1 < uint32_t(p.corners.size()); ++i) {
+            w.triangles.push_back(Triangle{{v0, v0 + i, v0 + i + 1}});
+            w.triangle_opaque.push_back(opaque ? 1 : 0);
+            w.triangle_double_sided.push_back(1);
+        }
+        o.triangle_count = uint32_t(w.triangles.size()) - o.first_triangle;
+        o.flags = opaque ? kObjectHasOpaque : kObjectHasSeeThrough;
+        w.bounds.extend(p.bounds);
+        w.objects.push_back(o);
+    }
     return w;
 }
 
@@ -111,14 +129,62 @@ bool box_hides(const Aabb& region, const Aabb& object, const Aabb& box) {
     return true;
 }
 
+bool slanted_hides(const Aabb& region, const Aabb& object, const SlantedPanel& panel) {
+    const size_t n = panel.corners.size();
+    if (n < 3) return false;
+    const glm::dvec3 normal = panel.normal;
+    const double tol = kHideToleranceM;
+    const std::array<glm::dvec3, 8> rc = corners(region), oc = corners(object);
+    auto support = [&](const std::array<glm::dvec3, 8>& c) {
+        double lo = INFINITY, hi = -INFINITY;
+        for (const glm::dvec3& p : c) {
+            const double h = glm::dot(normal, p);
+            lo = std::min(lo, h);
+            hi = std::max(hi, h);
+        }
+        return std::pair{lo, hi};
+    };
+    const auto [r_lo, r_hi] = support(rc);
+    const auto [o_lo, o_hi] = support(oc);
+    const double below = panel.offset - panel.thickness - tol, above = panel.offset + panel.thickness + tol;
+    if (!((r_hi < below && o_lo > above) || (o_hi < below && r_lo > above))) return false;
+    // The polygon's edges as inward half-planes m.x >= k + tol (m in the plane, square to the edge). Their
+    // intersection lies in the polygon even if rounding left it a hair short of convex.
+    std::vector<glm::dvec3> m(n);
+    std::vector<double> k(n);
+    for (size_t i = 0; i < n; ++i) {
+        const glm::dvec3 e = panel.corners[(i + 1) % n] - panel.corners[i];
+        const glm::dvec3 in = glm::cross(normal, e);
+        const double len = glm::length(in);
+        if (!(len > 0.0)) return false;
+        m[i] = in / len;
+        k[i] = glm::dot(m[i], panel.corners[i]) + tol;
+    }
+    const double faces[2] = {panel.offset - panel.thickness, panel.offset + panel.thickness};
+    for (const glm::dvec3& q : rc)
+        for (const glm::dvec3& x : oc) {
+            const double hq = glm::dot(normal, q), hx = glm::dot(normal, x);
+            for (double face : faces) {
+                const double t = (face - hq) / (hx - hq);  // in (0, 1): q and x lie beyond the slab's faces
+                const glm::dvec3 y = q + t * (x - q);
+                for (size_t i = 0; i < n; ++i)
+                    if (!(glm::dot(m[i], y) >= k[i])) return false;
+            }
+        }
+    return true;
+}
+
 RegionHider::RegionHider(Context& ctx, const ShrunkOccluders& set)
-    : boxes_(set.boxes.empty() ? std::vector<Aabb>{} : set.boxes.front()), panels_(set.panels) {
+    : boxes_(set.boxes.empty() ? std::vector<Aabb>{} : set.boxes.front()),
+      panels_(set.panels),
+      slanted_(set.slanted) {
     for (const Aabb& p : panels_) panel_axis_.push_back(panel_axis(p));
     // Embree's own log lines would repeat per set: a quiet context for the scene, one line here.
     Context quiet(Context::Options{LogLevel::kWarning, true, nullptr});
-    scene_ = std::make_unique<RayScene>(quiet, box_world(boxes_, panels_, false), BuildQuality::kMedium, 1);
-    ctx.debug(fmt::format("single-occluder pass: {} boxes and {} panels as candidates", boxes_.size(),
-                          panels_.size()));
+    scene_ = std::make_unique<RayScene>(quiet, box_world(boxes_, panels_, false, slanted_),
+                                        BuildQuality::kMedium, 1);
+    ctx.debug(fmt::format("single-occluder pass: {} boxes, {} panels and {} slanted panels as candidates",
+                          boxes_.size(), panels_.size(), slanted_.size()));
 }
 
 RegionHider::~RegionHider() = default;
@@ -131,7 +197,7 @@ RegionHiders::RegionHiders(Context& ctx, const ShrunkOccluders& occluders) {
 
 uint32_t RegionHider::hide(const World& world, const Aabb& region, const std::vector<uint32_t>& objects,
                            uint64_t* hidden) const {
-    if (region.is_empty() || (boxes_.empty() && panels_.empty())) return 0;
+    if (region.is_empty() || (boxes_.empty() && panels_.empty() && slanted_.empty())) return 0;
     const glm::vec3 from = region.center();
     std::vector<uint32_t> tried;
     std::vector<glm::vec3> dirs;
@@ -154,7 +220,7 @@ uint32_t RegionHider::hide(const World& world, const Aabb& region, const std::ve
         return x.ray != y.ray ? x.ray < y.ray : x.t < y.t;
     });
     uint32_t n = 0;
-    const uint32_t n_boxes = uint32_t(boxes_.size());
+    const uint32_t n_boxes = uint32_t(boxes_.size()), n_flat = n_boxes + uint32_t(panels_.size());
     for (size_t i = 0; i < touches.size();) {
         const uint32_t ray = touches[i].ray;
         const uint32_t o = tried[ray];
@@ -164,10 +230,13 @@ uint32_t RegionHider::hide(const World& world, const Aabb& region, const std::ve
             if (is_hidden) continue;
             const uint32_t k = touches[i].object;
             if (i > 0 && touches[i - 1].ray == ray && touches[i - 1].object == k) continue;  // its other face
-            is_hidden = k < n_boxes
-                            ? box_hides(region, b, boxes_[k])
-                            : panel_axis_[k - n_boxes] >= 0 &&
-                                  panel_hides(region, b, panels_[k - n_boxes], panel_axis_[k - n_boxes]);
+            if (k < n_boxes)
+                is_hidden = box_hides(region, b, boxes_[k]);
+            else if (k < n_flat)
+                is_hidden = panel_axis_[k - n_boxes] >= 0 &&
+                            panel_hides(region, b, panels_[k - n_boxes], panel_axis_[k - n_boxes]);
+            else
+                is_hidden = slanted_hides(region, b, slanted_[k - n_flat]);
         }
         if (is_hidden) {
             hidden[o >> 6] |= uint64_t(1) << (o & 63);

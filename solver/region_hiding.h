@@ -30,9 +30,10 @@ namespace pvs {
 constexpr double kHideToleranceM = 1e-4;
 
 // Box meshes (a flat panel is a box of zero thickness) as a world to trace rays against: one object per
-// box, `boxes` first, then `flat`; every triangle opaque, or every one see-through (a ray then reports each
-// box it passes).
-World box_world(const std::vector<Aabb>& boxes, const std::vector<Aabb>& flat, bool opaque = true);
+// box, `boxes` first, then `flat`, then each slanted panel as a fan of its corners; every triangle opaque,
+// or every one see-through (a ray then reports each occluder it passes).
+World box_world(const std::vector<Aabb>& boxes, const std::vector<Aabb>& flat, bool opaque = true,
+                const std::vector<SlantedPanel>& slanted = {});
 
 // Does every segment from the box `region` to the box `object` cross the flat rectangle `panel` (flat along
 // `axis`, shrunk by kHideToleranceM)? Both boxes must lie strictly on opposite sides of its plane.
@@ -41,6 +42,13 @@ bool panel_hides(const Aabb& region, const Aabb& object, const Aabb& panel, int 
 // Does every segment from the box `region` to the box `object` meet the box `box` shrunk by
 // kHideToleranceM?
 bool box_hides(const Aabb& region, const Aabb& object, const Aabb& box);
+
+// Does every segment from the box `region` to the box `object` meet the triangles of the slanted panel?
+// True only if the two boxes lie strictly on opposite sides of its slab (|n.x - offset| <= thickness, grown
+// by kHideToleranceM) and each of the 64 corner segments crosses both faces of the slab inside the polygon
+// shrunk by kHideToleranceM: then every segment's part in the slab lies over the polygon, where the
+// triangles form a continuous surface across the slab (docs/ALGORITHMS.md#slanted-panels).
+bool slanted_hides(const Aabb& region, const Aabb& object, const SlantedPanel& panel);
 
 // The occluders of one set (ShrunkOccluders: its panels, and its boxes at the floor epsilon), ready to
 // prove objects hidden from regions.
@@ -60,7 +68,8 @@ public:
 private:
     std::vector<Aabb> boxes_, panels_;
     std::vector<int> panel_axis_;
-    std::unique_ptr<RayScene> scene_;  // boxes_ then panels_, every triangle see-through
+    std::vector<SlantedPanel> slanted_;
+    std::unique_ptr<RayScene> scene_;  // boxes_, panels_, then slanted_, every triangle see-through
 };
 
 // A RegionHider for every set of a ShrunkOccluders (the global one and each block's), built once.

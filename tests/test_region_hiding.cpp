@@ -1,6 +1,7 @@
 // The single-occluder pass (solver/region_hiding.h): exact tests of one panel or one box between a region
 // and an object, checked against many random segments, and the hider on a small scene.
 #include "core/random.h"
+#include "occluders/slanted_panels.h"
 #include "solver/region_hiding.h"
 #include "tests/test_util.h"
 
@@ -129,6 +130,122 @@ TEST(RegionHiding, EdgesAndContactAreNotHidden) {
 // The hider finds its candidates by tracing: an object behind a big wall panel is hidden from a region in
 // front, one beside the wall, one the region meets and one in front of the wall are not; the same with
 // the wall as a box.
+// Does the segment p -> x meet the closed triangle (a, b, c)? (Double; a hit within 1e-9 of an edge counts.)
+bool segment_meets_triangle(const glm::dvec3& p, const glm::dvec3& x, const glm::dvec3& a,
+                            const glm::dvec3& b, const glm::dvec3& c) {
+    const glm::dvec3 d = x - p, e1 = b - a, e2 = c - a;
+    const glm::dvec3 h = glm::cross(d, e2);
+    const double det = glm::dot(e1, h);
+    if (std::abs(det) < 1e-15) return false;
+    const glm::dvec3 s = p - a;
+    const double u = glm::dot(s, h) / det;
+    const glm::dvec3 q = glm::cross(s, e1);
+    const double v = glm::dot(d, q) / det, t = glm::dot(e2, q) / det;
+    const double eps = 1e-9;
+    return u >= -eps && v >= -eps && u + v <= 1.0 + eps && t >= -eps && t <= 1.0 + eps;
+}
+
+// A bumpy tilted sheet: an n x n grid of quads of 1 m in a random plane (not an axis plane), each vertex
+// lifted by up to `bump` along the normal, each quad cut along a random diagonal.
+World bumpy_sheet(Rng& rng, int n, double bump, glm::dvec3& normal) {
+    do {
+        normal = glm::normalize(glm::dvec3(rng.uniform() - 0.5, rng.uniform() - 0.5, rng.uniform() - 0.5));
+    } while (std::max({std::abs(normal.x), std::abs(normal.y), std::abs(normal.z)}) > 0.95);
+    const glm::dvec3 e1 = glm::normalize(glm::cross(normal, glm::dvec3(0.3, 0.5, 0.7)));
+    const glm::dvec3 e2 = glm::cross(normal, e1);
+    std::vector<glm::vec3> v;
+    for (int j = 0; j <= n; ++j)
+        for (int i = 0; i <= n; ++i)
+            v.emplace_back(double(i) * e1 + double(j) * e2 + (2.0 * rng.uniform() - 1.0) * bump * normal);
+    World w;
+    w.positions = v;
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            const uint32_t a = uint32_t(j * (n + 1) + i), b = a + 1, c = a + uint32_t(n + 1), d = c + 1;
+            if (rng.uniform() < 0.5) {
+                w.triangles.push_back(Triangle{{a, b, d}});
+                w.triangles.push_back(Triangle{{a, d, c}});
+            } else {
+                w.triangles.push_back(Triangle{{a, b, c}});
+                w.triangles.push_back(Triangle{{b, d, c}});
+            }
+        }
+    w.triangle_opaque.assign(w.triangles.size(), 1);
+    w.triangle_double_sided.assign(w.triangles.size(), 0);
+    WorldObject o;
+    o.triangle_count = uint32_t(w.triangles.size());
+    for (const glm::vec3& p : v) o.bounds.extend(p);
+    o.flags = kObjectHasOpaque;
+    w.objects.push_back(o);
+    w.bounds = o.bounds;
+    return w;
+}
+
+// Whenever slanted_hides() says so, every one of many random segments from the region to the object meets
+// one of the sheet's triangles (flat and bumpy sheets); and it says so often enough to mean something.
+TEST(RegionHiding, ASlantedPanelThatHidesIsCrossedByEverySegmentThroughItsTriangles) {
+    Rng rng(29, 5);
+    int hides = 0, trials = 0;
+    for (int i = 0; i < 4000 && hides < 200; ++i) {
+        glm::dvec3 normal;
+        const double bump = rng.uniform() < 0.5 ? 0.0 : 0.004;
+        const World sheet = bumpy_sheet(rng, 1 + int(rng.below(3)), bump, normal);
+        const std::vector<SlantedPanel> panels = find_slanted_panels(sheet, 0.02, 0.0);
+        if (panels.empty()) continue;
+        const SlantedPanel& panel = *std::max_element(
+            panels.begin(), panels.end(),
+            [](const SlantedPanel& a, const SlantedPanel& b) { return a.area_m2 < b.area_m2; });
+        // Small boxes around points on either side of the sheet, near its middle.
+        glm::dvec3 mid(0.0);
+        for (const glm::dvec3& c : panel.corners) mid += c;
+        mid /= double(panel.corners.size());
+        auto box_at = [&](double side) {
+            const glm::dvec3 c =
+                mid + side * (0.1 + 2.0 * rng.uniform()) * panel.normal +
+                glm::dvec3(rng.uniform() - 0.5, rng.uniform() - 0.5, rng.uniform() - 0.5) * 0.6;
+            const glm::dvec3 h = glm::dvec3(rng.uniform(), rng.uniform(), rng.uniform()) * 0.2;
+            return Aabb::of(glm::vec3(c - h), glm::vec3(c + h));
+        };
+        const Aabb region = box_at(-1.0), object = box_at(1.0);
+        ++trials;
+        if (!slanted_hides(region, object, panel)) continue;
+        ++hides;
+        for (int k = 0; k < 500; ++k) {
+            const glm::dvec3 p = glm::dvec3(point_in(region, rng)), x = glm::dvec3(point_in(object, rng));
+            bool hit = false;
+            for (const Triangle& t : sheet.triangles) {
+                hit = hit || segment_meets_triangle(p, x, glm::dvec3(sheet.positions[t.v[0]]),
+                                                    glm::dvec3(sheet.positions[t.v[1]]),
+                                                    glm::dvec3(sheet.positions[t.v[2]]));
+            }
+            ASSERT_TRUE(hit) << "trial " << i << ", segment " << k;
+        }
+    }
+    EXPECT_GE(hides, 50) << "of " << trials << " trials: the test is vacuous";
+    EXPECT_LT(hides, trials);
+}
+
+// Boxes that reach into the slab, or whose segments pass beside the polygon, are not hidden.
+TEST(RegionHiding, ASlantedPanelHidesNothingPastItsEdgesOrFromInsideItsSlab) {
+    Rng rng(3, 1);
+    glm::dvec3 normal;
+    const World sheet = bumpy_sheet(rng, 2, 0.0, normal);
+    const std::vector<SlantedPanel> panels = find_slanted_panels(sheet, 1e-4, 0.0);
+    ASSERT_FALSE(panels.empty());
+    const SlantedPanel& p = panels.front();
+    glm::dvec3 mid(0.0);
+    for (const glm::dvec3& c : p.corners) mid += c;
+    mid /= double(p.corners.size());
+    auto box = [](const glm::dvec3& c, double h) {
+        return Aabb::of(glm::vec3(c - glm::dvec3(h)), glm::vec3(c + glm::dvec3(h)));
+    };
+    EXPECT_TRUE(slanted_hides(box(mid - 0.5 * p.normal, 0.05), box(mid + 0.5 * p.normal, 0.05), p));
+    EXPECT_FALSE(slanted_hides(box(mid - 0.5 * p.normal, 0.05), box(mid, 0.05), p));  // in the slab
+    EXPECT_FALSE(slanted_hides(box(mid - 0.5 * p.normal, 0.05),
+                               box(mid + 0.5 * p.normal + glm::dvec3(5, 5, 5), 0.05),
+                               p));  // beside it
+}
+
 TEST(RegionHiding, TheHiderOnASmallScene) {
     Context ctx = quiet_context();
     World w;
@@ -159,6 +276,23 @@ TEST(RegionHiding, TheHiderOnASmallScene) {
         EXPECT_EQ(hider.hide(w, region, all, hidden.data()), 1u) << (as_box ? "box" : "panel");
         EXPECT_EQ(hidden[0], uint64_t(1) << behind);
     }
+    // The same wall tilted by 20 degrees about x, as a slanted panel (a square of two triangles).
+    World wall;
+    const float c = std::cos(glm::radians(20.0f)), sn = std::sin(glm::radians(20.0f));
+    auto at = [&](float x, float y) { return glm::vec3(x, y * c, 5.5f + y * sn); };
+    wall.positions = {at(-5, -5), at(7, -5), at(7, 7), at(-5, 7)};
+    wall.triangles = {Triangle{{0, 1, 2}}, Triangle{{0, 2, 3}}};
+    wall.triangle_opaque = {1, 1};
+    wall.triangle_double_sided = {0, 0};
+    ShrunkOccluders set;
+    set.epsilon_m = {0.1};
+    set.boxes.resize(1);
+    set.slanted = find_slanted_panels(wall, 1e-4, 0.0);
+    ASSERT_EQ(set.slanted.size(), 1u);
+    const RegionHider hider(ctx, set);
+    std::vector<uint64_t> hidden(1, 0);
+    EXPECT_EQ(hider.hide(w, region, all, hidden.data()), 1u) << "slanted";
+    EXPECT_EQ(hidden[0], uint64_t(1) << behind);
 }
 
 }  // namespace
