@@ -144,9 +144,7 @@ struct RowHead {
     const uint8_t* stop = nullptr;
 };
 
-std::string check_offsets(const uint8_t* code, uint64_t code_size, const uint32_t* offsets,
-                          uint64_t row_count, uint32_t objects) {
-    (void)code;
+std::string check_offsets(uint64_t code_size, const uint32_t* offsets, uint64_t row_count, uint32_t objects) {
     if (offsets[0] != 0 || offsets[row_count] != code_size) {
         return "/pvs/code_offsets does not start at 0 and end at the size of /pvs/code";
     }
@@ -187,11 +185,42 @@ std::string read_head(const uint8_t* code, const uint32_t* offsets, uint64_t r, 
     return wrong == nullptr ? std::string() : "/pvs/code row " + std::to_string(r) + wrong;
 }
 
-}  // namespace
+// Every index of a row whose head passed: "" or what is wrong (after "/pvs/code row r"). Every bit used
+// must lie before h.stop (reads may look up to 8 bytes past it: the buffer is padded).
+const char* check_indices(const RowHead& h, uint32_t objects) {
+    const uint8_t* const p = h.bits;
+    const uint32_t k = h.k;
+    const uint64_t limit = uint64_t(h.stop - p) * 8;
+    const uint64_t mask = (uint64_t(1) << k) - 1;
+    uint64_t pos = 0, last = UINT64_MAX;
+    for (uint32_t n = 0; n < h.count; ++n) {
+        uint64_t q = 0;
+        for (;;) {
+            if (pos >= limit || q > objects) return ": the code runs past the row";
+            const uint64_t w = peek_bits(p, pos);
+            if (w != 0) {
+                const unsigned z = unsigned(__builtin_ctzll(w));
+                q += z;
+                pos += z + 1;
+                break;
+            }
+            q += 64 - (pos & 7);
+            pos += 64 - (pos & 7);
+        }
+        if (pos + k > limit || q > objects) return ": the code runs past the row";
+        const uint64_t low = peek_bits(p, pos) & mask;
+        pos += k;
+        last += 1 + ((q << k) | low);
+        if (last >= objects) return ": an index beyond the objects";
+    }
+    if ((pos + 7) / 8 != limit / 8) return ": bytes left after the code";
+    return nullptr;
+}
 
-std::string check_row_code(const uint8_t* code, uint64_t code_size, const uint32_t* offsets,
-                           uint64_t row_count, uint32_t objects) {
-    std::string bad = check_offsets(code, code_size, offsets, row_count, objects);
+// The offsets and every row's head; with `indices`, every index too.
+std::string check_rows(const uint8_t* code, uint64_t code_size, const uint32_t* offsets, uint64_t row_count,
+                       uint32_t objects, bool indices) {
+    std::string bad = check_offsets(code_size, offsets, row_count, objects);
     if (!bad.empty()) return bad;
     std::vector<bool> is_key(size_t(row_count), false);
     RowHead h;
@@ -199,53 +228,26 @@ std::string check_row_code(const uint8_t* code, uint64_t code_size, const uint32
         bad = read_head(code, offsets, r, objects, is_key, h);
         if (!bad.empty()) return bad;
         is_key[size_t(r)] = h.ref == 0;
-        const std::string where = "/pvs/code row " + std::to_string(r);  // the full check's cost is decoding
-        const uint32_t count = h.count, k = h.k;
-        const uint8_t* const p = h.bits;
-        // Decode with bounds: every bit used must lie before `stop` (reads may look up to 8 bytes past it:
-        // the buffer is padded).
-        const uint64_t limit = uint64_t(h.stop - p) * 8;
-        const uint64_t mask = (uint64_t(1) << k) - 1;
-        uint64_t pos = 0, last = UINT64_MAX;
-        for (uint32_t n = 0; n < count; ++n) {
-            uint64_t q = 0;
-            for (;;) {
-                if (pos >= limit || q > objects) return where + ": the code runs past the row";
-                const uint64_t w = peek_bits(p, pos);
-                if (w != 0) {
-                    const unsigned z = unsigned(__builtin_ctzll(w));
-                    q += z;
-                    pos += z + 1;
-                    break;
-                }
-                q += 64 - (pos & 7);
-                pos += 64 - (pos & 7);
-            }
-            if (pos + k > limit || q > objects) return where + ": the code runs past the row";
-            const uint64_t low = peek_bits(p, pos) & mask;
-            pos += k;
-            last += 1 + ((q << k) | low);
-            if (last >= objects) return where + ": an index beyond the objects";
-        }
-        if ((pos + 7) / 8 != limit / 8) return where + ": bytes left after the code";
+        const char* wrong = nullptr;
+        if (uint64_t(h.count) * (1 + h.k) > uint64_t(h.stop - h.bits) * 8)
+            wrong = ": the code runs past the row";
+        else if (indices)
+            wrong = check_indices(h, objects);
+        if (wrong != nullptr) return "/pvs/code row " + std::to_string(r) + wrong;
     }
     return "";
 }
 
+}  // namespace
+
+std::string check_row_code(const uint8_t* code, uint64_t code_size, const uint32_t* offsets,
+                           uint64_t row_count, uint32_t objects) {
+    return check_rows(code, code_size, offsets, row_count, objects, /*indices=*/true);
+}
+
 std::string check_row_heads(const uint8_t* code, uint64_t code_size, const uint32_t* offsets,
                             uint64_t row_count, uint32_t objects) {
-    std::string bad = check_offsets(code, code_size, offsets, row_count, objects);
-    if (!bad.empty()) return bad;
-    std::vector<bool> is_key(size_t(row_count), false);
-    RowHead h;
-    for (uint64_t r = 0; r < row_count; ++r) {
-        bad = read_head(code, offsets, r, objects, is_key, h);
-        if (!bad.empty()) return bad;
-        is_key[size_t(r)] = h.ref == 0;
-        if (uint64_t(h.count) * (1 + h.k) > uint64_t(h.stop - h.bits) * 8)
-            return "/pvs/code row " + std::to_string(r) + ": the code runs past the row";
-    }
-    return "";
+    return check_rows(code, code_size, offsets, row_count, objects, /*indices=*/false);
 }
 
 uint64_t code_checksum(const uint8_t* code, uint64_t code_size) {
