@@ -145,7 +145,7 @@ private:
         for (uint32_t c = 0; c < count; ++c) b.cell_bounds_[c] = box_at(f.bounds, c);
     }
 
-    // The view mask as 8 x 8 x 8 bricks (detail/mask_bricks.h): empty and full bricks cost 4 bytes, mixed
+    // The view mask as 8 x 8 x 8 bricks (io/loader/mask_bricks.h): empty and full bricks cost 4 bytes, mixed
     // ones 68. The eye mask (on the same voxels) the same way, when the file has one. Files before format
     // 1.4 store only the bits: their bricks are made here.
     static void view_bricks(detail::FileMask& m, detail::FileMask& eyes, Bake& b) {
