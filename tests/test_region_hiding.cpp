@@ -186,22 +186,31 @@ World bumpy_sheet(Rng& rng, int n, double bump, glm::dvec3& normal) {
 TEST(RegionHiding, ASlantedPanelThatHidesIsCrossedByEverySegmentThroughItsTriangles) {
     Rng rng(29, 5);
     int hides = 0, trials = 0;
-    for (int i = 0; i < 4000 && hides < 200; ++i) {
+    for (int i = 0; i < 20000 && hides < 300; ++i) {
         glm::dvec3 normal;
-        const double bump = rng.uniform() < 0.5 ? 0.0 : 0.004;
+        // Flat sheets, sheets bumped by rounding-sized amounts, and sheets bumped by 10 cm (a thick slab:
+        // there a test of one plane instead of both slab faces passes segments that miss the triangles).
+        const double bumps[3] = {0.0, 0.004, 0.1};
+        const double bump = bumps[rng.below(3)];
         const World sheet = bumpy_sheet(rng, 1 + int(rng.below(3)), bump, normal);
-        const std::vector<SlantedPanel> panels = find_slanted_panels(sheet, 0.02, 0.0);
+        const std::vector<SlantedPanel> panels = find_slanted_panels(sheet, 0.25, 0.0);
         if (panels.empty()) continue;
         const SlantedPanel& panel = *std::max_element(
             panels.begin(), panels.end(),
             [](const SlantedPanel& a, const SlantedPanel& b) { return a.area_m2 < b.area_m2; });
-        // Small boxes around points on either side of the sheet, near its middle.
+        // Small boxes on either side of the sheet around a random point of the polygon (often near an
+        // edge, where segments may leave the slab over the edge).
         glm::dvec3 mid(0.0);
-        for (const glm::dvec3& c : panel.corners) mid += c;
-        mid /= double(panel.corners.size());
+        double weights = 0.0;
+        for (const glm::dvec3& c : panel.corners) {
+            const double w = std::pow(rng.uniform(), 4.0);
+            mid += w * c;
+            weights += w;
+        }
+        mid /= weights;
         auto box_at = [&](double side) {
             const glm::dvec3 c =
-                mid + side * (0.1 + 2.0 * rng.uniform()) * panel.normal +
+                mid + side * (0.05 + 1.0 * rng.uniform()) * panel.normal +
                 glm::dvec3(rng.uniform() - 0.5, rng.uniform() - 0.5, rng.uniform() - 0.5) * 0.6;
             const glm::dvec3 h = glm::dvec3(rng.uniform(), rng.uniform(), rng.uniform()) * 0.2;
             return Aabb::of(glm::vec3(c - h), glm::vec3(c + h));
