@@ -8,11 +8,12 @@
 // into the first class that holds:
 // - visible:  some ray reaches it past the real triangles: rightly listed;
 // - rule:     not reached, but every PVS lists it (pvs_always_visible, or bounds meeting the cell);
-// - no_box:   some ray passes the unshrunk proven boxes and the (uninset) panels: no occluder stands where
-//             the real triangles block (thin walls, detail, voxel erosion, solid the sweep could not prove);
-// - epsilon:  every ray is stopped by the unshrunk boxes and panels, some passes the boxes shrunk by the
-//             floor epsilon and the panels inset by it (the least the solver insets them, at a face's
-//             centre): shrinking lost the blocker;
+// - no_box:   some ray passes the unshrunk proven boxes and the (uninset) panels and slanted panels: no
+//             occluder stands where the real triangles block (thin walls, detail, voxel erosion, solid the
+//             sweep could not prove);
+// - epsilon:  every ray is stopped by the unshrunk boxes and the panels, some passes the boxes shrunk by
+//             the floor epsilon and the panels and slanted panels inset by it (the least the solver insets
+//             them, at a face's centre): shrinking lost the blocker;
 // - region:   every ray is stopped by the shrunk occluders, but a ray from a random point of the cell's eye
 //             REGION (the box around its eye voxels, whose boundary the solver samples) passes them: the
 //             solver proves hiddenness for the whole box, not just the eye voxels in it;
@@ -30,6 +31,7 @@
 #include "io/bake_file.h"
 #include "io/gltf_loader.h"
 #include "occluders/panels.h"
+#include "occluders/slanted_panels.h"
 #include "rays/ray_scene.h"
 #include "rays/surface_points.h"
 #include "solver/region_hiding.h"
@@ -47,6 +49,32 @@
 #include <vector>
 
 namespace {
+
+// The slanted panels with every edge moved inward by inset_m in their planes (the least the solver insets
+// them, as inset_panels() does for panels); those that vanish are left out. Corner j of the inset polygon is
+// where the moved lines of its two edges meet: c_j + inset (m_a + m_b) / (1 + m_a.m_b), with m_a, m_b their
+// inward unit normals.
+std::vector<pvs::SlantedPanel> inset_slanted(const std::vector<pvs::SlantedPanel>& panels, double inset_m) {
+    std::vector<pvs::SlantedPanel> out;
+    for (const pvs::SlantedPanel& p : panels) {
+        const size_t n = p.corners.size();
+        if (p.edge_normal.size() != n) continue;
+        pvs::SlantedPanel q = p;
+        q.bounds = pvs::Aabb{};
+        for (size_t j = 0; j < n; ++j) {
+            const glm::dvec3 ma = p.edge_normal[(j + n - 1) % n], mb = p.edge_normal[j];
+            q.corners[j] = p.corners[j] + inset_m * (ma + mb) / (1.0 + glm::dot(ma, mb));
+            q.bounds.extend(glm::vec3(q.corners[j]));
+        }
+        // Gone when some new corner lies outside a moved line (the polygon turned inside out).
+        bool kept = pvs::set_slanted_edges(q);
+        for (size_t j = 0; j < n && kept; ++j)
+            for (size_t i = 0; i < n && kept; ++i)
+                kept = glm::dot(p.edge_normal[i], q.corners[j]) >= p.edge_offset[i] + inset_m * (1.0 - 1e-9);
+        if (kept) out.push_back(std::move(q));
+    }
+    return out;
+}
 
 enum Class { kVisible, kRule, kNoBox, kEpsilon, kRegion, kSolver, kClasses };
 constexpr const char* kClassNames[kClasses] = {"visible", "rule", "no_box", "epsilon", "region", "solver"};
@@ -108,9 +136,11 @@ int main(int argc, char** argv) {
         for (size_t s = 0; s < n_sets; ++s) {
             const pvs::ShrunkOccluders& set = shrunk.set(int32_t(s) - 1);
             // A block's unshrunk solid is not kept as boxes: its floor-level boxes stand in for it.
-            const pvs::World full = pvs::box_world(s == 0 ? unshrunk : set.boxes[0], set.panels);
+            const pvs::World full =
+                pvs::box_world(s == 0 ? unshrunk : set.boxes[0], set.panels, true, set.slanted);
             const pvs::World thin =
-                pvs::box_world(set.boxes[0], pvs::inset_panels(set.panels, set.epsilon_m.front()));
+                pvs::box_world(set.boxes[0], pvs::inset_panels(set.panels, set.epsilon_m.front()), true,
+                               inset_slanted(set.slanted, set.epsilon_m.front()));
             full_scenes.push_back(std::make_unique<pvs::RayScene>(ctx, full));
             shrunk_scenes.push_back(std::make_unique<pvs::RayScene>(ctx, thin));
             boxes_only_scenes.push_back(

@@ -38,6 +38,10 @@ struct SlantedPanel {
     double offset = 0.0;              // the plane: dot(normal, x) = offset
     double thickness = 0.0;           // the largest distance of a corner of its triangles from the plane
     std::vector<glm::dvec3> corners;  // convex, counter-clockwise seen from the side normal points to
+    // Per edge i, from corners[i] to corners[i + 1]: its inward unit normal m in the plane and the line
+    // m.x = edge_offset[i] through it. The polygon's prism is where m.x >= offset for every edge.
+    std::vector<glm::dvec3> edge_normal;
+    std::vector<double> edge_offset;
     double area_m2 = 0.0;
     uint32_t triangles = 0;
     Aabb bounds;
@@ -64,8 +68,9 @@ struct ShrunkOccluders {
     // Flat rectangles covered by opaque triangles (occluders/panels.h), as found: the depth cube insets them
     // per ray for each patch's box (docs/ALGORITHMS.md#panel-inset).
     std::vector<Aabb> panels;
-    // Convex polygons in other planes (occluders/slanted_panels.h), as found: only the single-occluder test
-    // (solver/region_hiding.h) uses them.
+    // Convex polygons in other planes (occluders/slanted_panels.h), as found: the depth cube insets them per
+    // ray for each patch's box (docs/ALGORITHMS.md#slanted-inset), and the single-occluder test
+    // (solver/region_hiding.h) uses them whole.
     std::vector<SlantedPanel> slanted;
     VoxelMask solid;  // the proven solid (sealed off from the eyes, untouched, passed the sight probe and the
                       // ray check): no sight line from the eye space enters it

@@ -53,6 +53,20 @@ struct Growing {
 
 }  // namespace
 
+bool set_slanted_edges(SlantedPanel& panel) {
+    const size_t n = panel.corners.size();
+    panel.edge_normal.resize(n);
+    panel.edge_offset.resize(n);
+    for (size_t i = 0; i < n; ++i) {
+        const glm::dvec3 in = glm::cross(panel.normal, panel.corners[(i + 1) % n] - panel.corners[i]);
+        const double len = glm::length(in);
+        if (!(len > 0.0) || !std::isfinite(len)) return false;
+        panel.edge_normal[i] = in / len;
+        panel.edge_offset[i] = glm::dot(panel.edge_normal[i], panel.corners[i]);
+    }
+    return n >= 3;
+}
+
 std::vector<SlantedPanel> find_slanted_panels(const World& world, double max_thickness_m, double min_area_m2,
                                               SlantedPanelFigures* figures) {
     SlantedPanelFigures fig;
@@ -154,6 +168,7 @@ std::vector<SlantedPanel> find_slanted_panels(const World& world, double max_thi
             panel.corners.emplace_back(c);
             panel.bounds.extend(c);
         }
+        if (!set_slanted_edges(panel)) continue;
         fig.triangles_in_panels += members;
         fig.panel_area_m2 += a;
         out.push_back(std::move(panel));

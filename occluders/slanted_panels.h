@@ -28,6 +28,10 @@ struct SlantedPanelFigures {
     double panel_area_m2 = 0.0;
 };
 
+// Sets the panel's edge lines from its normal and corners; false when an edge is degenerate or it has fewer
+// than three corners.
+bool set_slanted_edges(SlantedPanel& panel);
+
 // The slanted panels of the world's opaque triangles, largest triangle first as seed: a polygon grows by
 // a triangle that shares one of its edges (vertex positions compared exactly), whose third corner lies
 // beyond that edge and within max_thickness_m of the seed's plane, and that keeps it convex. Each triangle

@@ -344,31 +344,22 @@ public:
             // objects, so its pixels lie in the region clear_for() cleared. At every level, not only the
             // floor: what they prove on a large patch needs no smaller ones.
             if (!sides.empty() && !near_panels_.empty()) {
-                interest_.clear();
-                for (const std::vector<uint32_t>& open : sides.open)
-                    for (uint32_t o : open) interest_.push_back(sh_.world.objects[o].bounds);
-                cube_.limit_to(interest_);
-                // Only the panels that meet the box around s and some object left open: a panel
-                // that lowers a pixel below an object's depth there has every ray of the pixel cross
-                // it first, so on a segment from s into the object's bounds, which that box holds
-                // (drawing fewer is always safe). Those boxes are gathered by the octant of the
-                // object's centre around s, and each panel is tested against the eight unions (a
-                // superset of the boxes it meets): not against every open object, which may be
-                // thousands on open levels.
-                std::array<Aabb, 8> hulls;
-                std::array<bool, 8> used{};
-                hulls.fill(Aabb::of(s, s));
-                for (const Aabb& b : interest_) {
-                    const glm::vec3 c = b.center();
-                    const int octant = (c.x > s.x ? 1 : 0) | (c.y > s.y ? 2 : 0) | (c.z > s.z ? 4 : 0);
-                    hulls[size_t(octant)].extend(b);
-                    used[size_t(octant)] = true;
-                }
-                for (const Aabb& p : near_panels_) {
-                    bool meets = false;
-                    for (size_t o = 0; o < 8 && !meets; ++o) meets = used[o] && p.overlaps(hulls[o]);
-                    if (meets) cube_.add_panel_sides(p, panel_spread_);
-                }
+                open_hulls(s, sides);
+                for (const Aabb& p : near_panels_)
+                    if (meets_open_hulls(p)) cube_.add_panel_sides(p, panel_spread_);
+                for (int side = 0; side < 2; ++side)
+                    sides.open[size_t(side)] = unproven_each(cube_, sides.open[size_t(side)]);
+            }
+            // Slanted panels (docs/ALGORITHMS.md#slanted-inset), on every face, over what is still unproven
+            // (the same pixels' depths fuse with the boxes' and panels'): those meeting the box around s and
+            // an object left open, as above; add_slanted_panel() leaves out those whose slab the patch's box
+            // reaches.
+            near_slanted_.clear();
+            if (!sides.empty() && !occ_->slanted.empty()) {
+                open_hulls(s, sides);
+                for (uint32_t i = 0; i < occ_->slanted.size(); ++i)
+                    if (slanted_may_hide(occ_->slanted[i], s)) near_slanted_.push_back(i);
+                cube_.add_slanted_panels(occ_->slanted, near_slanted_, panel_spread_);
                 for (int side = 0; side < 2; ++side)
                     sides.open[size_t(side)] = unproven_each(cube_, sides.open[size_t(side)]);
             }
@@ -382,7 +373,7 @@ public:
                 // panels need no epsilon, so a patch half the size insets them by half as much. While the
                 // panels are drawn here, what they left open goes down panel_refine_levels more halvings
                 // (sight rays first, as above the floor); what is left after them is listed.
-                if (!sides.empty() && !near_panels_.empty() &&
+                if (!sides.empty() && (!near_panels_.empty() || !near_slanted_.empty()) &&
                     r > eps[0] / double(1 << sh_.panel_refine_levels)) {
                     for (int side = 0; side < 2; ++side)
                         sides.open[size_t(side)] =
@@ -405,6 +396,47 @@ public:
                 sides.open[size_t(side)] = list_seen(s, sides.open[size_t(side)], sides.row[size_t(side)]);
         }
         split(rect, axis, sides);
+    }
+
+    // Limits the cube to the pixels of the objects still open, and gathers their bounds by the octant of
+    // their centre around s, each octant's union grown from s (hulls_). An occluder that lowers a pixel
+    // below an open object's depth there has every ray of the pixel cross it first, so on a segment from s
+    // into the object's bounds, which that union holds: an occluder meeting no union cannot help (drawing
+    // fewer is always safe). Testing eight unions, not every open object, which may be thousands on open
+    // levels.
+    void open_hulls(glm::vec3 s, const Sides& sides) {
+        interest_.clear();
+        for (const std::vector<uint32_t>& open : sides.open)
+            for (uint32_t o : open) interest_.push_back(sh_.world.objects[o].bounds);
+        cube_.limit_to(interest_);
+        hulls_.fill(Aabb::of(s, s));
+        hull_used_.fill(false);
+        for (const Aabb& b : interest_) {
+            const glm::vec3 c = b.center();
+            const int octant = (c.x > s.x ? 1 : 0) | (c.y > s.y ? 2 : 0) | (c.z > s.z ? 4 : 0);
+            hulls_[size_t(octant)].extend(b);
+            hull_used_[size_t(octant)] = true;
+        }
+    }
+    bool meets_open_hulls(const Aabb& b) const {
+        for (size_t o = 0; o < 8; ++o)
+            if (hull_used_[o] && b.overlaps(hulls_[o])) return true;
+        return false;
+    }
+
+    // Does the slanted panel meet an octant's union whose part beyond the panel's slab, seen from s, is not
+    // empty? (What it hides lies beyond its slab; see open_hulls().)
+    bool slanted_may_hide(const SlantedPanel& p, glm::vec3 s) const {
+        const double side = glm::dot(p.normal, glm::dvec3(s)) - p.offset > 0.0 ? 1.0 : -1.0;
+        const glm::dvec3 n = side * p.normal;
+        for (size_t o = 0; o < 8; ++o) {
+            if (!hull_used_[o] || !p.bounds.overlaps(hulls_[o])) continue;
+            double lowest = 0.0;  // the least n.x over the union's corners
+            for (int k = 0; k < 3; ++k)
+                lowest += n[k] * double(n[k] >= 0.0 ? hulls_[o].min[k] : hulls_[o].max[k]);
+            if (lowest < side * p.offset - p.thickness) return true;
+        }
+        return false;
     }
 
     const Counts& counts() const { return counts_; }
@@ -495,6 +527,7 @@ private:
             for (uint32_t o : open) interest_.push_back(sh_.world.objects[o].bounds);
         fine_.clear_for(s, interest_);
         fine_.add_panels(near_panels_, panel_spread_);
+        fine_.add_slanted_panels(occ_->slanted, near_slanted_, panel_spread_);
         fine_.add_occluders(near_);
         ++counts_.fine_samples;
         for (int side = 0; side < 2; ++side)
@@ -580,7 +613,10 @@ private:
     std::vector<Aabb> interest_;     // bounds of the open objects: the only pixels worth drawing
     std::vector<Aabb> near_;         // the occluders drawn for the current sample
     std::vector<Aabb> near_panels_;  // the panels drawn for it
-    glm::dvec3 panel_spread_{0.0};   // and the half-extents of the box around s they are drawn for
+    std::array<Aabb, 8> hulls_;      // open_hulls()
+    std::array<bool, 8> hull_used_{};
+    std::vector<uint32_t> near_slanted_;  // and the slanted ones (indices into the set's)
+    glm::dvec3 panel_spread_{0.0};        // and the half-extents of the box around s they are drawn for
     std::vector<glm::vec3> origins_, dirs_;
     std::vector<float> tfar_;
     std::vector<uint8_t> blocked_;

@@ -552,6 +552,198 @@ void DepthCube::add_panel_sides(const Aabb& panel, glm::dvec3 spread) {
     }
 }
 
+namespace {
+
+// A slanted panel prepared for one eye box (depth_cube.h, add_slanted_panel()): THE rule of a grid vertex,
+// shared by the kernel and the reference.
+struct SlantedRule {
+    glm::dvec3 toward{0.0};         // N: the unit normal on the eye's side
+    double h_near = 0.0;            // height of s above the grown slab's near face (> b_n)
+    double h_far = 0.0;             // and above its far face
+    double b_n = 0.0;               // the eye box's support along the normal
+    const glm::dvec3* m = nullptr;  // per edge: inward unit normal in the plane (the panel's edge_normal)
+    size_t edges = 0;
+    std::vector<double> slack;  // per edge: m_i.s - k_i - a_i (the sample's room inside the inset edge)
+};
+
+// False when the panel is unusable (fewer than 3 corners, no edge lines, not finite) or the eye box reaches
+// its grown slab.
+bool slanted_rule(const SlantedPanel& panel, glm::vec3 eye, glm::dvec3 spread, SlantedRule& out) {
+    const size_t n = panel.corners.size();
+    if (n < 3 || !std::isfinite(panel.offset) || !std::isfinite(panel.thickness)) return false;
+    const glm::dvec3 s(eye);
+    const double h0 = glm::dot(panel.normal, s) - panel.offset;
+    const double sign = h0 > 0.0 ? 1.0 : -1.0;
+    out.toward = sign * panel.normal;
+    out.b_n = 0.0;
+    for (int k = 0; k < 3; ++k) out.b_n += std::abs(panel.normal[k]) * spread[k] * (1.0 + 1e-9);
+    const double grown = panel.thickness + kSlantedPanelMarginM;
+    out.h_near = std::abs(h0) - grown;
+    out.h_far = std::abs(h0) + grown;
+    // Beyond the eye box, and far enough from s that every crossing lies beyond the near plane (|d| <= sqrt
+    // 3, so a crossing's depth is at least h_near / sqrt 3): there a passing vertex lies in the projection of
+    // slanted_reach() clipped to the near plane, which the kernel's candidate vertices cover.
+    if (!(out.h_near > std::max(out.b_n * (1.0 + 1e-6), 2.0 * kCubeNearPlane_m)) || !std::isfinite(out.h_far))
+        return false;
+    if (panel.edge_normal.size() != n || panel.edge_offset.size() != n) return false;
+    out.m = panel.edge_normal.data();
+    out.edges = n;
+    out.slack.resize(n);
+    for (size_t i = 0; i < n; ++i) {
+        double a = 0.0;
+        for (int k = 0; k < 3; ++k) a += std::abs(out.m[i][k]) * spread[k] * (1.0 + 1e-9);
+        out.slack[i] = glm::dot(out.m[i], s) - (panel.edge_offset[i] + kSlantedPanelMarginM) - a;
+    }
+    return true;
+}
+
+// The far-face crossing depth of a passing vertex with ray direction d (+-1 on the face axis, so the ray
+// parameter is the depth), or +infinity when it does not pass.
+inline double slanted_vertex_depth(const SlantedRule& rule, const glm::dvec3& d) {
+    const double w = -glm::dot(rule.toward, d);
+    if (!(w > 0.0)) return kInf;
+    for (size_t i = 0; i < rule.edges; ++i) {
+        const double md = glm::dot(rule.m[i], d);
+        // Linear in h: both faces pass when the one with the smaller h * md does.
+        const double hm = md >= 0.0 ? rule.h_near * md : rule.h_far * md;
+        if (!(rule.slack[i] * w + hm - rule.b_n * std::abs(md) >= 0.0)) return kInf;
+    }
+    return rule.h_far / w;
+}
+
+// The slanted panel's bounds grown to hold every point of its slab over the polygon, where a passing
+// vertex's ray crosses (for the candidate vertices; a vertex left out counts as failing, which is safe).
+Aabb slanted_reach(const SlantedPanel& panel) {
+    const float g = float(2.0 * (panel.thickness + kSlantedPanelMarginM)) + 1e-3f;
+    return Aabb::of(panel.bounds.min - g, panel.bounds.max + g);
+}
+
+// face_candidates() for a slanted panel's reach, false also when its projection is narrower than a pixel
+// on either axis: a written pixel's four corner rays cross the near face inside the reach, beyond the near
+// plane, so the pixel lies in that projection. (Most far panels are; the answer is the same, only faster.)
+bool slanted_face_candidates(const Aabb& reach, glm::vec3 eye, int face, const std::array<int, 4>& reg, int r,
+                             FaceCandidates& fc) {
+    if (!face_candidates(reach, eye, face, reg, r, fc)) return false;
+    double u0, u1, v0, v1;
+    projected_rect(fc.fb, fc.d_lo, u0, u1, v0, v1);
+    const double pixel = 2.0 / double(r) * (1.0 - 1e-9);
+    return std::min(u1, 1.0) - std::max(u0, -1.0) >= pixel && std::min(v1, 1.0) - std::max(v0, -1.0) >= pixel;
+}
+
+// The direction of the ray of face coordinates (u, v) on a face: +-1 on its axis, so its parameter is depth.
+inline glm::dvec3 face_direction(int face, double u, double v) {
+    const int a = face / 2;
+    glm::dvec3 dir(0.0);
+    dir[a] = face % 2 == 0 ? 1.0 : -1.0;
+    dir[(a + 1) % 3] = u;
+    dir[(a + 2) % 3] = v;
+    return dir;
+}
+
+}  // namespace
+
+// On a row of grid vertices (v fixed) the rule is a set of linear conditions in u: w > 0, and per edge, as
+// the left side is concave and piecewise linear with its break at m_i.d = 0, the two lines it is the minimum
+// of, (m_i.s - k_i - a_i) w + (h_near - b_n) m_i.d >= 0 and (m_i.s - k_i - a_i) w + (h_far + b_n) m_i.d >= 0.
+// So the passing vertices of a row are a run, found from the interval those lines leave and walked to its
+// exact ends with slanted_vertex_depth() (in exact arithmetic every vertex between two passing ones passes:
+// the set is convex; the rule's margins dwarf rounding). A pixel is written when its four vertices lie in
+// the runs of its two rows, with the largest of their far-face depths.
+void DepthCube::add_slanted_panel(const SlantedPanel& panel, glm::dvec3 spread) {
+    thread_local SlantedRule rule;  // keeps its edge arrays from panel to panel
+    if (!slanted_rule(panel, eye_, spread, rule)) return;
+    const Aabb reach = slanted_reach(panel);
+    const int r = resolution_;
+    const double* const g = grid_.data();
+    for (int face = 0; face < 6; ++face) {
+        FaceCandidates fc;
+        if (!slanted_face_candidates(reach, eye_, face, region_[size_t(face)], r, fc)) continue;
+        const int a = face / 2, ua = (a + 1) % 3, va = (a + 2) % 3;
+        const double sg = face % 2 == 0 ? 1.0 : -1.0;
+        // x.d = x0 + u x1 on the row of v, for the direction d = (sg on a, u, v).
+        const auto on_row = [&](const glm::dvec3& x, double v, double& x0, double& x1) {
+            x0 = sg * x[a] + v * x[va];
+            x1 = x[ua];
+        };
+        // Passing vertices of row jv, [first, last], and their far-face depths in out[].
+        const auto row_run = [&](int jv, int& first, int& last, double* out) {
+            const double v = g[jv];
+            double lo = -kInf, hi = kInf;
+            const auto keep = [&](double alpha, double beta) {  // alpha + beta u >= 0
+                if (beta > 0.0) {
+                    lo = std::max(lo, -alpha / beta);
+                } else if (beta < 0.0) {
+                    hi = std::min(hi, -alpha / beta);
+                } else if (!(alpha >= 0.0)) {
+                    lo = kInf;
+                }
+            };
+            double w0, w1;
+            on_row(-rule.toward, v, w0, w1);
+            keep(w0, w1);
+            const double near_k = rule.h_near - rule.b_n, far_k = rule.h_far + rule.b_n;
+            for (size_t i = 0; i < rule.edges && lo <= hi; ++i) {
+                double m0, m1;
+                on_row(rule.m[i], v, m0, m1);
+                const double c = rule.slack[i];
+                keep(c * w0 + near_k * m0, c * w1 + near_k * m1);
+                keep(c * w0 + far_k * m0, c * w1 + far_k * m1);
+            }
+            vertex_run(g, lo, hi, fc.iv0, fc.iv1, r, first, last);
+            const auto depth_at = [&](int iv) {
+                return slanted_vertex_depth(rule, face_direction(face, g[iv], v));
+            };
+            while (first <= last && !(depth_at(first) < kInf)) ++first;
+            while (last >= first && !(depth_at(last) < kInf)) --last;
+            for (int iv = first; iv <= last; ++iv)  // slanted_vertex_depth()'s very value
+                out[iv] = rule.h_far / -glm::dot(rule.toward, face_direction(face, g[iv], v));
+        };
+        float* const face_depth = depth_.data() + size_t(face) * r * r;
+        int prev_first, prev_last;
+        row_run(fc.jv0, prev_first, prev_last, corner_prev_.data());
+        for (int j = fc.jv0; j < fc.jv1; ++j) {
+            int first, last;
+            row_run(j + 1, first, last, corner_cur_.data());
+            const double* const cp = corner_prev_.data();
+            const double* const cc = corner_cur_.data();
+            float* const row = face_depth + size_t(j) * r;
+            for (int i = std::max(first, prev_first); i < std::min(last, prev_last); ++i) {
+                const double d = std::max(std::max(cp[i], cp[i + 1]), std::max(cc[i], cc[i + 1]));
+                row[i] = std::min(row[i], float_up(d * (1.0 + kCubeDepthSlack)));
+            }
+            std::swap(corner_prev_, corner_cur_);
+            prev_first = first;
+            prev_last = last;
+        }
+    }
+}
+
+void DepthCube::add_slanted_panels(const std::vector<SlantedPanel>& panels, glm::dvec3 spread) {
+    std::vector<uint32_t> all(panels.size());
+    for (uint32_t p = 0; p < all.size(); ++p) all[p] = p;
+    add_slanted_panels(panels, all, spread);
+}
+
+void DepthCube::add_slanted_panels(const std::vector<SlantedPanel>& panels,
+                                   const std::vector<uint32_t>& which, glm::dvec3 spread) {
+    slanted_order_.clear();
+    for (const uint32_t p : which) {
+        const Aabb& b = panels[p].bounds;
+        const glm::vec3 q = glm::clamp(eye_, b.min, b.max);
+        slanted_order_.push_back({glm::dot(q - eye_, q - eye_), p});
+    }
+    std::sort(slanted_order_.begin(), slanted_order_.end());
+    for (const auto& [dist2, p] : slanted_order_) {
+        const Aabb reach = slanted_reach(panels[p]);
+        bool wide = false;  // can it write a pixel anywhere?
+        for (int face = 0; face < 6 && !wide; ++face) {
+            FaceCandidates fc;
+            wide = slanted_face_candidates(reach, eye_, face, region_[size_t(face)], resolution_, fc);
+        }
+        if (wide && !is_hidden(reach)) add_slanted_panel(panels[p], spread);
+    }
+}
+
 void DepthCube::add_panel(const Aabb& panel, glm::dvec3 spread) {
     int face = 0;
     double t = 0.0;
@@ -654,15 +846,6 @@ double reference_corner_depth(const Aabb& box, glm::vec3 eye, glm::dvec3 dir) {
     return t_exit >= hit_depth ? hit_depth : kInf;
 }
 
-glm::dvec3 reference_direction(int face, double u, double v) {
-    const int a = face / 2;
-    glm::dvec3 dir(0.0);
-    dir[a] = face % 2 == 0 ? 1.0 : -1.0;
-    dir[(a + 1) % 3] = u;
-    dir[(a + 2) % 3] = v;
-    return dir;
-}
-
 }  // namespace
 
 bool is_hidden_reference(const std::vector<Aabb>& occluders, glm::vec3 eye, const Aabb& box, int resolution) {
@@ -671,7 +854,7 @@ bool is_hidden_reference(const std::vector<Aabb>& occluders, glm::vec3 eye, cons
 
 bool is_hidden_reference(const std::vector<Aabb>& occluders, const std::vector<Aabb>& panels,
                          glm::dvec3 panel_spread, glm::vec3 eye, const Aabb& box, int resolution,
-                         bool panel_sides) {
+                         bool panel_sides, const std::vector<SlantedPanel>& slanted) {
     const int r = resolution;
     if (!box_usable(box)) return false;
     // Visible when the box meets the closed near cube around the eye.
@@ -718,9 +901,8 @@ bool is_hidden_reference(const std::vector<Aabb>& occluders, const std::vector<A
                     double d = 0.0;
                     for (int cj = j; cj <= j + 1; ++cj) {
                         for (int ci = i; ci <= i + 1; ++ci) {
-                            d = std::max(d,
-                                         reference_corner_depth(
-                                             occ, eye, reference_direction(face, grid(ci, r), grid(cj, r))));
+                            d = std::max(d, reference_corner_depth(
+                                                occ, eye, face_direction(face, grid(ci, r), grid(cj, r))));
                         }
                     }
                     if (d < kInf) pixel = std::min(pixel, float_up(d));
@@ -761,6 +943,16 @@ bool is_hidden_reference(const std::vector<Aabb>& occluders, const std::vector<A
                     const bool hits = range_u.contains(grid(i, r)) && range_u.contains(grid(i + 1, r)) &&
                                       range_v.contains(grid(j, r)) && range_v.contains(grid(j + 1, r));
                     if (hits) pixel = std::min(pixel, float_up(t * (1.0 + kCubeDepthSlack)));
+                }
+                for (const SlantedPanel& sp : slanted) {
+                    SlantedRule rule;
+                    if (!slanted_rule(sp, eye, panel_spread, rule)) continue;
+                    double d = 0.0;
+                    for (int cj = j; cj <= j + 1; ++cj)
+                        for (int ci = i; ci <= i + 1; ++ci)
+                            d = std::max(d, slanted_vertex_depth(
+                                                rule, face_direction(face, grid(ci, r), grid(cj, r))));
+                    if (d < kInf) pixel = std::min(pixel, float_up(d * (1.0 + kCubeDepthSlack)));
                 }
                 if (!(double(pixel) < limit)) return false;
             }

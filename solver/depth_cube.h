@@ -1,10 +1,11 @@
 // pvsbake solver: a conservative from-point occlusion test on a depth cube map around an eye point s.
 //
 // This is the from-point test of occluder shrinking (Wonka, Wimmer, Schmalstieg 2000; the caller passes the
-// ε-shrunk occluders). Why each rule below is safe: docs/ALGORITHMS.md#depth-cube. Occluders and occludees
-// are axis-aligned boxes. Pure CPU, no Embree. DepthCube is the fast kernel; is_hidden_reference() is the
-// plain reference of the SAME rules, and tests/test_depth_cube.cpp runs both on fixed seeds and asserts
-// identical answers.
+// ε-shrunk occluders). Why each rule below is safe: docs/ALGORITHMS.md#depth-cube. Occluders are axis-aligned
+// boxes, flat rectangles (panels) and convex polygons in other planes (slanted panels); occludees are boxes.
+// Pure CPU, no Embree. DepthCube is the fast kernel; is_hidden_reference() is the plain reference of the SAME
+// rules, and tests/test_depth_cube.cpp and tests/test_depth_cube_slanted.cpp run both on fixed seeds and
+// assert identical answers.
 //
 // Conventions (read these before touching the code; Masked Occlusion Culling style):
 // - Axes: glTF world axes (right-handed, +Y up, metres). Everything is relative to the eye:
@@ -49,6 +50,7 @@
 #pragma once
 
 #include "core/math.h"
+#include "core/occluder.h"
 
 #include <array>
 #include <utility>
@@ -60,6 +62,9 @@ namespace pvs {
 inline constexpr double kCubeNearPlane_m = 1e-4;
 // Relative safety margin on depths and on "the ray passes through the box" (covers rounding).
 inline constexpr double kCubeDepthSlack = 1e-6;
+// A slanted panel's slab is grown, and its polygon's edges moved inward, by this much (metres) before it is
+// drawn: covers the rounding of its corners and of the tests.
+inline constexpr double kSlantedPanelMarginM = 1e-4;
 // Resolution limits (pixels per face edge).
 inline constexpr int kMinCubeResolution = 1;
 inline constexpr int kMaxCubeResolution = 4096;
@@ -115,6 +120,27 @@ public:
     // (docs/ALGORITHMS.md#panel-inset); separable: per major value a contiguous range of minors.
     void add_panel_sides(const Aabb& panel, glm::dvec3 spread);
     void add_panels_sides(const std::vector<Aabb>& panels, glm::dvec3 spread);
+    // Rasterizes one SLANTED PANEL (core/occluder.h: a convex polygon tiled by opaque triangles within a slab
+    // |n.x - offset| <= thickness) for every eye in the EYE BOX around s (as add_panel()), on every face. Let
+    // N be the unit normal towards s, and h_near < h_far the heights of s above the slab's two faces, the
+    // slab grown by kSlantedPanelMarginM. A grid vertex with ray direction d (+-1 on the face axis) passes
+    // when w = -N.d > 0 and, for each edge i of the polygon (inward unit normal m_i in the plane, line
+    // m_i.x = k_i moved inward by kSlantedPanelMarginM), at both heights h:
+    //     (m_i.s - k_i - a_i) w + h (m_i.d) - b_n |m_i.d| >= 0,
+    // a_i = sum_k |m_ik| spread_k and b_n = sum_k |n_k| spread_k (each times 1 + 1e-9): the ray crosses both
+    // faces inside the polygon inset by the eye box's per-ray bound. A pixel whose four vertices pass gets
+    // the largest of their far-face crossing depths h_far / w, times (1 + slack), rounded up. Ignored when
+    // the eye box reaches the grown slab (h_near <= b_n (1 + 1e-6)). Guarantee: if x lies beyond that depth
+    // in the direction of a written pixel, then for every q in the eye box the segment q -> x crosses the
+    // slab over the polygon, so meets an opaque triangle before x. Why, and why the vertices decide:
+    // docs/ALGORITHMS.md#slanted-inset.
+    void add_slanted_panel(const SlantedPanel& panel, glm::dvec3 spread);
+    // All of them, nearest first, skipping each panel whose bounds the occluders drawn so far already hide
+    // (drawing fewer is always safe).
+    void add_slanted_panels(const std::vector<SlantedPanel>& panels, glm::dvec3 spread);
+    // The same for panels[i], i in `which`.
+    void add_slanted_panels(const std::vector<SlantedPanel>& panels, const std::vector<uint32_t>& which,
+                            glm::dvec3 spread);
     // Rasterizes all the boxes, nearest first, skipping each box the ones before already hide (it could not
     // lower any pixel). Same depths as add_occluder() on every box, in far less time behind walls.
     void add_occluders(const std::vector<Aabb>& boxes);
@@ -141,16 +167,17 @@ private:
     std::vector<double> col_enter_, col_exit_, row_enter_, row_exit_, corner_prev_, corner_cur_;
     std::vector<int> side_first_, side_last_;  // scratch of add_panel_sides(): per major, its minor range
     std::vector<double> grid_;                 // grid(k) for k = 0..R
+    std::vector<std::pair<float, uint32_t>> slanted_order_;  // scratch of add_slanted_panels()
 };
 
 // The plain reference of the same rules: for every pixel of every face, brute force "is it touched", and
 // for touched pixels the minimum over all occluders of the four-corner slab tests. Slow (O(6 R^2 * N)); for
 // the differential test and the benchmark ratio only.
 bool is_hidden_reference(const std::vector<Aabb>& occluders, glm::vec3 eye, const Aabb& box, int resolution);
-// The same with panels (add_panel(panel, panel_spread), and add_panel_sides() too when panel_sides) besides
-// the boxes.
+// The same with panels (add_panel(panel, panel_spread), and add_panel_sides() too when panel_sides) and
+// slanted panels (add_slanted_panel(panel, panel_spread), all of them) besides the boxes.
 bool is_hidden_reference(const std::vector<Aabb>& occluders, const std::vector<Aabb>& panels,
                          glm::dvec3 panel_spread, glm::vec3 eye, const Aabb& box, int resolution,
-                         bool panel_sides = false);
+                         bool panel_sides = false, const std::vector<SlantedPanel>& slanted = {});
 
 }  // namespace pvs

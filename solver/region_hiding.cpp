@@ -150,16 +150,10 @@ bool slanted_hides(const Aabb& region, const Aabb& object, const SlantedPanel& p
     if (!((r_hi < below && o_lo > above) || (o_hi < below && r_lo > above))) return false;
     // The polygon's edges as inward half-planes m.x >= k + tol (m in the plane, square to the edge). Their
     // intersection lies in the polygon even if rounding left it a hair short of convex.
-    std::vector<glm::dvec3> m(n);
+    if (panel.edge_normal.size() != n || panel.edge_offset.size() != n) return false;
+    const std::vector<glm::dvec3>& m = panel.edge_normal;
     std::vector<double> k(n);
-    for (size_t i = 0; i < n; ++i) {
-        const glm::dvec3 e = panel.corners[(i + 1) % n] - panel.corners[i];
-        const glm::dvec3 in = glm::cross(normal, e);
-        const double len = glm::length(in);
-        if (!(len > 0.0)) return false;
-        m[i] = in / len;
-        k[i] = glm::dot(m[i], panel.corners[i]) + tol;
-    }
+    for (size_t i = 0; i < n; ++i) k[i] = panel.edge_offset[i] + tol;
     const double faces[2] = {panel.offset - panel.thickness, panel.offset + panel.thickness};
     for (const glm::dvec3& q : rc)
         for (const glm::dvec3& x : oc) {

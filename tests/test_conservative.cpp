@@ -440,6 +440,41 @@ TEST(Conservative, BehindAHollowWallOthersSeeIntoIsCulledByTheBlocksOwnOccluders
     }
 }
 
+// FUSION OF OFF-AXIS WALLS. A closed room 20 x 3 x 12 m; two full-height walls 5 cm thick (no solid in
+// them, no axis panel), one turned 49 degrees off x from (6, 2) to (10, 6.6), the other turned -56 degrees
+// from (8, 10) to (11, 5.6). From the cell at x in [2, 3], z in [5.5, 6.5] they overlap in view, and a
+// target at x in [16, 17], z in [5, 7] lies behind the two together, behind neither alone (so the
+// single-occluder pass cannot prove it): only their slanted faces drawn on the same depth cubes can
+// (docs/ALGORITHMS.md#slanted-inset).
+TEST(Conservative, BehindTwoOffAxisWallsIsCulledByTheirFusion) {
+    World w;
+    const float t = 0.5f;
+    const glm::vec3 size(20, 3, 12);
+    test::add_box(w, "floor", Aabb::of({-t, -t, -t}, {size.x + t, 0, size.z + t}));
+    test::add_box(w, "roof", Aabb::of({-t, size.y, -t}, {size.x + t, size.y + t, size.z + t}));
+    test::add_box(w, "west", Aabb::of({-t, 0, -t}, {0, size.y, size.z + t}));
+    test::add_box(w, "east", Aabb::of({size.x, 0, -t}, {size.x + t, size.y, size.z + t}));
+    test::add_box(w, "south", Aabb::of({0, 0, -t}, {size.x, size.y, 0}));
+    test::add_box(w, "north", Aabb::of({0, 0, size.z}, {size.x, size.y, size.z + t}));
+    const auto wall = [&](const std::string& name, glm::vec2 a, glm::vec2 b) {
+        const glm::vec2 along = glm::normalize(b - a), across(-along.y, along.x);
+        add_prism(w, name, {a, b, b + 0.05f * across, a + 0.05f * across}, 0.0f, size.y, -1);
+    };
+    wall("first", {6, 2}, {10, 6.6f});
+    wall("second", {8, 10}, {11, 5.6f});
+    const uint32_t target = test::add_box(w, "target", Aabb::of({16, 1, 5}, {17, 2, 7}));
+    w.view_seeds = {{2.5f, 1.5f, 6}, {18, 1.5f, 6}};
+    Context ctx = quiet_context();
+    const BakeData bake = bake_world(ctx, conservative_config(), w, "test", "");
+    EXPECT_TRUE(bake.verification.ran);
+    EXPECT_TRUE(bake.verification.misses.empty()) << bake.verification.misses.size() << " misses";
+    const int32_t cell = bake.cells.find({2.5f, 1.5f, 6.0f}), near = bake.cells.find({15.5f, 1.5f, 6.0f});
+    ASSERT_GE(cell, 0);
+    ASSERT_GE(near, 0);
+    EXPECT_FALSE(bake.pvs.test(uint32_t(cell), target)) << "the two walls together hide the target";
+    EXPECT_TRUE(bake.pvs.test(uint32_t(near), target));
+}
+
 // The safety property of block occluders, on the yard: no ray from eyes of a block (fresh ones, not those
 // synthesis used) reaches a point inside one of that block's shrunk boxes before an opaque triangle.
 TEST(Conservative, NoRayFromABlocksEyesReachesIntoItsOwnOccluders) {
@@ -478,10 +513,10 @@ TEST(Conservative, OnAnOctreeTheWestCellsCullTheCrateBehindTheHollowWall) {
 // A random closed room, inside [0, size] (x and z 12 to 16 m, y 3 to 4 m), shut by a floor, a roof and four
 // walls 0.5 to 1 m thick, holding: one or two partitions across the room with a doorway, long thin walls (0.3
 // to 0.6 m thick, along x or z, full height, low, or hanging from the roof like a lintel, some from a room
-// wall), pillars, crates (on the floor, stacked or in the air), see-through panes and blocks (opaque =
-// false), and small targets (0.1 to 0.4 m, a fifth of them see-through) anywhere, some partly inside other
-// boxes. Coordinates are random floats, on neither the voxel nor the cell grid. The view seeds are random
-// points at least 0.2 m from every opaque box.
+// wall), up to two walls turned off the axes (some hollow), pillars, crates (on the floor, stacked or in the
+// air), see-through panes and blocks (opaque = false), and small targets (0.1 to 0.4 m, a fifth of them
+// see-through) anywhere, some partly inside other boxes. Coordinates are random floats, on neither the voxel
+// nor the cell grid. The view seeds are random points at least 0.2 m from every opaque box.
 struct RandomWorld {
     World world;
     std::vector<Aabb> opaque;  // every opaque box, to keep the seeds out of them
@@ -557,6 +592,28 @@ RandomWorld make_random_world(uint64_t seed, uint64_t attempt) {
             hi.y = in(1.0f, size.y - 0.5f);  // a low wall
         }
         add_inside("wall" + std::to_string(i), Aabb::of(lo, hi), true);
+    }
+    // Up to two walls turned 15 to 75 degrees off the axes (no axis panel comes from them; their faces are
+    // slanted panels, docs/ALGORITHMS.md#slanted-panels), 2 to 5 m long and 0.2 to 0.5 m thick, full height
+    // or low, a third of them hollow (one long side left out, as a compiled level's walls are).
+    const uint32_t turned = rng.below(3);
+    for (uint32_t i = 0; i < turned; ++i) {
+        const float angle = glm::radians(in(15.0f, 75.0f)) * (rng.below(2) ? 1.0f : -1.0f);
+        const float length = in(2.0f, 5.0f), thick = in(0.2f, 0.5f);
+        const glm::vec2 along(std::cos(angle), std::sin(angle)), across(-along.y, along.x);
+        const glm::vec2 centre(in(3.5f, size.x - 3.5f), in(3.5f, size.z - 3.5f));
+        const glm::vec2 a = centre - 0.5f * length * along - 0.5f * thick * across;
+        const glm::vec2 b = a + length * along, c = b + thick * across, d = a + thick * across;
+        const float height = rng.uniform() < 0.7f ? size.y : in(1.0f, size.y - 0.5f);
+        const int open_side = rng.below(3) == 0 ? 0 : -1;
+        const std::array<glm::vec2, 4> footprint{a, b, c, d};
+        add_prism(w, "turned" + std::to_string(i), footprint, 0.0f, height, open_side);
+        Aabb bounds;
+        for (const glm::vec2& p : footprint) {
+            bounds.extend(glm::vec3(p.x, 0.0f, p.y));
+            bounds.extend(glm::vec3(p.x, height, p.y));
+        }
+        r.opaque.push_back(bounds);
     }
     const uint32_t pillars = 2 + rng.below(4);
     for (uint32_t i = 0; i < pillars; ++i) {

@@ -3,6 +3,7 @@
 #include "core/error.h"
 #include "core/random.h"
 #include "solver/depth_cube.h"
+#include "tests/depth_cube_checks.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
@@ -190,42 +191,21 @@ TEST(DepthCube, MatchesTheReferenceOnRandomScenes) {
     const int scenes = test::in_ci() ? 60 : 300;
     const int resolutions[] = {16, 17, 24, 31, 32, 48, 64};
     Rng rng(7, 11);
-    int hidden = 0, tested = 0, disagreements = 0;
+    test::CubeCheck check;
     DepthCube cube(16);
-    for (int n = 0; n < scenes; ++n) {
+    for (int n = 0; n < scenes && check.failures <= 5; ++n) {
         const Scene s = random_scene(rng);
         const int r = resolutions[rng.below(7)];
         if (cube.resolution() != r) cube = DepthCube(r);
         cube.clear(s.eye);
         for (const Aabb& b : s.occluders) cube.add_occluder(b);
-        for (const Aabb& b : s.occludees) {
-            const bool fast = cube.is_hidden(b);
-            const bool slow = is_hidden_reference(s.occluders, s.eye, b, r);
-            hidden += fast;
-            ++tested;
-            if (fast != slow) {
-                ++disagreements;
-                ADD_FAILURE() << "scene " << n << " resolution " << r << " eye (" << s.eye.x << ", "
-                              << s.eye.y << ", " << s.eye.z << ") box (" << b.min.x << ", " << b.min.y << ", "
-                              << b.min.z << ")-(" << b.max.x << ", " << b.max.y << ", " << b.max.z
-                              << "): fast " << fast << ", reference " << slow;
-                if (disagreements > 5) return;
-            }
-        }
+        test::expect_same_answers(
+            cube, s.occludees, [&](const Aabb& b) { return is_hidden_reference(s.occluders, s.eye, b, r); },
+            "scene " + std::to_string(n) + " resolution " + std::to_string(r), check);
     }
-    EXPECT_EQ(disagreements, 0);
-    EXPECT_GT(hidden, tested / 10) << hidden << " of " << tested << " hidden";
-    EXPECT_LT(hidden, tested * 9 / 10);
-}
-
-// Target k of a box for the ray tests: its 8 corners first, then random points inside it.
-glm::dvec3 box_target(const Aabb& b, int k, Rng& rng) {
-    glm::dvec3 x;
-    for (int a = 0; a < 3; ++a) {
-        const double t = k < 8 ? double((k >> a) & 1) : double(rng.uniform());
-        x[a] = double(b.min[a]) + t * (double(b.max[a]) - double(b.min[a]));
-    }
-    return x;
+    EXPECT_EQ(check.failures, 0);
+    EXPECT_GT(check.hidden, check.tested / 10) << check.hidden << " of " << check.tested << " hidden";
+    EXPECT_LT(check.hidden, check.tested * 9 / 10);
 }
 
 // Does the segment from eye to x meet the box strictly before x? (double slab test over t in [0, 1))
@@ -250,8 +230,7 @@ TEST(DepthCube, HiddenMeansEveryRayIsBlocked) {
     const int rays_per_box = test::in_ci() ? 500 : 2000;
     const int resolutions[] = {16, 32, 64, 128};
     Rng rng(3, 5);
-    long long violations = 0, rays = 0;
-    int hidden = 0, tested = 0;
+    test::CubeCheck check;
     for (int n = 0; n < scenes; ++n) {
         const Scene s = random_scene(rng);
         DepthCube cube(resolutions[rng.below(4)]);
@@ -262,29 +241,16 @@ TEST(DepthCube, HiddenMeansEveryRayIsBlocked) {
         for (const Aabb& b : s.occluders) {
             if (!b.contains(s.eye)) blockers.push_back(b);
         }
-        for (const Aabb& b : s.occludees) {
-            ++tested;
-            if (!cube.is_hidden(b)) continue;
-            ++hidden;
-            for (int k = 0; k < rays_per_box; ++k) {
-                glm::dvec3 x = box_target(b, k, rng);  // then a share of the random ones on faces
-                if (k >= 8 && k % 4 == 0) {
-                    const int a = int(rng.below(3));
-                    x[a] = rng.uniform() < 0.5f ? double(b.min[a]) : double(b.max[a]);
-                }
-                ++rays;
-                const bool blocked = std::any_of(blockers.begin(), blockers.end(), [&](const Aabb& o) {
-                    return segment_blocked(glm::dvec3(s.eye), x, o);
-                });
-                if (!blocked && ++violations <= 5) {
-                    ADD_FAILURE() << "scene " << n << ": ray to (" << x.x << ", " << x.y << ", " << x.z
-                                  << ") is not blocked";
-                }
-            }
-        }
+        test::expect_blocked_segments(
+            cube, s.occludees, s.eye, glm::dvec3(0.0), rays_per_box, 1, rng,
+            [&](const glm::dvec3& q, const glm::dvec3& x) {
+                return std::any_of(blockers.begin(), blockers.end(),
+                                   [&](const Aabb& o) { return segment_blocked(q, x, o); });
+            },
+            "scene " + std::to_string(n), check);
     }
-    EXPECT_EQ(violations, 0) << "of " << rays << " rays";
-    EXPECT_GT(hidden, tested / 10) << hidden << " of " << tested << " hidden";
+    EXPECT_EQ(check.failures, 0) << "of " << check.segments << " rays";
+    EXPECT_GT(check.hidden, check.tested / 10) << check.hidden << " of " << check.tested << " hidden";
 }
 
 // Walls given as their two big faces (panels) instead of boxes, as occluders/panels.h finds them.
@@ -302,22 +268,13 @@ std::vector<Aabb> wall_faces(const std::vector<Aabb>& walls) {
     return panels;
 }
 
-// The half-extents of an eye box: 0.05 to 1 m per axis, and flat along one axis (a patch of a cell face) in
-// half the draws.
-glm::dvec3 random_spread(Rng& rng) {
-    glm::dvec3 spread;
-    for (int a = 0; a < 3; ++a) spread[a] = 0.05 + 0.95 * double(rng.uniform());
-    if (rng.uniform() < 0.5f) spread[int(rng.below(3))] = 0.0;
-    return spread;
-}
-
 TEST(DepthCube, PanelsMatchTheReferenceOnRandomScenes) {
     const int scenes = test::in_ci() ? 60 : 300;
     const int resolutions[] = {16, 17, 24, 31, 32, 48, 64};
     Rng rng(17, 3);
-    int hidden = 0, tested = 0, disagreements = 0;
+    test::CubeCheck check;
     DepthCube cube(16);
-    for (int n = 0; n < scenes; ++n) {
+    for (int n = 0; n < scenes && check.failures <= 5; ++n) {
         Scene s = random_scene(rng);
         // Half the occluders become panels (their two largest faces).
         const size_t half = s.occluders.size() / 2;
@@ -326,29 +283,23 @@ TEST(DepthCube, PanelsMatchTheReferenceOnRandomScenes) {
         s.occluders.erase(s.occluders.begin(), s.occluders.begin() + std::ptrdiff_t(half));
         const int r = resolutions[rng.below(7)];
         // A third of the scenes from the point itself, the rest for a box around it (per-ray insets).
-        const glm::dvec3 spread = n % 3 == 0 ? glm::dvec3(0.0) : random_spread(rng);
+        const glm::dvec3 spread = n % 3 == 0 ? glm::dvec3(0.0) : test::random_eye_box(rng, 0.05, 1.0);
         if (cube.resolution() != r) cube = DepthCube(r);
         cube.clear(s.eye);
         cube.add_panels(panels, spread);
         const bool with_sides = n % 2 == 1;  // half the scenes draw the panels on the side faces too
         if (with_sides) cube.add_panels_sides(panels, spread);
         for (const Aabb& b : s.occluders) cube.add_occluder(b);
-        for (const Aabb& b : s.occludees) {
-            const bool fast = cube.is_hidden(b);
-            const bool slow = is_hidden_reference(s.occluders, panels, spread, s.eye, b, r, with_sides);
-            hidden += fast;
-            ++tested;
-            if (fast != slow) {
-                ++disagreements;
-                ADD_FAILURE() << "scene " << n << " resolution " << r << ": fast " << fast << ", reference "
-                              << slow;
-                if (disagreements > 5) return;
-            }
-        }
+        test::expect_same_answers(
+            cube, s.occludees,
+            [&](const Aabb& b) {
+                return is_hidden_reference(s.occluders, panels, spread, s.eye, b, r, with_sides);
+            },
+            "scene " + std::to_string(n) + " resolution " + std::to_string(r), check);
     }
-    EXPECT_EQ(disagreements, 0);
-    EXPECT_GT(hidden, tested / 10) << hidden << " of " << tested << " hidden";
-    EXPECT_LT(hidden, tested * 9 / 10);
+    EXPECT_EQ(check.failures, 0);
+    EXPECT_GT(check.hidden, check.tested / 10) << check.hidden << " of " << check.tested << " hidden";
+    EXPECT_LT(check.hidden, check.tested * 9 / 10);
 }
 
 TEST(DepthCube, APanelHidesWhatIsBehindItSeenFromEitherSideOnly) {
@@ -452,33 +403,23 @@ TEST(DepthCube, HiddenByPanelsMeansEveryRayCrossesOne) {
     const int rays_per_box = test::in_ci() ? 500 : 2000;
     const int resolutions[] = {16, 32, 64, 128};
     Rng rng(5, 9);
-    long long violations = 0, rays = 0;
-    int hidden = 0, tested = 0;
+    test::CubeCheck check;
     for (int n = 0; n < scenes; ++n) {
         const Scene s = random_scene(rng);
         const std::vector<Aabb> panels = wall_faces(s.occluders);
         DepthCube cube(resolutions[rng.below(4)]);
         cube.clear(s.eye);
         cube.add_panels(panels);
-        for (const Aabb& b : s.occludees) {
-            ++tested;
-            if (!cube.is_hidden(b)) continue;
-            ++hidden;
-            for (int k = 0; k < rays_per_box; ++k) {
-                const glm::dvec3 x = box_target(b, k, rng);
-                ++rays;
-                const bool blocked = std::any_of(panels.begin(), panels.end(), [&](const Aabb& p) {
-                    return segment_blocked(glm::dvec3(s.eye), x, p);
-                });
-                if (!blocked && ++violations <= 5) {
-                    ADD_FAILURE() << "scene " << n << ": ray to (" << x.x << ", " << x.y << ", " << x.z
-                                  << ") crosses no panel";
-                }
-            }
-        }
+        test::expect_blocked_segments(
+            cube, s.occludees, s.eye, glm::dvec3(0.0), rays_per_box, 1, rng,
+            [&](const glm::dvec3& q, const glm::dvec3& x) {
+                return std::any_of(panels.begin(), panels.end(),
+                                   [&](const Aabb& p) { return segment_blocked(q, x, p); });
+            },
+            "scene " + std::to_string(n), check);
     }
-    EXPECT_EQ(violations, 0) << "of " << rays << " rays";
-    EXPECT_GT(hidden, tested / 20) << hidden << " of " << tested << " hidden";
+    EXPECT_EQ(check.failures, 0) << "of " << check.segments << " rays";
+    EXPECT_GT(check.hidden, check.tested / 20) << check.hidden << " of " << check.tested << " hidden";
 }
 
 // Where a panel's inset per ray is tightest: one panel just beyond the eye box (`reach` is its largest
@@ -537,8 +478,7 @@ TEST(DepthCube, HiddenByPanelsForAnEyeBoxMeansEverySegmentFromTheBoxCrossesOne) 
     const int eyes_per_point = test::in_ci() ? 24 : 48;
     const int resolutions[] = {16, 32, 64, 128};
     Rng rng(23, 4);
-    long long violations = 0, segments = 0;
-    int hidden = 0, tested = 0;
+    test::CubeCheck check;
     for (int n = 0; n < scenes; ++n) {
         glm::dvec3 spread;
         for (int a = 0; a < 3; ++a) spread[a] = 0.1 + 0.9 * double(rng.uniform());
@@ -555,36 +495,16 @@ TEST(DepthCube, HiddenByPanelsForAnEyeBoxMeansEverySegmentFromTheBoxCrossesOne) 
         cube.clear(s.eye);
         cube.add_panels(panels, spread);
         cube.add_panels_sides(panels, spread);
-        for (const Aabb& b : s.occludees) {
-            ++tested;
-            if (!cube.is_hidden(b)) continue;
-            ++hidden;
-            for (int k = 0; k < points_per_box; ++k) {
-                const glm::dvec3 x = box_target(b, k, rng);
-                for (int e = 0; e < eyes_per_point; ++e) {
-                    glm::dvec3 corner;  // in [-1, 1]^3: a corner of the box, or a point of one of its faces
-                    if (e < 8) {
-                        for (int a = 0; a < 3; ++a) corner[a] = (e >> a) & 1 ? 1.0 : -1.0;
-                    } else {
-                        for (int a = 0; a < 3; ++a) corner[a] = 2.0 * double(rng.uniform()) - 1.0;
-                        corner[int(rng.below(3))] = rng.uniform() < 0.5f ? -1.0 : 1.0;
-                    }
-                    const glm::dvec3 q = glm::dvec3(s.eye) + spread * corner;
-                    ++segments;
-                    const bool blocked = std::any_of(panels.begin(), panels.end(),
-                                                     [&](const Aabb& p) { return segment_blocked(q, x, p); });
-                    if (!blocked && ++violations <= 5) {
-                        ADD_FAILURE()
-                            << "scene " << n << ", eye box (" << spread.x << ", " << spread.y << ", "
-                            << spread.z << "): segment from (" << q.x << ", " << q.y << ", " << q.z
-                            << ") to (" << x.x << ", " << x.y << ", " << x.z << ") crosses no panel";
-                    }
-                }
-            }
-        }
+        test::expect_blocked_segments(
+            cube, s.occludees, s.eye, spread, points_per_box, eyes_per_point, rng,
+            [&](const glm::dvec3& q, const glm::dvec3& x) {
+                return std::any_of(panels.begin(), panels.end(),
+                                   [&](const Aabb& p) { return segment_blocked(q, x, p); });
+            },
+            "scene " + std::to_string(n), check);
     }
-    EXPECT_EQ(violations, 0) << "of " << segments << " segments";
-    EXPECT_GT(hidden, tested / 20) << hidden << " of " << tested << " hidden";
+    EXPECT_EQ(check.failures, 0) << "of " << check.segments << " segments";
+    EXPECT_GT(check.hidden, check.tested / 20) << check.hidden << " of " << check.tested << " hidden";
 }
 
 // clear_for() resets only the pixels of the boxes it is given, and the cube is reused from one scene to the

@@ -3,12 +3,16 @@
 #include "core/random.h"
 #include "occluders/slanted_panels.h"
 #include "solver/region_hiding.h"
+#include "tests/slanted_fixtures.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
 
 namespace pvs {
 namespace {
+
+using test::bumpy_sheet;
+using test::segment_meets_triangle;
 
 Context quiet_context() {
     return Context(Context::Options{LogLevel::kError, true, nullptr});
@@ -127,60 +131,6 @@ TEST(RegionHiding, EdgesAndContactAreNotHidden) {
     EXPECT_FALSE(box_hides(region, Aabb::of({1.5f, 1.5f, 8}, {5.2f, 2.5f, 9}), box));
 }
 
-// The hider finds its candidates by tracing: an object behind a big wall panel is hidden from a region in
-// front, one beside the wall, one the region meets and one in front of the wall are not; the same with
-// the wall as a box.
-// Does the segment p -> x meet the closed triangle (a, b, c)? (Double; a hit within 1e-9 of an edge counts.)
-bool segment_meets_triangle(const glm::dvec3& p, const glm::dvec3& x, const glm::dvec3& a,
-                            const glm::dvec3& b, const glm::dvec3& c) {
-    const glm::dvec3 d = x - p, e1 = b - a, e2 = c - a;
-    const glm::dvec3 h = glm::cross(d, e2);
-    const double det = glm::dot(e1, h);
-    if (std::abs(det) < 1e-15) return false;
-    const glm::dvec3 s = p - a;
-    const double u = glm::dot(s, h) / det;
-    const glm::dvec3 q = glm::cross(s, e1);
-    const double v = glm::dot(d, q) / det, t = glm::dot(e2, q) / det;
-    const double eps = 1e-9;
-    return u >= -eps && v >= -eps && u + v <= 1.0 + eps && t >= -eps && t <= 1.0 + eps;
-}
-
-// A bumpy tilted sheet: an n x n grid of quads of 1 m in a random plane (not an axis plane), each vertex
-// lifted by up to `bump` along the normal, each quad cut along a random diagonal.
-World bumpy_sheet(Rng& rng, int n, double bump, glm::dvec3& normal) {
-    do {
-        normal = glm::normalize(glm::dvec3(rng.uniform() - 0.5, rng.uniform() - 0.5, rng.uniform() - 0.5));
-    } while (std::max({std::abs(normal.x), std::abs(normal.y), std::abs(normal.z)}) > 0.95);
-    const glm::dvec3 e1 = glm::normalize(glm::cross(normal, glm::dvec3(0.3, 0.5, 0.7)));
-    const glm::dvec3 e2 = glm::cross(normal, e1);
-    std::vector<glm::vec3> v;
-    for (int j = 0; j <= n; ++j)
-        for (int i = 0; i <= n; ++i)
-            v.emplace_back(double(i) * e1 + double(j) * e2 + (2.0 * rng.uniform() - 1.0) * bump * normal);
-    World w;
-    w.positions = v;
-    for (int j = 0; j < n; ++j)
-        for (int i = 0; i < n; ++i) {
-            const uint32_t a = uint32_t(j * (n + 1) + i), b = a + 1, c = a + uint32_t(n + 1), d = c + 1;
-            if (rng.uniform() < 0.5) {
-                w.triangles.push_back(Triangle{{a, b, d}});
-                w.triangles.push_back(Triangle{{a, d, c}});
-            } else {
-                w.triangles.push_back(Triangle{{a, b, c}});
-                w.triangles.push_back(Triangle{{b, d, c}});
-            }
-        }
-    w.triangle_opaque.assign(w.triangles.size(), 1);
-    w.triangle_double_sided.assign(w.triangles.size(), 0);
-    WorldObject o;
-    o.triangle_count = uint32_t(w.triangles.size());
-    for (const glm::vec3& p : v) o.bounds.extend(p);
-    o.flags = kObjectHasOpaque;
-    w.objects.push_back(o);
-    w.bounds = o.bounds;
-    return w;
-}
-
 // Whenever slanted_hides() says so, every one of many random segments from the region to the object meets
 // one of the sheet's triangles (flat and bumpy sheets); and it says so often enough to mean something.
 TEST(RegionHiding, ASlantedPanelThatHidesIsCrossedByEverySegmentThroughItsTriangles) {
@@ -255,6 +205,9 @@ TEST(RegionHiding, ASlantedPanelHidesNothingPastItsEdgesOrFromInsideItsSlab) {
                                p));  // beside it
 }
 
+// The hider finds its candidates by tracing: an object behind a big wall panel is hidden from a region in
+// front, one beside the wall, one the region meets and one in front of the wall are not; the same with
+// the wall as a box.
 TEST(RegionHiding, TheHiderOnASmallScene) {
     Context ctx = quiet_context();
     World w;
