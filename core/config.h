@@ -133,6 +133,9 @@ struct ConservativeConfig {
     int panel_refine_levels = 0;   // [Limit: 0..4] halvings of the floor patches, for what only the panels
                                    // may still prove (their inset is the patch's half-size; the boxes keep
                                    // epsilon); 0 = none
+    bool slanted_cubes = false;    // slanted panels are drawn on the depth cubes too, inset per ray
+                                   // (docs/ALGORITHMS.md#slanted-inset): exact, a little tighter on levels of
+                                   // slopes and roofs, slower
     bool single_occluder_pass = true;  // first, what ONE occluder hides from a cell's whole eye region is
                                        // proven exactly (solver/region_hiding.h); the faces skip it
     int refine_levels = 4;  // [Limit: 0..8] adaptive refinement: patches of a face are first tested
@@ -356,6 +359,11 @@ void visit_options(Config& c, Visitor&& v) {
             "hides from a cell's whole eye region), to measure what it gives: the same safety, a looser "
             "PVS"},
         c.conservative.single_occluder_pass);
+    v(OptionSpec{OptionGroup::kConservative, "--slanted-cubes", "conservative.slanted_cubes", "",
+                 "slanted panels (convex polygons of opaque triangles off the axis planes) are drawn on the "
+                 "depth cubes too, where they fuse with the other occluders: exact, a little tighter on levels "
+                 "of slopes and roofs, about 1.3x the PVS stage there"},
+      c.conservative.slanted_cubes);
     v(OptionSpec{OptionGroup::kConservative, "--panel-refine-levels", "conservative.panel_refine_levels",
                  "levels",
                  "floor patches are halved this many more times for the objects only the "

@@ -61,6 +61,13 @@ void bind_options(CLI::App& app, BakeConfig& config, std::initializer_list<std::
             if (!wanted) return;
             std::string help = spec.help;
             if (*spec.units) help += fmt::format(" [{}]", spec.units);
+            // A declared boolean that is off by default is a flag (`--slanted-cubes`).
+            if constexpr (std::is_same_v<std::decay_t<decltype(field)>, bool>) {
+                if (!field) {
+                    app.add_flag(spec.flag, field, help)->group(title);
+                    return;
+                }
+            }
             CLI::Option* opt = app.add_option(spec.flag, field, help)->capture_default_str()->group(title);
             if (std::isfinite(spec.min) && std::isfinite(spec.max)) {
                 opt->check(CLI::Range(spec.min, spec.max));

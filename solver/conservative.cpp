@@ -176,6 +176,7 @@ struct Shared {
     int cube_resolution;
     int fine_cube_resolution;  // 0: no second look at the floor
     int panel_refine_levels;   // halvings below the floor for what panels may still prove
+    bool slanted_cubes;        // slanted panels are drawn on the cubes too
 };
 
 // Per thread: the depth cube and scratch. solve_patch() refines one patch.
@@ -355,10 +356,13 @@ public:
             // an object left open, as above; add_slanted_panel() leaves out those whose slab the patch's box
             // reaches.
             near_slanted_.clear();
-            if (!sides.empty() && !occ_->slanted.empty()) {
+            if (sh_.slanted_cubes && !sides.empty() && !occ_->slanted.empty()) {
                 open_hulls(s, sides);
+                Aabb all = hulls_[0];  // the union of the octants' unions, to skip most panels at once
+                for (const Aabb& h : hulls_) all.extend(h);
                 for (uint32_t i = 0; i < occ_->slanted.size(); ++i)
-                    if (slanted_may_hide(occ_->slanted[i], s)) near_slanted_.push_back(i);
+                    if (occ_->slanted[i].bounds.overlaps(all) && slanted_may_hide(occ_->slanted[i], s))
+                        near_slanted_.push_back(i);
                 cube_.add_slanted_panels(occ_->slanted, near_slanted_, panel_spread_);
                 for (int side = 0; side < 2; ++side)
                     sides.open[size_t(side)] = unproven_each(cube_, sides.open[size_t(side)]);
@@ -656,7 +660,8 @@ Shared make_shared(const ConservativeConfig& config, const World& world, const S
                   ray_targets(world),
                   config.cube_resolution,
                   config.fine_cube_resolution,
-                  config.panel_refine_levels};
+                  config.panel_refine_levels,
+                  config.slanted_cubes};
 }
 
 // One face of a box: the side at box.min[axis] (side 0) or box.max[axis] (side 1), flat along `axis`.

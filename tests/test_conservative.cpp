@@ -445,7 +445,7 @@ TEST(Conservative, BehindAHollowWallOthersSeeIntoIsCulledByTheBlocksOwnOccluders
 // from (8, 10) to (11, 5.6). From the cell at x in [2, 3], z in [5.5, 6.5] they overlap in view, and a
 // target at x in [16, 17], z in [5, 7] lies behind the two together, behind neither alone (so the
 // single-occluder pass cannot prove it): only their slanted faces drawn on the same depth cubes can
-// (docs/ALGORITHMS.md#slanted-inset).
+// (`--slanted-cubes`, docs/ALGORITHMS.md#slanted-inset).
 TEST(Conservative, BehindTwoOffAxisWallsIsCulledByTheirFusion) {
     World w;
     const float t = 0.5f;
@@ -465,7 +465,9 @@ TEST(Conservative, BehindTwoOffAxisWallsIsCulledByTheirFusion) {
     const uint32_t target = test::add_box(w, "target", Aabb::of({16, 1, 5}, {17, 2, 7}));
     w.view_seeds = {{2.5f, 1.5f, 6}, {18, 1.5f, 6}};
     Context ctx = quiet_context();
-    const BakeData bake = bake_world(ctx, conservative_config(), w, "test", "");
+    BakeConfig c = conservative_config();
+    c.conservative.slanted_cubes = true;
+    const BakeData bake = bake_world(ctx, c, w, "test", "");
     EXPECT_TRUE(bake.verification.ran);
     EXPECT_TRUE(bake.verification.misses.empty()) << bake.verification.misses.size() << " misses";
     const int32_t cell = bake.cells.find({2.5f, 1.5f, 6.0f}), near = bake.cells.find({15.5f, 1.5f, 6.0f});
@@ -851,6 +853,8 @@ BakeConfig property_config(uint64_t seed) {
     // The second world halves its floor patches once more for the panels (--panel-refine-levels; about
     // 4x the PVS time too).
     if (seed == 2) c.conservative.panel_refine_levels = 1;
+    // The third draws the slanted panels on the depth cubes (--slanted-cubes).
+    if (seed == 3) c.conservative.slanted_cubes = true;
     return c;
 }
 
