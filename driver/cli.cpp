@@ -169,6 +169,8 @@ void write_report(const std::string& path, const BakeData& bake, const Context& 
 int run_occluders(Context& ctx, const BakeConfig& config, const std::string& world_path,
                   const std::string& out_path, const std::string& report_path) {
     ScopedTimer total(ctx, "total");
+    check_output_writable(out_path, "the output");
+    if (!report_path.empty()) check_output_writable(report_path, "the report");
     set_threads(config.run.threads);
     const World world = load_world(ctx, world_path);
     const ViewVolume view = build_view_volume(ctx, config.view, world);
@@ -259,6 +261,9 @@ double figure_or(const NamedValues& values, const std::string& key, double fallb
 int run_bake(Context& ctx, const BakeConfig& config, const std::string& world_path,
              const std::string& out_path, const std::string& report_path) {
     ScopedTimer total(ctx, "total");
+    // Before any stage: a bad output path must not cost a night's bake.
+    check_output_writable(out_path, "the output");
+    if (!report_path.empty()) check_output_writable(report_path, "the report");
     set_threads(config.run.threads);
     const World world = load_world(ctx, world_path);
     const std::string hash = hash_file_hex(world_path);
@@ -289,6 +294,8 @@ int run_bake(Context& ctx, const BakeConfig& config, const std::string& world_pa
 // default for bakes made before it was recorded) decides which misses fail.
 int run_verify(Context& ctx, BakeConfig config, const std::string& world_path, const std::string& bake_path,
                const std::string& report_path, bool write_back, bool tolerance_given) {
+    if (write_back) check_output_writable(bake_path, "the bake");
+    if (!report_path.empty()) check_output_writable(report_path, "the report");
     set_threads(config.run.threads);
     BakeData bake = read_bake_file(bake_path);
     if (!tolerance_given) config.gap.tolerance_m = gap_tolerance_of(bake);

@@ -39,6 +39,29 @@ void sync_parent_folder(const std::string& path) {
 
 }  // namespace
 
+void check_output_writable(const std::string& path, const std::string& what) {
+    namespace fs = std::filesystem;
+    const fs::path p(path);
+    fs::path folder = p.parent_path();
+    if (folder.empty()) folder = ".";
+    std::error_code ec;
+    if (p.filename().empty() || fs::is_directory(p, ec)) {
+        throw bad_input(fmt::format("{} {}: is a folder, not a file name", what, path));
+    }
+    if (!fs::is_directory(folder, ec)) {
+        throw bad_input(fmt::format("{} {}: the folder {} does not exist", what, path, folder.string()));
+    }
+    const std::string probe = make_temp_path(path);
+    const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+    if (fd < 0) {
+        const int err = errno;
+        throw bad_input(fmt::format("{} {}: cannot write in the folder {}: {}", what, path, folder.string(),
+                                    std::strerror(err)));
+    }
+    ::close(fd);
+    fs::remove(probe, ec);
+}
+
 AtomicOutput::AtomicOutput(std::string final_path)
     : final_path_(std::move(final_path)), temp_path_(make_temp_path(final_path_)) {}
 

@@ -30,4 +30,10 @@ private:
 // Writes bytes to path atomically (through AtomicOutput). Throws pvs::Error (kIo) on failure.
 void write_file_atomically(const std::string& path, const std::string& bytes);
 
+// Checks, before any work, that an output can be written at `path` as AtomicOutput writes it: its folder
+// exists, `path` is not a folder, and a temporary file can be created in that folder (permissions, a
+// read-only file system); the probe file is removed. Throws pvs::Error (kBadInput) naming `what` and the
+// path otherwise. A disk that fills up later is not foreseen.
+void check_output_writable(const std::string& path, const std::string& what);
+
 }  // namespace pvs

@@ -191,12 +191,29 @@ TEST(Cli, BadInputGetsStatusTwoAClearMessageAndNoOutput) {
     EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.path()), {}), 1);  // notgltf.glb only
 }
 
-TEST(Cli, UnwritableOutputFailsAndLeavesNothing) {
+// An output that cannot be written is bad input (status 2), found before the world is even loaded: the
+// log holds no stage, and nothing is left behind. Likewise a folder given as the output, a report in a
+// missing folder, and the occluders command.
+TEST(Cli, UnwritableOutputFailsBeforeAnyStageAndLeavesNothing) {
     test::TempDir dir;
     const std::string out = dir.file("no/such/folder/out.h5");
     const CliRun r = run(with({"bake", test::sample_world(), "-o", out, "--no-verify"}, kFast));
-    EXPECT_NE(r.status, 0);
+    EXPECT_EQ(r.status, 2);
     EXPECT_TRUE(contains(r.log, "out.h5")) << r.log;
+    EXPECT_TRUE(contains(r.log, "does not exist")) << r.log;
+    EXPECT_FALSE(contains(r.log, "triangles")) << r.log;  // the world's load line
+    EXPECT_FALSE(contains(r.log, "view volume")) << r.log;
+    const CliRun folder = run(with({"bake", test::sample_world(), "-o", dir.path(), "--no-verify"}, kFast));
+    EXPECT_EQ(folder.status, 2);
+    EXPECT_TRUE(contains(folder.log, "is a folder")) << folder.log;
+    const CliRun report = run(with({"bake", test::sample_world(), "-o", dir.file("ok.h5"), "--report",
+                                    dir.file("none/r.json"), "--no-verify"},
+                                   kFast));
+    EXPECT_EQ(report.status, 2);
+    EXPECT_TRUE(contains(report.log, "the report")) << report.log;
+    const CliRun occ = run({"occluders", test::sample_world(), "-o", out});
+    EXPECT_EQ(occ.status, 2);
+    EXPECT_TRUE(contains(occ.log, "does not exist")) << occ.log;
     EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.path()), {}), 0);
 }
 
