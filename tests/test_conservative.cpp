@@ -128,6 +128,15 @@ BakeConfig conservative_config() {
     return c;
 }
 
+// Bakes the world with the config, and expects the bake's own verification to have run and found no miss.
+BakeData bake_without_misses(const BakeConfig& c, const World& w) {
+    Context ctx = quiet_context();
+    BakeData bake = bake_world(ctx, c, w, "test", "");
+    EXPECT_TRUE(bake.verification.ran);
+    EXPECT_TRUE(bake.verification.misses.empty()) << bake.verification.misses.size() << " misses";
+    return bake;
+}
+
 // Is the target listed for the cell at x in [2, 3], y in [1, 2], z in [0.5, 1.5] (in line with it)?
 bool target_listed(Middle middle) {
     Context ctx = quiet_context();
@@ -162,10 +171,7 @@ TEST(Conservative, SeenByLookingUpAboveThePlayHeightIsListed) {
     BakeConfig c = conservative_config();
     c.cells.cell_size_m = 4.0;
     c.view.play_height_m = 1.5;
-    Context ctx = quiet_context();
-    const BakeData bake = bake_world(ctx, c, w, "test", "");
-    EXPECT_TRUE(bake.verification.ran);
-    EXPECT_TRUE(bake.verification.misses.empty()) << bake.verification.misses.size() << " misses";
+    const BakeData bake = bake_without_misses(c, w);
     for (const glm::vec3 eye : {glm::vec3(1, 1, 1), glm::vec3(4, 1, 4), glm::vec3(7, 1, 7)}) {
         const int32_t cell = bake.cells.find(eye);
         ASSERT_GE(cell, 0);
@@ -188,10 +194,7 @@ TEST(Conservative, AWallOpenOnlyAtItsTopUnderTheSkyHidesWhatIsBehindIt) {
     w.view_seeds = {{3, 1, 3}, {9, 1, 3}};
     BakeConfig c = conservative_config();
     c.view.play_height_m = 2.0;
-    Context ctx = quiet_context();
-    const BakeData bake = bake_world(ctx, c, w, "test", "");
-    EXPECT_TRUE(bake.verification.ran);
-    EXPECT_TRUE(bake.verification.misses.empty()) << bake.verification.misses.size() << " misses";
+    const BakeData bake = bake_without_misses(c, w);
     const int32_t cell = bake.cells.find({2.5f, 1.5f, 1.0f});
     ASSERT_GE(cell, 0);
     EXPECT_FALSE(bake.pvs.test(uint32_t(cell), crate)) << "the crate is behind the wall";
@@ -420,10 +423,7 @@ TEST(Conservative, BehindAHollowWallOthersSeeIntoIsCulledByTheBlocksOwnOccluders
         c.view.play_height_m = 2.0;
         c.cells.cell_size_m = 2.0;
         c.occluders.block_m = blocks ? 8.0 : 0.0;
-        Context ctx = quiet_context();
-        const BakeData bake = bake_world(ctx, c, w, "test", "");
-        EXPECT_TRUE(bake.verification.ran);
-        EXPECT_TRUE(bake.verification.misses.empty()) << bake.verification.misses.size() << " misses";
+        const BakeData bake = bake_without_misses(c, w);
         const int32_t west = bake.cells.find({3, 1, 6}), east = bake.cells.find({27, 1, 6});
         ASSERT_GE(west, 0);
         ASSERT_GE(east, 0);
@@ -464,12 +464,9 @@ TEST(Conservative, BehindTwoOffAxisWallsIsCulledByTheirFusion) {
     wall("second", {8, 10}, {11, 5.6f});
     const uint32_t target = test::add_box(w, "target", Aabb::of({16, 1, 5}, {17, 2, 7}));
     w.view_seeds = {{2.5f, 1.5f, 6}, {18, 1.5f, 6}};
-    Context ctx = quiet_context();
     BakeConfig c = conservative_config();
     c.conservative.slanted_cubes = true;
-    const BakeData bake = bake_world(ctx, c, w, "test", "");
-    EXPECT_TRUE(bake.verification.ran);
-    EXPECT_TRUE(bake.verification.misses.empty()) << bake.verification.misses.size() << " misses";
+    const BakeData bake = bake_without_misses(c, w);
     const int32_t cell = bake.cells.find({2.5f, 1.5f, 6.0f}), near = bake.cells.find({15.5f, 1.5f, 6.0f});
     ASSERT_GE(cell, 0);
     ASSERT_GE(near, 0);
@@ -499,10 +496,7 @@ TEST(Conservative, OnAnOctreeTheWestCellsCullTheCrateBehindTheHollowWall) {
     c.cells.min_cell_size_m = 2.0;
     c.cells.root_cell_size_m = 8.0;
     c.occluders.block_m = 8.0;
-    Context ctx = quiet_context();
-    const BakeData bake = bake_world(ctx, c, w, "test", "");
-    EXPECT_TRUE(bake.verification.ran);
-    EXPECT_TRUE(bake.verification.misses.empty()) << bake.verification.misses.size() << " misses";
+    const BakeData bake = bake_without_misses(c, w);
     const int32_t west = bake.cells.find({3, 1, 6}), east = bake.cells.find({27, 1, 6});
     ASSERT_GE(west, 0);
     ASSERT_GE(east, 0);
