@@ -152,8 +152,7 @@ bool slanted_hides(const Aabb& region, const Aabb& object, const SlantedPanel& p
     // intersection lies in the polygon even if rounding left it a hair short of convex.
     if (panel.edge_normal.size() != n || panel.edge_offset.size() != n) return false;
     const std::vector<glm::dvec3>& m = panel.edge_normal;
-    std::vector<double> k(n);
-    for (size_t i = 0; i < n; ++i) k[i] = panel.edge_offset[i] + tol;
+    const std::vector<double>& k = panel.edge_offset;
     const double faces[2] = {panel.offset - panel.thickness, panel.offset + panel.thickness};
     for (const glm::dvec3& q : rc)
         for (const glm::dvec3& x : oc) {
@@ -162,7 +161,7 @@ bool slanted_hides(const Aabb& region, const Aabb& object, const SlantedPanel& p
                 const double t = (face - hq) / (hx - hq);  // in (0, 1): q and x lie beyond the slab's faces
                 const glm::dvec3 y = q + t * (x - q);
                 for (size_t i = 0; i < n; ++i)
-                    if (!(glm::dot(m[i], y) >= k[i])) return false;
+                    if (!(glm::dot(m[i], y) >= k[i] + tol)) return false;
             }
         }
     return true;
