@@ -136,6 +136,10 @@ struct ConservativeConfig {
     bool slanted_cubes = false;    // slanted panels are drawn on the depth cubes too, inset per ray
                                    // (docs/ALGORITHMS.md#slanted-inset): exact, a little tighter on levels of
                                    // slopes and roofs, slower
+    int shaft_budget = 0;  // [Limit: 0..4096] the shaft pass: an object the faces listed and no sight ray
+                           // saw is tried once more against the whole eye region, cut into piece pairs
+                           // each covered in one plane by panels and the proven solid, at most this many
+                           // pairs per (cell, object) (solver/shaft_hiding.h); 0 = off
     bool single_occluder_pass = true;  // first, what ONE occluder hides from a cell's whole eye region is
                                        // proven exactly (solver/region_hiding.h); the faces skip it
     int refine_levels = 4;  // [Limit: 0..8] adaptive refinement: patches of a face are first tested
@@ -359,11 +363,19 @@ void visit_options(Config& c, Visitor&& v) {
             "hides from a cell's whole eye region), to measure what it gives: the same safety, a looser "
             "PVS"},
         c.conservative.single_occluder_pass);
-    v(OptionSpec{OptionGroup::kConservative, "--slanted-cubes", "conservative.slanted_cubes", "",
-                 "slanted panels (convex polygons of opaque triangles off the axis planes) are drawn on the "
-                 "depth cubes too, where they fuse with the other occluders: exact, a little tighter on levels "
-                 "of slopes and roofs, about 1.3x the PVS stage there"},
-      c.conservative.slanted_cubes);
+    v(
+        OptionSpec{
+            OptionGroup::kConservative, "--slanted-cubes", "conservative.slanted_cubes", "",
+            "slanted panels (convex polygons of opaque triangles off the axis planes) are drawn on the "
+            "depth cubes too, where they fuse with the other occluders: exact, a little tighter on levels "
+            "of slopes and roofs, about 1.3x the PVS stage there"},
+        c.conservative.slanted_cubes);
+    v(OptionSpec{OptionGroup::kConservative, "--shaft-budget", "conservative.shaft_budget", "pairs",
+                 "what the faces listed and no sight ray saw is tried once more from the whole eye region, "
+                 "exactly, in piece pairs each covered in one plane by panels and the proven solid: at most "
+                 "this many pairs per (cell, object); 0 = off",
+                 0, 4096},
+      c.conservative.shaft_budget);
     v(OptionSpec{OptionGroup::kConservative, "--panel-refine-levels", "conservative.panel_refine_levels",
                  "levels",
                  "floor patches are halved this many more times for the objects only the "

@@ -8,6 +8,7 @@
 #include "rays/ray_sampler.h"
 #include "solver/depth_cube.h"
 #include "solver/region_hiding.h"
+#include "solver/shaft_hiding.h"
 
 #include <fmt/format.h>
 
@@ -209,6 +210,7 @@ public:
     struct Sides {
         std::array<std::vector<uint32_t>, 2> open;
         std::array<uint64_t*, 2> row{nullptr, nullptr};
+        std::array<uint64_t*, 2> seen{nullptr, nullptr};  // or null: objects a sight ray saw, per side
         bool empty() const { return open[0].empty() && open[1].empty(); }
     };
 
@@ -380,8 +382,8 @@ public:
                 if (!sides.empty() && (!near_panels_.empty() || !near_slanted_.empty()) &&
                     r > eps[0] / double(1 << sh_.panel_refine_levels)) {
                     for (int side = 0; side < 2; ++side)
-                        sides.open[size_t(side)] =
-                            list_seen(s, sides.open[size_t(side)], sides.row[size_t(side)]);
+                        sides.open[size_t(side)] = list_seen(
+                            s, sides.open[size_t(side)], sides.row[size_t(side)], sides.seen[size_t(side)]);
                     if (sides.empty()) return;
                     ++counts_.panel_splits;
                     split(rect, axis, sides);
@@ -397,7 +399,8 @@ public:
             }
             if (sides.empty()) return;
             for (int side = 0; side < 2; ++side)
-                sides.open[size_t(side)] = list_seen(s, sides.open[size_t(side)], sides.row[size_t(side)]);
+                sides.open[size_t(side)] =
+                    list_seen(s, sides.open[size_t(side)], sides.row[size_t(side)], sides.seen[size_t(side)]);
         }
         split(rect, axis, sides);
     }
@@ -461,7 +464,9 @@ public:
     // never be proven hidden from a patch holding s, so refining it would only cost time: the PVS is the
     // same, sooner. Only from free space (every voxel holding s free: untouched and not proven solid), or
     // rays would start behind walls and reach the backs of triangles through the sealed void.
-    std::vector<uint32_t> list_seen(glm::vec3 s, const std::vector<uint32_t>& open, uint64_t* row) {
+    // Each object listed so is marked in `seen_row` too, when given.
+    std::vector<uint32_t> list_seen(glm::vec3 s, const std::vector<uint32_t>& open, uint64_t* row,
+                                    uint64_t* seen_row) {
         if (open.empty() || !box_all_in_mask(sh_.occ.free, Aabb::of(s, s))) return open;
         origins_.clear();
         dirs_.clear();
@@ -487,6 +492,7 @@ public:
                 seen = seen || !blocked_[ray];
             if (seen) {
                 row[o >> 6] |= uint64_t(1) << (o & 63);
+                if (seen_row) seen_row[o >> 6] |= uint64_t(1) << (o & 63);
             } else {
                 out.push_back(o);
             }
@@ -524,7 +530,8 @@ private:
     // smaller. Both tests are conservative (docs/ALGORITHMS.md#depth-cube), so proving on either is enough.
     void second_look(glm::vec3 s, Sides& sides) {
         for (int side = 0; side < 2; ++side)
-            sides.open[size_t(side)] = list_seen(s, sides.open[size_t(side)], sides.row[size_t(side)]);
+            sides.open[size_t(side)] =
+                list_seen(s, sides.open[size_t(side)], sides.row[size_t(side)], sides.seen[size_t(side)]);
         if (sides.empty()) return;
         interest_.clear();
         for (const std::vector<uint32_t>& open : sides.open)
@@ -635,6 +642,25 @@ std::vector<uint32_t> leavable_objects(const World& world) {
     return out;
 }
 
+// The shaft pass over one region's row (solver/shaft_hiding.h, docs/ALGORITHMS.md#shaft-pass): every object
+// of `candidates` the row lists whose bounds do not meet the region and that no sight ray saw (`seen`, or
+// null) is tried once more against the whole region; proven hidden from every eye of it, it leaves the row.
+void shaft_row(const ShaftProver& prover, const World& world, const VoxelMask& eyes, const Aabb& region,
+               const std::vector<uint32_t>& candidates, int budget, uint64_t* row, const uint64_t* seen,
+               ShaftFigures& figures) {
+    const ShaftRegion shaft = shaft_region(eyes, region);
+    for (uint32_t o : candidates) {
+        if (!row_lists(row, o) || (seen && row_lists(seen, o)) || world.objects[o].bounds.overlaps(region))
+            continue;
+        if (prover.hides(world, eyes, shaft, o, budget, figures)) row[o >> 6] &= ~(uint64_t(1) << (o & 63));
+    }
+}
+
+PatchSolver::Sides with_seen(PatchSolver::Sides sides, uint64_t* seen_lo, uint64_t* seen_hi) {
+    sides.seen = {seen_lo, seen_hi};
+    return sides;
+}
+
 void add_counts(ConservativeFigures& figures, const Counts& n, std::chrono::steady_clock::time_point start) {
     figures.samples += n.samples;
     figures.samples_skipped += n.skipped;
@@ -684,13 +710,17 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
     std::optional<RegionHiders> own_hiders;
     if (config.single_occluder_pass && !hiders) hiders = &own_hiders.emplace(ctx, occluders);
     if (!config.single_occluder_pass) hiders = nullptr;
+    std::optional<ShaftProvers> provers;
+    if (config.shaft_budget > 0) provers.emplace(ctx, occluders);
     Counts total;
+    ShaftFigures shaft;
     uint64_t region_hidden = 0, skipped = 0;
 #pragma omp parallel reduction(+ : region_hidden, skipped)
     {
         PatchSolver solver(shared);
         std::vector<uint32_t> open, candidates;
-        std::vector<uint64_t> hidden(pvs.words_per_row);
+        std::vector<uint64_t> hidden(pvs.words_per_row), seen(pvs.words_per_row);
+        ShaftFigures local_shaft;
 #pragma omp for schedule(dynamic, 1)
         for (int64_t ci = 0; ci < int64_t(boxes.size()); ++ci) {
             const Aabb box = eye_region(eyes, boxes[size_t(ci)]);
@@ -718,17 +748,31 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
                         open.push_back(o);
                 // One face after another into the cell's own row: solve_patch() skips what the faces (and
                 // patches) before it listed (docs/ALGORITHMS.md#refinement).
+                std::fill(seen.begin(), seen.end(), 0);
                 for (int axis = 0; axis < 3; ++axis)
                     for (int side = 0; side < 2; ++side)
-                        solver.solve_face(box_face(box, axis, side), axis,
-                                          solver.sides_of(open, axis, side ? box.max[axis] : box.min[axis],
-                                                          side ? nullptr : row, side ? row : nullptr));
+                        solver.solve_face(
+                            box_face(box, axis, side), axis,
+                            with_seen(solver.sides_of(open, axis, side ? box.max[axis] : box.min[axis],
+                                                      side ? nullptr : row, side ? row : nullptr),
+                                      side ? nullptr : seen.data(), side ? seen.data() : nullptr));
+                if (provers) {
+                    const auto shaft_start = std::chrono::steady_clock::now();
+                    shaft_row(provers->of(set), world, eyes, box, candidates, config.shaft_budget, row,
+                              seen.data(), local_shaft);
+                    local_shaft.seconds +=
+                        std::chrono::duration<double>(std::chrono::steady_clock::now() - shaft_start).count();
+                }
             }
             ctx.progress_advance();
         }
 #pragma omp critical
-        total += solver.counts();
+        {
+            total += solver.counts();
+            shaft += local_shaft;
+        }
     }
+    figures.shaft += shaft;
     figures.region_hidden += region_hidden;
     figures.parent_hidden += skipped;
     add_counts(figures, total, start);
@@ -821,6 +865,12 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
         return config.single_occluder_pass && cell >= 0 ? hidden.row(uint32_t(cell)) : nullptr;
     };
     PvsSet face_rows = PvsSet::make(uint32_t(2 * faces.size()), n_objects);  // face * 2 + side
+    // What sight rays saw, per cell, for the shaft pass: a cell has at most one face in a phase, so each row
+    // is written by one thread at a time.
+    PvsSet seen = PvsSet::make(config.shaft_budget > 0 ? uint32_t(cells.size()) : 0, n_objects);
+    const auto seen_row = [&](int32_t cell) -> uint64_t* {
+        return config.shaft_budget > 0 && cell >= 0 ? seen.row(uint32_t(cell)) : nullptr;
+    };
     Counts total;
     ctx.progress_begin("conservative PVS", faces.size(), "faces");
 #pragma omp parallel
@@ -840,20 +890,27 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
                 if (row_lo && row_hi && f.set[0] != f.set[1]) {
                     // The regions on the two sides take their occluders from different blocks: once per side.
                     solver.use(occluders.set(f.set[0]), hider(f.set[0]));
-                    solver.solve_face(f.rect, f.axis,
-                                      solver.sides_of(leavable, f.axis, plane, row_lo, nullptr, known_lo,
-                                                      nullptr, hidden_row(f.cell[0]), nullptr));
+                    solver.solve_face(
+                        f.rect, f.axis,
+                        with_seen(solver.sides_of(leavable, f.axis, plane, row_lo, nullptr, known_lo, nullptr,
+                                                  hidden_row(f.cell[0]), nullptr),
+                                  seen_row(f.cell[0]), nullptr));
                     solver.use(occluders.set(f.set[1]), hider(f.set[1]));
-                    solver.solve_face(f.rect, f.axis,
-                                      solver.sides_of(leavable, f.axis, plane, nullptr, row_hi, nullptr,
-                                                      known_hi, nullptr, hidden_row(f.cell[1])));
+                    solver.solve_face(
+                        f.rect, f.axis,
+                        with_seen(solver.sides_of(leavable, f.axis, plane, nullptr, row_hi, nullptr, known_hi,
+                                                  nullptr, hidden_row(f.cell[1])),
+                                  nullptr, seen_row(f.cell[1])));
                 } else {
                     solver.use(occluders.set(row_lo ? f.set[0] : f.set[1]),
                                hider(row_lo ? f.set[0] : f.set[1]));
-                    solver.solve_face(f.rect, f.axis,
-                                      solver.sides_of(leavable, f.axis, plane, row_lo, row_hi, known_lo,
-                                                      known_hi, row_lo ? hidden_row(f.cell[0]) : nullptr,
-                                                      row_hi ? hidden_row(f.cell[1]) : nullptr));
+                    solver.solve_face(
+                        f.rect, f.axis,
+                        with_seen(solver.sides_of(leavable, f.axis, plane, row_lo, row_hi, known_lo, known_hi,
+                                                  row_lo ? hidden_row(f.cell[0]) : nullptr,
+                                                  row_hi ? hidden_row(f.cell[1]) : nullptr),
+                                  row_lo ? seen_row(f.cell[0]) : nullptr,
+                                  row_hi ? seen_row(f.cell[1]) : nullptr));
                 }
                 ctx.progress_advance();
             }
@@ -873,6 +930,30 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
         total += solver.counts();
     }
     ctx.progress_end();
+    // The shaft pass (docs/ALGORITHMS.md#shaft-pass), on the cells' finished rows.
+    if (config.shaft_budget > 0) {
+        const auto pass_start = std::chrono::steady_clock::now();
+        const ShaftProvers provers(ctx, occluders);
+        ShaftFigures shaft;
+        ctx.progress_begin("shaft pass", cells.size(), "cells");
+#pragma omp parallel
+        {
+            ShaftFigures local;
+#pragma omp for schedule(dynamic, 1)
+            for (int64_t c = 0; c < int64_t(cells.size()); ++c) {
+                const Aabb& region = regions[size_t(c)];
+                if (!region.is_empty())
+                    shaft_row(provers.of(occluders.set_for(region)), world, cells.eyes, region, leavable,
+                              config.shaft_budget, pvs.row(uint32_t(c)), seen.row(uint32_t(c)), local);
+                ctx.progress_advance();
+            }
+#pragma omp critical
+            shaft += local;
+        }
+        ctx.progress_end();
+        shaft.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - pass_start).count();
+        figures.shaft += shaft;
+    }
     add_counts(figures, total, start);
 }
 
@@ -897,6 +978,14 @@ PvsSet bake_conservative_pvs(Context& ctx, const ConservativeConfig& config, con
         ctx.progress_end();
     }
     add_always_listed(world, cells, pvs);
+    if (figures.shaft.pairs > 0) {
+        ctx.info(fmt::format(
+            "shaft pass: {:.3f} M of {:.3f} M (cell, object) pairs proven hidden ({:.3f} M given up at once, "
+            "{:.3f} M out of budget), {:.2f} M piece pairs, {:.1f} s",
+            double(figures.shaft.hidden) * 1e-6, double(figures.shaft.pairs) * 1e-6,
+            double(figures.shaft.certain) * 1e-6, double(figures.shaft.out_of_budget) * 1e-6,
+            double(figures.shaft.tests) * 1e-6, figures.shaft.seconds));
+    }
     ctx.info(fmt::format(
         "conservative PVS: one occluder hides {:.2f} M (cell, object) pairs from the whole region ({:.1f} s) "
         "and {:.2f} M (patch, object) pairs from a patch; {} samples (per epsilon level {}; {} floor patches "

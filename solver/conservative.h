@@ -36,6 +36,7 @@
 #include "core/world.h"
 #include "rays/ray_scene.h"
 #include "solver/region_hiding.h"
+#include "solver/shaft_hiding.h"
 
 #include <vector>
 
@@ -54,6 +55,7 @@ struct ConservativeFigures {
     double region_seconds = 0.0;    // its time (grid; on boxes it is part of `seconds`)
     uint64_t patch_hidden = 0;      // (patch, object) pairs it proved hidden, of what a patch's cubes left
     uint64_t parent_hidden = 0;     // (octree box, object) pairs left out untested: its parent left them out
+    ShaftFigures shaft;             // the shaft pass (solver/shaft_hiding.h)
     std::vector<uint64_t> samples_per_level;  // samples at each epsilon of the ladder
     double seconds = 0.0;
 };

@@ -1,0 +1,654 @@
+// The shaft pass: piece pairs of a region and an object, each covered in one plane by panels and the solid.
+#include "solver/shaft_hiding.h"
+
+#include "cells/eyes.h"
+#include "core/random.h"
+#include "occluders/panels.h"
+#include "solver/region_hiding.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <chrono>
+#include <cmath>
+
+namespace pvs {
+
+namespace {
+
+using Poly = std::vector<glm::dvec2>;
+
+// More pieces than this left of a plane's cover: given up (not covered).
+constexpr size_t kMaxPieces = 64;
+// Voxel coordinates within this of a voxel's side count as on it (both voxels are then tested).
+constexpr double kVoxelSlack = 1e-6;
+// Random sight lines tried before the cover search: one that meets no occluder settles the pair.
+constexpr int kProbeLines = 8;
+
+// The corners of the box grown by `grow` on every side, in double.
+std::array<glm::dvec3, 8> box_corners(const Aabb& b, double grow) {
+    const glm::dvec3 lo = glm::dvec3(b.min) - grow, hi = glm::dvec3(b.max) + grow;
+    std::array<glm::dvec3, 8> c;
+    for (int i = 0; i < 8; ++i)
+        c[size_t(i)] = glm::dvec3(i & 1 ? hi.x : lo.x, i & 2 ? hi.y : lo.y, i & 4 ? hi.z : lo.z);
+    return c;
+}
+
+double cross(const glm::dvec2& o, const glm::dvec2& a, const glm::dvec2& b) {
+    return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x);
+}
+
+// The convex hull of the n points `pts` (sorted in place; Andrew's monotone chain) into `out`,
+// counter-clockwise, without collinear corners. `out` has room for 2n points.
+void convex_hull(glm::dvec2* pts, size_t n, Poly& out) {
+    std::sort(pts, pts + n,
+              [](const glm::dvec2& a, const glm::dvec2& b) { return a.x != b.x ? a.x < b.x : a.y < b.y; });
+    std::array<glm::dvec2, 130> h;
+    if (n < 3 || n > 64) {
+        out.assign(pts, pts + std::min<size_t>(n, 2));
+        return;
+    }
+    size_t k = 0;
+    for (size_t i = 0; i < n; ++i) {
+        while (k >= 2 && cross(h[k - 2], h[k - 1], pts[i]) <= 0.0) --k;
+        h[k++] = pts[i];
+    }
+    for (size_t i = n - 1, t = k + 1; i-- > 0;) {
+        while (k >= t && cross(h[k - 2], h[k - 1], pts[i]) <= 0.0) --k;
+        h[k++] = pts[i];
+    }
+    out.assign(h.begin(), h.begin() + std::ptrdiff_t(k - 1));
+}
+
+// The part of convex `in` on one side of the line x[k] = at (keep_below: x[k] <= at), closed. Corners made
+// on the line get exactly `at` there, so pieces cut by a rectangle's side meet the next rectangle's side
+// exactly where the two sides coincide.
+void clip(const Poly& in, int k, double at, bool keep_below, Poly& out) {
+    out.clear();
+    const size_t n = in.size();
+    for (size_t i = 0; i < n; ++i) {
+        const glm::dvec2& a = in[i];
+        const glm::dvec2& b = in[(i + 1) % n];
+        const bool a_in = keep_below ? a[k] <= at : a[k] >= at;
+        const bool b_in = keep_below ? b[k] <= at : b[k] >= at;
+        if (a_in) out.push_back(a);
+        if (a_in != b_in && a[k] != at && b[k] != at) {
+            const double t = (at - a[k]) / (b[k] - a[k]);
+            glm::dvec2 p = a + t * (b - a);
+            p[k] = at;
+            out.push_back(p);
+        }
+    }
+}
+
+// A piece with no area: fewer than three corners, or no extent on an axis (a piece cut to a rectangle's
+// side). The uncovered part of a convex polygon of positive area, less closed sets, is open in it, so it
+// has positive area when it is not empty: pieces without area are covered.
+bool degenerate(const Poly& p) {
+    if (p.size() < 3) return true;
+    glm::dvec2 lo = p[0], hi = p[0];
+    for (const glm::dvec2& q : p) {
+        lo = glm::min(lo, q);
+        hi = glm::max(hi, q);
+    }
+    return !(hi.x > lo.x && hi.y > lo.y);
+}
+
+// The corners of the part of triangle (a, b, c) inside the closed box, in double; empty if none.
+void clip_triangle(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c, const Aabb& box,
+                   std::vector<glm::dvec3>& poly, std::vector<glm::dvec3>& tmp) {
+    poly = {a, b, c};
+    for (int k = 0; k < 3 && !poly.empty(); ++k)
+        for (int side = 0; side < 2 && !poly.empty(); ++side) {
+            const double at = side ? box.max[k] : box.min[k];
+            tmp.clear();
+            const size_t n = poly.size();
+            for (size_t i = 0; i < n; ++i) {
+                const glm::dvec3& p = poly[i];
+                const glm::dvec3& q = poly[(i + 1) % n];
+                const bool p_in = side ? p[k] <= at : p[k] >= at;
+                const bool q_in = side ? q[k] <= at : q[k] >= at;
+                if (p_in) tmp.push_back(p);
+                if (p_in != q_in && p[k] != at && q[k] != at) {
+                    glm::dvec3 y = p + (at - p[k]) / (q[k] - p[k]) * (q - p);
+                    y[k] = at;
+                    tmp.push_back(y);
+                }
+            }
+            poly.swap(tmp);
+        }
+}
+
+// Calls visit(voxel, solid) for the voxels of `mask` the segment from -> to passes, in order, until visit
+// returns true (Amanatides and Woo).
+template <class Visit>
+void walk_voxels(const VoxelMask& mask, glm::vec3 from, glm::vec3 to, Visit&& visit) {
+    if (mask.empty()) return;
+    const double h = mask.voxel_size_m;
+    const glm::dvec3 o(mask.origin);
+    const glm::dvec3 p0 = (glm::dvec3(from) - o) / h, p1 = (glm::dvec3(to) - o) / h;
+    const glm::dvec3 dd = p1 - p0;
+    double t0 = 0.0, t1 = 1.0;
+    for (int k = 0; k < 3; ++k) {
+        if (dd[k] == 0.0) {
+            if (p0[k] < 0.0 || p0[k] >= mask.dims[k]) return;
+            continue;
+        }
+        double a = (0.0 - p0[k]) / dd[k], b = (double(mask.dims[k]) - p0[k]) / dd[k];
+        if (a > b) std::swap(a, b);
+        t0 = std::max(t0, a);
+        t1 = std::min(t1, b);
+    }
+    if (!(t0 < t1)) return;
+    glm::ivec3 cell, step;
+    glm::dvec3 t_max, t_delta;
+    const glm::dvec3 start = p0 + (t0 + 1e-9) * dd;
+    for (int k = 0; k < 3; ++k) {
+        cell[k] = std::clamp(int(std::floor(start[k])), 0, mask.dims[k] - 1);
+        step[k] = dd[k] > 0.0 ? 1 : -1;
+        t_delta[k] = dd[k] != 0.0 ? 1.0 / std::abs(dd[k]) : INFINITY;
+        const double next = dd[k] > 0.0 ? double(cell[k] + 1) : double(cell[k]);
+        t_max[k] = dd[k] != 0.0 ? (next - p0[k]) / dd[k] : INFINITY;
+    }
+    for (int guard = 0; guard < mask.dims.x + mask.dims.y + mask.dims.z + 3; ++guard) {
+        const uint64_t idx =
+            uint64_t(cell.x) +
+            uint64_t(mask.dims.x) * (uint64_t(cell.y) + uint64_t(mask.dims.y) * uint64_t(cell.z));
+        if (visit(cell, mask.get(idx))) return;
+        const int k = t_max.x < t_max.y ? (t_max.x < t_max.z ? 0 : 2) : (t_max.y < t_max.z ? 1 : 2);
+        if (t_max[k] > t1) return;
+        cell[k] += step[k];
+        if (cell[k] < 0 || cell[k] >= mask.dims[k]) return;
+        t_max[k] += t_delta[k];
+    }
+}
+
+// Per thread: the pieces of a plane's cover.
+struct PlaneScratch {
+    std::vector<Poly> pieces, next;
+    Poly rest, part, band;
+};
+
+float down(double x) {
+    float f = float(x);
+    return double(f) > x ? std::nextafter(f, -INFINITY) : f;
+}
+float up(double x) {
+    float f = float(x);
+    return double(f) < x ? std::nextafter(f, INFINITY) : f;
+}
+
+}  // namespace
+
+// A piece of the region (the bounds of its eye voxels' parts in a box, with an eye point) and a piece of
+// the object (the bounds of its triangles' parts in a box, with a point on one of them). Voxel and triangle
+// lists live in the scratch arenas.
+struct ShaftProver::Pair {
+    Aabb region;
+    glm::ivec3 eyes_lo{0}, eyes_hi{0};  // the eye voxels of the piece: local indices of the ShaftRegion
+    glm::vec3 from{0.0f};
+    Aabb target;
+    uint32_t tris_first = 0, tris_count = 0;
+    glm::vec3 point{0.0f};
+};
+
+struct ShaftProver::Scratch {
+    std::vector<uint32_t> tri_arena;
+    std::vector<Pair> stack;
+    std::vector<glm::dvec3> poly, tmp;
+    std::vector<RayTouch> touches;
+    std::vector<glm::ivec3> run;
+};
+
+ShaftProver::ShaftProver(Context& ctx, const ShrunkOccluders& set)
+    : panels_(set.panels), slanted_(set.slanted), solid_(set.solid) {
+    std::array<std::vector<std::pair<float, uint32_t>>, 3> by_plane;
+    for (uint32_t i = 0; i < panels_.size(); ++i) {
+        const int a = panel_axis(panels_[i]);
+        panel_axis_.push_back(a);
+        if (a >= 0) by_plane[size_t(a)].emplace_back(panels_[i].min[a], i);
+    }
+    for (int a = 0; a < 3; ++a) {
+        std::vector<std::pair<float, uint32_t>>& v = by_plane[size_t(a)];
+        std::sort(v.begin(), v.end());
+        const int u = (a + 1) % 3, w = (a + 2) % 3;
+        for (size_t i = 0; i < v.size();) {
+            Plane p{v[i].first, uint32_t(rects_.size()), 0};
+            for (; i < v.size() && v[i].first == p.c; ++i) {
+                const Aabb& b = panels_[v[i].second];
+                rects_.push_back(Rect{b.min[u], b.max[u], b.min[w], b.max[w]});
+                ++p.count;
+            }
+            planes_[a].push_back(p);
+        }
+    }
+    Context quiet(Context::Options{LogLevel::kWarning, true, nullptr});
+    scene_ =
+        std::make_unique<RayScene>(quiet, box_world({}, panels_, false, slanted_), BuildQuality::kMedium, 1);
+    ctx.debug(fmt::format("shaft pass: {} panels in {} planes, {} slanted panels", panels_.size(),
+                          planes_[0].size() + planes_[1].size() + planes_[2].size(), slanted_.size()));
+}
+
+ShaftProver::~ShaftProver() = default;
+
+bool ShaftProver::plane_covers(const Aabb& region, const Aabb& target, int axis, float c) const {
+    const int a = axis, u = (a + 1) % 3, v = (a + 2) % 3;
+    const double cd = c, tol = kHideToleranceM;
+    const bool below = double(region.max[a])<cd - tol&& double(target.min[a])> cd + tol;
+    const bool above = double(region.min[a]) > cd + tol && double(target.max[a]) < cd - tol;
+    if (!below && !above) return false;
+    // Where the 64 corner segments of the boxes grown by tol cross the plane: their hull holds where every
+    // segment from region to target crosses it (docs/ALGORITHMS.md#single-occluder) grown by tol on both
+    // axes (a segment moved by e in the plane, |e| <= tol, runs between the grown boxes).
+    thread_local PlaneScratch ps;
+    std::array<glm::dvec2, 64> pts;
+    const std::array<glm::dvec3, 8> rc = box_corners(region, tol), tc = box_corners(target, tol);
+    size_t n_pts = 0;
+    for (const glm::dvec3& q : rc)
+        for (const glm::dvec3& x : tc) {
+            const double t = (cd - q[a]) / (x[a] - q[a]);
+            pts[n_pts++] = glm::dvec2(q[u] + t * (x[u] - q[u]), q[v] + t * (x[v] - q[v]));
+        }
+    if (ps.pieces.empty()) ps.pieces.resize(1);
+    convex_hull(pts.data(), n_pts, ps.pieces[0]);
+    size_t n_pieces = 1;
+    glm::dvec2 lo = ps.pieces[0][0], hi = ps.pieces[0][0];
+    for (const glm::dvec2& p : ps.pieces[0]) {
+        lo = glm::min(lo, p);
+        hi = glm::max(hi, p);
+    }
+    // Less the panels of the plane.
+    const std::vector<Plane>& planes = planes_[a];
+    const auto it = std::lower_bound(planes.begin(), planes.end(), c,
+                                     [](const Plane& p, float value) { return p.c < value; });
+    if (it != planes.end() && it->c == c) {
+        for (uint32_t r = it->first; r < it->first + it->count && n_pieces > 0; ++r) {
+            const Rect& rect = rects_[r];
+            if (rect.u0 > hi.x || rect.u1 < lo.x || rect.v0 > hi.y || rect.v1 < lo.y) continue;
+            size_t n_next = 0;
+            for (size_t i = 0; i < n_pieces; ++i) {
+                // The piece outside the rectangle, as up to four convex parts: left, right, below, above.
+                ps.rest = ps.pieces[i];
+                const std::array<std::pair<int, double>, 4> sides{
+                    {{0, rect.u0}, {0, rect.u1}, {1, rect.v0}, {1, rect.v1}}};
+                for (size_t s = 0; s < 4 && !ps.rest.empty(); ++s) {
+                    const bool low_side = s % 2 == 0;
+                    clip(ps.rest, sides[s].first, sides[s].second, low_side, ps.part);
+                    if (!degenerate(ps.part)) {
+                        if (ps.next.size() <= n_next) ps.next.resize(n_next + 1);
+                        ps.next[n_next++] = ps.part;
+                    }
+                    clip(ps.rest, sides[s].first, sides[s].second, !low_side, ps.part);
+                    ps.rest.swap(ps.part);
+                }
+            }
+            ps.pieces.swap(ps.next);
+            n_pieces = n_next;
+            if (n_pieces > kMaxPieces) return false;
+        }
+    }
+    if (n_pieces == 0) return true;
+    // The rest must lie in the interior of the proven solid: every voxel of the layer (both layers, on a
+    // voxel side) whose closed square meets a piece is solid.
+    if (solid_.empty()) return false;
+    const double h = solid_.voxel_size_m;
+    const glm::dvec3 o(solid_.origin);
+    const double rel = (cd - o[a]) / h;
+    const double fl = std::floor(rel);
+    int l0 = int(fl), l1 = int(fl);
+    if (rel - fl < kVoxelSlack) l0 = l1 - 1;
+    if (fl + 1.0 - rel < kVoxelSlack) l1 = l0 + 1;
+    if (l0 < 0 || l1 >= solid_.dims[a]) return false;
+    Poly& band = ps.band;
+    Poly& part = ps.part;
+    for (size_t pi = 0; pi < n_pieces; ++pi) {
+        const Poly& piece = ps.pieces[pi];
+        glm::dvec2 plo = piece[0], phi = piece[0];
+        for (const glm::dvec2& p : piece) {
+            plo = glm::min(plo, p);
+            phi = glm::max(phi, p);
+        }
+        const int64_t j0 = int64_t(std::floor((plo.y - o[v]) / h - kVoxelSlack));
+        const int64_t j1 = int64_t(std::floor((phi.y - o[v]) / h + kVoxelSlack));
+        if (j0 < 0 || j1 >= solid_.dims[v]) return false;
+        for (int64_t j = j0; j <= j1; ++j) {
+            clip(piece, 1, o[v] + double(j) * h - kVoxelSlack * h, false, part);
+            clip(part, 1, o[v] + double(j + 1) * h + kVoxelSlack * h, true, band);
+            if (band.empty()) continue;
+            double umin = band[0].x, umax = band[0].x;
+            for (const glm::dvec2& p : band) {
+                umin = std::min(umin, p.x);
+                umax = std::max(umax, p.x);
+            }
+            const int64_t i0 = int64_t(std::floor((umin - o[u]) / h - kVoxelSlack));
+            const int64_t i1 = int64_t(std::floor((umax - o[u]) / h + kVoxelSlack));
+            if (i0 < 0 || i1 >= solid_.dims[u]) return false;
+            for (int64_t i = i0; i <= i1; ++i)
+                for (int l = l0; l <= l1; ++l) {
+                    glm::i64vec3 idx;
+                    idx[a] = l;
+                    idx[u] = i;
+                    idx[v] = j;
+                    if (!solid_.get(uint64_t(idx.x) +
+                                    uint64_t(solid_.dims.x) *
+                                        (uint64_t(idx.y) + uint64_t(solid_.dims.y) * uint64_t(idx.z))))
+                        return false;
+                }
+        }
+    }
+    return true;
+}
+
+bool ShaftProver::try_pair(const Pair& pair, glm::vec3 from, glm::vec3 to, bool& line_blocked,
+                           Scratch& sc) const {
+    line_blocked = false;
+    const glm::vec3 d = to - from;
+    const float len = glm::length(d);
+    if (!(len > 0.0f)) return false;
+    std::array<std::pair<int, float>, 16> tried;
+    size_t n_tried = 0;
+    const auto try_plane = [&](int a, float c) {
+        for (size_t i = 0; i < n_tried; ++i)
+            if (tried[i].first == a && tried[i].second == c) return false;
+        if (n_tried < tried.size()) tried[n_tried++] = {a, c};
+        return plane_covers(pair.region, pair.target, a, c);
+    };
+    // The panels and slanted panels the line crosses.
+    const glm::vec3 dir = d / len;
+    sc.touches.clear();
+    scene_->trace_until(from, &dir, &len, 1, sc.touches);
+    std::sort(sc.touches.begin(), sc.touches.end(),
+              [](const RayTouch& x, const RayTouch& y) { return x.t < y.t; });
+    const uint32_t n_panels = uint32_t(panels_.size());
+    for (const RayTouch& t : sc.touches) {
+        line_blocked = true;
+        if (t.object < n_panels) {
+            const int a = panel_axis_[t.object];
+            if (a >= 0 && try_plane(a, panels_[t.object].min[a])) return true;
+        } else if (slanted_hides(pair.region, pair.target, slanted_[t.object - n_panels])) {
+            return true;
+        }
+    }
+    // The runs of proven solid the line crosses: a plane across the middle voxel of each, on the axes the
+    // line runs along most first.
+    std::array<int, 3> axes{0, 1, 2};
+    std::sort(axes.begin(), axes.end(), [&](int x, int y) { return std::abs(d[x]) > std::abs(d[y]); });
+    const double h = solid_.voxel_size_m;
+    const glm::dvec3 o(solid_.origin);
+    sc.run.clear();
+    const auto end_run = [&]() {
+        if (sc.run.empty()) return false;
+        const glm::ivec3 mid = sc.run[sc.run.size() / 2];
+        sc.run.clear();
+        for (int a : axes)
+            if (d[a] != 0.0f && try_plane(a, float(o[a] + (double(mid[a]) + 0.5) * h))) return true;
+        return false;
+    };
+    bool covered = false;
+    walk_voxels(solid_, from, to, [&](const glm::ivec3& cell, bool in_solid) {
+        if (in_solid) {
+            line_blocked = true;
+            sc.run.push_back(cell);
+            return false;
+        }
+        covered = end_run();
+        return covered;
+    });
+    return covered || end_run();
+}
+
+ShaftRegion shaft_region(const VoxelMask& eyes, const Aabb& region) {
+    ShaftRegion out;
+    out.box = region;
+    if (eyes.empty() || region.is_empty()) return out;
+    const float h = eyes.voxel_size_m;
+    glm::ivec3 lo, hi;
+    for (int a = 0; a < 3; ++a) {
+        lo[a] = std::clamp(int(std::floor((region.min[a] - eyes.origin[a]) / h)), 0, eyes.dims[a]);
+        hi[a] = std::clamp(int(std::ceil((region.max[a] - eyes.origin[a]) / h)), lo[a], eyes.dims[a]);
+    }
+    out.base = lo;
+    out.n = hi - lo;
+    const glm::ivec3 n = out.n;
+    out.sum.assign(size_t(n.x + 1) * size_t(n.y + 1) * size_t(n.z + 1), 0);
+    const auto at = [&](int x, int y, int z) -> uint32_t& {
+        return out.sum[size_t(x) + size_t(n.x + 1) * (size_t(y) + size_t(n.y + 1) * size_t(z))];
+    };
+    for (int z = 1; z <= n.z; ++z)
+        for (int y = 1; y <= n.y; ++y)
+            for (int x = 1; x <= n.x; ++x) {
+                const glm::ivec3 g = lo + glm::ivec3(x - 1, y - 1, z - 1);
+                const uint64_t i =
+                    uint64_t(g.x) +
+                    uint64_t(eyes.dims.x) * (uint64_t(g.y) + uint64_t(eyes.dims.y) * uint64_t(g.z));
+                at(x, y, z) = (eyes.get(i) ? 1u : 0u) + at(x - 1, y, z) + at(x, y - 1, z) + at(x, y, z - 1) -
+                              at(x - 1, y - 1, z) - at(x - 1, y, z - 1) - at(x, y - 1, z - 1) +
+                              at(x - 1, y - 1, z - 1);
+            }
+    return out;
+}
+
+bool ShaftProver::meets_occluder(glm::vec3 from, glm::vec3 to, Scratch& sc) const {
+    const glm::vec3 d = to - from;
+    const float len = glm::length(d);
+    if (!(len > 0.0f)) return true;
+    const glm::vec3 dir = d / len;
+    sc.touches.clear();
+    scene_->trace_until(from, &dir, &len, 1, sc.touches);
+    if (!sc.touches.empty()) return true;
+    bool solid = false;
+    walk_voxels(solid_, from, to, [&](const glm::ivec3&, bool in_solid) {
+        solid = in_solid;
+        return in_solid;
+    });
+    return solid;
+}
+
+bool ShaftProver::hides(const World& world, const VoxelMask& eyes, const ShaftRegion& region, uint32_t object,
+                        int budget, ShaftFigures& figures) const {
+    ++figures.pairs;
+    const WorldObject& obj = world.objects[object];
+    if (region.box.is_empty() || obj.bounds.is_empty() || obj.triangle_count == 0 || budget <= 0)
+        return false;
+    thread_local Scratch sc;
+    sc.tri_arena.clear();
+    sc.stack.clear();
+    const bool voxels = !region.sum.empty();
+    const float h = eyes.voxel_size_m;
+    // The box of voxel local index i.
+    const auto voxel_box = [&](glm::ivec3 i) {
+        const glm::vec3 c(region.base + i);
+        return Aabb::of(eyes.origin + c * h, eyes.origin + (c + 1.0f) * h);
+    };
+    // A piece of the region: the eye voxels of [lo, hi) meeting `box` with volume, their index box tightened
+    // to them, the bounds of their parts in the box and an eye point (in the part of the eye voxel found by
+    // halving towards the box's centre).
+    const auto eyes_in = [&](glm::ivec3 lo, glm::ivec3 hi, const Aabb& box, Pair& out) {
+        for (int k = 0; k < 3; ++k) {
+            const double o = double(eyes.origin[k]) + double(region.base[k]) * h;
+            lo[k] = std::max(lo[k], int(std::floor((double(box.min[k]) - o) / h - kVoxelSlack)));
+            hi[k] = std::min(hi[k], int(std::ceil((double(box.max[k]) - o) / h + kVoxelSlack)));
+        }
+        if (region.count(lo, hi) == 0) return false;
+        for (int k = 0; k < 3; ++k) {
+            glm::ivec3 slab_hi = hi;
+            for (;;) {
+                slab_hi[k] = lo[k] + 1;
+                if (region.count(lo, slab_hi) > 0) break;
+                ++lo[k];
+            }
+            glm::ivec3 slab_lo = lo;
+            for (;;) {
+                slab_lo[k] = hi[k] - 1;
+                if (region.count(slab_lo, hi) > 0) break;
+                --hi[k];
+            }
+        }
+        out.eyes_lo = lo;
+        out.eyes_hi = hi;
+        out.region = Aabb::of(glm::max(voxel_box(lo).min, box.min), glm::min(voxel_box(hi - 1).max, box.max));
+        const glm::vec3 centre = out.region.center();
+        glm::ivec3 a = lo, b = hi;
+        while (b.x - a.x > 1 || b.y - a.y > 1 || b.z - a.z > 1) {
+            const glm::ivec3 s = b - a;
+            const int k = s.x >= s.y && s.x >= s.z ? 0 : (s.y >= s.z ? 1 : 2);
+            const int mid = (a[k] + b[k]) / 2;
+            glm::ivec3 lo_hi = b, hi_lo = a;
+            lo_hi[k] = mid;
+            hi_lo[k] = mid;
+            const bool centre_low = centre[k] < voxel_box(hi_lo).min[k];
+            const bool low_has = region.count(a, lo_hi) > 0;
+            if (centre_low ? low_has : region.count(hi_lo, b) == 0) {
+                b = lo_hi;
+            } else {
+                a = hi_lo;
+            }
+        }
+        const Aabb vb = voxel_box(a);
+        out.from = Aabb::of(glm::max(vb.min, out.region.min), glm::min(vb.max, out.region.max)).center();
+        return true;
+    };
+    // A random eye voxel of the piece: halving, each half chosen by its share of the eye voxels.
+    const auto random_eye_voxel = [&](const Pair& p, Rng& rng) {
+        glm::ivec3 a = p.eyes_lo, b = p.eyes_hi;
+        uint32_t pick = rng.below(region.count(a, b));
+        while (b.x - a.x > 1 || b.y - a.y > 1 || b.z - a.z > 1) {
+            const glm::ivec3 s = b - a;
+            const int k = s.x >= s.y && s.x >= s.z ? 0 : (s.y >= s.z ? 1 : 2);
+            glm::ivec3 lo_hi = b, hi_lo = a;
+            lo_hi[k] = hi_lo[k] = (a[k] + b[k]) / 2;
+            const uint32_t low = region.count(a, lo_hi);
+            if (pick < low) {
+                b = lo_hi;
+            } else {
+                pick -= low;
+                a = hi_lo;
+            }
+        }
+        return voxel_box(a);
+    };
+    // The part of the object in `box`: its triangles with a part there (appended to the arena), their parts'
+    // bounds (rounded out to float, then clipped to the box) and a point on the first part.
+    const auto tris_in = [&](uint32_t first, uint32_t count, const Aabb& box, Pair& out) {
+        out.tris_first = uint32_t(sc.tri_arena.size());
+        out.target = Aabb{};
+        for (uint32_t k = first; k < first + count; ++k) {
+            const uint32_t t = sc.tri_arena[k];
+            const Triangle& tri = world.triangles[t];
+            clip_triangle(glm::dvec3(world.positions[tri.v[0]]), glm::dvec3(world.positions[tri.v[1]]),
+                          glm::dvec3(world.positions[tri.v[2]]), box, sc.poly, sc.tmp);
+            if (sc.poly.empty()) continue;
+            glm::dvec3 lo = sc.poly[0], hi = sc.poly[0], sum(0.0);
+            for (const glm::dvec3& p : sc.poly) {
+                lo = glm::min(lo, p);
+                hi = glm::max(hi, p);
+                sum += p;
+            }
+            if (uint32_t(sc.tri_arena.size()) == out.tris_first)
+                out.point = glm::vec3(sum / double(sc.poly.size()));
+            sc.tri_arena.push_back(t);
+            out.target.extend(Aabb::of(glm::vec3(down(lo.x), down(lo.y), down(lo.z)),
+                                       glm::vec3(up(hi.x), up(hi.y), up(hi.z))));
+        }
+        out.target.min = glm::max(out.target.min, box.min);
+        out.target.max = glm::min(out.target.max, box.max);
+        out.tris_count = uint32_t(sc.tri_arena.size()) - out.tris_first;
+        return out.tris_count > 0;
+    };
+    Pair root;
+    for (uint32_t t = 0; t < obj.triangle_count; ++t) sc.tri_arena.push_back(obj.first_triangle + t);
+    if (!tris_in(0, obj.triangle_count, obj.bounds, root)) return false;
+    if (voxels) {
+        if (!eyes_in(glm::ivec3(0), region.n, region.box, root)) return false;
+    } else {
+        root.region = region.box;
+        root.from = region.box.center();
+    }
+    // A few sight lines first, from eyes to points of the object: one that meets no occluder settles the
+    // pair at once (no cover can hold it).
+    // Seeded by the object and the region, so the answer does not depend on threads or order.
+    const glm::vec3 m = region.box.min;
+    Rng rng(object, (uint64_t(std::bit_cast<uint32_t>(m.x)) << 32 | std::bit_cast<uint32_t>(m.z)) ^
+                        (uint64_t(std::bit_cast<uint32_t>(m.y)) << 16));
+    for (int k = 0; k < kProbeLines; ++k) {
+        glm::vec3 from = root.region.center();
+        if (voxels) {
+            const Aabb vb = random_eye_voxel(root, rng);
+            const Aabb part = Aabb::of(glm::max(vb.min, root.region.min), glm::min(vb.max, root.region.max));
+            from = part.min + glm::vec3(rng.uniform(), rng.uniform(), rng.uniform()) * part.size();
+        } else {
+            from =
+                root.region.min + glm::vec3(rng.uniform(), rng.uniform(), rng.uniform()) * root.region.size();
+        }
+        const Triangle& tri = world.triangles[obj.first_triangle + rng.below(obj.triangle_count)];
+        float b1 = rng.uniform(), b2 = rng.uniform();
+        if (b1 + b2 > 1.0f) {
+            b1 = 1.0f - b1;
+            b2 = 1.0f - b2;
+        }
+        const glm::vec3 to = world.positions[tri.v[0]] +
+                             b1 * (world.positions[tri.v[1]] - world.positions[tri.v[0]]) +
+                             b2 * (world.positions[tri.v[2]] - world.positions[tri.v[0]]);
+        if (!meets_occluder(from, to, sc)) {
+            ++figures.certain;
+            return false;
+        }
+    }
+    sc.stack.push_back(root);
+    int tests = 0;
+    while (!sc.stack.empty()) {
+        const Pair pair = sc.stack.back();
+        sc.stack.pop_back();
+        if (tests >= budget) {
+            ++figures.out_of_budget;
+            return false;
+        }
+        ++tests;
+        ++figures.tests;
+        if (pair.region.overlaps(pair.target)) return false;
+        bool blocked = false;
+        if (try_pair(pair, pair.from, pair.point, blocked, sc)) continue;
+        // A line from an eye to a point of the object that meets no occluder: every cover has a piece pair
+        // holding it, and no plane covers that pair.
+        if (!blocked) {
+            ++figures.certain;
+            return false;
+        }
+        const glm::vec3 rs = pair.region.size(), ts = pair.target.size();
+        const float rl = std::max({rs.x, rs.y, rs.z}), tl = std::max({ts.x, ts.y, ts.z});
+        const bool split_region = rl >= tl;
+        const Aabb& box = split_region ? pair.region : pair.target;
+        const glm::vec3 bs = split_region ? rs : ts;
+        const int k = bs.x >= bs.y && bs.x >= bs.z ? 0 : (bs.y >= bs.z ? 1 : 2);
+        const float mid = 0.5f * (box.min[k] + box.max[k]);
+        if (!(mid > box.min[k] && mid < box.max[k])) return false;  // too small to halve
+        for (int side = 0; side < 2; ++side) {
+            Aabb half = box;
+            (side ? half.min[k] : half.max[k]) = mid;
+            Pair child = pair;
+            if (split_region) {
+                if (voxels) {
+                    if (!eyes_in(pair.eyes_lo, pair.eyes_hi, half, child)) continue;  // no eye there
+                } else {
+                    child.region = half;
+                    child.from = half.center();
+                }
+            } else if (!tris_in(pair.tris_first, pair.tris_count, half, child)) {
+                continue;  // no triangle there
+            }
+            sc.stack.push_back(child);
+        }
+    }
+    ++figures.hidden;
+    return true;
+}
+
+ShaftProvers::ShaftProvers(Context& ctx, const ShrunkOccluders& occluders) {
+    provers_.push_back(std::make_unique<ShaftProver>(ctx, occluders));
+    for (const ShrunkOccluders& set : occluders.block_sets)
+        provers_.push_back(std::make_unique<ShaftProver>(ctx, set));
+}
+
+}  // namespace pvs

@@ -1,0 +1,116 @@
+// pvsbake solver: the shaft pass. An object the depth cubes left listed is proven hidden from a cell's whole
+// eye region, exactly, when the region and the object can be cut into pieces such that, for every pair of
+// pieces, ONE plane holds an occluder cover of all the segments between them: no shrinking, no inset, no
+// pixels; the occluders of one plane fuse (the panels of a wall and the slice of the proven solid).
+//
+// Contract: plane_covers() is true only if every segment from the box `region` to the box `target` crosses
+// the plane (axis, c) at a point that lies, with its whole square of half-side kHideToleranceM in the plane,
+// in the union of the panels of that plane and of the interior of the proven solid's slice (both boxes lie
+// strictly on opposite sides of the plane). A segment crossing a panel meets an opaque triangle; one reaching
+// the interior of the proven solid is stopped by S. hides() is true only if every piece pair of a cover of
+// the region's eyes and of the object's triangles passes plane_covers() or slanted_hides(). So what it proves
+// is hidden from every eye of the region. The argument: docs/ALGORITHMS.md#shaft-pass.
+#pragma once
+
+#include "core/cell_set.h"
+#include "core/context.h"
+#include "core/occluder.h"
+#include "core/world.h"
+#include "rays/ray_scene.h"
+
+#include <memory>
+#include <vector>
+
+namespace pvs {
+
+struct ShaftFigures {
+    uint64_t pairs = 0;          // (cell, object) pairs tried
+    uint64_t hidden = 0;         // of them, proven hidden
+    uint64_t tests = 0;          // piece pairs tested
+    uint64_t certain = 0;        // pairs given up at once: a line from an eye to the object meets no occluder
+    uint64_t out_of_budget = 0;  // pairs given up when the budget of piece pairs ran out
+    double seconds = 0.0;
+
+    ShaftFigures& operator+=(const ShaftFigures& o) {
+        pairs += o.pairs;
+        hidden += o.hidden;
+        tests += o.tests;
+        certain += o.certain;
+        out_of_budget += o.out_of_budget;
+        seconds += o.seconds;
+        return *this;
+    }
+};
+
+// A region with its eye voxels (those meeting it with volume) as summed counts over their index box, built
+// once for all the objects tried against it.
+struct ShaftRegion {
+    Aabb box;
+    glm::ivec3 base{0}, n{0};   // the index box of the voxels meeting `box`: [base, base + n)
+    std::vector<uint32_t> sum;  // (n + 1)^3 summed counts; empty without eye voxels (every point is an eye)
+    // The eye voxels with local indices in [lo, hi).
+    uint32_t count(glm::ivec3 lo, glm::ivec3 hi) const {
+        if (lo.x >= hi.x || lo.y >= hi.y || lo.z >= hi.z) return 0;
+        const auto at = [&](int x, int y, int z) {
+            return int64_t(sum[size_t(x) + size_t(n.x + 1) * (size_t(y) + size_t(n.y + 1) * size_t(z))]);
+        };
+        return uint32_t(at(hi.x, hi.y, hi.z) - at(lo.x, hi.y, hi.z) - at(hi.x, lo.y, hi.z) -
+                        at(hi.x, hi.y, lo.z) + at(lo.x, lo.y, hi.z) + at(lo.x, hi.y, lo.z) +
+                        at(hi.x, lo.y, lo.z) - at(lo.x, lo.y, lo.z));
+    }
+};
+ShaftRegion shaft_region(const VoxelMask& eyes, const Aabb& region);
+
+// The occluders of one set (ShrunkOccluders: its panels, slanted panels and proven solid), indexed by plane.
+class ShaftProver {
+public:
+    ShaftProver(Context& ctx, const ShrunkOccluders& set);
+    ~ShaftProver();
+    ShaftProver(const ShaftProver&) = delete;
+    ShaftProver& operator=(const ShaftProver&) = delete;
+
+    // Is every segment from an eye in `region` (a point of a voxel of `eyes` in it, shaft_region(); every
+    // point of the region when `eyes` is empty) to a point of object `object`'s triangles stopped by an
+    // occluder? Tests at most `budget` piece pairs. Thread-safe.
+    bool hides(const World& world, const VoxelMask& eyes, const ShaftRegion& region, uint32_t object,
+               int budget, ShaftFigures& figures) const;
+
+    // Does every segment from `region` to `target` cross the plane x[axis] = c inside the panels of that
+    // plane and the proven solid's slice (see the contract above)?
+    bool plane_covers(const Aabb& region, const Aabb& target, int axis, float c) const;
+
+private:
+    struct Plane {
+        float c;
+        uint32_t first, count;  // into rects_
+    };
+    struct Rect {
+        double u0, u1, v0, v1;
+    };
+    struct Pair;
+    struct Scratch;
+    // Does one plane that the line from -> to crosses an occluder in cover the pair? `line_blocked`: the line
+    // meets an occluder at all.
+    bool try_pair(const Pair& pair, glm::vec3 from, glm::vec3 to, bool& line_blocked, Scratch& sc) const;
+    bool meets_occluder(glm::vec3 from, glm::vec3 to, Scratch& sc) const;
+
+    std::vector<Plane> planes_[3];  // per axis, by c
+    std::vector<Rect> rects_;       // the panels of each plane, in its (axis + 1, axis + 2) coordinates
+    std::vector<Aabb> panels_;
+    std::vector<int> panel_axis_;
+    std::vector<SlantedPanel> slanted_;
+    const VoxelMask& solid_;
+    std::unique_ptr<RayScene> scene_;  // panels_, then slanted_, every triangle see-through
+};
+
+// A ShaftProver for every set of a ShrunkOccluders (the global one and each block's), built once.
+class ShaftProvers {
+public:
+    ShaftProvers(Context& ctx, const ShrunkOccluders& occluders);
+    const ShaftProver& of(int32_t i) const { return *provers_[size_t(i + 1)]; }
+
+private:
+    std::vector<std::unique_ptr<ShaftProver>> provers_;
+};
+
+}  // namespace pvs
