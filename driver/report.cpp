@@ -90,6 +90,12 @@ NamedValues bake_figures(const BakeConfig& config, const World& world, const Vie
         {"conservative_parent_hidden", double(stages.conservative.parent_hidden)},
         {"conservative_region_seconds", stages.conservative.region_seconds},
         {"conservative_patch_hidden", double(stages.conservative.patch_hidden)},
+        {"conservative_shaft_pairs", double(stages.conservative.shaft.pairs)},
+        {"conservative_shaft_hidden", double(stages.conservative.shaft.hidden)},
+        {"conservative_shaft_tests", double(stages.conservative.shaft.tests)},
+        {"conservative_shaft_given_up", double(stages.conservative.shaft.certain)},
+        {"conservative_shaft_out_of_budget", double(stages.conservative.shaft.out_of_budget)},
+        {"conservative_shaft_seconds", stages.conservative.shaft.seconds},
         {"conservative_seconds", stages.conservative.seconds},
         {"cells_per_second",
          stages.conservative.seconds > 0

@@ -981,10 +981,11 @@ PvsSet bake_conservative_pvs(Context& ctx, const ConservativeConfig& config, con
     if (figures.shaft.pairs > 0) {
         ctx.info(fmt::format(
             "shaft pass: {:.3f} M of {:.3f} M (cell, object) pairs proven hidden ({:.3f} M given up at once, "
-            "{:.3f} M out of budget), {:.2f} M piece pairs, {:.1f} s",
+            "{:.3f} M out of budget, {:.3f} M on pieces that meet or cannot be halved), {:.2f} M piece "
+            "pairs, {:.1f} s",
             double(figures.shaft.hidden) * 1e-6, double(figures.shaft.pairs) * 1e-6,
             double(figures.shaft.certain) * 1e-6, double(figures.shaft.out_of_budget) * 1e-6,
-            double(figures.shaft.tests) * 1e-6, figures.shaft.seconds));
+            double(figures.shaft.stuck) * 1e-6, double(figures.shaft.tests) * 1e-6, figures.shaft.seconds));
     }
     ctx.info(fmt::format(
         "conservative PVS: one occluder hides {:.2f} M (cell, object) pairs from the whole region ({:.1f} s) "

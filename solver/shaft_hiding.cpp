@@ -26,6 +26,10 @@ constexpr size_t kMaxPieces = 64;
 constexpr double kVoxelSlack = 1e-6;
 // Random sight lines tried before the cover search: one that meets no occluder settles the pair.
 constexpr int kProbeLines = 8;
+// Halving: a side across an open strip (narrower than this share of the crossing, relative to the other
+// side's share) counts this many times its length.
+constexpr double kNarrowStrip = 0.5;
+constexpr double kAcrossStripWeight = 4.0;
 
 // The corners of the box grown by `grow` on every side, in double.
 std::array<glm::dvec3, 8> box_corners(const Aabb& b, double grow) {
@@ -233,7 +237,8 @@ ShaftProver::ShaftProver(Context& ctx, const ShrunkOccluders& set)
 
 ShaftProver::~ShaftProver() = default;
 
-bool ShaftProver::plane_covers(const Aabb& region, const Aabb& target, int axis, float c) const {
+bool ShaftProver::plane_covers(const Aabb& region, const Aabb& target, int axis, float c,
+                               PlaneMiss* miss) const {
     const int a = axis, u = (a + 1) % 3, v = (a + 2) % 3;
     const double cd = c, tol = kHideToleranceM;
     const bool below = double(region.max[a])<cd - tol&& double(target.min[a])> cd + tol;
@@ -286,10 +291,19 @@ bool ShaftProver::plane_covers(const Aabb& region, const Aabb& target, int axis,
             }
             ps.pieces.swap(ps.next);
             n_pieces = n_next;
-            if (n_pieces > kMaxPieces) return false;
+            if (n_pieces > kMaxPieces) break;
         }
     }
     if (n_pieces == 0) return true;
+    if (miss) {
+        *miss = PlaneMiss{a, c, lo, hi, ps.pieces[0][0], ps.pieces[0][0]};
+        for (size_t i = 0; i < n_pieces; ++i)
+            for (const glm::dvec2& p : ps.pieces[i]) {
+                miss->open_lo = glm::min(miss->open_lo, p);
+                miss->open_hi = glm::max(miss->open_hi, p);
+            }
+    }
+    if (n_pieces > kMaxPieces) return false;
     // The rest must lie in the interior of the proven solid: every voxel of the layer (both layers, on a
     // voxel side) whose closed square meets a piece is solid.
     if (solid_.empty()) return false;
@@ -342,8 +356,10 @@ bool ShaftProver::plane_covers(const Aabb& region, const Aabb& target, int axis,
 }
 
 bool ShaftProver::try_pair(const Pair& pair, glm::vec3 from, glm::vec3 to, bool& line_blocked,
-                           Scratch& sc) const {
+                           PlaneMiss& miss, Scratch& sc) const {
     line_blocked = false;
+    miss = PlaneMiss{};
+    double best = INFINITY;
     const glm::vec3 d = to - from;
     const float len = glm::length(d);
     if (!(len > 0.0f)) return false;
@@ -353,7 +369,17 @@ bool ShaftProver::try_pair(const Pair& pair, glm::vec3 from, glm::vec3 to, bool&
         for (size_t i = 0; i < n_tried; ++i)
             if (tried[i].first == a && tried[i].second == c) return false;
         if (n_tried < tried.size()) tried[n_tried++] = {a, c};
-        return plane_covers(pair.region, pair.target, a, c);
+        PlaneMiss m;
+        if (plane_covers(pair.region, pair.target, a, c, &m)) return true;
+        if (m.axis >= 0) {
+            const glm::dvec2 extent = glm::max(m.hi - m.lo, 1e-12), open = m.open_hi - m.open_lo;
+            const double narrow = std::min(open.x / extent.x, open.y / extent.y);
+            if (narrow < best) {
+                best = narrow;
+                miss = m;
+            }
+        }
+        return false;
     };
     // The panels and slanted panels the line crosses.
     const glm::vec3 dir = d / len;
@@ -607,23 +633,57 @@ bool ShaftProver::hides(const World& world, const VoxelMask& eyes, const ShaftRe
         }
         ++tests;
         ++figures.tests;
-        if (pair.region.overlaps(pair.target)) return false;
+        if (pair.region.overlaps(pair.target)) {
+            ++figures.stuck;
+            return false;
+        }
         bool blocked = false;
-        if (try_pair(pair, pair.from, pair.point, blocked, sc)) continue;
+        PlaneMiss miss;
+        if (try_pair(pair, pair.from, pair.point, blocked, miss, sc)) continue;
         // A line from an eye to a point of the object that meets no occluder: every cover has a piece pair
         // holding it, and no plane covers that pair.
         if (!blocked) {
             ++figures.certain;
             return false;
         }
+        // What to halve: the longest side of the two pieces, where a side across a narrow strip left open by
+        // the best plane (along an occluder's edge: halving across it cuts the strip off) counts
+        // kAcrossStripWeight times its length.
         const glm::vec3 rs = pair.region.size(), ts = pair.target.size();
-        const float rl = std::max({rs.x, rs.y, rs.z}), tl = std::max({ts.x, ts.y, ts.z});
-        const bool split_region = rl >= tl;
+        bool split_region;
+        int k;
+        if (miss.axis >= 0) {
+            const int u = (miss.axis + 1) % 3, v = (miss.axis + 2) % 3;
+            const glm::dvec2 extent = glm::max(miss.hi - miss.lo, 1e-12), open = miss.open_hi - miss.open_lo;
+            const glm::dvec2 ratio = open / extent;
+            double best = 0.0;
+            k = -1;
+            for (int side = 0; side < 2; ++side)
+                for (int kk = 0; kk < 3; ++kk) {
+                    double length = side == 0 ? rs[kk] : ts[kk];
+                    const int i = kk == u ? 0 : (kk == v ? 1 : -1);
+                    if (i >= 0 && ratio[i] < kNarrowStrip * ratio[1 - i]) length *= kAcrossStripWeight;
+                    if (length > best) {
+                        best = length;
+                        k = kk;
+                        split_region = side == 0;
+                    }
+                }
+        } else {
+            k = -1;
+        }
+        if (k < 0) {
+            const float rl = std::max({rs.x, rs.y, rs.z}), tl = std::max({ts.x, ts.y, ts.z});
+            split_region = rl >= tl;
+            const glm::vec3 bs = split_region ? rs : ts;
+            k = bs.x >= bs.y && bs.x >= bs.z ? 0 : (bs.y >= bs.z ? 1 : 2);
+        }
         const Aabb& box = split_region ? pair.region : pair.target;
-        const glm::vec3 bs = split_region ? rs : ts;
-        const int k = bs.x >= bs.y && bs.x >= bs.z ? 0 : (bs.y >= bs.z ? 1 : 2);
         const float mid = 0.5f * (box.min[k] + box.max[k]);
-        if (!(mid > box.min[k] && mid < box.max[k])) return false;  // too small to halve
+        if (!(mid > box.min[k] && mid < box.max[k])) {  // too small to halve
+            ++figures.stuck;
+            return false;
+        }
         for (int side = 0; side < 2; ++side) {
             Aabb half = box;
             (side ? half.min[k] : half.max[k]) = mid;

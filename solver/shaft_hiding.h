@@ -29,6 +29,7 @@ struct ShaftFigures {
     uint64_t tests = 0;          // piece pairs tested
     uint64_t certain = 0;        // pairs given up at once: a line from an eye to the object meets no occluder
     uint64_t out_of_budget = 0;  // pairs given up when the budget of piece pairs ran out
+    uint64_t stuck = 0;          // pairs given up on pieces that meet or cannot be halved
     double seconds = 0.0;
 
     ShaftFigures& operator+=(const ShaftFigures& o) {
@@ -37,6 +38,7 @@ struct ShaftFigures {
         tests += o.tests;
         certain += o.certain;
         out_of_budget += o.out_of_budget;
+        stuck += o.stuck;
         seconds += o.seconds;
         return *this;
     }
@@ -75,9 +77,18 @@ public:
     bool hides(const World& world, const VoxelMask& eyes, const ShaftRegion& region, uint32_t object,
                int budget, ShaftFigures& figures) const;
 
+    // Where a plane's cover fell short: the bounds of the crossing and of the part left open, in the plane's
+    // coordinates (axis + 1, axis + 2).
+    struct PlaneMiss {
+        int axis = -1;
+        float c = 0.0f;
+        glm::dvec2 lo{0.0}, hi{0.0}, open_lo{0.0}, open_hi{0.0};
+    };
     // Does every segment from `region` to `target` cross the plane x[axis] = c inside the panels of that
-    // plane and the proven solid's slice (see the contract above)?
-    bool plane_covers(const Aabb& region, const Aabb& target, int axis, float c) const;
+    // plane and the proven solid's slice (see the contract above)? When not, and the boxes lie on opposite
+    // sides of the plane, `miss` (if given) says where.
+    bool plane_covers(const Aabb& region, const Aabb& target, int axis, float c,
+                      PlaneMiss* miss = nullptr) const;
 
 private:
     struct Plane {
@@ -91,7 +102,9 @@ private:
     struct Scratch;
     // Does one plane that the line from -> to crosses an occluder in cover the pair? `line_blocked`: the line
     // meets an occluder at all.
-    bool try_pair(const Pair& pair, glm::vec3 from, glm::vec3 to, bool& line_blocked, Scratch& sc) const;
+    // `miss`: of the planes tried, the one whose open part is narrowest across, relative to its crossing.
+    bool try_pair(const Pair& pair, glm::vec3 from, glm::vec3 to, bool& line_blocked, PlaneMiss& miss,
+                  Scratch& sc) const;
     bool meets_occluder(glm::vec3 from, glm::vec3 to, Scratch& sc) const;
 
     std::vector<Plane> planes_[3];  // per axis, by c

@@ -474,6 +474,43 @@ TEST(Conservative, BehindTwoOffAxisWallsIsCulledByTheirFusion) {
     EXPECT_TRUE(bake.pvs.test(uint32_t(near), target));
 }
 
+// THE SHAFT PASS (docs/ALGORITHMS.md#shaft-pass). A closed room 14 x 3 x 8 m; two full-height walls 5 cm
+// thick (no solid in them, only their faces), the near one at x = 6 from z = 0 to 4.3, the far one at x = 9
+// from z = 4.45 to 8. A target at x in [11, 11.5], z in [3, 5] lies behind the two together: from the cell at
+// x in [2, 3], z in [3, 4], every line that passes the near wall's end meets the far wall at least 7.5 cm
+// inside its end. Neither wall alone hides it (so the single-occluder pass cannot), and the depth cubes lose
+// more than that margin to their pixels and the panels' inset; cut into piece pairs, each covered by one
+// wall, the shaft pass proves it.
+TEST(Conservative, BehindTwoWallsAtDifferentDepthsTheShaftPassCulls) {
+    World w;
+    const float t = 0.5f;
+    const glm::vec3 size(14, 3, 8);
+    test::add_box(w, "floor", Aabb::of({-t, -t, -t}, {size.x + t, 0, size.z + t}));
+    test::add_box(w, "roof", Aabb::of({-t, size.y, -t}, {size.x + t, size.y + t, size.z + t}));
+    test::add_box(w, "west", Aabb::of({-t, 0, -t}, {0, size.y, size.z + t}));
+    test::add_box(w, "east", Aabb::of({size.x, 0, -t}, {size.x + t, size.y, size.z + t}));
+    test::add_box(w, "south", Aabb::of({0, 0, -t}, {size.x, size.y, 0}));
+    test::add_box(w, "north", Aabb::of({0, 0, size.z}, {size.x, size.y, size.z + t}));
+    test::add_box(w, "near", Aabb::of({5.975f, 0, 0}, {6.025f, size.y, 4.3f}));
+    test::add_box(w, "far", Aabb::of({8.975f, 0, 4.45f}, {9.025f, size.y, size.z}));
+    const uint32_t target = test::add_box(w, "target", Aabb::of({11, 0.5f, 3}, {11.5f, 2.5f, 5}));
+    w.view_seeds = {{2.5f, 1.5f, 3.5f}, {12.5f, 1.5f, 4}};
+    BakeConfig c = conservative_config();
+    const auto listed = [&](int budget, uint64_t& shaft_hidden) {
+        c.conservative.shaft_budget = budget;
+        const BakeData bake = bake_without_misses(c, w);
+        shaft_hidden = uint64_t(figure(bake.figures, "conservative_shaft_hidden"));
+        const int32_t cell = bake.cells.find({2.5f, 1.5f, 3.5f});
+        EXPECT_GE(cell, 0);
+        return cell < 0 || bake.pvs.test(uint32_t(cell), target);
+    };
+    uint64_t without_hidden = 0, with_hidden = 0;
+    EXPECT_TRUE(listed(0, without_hidden)) << "the cubes alone prove it: the scene no longer tests the pass";
+    EXPECT_EQ(without_hidden, 0u);
+    EXPECT_FALSE(listed(1024, with_hidden)) << "the shaft pass did not prove what the two walls hide";
+    EXPECT_GT(with_hidden, 0u);
+}
+
 // The safety property of block occluders, on the yard: no ray from eyes of a block (fresh ones, not those
 // synthesis used) reaches a point inside one of that block's shrunk boxes before an opaque triangle.
 TEST(Conservative, NoRayFromABlocksEyesReachesIntoItsOwnOccluders) {
@@ -849,6 +886,8 @@ BakeConfig property_config(uint64_t seed) {
     if (seed == 2) c.conservative.panel_refine_levels = 1;
     // The third draws the slanted panels on the depth cubes (--slanted-cubes).
     if (seed == 3) c.conservative.slanted_cubes = true;
+    // The fourth to sixth take the shaft pass on what the faces listed (--shaft-budget).
+    if (seed >= 4 && seed <= 6) c.conservative.shaft_budget = 256;
     return c;
 }
 
@@ -859,7 +898,7 @@ double random_worlds_have_no_miss(const CellConfig& cells, uint64_t worlds, cons
     double figure_sum = 0.0;
     uint64_t cells_total = 0, listed_total = 0, pairs_total = 0, sampled_total = 0, rays_total = 0;
     uint32_t worlds_culling = 0;
-    uint64_t fine_samples = 0, panel_splits = 0, region_hidden = 0;
+    uint64_t fine_samples = 0, panel_splits = 0, region_hidden = 0, shaft_hidden = 0;
     for (uint64_t seed = 1; seed <= worlds; ++seed) {
         SCOPED_TRACE("world seed " + std::to_string(seed));
         const auto start = std::chrono::steady_clock::now();
@@ -894,6 +933,7 @@ double random_worlds_have_no_miss(const CellConfig& cells, uint64_t worlds, cons
         fine_samples += uint64_t(figure(bake.figures, "conservative_fine_samples"));
         panel_splits += uint64_t(figure(bake.figures, "conservative_panel_splits"));
         region_hidden += uint64_t(figure(bake.figures, "conservative_region_hidden"));
+        shaft_hidden += uint64_t(figure(bake.figures, "conservative_shaft_hidden"));
         figure_sum += figure(bake.figures, figure_name);
         const uint64_t missed_pairs = uint64_t(figure(bake.verification.figures, "missed_pairs"));
         EXPECT_EQ(missed_pairs, 0u) << "world seed " << seed << ": " << bake.verification.misses.size()
@@ -950,6 +990,7 @@ double random_worlds_have_no_miss(const CellConfig& cells, uint64_t worlds, cons
     EXPECT_GT(fine_samples, 0u) << "no world took the second look on the fine cube";
     EXPECT_GT(panel_splits, 0u) << "no world halved a floor patch for the panels";
     EXPECT_GT(region_hidden, 0u) << "the single-occluder pass proved nothing in any world";
+    EXPECT_GT(shaft_hidden, 0u) << "the shaft pass proved nothing in any world";
     return figure_sum;
 }
 

@@ -1,0 +1,241 @@
+// The shaft pass (solver/shaft_hiding.h): a plane's cover by panels and the proven solid's slice, held to a
+// plain reference on many random segments, and the whole proof held to segments from random eyes to random
+// points of the objects it proves hidden.
+#include "core/random.h"
+#include "solver/shaft_hiding.h"
+#include "tests/test_util.h"
+#include "tests/world_builder.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace pvs {
+namespace {
+
+Context quiet_context() {
+    return Context(Context::Options{LogLevel::kError, true, nullptr});
+}
+
+constexpr float kPanelZ = 5.0f;
+constexpr float kVoxel = 0.25f;
+
+// Panels in the plane z = 5: A and B share the side x = 2; C starts 1 mm after B ends (x = 4); D lies over
+// the three. The proven solid: voxels of 0.25 m from (-1, -1, -1), solid for z in [7, 8], x in [0, 5],
+// y in [0, 4], but for the column at x in [2, 2.25], y in [1, 1.25] (a hole through the slab).
+ShrunkOccluders make_occluders() {
+    ShrunkOccluders occ;
+    occ.epsilon_m = {0.1};
+    occ.boxes = {{}};
+    const auto panel = [&](float x0, float x1, float y0, float y1) {
+        occ.panels.push_back(Aabb::of({x0, y0, kPanelZ}, {x1, y1, kPanelZ}));
+    };
+    panel(0, 2, 0, 3);
+    panel(2, 4, 0, 3);
+    panel(4.001f, 6, 0, 3);
+    panel(0, 6, 3, 4);
+    VoxelMask& m = occ.solid;
+    m.origin = glm::vec3(-1.0f);
+    m.voxel_size_m = kVoxel;
+    m.dims = glm::ivec3(40);
+    m.bits.assign((m.count() + 63) / 64, 0);
+    for (int z = 0; z < 40; ++z)
+        for (int y = 0; y < 40; ++y)
+            for (int x = 0; x < 40; ++x) {
+                const glm::vec3 lo = m.origin + glm::vec3(x, y, z) * kVoxel;
+                const bool in_slab =
+                    lo.z >= 7.0f && lo.z < 8.0f && lo.x >= 0.0f && lo.x < 5.0f && lo.y >= 0.0f && lo.y < 4.0f;
+                const bool hole = lo.x == 2.0f && lo.y == 1.0f;
+                if (in_slab && !hole) {
+                    const uint64_t i = uint64_t(x) + 40u * (uint64_t(y) + 40u * uint64_t(z));
+                    m.bits[i >> 6] |= uint64_t(1) << (i & 63);
+                }
+            }
+    return occ;
+}
+
+// The plain reference: is the point y of the plane z = c covered, by a closed panel of that plane or by the
+// interior of the solid (every voxel holding y solid)?
+bool in_solid_interior(const ShrunkOccluders& occ, glm::dvec3 y) {
+    const VoxelMask& m = occ.solid;
+    const glm::dvec3 rel = (y - glm::dvec3(m.origin)) / double(m.voxel_size_m);
+    glm::ivec3 lo, hi;
+    for (int k = 0; k < 3; ++k) {
+        const double f = std::floor(rel[k]);
+        lo[k] = hi[k] = int(f);
+        if (rel[k] == f) lo[k] = int(f) - 1;
+        if (lo[k] < 0 || hi[k] >= m.dims[k]) return false;
+    }
+    for (int z = lo.z; z <= hi.z; ++z)
+        for (int yy = lo.y; yy <= hi.y; ++yy)
+            for (int x = lo.x; x <= hi.x; ++x)
+                if (!m.get(uint64_t(x) +
+                           uint64_t(m.dims.x) * (uint64_t(yy) + uint64_t(m.dims.y) * uint64_t(z))))
+                    return false;
+    return true;
+}
+
+bool covered(const ShrunkOccluders& occ, glm::dvec3 y, float c) {
+    for (const Aabb& p : occ.panels)
+        if (p.min.z == c && y.x >= p.min.x && y.x <= p.max.x && y.y >= p.min.y && y.y <= p.max.y) return true;
+    return in_solid_interior(occ, y);
+}
+
+glm::vec3 point_in(const Aabb& b, Rng& rng) {
+    return b.min + b.size() * glm::vec3(rng.uniform(), rng.uniform(), rng.uniform());
+}
+
+Aabb box_around(glm::vec3 c, glm::vec3 half) {
+    return Aabb::of(c - half, c + half);
+}
+
+// Whenever plane_covers() says so, every one of many segments from the region to the target (the 64 corner
+// segments and random ones) crosses the plane where the reference says covered; and where it says not, the
+// segments find an uncovered crossing in most cases (it gives up little).
+TEST(ShaftHiding, APlaneCoverAgreesWithTheReferenceOnManySegments) {
+    Context ctx = quiet_context();
+    const ShrunkOccluders occ = make_occluders();
+    const ShaftProver prover(ctx, occ);
+    Rng rng(5, 1);
+    int covers = 0, not_covers = 0, refuted = 0;
+    for (int i = 0; i < 4000; ++i) {
+        // The panels' plane or a plane across the middle of the slab's voxel layer at z in [7.5, 7.75].
+        const bool slab = rng.below(2) == 1;
+        const float c = slab ? 7.625f : kPanelZ;
+        const Aabb region = box_around({rng.uniform() * 6.0f, rng.uniform() * 4.0f, rng.uniform() * 3.0f},
+                                       glm::vec3(rng.uniform(), rng.uniform(), rng.uniform()) * 0.6f);
+        const Aabb target =
+            box_around({rng.uniform() * 6.0f, rng.uniform() * 4.0f, 9.0f + rng.uniform() * 3.0f},
+                       glm::vec3(rng.uniform(), rng.uniform(), rng.uniform()) * 0.6f);
+        const bool cover = prover.plane_covers(region, target, 2, c);
+        bool all = true;
+        glm::dvec2 lo(INFINITY), hi(-INFINITY);  // the corner crossings' bounds
+        for (int s = 0; s < 64 + 400 && all; ++s) {
+            const glm::dvec3 q(s < 64 ? glm::vec3(s & 1 ? region.max.x : region.min.x,
+                                                  s & 2 ? region.max.y : region.min.y,
+                                                  s & 4 ? region.max.z : region.min.z)
+                                      : point_in(region, rng));
+            const glm::dvec3 x(s < 64 ? glm::vec3(s & 8 ? target.max.x : target.min.x,
+                                                  s & 16 ? target.max.y : target.min.y,
+                                                  s & 32 ? target.max.z : target.min.z)
+                                      : point_in(target, rng));
+            const double t = (double(c) - q.z) / (x.z - q.z);
+            const glm::dvec3 y = q + t * (x - q);
+            all = covered(occ, y, c);
+            lo = glm::min(lo, glm::dvec2(y));
+            hi = glm::max(hi, glm::dvec2(y));
+        }
+        // Random segments seldom cross the 1 mm gap between B and C: a crossing that spans it is uncovered.
+        if (all && c == kPanelZ && lo.x < 4.0 && hi.x > 4.001 && lo.y < 3.0 && hi.y > 0.0) all = false;
+        if (cover) {
+            ++covers;
+            EXPECT_TRUE(all) << "case " << i << ": a segment crosses the plane z = " << c << " uncovered";
+        } else {
+            ++not_covers;
+            refuted += all ? 0 : 1;
+        }
+    }
+    EXPECT_GT(covers, 300);
+    EXPECT_GT(not_covers, 300);
+    EXPECT_GT(refuted, not_covers * 9 / 10) << "the cover gives up where the segments find it covered";
+}
+
+// Panels of one plane fuse where they share a side; a 1 mm gap between two breaks the cover; the solid's
+// slice covers except where the hole is, and a plane on a voxel side needs both layers.
+TEST(ShaftHiding, CoplanarPanelsFuseAndTheSolidsSliceCovers) {
+    Context ctx = quiet_context();
+    const ShrunkOccluders occ = make_occluders();
+    const ShaftProver prover(ctx, occ);
+    const Aabb eye = box_around({2.0f, 1.5f, 1.0f}, glm::vec3(0.3f));
+    // Across the side A and B share: covered by the two together.
+    EXPECT_TRUE(prover.plane_covers(eye, box_around({2.0f, 1.5f, 9.0f}, glm::vec3(0.4f)), 2, kPanelZ));
+    // Up into D as well.
+    EXPECT_TRUE(prover.plane_covers(eye, box_around({2.0f, 3.0f, 9.0f}, glm::vec3(0.4f)), 2, kPanelZ));
+    // Across the gap between B and C: not covered.
+    const Aabb at_gap = box_around({4.0f, 1.5f, 1.0f}, glm::vec3(0.3f));
+    EXPECT_FALSE(prover.plane_covers(at_gap, box_around({4.0f, 1.5f, 9.0f}, glm::vec3(0.4f)), 2, kPanelZ));
+    // Beyond the panels' outer side: not covered.
+    EXPECT_FALSE(prover.plane_covers(eye, box_around({6.5f, 1.5f, 9.0f}, glm::vec3(0.4f)), 2, kPanelZ));
+    // Not on opposite sides of the plane: never.
+    EXPECT_FALSE(prover.plane_covers(eye, box_around({2.0f, 1.5f, 4.0f}, glm::vec3(0.4f)), 2, kPanelZ));
+    // The slab: covered away from the hole, not through it.
+    const Aabb far_from_hole = box_around({3.5f, 2.5f, 1.0f}, glm::vec3(0.2f));
+    EXPECT_TRUE(
+        prover.plane_covers(far_from_hole, box_around({3.5f, 2.5f, 10.0f}, glm::vec3(0.2f)), 2, 7.625f));
+    const Aabb at_hole = box_around({2.125f, 1.125f, 1.0f}, glm::vec3(0.2f));
+    EXPECT_FALSE(
+        prover.plane_covers(at_hole, box_around({2.125f, 1.125f, 10.0f}, glm::vec3(0.2f)), 2, 7.625f));
+    // On the slab's far side, z = 8: the layer beyond is empty, so not covered.
+    EXPECT_FALSE(
+        prover.plane_covers(far_from_hole, box_around({3.5f, 2.5f, 10.0f}, glm::vec3(0.2f)), 2, 8.0f));
+    // Inside, on the side between two solid layers: covered.
+    EXPECT_TRUE(
+        prover.plane_covers(far_from_hole, box_around({3.5f, 2.5f, 10.0f}, glm::vec3(0.2f)), 2, 7.5f));
+}
+
+// Does the segment q -> x meet an occluder by the reference: cross a covered point of the panels' plane, or
+// pass a point of the solid's interior (sampled every millimetre)?
+bool segment_blocked(const ShrunkOccluders& occ, glm::dvec3 q, glm::dvec3 x) {
+    if ((q.z - kPanelZ) * (x.z - kPanelZ) < 0.0) {
+        const double t = (double(kPanelZ) - q.z) / (x.z - q.z);
+        const glm::dvec3 y = q + t * (x - q);
+        for (const Aabb& p : occ.panels)
+            if (y.x >= p.min.x && y.x <= p.max.x && y.y >= p.min.y && y.y <= p.max.y) return true;
+    }
+    const int steps = int(glm::length(x - q) / 1e-3) + 1;
+    for (int i = 0; i <= steps; ++i) {
+        const glm::dvec3 y = q + (double(i) / steps) * (x - q);
+        if (in_solid_interior(occ, y)) return true;
+    }
+    return false;
+}
+
+// hides(): for random eye regions (every point an eye) and small objects behind the panels or the slab,
+// every one of many segments from the region to points of the object's triangles is blocked when it says
+// hidden; and it proves some.
+TEST(ShaftHiding, EverySegmentFromTheRegionToAnObjectItHidesIsBlocked) {
+    Context ctx = quiet_context();
+    const ShrunkOccluders occ = make_occluders();
+    const ShaftProver prover(ctx, occ);
+    Rng rng(9, 2);
+    World w;
+    std::vector<uint32_t> objects;
+    for (int i = 0; i < 40; ++i) {
+        const glm::vec3 c(rng.uniform() * 6.0f, rng.uniform() * 4.0f, 9.0f + rng.uniform() * 2.0f);
+        objects.push_back(test::add_box(w, "o" + std::to_string(i), box_around(c, glm::vec3(0.3f))));
+    }
+    const VoxelMask no_eyes;
+    int hidden = 0, tried = 0;
+    ShaftFigures figures;
+    for (int r = 0; r < 40; ++r) {
+        const Aabb region =
+            box_around({rng.uniform() * 6.0f, rng.uniform() * 4.0f, 1.0f + rng.uniform() * 2.0f},
+                       glm::vec3(0.1f + 0.4f * rng.uniform()));
+        const ShaftRegion shaft = shaft_region(no_eyes, region);
+        for (uint32_t o : objects) {
+            ++tried;
+            if (!prover.hides(w, no_eyes, shaft, o, 256, figures)) continue;
+            ++hidden;
+            const WorldObject& obj = w.objects[o];
+            for (int s = 0; s < 300; ++s) {
+                const Triangle& tri = w.triangles[obj.first_triangle + rng.below(obj.triangle_count)];
+                float b1 = rng.uniform(), b2 = rng.uniform();
+                if (b1 + b2 > 1.0f) {
+                    b1 = 1.0f - b1;
+                    b2 = 1.0f - b2;
+                }
+                const glm::vec3 a = w.positions[tri.v[0]];
+                const glm::vec3 x = a + b1 * (w.positions[tri.v[1]] - a) + b2 * (w.positions[tri.v[2]] - a);
+                const glm::vec3 q = point_in(region, rng);
+                ASSERT_TRUE(segment_blocked(occ, q, x))
+                    << "region " << r << " object " << o << ": a segment passes every occluder";
+            }
+        }
+    }
+    EXPECT_GT(hidden, tried / 10) << "the proof never succeeds: the check is vacuous";
+    EXPECT_LT(hidden, tried) << "everything proven hidden: the scene is not telling";
+    EXPECT_EQ(figures.hidden, uint64_t(hidden));
+}
+
+}  // namespace
+}  // namespace pvs
