@@ -25,7 +25,7 @@ constexpr size_t kMaxPieces = 64;
 // Voxel coordinates within this of a voxel's side count as on it (both voxels are then tested).
 constexpr double kVoxelSlack = 1e-6;
 // Random sight lines tried before the cover search: one that meets no occluder settles the pair.
-constexpr int kProbeLines = 8;
+constexpr int kProbeLines = 32;
 // Halving: a side across an open strip (narrower than this share of the crossing, relative to the other
 // side's share) counts this many times its length.
 constexpr double kNarrowStrip = 0.5;
@@ -219,13 +219,40 @@ ShaftProver::ShaftProver(Context& ctx, const ShrunkOccluders& set)
         std::sort(v.begin(), v.end());
         const int u = (a + 1) % 3, w = (a + 2) % 3;
         for (size_t i = 0; i < v.size();) {
-            Plane p{v[i].first, uint32_t(rects_.size()), 0};
+            Plane p{v[i].first, uint32_t(rects_.size()), 0, glm::dvec2(INFINITY), glm::dvec2(-INFINITY)};
             for (; i < v.size() && v[i].first == p.c; ++i) {
                 const Aabb& b = panels_[v[i].second];
                 rects_.push_back(Rect{b.min[u], b.max[u], b.min[w], b.max[w]});
+                p.lo = glm::min(p.lo, glm::dvec2(b.min[u], b.min[w]));
+                p.hi = glm::max(p.hi, glm::dvec2(b.max[u], b.max[w]));
                 ++p.count;
             }
             planes_[a].push_back(p);
+        }
+    }
+    if (!solid_.empty()) {
+        const glm::ivec3 n = solid_.dims;
+        const double h = solid_.voxel_size_m;
+        const glm::dvec3 o(solid_.origin);
+        for (int a = 0; a < 3; ++a) {
+            layer_lo_[a].assign(size_t(n[a]), glm::dvec2(INFINITY));
+            layer_hi_[a].assign(size_t(n[a]), glm::dvec2(-INFINITY));
+        }
+        for (size_t w = 0; w < solid_.bits.size(); ++w) {
+            for (uint64_t bits = solid_.bits[w]; bits != 0; bits &= bits - 1) {
+                const uint64_t i = uint64_t(w) * 64 + uint64_t(std::countr_zero(bits));
+                if (i >= solid_.count()) break;
+                const glm::ivec3 g(int(i % uint64_t(n.x)), int((i / uint64_t(n.x)) % uint64_t(n.y)),
+                                   int(i / (uint64_t(n.x) * uint64_t(n.y))));
+                const glm::dvec3 lo = o + glm::dvec3(g) * h, hi = o + glm::dvec3(g + 1) * h;
+                for (int a = 0; a < 3; ++a) {
+                    const int u = (a + 1) % 3, v = (a + 2) % 3;
+                    glm::dvec2& l = layer_lo_[a][size_t(g[a])];
+                    glm::dvec2& r = layer_hi_[a][size_t(g[a])];
+                    l = glm::min(l, glm::dvec2(lo[u], lo[v]));
+                    r = glm::max(r, glm::dvec2(hi[u], hi[v]));
+                }
+            }
         }
     }
     Context quiet(Context::Options{LogLevel::kWarning, true, nullptr});
@@ -256,19 +283,51 @@ bool ShaftProver::plane_covers(const Aabb& region, const Aabb& target, int axis,
             const double t = (cd - q[a]) / (x[a] - q[a]);
             pts[n_pts++] = glm::dvec2(q[u] + t * (x[u] - q[u]), q[v] + t * (x[v] - q[v]));
         }
-    if (ps.pieces.empty()) ps.pieces.resize(1);
-    convex_hull(pts.data(), n_pts, ps.pieces[0]);
-    size_t n_pieces = 1;
-    glm::dvec2 lo = ps.pieces[0][0], hi = ps.pieces[0][0];
-    for (const glm::dvec2& p : ps.pieces[0]) {
-        lo = glm::min(lo, p);
-        hi = glm::max(hi, p);
+    glm::dvec2 lo = pts[0], hi = pts[0];
+    for (size_t i = 1; i < n_pts; ++i) {
+        lo = glm::min(lo, pts[i]);
+        hi = glm::max(hi, pts[i]);
     }
-    // Less the panels of the plane.
+    // The voxel layers holding the plane (both, on a voxel side), or none outside the grid.
+    int l0 = -1, l1 = -2;
+    if (!solid_.empty()) {
+        const double rel = (cd - double(solid_.origin[a])) / double(solid_.voxel_size_m);
+        const double fl = std::floor(rel);
+        l0 = l1 = int(fl);
+        if (rel - fl < kVoxelSlack) l0 = l1 - 1;
+        if (fl + 1.0 - rel < kVoxelSlack) l1 = l0 + 1;
+        if (l0 < 0 || l1 >= solid_.dims[a]) l0 = -1, l1 = -2;
+    }
+    // A crossing beyond the bounds of the plane's panels and of its layers' solid is not covered.
     const std::vector<Plane>& planes = planes_[a];
     const auto it = std::lower_bound(planes.begin(), planes.end(), c,
                                      [](const Plane& p, float value) { return p.c < value; });
-    if (it != planes.end() && it->c == c) {
+    const bool has_panels = it != planes.end() && it->c == c;
+    {
+        glm::dvec2 reach_lo(INFINITY), reach_hi(-INFINITY);
+        if (has_panels) {
+            reach_lo = it->lo;
+            reach_hi = it->hi;
+        }
+        glm::dvec2 solid_lo(-INFINITY), solid_hi(INFINITY);  // what every layer holds
+        for (int l = l0; l <= l1; ++l) {
+            solid_lo = glm::max(solid_lo, layer_lo_[a][size_t(l)]);
+            solid_hi = glm::min(solid_hi, layer_hi_[a][size_t(l)]);
+        }
+        if (l0 <= l1 && solid_lo.x <= solid_hi.x && solid_lo.y <= solid_hi.y) {
+            reach_lo = glm::min(reach_lo, solid_lo);
+            reach_hi = glm::max(reach_hi, solid_hi);
+        }
+        if (!(lo.x >= reach_lo.x && lo.y >= reach_lo.y && hi.x <= reach_hi.x && hi.y <= reach_hi.y)) {
+            if (miss) *miss = PlaneMiss{a, c, lo, hi, lo, hi};
+            return false;
+        }
+    }
+    if (ps.pieces.empty()) ps.pieces.resize(1);
+    convex_hull(pts.data(), n_pts, ps.pieces[0]);
+    size_t n_pieces = 1;
+    // Less the panels of the plane.
+    if (has_panels) {
         for (uint32_t r = it->first; r < it->first + it->count && n_pieces > 0; ++r) {
             const Rect& rect = rects_[r];
             if (rect.u0 > hi.x || rect.u1 < lo.x || rect.v0 > hi.y || rect.v1 < lo.y) continue;
@@ -306,15 +365,9 @@ bool ShaftProver::plane_covers(const Aabb& region, const Aabb& target, int axis,
     if (n_pieces > kMaxPieces) return false;
     // The rest must lie in the interior of the proven solid: every voxel of the layer (both layers, on a
     // voxel side) whose closed square meets a piece is solid.
-    if (solid_.empty()) return false;
+    if (l0 > l1) return false;
     const double h = solid_.voxel_size_m;
     const glm::dvec3 o(solid_.origin);
-    const double rel = (cd - o[a]) / h;
-    const double fl = std::floor(rel);
-    int l0 = int(fl), l1 = int(fl);
-    if (rel - fl < kVoxelSlack) l0 = l1 - 1;
-    if (fl + 1.0 - rel < kVoxelSlack) l1 = l0 + 1;
-    if (l0 < 0 || l1 >= solid_.dims[a]) return false;
     Poly& band = ps.band;
     Poly& part = ps.part;
     for (size_t pi = 0; pi < n_pieces; ++pi) {

@@ -94,6 +94,7 @@ private:
     struct Plane {
         float c;
         uint32_t first, count;  // into rects_
+        glm::dvec2 lo, hi;      // the bounds of its panels
     };
     struct Rect {
         double u0, u1, v0, v1;
@@ -108,7 +109,10 @@ private:
     bool meets_occluder(glm::vec3 from, glm::vec3 to, Scratch& sc) const;
 
     std::vector<Plane> planes_[3];  // per axis, by c
-    std::vector<Rect> rects_;       // the panels of each plane, in its (axis + 1, axis + 2) coordinates
+    // Per axis and voxel layer across it, the bounds of the layer's solid voxels in the plane's coordinates
+    // (empty when none): a crossing outside them and the plane's panels is not covered.
+    std::vector<glm::dvec2> layer_lo_[3], layer_hi_[3];
+    std::vector<Rect> rects_;  // the panels of each plane, in its (axis + 1, axis + 2) coordinates
     std::vector<Aabb> panels_;
     std::vector<int> panel_axis_;
     std::vector<SlantedPanel> slanted_;
