@@ -173,6 +173,7 @@ void walk_voxels(const VoxelMask& mask, glm::vec3 from, glm::vec3 to, Visit&& vi
 struct PlaneScratch {
     std::vector<Poly> pieces, next;
     Poly rest, part, band;
+    std::vector<uint32_t> near_rects;  // the plane's panels meeting the crossing's bounds
 };
 
 float down(double x) {
@@ -323,14 +324,61 @@ bool ShaftProver::plane_covers(const Aabb& region, const Aabb& target, int axis,
             return false;
         }
     }
+    // Every corner crossing is a point of the crossing: one left open settles it (cheaper than the cover).
+    {
+        ps.near_rects.clear();
+        if (has_panels)
+            for (uint32_t r = it->first; r < it->first + it->count; ++r) {
+                const Rect& rect = rects_[r];
+                if (!(rect.u0 > hi.x || rect.u1 < lo.x || rect.v0 > hi.y || rect.v1 < lo.y))
+                    ps.near_rects.push_back(r);
+            }
+        const double h = solid_.voxel_size_m;
+        const glm::dvec3 o(solid_.origin);
+        glm::dvec2 open_lo(INFINITY), open_hi(-INFINITY);
+        for (size_t i = 0; i < n_pts; ++i) {
+            const glm::dvec2 p = pts[i];
+            bool in = false;
+            for (uint32_t r : ps.near_rects) {
+                const Rect& rect = rects_[r];
+                if (p.x >= rect.u0 && p.x <= rect.u1 && p.y >= rect.v0 && p.y <= rect.v1) {
+                    in = true;
+                    break;
+                }
+            }
+            if (!in && l0 <= l1) {
+                const int64_t iu = int64_t(std::floor((p.x - o[u]) / h)),
+                              iv = int64_t(std::floor((p.y - o[v]) / h));
+                if (iu >= 0 && iv >= 0 && iu < solid_.dims[u] && iv < solid_.dims[v]) {
+                    in = true;
+                    for (int l = l0; l <= l1 && in; ++l) {
+                        glm::i64vec3 idx;
+                        idx[a] = l;
+                        idx[u] = iu;
+                        idx[v] = iv;
+                        in = solid_.get(uint64_t(idx.x) +
+                                        uint64_t(solid_.dims.x) *
+                                            (uint64_t(idx.y) + uint64_t(solid_.dims.y) * uint64_t(idx.z)));
+                    }
+                }
+            }
+            if (!in) {
+                open_lo = glm::min(open_lo, p);
+                open_hi = glm::max(open_hi, p);
+            }
+        }
+        if (open_lo.x <= open_hi.x) {
+            if (miss) *miss = PlaneMiss{a, c, lo, hi, open_lo, open_hi};
+            return false;
+        }
+    }
     if (ps.pieces.empty()) ps.pieces.resize(1);
     convex_hull(pts.data(), n_pts, ps.pieces[0]);
     size_t n_pieces = 1;
     // Less the panels of the plane.
     if (has_panels) {
-        for (uint32_t r = it->first; r < it->first + it->count && n_pieces > 0; ++r) {
-            const Rect& rect = rects_[r];
-            if (rect.u0 > hi.x || rect.u1 < lo.x || rect.v0 > hi.y || rect.v1 < lo.y) continue;
+        for (size_t nr = 0; nr < ps.near_rects.size() && n_pieces > 0; ++nr) {
+            const Rect& rect = rects_[ps.near_rects[nr]];
             size_t n_next = 0;
             for (size_t i = 0; i < n_pieces; ++i) {
                 // The piece outside the rectangle, as up to four convex parts: left, right, below, above.
