@@ -66,23 +66,23 @@ void convex_hull(glm::dvec2* pts, size_t n, Poly& out) {
     out.assign(h.begin(), h.begin() + std::ptrdiff_t(k - 1));
 }
 
-// The part of convex `in` on one side of the line x[k] = at (keep_below: x[k] <= at), closed. Corners made
-// on the line get exactly `at` there, so pieces cut by a rectangle's side meet the next rectangle's side
-// exactly where the two sides coincide.
-void clip(const Poly& in, int k, double at, bool keep_below, Poly& out) {
+// The part of convex `in` (2D or 3D points) on one side of x[k] = at (keep_below: x[k] <= at), closed.
+// Corners made on the line get exactly `at` there, so pieces cut by a rectangle's side meet the next
+// rectangle's side exactly where the two sides coincide.
+template <class P>
+void clip(const std::vector<P>& in, int k, double at, bool keep_below, std::vector<P>& out) {
     out.clear();
     const size_t n = in.size();
     for (size_t i = 0; i < n; ++i) {
-        const glm::dvec2& a = in[i];
-        const glm::dvec2& b = in[(i + 1) % n];
+        const P& a = in[i];
+        const P& b = in[(i + 1) % n];
         const bool a_in = keep_below ? a[k] <= at : a[k] >= at;
         const bool b_in = keep_below ? b[k] <= at : b[k] >= at;
         if (a_in) out.push_back(a);
         if (a_in != b_in && a[k] != at && b[k] != at) {
-            const double t = (at - a[k]) / (b[k] - a[k]);
-            glm::dvec2 p = a + t * (b - a);
-            p[k] = at;
-            out.push_back(p);
+            P y = a + (at - a[k]) / (b[k] - a[k]) * (b - a);
+            y[k] = at;
+            out.push_back(y);
         }
     }
 }
@@ -106,21 +106,7 @@ void clip_triangle(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c
     poly = {a, b, c};
     for (int k = 0; k < 3 && !poly.empty(); ++k)
         for (int side = 0; side < 2 && !poly.empty(); ++side) {
-            const double at = side ? box.max[k] : box.min[k];
-            tmp.clear();
-            const size_t n = poly.size();
-            for (size_t i = 0; i < n; ++i) {
-                const glm::dvec3& p = poly[i];
-                const glm::dvec3& q = poly[(i + 1) % n];
-                const bool p_in = side ? p[k] <= at : p[k] >= at;
-                const bool q_in = side ? q[k] <= at : q[k] >= at;
-                if (p_in) tmp.push_back(p);
-                if (p_in != q_in && p[k] != at && q[k] != at) {
-                    glm::dvec3 y = p + (at - p[k]) / (q[k] - p[k]) * (q - p);
-                    y[k] = at;
-                    tmp.push_back(y);
-                }
-            }
+            clip(poly, k, side ? double(box.max[k]) : double(box.min[k]), side == 1, tmp);
             poly.swap(tmp);
         }
 }

@@ -440,6 +440,17 @@ TEST(Conservative, BehindAHollowWallOthersSeeIntoIsCulledByTheBlocksOwnOccluders
     }
 }
 
+// A closed room from the origin to `size`, of walls, floor and roof 0.5 m thick.
+void add_closed_room(World& w, glm::vec3 size) {
+    const float t = 0.5f;
+    test::add_box(w, "floor", Aabb::of({-t, -t, -t}, {size.x + t, 0, size.z + t}));
+    test::add_box(w, "roof", Aabb::of({-t, size.y, -t}, {size.x + t, size.y + t, size.z + t}));
+    test::add_box(w, "west", Aabb::of({-t, 0, -t}, {0, size.y, size.z + t}));
+    test::add_box(w, "east", Aabb::of({size.x, 0, -t}, {size.x + t, size.y, size.z + t}));
+    test::add_box(w, "south", Aabb::of({0, 0, -t}, {size.x, size.y, 0}));
+    test::add_box(w, "north", Aabb::of({0, 0, size.z}, {size.x, size.y, size.z + t}));
+}
+
 // FUSION OF OFF-AXIS WALLS. A closed room 20 x 3 x 12 m; two full-height walls 5 cm thick (no solid in
 // them, no axis panel), one turned 49 degrees off x from (6, 2) to (10, 6.6), the other turned -56 degrees
 // from (8, 10) to (11, 5.6). From the cell at x in [2, 3], z in [5.5, 6.5] they overlap in view, and a
@@ -448,14 +459,8 @@ TEST(Conservative, BehindAHollowWallOthersSeeIntoIsCulledByTheBlocksOwnOccluders
 // (`--slanted-cubes`, docs/ALGORITHMS.md#slanted-inset).
 TEST(Conservative, BehindTwoOffAxisWallsIsCulledByTheirFusion) {
     World w;
-    const float t = 0.5f;
     const glm::vec3 size(20, 3, 12);
-    test::add_box(w, "floor", Aabb::of({-t, -t, -t}, {size.x + t, 0, size.z + t}));
-    test::add_box(w, "roof", Aabb::of({-t, size.y, -t}, {size.x + t, size.y + t, size.z + t}));
-    test::add_box(w, "west", Aabb::of({-t, 0, -t}, {0, size.y, size.z + t}));
-    test::add_box(w, "east", Aabb::of({size.x, 0, -t}, {size.x + t, size.y, size.z + t}));
-    test::add_box(w, "south", Aabb::of({0, 0, -t}, {size.x, size.y, 0}));
-    test::add_box(w, "north", Aabb::of({0, 0, size.z}, {size.x, size.y, size.z + t}));
+    add_closed_room(w, size);
     const auto wall = [&](const std::string& name, glm::vec2 a, glm::vec2 b) {
         const glm::vec2 along = glm::normalize(b - a), across(-along.y, along.x);
         add_prism(w, name, {a, b, b + 0.05f * across, a + 0.05f * across}, 0.0f, size.y, -1);
@@ -483,14 +488,8 @@ TEST(Conservative, BehindTwoOffAxisWallsIsCulledByTheirFusion) {
 // wall, the shaft pass proves it.
 TEST(Conservative, BehindTwoWallsAtDifferentDepthsTheShaftPassCulls) {
     World w;
-    const float t = 0.5f;
     const glm::vec3 size(14, 3, 8);
-    test::add_box(w, "floor", Aabb::of({-t, -t, -t}, {size.x + t, 0, size.z + t}));
-    test::add_box(w, "roof", Aabb::of({-t, size.y, -t}, {size.x + t, size.y + t, size.z + t}));
-    test::add_box(w, "west", Aabb::of({-t, 0, -t}, {0, size.y, size.z + t}));
-    test::add_box(w, "east", Aabb::of({size.x, 0, -t}, {size.x + t, size.y, size.z + t}));
-    test::add_box(w, "south", Aabb::of({0, 0, -t}, {size.x, size.y, 0}));
-    test::add_box(w, "north", Aabb::of({0, 0, size.z}, {size.x, size.y, size.z + t}));
+    add_closed_room(w, size);
     test::add_box(w, "near", Aabb::of({5.975f, 0, 0}, {6.025f, size.y, 4.3f}));
     test::add_box(w, "far", Aabb::of({8.975f, 0, 4.45f}, {9.025f, size.y, size.z}));
     const uint32_t target = test::add_box(w, "target", Aabb::of({11, 0.5f, 3}, {11.5f, 2.5f, 5}));
