@@ -23,6 +23,9 @@
 // - panels (occluders/panels.h) are drawn inset per ray for the patch's box (docs/ALGORITHMS.md#panel-inset);
 // - with --single-occluder-pass, what one panel or one box hides from the whole region (or patch) is left
 //   out first, proven exactly (solver/region_hiding.h, docs/ALGORITHMS.md#single-occluder);
+// - with --shaft-budget, what the faces listed and no sight ray saw is tried once more against the whole
+//   region, in piece pairs each covered in one plane by panels and the proven solid (solver/shaft_hiding.h,
+//   docs/ALGORITHMS.md#shaft-pass);
 // - a region whose eyes lie in one block uses that block's occluders, ShrunkOccluders::set_for (opt-in
 //   --occluder-block, unproven: docs/ALGORITHMS.md#block-occluders);
 // - an octree box tests only what its parent's row lists (docs/ALGORITHMS.md#octree-parent-bound).
