@@ -124,16 +124,19 @@ void octree_cells_and_pvs(Context& ctx, const BakeConfig& config, const World& w
     masks.eyes = view.eyes;
     SampledFigures& sampled = figures.sampled;
     sampled.rays_per_eye = config.sampled.rays.rays_per_eye;
-    // Built once for all the boxes the octree considers (solver/region_hiding.h).
+    // Built once for all the boxes the octree considers (solver/region_hiding.h, solver/shaft_hiding.h).
     std::optional<RegionHiders> hiders;
     if (conservative && config.conservative.single_occluder_pass) hiders.emplace(ctx, shrunk);
+    std::optional<ShaftProvers> provers;
+    if (conservative && config.conservative.shaft_budget > 0) provers.emplace(ctx, shrunk);
     // A conservative box tests only what its parent lists (docs/ALGORITHMS.md#octree-parent-bound); the
     // sampled mode's rows prove nothing, so it samples every box afresh.
     const RegionPvsOracle oracle = [&](const std::vector<Aabb>& boxes, const std::vector<uint64_t>& streams,
                                        const std::vector<const uint64_t*>& bounds, PvsSet& rows) {
         if (conservative) {
             conservative_box_rows(ctx, config.conservative, world, boxes, masks.eyes, shrunk, scene, rows,
-                                  figures.conservative, hiders ? &*hiders : nullptr, &bounds);
+                                  figures.conservative, hiders ? &*hiders : nullptr, &bounds,
+                                  provers ? &*provers : nullptr);
             return;
         }
         sample_box_rows(config.sampled, world, scene, masks, boxes, streams, sampled.rays_per_eye, rows,

@@ -703,15 +703,16 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
                            const std::vector<Aabb>& boxes, const VoxelMask& eyes,
                            const ShrunkOccluders& occluders, const RayScene& scene, PvsSet& pvs,
                            ConservativeFigures& figures, const RegionHiders* hiders,
-                           const std::vector<const uint64_t*>* bounds) {
+                           const std::vector<const uint64_t*>* bounds, const ShaftProvers* provers) {
     const auto start = std::chrono::steady_clock::now();
     const Shared shared = make_shared(config, world, occluders, scene);
     const std::vector<uint32_t> leavable = leavable_objects(world);
     std::optional<RegionHiders> own_hiders;
     if (config.single_occluder_pass && !hiders) hiders = &own_hiders.emplace(ctx, occluders);
     if (!config.single_occluder_pass) hiders = nullptr;
-    std::optional<ShaftProvers> provers;
-    if (config.shaft_budget > 0) provers.emplace(ctx, occluders);
+    std::optional<ShaftProvers> own_provers;
+    if (config.shaft_budget > 0 && !provers) provers = &own_provers.emplace(ctx, occluders);
+    if (config.shaft_budget <= 0) provers = nullptr;
     Counts total;
     ShaftFigures shaft;
     uint64_t region_hidden = 0, skipped = 0;

@@ -70,11 +70,13 @@ struct ConservativeFigures {
 // With `bounds` (one per box, null for none): bounds[i] is this function's row for a box that holds box i
 // (an octree node's parent). Its eye region holds box i's, so what that row leaves out is hidden from every
 // eye of box i too: it is left out without a test (docs/ALGORITHMS.md#octree-parent-bound).
+// `hiders` and `provers` (of these occluders), when given, are used instead of building them per call.
 void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const World& world,
                            const std::vector<Aabb>& boxes, const VoxelMask& eyes,
                            const ShrunkOccluders& occluders, const RayScene& scene, PvsSet& rows,
                            ConservativeFigures& figures, const RegionHiders* hiders = nullptr,
-                           const std::vector<const uint64_t*>* bounds = nullptr);
+                           const std::vector<const uint64_t*>* bounds = nullptr,
+                           const ShaftProvers* provers = nullptr);
 
 // The conservative PVS of every cell. On a grid each face shared by two cells is computed once.
 PvsSet bake_conservative_pvs(Context& ctx, const ConservativeConfig& config, const World& world,

@@ -14,14 +14,6 @@ namespace pvs {
 
 namespace {
 
-std::array<glm::dvec3, 8> corners(const Aabb& b) {
-    std::array<glm::dvec3, 8> c;
-    for (int i = 0; i < 8; ++i)
-        c[size_t(i)] =
-            glm::dvec3(i & 1 ? b.max.x : b.min.x, i & 2 ? b.max.y : b.min.y, i & 4 ? b.max.z : b.min.z);
-    return c;
-}
-
 // Does the segment q -> x meet the closed box [lo, hi]? (Slabs, in double.)
 bool segment_meets(const glm::dvec3& q, const glm::dvec3& x, const glm::dvec3& lo, const glm::dvec3& hi) {
     double t0 = 0.0, t1 = 1.0;
@@ -41,6 +33,14 @@ bool segment_meets(const glm::dvec3& q, const glm::dvec3& x, const glm::dvec3& l
 }
 
 }  // namespace
+
+std::array<glm::dvec3, 8> box_corners(const Aabb& b, double grow) {
+    const glm::dvec3 lo = glm::dvec3(b.min) - grow, hi = glm::dvec3(b.max) + grow;
+    std::array<glm::dvec3, 8> c;
+    for (int i = 0; i < 8; ++i)
+        c[size_t(i)] = glm::dvec3(i & 1 ? hi.x : lo.x, i & 2 ? hi.y : lo.y, i & 4 ? hi.z : lo.z);
+    return c;
+}
 
 World box_world(const std::vector<Aabb>& boxes, const std::vector<Aabb>& flat, bool opaque,
                 const std::vector<SlantedPanel>& slanted) {
@@ -109,7 +109,7 @@ bool panel_hides(const Aabb& region, const Aabb& object, const Aabb& panel, int 
     const double u0 = double(panel.min[u]) + tol, u1 = double(panel.max[u]) - tol;
     const double v0 = double(panel.min[v]) + tol, v1 = double(panel.max[v]) - tol;
     if (!(u0 <= u1 && v0 <= v1)) return false;
-    const std::array<glm::dvec3, 8> rc = corners(region), oc = corners(object);
+    const std::array<glm::dvec3, 8> rc = box_corners(region), oc = box_corners(object);
     for (const glm::dvec3& q : rc)
         for (const glm::dvec3& x : oc) {
             const double t = (c - q[a]) / (x[a] - q[a]);  // in (0, 1): q and x are on opposite sides
@@ -122,7 +122,7 @@ bool panel_hides(const Aabb& region, const Aabb& object, const Aabb& panel, int 
 bool box_hides(const Aabb& region, const Aabb& object, const Aabb& box) {
     const glm::dvec3 lo = glm::dvec3(box.min) + kHideToleranceM, hi = glm::dvec3(box.max) - kHideToleranceM;
     if (!(lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z)) return false;
-    const std::array<glm::dvec3, 8> rc = corners(region), oc = corners(object);
+    const std::array<glm::dvec3, 8> rc = box_corners(region), oc = box_corners(object);
     for (const glm::dvec3& q : rc)
         for (const glm::dvec3& x : oc)
             if (!segment_meets(q, x, lo, hi)) return false;
@@ -134,7 +134,7 @@ bool slanted_hides(const Aabb& region, const Aabb& object, const SlantedPanel& p
     if (n < 3) return false;
     const glm::dvec3 normal = panel.normal;
     const double tol = kHideToleranceM;
-    const std::array<glm::dvec3, 8> rc = corners(region), oc = corners(object);
+    const std::array<glm::dvec3, 8> rc = box_corners(region), oc = box_corners(object);
     auto support = [&](const std::array<glm::dvec3, 8>& c) {
         double lo = INFINITY, hi = -INFINITY;
         for (const glm::dvec3& p : c) {

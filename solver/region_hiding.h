@@ -22,12 +22,17 @@
 #include "core/world.h"
 #include "rays/ray_scene.h"
 
+#include <array>
 #include <memory>
 #include <vector>
 
 namespace pvs {
 
 constexpr double kHideToleranceM = 1e-4;
+
+// The 8 corners of the box grown by `grow` on every side, in double (corner i takes max on x for bit 1, on
+// y for bit 2, on z for bit 4).
+std::array<glm::dvec3, 8> box_corners(const Aabb& b, double grow = 0.0);
 
 // Box meshes (a flat panel is a box of zero thickness) as a world to trace rays against: one object per
 // box, `boxes` first, then `flat`, then each slanted panel as a fan of its corners; every triangle opaque,

@@ -31,21 +31,12 @@ constexpr int kProbeLines = 32;
 constexpr double kNarrowStrip = 0.5;
 constexpr double kAcrossStripWeight = 4.0;
 
-// The corners of the box grown by `grow` on every side, in double.
-std::array<glm::dvec3, 8> box_corners(const Aabb& b, double grow) {
-    const glm::dvec3 lo = glm::dvec3(b.min) - grow, hi = glm::dvec3(b.max) + grow;
-    std::array<glm::dvec3, 8> c;
-    for (int i = 0; i < 8; ++i)
-        c[size_t(i)] = glm::dvec3(i & 1 ? hi.x : lo.x, i & 2 ? hi.y : lo.y, i & 4 ? hi.z : lo.z);
-    return c;
-}
-
 double cross(const glm::dvec2& o, const glm::dvec2& a, const glm::dvec2& b) {
     return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x);
 }
 
-// The convex hull of the n points `pts` (sorted in place; Andrew's monotone chain) into `out`,
-// counter-clockwise, without collinear corners. `out` has room for 2n points.
+// The convex hull of the n <= 64 points `pts` (sorted in place; Andrew's monotone chain) into `out`,
+// counter-clockwise, without collinear corners; fewer than 3 corners when it has no area.
 void convex_hull(glm::dvec2* pts, size_t n, Poly& out) {
     std::sort(pts, pts + n,
               [](const glm::dvec2& a, const glm::dvec2& b) { return a.x != b.x ? a.x < b.x : a.y < b.y; });
@@ -360,6 +351,8 @@ bool ShaftProver::plane_covers(const Aabb& region, const Aabb& target, int axis,
     }
     if (ps.pieces.empty()) ps.pieces.resize(1);
     convex_hull(pts.data(), n_pts, ps.pieces[0]);
+    // Pieces without area are dropped as covered below (6.11.1): that needs a crossing with area.
+    if (ps.pieces[0].size() < 3) return false;
     size_t n_pieces = 1;
     // Less the panels of the plane.
     if (has_panels) {
