@@ -276,9 +276,9 @@ RepeatedBake repeated_bake(const pvs::BakeConfig& config, const pvs::World& worl
         TimedBake b = timed_bake(config, world);
         std::fprintf(stderr, "bench_conservative: %s: %zu cells, bake %.2f s (conservative %.2f s)\n",
                      label.c_str(), b.bake.cells.size(), b.seconds,
-                     figure(b.bake.figures, "conservative_seconds"));
+                     figure(b.bake.run.figures, "conservative_seconds"));
         wall.push_back(b.seconds);
-        conservative.push_back(figure(b.bake.figures, "conservative_seconds"));
+        conservative.push_back(figure(b.bake.run.figures, "conservative_seconds"));
         std::map<std::string, double> sums;
         for (const auto& [stage, s] : b.timings) {
             if (!per_stage.count(stage) && !sums.count(stage)) order.push_back(stage);

@@ -445,6 +445,13 @@ void validate(const BakeConfig& config);
 // The resolved options as (key, value) text pairs, in declaration order, mode first.
 std::vector<std::pair<std::string, std::string>> resolved_parameters(const BakeConfig& config);
 
+// Options under "run." (threads ...) decide how a bake runs, never what it writes outside the run's own
+// record: the bake file keeps them apart (/run/parameters), and a checkpoint or a reused bake need not
+// match them.
+inline bool is_run_parameter(const std::string& key) {
+    return key.rfind("run.", 0) == 0;
+}
+
 // The inverse: the config a bake was made with, from its stored parameters (keys not given keep their
 // defaults). Throws pvs::Error (bad input) naming a key whose value does not parse.
 BakeConfig config_from_parameters(const std::vector<std::pair<std::string, std::string>>& parameters);

@@ -48,9 +48,16 @@ double gap_tolerance_of(const BakeData& bake) {
     return config_from_parameters(bake.parameters).gap.tolerance_m;
 }
 
-void store_verification(const VerifyResult& result, VerificationRecord& record) {
+void store_verification(const VerifyResult& result, BakeData& bake) {
+    VerificationRecord& record = bake.verification;
     record.ran = true;
     record.figures = result.figures();
+    // The run's timing of the verification replaces an earlier one (`pvsbake verify` writing back).
+    const NamedValues timing = result.run_figures();
+    std::erase_if(bake.run.figures, [&](const auto& f) {
+        return std::any_of(timing.begin(), timing.end(), [&](const auto& t) { return t.first == f.first; });
+    });
+    bake.run.figures.insert(bake.run.figures.end(), timing.begin(), timing.end());
     record.cell_sampled_visible = result.cell_sampled_visible;
     record.misses = result.misses;
 }
@@ -89,7 +96,8 @@ BakeData bake_header(const BakeConfig& config, const World& world, const std::st
     bake.world_hash = world_hash;
     bake.mode = to_string(config.mode);
     bake.conservative = config.mode == BakeMode::kConservative;
-    bake.parameters = resolved_parameters(config);
+    for (auto& p : resolved_parameters(config))
+        (is_run_parameter(p.first) ? bake.run.parameters : bake.parameters).push_back(std::move(p));
     bake.objects = object_records(world);
     return bake;
 }
@@ -198,6 +206,7 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
     figures.shrunk_boxes = shrunk.boxes.empty() ? 0 : shrunk.boxes[0].size();
     figures.epsilon_levels = shrunk.epsilon_m.size();
     bake.figures = bake_figures(config, world, view, bake, figures);
+    bake.run.figures = run_figures(bake, figures);
 
     // 7. Verification by rays (docs/ALGORITHMS.md#verification).
     if (config.verify.enabled) {
@@ -209,7 +218,7 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
         verify.gap_tolerance_m = config.gap.tolerance_m;
         const VerifyResult result = verify_pvs(ctx, verify, world, scene, bake.cells, bake.pvs);
         log_verify_summary(ctx, result, world);
-        store_verification(result, bake.verification);
+        store_verification(result, bake);
     }
     return bake;
 }

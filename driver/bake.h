@@ -46,8 +46,9 @@ ViewVolumeConfig view_volume_config(const BakeConfig& config);
 // it was recorded). Throws pvs::Error (bad input) when the stored parameters do not parse.
 double gap_tolerance_of(const BakeData& bake);
 
-// Copies a verification's figures, per-cell sampled counts and misses into the bake's record.
-void store_verification(const VerifyResult& result, VerificationRecord& record);
+// Copies a verification's figures, per-cell sampled counts and misses into the bake's record, and its
+// timing into the bake's run record.
+void store_verification(const VerifyResult& result, BakeData& bake);
 
 // Checks that a bake was made from this world (same objects, in the same order). Throws pvs::Error
 // (bad input) naming the first difference. A different content hash only warns.

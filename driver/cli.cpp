@@ -268,8 +268,8 @@ int run_bake(Context& ctx, const BakeConfig& config, const std::string& world_pa
     const World world = load_world(ctx, world_path);
     const std::string hash = hash_file_hex(world_path);
     BakeData bake = bake_world(ctx, config, world, world_path, hash);
-    bake.timings_s = ctx.timings();
-    bake.figures.emplace_back("peak_memory_mb", peak_memory_mb());
+    bake.run.timings_s = ctx.timings();
+    bake.run.figures.emplace_back("peak_memory_mb", peak_memory_mb());
     {
         ScopedTimer t(ctx, "write");
         write_bake_file(out_path, bake);
@@ -307,7 +307,7 @@ int run_verify(Context& ctx, BakeConfig config, const std::string& world_path, c
     RayScene scene(ctx, world, BuildQuality::kMedium, config.run.threads);
     const VerifyResult result = verify_pvs(ctx, config.verify, world, scene, bake.cells, bake.pvs);
     log_verify_summary(ctx, result, world);
-    store_verification(result, bake.verification);
+    store_verification(result, bake);
     if (write_back) write_bake_file(bake_path, bake);
     write_report(report_path, bake, ctx);
     return result.wide_missed_pairs > 0 ? kExitMisses : kExitOk;
@@ -377,8 +377,6 @@ int run_info(const std::string& bake_path, bool json, std::ostream& out) {
     for (const auto& [k, v] : bake.parameters) out << fmt::format("  {:<32} {}\n", k, v);
     out << "figures\n";
     for (const auto& [k, v] : bake.figures) out << fmt::format("  {:<32} {:g}\n", k, v);
-    out << "timings (s)\n";
-    for (const auto& [k, v] : bake.timings_s) out << fmt::format("  {:<32} {:.3f}\n", k, v);
     if (bake.verification.ran) {
         out << "verification\n";
         for (const auto& [k, v] : bake.verification.figures) out << fmt::format("  {:<32} {:g}\n", k, v);
@@ -403,6 +401,11 @@ int run_info(const std::string& bake_path, bool json, std::ostream& out) {
     } else {
         out << "verification: not run (pvsbake verify WORLD BAKE.h5)\n";
     }
+    out << "run (what differs between runs of the same bake)\n";
+    for (const auto& [k, v] : bake.run.parameters) out << fmt::format("  {:<32} {}\n", k, v);
+    for (const auto& [k, v] : bake.run.figures) out << fmt::format("  {:<32} {:g}\n", k, v);
+    out << "run timings (s)\n";
+    for (const auto& [k, v] : bake.run.timings_s) out << fmt::format("  {:<32} {:.3f}\n", k, v);
     return kExitOk;
 }
 

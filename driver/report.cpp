@@ -36,8 +36,6 @@ NamedValues bake_figures(const BakeConfig& config, const World& world, const Vie
         {"cell_size_mean_m", edge_mean},
         {"cell_size_max_m", edge_max},
         {"octree_splits_by_visibility", double(stages.octree.splits)},
-        {"octree_merged_back", double(stages.octree.merged)},
-        {"octree_boxes_evaluated", double(stages.octree.evaluated)},
         {"octree_depth", double(stages.octree.depth)},
         {"view_volume_m3", view.view_volume_m3},
         {"view_eye_space_m3", view.eye_volume_m3},
@@ -63,55 +61,63 @@ NamedValues bake_figures(const BakeConfig& config, const World& world, const Vie
         {"occluder_seal_leaks", double(stages.occluders.seal_leaks)},
         {"occluder_seal_narrow", double(stages.occluders.seal_narrow)},
         {"occluder_seal_removed_voxels", double(stages.occluders.seal_removed_voxels)},
-        {"occluder_seconds", stages.occluders.seconds},
         {"occluder_blocks", double(stages.blocks.blocks)},
         {"occluder_blocks_with_own_occluders", double(stages.blocks.blocks_used)},
         {"occluder_block_solid_m3", stages.blocks.solid_m3},
         {"occluder_block_global_solid_m3", stages.blocks.global_solid_m3},
         {"occluder_block_rays", double(stages.blocks.rays)},
-        {"occluder_block_seconds", stages.blocks.seconds},
         {"ranked_occluders_per_cell_mean",
          bake.cells.size() ? double(stages.ranking.ranked) / double(bake.cells.size()) : 0.0},
         {"ranked_occluders_cells_with_none", double(stages.ranking.cells_with_none)},
         {"ranked_occluder_score_mean", stages.ranking.score_mean},
         {"ranked_occluder_solid_angle_mean_sr", stages.ranking.solid_angle_mean_sr},
         {"ranked_occluder_hidden_triangle_share_mean", stages.ranking.hidden_triangle_share_mean},
-        {"ranking_seconds", stages.ranking.seconds},
         {"conservative_shrunk_occluders", double(stages.shrunk_boxes)},
         {"conservative_epsilon_levels", double(stages.epsilon_levels)},
-        {"conservative_samples", double(stages.conservative.samples)},
-        {"conservative_samples_in_occluders", double(stages.conservative.samples_skipped)},
-        {"conservative_patches_in_solid", double(stages.conservative.patches_in_solid)},
-        {"conservative_object_tests", double(stages.conservative.object_tests)},
-        {"conservative_fine_samples", double(stages.conservative.fine_samples)},
-        {"conservative_panel_splits", double(stages.conservative.panel_splits)},
-        {"conservative_known_listed", double(stages.conservative.known_listed)},
-        {"conservative_region_hidden", double(stages.conservative.region_hidden)},
-        {"conservative_parent_hidden", double(stages.conservative.parent_hidden)},
-        {"conservative_region_seconds", stages.conservative.region_seconds},
-        {"conservative_patch_hidden", double(stages.conservative.patch_hidden)},
-        {"conservative_shaft_pairs", double(stages.conservative.shaft.pairs)},
-        {"conservative_shaft_hidden", double(stages.conservative.shaft.hidden)},
-        {"conservative_shaft_tests", double(stages.conservative.shaft.tests)},
-        {"conservative_shaft_given_up", double(stages.conservative.shaft.certain)},
-        {"conservative_shaft_out_of_budget", double(stages.conservative.shaft.out_of_budget)},
-        {"conservative_shaft_seconds", stages.conservative.shaft.seconds},
-        {"conservative_seconds", stages.conservative.seconds},
-        {"cells_per_second",
-         stages.conservative.seconds > 0
-             ? double(bake.cells.size()) / stages.conservative.seconds
-             : (stages.sampled.seconds > 0 ? double(bake.cells.size()) / stages.sampled.seconds : 0.0)},
         {"pvs_objects_mean", double(listed) / n_cells},
         {"pvs_objects_max", double(listed_max)},
         {"pvs_share_of_objects_mean",
          double(listed) / n_cells / std::max<double>(1.0, double(world.objects.size()))},
-        {"sampled_rays", double(stages.sampled.rays)},
         {"sampled_rays_per_eye", double(stages.sampled.rays_per_eye)},
         {"sampled_eyes_per_cell", double(config.sampled.rays.eyes_per_cell)},
+        {"degenerate_triangles_dropped", double(world.stats.degenerate_triangles_dropped)},
+    };
+}
+
+NamedValues run_figures(const BakeData& bake, const StageFigures& stages) {
+    const ConservativeFigures& cons = stages.conservative;
+    return {
+        {"octree_boxes_evaluated", double(stages.octree.evaluated)},
+        {"octree_merged_back", double(stages.octree.merged)},
+        {"occluder_seconds", stages.occluders.seconds},
+        {"occluder_block_seconds", stages.blocks.seconds},
+        {"ranking_seconds", stages.ranking.seconds},
+        {"conservative_samples", double(cons.samples)},
+        {"conservative_samples_in_occluders", double(cons.samples_skipped)},
+        {"conservative_patches_in_solid", double(cons.patches_in_solid)},
+        {"conservative_object_tests", double(cons.object_tests)},
+        {"conservative_fine_samples", double(cons.fine_samples)},
+        {"conservative_panel_splits", double(cons.panel_splits)},
+        {"conservative_known_listed", double(cons.known_listed)},
+        {"conservative_region_hidden", double(cons.region_hidden)},
+        {"conservative_parent_hidden", double(cons.parent_hidden)},
+        {"conservative_region_seconds", cons.region_seconds},
+        {"conservative_patch_hidden", double(cons.patch_hidden)},
+        {"conservative_shaft_pairs", double(cons.shaft.pairs)},
+        {"conservative_shaft_hidden", double(cons.shaft.hidden)},
+        {"conservative_shaft_tests", double(cons.shaft.tests)},
+        {"conservative_shaft_given_up", double(cons.shaft.certain)},
+        {"conservative_shaft_out_of_budget", double(cons.shaft.out_of_budget)},
+        {"conservative_shaft_seconds", cons.shaft.seconds},
+        {"conservative_seconds", cons.seconds},
+        {"cells_per_second",
+         cons.seconds > 0
+             ? double(bake.cells.size()) / cons.seconds
+             : (stages.sampled.seconds > 0 ? double(bake.cells.size()) / stages.sampled.seconds : 0.0)},
+        {"sampled_rays", double(stages.sampled.rays)},
         {"sampled_rays_per_second",
          stages.sampled.seconds > 0 ? double(stages.sampled.rays) / stages.sampled.seconds : 0.0},
         {"sampled_guard_band_added", double(stages.sampled.guard_band_added)},
-        {"degenerate_triangles_dropped", double(world.stats.degenerate_triangles_dropped)},
     };
 }
 
@@ -148,7 +154,6 @@ std::string bake_report_json(const BakeData& bake, const std::vector<std::string
     nlohmann::ordered_json params = nlohmann::ordered_json::object();
     for (const auto& [k, v] : bake.parameters) params[k] = v;
     j["parameters"] = params;
-    j["timings_s"] = values_json(bake.timings_s);
     j["figures"] = values_json(bake.figures);
     nlohmann::ordered_json ranked;
     ranked["stored"] = !bake.ranked.empty();
@@ -182,6 +187,13 @@ std::string bake_report_json(const BakeData& bake, const std::vector<std::string
         ver["misses"] = misses;
     }
     j["verification"] = ver;
+    nlohmann::ordered_json run;
+    nlohmann::ordered_json run_params = nlohmann::ordered_json::object();
+    for (const auto& [k, v] : bake.run.parameters) run_params[k] = v;
+    run["parameters"] = run_params;
+    run["figures"] = values_json(bake.run.figures);
+    run["timings_s"] = values_json(bake.run.timings_s);
+    j["run"] = run;
     j["warnings"] = warnings;
     return j.dump(2) + "\n";
 }

@@ -2,8 +2,9 @@
 // the JSON report of a bake (and of `pvsbake info --json`).
 //
 // Keys: tool, version, world, world_hash, mode, pvs_kind ("conservative" or "aggressive"), objects,
-// triangles, cells, parameters{}, timings_s{}, figures{}, verification{ran, figures..., misses[]},
-// warnings[]. Numbers are plain JSON numbers; misses carry the object's name.
+// triangles, cells, parameters{}, figures{}, verification{ran, figures..., misses[]},
+// run{parameters{}, figures{}, timings_s{}}, warnings[]. Numbers are plain JSON numbers; misses carry the
+// object's name.
 #pragma once
 
 #include "cells/octree.h"
@@ -41,10 +42,15 @@ struct StageFigures {
     RankingFigures ranking;
 };
 
-// The figures of a bake, as stored in /figures and the report's figures{}: named numbers, in a fixed
-// order (docs/FORMAT.md lists them).
+// The figures of a bake's result, as stored in /figures and the report's figures{}: named numbers in a
+// fixed order, functions of the world and the parameters alone.
 NamedValues bake_figures(const BakeConfig& config, const World& world, const ViewVolume& view,
                          const BakeData& bake, const StageFigures& stages);
+
+// The figures of the work one run did (/run/figures, the report's run{figures{}}): seconds, rates and
+// counts of tests and samples, which depend on the schedule and, in a resumed run, cover only what it
+// computed itself.
+NamedValues run_figures(const BakeData& bake, const StageFigures& stages);
 
 std::string bake_report_json(const BakeData& bake, const std::vector<std::string>& warnings);
 

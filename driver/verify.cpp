@@ -498,12 +498,18 @@ private:
 
 }  // namespace
 
+NamedValues VerifyResult::run_figures() const {
+    return {
+        {"verify_seconds", seconds},
+        {"verify_rays_per_second", seconds > 0 ? double(rays) / seconds : 0.0},
+        {"verify_width_seconds", width_seconds},
+    };
+}
+
 NamedValues VerifyResult::figures() const {
     return {
         {"rays", double(rays)},
         {"rays_per_eye", double(rays_per_eye)},
-        {"seconds", seconds},
-        {"rays_per_second", seconds > 0 ? double(rays) / seconds : 0.0},
         {"missed_pairs", double(missed_pairs)},
         {"missed_rays", double(missed_rays)},
         {"cells_with_misses", double(cells_with_misses)},
@@ -528,7 +534,6 @@ NamedValues VerifyResult::figures() const {
         {"wide_missed_pairs", double(wide_missed_pairs)},
         {"narrow_missed_pairs", double(narrow_missed_pairs)},
         {"narrow_width_max_m", double(narrow_width_max_m)},
-        {"width_seconds", width_seconds},
         {"overestimation_mean", overestimation_mean},
         {"overestimation_median", overestimation_median},
         {"overestimation_max", overestimation_max},

@@ -99,7 +99,11 @@ struct VerifyResult {
     double sampled_triangle_share_mean = 0;  // share of the world's triangles the rays saw
     uint32_t cells_with_empty_sample = 0;
 
+    // What the rays found (/verification/figures): a function of the bake and the verification's options.
     NamedValues figures() const;
+    // How long it took (the run's own record, /run/figures): verify_seconds, verify_rays_per_second,
+    // verify_width_seconds.
+    NamedValues run_figures() const;
 };
 
 VerifyResult verify_pvs(Context& ctx, const VerifyConfig& config, const World& world, const RayScene& scene,

@@ -5,6 +5,7 @@
 // file turns its sections into a BakeData and its failures into a pvs::Error naming the file.
 #include "io/bake_file.h"
 
+#include "core/config.h"
 #include "core/error.h"
 #include "io/atomic_file.h"
 #include "io/loader/bake_reader.h"
@@ -374,8 +375,14 @@ void check_writable(const std::string& path, const BakeData& bake) {
     }
     for (size_t i = 0; i < bake.figures.size(); ++i)
         check_text(bake.figures[i].first, fmt::format("figure {}", i));
-    for (size_t i = 0; i < bake.timings_s.size(); ++i) {
-        check_text(bake.timings_s[i].first, fmt::format("timing {}", i));
+    for (size_t i = 0; i < bake.run.parameters.size(); ++i) {
+        check_text(bake.run.parameters[i].first + bake.run.parameters[i].second,
+                   fmt::format("run parameter {}", i));
+    }
+    for (size_t i = 0; i < bake.run.figures.size(); ++i)
+        check_text(bake.run.figures[i].first, fmt::format("run figure {}", i));
+    for (size_t i = 0; i < bake.run.timings_s.size(); ++i) {
+        check_text(bake.run.timings_s[i].first, fmt::format("timing {}", i));
     }
     for (size_t i = 0; i < v.figures.size(); ++i) {
         check_text(v.figures[i].first, fmt::format("verification figure {}", i));
@@ -409,17 +416,48 @@ void write_root(Writer& w, hid_t root, const BakeData& bake) {
     w.string_attr(root, "pvs_kind", bake.conservative ? kConservativeNote : kAggressiveNote);
 }
 
-void write_parameters(Writer& w, hid_t root, const NamedStrings& parameters) {
-    Handle g = w.group(root, "/", "parameters");
+// A group `name` in `loc` (at `where`) of keys and values: /parameters and /run/parameters.
+void write_string_pairs(Writer& w, hid_t loc, const std::string& where, const std::string& name,
+                        const NamedStrings& pairs) {
+    Handle g = w.group(loc, where, name);
+    const std::string full = at(where, name);
     std::vector<std::string> keys, values;
     std::unordered_set<std::string> seen;
-    for (const auto& [k, v] : parameters) {
+    for (const auto& [k, v] : pairs) {
         keys.push_back(k);
         values.push_back(v);
         if (!k.empty() && seen.insert(k).second) w.string_attr(g.get(), k, v);
     }
-    w.string_dataset(g.get(), "/parameters", "keys", keys);
-    w.string_dataset(g.get(), "/parameters", "values", values);
+    w.string_dataset(g.get(), full, "keys", keys);
+    w.string_dataset(g.get(), full, "values", values);
+}
+
+// /run: the run's own record (RunRecord). The root keeps an empty /timings, which readers of 1.4 and
+// older require.
+void write_run(Writer& w, hid_t root, const RunRecord& run) {
+    Handle g = w.group(root, "/", "run");
+    write_string_pairs(w, g.get(), "/run", "parameters", run.parameters);
+    w.named_values(g.get(), "/run", "figures", run.figures, nullptr);
+    w.named_values(g.get(), "/run", "timings", run.timings_s, "s");
+    w.named_values(root, "/", "timings", {}, "s");
+}
+
+// The run's record of a file: /run, or for a file older than 1.5 its /timings and the run.* parameters,
+// which move out of bake.parameters.
+void read_run(const Reader& r, hid_t root, BakeData& bake) {
+    RunRecord& run = bake.run;
+    if (r.has_link(root, "run")) {
+        Handle g = r.open_group(root, "/run");
+        run.parameters = pvsbake::detail::read_string_pairs(r, g.get(), "/run/parameters");
+        run.figures = r.named_values(g.get(), "/run/figures");
+        run.timings_s = r.named_values(g.get(), "/run/timings");
+        return;
+    }
+    run.timings_s = r.named_values(root, "/timings");
+    NamedStrings kept;
+    for (auto& p : bake.parameters)
+        (is_run_parameter(p.first) ? run.parameters : kept).push_back(std::move(p));
+    bake.parameters = std::move(kept);
 }
 
 void write_objects(Writer& w, hid_t root, const std::vector<ObjectRecord>& objects) {
@@ -883,15 +921,15 @@ void write_bake_file(const std::string& path, const BakeData& bake) {
             Writer w(site);
             Handle root = site.handle(H5Gopen2(file.get(), "/", H5P_DEFAULT), H5Gclose, "cannot open /");
             write_root(w, root.get(), bake);
-            write_parameters(w, root.get(), bake.parameters);
+            write_string_pairs(w, root.get(), "/", "parameters", bake.parameters);
             write_objects(w, root.get(), bake.objects);
             write_cells(w, root.get(), bake.cells);
             write_pvs(w, root.get(), bake);
             write_leak_path(w, root.get(), bake.leak_path);
             write_occluders(w, root.get(), bake.occluders, bake.ranked);
             w.named_values(root.get(), "/", "figures", bake.figures, nullptr);
-            w.named_values(root.get(), "/", "timings", bake.timings_s, "s");
             write_verification(w, root.get(), bake.verification);
+            write_run(w, root.get(), bake.run);
         }
         site.check(file.close(), "cannot finish writing " + out.temp_path());
     }
@@ -919,8 +957,8 @@ BakeData read_bake_file(const std::string& path) {
             read_leak_path(r, root.get(), bake);
             read_occluders(r, root.get(), bake);
             bake.figures = r.named_values(root.get(), "/figures");
-            bake.timings_s = r.named_values(root.get(), "/timings");
             read_verification(r, root.get(), bake);
+            read_run(r, root.get(), bake);
         } catch (const std::bad_alloc&) {
             r.fail("a dataset is too large to load (damaged file?)");
         } catch (const std::length_error&) {

@@ -1,4 +1,4 @@
-// pvsbake io: the bake file (HDF5), format version 1.2. docs/FORMAT.md documents every group, dataset and
+// pvsbake io: the bake file (HDF5), format version 1.5. docs/FORMAT.md documents every group, dataset and
 // attribute; this header is the in-memory form.
 //
 // Conventions: glTF axes (right-handed, +Y up), metres. Grid index order x fastest (core/cell_set.h).
@@ -22,9 +22,9 @@
 namespace pvs {
 
 constexpr int kBakeFormatMajor = 1;
-constexpr int kBakeFormatMinor = 4;  // 1.1 added the PVS code (/pvs/code), 1.2 ranked occluders per cell,
+constexpr int kBakeFormatMinor = 5;  // 1.1 added the PVS code (/pvs/code), 1.2 ranked occluders per cell,
                                      // 1.3 the opening width of each verification miss, 1.4 the voxel
-                                     // masks as bricks
+                                     // masks as bricks, 1.5 the run's own record (/run)
 
 struct ObjectRecord {
     std::string name;
@@ -62,6 +62,16 @@ struct VerificationRecord {
 using NamedValues = std::vector<std::pair<std::string, double>>;
 using NamedStrings = std::vector<std::pair<std::string, std::string>>;
 
+// What differs between two runs of one bake (same world, same parameters): the options that cannot change
+// a row (threads ...), seconds, memory, and the counts of work done in this run, which depend on the
+// schedule and on what a resumed run took from its checkpoint. Everything else in the file is a function
+// of the world and the parameters alone (docs/FORMAT.md, "/run").
+struct RunRecord {
+    NamedStrings parameters;  // the run.* options (core/config.h is_run_parameter)
+    NamedValues figures;      // work done in this run: seconds, rates, memory, tests, samples
+    NamedValues timings_s;    // seconds per stage
+};
+
 struct BakeData {
     int format_major = kBakeFormatMajor;
     int format_minor = kBakeFormatMinor;
@@ -70,16 +80,17 @@ struct BakeData {
     std::string world_hash;     // content hash of the world file (hex)
     std::string mode;           // "sampled" or "conservative"
     bool conservative = false;  // false = aggressive: may miss visible objects
-    NamedStrings parameters;    // every resolved option (core/config.h resolved_parameters)
+    NamedStrings parameters;    // every resolved option that can change a row (core/config.h
+                                // resolved_parameters); the others are in run.parameters
     std::vector<ObjectRecord> objects;
     CellSet cells;
     PvsSet pvs;                        // cells.size() rows of objects.size() bits
-    NamedValues figures;               // counts and figures of the bake
-    NamedValues timings_s;             // seconds per stage
+    NamedValues figures;               // counts and figures of the result (the run's own: run.figures)
     std::vector<glm::vec3> leak_path;  // view volume flood: seed to outside, when the level leaks
     std::vector<Occluder> occluders;   // synthesized boxes (only proven ones may occlude)
     RankedOccluders ranked;            // per cell, indices into `occluders` (empty: none, or a file < 1.2)
     VerificationRecord verification;
+    RunRecord run;
 };
 
 void write_bake_file(const std::string& path, const BakeData& bake);

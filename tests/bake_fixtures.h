@@ -116,7 +116,7 @@ inline BakeData coherent_bake(uint32_t objects, glm::ivec3 dims, bool octree, bo
         b.ranked.offsets.push_back(uint32_t(b.ranked.entries.size()));
     }
     b.figures = {{"cells", double(n_cells)}, {"objects", double(objects)}, {"", 0.5}, {"cells", 7.0}};
-    b.timings_s = {{"solve", 1.25}};
+    b.run.timings_s = {{"solve", 1.25}};
     b.verification.ran = true;
     b.verification.figures = {{"rays", 4096.0}, {"misses", 0.0}};
     return b;

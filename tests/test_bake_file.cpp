@@ -105,7 +105,9 @@ BakeData make_bake(uint32_t objects, glm::ivec3 dims, int drop_every, uint32_t d
                  {"mean_visible", 0.3125},
                  {"huge", 1e300},
                  {"tiny", -4.9e-324}};
-    b.timings_s = {{"load", 0.25}, {"cells", 1.5}, {"solve", 12.75}, {"write", 0.0625}};
+    b.run.parameters = {{"run.threads", "2"}};
+    b.run.figures = {{"conservative_seconds", 11.5}, {"peak_memory_mb", 512.0}};
+    b.run.timings_s = {{"load", 0.25}, {"cells", 1.5}, {"solve", 12.75}, {"write", 0.0625}};
     VerificationRecord& v = b.verification;
     v.ran = true;
     v.figures = {{"rays", 1e6}, {"misses", 2.0}, {"overestimation", 1.75}};
@@ -130,7 +132,9 @@ BakeData make_example_bake() {
     b.conservative = false;
     b.parameters = {{"cells.cell_size_m", "2"}, {"bake.mode", "sampled"}};
     b.figures = {{"cells", 3.0}, {"mean_visible", 1.5}};
-    b.timings_s = {{"solve", 0.5}, {"write", 0.01}};
+    b.run.parameters = {{"run.threads", "0"}};
+    b.run.figures = {{"peak_memory_mb", 42.0}};
+    b.run.timings_s = {{"solve", 0.5}, {"write", 0.01}};
     b.verification.figures = {{"rays", 3000.0}, {"misses", 1.0}};
     b.verification.misses.resize(1);
     // Cells 0 and 2 see the same objects: two distinct rows for three cells.
@@ -195,7 +199,9 @@ void expect_same(const BakeData& a, const BakeData& b) {
     EXPECT_EQ(a.pvs.words_per_row, b.pvs.words_per_row);
     EXPECT_TRUE(a.pvs == b.pvs);
     expect_same_values(a.figures, b.figures);
-    expect_same_values(a.timings_s, b.timings_s);
+    EXPECT_EQ(a.run.parameters, b.run.parameters);
+    expect_same_values(a.run.figures, b.run.figures);
+    expect_same_values(a.run.timings_s, b.run.timings_s);
     EXPECT_EQ(a.verification.ran, b.verification.ran);
     expect_same_values(a.verification.figures, b.verification.figures);
     EXPECT_EQ(a.verification.cell_sampled_visible, b.verification.cell_sampled_visible);
@@ -374,7 +380,9 @@ TEST(BakeFile, RoundTripIsLosslessAndDedupesRows) {
     // One attribute per parameter and per figure, next to the ordered datasets.
     EXPECT_EQ(string_attr(path, "/parameters", "world"), "worlds/Stadt_Ü/town.glb");
     EXPECT_EQ(string_attr(path, "/parameters", "a key with spaces"), "");
-    EXPECT_EQ(double_attr(path, "/timings", "solve"), 12.75);
+    EXPECT_EQ(double_attr(path, "/run/timings", "solve"), 12.75);
+    EXPECT_EQ(string_attr(path, "/run/parameters", "run.threads"), "2");
+    EXPECT_EQ(double_attr(path, "/run/figures", "peak_memory_mb"), 512.0);
     EXPECT_EQ(double_attr(path, "/verification/figures", "overestimation"), 1.75);
 }
 
@@ -685,6 +693,28 @@ TEST(BakeFileBad, NewerMinorVersionIsRead) {
     write_bake_file(path, bake);
     patch_int_attr(path, "/", "format_minor", 7);
     EXPECT_EQ(read_bake_file(path).format_minor, 7);
+}
+
+// A file from before the run's record (format 1.4: no /run; run.threads among /parameters, seconds in
+// /timings) reads into the same form: its run.* parameters and its timings become the run record.
+TEST(BakeFile, AFileWithoutRunReadsItsRunRecordFromTheOldPlaces) {
+    test::TempDir dir;
+    const std::string path = dir.file("old.h5");
+    BakeData bake = make_bake(5, {2, 2, 2}, 0, 0, 1);
+    bake.parameters.emplace_back("run.threads", "3");
+    write_bake_file(path, bake);
+    {
+        H5File f(path, true);
+        ASSERT_GE(f.id(), 0);
+        ASSERT_GE(H5Ldelete(f.id(), "/run", H5P_DEFAULT), 0);
+    }
+    patch_int_attr(path, "/", "format_minor", 4);
+    const BakeData back = read_bake_file(path);
+    EXPECT_EQ(back.run.parameters, (NamedStrings{{"run.threads", "3"}}));
+    bake.parameters.pop_back();
+    EXPECT_EQ(back.parameters, bake.parameters);
+    EXPECT_TRUE(back.run.timings_s.empty());  // the empty /timings a 1.5 file keeps for older readers
+    EXPECT_TRUE(back.run.figures.empty());
 }
 
 TEST(BakeFileBad, CellRowOutOfRange) {

@@ -9,10 +9,13 @@
 #include <nlohmann/json.hpp>
 
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <sstream>
 #include <string>
 #include <vector>
+
+#include <sys/wait.h>
 
 namespace pvs {
 namespace {
@@ -47,7 +50,8 @@ bool contains(const std::string& hay, const std::string& needle) {
 
 // Big cells and small sampling so the whole bake of the sample world takes seconds.
 const std::vector<std::string> kFast = {
-    "--cell-size", "4", "--eyes", "4", "--rays", "256", "--verify-eyes", "4", "--verify-rays-per-eye", "256"};
+    "--cell-size",           "4",   "--eyes",        "4",     "--rays", "256", "--verify-eyes", "4",
+    "--verify-rays-per-eye", "256", "--verify-rays", "200000"};
 
 std::vector<std::string> with(std::vector<std::string> a, const std::vector<std::string>& b) {
     a.insert(a.end(), b.begin(), b.end());
@@ -66,7 +70,7 @@ TEST(Cli, BakeInfoQueryOnTheSampleWorld) {
     EXPECT_GT(j["cells"].get<int>(), 30);
     EXPECT_TRUE(j["conservative"].get<bool>()) << "the default mode is conservative";
     EXPECT_FALSE(contains(j["pvs_kind"].get<std::string>(), "aggressive"));
-    EXPECT_TRUE(j["timings_s"].contains("conservative_pvs"));
+    EXPECT_TRUE(j["run"]["timings_s"].contains("conservative_pvs"));
     EXPECT_EQ(j["verification"]["figures"]["missed_pairs"].get<double>(), 0.0);
     EXPECT_TRUE(j["verification"]["ran"].get<bool>());
     EXPECT_TRUE(j["verification"]["figures"].contains("overestimation_mean"));
@@ -107,7 +111,7 @@ TEST(Cli, TheSampledModeIsLabelledAggressive) {
     const auto j = nlohmann::json::parse(test::read_file(report));
     EXPECT_FALSE(j["conservative"].get<bool>());
     EXPECT_TRUE(contains(j["pvs_kind"].get<std::string>(), "aggressive"));
-    EXPECT_TRUE(j["timings_s"].contains("sampled_pvs"));
+    EXPECT_TRUE(j["run"]["timings_s"].contains("sampled_pvs"));
     const CliRun info = run({"info", out});
     ASSERT_EQ(info.status, 0) << info.log;
     EXPECT_TRUE(contains(info.out, "aggressive"));
@@ -215,6 +219,39 @@ TEST(Cli, UnwritableOutputFailsBeforeAnyStageAndLeavesNothing) {
     EXPECT_EQ(occ.status, 2);
     EXPECT_TRUE(contains(occ.log, "does not exist")) << occ.log;
     EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.path()), {}), 0);
+}
+
+// The comparison docs/FORMAT.md gives: two bakes of one world with the same parameters differ only in /run.
+int h5diff_outside_run(const std::string& a, const std::string& b, const std::string& log) {
+    const int status =
+        std::system(("h5diff --exclude-path /run '" + a + "' '" + b + "' > '" + log + "' 2>&1").c_str());
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+// Deterministic bakes (docs/FORMAT.md, "/run"): other thread counts give the same file but for the run's own
+// record, in every mode and partition; the run record does differ (the thread count is in it).
+TEST(Cli, OtherThreadCountsGiveTheSameFileOutsideRun) {
+    test::TempDir dir;
+    // The grid verified (its figures are compared too); the octree and the sampled mode without.
+    const std::vector<std::vector<std::string>> kinds = {
+        {}, {"--cells", "octree", "--no-verify"}, {"--mode", "sampled", "--no-verify"}};
+    for (size_t k = 0; k < kinds.size(); ++k) {
+        SCOPED_TRACE("bake kind " + std::to_string(k));
+        std::vector<std::string> files;
+        for (const char* threads : {"1", "2"}) {
+            const std::string out = dir.file("t" + std::to_string(k) + "_" + threads + ".h5");
+            const CliRun r = run(
+                with(with({"bake", test::sample_world(), "-o", out, "--threads", threads}, kFast), kinds[k]));
+            ASSERT_EQ(r.status, 0) << r.log;
+            files.push_back(out);
+        }
+        const std::string log = dir.file("h5diff.txt");
+        EXPECT_EQ(h5diff_outside_run(files[0], files[1], log), 0) << test::read_file(log);
+        const BakeData one = read_bake_file(files[0]), two = read_bake_file(files[1]);
+        EXPECT_NE(one.run.parameters, two.run.parameters);
+        EXPECT_EQ(one.parameters, two.parameters);
+        EXPECT_FALSE(one.run.timings_s.empty());
+    }
 }
 
 TEST(Cli, HelpOnEverySubcommandAndTheRealBinary) {

@@ -36,6 +36,15 @@ double figure(const NamedValues& figures, const std::string& name) {
     return 0.0;
 }
 
+// A figure of the result (/figures) or of the run's work (/run/figures).
+double figure(const BakeData& bake, const std::string& name) {
+    for (const NamedValues* list : {&bake.figures, &bake.run.figures})
+        for (const auto& [key, value] : *list)
+            if (key == name) return value;
+    ADD_FAILURE() << "no figure " << name;
+    return 0.0;
+}
+
 // A closed hall (inside x in [0, 12], y in [0, 4], z in [0, 6]; 0.5 m shell) split at x = 6 by a 0.6 m wall
 // with a doorway at its far end (z in [4.6, 5.6], y < 2.5) so both halves are reachable. What stands in the
 // wall near z in [0, 2] varies: solid, two walls overlapping in view (fusion), the same with a gap, a slit,
@@ -290,8 +299,8 @@ TEST(Conservative, TheSingleOccluderPassOnlyNarrowsRows) {
         const BakeData with = bake_world(ctx, on, s.world, "test", "");
         const BakeData without = bake_world(ctx, off, s.world, "test", "");
         ASSERT_EQ(with.cells.size(), without.cells.size());
-        EXPECT_GT(figure(with.figures, "conservative_region_hidden"), 0.0);
-        EXPECT_EQ(figure(without.figures, "conservative_region_hidden"), 0.0);
+        EXPECT_GT(figure(with, "conservative_region_hidden"), 0.0);
+        EXPECT_EQ(figure(without, "conservative_region_hidden"), 0.0);
         uint64_t listed_with = 0, listed_without = 0;
         for (uint32_t c = 0; c < with.cells.size(); ++c) {
             for (uint32_t o = 0; o < s.world.objects.size(); ++o) {
@@ -498,7 +507,7 @@ TEST(Conservative, BehindTwoWallsAtDifferentDepthsTheShaftPassCulls) {
     const auto listed = [&](int budget, uint64_t& shaft_hidden) {
         c.conservative.shaft_budget = budget;
         const BakeData bake = bake_without_misses(c, w);
-        shaft_hidden = uint64_t(figure(bake.figures, "conservative_shaft_hidden"));
+        shaft_hidden = uint64_t(figure(bake, "conservative_shaft_hidden"));
         const int32_t cell = bake.cells.find({2.5f, 1.5f, 3.5f});
         EXPECT_GE(cell, 0);
         return cell < 0 || bake.pvs.test(uint32_t(cell), target);
@@ -760,7 +769,7 @@ TEST(Conservative, TheLadderStopsAtTheLevelTheCellsUseWithTheSameRows) {
     Context ctx = quiet_context();
     const Scene s = make_scene(Middle::kFusedHalves);
     const BakeData bake = bake_world(ctx, c, s.world, "test", "");
-    EXPECT_EQ(figure(bake.figures, "conservative_epsilon_levels"), 4.0);
+    EXPECT_EQ(figure(bake, "conservative_epsilon_levels"), 4.0);
     RayScene scene(ctx, s.world);
     const ShrunkOccluders whole = shrunk_occluders(ctx, c, s.world, scene);
     ASSERT_EQ(whole.epsilon_m.size(), size_t(c.conservative.refine_levels) + 1);
@@ -929,11 +938,11 @@ double random_worlds_have_no_miss(const CellConfig& cells, uint64_t worlds, cons
         const World& w = rw.world;
         const uint32_t n_objects = uint32_t(w.objects.size());
 
-        fine_samples += uint64_t(figure(bake.figures, "conservative_fine_samples"));
-        panel_splits += uint64_t(figure(bake.figures, "conservative_panel_splits"));
-        region_hidden += uint64_t(figure(bake.figures, "conservative_region_hidden"));
-        shaft_hidden += uint64_t(figure(bake.figures, "conservative_shaft_hidden"));
-        figure_sum += figure(bake.figures, figure_name);
+        fine_samples += uint64_t(figure(bake, "conservative_fine_samples"));
+        panel_splits += uint64_t(figure(bake, "conservative_panel_splits"));
+        region_hidden += uint64_t(figure(bake, "conservative_region_hidden"));
+        shaft_hidden += uint64_t(figure(bake, "conservative_shaft_hidden"));
+        figure_sum += figure(bake, figure_name);
         const uint64_t missed_pairs = uint64_t(figure(bake.verification.figures, "missed_pairs"));
         EXPECT_EQ(missed_pairs, 0u) << "world seed " << seed << ": " << bake.verification.misses.size()
                                     << " misses reported";

@@ -182,11 +182,11 @@ BakeInfo read_header(const Reader& r, hid_t root) {
     return h;
 }
 
-std::vector<std::pair<std::string, std::string>> read_parameters(const Reader& r, hid_t root) {
-    Handle g = r.open_group(root, "/parameters");
-    const std::vector<std::string> keys = r.string_dataset(g.get(), "/parameters", "keys", -1);
-    const std::vector<std::string> values =
-        r.string_dataset(g.get(), "/parameters", "values", int64_t(keys.size()));
+std::vector<std::pair<std::string, std::string>> read_string_pairs(const Reader& r, hid_t loc,
+                                                                   const std::string& where) {
+    Handle g = r.open_group(loc, where);
+    const std::vector<std::string> keys = r.string_dataset(g.get(), where, "keys", -1);
+    const std::vector<std::string> values = r.string_dataset(g.get(), where, "values", int64_t(keys.size()));
     std::vector<std::pair<std::string, std::string>> out;
     for (size_t i = 0; i < keys.size(); ++i) out.emplace_back(keys[i], values[i]);
     return out;

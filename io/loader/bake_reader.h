@@ -18,12 +18,18 @@ namespace pvsbake::detail {
 
 constexpr const char* kFormatName = "pvsbake";
 constexpr int kFormatMajor = 1;
-constexpr int kFormatMinor = 4;
+constexpr int kFormatMinor = 5;
 
 // The root attributes. Throws kNotBakeFile without format = "pvsbake", kVersionTooNew for a newer major.
 BakeInfo read_header(const Reader& r, hid_t root);
 
-std::vector<std::pair<std::string, std::string>> read_parameters(const Reader& r, hid_t root);
+// The group `where` in `loc` (its last name, opened in loc) of `keys` and `values` string datasets
+// (/parameters, /run/parameters) as pairs, in order.
+std::vector<std::pair<std::string, std::string>> read_string_pairs(const Reader& r, hid_t loc,
+                                                                   const std::string& where);
+inline std::vector<std::pair<std::string, std::string>> read_parameters(const Reader& r, hid_t root) {
+    return read_string_pairs(r, root, "/parameters");
+}
 
 struct FileObjects {
     std::vector<std::string> names;
