@@ -131,7 +131,7 @@ TEST(Cli, VerifyNamesTheObjectAnEditedBakeDropped) {
     write_bake_file(edited, bake);
 
     const CliRun v = run({"verify", test::sample_world(), edited, "--report", report, "--verify-eyes", "4",
-                          "--verify-rays-per-eye", "256"});
+                          "--verify-rays-per-eye", "256", "--verify-rays", "200000"});
     EXPECT_EQ(v.status, kExitMisses) << v.log;
     EXPECT_TRUE(contains(v.log, "floor_0_0")) << v.log;
     const auto j = nlohmann::json::parse(test::read_file(report));
