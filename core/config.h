@@ -22,6 +22,9 @@ const char* to_string(BakeMode mode);
 
 struct RunConfig {
     int threads = 0;  // [Limit: >= 0] worker threads; 0 = every core
+    // [Limit: 0..1e6] [Units: s] seconds between checkpoint chunks within a pass of the conservative solver
+    // (each pass's end writes one too); 0 = no checkpoint (docs/ALGORITHMS.md#resume)
+    double checkpoint_interval_s = 300.0;
 };
 
 // The gap tolerance: the conservative promise covers every object seen through an opening at least this
@@ -246,6 +249,11 @@ void visit_options(Config& c, Visitor&& v) {
     v(OptionSpec{OptionGroup::kGeneral, "--threads", "run.threads", "threads",
                  "worker threads, 0 = every core", 0, 4096},
       c.run.threads);
+    v(OptionSpec{OptionGroup::kGeneral, "--checkpoint-interval", "run.checkpoint_interval_s", "s",
+                 "seconds between checkpoints of a conservative bake's finished rows (in OUT.checkpoint/, "
+                 "removed once OUT is written; a killed bake run again resumes from them); 0 = none",
+                 0, 1e6},
+      c.run.checkpoint_interval_s);
     v(OptionSpec{OptionGroup::kGeneral, "--gap-tolerance", "gap.tolerance_m", "m",
                  "the promise: every object seen through an opening at least this wide is listed (a tube of "
                  "this diameter around the sight line clear of opaque triangles, ends excepted); "

@@ -105,12 +105,12 @@ BakeData bake_header(const BakeConfig& config, const World& world, const std::st
 // The grid's cells, clipped to the view volume, then every cell's PVS in the bake's mode.
 void grid_cells_and_pvs(Context& ctx, const BakeConfig& config, const World& world, const ViewVolume& view,
                         const RayScene& scene, const ShrunkOccluders& shrunk, BakeData& bake,
-                        StageFigures& figures) {
+                        StageFigures& figures, RowJournal* journal) {
     bake.cells = build_uniform_grid(ctx, config.cells, view.view_bounds);
     figures.cells_dropped = clip_grid_to_view(ctx, bake.cells, view.view, view.eyes);
     if (config.mode == BakeMode::kConservative) {
         bake.pvs = bake_conservative_pvs(ctx, config.conservative, world, bake.cells, shrunk, scene,
-                                         figures.conservative);
+                                         figures.conservative, journal);
     } else {
         SampledPvs sampled = bake_sampled_pvs(ctx, config.sampled, world, scene, bake.cells);
         bake.pvs = std::move(sampled.pvs);
@@ -123,7 +123,7 @@ void grid_cells_and_pvs(Context& ctx, const BakeConfig& config, const World& wor
 // apply: boxes are not known in advance. Timed under the mode's name, as on the grid.
 void octree_cells_and_pvs(Context& ctx, const BakeConfig& config, const World& world, const ViewVolume& view,
                           const RayScene& scene, const ShrunkOccluders& shrunk, BakeData& bake,
-                          StageFigures& figures) {
+                          StageFigures& figures, RowJournal* journal) {
     const bool conservative = config.mode == BakeMode::kConservative;
     ScopedTimer t(ctx, conservative ? "conservative_pvs" : "sampled_pvs");
     const auto start = std::chrono::steady_clock::now();
@@ -142,9 +142,11 @@ void octree_cells_and_pvs(Context& ctx, const BakeConfig& config, const World& w
     const RegionPvsOracle oracle = [&](const std::vector<Aabb>& boxes, const std::vector<uint64_t>& streams,
                                        const std::vector<const uint64_t*>& bounds, PvsSet& rows) {
         if (conservative) {
+            // A box's stream names it in every run (its node's index): the journal's key.
             conservative_box_rows(ctx, config.conservative, world, boxes, masks.eyes, shrunk, scene, rows,
                                   figures.conservative, hiders ? &*hiders : nullptr, &bounds,
-                                  provers ? &*provers : nullptr);
+                                  provers ? &*provers : nullptr, journal, &streams);
+            if (journal) journal->flush();  // an octree level is a stage's end
             return;
         }
         sample_box_rows(config.sampled, world, scene, masks, boxes, streams, sampled.rays_per_eye, rows,
@@ -169,7 +171,7 @@ void octree_cells_and_pvs(Context& ctx, const BakeConfig& config, const World& w
 }  // namespace
 
 BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, const std::string& world_path,
-                    const std::string& world_hash) {
+                    const std::string& world_hash, RowJournal* journal) {
     validate(config);
     const bool conservative = config.mode == BakeMode::kConservative;
     BakeData bake = bake_header(config, world, world_path, world_hash);
@@ -192,9 +194,9 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
     // 4. Cells and their PVS (docs/ALGORITHMS.md#conservative-pvs): a grid, then each cell's row; or an
     //    octree, split where the rows of its children differ.
     if (config.cells.kind == CellKind::kGrid) {
-        grid_cells_and_pvs(ctx, config, world, view, scene, shrunk, bake, figures);
+        grid_cells_and_pvs(ctx, config, world, view, scene, shrunk, bake, figures, journal);
     } else {
-        octree_cells_and_pvs(ctx, config, world, view, scene, shrunk, bake, figures);
+        octree_cells_and_pvs(ctx, config, world, view, scene, shrunk, bake, figures, journal);
     }
 
     // 5. Ranked occluders per cell, once the cells are final (the octree's depend on the PVS).

@@ -11,6 +11,7 @@
 #include "core/config.h"
 #include "core/context.h"
 #include "core/occluder.h"
+#include "core/row_journal.h"
 #include "core/world.h"
 #include "driver/verify.h"
 #include "io/bake_file.h"
@@ -36,8 +37,10 @@ std::vector<Occluder> solver_occluders(Context& ctx, const BakeConfig& config, c
                                        ShrunkOccluders& shrunk);
 
 // Runs the bake of `world` (already loaded from world_path, whose content hash is world_hash).
+// With `journal`, the conservative PVS (grid or octree) takes the rows it holds and records those it
+// computes (docs/ALGORITHMS.md#resume); the bake is the same.
 BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, const std::string& world_path,
-                    const std::string& world_hash);
+                    const std::string& world_hash, RowJournal* journal = nullptr);
 
 // The view volume's config of a bake: the conservative mode's automatic voxel follows epsilon.
 ViewVolumeConfig view_volume_config(const BakeConfig& config);

@@ -9,6 +9,7 @@
 #include "driver/verify.h"
 #include "io/atomic_file.h"
 #include "io/bake_file.h"
+#include "io/checkpoint.h"
 #include "io/file_hash.h"
 #include "io/gltf_loader.h"
 #include "io/gltf_writer.h"
@@ -20,10 +21,12 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <string_view>
 #include <type_traits>
 
@@ -257,23 +260,115 @@ double figure_or(const NamedValues& values, const std::string& key, double fallb
     return fallback;
 }
 
+// What a bake does with the checkpoint beside its output (docs/ALGORITHMS.md#resume).
+enum class ResumeMode {
+    kAuto,     // resume from a checkpoint of this bake, refuse one of another
+    kResume,   // --resume: as kAuto, and a checkpoint must exist
+    kRestart,  // --restart: remove any checkpoint first
+};
+
+// What writing the checkpoint cost a run (its run figures checkpoint_*).
+struct CheckpointCost {
+    uint64_t chunks = 0, rows = 0;
+    double seconds = 0.0;
+};
+
+// The journal of a conservative bake's finished rows, loaded from the checkpoint in `folder` and writing
+// its chunks there (adding to `cost`); none when checkpoints are off or the mode has none (sampled).
+std::unique_ptr<RowJournal> open_journal(Context& ctx, const BakeConfig& config, const std::string& folder,
+                                         const CheckpointIdentity& id, ResumeMode resume,
+                                         CheckpointCost& cost) {
+    const bool on = config.run.checkpoint_interval_s > 0.0 && config.mode == BakeMode::kConservative;
+    if (!on) {
+        if (resume == ResumeMode::kResume) {
+            throw bad_input(config.mode == BakeMode::kConservative
+                                ? "--resume: checkpoints are off (--checkpoint-interval 0)"
+                                : "--resume: only conservative bakes keep checkpoints");
+        }
+        if (checkpoint_exists(folder))
+            ctx.warn(fmt::format("the checkpoint {} is not used by this bake; it is left as it is", folder));
+        return nullptr;
+    }
+    if (resume == ResumeMode::kRestart && checkpoint_exists(folder)) {
+        if (!remove_checkpoint(folder))
+            throw bad_input(fmt::format("--restart: cannot remove the checkpoint {}", folder));
+        ctx.info(fmt::format("removed the checkpoint {}", folder));
+    }
+    Checkpoint checkpoint;
+    try {
+        checkpoint = read_checkpoint(folder, id);
+    } catch (const Error& e) {
+        throw bad_input(
+            fmt::format("{}\nthe checkpoint {} is not this bake's: remove it, or bake with "
+                        "--restart to start again from zero",
+                        e.what(), folder));
+    }
+    if (resume == ResumeMode::kResume && checkpoint.chunks.empty())
+        throw bad_input(fmt::format("--resume: there is no checkpoint at {}", folder));
+    // The sink runs under the journal's lock, so the chunk numbers follow the chunks.
+    auto sink = [&ctx, &cost, folder, id, next = checkpoint.next_index](const RowChunk& chunk) mutable {
+        const auto start = std::chrono::steady_clock::now();
+        try {
+            write_checkpoint_chunk(folder, next, id, chunk);
+            ++next;
+            ++cost.chunks;
+            cost.rows += chunk.row_count();
+            cost.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+            return true;
+        } catch (const Error& e) {
+            ctx.warn(
+                fmt::format("checkpoint: {} (the bake goes on; the rows wait for the next chunk)", e.what()));
+            return false;
+        }
+    };
+    auto journal = std::make_unique<RowJournal>(std::move(sink), config.run.checkpoint_interval_s);
+    for (const RowChunk& chunk : checkpoint.chunks) journal->load(chunk);
+    if (journal->loaded_rows() > 0) {
+        ctx.info(fmt::format("resuming from the checkpoint {}: {} finished rows in {} chunks", folder,
+                             journal->loaded_rows(), checkpoint.chunks.size()));
+    }
+    return journal;
+}
+
 // bake WORLD -o OUT.h5
 int run_bake(Context& ctx, const BakeConfig& config, const std::string& world_path,
-             const std::string& out_path, const std::string& report_path) {
+             const std::string& out_path, const std::string& report_path, ResumeMode resume) {
     ScopedTimer total(ctx, "total");
     // Before any stage: a bad output path must not cost a night's bake.
     check_output_writable(out_path, "the output");
     if (!report_path.empty()) check_output_writable(report_path, "the report");
     set_threads(config.run.threads);
-    const World world = load_world(ctx, world_path);
     const std::string hash = hash_file_hex(world_path);
-    BakeData bake = bake_world(ctx, config, world, world_path, hash);
+    CheckpointIdentity id{tool_version(), hash, {}};
+    for (auto& p : resolved_parameters(config))
+        if (!is_run_parameter(p.first)) id.parameters.push_back(std::move(p));
+    const std::string folder = checkpoint_folder(out_path);
+    CheckpointCost cost;
+    std::unique_ptr<RowJournal> journal = open_journal(ctx, config, folder, id, resume, cost);
+    const size_t resumed_rows = journal ? journal->loaded_rows() : 0;
+    const World world = load_world(ctx, world_path);
+    BakeData bake = bake_world(ctx, config, world, world_path, hash, journal.get());
     bake.run.timings_s = ctx.timings();
     bake.run.figures.emplace_back("peak_memory_mb", peak_memory_mb());
-    {
+    if (journal) {
+        // Writing a chunk holds the journal's lock, so its seconds bound what checkpoints cost the bake.
+        bake.run.figures.emplace_back("checkpoint_chunks", double(cost.chunks));
+        bake.run.figures.emplace_back("checkpoint_rows", double(cost.rows));
+        bake.run.figures.emplace_back("checkpoint_seconds", cost.seconds);
+        bake.run.figures.emplace_back("resumed_rows", double(resumed_rows));
+    }
+    try {
         ScopedTimer t(ctx, "write");
         write_bake_file(out_path, bake);
+    } catch (const Error& e) {
+        if (!journal || !checkpoint_exists(folder)) throw;
+        throw Error(e.kind(), fmt::format("{}\nthe finished rows are kept in {}: run the same command again "
+                                          "once the output can be written, and it resumes from them",
+                                          e.what(), folder));
     }
+    if (journal && !remove_checkpoint(folder))
+        ctx.warn(
+            fmt::format("cannot remove the checkpoint {} (the bake is written; remove it by hand)", folder));
     if (!bake.leak_path.empty()) {
         const std::string leak_file = out_path + ".leak.obj";
         write_file_atomically(leak_file, leak_path_obj(bake.leak_path));
@@ -462,7 +557,7 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
     BakeConfig config;
     CommonOptions common;
     std::string world_path, out_path, bake_path, mode = "conservative";
-    bool no_verify = false, no_write = false, json = false;
+    bool no_verify = false, no_write = false, json = false, resume = false, restart = false;
     std::vector<double> point;
 
     CLI::App* bake =
@@ -491,6 +586,17 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
                         ->required()
                         ->group(title);
                     bake->add_option("--report", common.report_path, "also write a JSON report here")
+                        ->group(title);
+                    bake->add_flag("--resume", resume,
+                                   "continue from the checkpoint OUT.checkpoint/ of a killed bake (a bake "
+                                   "also resumes without it when the checkpoint is its own); fail if there "
+                                   "is none")
+                        ->group(title);
+                    bake->add_flag(
+                            "--restart", restart,
+                            "remove the checkpoint OUT.checkpoint/ and bake from zero (a checkpoint of "
+                            "another world or other parameters is refused otherwise)")
+                        ->excludes("--resume")
                         ->group(title);
                     break;
                 case OptionGroup::kViewVolume:
@@ -525,7 +631,8 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
     verify->add_option("world", world_path, "the world the bake was made from")->required();
     verify->add_option("bake", bake_path, "the bake file; its verification group is updated")->required();
     bind_options(
-        *verify, config, {"run.", "gap.", "verify."}, [&](OptionGroup group, const std::string& title) {
+        *verify, config, {"run.threads", "gap.", "verify."},
+        [&](OptionGroup group, const std::string& title) {
             if (group == OptionGroup::kGeneral) add_common(*verify, common, title);
             if (group == OptionGroup::kOutput) {
                 verify->add_option("--report", common.report_path, "also write a JSON report here")
@@ -539,7 +646,7 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
         "synthesize occluder boxes inside the world's opaque solid and write them as glTF (.glb)");
     occ->add_option("world", world_path, "the world, glTF 2.0 (.gltf or .glb)")->required();
     ViewArgs occ_view_args;
-    bind_options(*occ, config, {"run.", "gap.", "view.", "occluders."},
+    bind_options(*occ, config, {"run.threads", "gap.", "view.", "occluders."},
                  [&](OptionGroup group, const std::string& title) {
                      if (group == OptionGroup::kGeneral) add_common(*occ, common, title);
                      if (group == OptionGroup::kOutput) {
@@ -602,7 +709,10 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
             apply_view_args(view_args, config.view);
             config.occluders.enabled = !no_occluders;
             validate(config);
-            return run_bake(ctx, config, world_path, out_path, common.report_path);
+            return run_bake(ctx, config, world_path, out_path, common.report_path,
+                            resume    ? ResumeMode::kResume
+                            : restart ? ResumeMode::kRestart
+                                      : ResumeMode::kAuto);
         }
         if (verify->parsed()) {
             validate(config);

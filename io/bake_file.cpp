@@ -8,6 +8,7 @@
 #include "core/config.h"
 #include "core/error.h"
 #include "io/atomic_file.h"
+#include "io/hdf5_file.h"
 #include "io/loader/bake_reader.h"
 #include "io/loader/hdf5_reader.h"
 #include "io/loader/mask_bricks.h"
@@ -31,6 +32,11 @@
 namespace pvs {
 namespace {
 
+using h5::kChunkBytes;
+using h5::Site;
+using h5::string_type;
+using h5::write_string_pairs;
+using h5::Writer;
 using pvsbake::detail::at;
 using pvsbake::detail::Handle;
 using pvsbake::detail::hdf5_detail;
@@ -44,185 +50,7 @@ static_assert(pvsbake::detail::kFormatMajor == kBakeFormatMajor &&
 using pvsbake::detail::kFormatName;
 constexpr const char* kConservativeNote = "conservative";
 constexpr const char* kAggressiveNote = "aggressive (sampled: may miss visible objects)";
-// Chunk size for the large datasets (FACTS.md: keep chunks at 32-128 KiB; one random row read inflates a
-// whole chunk). Level 6 was measured against level 1 on a 20,000 x 3,000 PVS: see docs/FORMAT.md.
-constexpr size_t kChunkBytes = 64 * 1024;
-constexpr unsigned kGzipLevel = 6;
 constexpr const char* kBoundsColumns = "min_x, min_y, min_z, max_x, max_y, max_z";
-
-// ---------------------------------------------------------------------------------------------------------
-// HDF5 plumbing for writing (handles and the quiet error stack come from io/loader/hdf5_reader.h).
-
-// Names the file in every message and throws pvs::Error of one kind (kIo: the writer's failures).
-class Site {
-public:
-    Site(std::string path, ErrorKind kind, std::string prefix)
-        : path_(std::move(path)), kind_(kind), prefix_(std::move(prefix)) {}
-
-    [[noreturn]] void fail(const std::string& what) const {
-        throw Error(kind_, fmt::format("{}: {}{}", path_, prefix_, what));
-    }
-    // An HDF5 call failed: adds what HDF5 said.
-    [[noreturn]] void fail_hdf5(const std::string& what) const {
-        const std::string detail = hdf5_detail();
-        fail(detail.empty() ? what : fmt::format("{} ({})", what, detail));
-    }
-    Handle handle(hid_t id, Handle::Closer closer, const std::string& what) const {
-        if (id < 0) fail_hdf5(what);
-        return Handle(id, closer);
-    }
-    void check(herr_t r, const std::string& what) const {
-        if (r < 0) fail_hdf5(what);
-    }
-
-private:
-    std::string path_;
-    ErrorKind kind_;
-    std::string prefix_;
-};
-
-// A fixed-length UTF-8 string type of `bytes` bytes, each string NUL-terminated inside it. Fixed, not
-// variable-length: variable-length strings live in HDF5's global heap, and HDF5 1.10.8 reads a damaged
-// global heap out of bounds (segfaults in H5HG_read when a fuzzed file is read); fixed-length strings are
-// plain bytes in the dataset or attribute, so damage can only garble them. A C reader also gets them as
-// one n x bytes buffer.
-Handle string_type(const Site& site, size_t bytes) {
-    Handle t = site.handle(H5Tcopy(H5T_C_S1), H5Tclose, "cannot copy the string type");
-    site.check(H5Tset_size(t.get(), std::max<size_t>(bytes, 1)), "cannot size the string type");
-    site.check(H5Tset_strpad(t.get(), H5T_STR_NULLTERM), "cannot set the string padding");
-    site.check(H5Tset_cset(t.get(), H5T_CSET_UTF8), "cannot set UTF-8 on the string type");
-    return t;
-}
-
-Handle file_access_list(const Site& site) {
-    return site.handle(pvsbake::detail::file_access_list(), H5Pclose, "cannot create a file access list");
-}
-
-// Group creation list that remembers the order links and attributes were created in, so that
-// `h5dump --sort_by=creation_order` shows them in the writer's order (by name is h5dump's default).
-// No modification times in object headers (HDF5 stores them by default): the same bake gives the same bytes.
-Handle ordered_group_list(const Site& site) {
-    Handle gcpl = site.handle(H5Pcreate(H5P_GROUP_CREATE), H5Pclose, "cannot create a group creation list");
-    const unsigned order = H5P_CRT_ORDER_TRACKED | H5P_CRT_ORDER_INDEXED;
-    site.check(H5Pset_link_creation_order(gcpl.get(), order), "cannot track link order");
-    site.check(H5Pset_attr_creation_order(gcpl.get(), order), "cannot track attribute order");
-    site.check(H5Pset_obj_track_times(gcpl.get(), false), "cannot turn off object times");
-    return gcpl;
-}
-
-// ---------------------------------------------------------------------------------------------------------
-// Writing.
-
-class Writer {
-public:
-    explicit Writer(const Site& site) : site_(site) {}
-
-    Handle group(hid_t loc, const std::string& where, const std::string& name) {
-        Handle gcpl = ordered_group_list(site_);
-        return site_.handle(H5Gcreate2(loc, name.c_str(), H5P_DEFAULT, gcpl.get(), H5P_DEFAULT), H5Gclose,
-                            "cannot create group " + at(where, name));
-    }
-
-    void attr(hid_t loc, const std::string& name, hid_t file_type, hid_t mem_type, size_t count,
-              const void* value) {
-        Handle space;
-        if (count == 1) {
-            space = site_.handle(H5Screate(H5S_SCALAR), H5Sclose, "cannot create a dataspace");
-        } else {
-            const hsize_t dims[1] = {count};
-            space = site_.handle(H5Screate_simple(1, dims, nullptr), H5Sclose, "cannot create a dataspace");
-        }
-        Handle a =
-            site_.handle(H5Acreate2(loc, name.c_str(), file_type, space.get(), H5P_DEFAULT, H5P_DEFAULT),
-                         H5Aclose, "cannot create attribute " + name);
-        site_.check(H5Awrite(a.get(), mem_type, value), "cannot write attribute " + name);
-    }
-    void string_attr(hid_t loc, const std::string& name, const std::string& value) {
-        Handle t = string_type(site_, value.size() + 1);
-        attr(loc, name, t.get(), t.get(), 1, value.c_str());
-    }
-    void int_attr(hid_t loc, const std::string& name, int32_t value) {
-        attr(loc, name, H5T_STD_I32LE, H5T_NATIVE_INT32, 1, &value);
-    }
-    void u32_attr(hid_t loc, const std::string& name, uint32_t value) {
-        attr(loc, name, H5T_STD_U32LE, H5T_NATIVE_UINT32, 1, &value);
-    }
-    void u64_attr(hid_t loc, const std::string& name, uint64_t value) {
-        attr(loc, name, H5T_STD_U64LE, H5T_NATIVE_UINT64, 1, &value);
-    }
-
-    // A dataset of the given shape. compress: chunked (~kChunkBytes per chunk, whole rows) and deflated.
-    // A dataset with a zero dimension is written contiguous and empty (HDF5 refuses zero chunk sizes).
-    Handle dataset(hid_t loc, const std::string& where, const std::string& name, hid_t file_type,
-                   hid_t mem_type, std::vector<hsize_t> dims, const void* data, bool compress = false) {
-        const std::string full = at(where, name);
-        Handle space = site_.handle(H5Screate_simple(int(dims.size()), dims.data(), nullptr), H5Sclose,
-                                    "cannot create the dataspace of " + full);
-        Handle dcpl = site_.handle(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, "cannot create a dataset list");
-        site_.check(H5Pset_obj_track_times(dcpl.get(), false), "cannot turn off object times");
-        const bool empty = std::any_of(dims.begin(), dims.end(), [](hsize_t d) { return d == 0; });
-        if (compress && !empty) {
-            hsize_t inner = H5Tget_size(file_type);
-            for (size_t i = 1; i < dims.size(); ++i) inner *= dims[i];
-            std::vector<hsize_t> chunk = dims;
-            chunk[0] = std::clamp<hsize_t>(kChunkBytes / std::max<hsize_t>(inner, 1), 1, dims[0]);
-            site_.check(H5Pset_chunk(dcpl.get(), int(chunk.size()), chunk.data()), "cannot chunk " + full);
-            // Shuffle groups the bytes of multi-byte integers before deflate: grid_to_cell (a mostly
-            // increasing int32 index) shrank from 27,970 to 1,068 bytes on a 20,000-cell grid. The PVS rows
-            // are bytes, where shuffle does nothing, so they go without it.
-            if (H5Tget_class(file_type) == H5T_INTEGER && H5Tget_size(file_type) > 1) {
-                site_.check(H5Pset_shuffle(dcpl.get()), "cannot set shuffle on " + full);
-            }
-            site_.check(H5Pset_deflate(dcpl.get(), kGzipLevel), "cannot set gzip on " + full);
-        }
-        Handle ds = site_.handle(
-            H5Dcreate2(loc, name.c_str(), file_type, space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT),
-            H5Dclose, "cannot create dataset " + full);
-        if (!empty) {
-            site_.check(H5Dwrite(ds.get(), mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data),
-                        "cannot write dataset " + full);
-        }
-        return ds;
-    }
-
-    void string_dataset(hid_t loc, const std::string& where, const std::string& name,
-                        const std::vector<std::string>& values) {
-        size_t longest = 0;
-        for (const std::string& s : values) longest = std::max(longest, s.size());
-        const size_t stride = longest + 1;
-        std::vector<char> buf(values.size() * stride, '\0');
-        for (size_t i = 0; i < values.size(); ++i) values[i].copy(&buf[i * stride], values[i].size());
-        Handle t = string_type(site_, stride);
-        // Padding compresses well: a long string list (object names) is chunked and deflated.
-        dataset(loc, where, name, t.get(), t.get(), {values.size()}, buf.data(), buf.size() > kChunkBytes);
-    }
-
-    // A group holding one attribute per name (for a quick look) and the ordered pair of datasets
-    // names/values (the authoritative copy: attributes cannot keep a duplicate or an empty name).
-    void named_values(hid_t loc, const std::string& where, const std::string& name, const NamedValues& values,
-                      const char* units) {
-        Handle g = group(loc, where, name);
-        const std::string full = at(where, name);
-        std::vector<std::string> names;
-        std::vector<double> numbers;
-        std::unordered_set<std::string> seen;
-        for (const auto& [n, v] : values) {
-            names.push_back(n);
-            numbers.push_back(v);
-            if (!n.empty() && seen.insert(n).second)
-                attr(g.get(), n, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1, &v);
-        }
-        string_dataset(g.get(), full, "names", names);
-        Handle ds = dataset(g.get(), full, "values", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, {numbers.size()},
-                            numbers.data());
-        if (units != nullptr) string_attr(ds.get(), "units", units);
-    }
-
-    const Site& site() const { return site_; }
-
-private:
-    const Site& site_;
-};
 
 // A miss as it is laid out in memory for HDF5 (the file type is the packed little-endian twin).
 struct MissRecord {
@@ -417,20 +245,6 @@ void write_root(Writer& w, hid_t root, const BakeData& bake) {
 }
 
 // A group `name` in `loc` (at `where`) of keys and values: /parameters and /run/parameters.
-void write_string_pairs(Writer& w, hid_t loc, const std::string& where, const std::string& name,
-                        const NamedStrings& pairs) {
-    Handle g = w.group(loc, where, name);
-    const std::string full = at(where, name);
-    std::vector<std::string> keys, values;
-    std::unordered_set<std::string> seen;
-    for (const auto& [k, v] : pairs) {
-        keys.push_back(k);
-        values.push_back(v);
-        if (!k.empty() && seen.insert(k).second) w.string_attr(g.get(), k, v);
-    }
-    w.string_dataset(g.get(), full, "keys", keys);
-    w.string_dataset(g.get(), full, "values", values);
-}
 
 // /run: the run's own record (RunRecord). The root keeps an empty /timings, which readers of 1.4 and
 // older require.
@@ -909,14 +723,7 @@ void write_bake_file(const std::string& path, const BakeData& bake) {
     AtomicOutput out(path);
     {
         const Site site(path, ErrorKind::kIo, "cannot write the bake file: ");
-        Handle fapl = file_access_list(site);
-        Handle fcpl = site.handle(H5Pcreate(H5P_FILE_CREATE), H5Pclose, "cannot create a file creation list");
-        const unsigned order = H5P_CRT_ORDER_TRACKED | H5P_CRT_ORDER_INDEXED;
-        site.check(H5Pset_link_creation_order(fcpl.get(), order), "cannot track link order");
-        site.check(H5Pset_attr_creation_order(fcpl.get(), order), "cannot track attribute order");
-        site.check(H5Pset_obj_track_times(fcpl.get(), false), "cannot turn off object times");
-        Handle file = site.handle(H5Fcreate(out.temp_path().c_str(), H5F_ACC_TRUNC, fcpl.get(), fapl.get()),
-                                  H5Fclose, "cannot create " + out.temp_path());
+        Handle file = create_file(site, out.temp_path());
         {
             Writer w(site);
             Handle root = site.handle(H5Gopen2(file.get(), "/", H5P_DEFAULT), H5Gclose, "cannot open /");
@@ -937,38 +744,23 @@ void write_bake_file(const std::string& path, const BakeData& bake) {
 }
 
 BakeData read_bake_file(const std::string& path) {
-    QuietHdf5 quiet;
-    BakeData bake;
-    try {
-        uint64_t file_bytes = 0;
-        Handle file = pvsbake::detail::open_bake_file(path, file_bytes);
-        const Reader r(path, file_bytes);
-        try {
-            Handle root = r.handle(H5Gopen2(file.get(), "/", H5P_DEFAULT), H5Gclose, "cannot open /");
-            const pvsbake::BakeInfo h = pvsbake::detail::read_header(r, root.get());
-            std::tie(bake.format_major, bake.format_minor, bake.tool_version, bake.world_path,
-                     bake.world_hash, bake.mode, bake.conservative) =
-                std::tie(h.format_major, h.format_minor, h.tool_version, h.world_path, h.world_hash, h.mode,
-                         h.conservative);
-            bake.parameters = pvsbake::detail::read_parameters(r, root.get());
-            read_objects(r, root.get(), bake);
-            read_cells(r, root.get(), bake);
-            read_pvs(r, root.get(), bake);
-            read_leak_path(r, root.get(), bake);
-            read_occluders(r, root.get(), bake);
-            bake.figures = r.named_values(root.get(), "/figures");
-            read_verification(r, root.get(), bake);
-            read_run(r, root.get(), bake);
-        } catch (const std::bad_alloc&) {
-            r.fail("a dataset is too large to load (damaged file?)");
-        } catch (const std::length_error&) {
-            r.fail("a dataset is too large to load (damaged file?)");
-        }
-    } catch (const pvsbake::detail::ReadError& e) {
-        if (e.status() == pvsbake::Status::kIoError) throw io_error(e.what());
-        throw bad_input(e.what());
-    }
-    return bake;
+    return h5::read_file(path, [&](const Reader& r, hid_t root) {
+        BakeData bake;
+        const pvsbake::BakeInfo h = pvsbake::detail::read_header(r, root);
+        std::tie(bake.format_major, bake.format_minor, bake.tool_version, bake.world_path, bake.world_hash,
+                 bake.mode, bake.conservative) = std::tie(h.format_major, h.format_minor, h.tool_version,
+                                                          h.world_path, h.world_hash, h.mode, h.conservative);
+        bake.parameters = pvsbake::detail::read_parameters(r, root);
+        read_objects(r, root, bake);
+        read_cells(r, root, bake);
+        read_pvs(r, root, bake);
+        read_leak_path(r, root, bake);
+        read_occluders(r, root, bake);
+        bake.figures = r.named_values(root, "/figures");
+        read_verification(r, root, bake);
+        read_run(r, root, bake);
+        return bake;
+    });
 }
 
 }  // namespace pvs

@@ -703,8 +703,10 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
                            const std::vector<Aabb>& boxes, const VoxelMask& eyes,
                            const ShrunkOccluders& occluders, const RayScene& scene, PvsSet& pvs,
                            ConservativeFigures& figures, const RegionHiders* hiders,
-                           const std::vector<const uint64_t*>* bounds, const ShaftProvers* provers) {
+                           const std::vector<const uint64_t*>* bounds, const ShaftProvers* provers,
+                           RowJournal* journal, const std::vector<uint64_t>* keys) {
     const auto start = std::chrono::steady_clock::now();
+    if (!keys) journal = nullptr;
     const Shared shared = make_shared(config, world, occluders, scene);
     const std::vector<uint32_t> leavable = leavable_objects(world);
     std::optional<RegionHiders> own_hiders;
@@ -726,6 +728,10 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
         for (int64_t ci = 0; ci < int64_t(boxes.size()); ++ci) {
             const Aabb box = eye_region(eyes, boxes[size_t(ci)]);
             uint64_t* row = pvs.row(uint32_t(ci));
+            if (journal && journal->find("box", (*keys)[size_t(ci)], row, pvs.words_per_row)) {
+                ctx.progress_advance();
+                continue;
+            }
             open.clear();
             for (uint32_t o = 0; o < world.objects.size(); ++o) {
                 if ((world.objects[o].flags & kObjectAlwaysVisible) ||
@@ -765,6 +771,7 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
                         std::chrono::duration<double>(std::chrono::steady_clock::now() - shaft_start).count();
                 }
             }
+            if (journal) journal->record("box", (*keys)[size_t(ci)], row, pvs.words_per_row);
             ctx.progress_advance();
         }
 #pragma omp critical
@@ -790,7 +797,8 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
 // test only what the earlier ones proved hidden, and the result depends on the phases, not on the threads.
 static void conservative_grid_rows(Context& ctx, const ConservativeConfig& config, const World& world,
                                    const CellSet& cells, const ShrunkOccluders& occluders,
-                                   const RayScene& scene, PvsSet& pvs, ConservativeFigures& figures) {
+                                   const RayScene& scene, PvsSet& pvs, ConservativeFigures& figures,
+                                   RowJournal* journal) {
     const auto start = std::chrono::steady_clock::now();
     const uint32_t n_objects = uint32_t(world.objects.size());
     // Faces of each cell's eye region (eye_region()); neighbours whose regions fill both cells share the
@@ -850,13 +858,17 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
         ctx.progress_begin("single-occluder pass", cells.size(), "cells");
 #pragma omp parallel for schedule(dynamic, 16) reduction(+ : n_hidden)
         for (int64_t c = 0; c < int64_t(cells.size()); ++c) {
-            if (!regions[size_t(c)].is_empty()) {
+            uint64_t* row = hidden.row(uint32_t(c));
+            if (!regions[size_t(c)].is_empty() &&
+                !(journal && journal->find("hidden", uint64_t(c), row, hidden.words_per_row))) {
                 n_hidden += hiders->of(occluders.set_for(regions[size_t(c)]))
-                                .hide(world, regions[size_t(c)], leavable, hidden.row(uint32_t(c)));
+                                .hide(world, regions[size_t(c)], leavable, row);
+                if (journal) journal->record("hidden", uint64_t(c), row, hidden.words_per_row);
             }
             ctx.progress_advance();
         }
         ctx.progress_end();
+        if (journal) journal->flush();
         figures.region_hidden += n_hidden;
         figures.region_seconds +=
             std::chrono::duration<double>(std::chrono::steady_clock::now() - pass_start).count();
@@ -872,6 +884,41 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
     const auto seen_row = [&](int32_t cell) -> uint64_t* {
         return config.shaft_budget > 0 && cell >= 0 ? seen.row(uint32_t(cell)) : nullptr;
     };
+    // Resuming (docs/ALGORITHMS.md#resume): a face's rows depend only on the cells' rows as its phase
+    // started, so a face whose every wanted side the journal holds is taken from it. The seen rows recorded
+    // are the cell's whole row after the face (no other face of the cell runs in the phase); their union
+    // is the row an uninterrupted run has.
+    const auto replay_face = [&](uint32_t fi) {
+        const Face& f = faces[fi];
+        for (int side = 0; side < 2; ++side) {
+            if (!f.wanted[size_t(side)]) continue;
+            const uint64_t key = 2 * uint64_t(fi) + uint64_t(side);
+            if (!journal->find("face", key, face_rows.row(uint32_t(key)), face_rows.words_per_row))
+                return false;
+        }
+        if (config.shaft_budget > 0) {
+            std::vector<uint64_t> snapshot(seen.words_per_row);
+            for (int side = 0; side < 2; ++side) {
+                if (!f.wanted[size_t(side)]) continue;
+                if (!journal->find("face_seen", 2 * uint64_t(fi) + uint64_t(side), snapshot.data(),
+                                   seen.words_per_row))
+                    return false;
+                uint64_t* row = seen_row(f.cell[size_t(side)]);
+                for (uint32_t w = 0; w < seen.words_per_row; ++w) row[w] |= snapshot[w];
+            }
+        }
+        return true;
+    };
+    const auto record_face = [&](uint32_t fi) {
+        const Face& f = faces[fi];
+        for (int side = 0; side < 2; ++side) {
+            if (!f.wanted[size_t(side)]) continue;
+            const uint64_t key = 2 * uint64_t(fi) + uint64_t(side);
+            journal->record("face", key, face_rows.row(uint32_t(key)), face_rows.words_per_row);
+            if (config.shaft_budget > 0)
+                journal->record("face_seen", key, seen_row(f.cell[size_t(side)]), seen.words_per_row);
+        }
+    };
     Counts total;
     ctx.progress_begin("conservative PVS", faces.size(), "faces");
 #pragma omp parallel
@@ -884,6 +931,10 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
                 const Face& f = faces[fi];
                 uint64_t* row_lo = f.wanted[0] ? face_rows.row(2 * fi) : nullptr;
                 uint64_t* row_hi = f.wanted[1] ? face_rows.row(2 * fi + 1) : nullptr;
+                if (journal && replay_face(fi)) {
+                    ctx.progress_advance();
+                    continue;
+                }
                 // The cells' rows as the phase started: only the merge below writes them.
                 const uint64_t* known_lo = f.wanted[0] ? pvs.row(uint32_t(f.cell[0])) : nullptr;
                 const uint64_t* known_hi = f.wanted[1] ? pvs.row(uint32_t(f.cell[1])) : nullptr;
@@ -913,18 +964,22 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
                                   row_lo ? seen_row(f.cell[0]) : nullptr,
                                   row_hi ? seen_row(f.cell[1]) : nullptr));
                 }
+                if (journal) record_face(fi);
                 ctx.progress_advance();
             }
             // (After the implied barrier: every face of the phase is done.) One thread merges, a few words
             // per face; the barrier after it starts the next phase on the merged rows.
 #pragma omp single
-            for (const uint32_t fi : phase) {
-                for (int side = 0; side < 2; ++side) {
-                    if (!faces[fi].wanted[size_t(side)]) continue;
-                    uint64_t* row = pvs.row(uint32_t(faces[fi].cell[size_t(side)]));
-                    const uint64_t* fr = face_rows.row(2 * fi + uint32_t(side));
-                    for (uint32_t w = 0; w < pvs.words_per_row; ++w) row[w] |= fr[w];
+            {
+                for (const uint32_t fi : phase) {
+                    for (int side = 0; side < 2; ++side) {
+                        if (!faces[fi].wanted[size_t(side)]) continue;
+                        uint64_t* row = pvs.row(uint32_t(faces[fi].cell[size_t(side)]));
+                        const uint64_t* fr = face_rows.row(2 * fi + uint32_t(side));
+                        for (uint32_t w = 0; w < pvs.words_per_row; ++w) row[w] |= fr[w];
+                    }
                 }
+                if (journal) journal->flush();  // a phase is a stage's end (docs/ALGORITHMS.md#resume)
             }
         }
 #pragma omp critical
@@ -943,15 +998,20 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
 #pragma omp for schedule(dynamic, 1)
             for (int64_t c = 0; c < int64_t(cells.size()); ++c) {
                 const Aabb& region = regions[size_t(c)];
-                if (!region.is_empty())
+                uint64_t* row = pvs.row(uint32_t(c));
+                if (!region.is_empty() &&
+                    !(journal && journal->find("shaft", uint64_t(c), row, pvs.words_per_row))) {
                     shaft_row(provers.of(occluders.set_for(region)), world, cells.eyes, region, leavable,
-                              config.shaft_budget, pvs.row(uint32_t(c)), seen.row(uint32_t(c)), local);
+                              config.shaft_budget, row, seen.row(uint32_t(c)), local);
+                    if (journal) journal->record("shaft", uint64_t(c), row, pvs.words_per_row);
+                }
                 ctx.progress_advance();
             }
 #pragma omp critical
             shaft += local;
         }
         ctx.progress_end();
+        if (journal) journal->flush();
         shaft.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - pass_start).count();
         figures.shaft += shaft;
     }
@@ -960,7 +1020,7 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
 
 PvsSet bake_conservative_pvs(Context& ctx, const ConservativeConfig& config, const World& world,
                              const CellSet& cells, const ShrunkOccluders& occluders, const RayScene& scene,
-                             ConservativeFigures& figures) {
+                             ConservativeFigures& figures, RowJournal* journal) {
     ScopedTimer timer(ctx, "conservative_pvs");
     ctx.info(fmt::format(
         "conservative PVS: {} cells, epsilon {} m to {} m ({} levels), {} shrunk occluders "
@@ -970,7 +1030,7 @@ PvsSet bake_conservative_pvs(Context& ctx, const ConservativeConfig& config, con
         occluders.boxes.empty() ? 0 : occluders.boxes[0].size(), config.cube_resolution));
     PvsSet pvs = PvsSet::make(uint32_t(cells.size()), uint32_t(world.objects.size()));
     if (cells.kind == CellSet::Kind::kGrid) {
-        conservative_grid_rows(ctx, config, world, cells, occluders, scene, pvs, figures);
+        conservative_grid_rows(ctx, config, world, cells, occluders, scene, pvs, figures, journal);
     } else {
         std::vector<Aabb> boxes;
         for (const Cell& c : cells.cells) boxes.push_back(c.bounds);

@@ -36,6 +36,7 @@
 #include "core/context.h"
 #include "core/occluder.h"
 #include "core/pvs_set.h"
+#include "core/row_journal.h"
 #include "core/world.h"
 #include "rays/ray_scene.h"
 #include "solver/region_hiding.h"
@@ -71,16 +72,23 @@ struct ConservativeFigures {
 // (an octree node's parent). Its eye region holds box i's, so what that row leaves out is hidden from every
 // eye of box i too: it is left out without a test (docs/ALGORITHMS.md#octree-parent-bound).
 // `hiders` and `provers` (of these occluders), when given, are used instead of building them per call.
+// With `journal` and `keys` (one per box, the same box the same key in every run): a box's row the journal
+// holds (table "box") is taken from it, and every row computed is recorded there
+// (docs/ALGORITHMS.md#resume).
 void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const World& world,
                            const std::vector<Aabb>& boxes, const VoxelMask& eyes,
                            const ShrunkOccluders& occluders, const RayScene& scene, PvsSet& rows,
                            ConservativeFigures& figures, const RegionHiders* hiders = nullptr,
                            const std::vector<const uint64_t*>* bounds = nullptr,
-                           const ShaftProvers* provers = nullptr);
+                           const ShaftProvers* provers = nullptr, RowJournal* journal = nullptr,
+                           const std::vector<uint64_t>* keys = nullptr);
 
 // The conservative PVS of every cell. On a grid each face shared by two cells is computed once.
+// With `journal` (a grid only): every finished row of a pass (tables "hidden", "face", "face_seen",
+// "shaft") is taken from the journal when it holds it and recorded there when computed, and the journal is
+// flushed at the end of each pass and phase; the PVS is the same (docs/ALGORITHMS.md#resume).
 PvsSet bake_conservative_pvs(Context& ctx, const ConservativeConfig& config, const World& world,
                              const CellSet& cells, const ShrunkOccluders& occluders, const RayScene& scene,
-                             ConservativeFigures& figures);
+                             ConservativeFigures& figures, RowJournal* journal = nullptr);
 
 }  // namespace pvs

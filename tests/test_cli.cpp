@@ -15,8 +15,6 @@
 #include <string>
 #include <vector>
 
-#include <sys/wait.h>
-
 namespace pvs {
 namespace {
 
@@ -221,13 +219,6 @@ TEST(Cli, UnwritableOutputFailsBeforeAnyStageAndLeavesNothing) {
     EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.path()), {}), 0);
 }
 
-// The comparison docs/FORMAT.md gives: two bakes of one world with the same parameters differ only in /run.
-int h5diff_outside_run(const std::string& a, const std::string& b, const std::string& log) {
-    const int status =
-        std::system(("h5diff --exclude-path /run '" + a + "' '" + b + "' > '" + log + "' 2>&1").c_str());
-    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
 // Deterministic bakes (docs/FORMAT.md, "/run"): other thread counts give the same file but for the run's own
 // record, in every mode and partition; the run record does differ (the thread count is in it).
 TEST(Cli, OtherThreadCountsGiveTheSameFileOutsideRun) {
@@ -246,7 +237,7 @@ TEST(Cli, OtherThreadCountsGiveTheSameFileOutsideRun) {
             files.push_back(out);
         }
         const std::string log = dir.file("h5diff.txt");
-        EXPECT_EQ(h5diff_outside_run(files[0], files[1], log), 0) << test::read_file(log);
+        EXPECT_EQ(test::h5diff_outside_run(files[0], files[1], log), 0) << test::read_file(log);
         const BakeData one = read_bake_file(files[0]), two = read_bake_file(files[1]);
         EXPECT_NE(one.run.parameters, two.run.parameters);
         EXPECT_EQ(one.parameters, two.parameters);

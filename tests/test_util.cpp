@@ -7,6 +7,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include <sys/wait.h>
+
 namespace pvs::test {
 
 TempDir::TempDir() {
@@ -62,6 +64,12 @@ void write_file(const std::string& path, const std::string& bytes) {
     std::ofstream out(path, std::ios::binary);
     out.write(bytes.data(), std::streamsize(bytes.size()));
     if (!out) throw std::runtime_error("cannot write " + path);
+}
+
+int h5diff_outside_run(const std::string& a, const std::string& b, const std::string& log) {
+    const int status =
+        std::system(("h5diff --exclude-path /run '" + a + "' '" + b + "' > '" + log + "' 2>&1").c_str());
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
 }  // namespace pvs::test

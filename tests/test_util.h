@@ -35,6 +35,9 @@ bool in_ci();
 int fuzz_iterations(int full, int ci);
 
 std::string read_file(const std::string& path);
+// The comparison docs/FORMAT.md gives: `h5diff --exclude-path /run A B`, its output in `log`; its exit
+// status (0: the two bakes are the same outside the run's own record).
+int h5diff_outside_run(const std::string& a, const std::string& b, const std::string& log);
 void write_file(const std::string& path, const std::string& bytes);
 
 }  // namespace pvs::test
