@@ -105,12 +105,12 @@ BakeData bake_header(const BakeConfig& config, const World& world, const std::st
 // The grid's cells, clipped to the view volume, then every cell's PVS in the bake's mode.
 void grid_cells_and_pvs(Context& ctx, const BakeConfig& config, const World& world, const ViewVolume& view,
                         const RayScene& scene, const ShrunkOccluders& shrunk, BakeData& bake,
-                        StageFigures& figures, RowJournal* journal) {
+                        StageFigures& figures, RowJournal* journal, WorkShare* share) {
     bake.cells = build_uniform_grid(ctx, config.cells, view.view_bounds);
     figures.cells_dropped = clip_grid_to_view(ctx, bake.cells, view.view, view.eyes);
     if (config.mode == BakeMode::kConservative) {
         bake.pvs = bake_conservative_pvs(ctx, config.conservative, world, bake.cells, shrunk, scene,
-                                         figures.conservative, journal);
+                                         figures.conservative, journal, share);
     } else {
         SampledPvs sampled = bake_sampled_pvs(ctx, config.sampled, world, scene, bake.cells);
         bake.pvs = std::move(sampled.pvs);
@@ -123,7 +123,7 @@ void grid_cells_and_pvs(Context& ctx, const BakeConfig& config, const World& wor
 // apply: boxes are not known in advance. Timed under the mode's name, as on the grid.
 void octree_cells_and_pvs(Context& ctx, const BakeConfig& config, const World& world, const ViewVolume& view,
                           const RayScene& scene, const ShrunkOccluders& shrunk, BakeData& bake,
-                          StageFigures& figures, RowJournal* journal) {
+                          StageFigures& figures, RowJournal* journal, WorkShare* share) {
     const bool conservative = config.mode == BakeMode::kConservative;
     ScopedTimer t(ctx, conservative ? "conservative_pvs" : "sampled_pvs");
     const auto start = std::chrono::steady_clock::now();
@@ -145,7 +145,7 @@ void octree_cells_and_pvs(Context& ctx, const BakeConfig& config, const World& w
             // A box's stream names it in every run (its node's index): the journal's key.
             conservative_box_rows(ctx, config.conservative, world, boxes, masks.eyes, shrunk, scene, rows,
                                   figures.conservative, hiders ? &*hiders : nullptr, &bounds,
-                                  provers ? &*provers : nullptr, journal, &streams);
+                                  provers ? &*provers : nullptr, journal, &streams, share);
             if (journal) journal->flush();  // an octree level is a stage's end
             return;
         }
@@ -171,9 +171,17 @@ void octree_cells_and_pvs(Context& ctx, const BakeConfig& config, const World& w
 }  // namespace
 
 BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, const std::string& world_path,
-                    const std::string& world_hash, RowJournal* journal) {
+                    const std::string& world_hash, RowJournal* journal, WorkShare* share) {
     validate(config);
     const bool conservative = config.mode == BakeMode::kConservative;
+    if (share && !conservative) {
+        // The sampled mode is not dealt: rank 0 bakes it alone.
+        const bool root = share->rank() == 0;
+        share->close();
+        if (!root) return bake_header(config, world, world_path, world_hash);
+        ctx.warn("the sampled mode runs on rank 0 alone; the other processes wait");
+        share = nullptr;
+    }
     BakeData bake = bake_header(config, world, world_path, world_hash);
     StageFigures figures;
 
@@ -194,9 +202,14 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
     // 4. Cells and their PVS (docs/ALGORITHMS.md#conservative-pvs): a grid, then each cell's row; or an
     //    octree, split where the rows of its children differ.
     if (config.cells.kind == CellKind::kGrid) {
-        grid_cells_and_pvs(ctx, config, world, view, scene, shrunk, bake, figures, journal);
+        grid_cells_and_pvs(ctx, config, world, view, scene, shrunk, bake, figures, journal, share);
     } else {
-        octree_cells_and_pvs(ctx, config, world, view, scene, shrunk, bake, figures, journal);
+        octree_cells_and_pvs(ctx, config, world, view, scene, shrunk, bake, figures, journal, share);
+    }
+    if (share) {
+        // Every process holds the whole PVS now; rank 0 alone ranks, verifies and writes.
+        share->close();
+        if (share->rank() != 0) return bake;
     }
 
     // 5. Ranked occluders per cell, once the cells are final (the octree's depend on the PVS).

@@ -12,6 +12,7 @@
 #include "core/context.h"
 #include "core/occluder.h"
 #include "core/row_journal.h"
+#include "core/work_share.h"
 #include "core/world.h"
 #include "driver/verify.h"
 #include "io/bake_file.h"
@@ -38,9 +39,11 @@ std::vector<Occluder> solver_occluders(Context& ctx, const BakeConfig& config, c
 
 // Runs the bake of `world` (already loaded from world_path, whose content hash is world_hash).
 // With `journal`, the conservative PVS (grid or octree) takes the rows it holds and records those it
-// computes (docs/ALGORITHMS.md#resume); the bake is the same.
+// computes (docs/ALGORITHMS.md#resume); the bake is the same. With `share` (several processes,
+// driver/processes.h), its passes are dealt between the processes, and only rank 0 goes on after the PVS
+// (the others return the bake as it stands then); the sampled mode runs on rank 0 alone.
 BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, const std::string& world_path,
-                    const std::string& world_hash, RowJournal* journal = nullptr);
+                    const std::string& world_hash, RowJournal* journal = nullptr, WorkShare* share = nullptr);
 
 // The view volume's config of a bake: the conservative mode's automatic voxel follows epsilon.
 ViewVolumeConfig view_volume_config(const BakeConfig& config);

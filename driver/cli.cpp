@@ -5,6 +5,7 @@
 #include "cells/view_volume.h"
 #include "core/error.h"
 #include "driver/bake.h"
+#include "driver/processes.h"
 #include "driver/report.h"
 #include "driver/verify.h"
 #include "io/atomic_file.h"
@@ -274,10 +275,12 @@ struct CheckpointCost {
 };
 
 // The journal of a conservative bake's finished rows, loaded from the checkpoint in `folder` and writing
-// its chunks there (adding to `cost`); none when checkpoints are off or the mode has none (sampled).
+// its chunks there (adding to `cost`); none when checkpoints are off or the mode has none (sampled). Under
+// MPI (`share`) every rank reads the whole checkpoint and writes chunks of its own.
 std::unique_ptr<RowJournal> open_journal(Context& ctx, const BakeConfig& config, const std::string& folder,
                                          const CheckpointIdentity& id, ResumeMode resume,
-                                         CheckpointCost& cost) {
+                                         CheckpointCost& cost, WorkShare* share) {
+    const int rank = share ? share->rank() : 0;
     const bool on = config.run.checkpoint_interval_s > 0.0 && config.mode == BakeMode::kConservative;
     if (!on) {
         if (resume == ResumeMode::kResume) {
@@ -289,11 +292,12 @@ std::unique_ptr<RowJournal> open_journal(Context& ctx, const BakeConfig& config,
             ctx.warn(fmt::format("the checkpoint {} is not used by this bake; it is left as it is", folder));
         return nullptr;
     }
-    if (resume == ResumeMode::kRestart && checkpoint_exists(folder)) {
+    if (resume == ResumeMode::kRestart && rank == 0 && checkpoint_exists(folder)) {
         if (!remove_checkpoint(folder))
             throw bad_input(fmt::format("--restart: cannot remove the checkpoint {}", folder));
         ctx.info(fmt::format("removed the checkpoint {}", folder));
     }
+    if (share) share->barrier();  // no rank reads what rank 0 is removing
     Checkpoint checkpoint;
     try {
         checkpoint = read_checkpoint(folder, id);
@@ -306,10 +310,10 @@ std::unique_ptr<RowJournal> open_journal(Context& ctx, const BakeConfig& config,
     if (resume == ResumeMode::kResume && checkpoint.chunks.empty())
         throw bad_input(fmt::format("--resume: there is no checkpoint at {}", folder));
     // The sink runs under the journal's lock, so the chunk numbers follow the chunks.
-    auto sink = [&ctx, &cost, folder, id, next = checkpoint.next_index](const RowChunk& chunk) mutable {
+    auto sink = [&ctx, &cost, folder, id, rank, next = checkpoint.next_index](const RowChunk& chunk) mutable {
         const auto start = std::chrono::steady_clock::now();
         try {
-            write_checkpoint_chunk(folder, next, id, chunk);
+            write_checkpoint_chunk(folder, next, id, chunk, rank);
             ++next;
             ++cost.chunks;
             cost.rows += chunk.row_count();
@@ -343,11 +347,14 @@ int run_bake(Context& ctx, const BakeConfig& config, const std::string& world_pa
     for (auto& p : resolved_parameters(config))
         if (!is_run_parameter(p.first)) id.parameters.push_back(std::move(p));
     const std::string folder = checkpoint_folder(out_path);
+    // Several processes (mpirun): each runs this; rank 0 alone writes (driver/processes.h).
+    const std::unique_ptr<WorkShare> share = make_work_share(ctx);
     CheckpointCost cost;
-    std::unique_ptr<RowJournal> journal = open_journal(ctx, config, folder, id, resume, cost);
+    std::unique_ptr<RowJournal> journal = open_journal(ctx, config, folder, id, resume, cost, share.get());
     const size_t resumed_rows = journal ? journal->loaded_rows() : 0;
     const World world = load_world(ctx, world_path);
-    BakeData bake = bake_world(ctx, config, world, world_path, hash, journal.get());
+    BakeData bake = bake_world(ctx, config, world, world_path, hash, journal.get(), share.get());
+    if (share && share->rank() != 0) return kExitOk;
     bake.run.timings_s = ctx.timings();
     bake.run.figures.emplace_back("peak_memory_mb", peak_memory_mb());
     if (journal) {
@@ -700,6 +707,7 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
         return kExitBadInput;
     }
 
+    if (process_rank() > 0) common.quiet = true;  // rank 0 speaks for an MPI job (driver/processes.h)
     Context ctx = make_context(common, log);
     try {
         config.verify.enabled = !no_verify;
@@ -728,12 +736,15 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
         if (query->parsed()) return run_query(bake_path, point, json, out);
     } catch (const Error& e) {
         ctx.error(e.what());
+        abort_processes(exit_status(e.kind()));
         return exit_status(e.kind());
     } catch (const std::bad_alloc&) {
         ctx.error("out of memory (try a larger --cell-size or fewer rays)");
+        abort_processes(kExitFailure);
         return kExitFailure;
     } catch (const std::exception& e) {
         ctx.error(fmt::format("internal error: {}", e.what()));
+        abort_processes(kExitFailure);
         return kExitFailure;
     }
     return kExitFailure;

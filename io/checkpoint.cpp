@@ -28,8 +28,15 @@ constexpr int32_t kCheckpointVersion = 1;
 constexpr const char* kChunkPrefix = "rows-";
 constexpr const char* kChunkSuffix = ".h5";
 
-std::string chunk_name(uint32_t index) {
-    return fmt::format("{}{:06}{}", kChunkPrefix, index, kChunkSuffix);
+// "rows-000007.h5"; under MPI each rank writes its own, rank r > 0 "rows-000007-r3.h5".
+std::string chunk_name(uint32_t index, int rank) {
+    return rank > 0 ? fmt::format("{}{:06}-r{}{}", kChunkPrefix, index, rank, kChunkSuffix)
+                    : fmt::format("{}{:06}{}", kChunkPrefix, index, kChunkSuffix);
+}
+
+bool all_digits(const std::string& s) {
+    return !s.empty() && s.size() <= 9 &&
+           std::all_of(s.begin(), s.end(), [](char c) { return c >= '0' && c <= '9'; });
 }
 
 // The number of a chunk's file name, or 0 when it is not one (temporary files of a killed write included).
@@ -38,10 +45,10 @@ uint32_t chunk_index(const std::string& name) {
     if (name.size() <= prefix.size() + suffix.size() || name.rfind(prefix, 0) != 0 ||
         name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0)
         return 0;
-    const std::string digits = name.substr(prefix.size(), name.size() - prefix.size() - suffix.size());
-    if (digits.empty() || digits.size() > 9 ||
-        !std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; }))
-        return 0;
+    const std::string middle = name.substr(prefix.size(), name.size() - prefix.size() - suffix.size());
+    const size_t dash = middle.find("-r");
+    const std::string digits = middle.substr(0, dash);
+    if (!all_digits(digits) || (dash != std::string::npos && !all_digits(middle.substr(dash + 2)))) return 0;
     return uint32_t(std::stoul(digits));
 }
 
@@ -129,17 +136,17 @@ Checkpoint read_checkpoint(const std::string& folder, const CheckpointIdentity& 
     std::sort(files.begin(), files.end());
     for (const auto& [index, path] : files) {
         out.chunks.push_back(read_chunk(path, expected));
-        out.next_index = index + 1;
+        out.next_index = std::max(out.next_index, index + 1);
     }
     return out;
 }
 
 void write_checkpoint_chunk(const std::string& folder, uint32_t index, const CheckpointIdentity& id,
-                            const RowChunk& chunk) {
+                            const RowChunk& chunk, int rank) {
     std::error_code ec;
     fs::create_directories(folder, ec);
     if (ec) throw io_error(fmt::format("cannot create the checkpoint folder {}: {}", folder, ec.message()));
-    const std::string path = (fs::path(folder) / chunk_name(index)).string();
+    const std::string path = (fs::path(folder) / chunk_name(index, rank)).string();
     QuietHdf5 quiet;
     AtomicOutput out(path);
     {

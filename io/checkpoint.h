@@ -2,6 +2,7 @@
 // (docs/ALGORITHMS.md#resume, layout in docs/FORMAT.md#checkpoint).
 //
 // A folder beside the output, "<output>.checkpoint", of chunk files rows-000001.h5, rows-000002.h5, ...
+// (under MPI, rank r > 0 writes rows-000001-r<r>.h5, ...).
 // Each chunk is an HDF5 file written whole or not at all (io/atomic_file.h) and holds rows of a
 // RowJournal (core/row_journal.h) with what they were made from: the tool version, the world's content hash
 // and every parameter that can change a row (the bake's parameters outside run.*). A run reads only chunks
@@ -39,10 +40,10 @@ struct Checkpoint {
 // or cannot be read.
 Checkpoint read_checkpoint(const std::string& folder, const CheckpointIdentity& expected);
 
-// Writes chunk number `index` into `folder` (created when missing). Throws pvs::Error (kIo) on failure and
-// then leaves no partial chunk.
+// Writes chunk number `index` into `folder` (created when missing); `rank`: the MPI rank writing it (each
+// rank numbers its own chunks). Throws pvs::Error (kIo) on failure and then leaves no partial chunk.
 void write_checkpoint_chunk(const std::string& folder, uint32_t index, const CheckpointIdentity& id,
-                            const RowChunk& chunk);
+                            const RowChunk& chunk, int rank = 0);
 
 // Removes the chunks (and chunks a killed write left half-written) and then the folder if it is empty.
 // Never throws; returns false when something could not be removed.

@@ -3,6 +3,7 @@
 # Idempotent: packages already installed are not fetched again, and the build is incremental.
 #   scripts/setup.sh            install what is missing, configure, build
 #   BUILD_DIR=... BUILD_TYPE=... scripts/setup.sh   another folder or build type
+#   PVSBAKE_MPI=OFF scripts/setup.sh                 without MPI (one process per bake)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -14,6 +15,7 @@ PACKAGES=(
   libtinygltf-dev     # glTF 2.0 parsing
   libhdf5-dev hdf5-tools  # the bake file (and h5dump to read it)
   libgtest-dev        # tests
+  libopenmpi-dev openmpi-bin  # bakes over several processes or machines (mpirun; PVSBAKE_MPI)
   libcli11-dev        # command line parsing and --help
   nlohmann-json3-dev  # JSON reports
   libfmt-dev          # message formatting
@@ -40,8 +42,10 @@ fi
 
 BUILD_DIR=${BUILD_DIR:-build}
 BUILD_TYPE=${BUILD_TYPE:-Release}
-if [ ! -f "$BUILD_DIR/build.ninja" ]; then
-  cmake -S . -B "$BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE="$BUILD_TYPE" >/dev/null
+PVSBAKE_MPI=${PVSBAKE_MPI:-ON}
+if [ ! -f "$BUILD_DIR/build.ninja" ] ||
+  ! grep -q "^PVSBAKE_MPI:BOOL=$PVSBAKE_MPI\$" "$BUILD_DIR/CMakeCache.txt"; then
+  cmake -S . -B "$BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE="$BUILD_TYPE" -DPVSBAKE_MPI="$PVSBAKE_MPI" >/dev/null
 fi
 cmake --build "$BUILD_DIR" -j "$(nproc)"
 echo "setup: built $BUILD_DIR/bin/pvsbake"

@@ -704,7 +704,7 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
                            const ShrunkOccluders& occluders, const RayScene& scene, PvsSet& pvs,
                            ConservativeFigures& figures, const RegionHiders* hiders,
                            const std::vector<const uint64_t*>* bounds, const ShaftProvers* provers,
-                           RowJournal* journal, const std::vector<uint64_t>* keys) {
+                           RowJournal* journal, const std::vector<uint64_t>* keys, WorkShare* shared_work) {
     const auto start = std::chrono::steady_clock::now();
     if (!keys) journal = nullptr;
     const Shared shared = make_shared(config, world, occluders, scene);
@@ -718,20 +718,19 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
     Counts total;
     ShaftFigures shaft;
     uint64_t region_hidden = 0, skipped = 0;
+    WorkShare alone;
+    WorkShare& share = shared_work ? *shared_work : alone;
+    share.begin(boxes.size());
 #pragma omp parallel reduction(+ : region_hidden, skipped)
     {
         PatchSolver solver(shared);
         std::vector<uint32_t> open, candidates;
         std::vector<uint64_t> hidden(pvs.words_per_row), seen(pvs.words_per_row);
         ShaftFigures local_shaft;
-#pragma omp for schedule(dynamic, 1)
-        for (int64_t ci = 0; ci < int64_t(boxes.size()); ++ci) {
+        for_each_dealt(share, ctx, 1, [&](uint64_t ci) {
             const Aabb box = eye_region(eyes, boxes[size_t(ci)]);
             uint64_t* row = pvs.row(uint32_t(ci));
-            if (journal && journal->find("box", (*keys)[size_t(ci)], row, pvs.words_per_row)) {
-                ctx.progress_advance();
-                continue;
-            }
+            if (journal && journal->find("box", (*keys)[size_t(ci)], row, pvs.words_per_row)) return;
             open.clear();
             for (uint32_t o = 0; o < world.objects.size(); ++o) {
                 if ((world.objects[o].flags & kObjectAlwaysVisible) ||
@@ -772,14 +771,14 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
                 }
             }
             if (journal) journal->record("box", (*keys)[size_t(ci)], row, pvs.words_per_row);
-            ctx.progress_advance();
-        }
+        });
 #pragma omp critical
         {
             total += solver.counts();
             shaft += local_shaft;
         }
     }
+    share.unite(pvs.words.data(), pvs.words.size());  // each row was written by the process it was dealt to
     figures.shaft += shaft;
     figures.region_hidden += region_hidden;
     figures.parent_hidden += skipped;
@@ -798,7 +797,7 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
 static void conservative_grid_rows(Context& ctx, const ConservativeConfig& config, const World& world,
                                    const CellSet& cells, const ShrunkOccluders& occluders,
                                    const RayScene& scene, PvsSet& pvs, ConservativeFigures& figures,
-                                   RowJournal* journal) {
+                                   RowJournal* journal, WorkShare& share) {
     const auto start = std::chrono::steady_clock::now();
     const uint32_t n_objects = uint32_t(world.objects.size());
     // Faces of each cell's eye region (eye_region()); neighbours whose regions fill both cells share the
@@ -856,17 +855,18 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
         hiders.emplace(ctx, occluders);
         uint64_t n_hidden = 0;
         ctx.progress_begin("single-occluder pass", cells.size(), "cells");
-#pragma omp parallel for schedule(dynamic, 16) reduction(+ : n_hidden)
-        for (int64_t c = 0; c < int64_t(cells.size()); ++c) {
+        share.begin(cells.size());
+#pragma omp parallel reduction(+ : n_hidden)
+        for_each_dealt(share, ctx, 16, [&](uint64_t c) {
             uint64_t* row = hidden.row(uint32_t(c));
             if (!regions[size_t(c)].is_empty() &&
-                !(journal && journal->find("hidden", uint64_t(c), row, hidden.words_per_row))) {
+                !(journal && journal->find("hidden", c, row, hidden.words_per_row))) {
                 n_hidden += hiders->of(occluders.set_for(regions[size_t(c)]))
                                 .hide(world, regions[size_t(c)], leavable, row);
-                if (journal) journal->record("hidden", uint64_t(c), row, hidden.words_per_row);
+                if (journal) journal->record("hidden", c, row, hidden.words_per_row);
             }
-            ctx.progress_advance();
-        }
+        });
+        share.unite(hidden.words.data(), hidden.words.size());
         ctx.progress_end();
         if (journal) journal->flush();
         figures.region_hidden += n_hidden;
@@ -921,20 +921,18 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
     };
     Counts total;
     ctx.progress_begin("conservative PVS", faces.size(), "faces");
+    share.begin(phase_faces[0].size());
 #pragma omp parallel
     {
         PatchSolver solver(shared);
-        for (const std::vector<uint32_t>& phase : phase_faces) {
-#pragma omp for schedule(dynamic, 4)
-            for (int64_t k = 0; k < int64_t(phase.size()); ++k) {
+        for (size_t p = 0; p < phase_faces.size(); ++p) {
+            const std::vector<uint32_t>& phase = phase_faces[p];
+            for_each_dealt(share, ctx, 4, [&](uint64_t k) {
                 const uint32_t fi = phase[size_t(k)];
                 const Face& f = faces[fi];
                 uint64_t* row_lo = f.wanted[0] ? face_rows.row(2 * fi) : nullptr;
                 uint64_t* row_hi = f.wanted[1] ? face_rows.row(2 * fi + 1) : nullptr;
-                if (journal && replay_face(fi)) {
-                    ctx.progress_advance();
-                    continue;
-                }
+                if (journal && replay_face(fi)) return;
                 // The cells' rows as the phase started: only the merge below writes them.
                 const uint64_t* known_lo = f.wanted[0] ? pvs.row(uint32_t(f.cell[0])) : nullptr;
                 const uint64_t* known_hi = f.wanted[1] ? pvs.row(uint32_t(f.cell[1])) : nullptr;
@@ -965,10 +963,11 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
                                   row_hi ? seen_row(f.cell[1]) : nullptr));
                 }
                 if (journal) record_face(fi);
-                ctx.progress_advance();
-            }
-            // (After the implied barrier: every face of the phase is done.) One thread merges, a few words
-            // per face; the barrier after it starts the next phase on the merged rows.
+            });
+#pragma omp barrier
+            // Every face of the phase is done. One thread merges, a few words per face (a face dealt to
+            // another process has a zero row here, and unite() brings its rows); the barrier after it starts
+            // the next phase on the merged rows.
 #pragma omp single
             {
                 for (const uint32_t fi : phase) {
@@ -979,7 +978,9 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
                         for (uint32_t w = 0; w < pvs.words_per_row; ++w) row[w] |= fr[w];
                     }
                 }
+                share.unite(pvs.words.data(), pvs.words.size());
                 if (journal) journal->flush();  // a phase is a stage's end (docs/ALGORITHMS.md#resume)
+                if (p + 1 < phase_faces.size()) share.begin(phase_faces[p + 1].size());
             }
         }
 #pragma omp critical
@@ -992,24 +993,30 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
         const ShaftProvers provers(ctx, occluders);
         ShaftFigures shaft;
         ctx.progress_begin("shaft pass", cells.size(), "cells");
+        // The seen rows of faces other processes solved; then each row of the pass comes from the process
+        // it was dealt to (the others zero theirs).
+        share.unite(seen.words.data(), seen.words.size());
+        std::vector<uint8_t> mine(share.processes() > 1 ? cells.size() : 0, 0);
+        share.begin(cells.size());
 #pragma omp parallel
         {
             ShaftFigures local;
-#pragma omp for schedule(dynamic, 1)
-            for (int64_t c = 0; c < int64_t(cells.size()); ++c) {
+            for_each_dealt(share, ctx, 1, [&](uint64_t c) {
                 const Aabb& region = regions[size_t(c)];
                 uint64_t* row = pvs.row(uint32_t(c));
-                if (!region.is_empty() &&
-                    !(journal && journal->find("shaft", uint64_t(c), row, pvs.words_per_row))) {
+                if (!mine.empty()) mine[size_t(c)] = 1;
+                if (!region.is_empty() && !(journal && journal->find("shaft", c, row, pvs.words_per_row))) {
                     shaft_row(provers.of(occluders.set_for(region)), world, cells.eyes, region, leavable,
                               config.shaft_budget, row, seen.row(uint32_t(c)), local);
-                    if (journal) journal->record("shaft", uint64_t(c), row, pvs.words_per_row);
+                    if (journal) journal->record("shaft", c, row, pvs.words_per_row);
                 }
-                ctx.progress_advance();
-            }
+            });
 #pragma omp critical
             shaft += local;
         }
+        for (size_t c = 0; c < mine.size(); ++c)
+            if (!mine[c]) std::fill_n(pvs.row(uint32_t(c)), pvs.words_per_row, uint64_t(0));
+        share.unite(pvs.words.data(), pvs.words.size());
         ctx.progress_end();
         if (journal) journal->flush();
         shaft.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - pass_start).count();
@@ -1020,7 +1027,7 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
 
 PvsSet bake_conservative_pvs(Context& ctx, const ConservativeConfig& config, const World& world,
                              const CellSet& cells, const ShrunkOccluders& occluders, const RayScene& scene,
-                             ConservativeFigures& figures, RowJournal* journal) {
+                             ConservativeFigures& figures, RowJournal* journal, WorkShare* shared_work) {
     ScopedTimer timer(ctx, "conservative_pvs");
     ctx.info(fmt::format(
         "conservative PVS: {} cells, epsilon {} m to {} m ({} levels), {} shrunk occluders "
@@ -1030,7 +1037,9 @@ PvsSet bake_conservative_pvs(Context& ctx, const ConservativeConfig& config, con
         occluders.boxes.empty() ? 0 : occluders.boxes[0].size(), config.cube_resolution));
     PvsSet pvs = PvsSet::make(uint32_t(cells.size()), uint32_t(world.objects.size()));
     if (cells.kind == CellSet::Kind::kGrid) {
-        conservative_grid_rows(ctx, config, world, cells, occluders, scene, pvs, figures, journal);
+        WorkShare alone;
+        conservative_grid_rows(ctx, config, world, cells, occluders, scene, pvs, figures, journal,
+                               shared_work ? *shared_work : alone);
     } else {
         std::vector<Aabb> boxes;
         for (const Cell& c : cells.cells) boxes.push_back(c.bounds);

@@ -37,6 +37,7 @@
 #include "core/occluder.h"
 #include "core/pvs_set.h"
 #include "core/row_journal.h"
+#include "core/work_share.h"
 #include "core/world.h"
 #include "rays/ray_scene.h"
 #include "solver/region_hiding.h"
@@ -74,21 +75,25 @@ struct ConservativeFigures {
 // `hiders` and `provers` (of these occluders), when given, are used instead of building them per call.
 // With `journal` and `keys` (one per box, the same box the same key in every run): a box's row the journal
 // holds (table "box") is taken from it, and every row computed is recorded there
-// (docs/ALGORITHMS.md#resume).
+// (docs/ALGORITHMS.md#resume). With `share`, the boxes are dealt between the processes of the bake and every
+// process gets every row (docs/ALGORITHMS.md#processes); without, this process computes them all.
 void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const World& world,
                            const std::vector<Aabb>& boxes, const VoxelMask& eyes,
                            const ShrunkOccluders& occluders, const RayScene& scene, PvsSet& rows,
                            ConservativeFigures& figures, const RegionHiders* hiders = nullptr,
                            const std::vector<const uint64_t*>* bounds = nullptr,
                            const ShaftProvers* provers = nullptr, RowJournal* journal = nullptr,
-                           const std::vector<uint64_t>* keys = nullptr);
+                           const std::vector<uint64_t>* keys = nullptr, WorkShare* share = nullptr);
 
 // The conservative PVS of every cell. On a grid each face shared by two cells is computed once.
 // With `journal` (a grid only): every finished row of a pass (tables "hidden", "face", "face_seen",
 // "shaft") is taken from the journal when it holds it and recorded there when computed, and the journal is
-// flushed at the end of each pass and phase; the PVS is the same (docs/ALGORITHMS.md#resume).
+// flushed at the end of each pass and phase; the PVS is the same (docs/ALGORITHMS.md#resume). With `share`,
+// the faces and cells of each pass are dealt between the processes of the bake, and every process gets the
+// whole PVS (docs/ALGORITHMS.md#processes).
 PvsSet bake_conservative_pvs(Context& ctx, const ConservativeConfig& config, const World& world,
                              const CellSet& cells, const ShrunkOccluders& occluders, const RayScene& scene,
-                             ConservativeFigures& figures, RowJournal* journal = nullptr);
+                             ConservativeFigures& figures, RowJournal* journal = nullptr,
+                             WorkShare* share = nullptr);
 
 }  // namespace pvs

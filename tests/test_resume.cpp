@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
@@ -152,15 +153,18 @@ TEST(Checkpoint, ChunksOfAnotherBakeOrDamagedAreRefusedAndHalfWrittenOnesIgnored
 // ---------------------------------------------------------------------------------------------------------
 // The real binary, killed.
 
-// Starts pvsbake with `args`, its output and log going to `log`.
-pid_t spawn(const std::vector<std::string>& args, const std::string& log) {
+// Starts `program` (pvsbake by default) with `args`, its output and log going to `log`, in a process group
+// of its own (so that an mpirun and its ranks can be killed together).
+pid_t spawn(const std::vector<std::string>& args, const std::string& log,
+            const std::vector<std::string>& program = {PVSBAKE_BINARY}) {
     std::vector<std::string> all = args;
-    all.insert(all.begin(), PVSBAKE_BINARY);
+    all.insert(all.begin(), program.begin(), program.end());
     std::vector<char*> argv;
     for (std::string& a : all) argv.push_back(a.data());
     argv.push_back(nullptr);
     const pid_t pid = ::fork();
     if (pid == 0) {
+        ::setpgid(0, 0);
         const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
         if (fd >= 0) {
             ::dup2(fd, 1);
@@ -169,6 +173,7 @@ pid_t spawn(const std::vector<std::string>& args, const std::string& log) {
         ::execv(argv[0], argv.data());
         ::_exit(127);
     }
+    ::setpgid(pid, pid);
     return pid;
 }
 
@@ -214,26 +219,27 @@ bool log_has(const std::string& log, const std::string& text) {
     return test::read_file(log).find(text) != std::string::npos;
 }
 
-// A bake of the sample world whose conservative PVS takes seconds on two threads, after cheap occluders.
+// A bake of the sample world whose conservative PVS takes seconds on two threads (unless `extra` says
+// --threads), after cheap occluders.
 std::vector<std::string> bake_args(const std::string& out, std::vector<std::string> extra) {
     std::vector<std::string> a = {"bake",
                                   test::sample_world(),
                                   "-o",
                                   out,
-                                  "--no-verify",
                                   "--eyes",
                                   "2",
                                   "--rays",
                                   "64",
-                                  "--threads",
-                                  "2",
+                                  "-q",
+                                  "--no-verify",
                                   "--occluder-probe-eyes",
                                   "64",
                                   "--occluder-gap-lines",
                                   "0",
                                   "--occluder-seal-rays",
-                                  "0",
-                                  "-q"};
+                                  "0"};
+    if (std::find(extra.begin(), extra.end(), "--threads") == extra.end())
+        a.insert(a.end(), {"--threads", "2"});
     a.insert(a.end(), extra.begin(), extra.end());
     return a;
 }
@@ -241,7 +247,9 @@ std::vector<std::string> bake_args(const std::string& out, std::vector<std::stri
 // Bakes once uninterrupted, then again killed with SIGKILL after a random number of new checkpoint chunks
 // (and a random few milliseconds more, so that some kills land inside a chunk's write), run again, killed
 // again..., and finally run to its end: the two files must be the same outside /run.
-void kill_and_resume(const std::vector<std::string>& extra, uint32_t seed) {
+// `program`: what runs the killed bakes (pvsbake, or mpirun and its ranks).
+void kill_and_resume(const std::vector<std::string>& extra, uint32_t seed,
+                     const std::vector<std::string>& program = {PVSBAKE_BINARY}) {
     test::TempDir dir;
     const std::string reference = dir.file("reference.h5"), out = dir.file("resumed.h5");
     const std::string folder = out + ".checkpoint", log = dir.file("log.txt");
@@ -255,11 +263,11 @@ void kill_and_resume(const std::vector<std::string>& extra, uint32_t seed) {
     std::mt19937 rng(seed);
     int kills = 0, status = -1;
     for (int attempt = 0; attempt < 4; ++attempt) {
-        const pid_t pid = spawn(bake_args(out, often), log);
+        const pid_t pid = spawn(bake_args(out, often), log, program);
         const size_t target = chunk_files(folder) + 1 + rng() % 6;
         if (!wait_for_chunks(pid, folder, target, status)) break;  // it finished first
         std::this_thread::sleep_for(std::chrono::milliseconds(rng() % 40));
-        ::kill(pid, SIGKILL);
+        ::kill(-pid, SIGKILL);
         wait_for(pid);
         ++kills;
         ASSERT_FALSE(fs::exists(out)) << "a killed bake wrote its output";
@@ -269,7 +277,7 @@ void kill_and_resume(const std::vector<std::string>& extra, uint32_t seed) {
     const std::string final_log = dir.file("final.txt");
     std::vector<std::string> last = bake_args(out, often);
     last.erase(std::find(last.begin(), last.end(), "-q"));
-    ASSERT_EQ(wait_for(spawn(last, final_log)), 0) << test::read_file(final_log);
+    ASSERT_EQ(wait_for(spawn(last, final_log, program)), 0) << test::read_file(final_log);
     EXPECT_TRUE(log_has(final_log, "resuming from the checkpoint")) << test::read_file(final_log);
     EXPECT_FALSE(fs::exists(folder)) << "the checkpoint outlived the bake it served";
     const std::string diff = dir.file("h5diff.txt");
@@ -338,6 +346,53 @@ TEST(Resume, AnOutputThatCannotBeWrittenAtTheEndKeepsTheRowsAndTheNextRunFinishe
     const std::string diff = dir.file("h5diff.txt");
     EXPECT_EQ(test::h5diff_outside_run(reference, out, diff), 0) << test::read_file(diff);
 }
+
+#ifdef PVSBAKE_MPI
+// ---------------------------------------------------------------------------------------------------------
+// Several processes (docs/ALGORITHMS.md#processes): 2 ranks of one thread under mpirun write the file one
+// process of two threads writes.
+
+std::vector<std::string> mpirun(int ranks) {
+    // OpenMPI refuses to run as root unless told; the test's machines run as root. Only these children see
+    // it.
+    ::setenv("OMPI_ALLOW_RUN_AS_ROOT", "1", 1);
+    ::setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 1);
+    return {"/usr/bin/mpirun", "--oversubscribe", "-np", std::to_string(ranks), PVSBAKE_BINARY};
+}
+
+void expect_same_under_mpirun(const std::vector<std::string>& extra) {
+    test::TempDir dir;
+    const std::string one = dir.file("one.h5"), two = dir.file("two.h5"), log = dir.file("log.txt");
+    ASSERT_EQ(wait_for(spawn(bake_args(one, extra), log)), 0) << test::read_file(log);
+    std::vector<std::string> one_thread = extra;
+    one_thread.insert(one_thread.end(), {"--threads", "1"});
+    const std::vector<std::string> args = bake_args(two, one_thread);
+    ASSERT_EQ(wait_for(spawn(args, log, mpirun(2))), 0) << test::read_file(log);
+    EXPECT_FALSE(fs::exists(two + ".checkpoint"));
+    const std::string diff = dir.file("h5diff.txt");
+    EXPECT_EQ(test::h5diff_outside_run(one, two, diff), 0) << test::read_file(diff);
+}
+
+TEST(Processes, TwoRanksBakeTheGridOneProcessBakes) {
+    expect_same_under_mpirun({"--shaft-budget", "16"});
+}
+
+TEST(Processes, TwoRanksBakeTheOctreeOneProcessBakes) {
+    expect_same_under_mpirun({"--cells", "octree"});
+}
+
+TEST(Processes, TwoRanksKilledTogetherAndRunAgainWriteTheSameFile) {
+    kill_and_resume({"--threads", "1"}, 4, mpirun(2));
+}
+
+TEST(Processes, AMissingWorldEndsEveryRankWithAMessage) {
+    // Every rank fails before the first stage; none may wait for the others.
+    test::TempDir dir;
+    const std::string log = dir.file("log.txt");
+    EXPECT_NE(wait_for(spawn({"bake", dir.file("missing.glb"), "-o", dir.file("x.h5")}, log, mpirun(2))), 0);
+    EXPECT_TRUE(log_has(log, "missing.glb")) << test::read_file(log);
+}
+#endif
 
 }  // namespace
 }  // namespace pvs

@@ -1,0 +1,28 @@
+// pvsbake driver: the processes of a bake. One, or the ranks of an MPI job when pvsbake is built with
+// PVSBAKE_MPI=ON and started by mpirun (docs/ALGORITHMS.md#processes). Every rank runs the whole command: the
+// stages before the PVS on its own (they are deterministic), the PVS with its passes dealt between the ranks
+// (core/work_share.h); rank 0 alone runs the stages after it and writes the output.
+#pragma once
+
+#include "core/context.h"
+#include "core/work_share.h"
+
+#include <memory>
+
+namespace pvs {
+
+// Starts the job's processes (MPI_Init_thread under MPI); once, from main, before anything else.
+void start_processes(int& argc, char**& argv);
+// Ends them (MPI_Finalize); once, from main, after everything else.
+void end_processes();
+// This process's rank and the number of processes: 0 and 1 without MPI.
+int process_rank();
+int process_count();
+// A share of the PVS passes between the processes, its progress shown by rank 0 on `ctx`; null for one
+// process. Collective: every process creates it.
+std::unique_ptr<WorkShare> make_work_share(Context& ctx);
+// Ends every process of the job with `status` (MPI_Abort: a rank that fails must not leave the others
+// waiting for it forever); returns only without MPI or with one process.
+void abort_processes(int status);
+
+}  // namespace pvs
