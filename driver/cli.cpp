@@ -707,7 +707,10 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
         return kExitBadInput;
     }
 
-    if (process_rank() > 0) common.quiet = true;  // rank 0 speaks for an MPI job (driver/processes.h)
+    // Under mpirun rank 0 speaks for the job (driver/processes.h), and only bake is shared between ranks: the
+    // other commands run on rank 0 alone.
+    if (process_rank() > 0 && !bake->parsed()) return kExitOk;
+    if (process_rank() > 0) common.quiet = true;
     Context ctx = make_context(common, log);
     try {
         config.verify.enabled = !no_verify;
