@@ -43,7 +43,7 @@ public:
     // interval_s <= 0: chunks go to the sink only at flush().
     RowJournal(Sink sink, double interval_s);
 
-    // Adds the rows of a chunk a earlier run wrote. Throws pvs::Error (internal) when a table's row width
+    // Adds the rows of a chunk an earlier run wrote. Throws pvs::Error (internal) when a table's row width
     // differs from one loaded before.
     void load(const RowChunk& chunk);
     size_t loaded_rows() const { return loaded_rows_; }
