@@ -11,12 +11,14 @@
 #include "rays/ray_sampler.h"
 #include "rays/ray_scene.h"
 #include "solver/conservative.h"
+#include "solver/reuse.h"
 
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <map>
 #include <optional>
 
 #ifndef PVSBAKE_VERSION
@@ -105,12 +107,23 @@ BakeData bake_header(const BakeConfig& config, const World& world, const std::st
 // The grid's cells, clipped to the view volume, then every cell's PVS in the bake's mode.
 void grid_cells_and_pvs(Context& ctx, const BakeConfig& config, const World& world, const ViewVolume& view,
                         const RayScene& scene, const ShrunkOccluders& shrunk, BakeData& bake,
-                        StageFigures& figures, RowJournal* journal, WorkShare* share) {
+                        StageFigures& figures, RowJournal* journal, WorkShare* share, const BakeData* reuse) {
     bake.cells = build_uniform_grid(ctx, config.cells, view.view_bounds);
     figures.cells_dropped = clip_grid_to_view(ctx, bake.cells, view.view, view.eyes);
     if (config.mode == BakeMode::kConservative) {
+        std::optional<ReusePlan> plan;
+        if (reuse) {
+            ScopedTimer t(ctx, "reuse_plan");
+            plan = plan_reuse(ctx, config.conservative, world, bake.cells, bake.print,
+                              ReuseSource{reuse->cells, reuse->pvs, reuse->print});
+            figures.reuse = plan->figures;
+            if (!plan->whole.empty()) {
+                ctx.warn(fmt::format("--reuse: nothing is kept from the old bake: {}", plan->whole));
+                plan.reset();
+            }
+        }
         bake.pvs = bake_conservative_pvs(ctx, config.conservative, world, bake.cells, shrunk, scene,
-                                         figures.conservative, journal, share);
+                                         figures.conservative, journal, share, plan ? &*plan : nullptr);
     } else {
         SampledPvs sampled = bake_sampled_pvs(ctx, config.sampled, world, scene, bake.cells);
         bake.pvs = std::move(sampled.pvs);
@@ -171,7 +184,8 @@ void octree_cells_and_pvs(Context& ctx, const BakeConfig& config, const World& w
 }  // namespace
 
 BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, const std::string& world_path,
-                    const std::string& world_hash, RowJournal* journal, WorkShare* share) {
+                    const std::string& world_hash, RowJournal* journal, WorkShare* share,
+                    const BakeData* reuse) {
     validate(config);
     const bool conservative = config.mode == BakeMode::kConservative;
     if (share && !conservative) {
@@ -198,12 +212,18 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
         bake.occluders =
             solver_occluders(ctx, config, world, view, scene, figures.occluders, figures.blocks, shrunk);
     }
+    // What a later re-bake after an edit compares (docs/ALGORITHMS.md#reuse).
+    if (conservative) {
+        ScopedTimer t(ctx, "geometry_print");
+        bake.print = geometry_print(config.conservative, world, shrunk, view.eyes);
+    }
 
     // 4. Cells and their PVS (docs/ALGORITHMS.md#conservative-pvs): a grid, then each cell's row; or an
     //    octree, split where the rows of its children differ.
     if (config.cells.kind == CellKind::kGrid) {
-        grid_cells_and_pvs(ctx, config, world, view, scene, shrunk, bake, figures, journal, share);
+        grid_cells_and_pvs(ctx, config, world, view, scene, shrunk, bake, figures, journal, share, reuse);
     } else {
+        if (reuse) ctx.warn("--reuse: octree cells are baked in full (a reuse keeps the rows of grid cells)");
         octree_cells_and_pvs(ctx, config, world, view, scene, shrunk, bake, figures, journal, share);
     }
     if (share) {
@@ -236,6 +256,25 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
         store_verification(result, bake);
     }
     return bake;
+}
+
+void check_reuse(const BakeConfig& config, const BakeData& old, const std::string& old_path) {
+    if (!old.conservative)
+        throw bad_input(fmt::format("--reuse {}: not a conservative bake (mode {})", old_path, old.mode));
+    std::map<std::string, std::string> before(old.parameters.begin(), old.parameters.end());
+    for (const auto& [name, value] : resolved_parameters(config)) {
+        if (is_run_parameter(name)) continue;
+        const auto it = before.find(name);
+        if (it == before.end() || it->second != value) {
+            throw bad_input(
+                fmt::format("--reuse {}: it was baked with {} = {}, this bake has {}: a re-bake reuses only "
+                            "a bake of the "
+                            "same parameters",
+                            old_path, name, it == before.end() ? "(none)" : it->second, value));
+        }
+    }
+    if (config.occluders.block_m > 0.0)
+        throw bad_input("--reuse: not with --occluder-block (occluders per block are not printed)");
 }
 
 void check_bake_matches_world(Context& ctx, const BakeData& bake, const World& world,

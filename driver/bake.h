@@ -42,8 +42,17 @@ std::vector<Occluder> solver_occluders(Context& ctx, const BakeConfig& config, c
 // computes (docs/ALGORITHMS.md#resume); the bake is the same. With `share` (several processes,
 // driver/processes.h), its passes are dealt between the processes, and only rank 0 goes on after the PVS
 // (the others return the bake as it stands then); the sampled mode runs on rank 0 alone.
+// With `reuse` (an older conservative bake of the same parameters, check_reuse()), a grid's PVS keeps the
+// bits of that bake an edit of the world cannot change and computes the rest (solver/reuse.h); the bake is
+// the same as without it (docs/ALGORITHMS.md#reuse). An octree is baked in full.
 BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, const std::string& world_path,
-                    const std::string& world_hash, RowJournal* journal = nullptr, WorkShare* share = nullptr);
+                    const std::string& world_hash, RowJournal* journal = nullptr, WorkShare* share = nullptr,
+                    const BakeData* reuse = nullptr);
+
+// Checks that `old` (read from `old_path`) can serve a re-bake with `config` (--reuse): a conservative
+// bake made with the same parameters (outside run.*). Throws pvs::Error (bad input) naming the first
+// difference.
+void check_reuse(const BakeConfig& config, const BakeData& old, const std::string& old_path);
 
 // The view volume's config of a bake: the conservative mode's automatic voxel follows epsilon.
 ViewVolumeConfig view_volume_config(const BakeConfig& config);

@@ -28,6 +28,7 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string_view>
 #include <type_traits>
 
@@ -336,7 +337,8 @@ std::unique_ptr<RowJournal> open_journal(Context& ctx, const BakeConfig& config,
 
 // bake WORLD -o OUT.h5
 int run_bake(Context& ctx, const BakeConfig& config, const std::string& world_path,
-             const std::string& out_path, const std::string& report_path, ResumeMode resume) {
+             const std::string& out_path, const std::string& report_path, ResumeMode resume,
+             const std::string& reuse_path) {
     ScopedTimer total(ctx, "total");
     // Before any stage: a bad output path must not cost a night's bake.
     check_output_writable(out_path, "the output");
@@ -346,6 +348,16 @@ int run_bake(Context& ctx, const BakeConfig& config, const std::string& world_pa
     CheckpointIdentity id{tool_version(), hash, {}};
     for (auto& p : resolved_parameters(config))
         if (!is_run_parameter(p.first)) id.parameters.push_back(std::move(p));
+    // --reuse: the old bake is read and checked before any stage too (docs/ALGORITHMS.md#reuse). A
+    // checkpoint's rows were computed beside the old bake's, so it belongs to that old bake alone.
+    std::optional<BakeData> reuse;
+    if (!reuse_path.empty()) {
+        reuse = read_bake_file(reuse_path);
+        check_reuse(config, *reuse, reuse_path);
+        if (config.mode != BakeMode::kConservative)
+            throw bad_input("--reuse: only a conservative bake reuses an old one");
+        id.parameters.emplace_back("reuse", hash_file_hex(reuse_path));
+    }
     const std::string folder = checkpoint_folder(out_path);
     // Several processes (mpirun): each runs this; rank 0 alone writes (driver/processes.h).
     const std::unique_ptr<WorkShare> share = make_work_share(ctx);
@@ -353,8 +365,10 @@ int run_bake(Context& ctx, const BakeConfig& config, const std::string& world_pa
     std::unique_ptr<RowJournal> journal = open_journal(ctx, config, folder, id, resume, cost, share.get());
     const size_t resumed_rows = journal ? journal->loaded_rows() : 0;
     const World world = load_world(ctx, world_path);
-    BakeData bake = bake_world(ctx, config, world, world_path, hash, journal.get(), share.get());
+    BakeData bake = bake_world(ctx, config, world, world_path, hash, journal.get(), share.get(),
+                               reuse ? &*reuse : nullptr);
     if (share && share->rank() != 0) return kExitOk;
+    if (reuse) bake.run.parameters.emplace_back("reuse", reuse_path);
     bake.run.timings_s = ctx.timings();
     bake.run.figures.emplace_back("peak_memory_mb", peak_memory_mb());
     if (journal) {
@@ -565,6 +579,7 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
     CommonOptions common;
     std::string world_path, out_path, bake_path, mode = "conservative";
     bool no_verify = false, no_write = false, json = false, resume = false, restart = false;
+    std::string reuse_path;
     std::vector<double> point;
 
     CLI::App* bake =
@@ -604,6 +619,12 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
                             "remove the checkpoint OUT.checkpoint/ and bake from zero (a checkpoint of "
                             "another world or other parameters is refused otherwise)")
                         ->excludes("--resume")
+                        ->group(title);
+                    bake->add_option(
+                            "--reuse", reuse_path,
+                            "OLD.h5, a conservative grid bake of this world before an edit, with the "
+                            "same parameters: keep its rows where the edit cannot change them and "
+                            "compute the rest (the same file as a full bake)")
                         ->group(title);
                     break;
                 case OptionGroup::kViewVolume:
@@ -723,7 +744,8 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
             return run_bake(ctx, config, world_path, out_path, common.report_path,
                             resume    ? ResumeMode::kResume
                             : restart ? ResumeMode::kRestart
-                                      : ResumeMode::kAuto);
+                                      : ResumeMode::kAuto,
+                            reuse_path);
         }
         if (verify->parsed()) {
             validate(config);

@@ -110,6 +110,13 @@ NamedValues run_figures(const BakeData& bake, const StageFigures& stages) {
         {"conservative_shaft_out_of_budget", double(cons.shaft.out_of_budget)},
         {"conservative_shaft_seconds", cons.shaft.seconds},
         {"conservative_seconds", cons.seconds},
+        {"reuse_pairs", double(stages.reuse.pairs)},
+        {"reuse_pairs_kept", double(stages.reuse.kept)},
+        {"reuse_cells_matched", double(stages.reuse.cells_matched)},
+        {"reuse_cells_whole", double(stages.reuse.cells_whole)},
+        {"reuse_objects_matched", double(stages.reuse.objects_matched)},
+        {"reuse_changed_tiles", double(stages.reuse.changed_tiles)},
+        {"reuse_seconds", stages.reuse.seconds},
         {"cells_per_second",
          cons.seconds > 0
              ? double(bake.cells.size()) / cons.seconds

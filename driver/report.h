@@ -40,6 +40,7 @@ struct StageFigures {
     ConservativeFigures conservative;
     SampledFigures sampled;
     RankingFigures ranking;
+    ReuseFigures reuse;  // an incremental re-bake (solver/reuse.h); zero without --reuse
 };
 
 // The figures of a bake's result, as stored in /figures and the report's figures{}: named numbers in a

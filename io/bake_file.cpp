@@ -274,6 +274,46 @@ void read_run(const Reader& r, hid_t root, BakeData& bake) {
     bake.parameters = std::move(kept);
 }
 
+// /reuse: the geometry print (core/geometry_print.h), what a re-bake after an edit compares; absent when
+// the bake has none.
+void write_print(Writer& w, hid_t root, const GeometryPrint& p) {
+    if (p.empty()) return;
+    Handle g = w.group(root, "/", "reuse");
+    const uint64_t header[2] = {p.header, p.outside};
+    w.attr(g.get(), "header", H5T_STD_U64LE, H5T_NATIVE_UINT64, 2, header);
+    const float origin[3] = {p.origin.x, p.origin.y, p.origin.z};
+    w.attr(g.get(), "origin", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, 3, origin);
+    w.attr(g.get(), "tile_m", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, 1, &p.tile_m);
+    const int32_t dims[3] = {p.dims.x, p.dims.y, p.dims.z};
+    w.attr(g.get(), "dims", H5T_STD_I32LE, H5T_NATIVE_INT32, 3, dims);
+    w.dataset(g.get(), "/reuse", "tiles", H5T_STD_U64LE, H5T_NATIVE_UINT64, {p.tiles.size()}, p.tiles.data());
+    w.dataset(g.get(), "/reuse", "objects", H5T_STD_U64LE, H5T_NATIVE_UINT64, {p.objects.size()},
+              p.objects.data());
+}
+
+void read_print(const Reader& r, hid_t root, BakeData& bake) {
+    if (!r.has_link(root, "reuse")) return;  // older than 1.6, or not conservative
+    Handle g = r.open_group(root, "/reuse");
+    GeometryPrint& p = bake.print;
+    const std::vector<uint64_t> header =
+        r.numeric_attr<uint64_t>(g.get(), "/reuse", "header", H5T_NATIVE_UINT64, 2);
+    const std::vector<float> origin = r.numeric_attr<float>(g.get(), "/reuse", "origin", H5T_NATIVE_FLOAT, 3);
+    const std::vector<float> tile = r.numeric_attr<float>(g.get(), "/reuse", "tile_m", H5T_NATIVE_FLOAT, 1);
+    const std::vector<int32_t> dims = r.numeric_attr<int32_t>(g.get(), "/reuse", "dims", H5T_NATIVE_INT32, 3);
+    if (!(tile[0] > 0.0f) || dims[0] <= 0 || dims[1] <= 0 || dims[2] <= 0 || header[0] == 0)
+        r.fail("/reuse has no tiles (tile_m, dims or header out of range)");
+    const uint64_t n = uint64_t(dims[0]) * uint64_t(dims[1]) * uint64_t(dims[2]);
+    p.tiles =
+        r.numeric_dataset<uint64_t>(g.get(), "/reuse", "tiles", H5T_NATIVE_UINT64, {int64_t(n)}, H5T_INTEGER);
+    p.objects = r.numeric_dataset<uint64_t>(g.get(), "/reuse", "objects", H5T_NATIVE_UINT64,
+                                            {int64_t(bake.objects.size())}, H5T_INTEGER);
+    p.header = header[0];
+    p.outside = header[1];
+    p.origin = {origin[0], origin[1], origin[2]};
+    p.tile_m = tile[0];
+    p.dims = {dims[0], dims[1], dims[2]};
+}
+
 void write_objects(Writer& w, hid_t root, const std::vector<ObjectRecord>& objects) {
     Handle g = w.group(root, "/", "objects");
     std::vector<std::string> names;
@@ -736,6 +776,7 @@ void write_bake_file(const std::string& path, const BakeData& bake) {
             write_occluders(w, root.get(), bake.occluders, bake.ranked);
             w.named_values(root.get(), "/", "figures", bake.figures, nullptr);
             write_verification(w, root.get(), bake.verification);
+            write_print(w, root.get(), bake.print);
             write_run(w, root.get(), bake.run);
         }
         site.check(file.close(), "cannot finish writing " + out.temp_path());
@@ -758,6 +799,7 @@ BakeData read_bake_file(const std::string& path) {
         read_occluders(r, root, bake);
         bake.figures = r.named_values(root, "/figures");
         read_verification(r, root, bake);
+        read_print(r, root, bake);
         read_run(r, root, bake);
         return bake;
     });

@@ -10,6 +10,7 @@
 #pragma once
 
 #include "core/cell_set.h"
+#include "core/geometry_print.h"
 #include "core/math.h"
 #include "core/occluder.h"
 #include "core/pvs_set.h"
@@ -22,9 +23,10 @@
 namespace pvs {
 
 constexpr int kBakeFormatMajor = 1;
-constexpr int kBakeFormatMinor = 5;  // 1.1 added the PVS code (/pvs/code), 1.2 ranked occluders per cell,
+constexpr int kBakeFormatMinor = 6;  // 1.1 added the PVS code (/pvs/code), 1.2 ranked occluders per cell,
                                      // 1.3 the opening width of each verification miss, 1.4 the voxel
-                                     // masks as bricks, 1.5 the run's own record (/run)
+                                     // masks as bricks, 1.5 the run's own record (/run), 1.6 the geometry
+                                     // print (/reuse)
 
 struct ObjectRecord {
     std::string name;
@@ -90,6 +92,7 @@ struct BakeData {
     std::vector<Occluder> occluders;   // synthesized boxes (only proven ones may occlude)
     RankedOccluders ranked;            // per cell, indices into `occluders` (empty: none, or a file < 1.2)
     VerificationRecord verification;
+    GeometryPrint print;  // conservative bakes from 1.6: what a re-bake after an edit compares (/reuse)
     RunRecord run;
 };
 

@@ -797,7 +797,7 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
 static void conservative_grid_rows(Context& ctx, const ConservativeConfig& config, const World& world,
                                    const CellSet& cells, const ShrunkOccluders& occluders,
                                    const RayScene& scene, PvsSet& pvs, ConservativeFigures& figures,
-                                   RowJournal* journal, WorkShare& share) {
+                                   RowJournal* journal, WorkShare& share, const ReusePlan* reuse) {
     const auto start = std::chrono::steady_clock::now();
     const uint32_t n_objects = uint32_t(world.objects.size());
     // Faces of each cell's eye region (eye_region()); neighbours whose regions fill both cells share the
@@ -842,7 +842,19 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
         uint64_t* row = pvs.row(c);
         for (uint32_t o = 0; o < n_objects; ++o)
             if (world.objects[o].bounds.overlaps(regions[c])) row[o >> 6] |= uint64_t(1) << (o & 63);
+        // Reusing an old bake (docs/ALGORITHMS.md#reuse): the settled pairs it lists are known listed.
+        if (reuse)
+            for (uint32_t w = 0; w < pvs.words_per_row; ++w) row[w] |= reuse->listed.row(c)[w];
     }
+    // The objects a pass tests for cell c: the leavable ones, less the pairs a reuse settled.
+    const auto unsettled = [&](uint32_t c, const std::vector<uint32_t>& all,
+                               std::vector<uint32_t>& out) -> const std::vector<uint32_t>& {
+        if (!reuse) return all;
+        out.clear();
+        for (uint32_t o : all)
+            if (!reuse->settled.test(c, o)) out.push_back(o);
+        return out;
+    };
     std::array<std::vector<uint32_t>, kPhases> phase_faces;
     for (uint32_t f = 0; f < faces.size(); ++f) phase_faces[size_t(faces[f].phase)].push_back(f);
     const Shared shared = make_shared(config, world, occluders, scene);
@@ -857,15 +869,19 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
         ctx.progress_begin("single-occluder pass", cells.size(), "cells");
         share.begin(cells.size());
 #pragma omp parallel reduction(+ : n_hidden)
-        for_each_dealt(share, ctx, 16, [&](uint64_t c) {
-            uint64_t* row = hidden.row(uint32_t(c));
-            if (!regions[size_t(c)].is_empty() &&
-                !(journal && journal->find("hidden", c, row, hidden.words_per_row))) {
-                n_hidden += hiders->of(occluders.set_for(regions[size_t(c)]))
-                                .hide(world, regions[size_t(c)], leavable, row);
-                if (journal) journal->record("hidden", c, row, hidden.words_per_row);
-            }
-        });
+        {
+            std::vector<uint32_t> scratch;
+            for_each_dealt(share, ctx, 16, [&](uint64_t c) {
+                uint64_t* row = hidden.row(uint32_t(c));
+                if (!regions[size_t(c)].is_empty() &&
+                    !(journal && journal->find("hidden", c, row, hidden.words_per_row))) {
+                    n_hidden +=
+                        hiders->of(occluders.set_for(regions[size_t(c)]))
+                            .hide(world, regions[size_t(c)], unsettled(uint32_t(c), leavable, scratch), row);
+                    if (journal) journal->record("hidden", c, row, hidden.words_per_row);
+                }
+            });
+        }
         share.unite(hidden.words.data(), hidden.words.size());
         ctx.progress_end();
         if (journal) journal->flush();
@@ -874,8 +890,20 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
             std::chrono::duration<double>(std::chrono::steady_clock::now() - pass_start).count();
     }
     const auto hider = [&](int32_t set) { return hiders ? &hiders->of(set) : nullptr; };
+    // What no face tests because it is known hidden: what the single-occluder pass proved, and with a
+    // reuse the settled pairs it does not list.
+    PvsSet excluded;
+    if (reuse) {
+        excluded = PvsSet::make(uint32_t(cells.size()), n_objects);
+        for (uint32_t c = 0; c < cells.size(); ++c)
+            for (uint32_t w = 0; w < excluded.words_per_row; ++w)
+                excluded.row(c)[w] = (reuse->settled.row(c)[w] & ~reuse->listed.row(c)[w]) |
+                                     (config.single_occluder_pass ? hidden.row(c)[w] : 0);
+    }
     const auto hidden_row = [&](int32_t cell) -> const uint64_t* {
-        return config.single_occluder_pass && cell >= 0 ? hidden.row(uint32_t(cell)) : nullptr;
+        if (cell < 0) return nullptr;
+        if (reuse) return excluded.row(uint32_t(cell));
+        return config.single_occluder_pass ? hidden.row(uint32_t(cell)) : nullptr;
     };
     PvsSet face_rows = PvsSet::make(uint32_t(2 * faces.size()), n_objects);  // face * 2 + side
     // What sight rays saw, per cell, for the shaft pass: a cell has at most one face in a phase, so each row
@@ -1001,13 +1029,15 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
 #pragma omp parallel
         {
             ShaftFigures local;
+            std::vector<uint32_t> scratch;
             for_each_dealt(share, ctx, 1, [&](uint64_t c) {
                 const Aabb& region = regions[size_t(c)];
                 uint64_t* row = pvs.row(uint32_t(c));
                 if (!mine.empty()) mine[size_t(c)] = 1;
                 if (!region.is_empty() && !(journal && journal->find("shaft", c, row, pvs.words_per_row))) {
-                    shaft_row(provers.of(occluders.set_for(region)), world, cells.eyes, region, leavable,
-                              config.shaft_budget, row, seen.row(uint32_t(c)), local);
+                    shaft_row(provers.of(occluders.set_for(region)), world, cells.eyes, region,
+                              unsettled(uint32_t(c), leavable, scratch), config.shaft_budget, row,
+                              seen.row(uint32_t(c)), local);
                     if (journal) journal->record("shaft", c, row, pvs.words_per_row);
                 }
             });
@@ -1027,7 +1057,8 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
 
 PvsSet bake_conservative_pvs(Context& ctx, const ConservativeConfig& config, const World& world,
                              const CellSet& cells, const ShrunkOccluders& occluders, const RayScene& scene,
-                             ConservativeFigures& figures, RowJournal* journal, WorkShare* shared_work) {
+                             ConservativeFigures& figures, RowJournal* journal, WorkShare* shared_work,
+                             const ReusePlan* reuse) {
     ScopedTimer timer(ctx, "conservative_pvs");
     ctx.info(fmt::format(
         "conservative PVS: {} cells, epsilon {} m to {} m ({} levels), {} shrunk occluders "
@@ -1039,7 +1070,7 @@ PvsSet bake_conservative_pvs(Context& ctx, const ConservativeConfig& config, con
     if (cells.kind == CellSet::Kind::kGrid) {
         WorkShare alone;
         conservative_grid_rows(ctx, config, world, cells, occluders, scene, pvs, figures, journal,
-                               shared_work ? *shared_work : alone);
+                               shared_work ? *shared_work : alone, reuse);
     } else {
         std::vector<Aabb> boxes;
         for (const Cell& c : cells.cells) boxes.push_back(c.bounds);

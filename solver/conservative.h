@@ -41,6 +41,7 @@
 #include "core/world.h"
 #include "rays/ray_scene.h"
 #include "solver/region_hiding.h"
+#include "solver/reuse.h"
 #include "solver/shaft_hiding.h"
 
 #include <vector>
@@ -90,10 +91,11 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
 // "shaft") is taken from the journal when it holds it and recorded there when computed, and the journal is
 // flushed at the end of each pass and phase; the PVS is the same (docs/ALGORITHMS.md#resume). With `share`,
 // the faces and cells of each pass are dealt between the processes of the bake, and every process gets the
-// whole PVS (docs/ALGORITHMS.md#processes).
+// whole PVS (docs/ALGORITHMS.md#processes). With `reuse` (a grid only; solver/reuse.h), the pairs it
+// settles take its bit and no pass tests them; the PVS is the same (docs/ALGORITHMS.md#reuse).
 PvsSet bake_conservative_pvs(Context& ctx, const ConservativeConfig& config, const World& world,
                              const CellSet& cells, const ShrunkOccluders& occluders, const RayScene& scene,
                              ConservativeFigures& figures, RowJournal* journal = nullptr,
-                             WorkShare* share = nullptr);
+                             WorkShare* share = nullptr, const ReusePlan* reuse = nullptr);
 
 }  // namespace pvs

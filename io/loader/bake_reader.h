@@ -18,7 +18,7 @@ namespace pvsbake::detail {
 
 constexpr const char* kFormatName = "pvsbake";
 constexpr int kFormatMajor = 1;
-constexpr int kFormatMinor = 5;
+constexpr int kFormatMinor = 6;
 
 // The root attributes. Throws kNotBakeFile without format = "pvsbake", kVersionTooNew for a newer major.
 BakeInfo read_header(const Reader& r, hid_t root);

@@ -1,0 +1,29 @@
+// pvsbake samples: a world written again with edits of the kind a level designer makes between two bakes
+// (an object moved or removed, the objects in a box removed, a hole cut, a crate added): the input of the
+// incremental re-bake's tests and measures (samples/edit_world.cpp, docs/ALGORITHMS.md#reuse).
+#pragma once
+
+#include "core/world.h"
+#include "io/gltf_writer.h"
+
+#include <string>
+#include <vector>
+
+namespace pvs {
+
+struct WorldEdit {
+    enum class Kind { kMove, kRemove, kRemoveIn, kCut, kAddBox };
+    Kind kind = Kind::kMove;
+    std::string name;  // kMove, kRemove: the object; kAddBox: the new object's name
+    Aabb box;          // kRemoveIn: objects wholly inside go; kCut: triangles whose centroid is inside go;
+                       // kAddBox: the closed opaque box added
+    glm::vec3 offset{0.0f};  // kMove
+};
+
+// The world as a scene to write (io/gltf_writer.h): every object as loaded (world-space triangles, one node
+// per object and kind of triangle: opaque or see-through, one- or two-sided, so an object of one kind keeps
+// its name), with its flags, the view seeds and the view-volume boxes; the edits applied in order. Throws
+// pvs::Error (bad input) when an edit names no object. Deterministic.
+SceneDesc edited_world(const World& world, const std::vector<WorldEdit>& edits);
+
+}  // namespace pvs

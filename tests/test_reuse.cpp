@@ -1,0 +1,179 @@
+// The incremental re-bake (docs/ALGORITHMS.md#reuse): the geometry print, and bakes of an edited sample world
+// with --reuse of the bake before the edit, which must write the file a full bake of the edited world
+// writes (the same outside /run, docs/FORMAT.md) while testing fewer pairs.
+#include "core/context.h"
+#include "io/gltf_loader.h"
+#include "io/gltf_writer.h"
+#include "samples/world_edit.h"
+#include "solver/reuse.h"
+#include "tests/test_util.h"
+#include "tests/world_builder.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include <sys/wait.h>
+
+namespace pvs {
+namespace {
+
+// Runs pvsbake with `args` (its log in `log`); returns its exit status.
+int run(const std::string& args, const std::string& log) {
+    const int status =
+        std::system((std::string(PVSBAKE_BINARY) + " " + args + " > '" + log + "' 2>&1").c_str());
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+// The sample world's bake, made cheap: few probe eyes, no gap lines, no seal rays, no verification.
+std::string bake_args(const std::string& world, const std::string& out) {
+    return "bake '" + world + "' -o '" + out +
+           "' -q --no-verify --threads 2 --occluder-probe-eyes 64 --occluder-gap-lines 0 "
+           "--occluder-seal-rays 0";
+}
+
+double run_figure(const std::string& report, const std::string& name) {
+    const nlohmann::json j = nlohmann::json::parse(test::read_file(report));
+    return j.at("run").at("figures").at(name).get<double>();
+}
+
+Aabb bounds_of(const World& world, const std::string& name) {
+    for (const WorldObject& o : world.objects)
+        if (o.name == name) return o.bounds;
+    ADD_FAILURE() << "no object " << name;
+    return {};
+}
+
+struct EditCase {
+    const char* name;
+    std::vector<WorldEdit> (*edits)(const World&);
+};
+
+// A crate moved within its room, and a closed wall between two rooms removed.
+std::vector<WorldEdit> moved_crate_and_removed_wall(const World&) {
+    WorldEdit move{WorldEdit::Kind::kMove, "crate_1_1_0", {}, glm::vec3(1.0f, 0.0f, 0.5f)};
+    WorldEdit remove{WorldEdit::Kind::kRemove, "wall_1_1_x", {}, {}};
+    return {move, remove};
+}
+
+// A door-sized hole cut through a closed wall, and a crate added in a room.
+std::vector<WorldEdit> door_and_new_crate(const World& world) {
+    // 1.2 m wide and 2.2 m high along the wall's long side, through its whole thickness.
+    const Aabb wall = bounds_of(world, "wall_1_2_x");
+    const int along = wall.size().x > wall.size().z ? 0 : 2;
+    Aabb door = Aabb::of(wall.min - 0.01f, wall.max + 0.01f);
+    door.min[along] = wall.center()[along] - 0.6f;
+    door.max[along] = wall.center()[along] + 0.6f;
+    door.max.y = wall.min.y + 2.2f;
+    WorldEdit cut{WorldEdit::Kind::kCut, "", door, {}};
+    const Aabb floor = bounds_of(world, "floor_2_2");
+    const glm::vec3 f = floor.center();
+    WorldEdit crate{
+        WorldEdit::Kind::kAddBox,
+        "crate_new",
+        Aabb::of({f.x - 0.5f, floor.max.y, f.z + 1.0f}, {f.x + 0.5f, floor.max.y + 1.0f, f.z + 2.0f}),
+        {}};
+    return {cut, crate};
+}
+
+std::vector<WorldEdit> no_edit(const World&) {
+    return {};
+}
+
+class ReuseEdit : public ::testing::TestWithParam<EditCase> {};
+
+TEST_P(ReuseEdit, TheReBakeFromTheOldBakeIsTheFullBakeOfTheEditedWorld) {
+    test::TempDir dir;
+    Context ctx(Context::Options{LogLevel::kWarning, true, nullptr});
+    const World sample = load_world(ctx, test::sample_world());
+    const std::string old_world = dir.file("old.glb"), new_world = dir.file("new.glb");
+    write_glb(edited_world(sample, {}), old_world);
+    const std::vector<WorldEdit> edits = GetParam().edits(sample);
+    write_glb(edited_world(sample, edits), new_world);
+    const std::string log = dir.file("log.txt"), report = dir.file("reuse.json");
+    ASSERT_EQ(run(bake_args(old_world, dir.file("old.h5")), log), 0) << test::read_file(log);
+    ASSERT_EQ(run(bake_args(new_world, dir.file("full.h5")), log), 0) << test::read_file(log);
+    ASSERT_EQ(run(bake_args(new_world, dir.file("reuse.h5")) + " --reuse '" + dir.file("old.h5") +
+                      "' --report '" + report + "'",
+                  log),
+              0)
+        << test::read_file(log);
+    EXPECT_EQ(test::h5diff_outside_run(dir.file("full.h5"), dir.file("reuse.h5"), dir.file("diff.txt")), 0)
+        << test::read_file(dir.file("diff.txt"));
+    const double pairs = run_figure(report, "reuse_pairs"), kept = run_figure(report, "reuse_pairs_kept");
+    EXPECT_GT(pairs, 0.0);
+    if (edits.empty()) {
+        EXPECT_EQ(kept, pairs) << "nothing changed: every pair is kept";
+        EXPECT_EQ(run_figure(report, "reuse_changed_tiles"), 0.0);
+    } else {
+        EXPECT_GT(kept, 0.0) << "the edit is local: some pairs are kept\n" << test::read_file(log);
+        EXPECT_LT(kept, pairs) << "the edit changes the geometry: some pairs are tested again";
+        EXPECT_GT(run_figure(report, "reuse_changed_tiles"), 0.0);
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(Edits, ReuseEdit,
+                         ::testing::Values(EditCase{"MovedCrateAndRemovedWall", moved_crate_and_removed_wall},
+                                           EditCase{"DoorCutAndCrateAdded", door_and_new_crate},
+                                           EditCase{"NoEdit", no_edit}),
+                         [](const auto& info) { return std::string(info.param.name); });
+
+TEST(Reuse, AnOldBakeOfOtherParametersOrNoneIsRefusedBeforeAnyStage) {
+    test::TempDir dir;
+    const std::string log = dir.file("log.txt"), old = dir.file("old.h5");
+    ASSERT_EQ(run(bake_args(test::sample_world(), old), log), 0) << test::read_file(log);
+    EXPECT_EQ(
+        run(bake_args(test::sample_world(), dir.file("new.h5")) + " --cell-size 4 --reuse '" + old + "'",
+            log),
+        2);
+    EXPECT_NE(test::read_file(log).find("cells.cell_size_m"), std::string::npos) << test::read_file(log);
+    EXPECT_EQ(
+        run(bake_args(test::sample_world(), dir.file("new.h5")) + " --reuse '" + dir.file("none.h5") + "'",
+            log),
+        2);
+    EXPECT_NE(test::read_file(log).find("none.h5"), std::string::npos) << test::read_file(log);
+    EXPECT_EQ(
+        run(bake_args(test::sample_world(), dir.file("new.h5")) + " --mode sampled --reuse '" + old + "'",
+            log),
+        2);
+    EXPECT_FALSE(std::filesystem::exists(dir.file("new.h5"))) << "a refused bake writes nothing";
+}
+
+// A print over a 16 m cube of eye voxels: a box moved changes the tiles its old and new bounds meet, and no
+// other; the same world prints the same.
+TEST(GeometryPrint, AMovedBoxChangesOnlyTheTilesItMeets) {
+    VoxelMask eyes;
+    eyes.origin = glm::vec3(0.0f);
+    eyes.voxel_size_m = 0.25f;
+    eyes.dims = glm::ivec3(64);
+    eyes.bits.assign(size_t(eyes.count() + 63) / 64, ~uint64_t(0));
+    const ConservativeConfig config;
+    const ShrunkOccluders none;
+    const Aabb before = Aabb::of({2.1f, 0.1f, 2.1f}, {2.9f, 0.9f, 2.9f});
+    const Aabb after = Aabb::of({10.1f, 0.1f, 6.1f}, {10.9f, 0.9f, 6.9f});
+    World a, b;
+    test::add_box(a, "wall", Aabb::of({0.1f, 0.1f, 8.1f}, {15.9f, 3.0f, 8.4f}));
+    test::add_box(b, "wall", Aabb::of({0.1f, 0.1f, 8.1f}, {15.9f, 3.0f, 8.4f}));
+    test::add_box(a, "crate", before);
+    test::add_box(b, "crate", after);
+    const GeometryPrint pa = geometry_print(config, a, none, eyes),
+                        pb = geometry_print(config, b, none, eyes);
+    EXPECT_EQ(pa.tiles, geometry_print(config, a, none, eyes).tiles);
+    ASSERT_EQ(pa.header, pb.header);
+    EXPECT_EQ(pa.objects[0], pb.objects[0]) << "the wall did not change";
+    EXPECT_NE(pa.objects[1], pb.objects[1]) << "the crate moved";
+    size_t changed = 0;
+    for (uint64_t t = 0; t < pa.tiles.size(); ++t) {
+        if (pa.tiles[t] == pb.tiles[t]) continue;
+        ++changed;
+        const Aabb tile = pa.tile_box(t);
+        EXPECT_TRUE(tile.overlaps(before) || tile.overlaps(after)) << "tile " << t << " changed";
+    }
+    EXPECT_GE(changed, 2u);
+}
+
+}  // namespace
+}  // namespace pvs
