@@ -69,6 +69,18 @@ SceneDesc edited_world(const World& world, const std::vector<WorldEdit>& edits) 
                 removed[o] = found = true;
             }
         }
+        // An object added by an earlier edit is moved or removed too.
+        for (auto it = added.begin(); it != added.end();) {
+            if (it->name == e.name && e.kind == WorldEdit::Kind::kMove) {
+                for (glm::vec3& q : it->positions) q += e.offset;
+                found = true;
+            } else if (it->name == e.name && e.kind == WorldEdit::Kind::kRemove) {
+                it = added.erase(it);
+                found = true;
+                continue;
+            }
+            ++it;
+        }
         if (e.kind == WorldEdit::Kind::kCut) cuts.push_back(e.box);
         if (e.kind == WorldEdit::Kind::kAddBox) added.push_back(make_box_node(e.name, e.box, 0));
         if (!found) {
