@@ -56,9 +56,6 @@ struct ReusePlan {
     PvsSet listed;   // the kept bits: the old row on the settled pairs, zero elsewhere
     ReuseFigures figures;
     std::string whole;  // why nothing is kept, or empty
-
-    // The pairs of cell c the solver still tests: those not settled.
-    bool settled_pair(uint32_t cell, uint32_t object) const { return settled.test(cell, object); }
 };
 
 // Plans the re-bake of `cells` (a grid) of `world`, whose print is `now`, from the old bake. A pair is
