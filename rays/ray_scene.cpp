@@ -43,9 +43,27 @@ void see_through_filter(const RTCFilterFunctionNArguments* args) {
     }
 }
 
-// See-through triangles never block an occlusion query.
-void reject_all_filter(const RTCFilterFunctionNArguments* args) {
-    for (unsigned i = 0; i < args->N; ++i) args->valid[i] = 0;
+// The occlusion context: with a test, a see-through touch ends the ray when the test accepts it.
+struct OccludedContext {
+    RTCIntersectContext rtc;
+    RayScene::TouchTest test = nullptr;
+    void* user = nullptr;
+    const uint32_t* see_through_object = nullptr;  // primID -> object
+    uint32_t ray_base = 0;
+};
+
+// See-through triangles never block an occlusion query, unless its test accepts them.
+void see_through_occluded_filter(const RTCFilterFunctionNArguments* args) {
+    const auto* oc = reinterpret_cast<const OccludedContext*>(args->context);
+    for (unsigned i = 0; i < args->N; ++i) {
+        if (args->valid[i] != -1) continue;
+        if (oc->test != nullptr) {
+            const unsigned prim = RTCHitN_primID(args->hit, args->N, i);
+            const unsigned id = RTCRayN_id(args->ray, args->N, i);
+            if (oc->test(oc->user, oc->ray_base + id, oc->see_through_object[prim])) continue;  // stop
+        }
+        args->valid[i] = 0;
+    }
 }
 
 void embree_error(void* user, RTCError code, const char* message) {
@@ -191,7 +209,7 @@ RayScene::RayScene(Context& ctx, const World& world, BuildQuality quality, int t
         if (want_opaque) impl_->opaque_corners = verts;
         if (!want_opaque) {
             rtcSetGeometryIntersectFilterFunction(geom, see_through_filter);
-            rtcSetGeometryOccludedFilterFunction(geom, reject_all_filter);
+            rtcSetGeometryOccludedFilterFunction(geom, see_through_occluded_filter);
         }
         rtcCommitGeometry(geom);
         const unsigned id = rtcAttachGeometry(impl_->scene, geom);
@@ -273,22 +291,42 @@ void RayScene::occluded_opaque(const glm::vec3* origins, const glm::vec3* direct
         const uint32_t n = std::min(kStreamSize, count - base);
         for (uint32_t i = 0; i < n; ++i)
             init_ray(rays[i], origins[base + i], directions[base + i], 0.0f, tfar[base + i], i);
-        RTCIntersectContext ictx;
-        rtcInitIntersectContext(&ictx);
-        rtcOccluded1M(impl_->scene, &ictx, rays, n, sizeof(RTCRay));
+        OccludedContext oc;
+        rtcInitIntersectContext(&oc.rtc);
+        rtcOccluded1M(impl_->scene, &oc.rtc, rays, n, sizeof(RTCRay));
         for (uint32_t i = 0; i < n; ++i) blocked[base + i] = rays[i].tfar < 0.0f ? 1 : 0;
+    }
+}
+
+void RayScene::touches_any(glm::vec3 origin, const glm::vec3* directions, const float* tfar, uint32_t count,
+                           TouchTest test, void* user, uint8_t* found) const {
+    ScopedFtz ftz;
+    RTCRay rays[kStreamSize];
+    for (uint32_t base = 0; base < count; base += kStreamSize) {
+        const uint32_t n = std::min(kStreamSize, count - base);
+        for (uint32_t i = 0; i < n; ++i)
+            init_ray(rays[i], origin, directions[base + i], 0.0f, tfar[base + i], i);
+        OccludedContext oc;
+        rtcInitIntersectContext(&oc.rtc);
+        oc.rtc.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+        oc.test = test;
+        oc.user = user;
+        oc.see_through_object = impl_->object_of[kSeeThroughGeom].data();
+        oc.ray_base = base;
+        rtcOccluded1M(impl_->scene, &oc.rtc, rays, n, sizeof(RTCRay));
+        for (uint32_t i = 0; i < n; ++i) found[base + i] = rays[i].tfar < 0.0f ? 1 : 0;
     }
 }
 
 uint64_t RayScene::occluded_baseline(glm::vec3 origin, const glm::vec3* directions, uint32_t count) const {
     ScopedFtz ftz;
     uint64_t hits = 0;
-    RTCIntersectContext ictx;
-    rtcInitIntersectContext(&ictx);
+    OccludedContext oc;
+    rtcInitIntersectContext(&oc.rtc);
     for (uint32_t i = 0; i < count; ++i) {
         RTCRay r;
         init_ray(r, origin, directions[i], 0.0f, std::numeric_limits<float>::infinity(), 0);
-        rtcOccluded1(impl_->scene, &ictx, &r);
+        rtcOccluded1(impl_->scene, &oc.rtc, &r);
         hits += r.tfar < 0.0f;
     }
     return hits;

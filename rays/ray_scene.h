@@ -63,6 +63,15 @@ public:
     void trace_repeated(glm::vec3 origin, const glm::vec3* directions, uint32_t count,
                         std::vector<RayTouch>& touches) const;
 
+    // Does ray i (from `origin`, t in [0, tfar[i]]) touch an opaque triangle, or a see-through triangle of an
+    // object o with test(user, i, o) true? Writes 1 or 0 into found[i]. The test is called on the touches
+    // in no set order (each see-through triangle touched at most once per ray, until one is accepted), so
+    // found[] does not depend on it: the answer of trace_until() followed by the test on every touch.
+    // Thread-safe if the test is.
+    using TouchTest = bool (*)(void* user, uint32_t ray, uint32_t object);
+    void touches_any(glm::vec3 origin, const glm::vec3* directions, const float* tfar, uint32_t count,
+                     TouchTest test, void* user, uint8_t* found) const;
+
     // Is each segment origins[i] + t * directions[i], t in [0, tfar[i]], blocked by an OPAQUE triangle?
     // (See-through triangles never block.) Writes 1 (blocked) or 0 into blocked[i]. Thread-safe.
     void occluded_opaque(const glm::vec3* origins, const glm::vec3* directions, const float* tfar,

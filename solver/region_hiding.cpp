@@ -188,49 +188,91 @@ RegionHiders::RegionHiders(Context& ctx, const ShrunkOccluders& occluders) {
         hiders_.push_back(std::make_unique<RegionHider>(ctx, set));
 }
 
-uint32_t RegionHider::hide(const World& world, const Aabb& region, const std::vector<uint32_t>& objects,
-                           uint64_t* hidden) const {
-    if (region.is_empty() || (boxes_.empty() && panels_.empty() && slanted_.empty())) return 0;
-    const glm::vec3 from = region.center();
-    std::vector<uint32_t> tried;
+bool RegionHider::occluder_hides(const Aabb& region, const Aabb& object, uint32_t k) const {
+    const uint32_t n_boxes = uint32_t(boxes_.size()), n_flat = n_boxes + uint32_t(panels_.size());
+    if (k < n_boxes) return box_hides(region, object, boxes_[k]);
+    if (k < n_flat)
+        return panel_axis_[k - n_boxes] >= 0 &&
+               panel_hides(region, object, panels_[k - n_boxes], panel_axis_[k - n_boxes]);
+    return slanted_hides(region, object, slanted_[k - n_flat]);
+}
+
+namespace {
+
+// The objects tried: every one of `objects` with bounds apart from the region, with the direction and
+// distance from the region's centre to the centre of its bounds.
+struct Tried {
+    std::vector<uint32_t> objects;
     std::vector<glm::vec3> dirs;
     std::vector<float> tfar;
+};
+
+Tried objects_to_try(const World& world, const Aabb& region, const std::vector<uint32_t>& objects) {
+    Tried tried;
+    const glm::vec3 from = region.center();
     for (uint32_t o : objects) {
         const Aabb& b = world.objects[o].bounds;
         if (b.is_empty() || b.overlaps(region)) continue;
         const glm::vec3 d = b.center() - from;
         const float len = glm::length(d);
         if (!(len > 0.0f)) continue;
-        tried.push_back(o);
-        dirs.push_back(d / len);
-        tfar.push_back(len);
+        tried.objects.push_back(o);
+        tried.dirs.push_back(d / len);
+        tried.tfar.push_back(len);
     }
-    if (tried.empty()) return 0;
-    std::vector<RayTouch> touches;
-    scene_->trace_until(from, dirs.data(), tfar.data(), uint32_t(dirs.size()), touches);
-    // Touches come grouped by stream, not by ray: sort by ray, then by distance (nearer first).
-    std::sort(touches.begin(), touches.end(), [](const RayTouch& x, const RayTouch& y) {
-        return x.ray != y.ray ? x.ray < y.ray : x.t < y.t;
-    });
+    return tried;
+}
+
+}  // namespace
+
+// One ray per object, from the region's centre to the centre of the object's bounds: an occluder hiding
+// the object from the whole region meets every segment between them, so this one too. The ray stops at
+// the first occluder touched that hides the object.
+uint32_t RegionHider::hide(const World& world, const Aabb& region, const std::vector<uint32_t>& objects,
+                           uint64_t* hidden) const {
+    if (region.is_empty() || (boxes_.empty() && panels_.empty() && slanted_.empty())) return 0;
+    const Tried tried = objects_to_try(world, region, objects);
+    if (tried.objects.empty()) return 0;
+    struct Test {
+        const RegionHider* hider;
+        const World* world;
+        const Aabb* region;
+        const Tried* tried;
+        std::vector<uint32_t> last;  // per ray, the occluder last refused (a box is touched twice)
+    } test{this, &world, &region, &tried, std::vector<uint32_t>(tried.objects.size(), UINT32_MAX)};
+    const RayScene::TouchTest accept = [](void* user, uint32_t ray, uint32_t k) {
+        auto* t = static_cast<Test*>(user);
+        if (t->last[ray] == k) return false;
+        t->last[ray] = k;
+        return t->hider->occluder_hides(*t->region, t->world->objects[t->tried->objects[ray]].bounds, k);
+    };
+    std::vector<uint8_t> found(tried.objects.size(), 0);
+    scene_->touches_any(region.center(), tried.dirs.data(), tried.tfar.data(), uint32_t(tried.objects.size()),
+                        accept, &test, found.data());
     uint32_t n = 0;
-    const uint32_t n_boxes = uint32_t(boxes_.size()), n_flat = n_boxes + uint32_t(panels_.size());
-    for (size_t i = 0; i < touches.size();) {
-        const uint32_t ray = touches[i].ray;
-        const uint32_t o = tried[ray];
-        const Aabb& b = world.objects[o].bounds;
+    for (size_t r = 0; r < found.size(); ++r) {
+        if (!found[r]) continue;
+        const uint32_t o = tried.objects[r];
+        hidden[o >> 6] |= uint64_t(1) << (o & 63);
+        ++n;
+    }
+    return n;
+}
+
+uint32_t RegionHider::hide_reference(const World& world, const Aabb& region,
+                                     const std::vector<uint32_t>& objects, uint64_t* hidden) const {
+    if (region.is_empty() || (boxes_.empty() && panels_.empty() && slanted_.empty())) return 0;
+    const Tried tried = objects_to_try(world, region, objects);
+    uint32_t n = 0;
+    std::vector<RayTouch> touches;
+    for (size_t r = 0; r < tried.objects.size(); ++r) {
+        touches.clear();
+        scene_->trace_reference(region.center(), &tried.dirs[r], 1, touches);
+        const uint32_t o = tried.objects[r];
         bool is_hidden = false;
-        for (; i < touches.size() && touches[i].ray == ray; ++i) {
-            if (is_hidden) continue;
-            const uint32_t k = touches[i].object;
-            if (i > 0 && touches[i - 1].ray == ray && touches[i - 1].object == k) continue;  // its other face
-            if (k < n_boxes)
-                is_hidden = box_hides(region, b, boxes_[k]);
-            else if (k < n_flat)
-                is_hidden = panel_axis_[k - n_boxes] >= 0 &&
-                            panel_hides(region, b, panels_[k - n_boxes], panel_axis_[k - n_boxes]);
-            else
-                is_hidden = slanted_hides(region, b, slanted_[k - n_flat]);
-        }
+        for (const RayTouch& t : touches)
+            if (t.t <= tried.tfar[r] && occluder_hides(region, world.objects[o].bounds, t.object))
+                is_hidden = true;
         if (is_hidden) {
             hidden[o >> 6] |= uint64_t(1) << (o & 63);
             ++n;

@@ -69,8 +69,15 @@ public:
     // meeting the region are never hidden. Thread-safe.
     uint32_t hide(const World& world, const Aabb& region, const std::vector<uint32_t>& objects,
                   uint64_t* hidden) const;
+    // The same answer, slowly: every occluder each ray touches (RayScene::trace_reference), tested in turn.
+    // For tests.
+    uint32_t hide_reference(const World& world, const Aabb& region, const std::vector<uint32_t>& objects,
+                            uint64_t* hidden) const;
 
 private:
+    // Does occluder k (boxes_, then panels_, then slanted_) hide the box `object` from all of `region`?
+    bool occluder_hides(const Aabb& region, const Aabb& object, uint32_t k) const;
+
     std::vector<Aabb> boxes_, panels_;
     std::vector<int> panel_axis_;
     std::vector<SlantedPanel> slanted_;

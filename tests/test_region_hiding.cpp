@@ -257,5 +257,58 @@ TEST(RegionHiding, TheHiderOnASmallScene) {
     EXPECT_EQ(hidden[0], uint64_t(1) << behind);
 }
 
+// The hider stops each ray at the first occluder that hides its object; its reference tests every occluder
+// each ray touches. On random scenes of boxes, wall panels and tilted walls, both hide the same objects.
+TEST(RegionHiding, TheHiderAgreesWithItsReference) {
+    Context ctx = quiet_context();
+    Rng rng(7, 11);
+    for (int scene = 0; scene < 6; ++scene) {
+        World w;
+        for (int i = 0; i < 300; ++i) {
+            WorldObject o;
+            o.bounds = random_box(rng, 40.0f, 1.5f);
+            w.objects.push_back(o);
+        }
+        World walls;
+        for (int i = 0; i < 20; ++i) {  // tilted squares of two triangles
+            const glm::vec3 c = point_in(Aabb::of(glm::vec3(-20.0f), glm::vec3(20.0f)), rng);
+            const float a = glm::radians(10.0f + 70.0f * rng.uniform()), half = 2.0f + 4.0f * rng.uniform();
+            const glm::vec3 u(std::cos(a), std::sin(a), 0.0f), v(0.0f, 0.0f, 1.0f);
+            const uint32_t base = uint32_t(walls.positions.size());
+            for (const glm::vec2 s : {glm::vec2(-1, -1), glm::vec2(1, -1), glm::vec2(1, 1), glm::vec2(-1, 1)})
+                walls.positions.push_back(c + half * (s.x * u + s.y * v));
+            walls.triangles.push_back(Triangle{{base, base + 1, base + 2}});
+            walls.triangles.push_back(Triangle{{base, base + 2, base + 3}});
+        }
+        walls.triangle_opaque.assign(walls.triangles.size(), 1);
+        walls.triangle_double_sided.assign(walls.triangles.size(), 0);
+        ShrunkOccluders set;
+        set.epsilon_m = {0.1};
+        set.boxes.resize(1);
+        for (int i = 0; i < 60; ++i) set.boxes[0].push_back(random_box(rng, 40.0f, 6.0f));
+        for (int i = 0; i < 60; ++i) {
+            Aabb p = random_box(rng, 40.0f, 8.0f);
+            const int axis = int(rng.below(3));
+            p.max[axis] = p.min[axis];
+            set.panels.push_back(p);
+        }
+        set.slanted = find_slanted_panels(walls, 1e-4, 0.0);
+        const RegionHider hider(ctx, set);
+        std::vector<uint32_t> all(w.objects.size());
+        for (uint32_t o = 0; o < all.size(); ++o) all[o] = o;
+        uint32_t total = 0;
+        for (int r = 0; r < 20; ++r) {
+            const Aabb region = random_box(rng, 40.0f, 2.0f);
+            std::vector<uint64_t> fast((all.size() + 63) / 64, 0), slow(fast.size(), 0);
+            const uint32_t n = hider.hide(w, region, all, fast.data());
+            EXPECT_EQ(n, hider.hide_reference(w, region, all, slow.data()))
+                << "scene " << scene << " region " << r;
+            EXPECT_EQ(fast, slow) << "scene " << scene << " region " << r;
+            total += n;
+        }
+        EXPECT_GT(total, 0u) << "scene " << scene << ": nothing hidden, the test tests nothing";
+    }
+}
+
 }  // namespace
 }  // namespace pvs
