@@ -1,9 +1,11 @@
 // edit_world: writes a world again, with edits of the kind a level designer makes between two bakes:
-// an object moved or removed, objects within a box removed (a wall), a hole cut (a door), a crate added.
+// an object moved or removed, objects within a box removed (a wall), a hole cut (a door), a crate added;
+// and, for measures of scale, the whole world tiled NX x NZ times.
 // The incremental re-bake (`pvsbake bake NEW.glb --reuse OLD.h5`) is measured and tested on its output.
 //
 //   edit_world IN.glb OUT.glb [--move NAME dx,dy,dz] [--remove NAME] [--remove-in BOX] [--cut BOX]
-//                             [--add-box NAME BOX]          (BOX: x0,y0,z0,x1,y1,z1 in metres)
+//                             [--add-box NAME BOX] [--tile NX,NZ [--tile-gap M]]
+//                                                           (BOX: x0,y0,z0,x1,y1,z1 in metres)
 //
 // Every object is written as it was loaded (world-space triangles, one node per object and kind of
 // triangle: opaque or see-through, one- or two-sided), with its flags, the view seeds and the view-volume
@@ -77,7 +79,7 @@ int main(int argc, char** argv) {
            [&](const std::vector<double>& v) {
                edits.push_back({pvs::WorldEdit::Kind::kCut, "", parse_box(v, "--cut"), {}});
            },
-           "remove every triangle whose centroid lies in the box x0,y0,z0,x1,y1,z1 (a hole)")
+           "cut away what lies in the box x0,y0,z0,x1,y1,z1 (a hole: triangles are clipped)")
         ->delimiter(',')
         ->trigger_on_parse();
     app.add_option_function<std::vector<std::string>>(
@@ -93,10 +95,24 @@ int main(int argc, char** argv) {
         ->expected(2)
         ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll)
         ->trigger_on_parse();
+    std::vector<int> tile;
+    double tile_gap = 1.0;
+    app.add_option("--tile", tile,
+                   "copy the whole edited world NX,NZ times along x and z (a big world; applied after the "
+                   "other edits, names get \"@i,j\")")
+        ->delimiter(',')
+        ->expected(2)
+        ->check(CLI::Range(1, 64));
+    app.add_option("--tile-gap", tile_gap, "metres between tiled copies")->check(CLI::Range(0.0, 1e6));
     CLI11_PARSE(app, argc, argv);
     try {
         pvs::Context ctx(pvs::Context::Options{pvs::LogLevel::kWarning, true, stderr});
         const pvs::World world = pvs::load_world(ctx, in_path);
+        if (!tile.empty()) {
+            pvs::WorldEdit t{pvs::WorldEdit::Kind::kTile, "", {}, world.bounds.size() + float(tile_gap)};
+            t.copies = glm::ivec2(tile[0], tile[1]);
+            edits.push_back(t);
+        }
         const pvs::SceneDesc scene = pvs::edited_world(world, edits);
         pvs::write_glb(scene, out_path);
         std::fprintf(stderr, "wrote %s: %zu nodes after %zu edits\n", out_path.c_str(), scene.nodes.size(),

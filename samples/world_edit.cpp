@@ -13,24 +13,73 @@ namespace pvs {
 
 namespace {
 
+using Polygon = std::vector<glm::vec3>;
+
+// The part of the convex polygon `poly` where (p[axis] - at) * side >= 0 (Sutherland-Hodgman).
+Polygon clip(const Polygon& poly, int axis, float at, float side) {
+    Polygon out;
+    for (size_t i = 0; i < poly.size(); ++i) {
+        const glm::vec3& a = poly[i];
+        const glm::vec3& b = poly[(i + 1) % poly.size()];
+        const float da = (a[axis] - at) * side, db = (b[axis] - at) * side;
+        if (da >= 0.0f) out.push_back(a);
+        if ((da < 0.0f) != (db < 0.0f)) {
+            glm::vec3 q = a + (b - a) * (da / (da - db));
+            q[axis] = at;  // exactly on the plane, so pieces on both sides share the cut edge
+            out.push_back(q);
+        }
+    }
+    return out;
+}
+
+// The convex polygon less the box: the convex pieces outside each of the box's six planes in turn, the
+// rest going on to the next plane; what is left after the sixth lies in the box and goes.
+std::vector<Polygon> cut_polygon(const Polygon& poly, const Aabb& box) {
+    Aabb pb = Aabb::of(poly[0], poly[0]);
+    for (const glm::vec3& q : poly) pb = Aabb::of(glm::min(pb.min, q), glm::max(pb.max, q));
+    if (!pb.overlaps(box)) return {poly};
+    std::vector<Polygon> pieces;
+    Polygon rest = poly;
+    for (int axis = 0; axis < 3 && rest.size() >= 3; ++axis) {
+        for (const auto& [at, side] : {std::pair{box.min[axis], -1.0f}, std::pair{box.max[axis], 1.0f}}) {
+            Polygon outside = clip(rest, axis, at, side);
+            if (outside.size() >= 3) pieces.push_back(std::move(outside));
+            rest = clip(rest, axis, at, -side);
+            if (rest.size() < 3) break;
+        }
+    }
+    return pieces;
+}
+
 // An object's triangles as nodes, one per kind (opaque or not, two-sided or not), moved by `offset`, less
-// the triangles whose centroid lies in one of `cuts`.
+// what lies in `cuts` (triangles are clipped; the pieces keep the triangle's facing).
 void add_object(SceneDesc& scene, const World& world, const WorldObject& obj, glm::vec3 offset,
                 const std::vector<Aabb>& cuts) {
     std::map<int, SceneNode> by_kind;
     for (uint32_t t = obj.first_triangle; t < obj.first_triangle + obj.triangle_count; ++t) {
         std::array<glm::vec3, 3> p;
         for (int k = 0; k < 3; ++k) p[size_t(k)] = world.positions[world.triangles[t].v[k]] + offset;
-        const glm::vec3 centroid = (p[0] + p[1] + p[2]) / 3.0f;
-        if (std::any_of(cuts.begin(), cuts.end(), [&](const Aabb& c) { return c.contains(centroid); }))
-            continue;
+        std::vector<Polygon> pieces{Polygon(p.begin(), p.end())};
+        for (const Aabb& c : cuts) {
+            std::vector<Polygon> next;
+            for (const Polygon& piece : pieces)
+                for (Polygon& q : cut_polygon(piece, c)) next.push_back(std::move(q));
+            pieces = std::move(next);
+        }
+        if (pieces.empty()) continue;
         const bool never = (obj.flags & kObjectNeverOccludes) != 0;
         const int kind = (world.triangle_opaque[t] || never ? 0 : 1) +
                          (t < world.triangle_double_sided.size() && world.triangle_double_sided[t] ? 2 : 0);
         SceneNode& n = by_kind[kind];
-        for (const glm::vec3& q : p) {
-            n.indices.push_back(uint32_t(n.positions.size()));
-            n.positions.push_back(q);
+        for (const Polygon& piece : pieces) {
+            for (size_t i = 1; i + 1 < piece.size(); ++i) {
+                const glm::vec3 e = glm::cross(piece[i] - piece[0], piece[i + 1] - piece[0]);
+                if (glm::dot(e, e) <= 1e-14f) continue;  // a sliver of no area
+                for (const glm::vec3& q : {piece[0], piece[i], piece[i + 1]}) {
+                    n.indices.push_back(uint32_t(n.positions.size()));
+                    n.positions.push_back(q);
+                }
+            }
         }
         n.material = kind;
         n.occluder = !never;
@@ -56,7 +105,8 @@ SceneDesc edited_world(const World& world, const std::vector<WorldEdit>& edits) 
     std::vector<Aabb> cuts;
     std::vector<SceneNode> added;
     for (const WorldEdit& e : edits) {
-        bool found = e.kind == WorldEdit::Kind::kCut || e.kind == WorldEdit::Kind::kAddBox;
+        bool found = e.kind == WorldEdit::Kind::kCut || e.kind == WorldEdit::Kind::kAddBox ||
+                     e.kind == WorldEdit::Kind::kTile;
         for (size_t o = 0; o < world.objects.size(); ++o) {
             const WorldObject& obj = world.objects[o];
             if (e.kind == WorldEdit::Kind::kMove && obj.name == e.name) {
@@ -83,6 +133,10 @@ SceneDesc edited_world(const World& world, const std::vector<WorldEdit>& edits) 
         }
         if (e.kind == WorldEdit::Kind::kCut) cuts.push_back(e.box);
         if (e.kind == WorldEdit::Kind::kAddBox) added.push_back(make_box_node(e.name, e.box, 0));
+        if (e.kind == WorldEdit::Kind::kTile &&
+            (e.copies.x < 1 || e.copies.y < 1 || e.copies.x * e.copies.y > 4096))
+            throw bad_input(fmt::format("tiling {} x {} copies: each count is 1 or more, 4096 copies at most",
+                                        e.copies.x, e.copies.y));
         if (!found) {
             throw bad_input(e.kind == WorldEdit::Kind::kRemoveIn
                                 ? "--remove-in: no object lies wholly in the box"
@@ -103,6 +157,27 @@ SceneDesc edited_world(const World& world, const std::vector<WorldEdit>& edits) 
         SceneNode box = make_box_node(fmt::format("view_volume_{}", i), world.view_volume_boxes[i]);
         box.view_volume = true;
         scene.nodes.push_back(std::move(box));
+    }
+    for (const WorldEdit& e : edits) {
+        if (e.kind != WorldEdit::Kind::kTile || e.copies == glm::ivec2(1)) continue;
+        std::vector<SceneNode> tiled;
+        tiled.reserve(scene.nodes.size() * size_t(e.copies.x * e.copies.y));
+        for (int i = 0; i < e.copies.x; ++i) {
+            for (int j = 0; j < e.copies.y; ++j) {
+                const glm::vec3 step(float(i) * e.offset.x, 0.0f, float(j) * e.offset.z);
+                for (const SceneNode& n : scene.nodes) {
+                    SceneNode c = n;
+                    c.name = fmt::format("{}@{},{}", n.name, i, j);
+                    if (n.positions.empty()) {
+                        c.translation += step;
+                    } else {
+                        for (glm::vec3& q : c.positions) q += step;
+                    }
+                    tiled.push_back(std::move(c));
+                }
+            }
+        }
+        scene.nodes = std::move(tiled);
     }
     return scene;
 }

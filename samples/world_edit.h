@@ -12,18 +12,20 @@
 namespace pvs {
 
 struct WorldEdit {
-    enum class Kind { kMove, kRemove, kRemoveIn, kCut, kAddBox };
+    enum class Kind { kMove, kRemove, kRemoveIn, kCut, kAddBox, kTile };
     Kind kind = Kind::kMove;
-    std::string name;  // kMove, kRemove: the object; kAddBox: the new object's name
-    Aabb box;          // kRemoveIn: objects wholly inside go; kCut: triangles whose centroid is inside go;
-                       // kAddBox: the closed opaque box added
-    glm::vec3 offset{0.0f};  // kMove
+    std::string name;         // kMove, kRemove: the object; kAddBox: the new object's name
+    Aabb box;                 // kRemoveIn: objects wholly inside go; kCut: what lies inside goes (triangles
+                              // are clipped); kAddBox: the closed opaque box added
+    glm::vec3 offset{0.0f};   // kMove; kTile: the step between copies (x and z)
+    glm::ivec2 copies{1, 1};  // kTile: the whole edited world, copies.x x copies.y times along x and z,
+                              // applied after every other edit; names get "@i,j"
 };
 
 // The world as a scene to write (io/gltf_writer.h): every object as loaded (world-space triangles, one node
 // per object and kind of triangle: opaque or see-through, one- or two-sided, so an object of one kind keeps
 // its name), with its flags, the view seeds and the view-volume boxes; the edits applied in order. Throws
-// pvs::Error (bad input) when an edit names no object. Deterministic.
+// pvs::Error (bad input) when an edit names no object or tiles no copy. Deterministic.
 SceneDesc edited_world(const World& world, const std::vector<WorldEdit>& edits);
 
 }  // namespace pvs
