@@ -30,6 +30,10 @@ constexpr int kProbeLines = 32;
 // side's share) counts this many times its length.
 constexpr double kNarrowStrip = 0.5;
 constexpr double kAcrossStripWeight = 4.0;
+// A piece pair halved 10 + log2(budget) times from the whole region and object is not halved again: the
+// pair is given up (listed). Pairs that need deeper pieces are mostly seams between occluders of different
+// planes, which no depth closes, and they spent most of the budget; a larger budget buys some depth too.
+constexpr int kBaseHalvings = 10;
 
 double cross(const glm::dvec2& o, const glm::dvec2& a, const glm::dvec2& b) {
     return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x);
@@ -174,6 +178,7 @@ struct ShaftProver::Pair {
     Aabb target;
     uint32_t tris_first = 0, tris_count = 0;
     glm::vec3 point{0.0f};
+    int depth = 0;  // halvings from the whole region and object
 };
 
 struct ShaftProver::Scratch {
@@ -703,6 +708,7 @@ bool ShaftProver::hides(const World& world, const VoxelMask& eyes, const ShaftRe
         }
     }
     sc.stack.push_back(root);
+    const int max_halvings = kBaseHalvings + std::bit_width(unsigned(budget)) - 1;
     int tests = 0;
     while (!sc.stack.empty()) {
         const Pair pair = sc.stack.back();
@@ -758,6 +764,10 @@ bool ShaftProver::hides(const World& world, const VoxelMask& eyes, const ShaftRe
             const glm::vec3 bs = split_region ? rs : ts;
             k = bs.x >= bs.y && bs.x >= bs.z ? 0 : (bs.y >= bs.z ? 1 : 2);
         }
+        if (pair.depth >= max_halvings) {  // a seam no one plane covers: deeper pieces rarely close it
+            ++figures.stuck;
+            return false;
+        }
         const Aabb& box = split_region ? pair.region : pair.target;
         const float mid = 0.5f * (box.min[k] + box.max[k]);
         if (!(mid > box.min[k] && mid < box.max[k])) {  // too small to halve
@@ -768,6 +778,7 @@ bool ShaftProver::hides(const World& world, const VoxelMask& eyes, const ShaftRe
             Aabb half = box;
             (side ? half.min[k] : half.max[k]) = mid;
             Pair child = pair;
+            ++child.depth;
             if (split_region) {
                 if (voxels) {
                     if (!eyes_in(pair.eyes_lo, pair.eyes_hi, half, child)) continue;  // no eye there

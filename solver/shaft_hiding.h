@@ -29,7 +29,7 @@ struct ShaftFigures {
     uint64_t tests = 0;          // piece pairs tested
     uint64_t certain = 0;        // pairs given up at once: a line from an eye to the object meets no occluder
     uint64_t out_of_budget = 0;  // pairs given up when the budget of piece pairs ran out
-    uint64_t stuck = 0;          // pairs given up on pieces that meet or cannot be halved
+    uint64_t stuck = 0;  // pairs given up on pieces that meet, cannot be halved or were halved too often
     double seconds = 0.0;
 
     ShaftFigures& operator+=(const ShaftFigures& o) {
