@@ -79,7 +79,9 @@ int main(int argc, char** argv) {
            [&](const std::vector<double>& v) {
                edits.push_back({pvs::WorldEdit::Kind::kCut, "", parse_box(v, "--cut"), {}});
            },
-           "cut away what lies in the box x0,y0,z0,x1,y1,z1 (a hole: triangles are clipped)")
+           "cut away what lies in the box x0,y0,z0,x1,y1,z1 (a hole: triangles are clipped; the hole's "
+           "sides stay open, so through a closed wall it opens the wall's inside: for a door in such a wall, "
+           "--remove it and --add-box its pieces)")
         ->delimiter(',')
         ->trigger_on_parse();
     app.add_option_function<std::vector<std::string>>(

@@ -14,10 +14,10 @@ namespace pvs {
 struct WorldEdit {
     enum class Kind { kMove, kRemove, kRemoveIn, kCut, kAddBox, kTile };
     Kind kind = Kind::kMove;
-    std::string name;         // kMove, kRemove: the object; kAddBox: the new object's name
-    Aabb box;                 // kRemoveIn: objects wholly inside go; kCut: what lies inside goes (triangles
-                              // are clipped); kAddBox: the closed opaque box added
-    glm::vec3 offset{0.0f};   // kMove; kTile: the step between copies (x and z)
+    std::string name;        // kMove, kRemove: the object; kAddBox: the new object's name
+    Aabb box;                // kRemoveIn: objects wholly inside go; kCut: what lies inside goes (triangles
+                             // are clipped, the hole's sides left open); kAddBox: the closed opaque box added
+    glm::vec3 offset{0.0f};  // kMove; kTile: the step between copies (x and z)
     glm::ivec2 copies{1, 1};  // kTile: the whole edited world, copies.x x copies.y times along x and z,
                               // applied after every other edit; names get "@i,j"
 };
