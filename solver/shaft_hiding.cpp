@@ -546,9 +546,10 @@ bool ShaftProver::meets_occluder(glm::vec3 from, glm::vec3 to, Scratch& sc) cons
     const float len = glm::length(d);
     if (!(len > 0.0f)) return true;
     const glm::vec3 dir = d / len;
-    sc.touches.clear();
-    scene_->trace_until(from, &dir, &len, 1, sc.touches);
-    if (!sc.touches.empty()) return true;
+    uint8_t touched = 0;
+    scene_->touches_any(
+        from, &dir, &len, 1, [](void*, uint32_t, uint32_t) { return true; }, nullptr, &touched);
+    if (touched) return true;
     bool solid = false;
     walk_voxels(solid_, from, to, [&](const glm::ivec3&, bool in_solid) {
         solid = in_solid;
@@ -732,6 +733,10 @@ bool ShaftProver::hides(const World& world, const VoxelMask& eyes, const ShaftRe
             ++figures.certain;
             return false;
         }
+        if (pair.depth >= max_halvings) {  // a seam no one plane covers: deeper pieces rarely close it
+            ++figures.stuck;
+            return false;
+        }
         // What to halve: the longest side of the two pieces, where a side across a narrow strip left open by
         // the best plane (along an occluder's edge: halving across it cuts the strip off) counts
         // kAcrossStripWeight times its length.
@@ -763,10 +768,6 @@ bool ShaftProver::hides(const World& world, const VoxelMask& eyes, const ShaftRe
             split_region = rl >= tl;
             const glm::vec3 bs = split_region ? rs : ts;
             k = bs.x >= bs.y && bs.x >= bs.z ? 0 : (bs.y >= bs.z ? 1 : 2);
-        }
-        if (pair.depth >= max_halvings) {  // a seam no one plane covers: deeper pieces rarely close it
-            ++figures.stuck;
-            return false;
         }
         const Aabb& box = split_region ? pair.region : pair.target;
         const float mid = 0.5f * (box.min[k] + box.max[k]);
