@@ -1,6 +1,7 @@
 // A world written again with edits (samples/world_edit.h).
 #include "samples/world_edit.h"
 
+#include "core/convex_clip.h"
 #include "core/error.h"
 
 #include <fmt/format.h>
@@ -13,39 +14,33 @@ namespace pvs {
 
 namespace {
 
-using Polygon = std::vector<glm::vec3>;
-
-// The part of the convex polygon `poly` where (p[axis] - at) * side >= 0 (Sutherland-Hodgman).
-Polygon clip(const Polygon& poly, int axis, float at, float side) {
-    Polygon out;
-    for (size_t i = 0; i < poly.size(); ++i) {
-        const glm::vec3& a = poly[i];
-        const glm::vec3& b = poly[(i + 1) % poly.size()];
-        const float da = (a[axis] - at) * side, db = (b[axis] - at) * side;
-        if (da >= 0.0f) out.push_back(a);
-        if ((da < 0.0f) != (db < 0.0f)) {
-            glm::vec3 q = a + (b - a) * (da / (da - db));
-            q[axis] = at;  // exactly on the plane, so pieces on both sides share the cut edge
-            out.push_back(q);
-        }
-    }
-    return out;
-}
+using Polygon = std::vector<glm::dvec3>;
 
 // The convex polygon less the box: the convex pieces outside each of the box's six planes in turn, the
 // rest going on to the next plane; what is left after the sixth lies in the box and goes.
 std::vector<Polygon> cut_polygon(const Polygon& poly, const Aabb& box) {
-    Aabb pb = Aabb::of(poly[0], poly[0]);
-    for (const glm::vec3& q : poly) pb = Aabb::of(glm::min(pb.min, q), glm::max(pb.max, q));
-    if (!pb.overlaps(box)) return {poly};
+    glm::dvec3 lo = poly[0], hi = poly[0];
+    for (const glm::dvec3& q : poly) {
+        lo = glm::min(lo, q);
+        hi = glm::max(hi, q);
+    }
+    if (!Aabb::of(glm::vec3(lo), glm::vec3(hi)).overlaps(box)) return {poly};
     std::vector<Polygon> pieces;
-    Polygon rest = poly;
-    for (int axis = 0; axis < 3 && rest.size() >= 3; ++axis) {
-        for (const auto& [at, side] : {std::pair{box.min[axis], -1.0f}, std::pair{box.max[axis], 1.0f}}) {
-            Polygon outside = clip(rest, axis, at, side);
-            if (outside.size() >= 3) pieces.push_back(std::move(outside));
-            rest = clip(rest, axis, at, -side);
-            if (rest.size() < 3) break;
+    Polygon rest = poly, part;
+    for (int axis = 0; axis < 3; ++axis) {
+        for (const bool below : {true, false}) {
+            const double at = below ? double(box.min[axis]) : double(box.max[axis]);
+            // Wholly beyond the plane (on it counts as beyond, once): it stays whole.
+            if (std::all_of(rest.begin(), rest.end(),
+                            [&](const glm::dvec3& q) { return below ? q[axis] <= at : q[axis] >= at; })) {
+                pieces.push_back(rest);
+                return pieces;
+            }
+            clip(rest, axis, at, below, part);  // the piece beyond this plane stays
+            if (part.size() >= 3) pieces.push_back(part);
+            clip(rest, axis, at, !below, part);  // the rest goes on
+            rest.swap(part);
+            if (rest.size() < 3) return pieces;
         }
     }
     return pieces;
@@ -57,29 +52,31 @@ void add_object(SceneDesc& scene, const World& world, const WorldObject& obj, gl
                 const std::vector<Aabb>& cuts) {
     std::map<int, SceneNode> by_kind;
     for (uint32_t t = obj.first_triangle; t < obj.first_triangle + obj.triangle_count; ++t) {
-        std::array<glm::vec3, 3> p;
-        for (int k = 0; k < 3; ++k) p[size_t(k)] = world.positions[world.triangles[t].v[k]] + offset;
-        std::vector<Polygon> pieces{Polygon(p.begin(), p.end())};
+        Polygon tri(3);
+        for (int k = 0; k < 3; ++k)
+            tri[size_t(k)] = glm::dvec3(world.positions[world.triangles[t].v[k]] + offset);
+        std::vector<Polygon> pieces{tri};
         for (const Aabb& c : cuts) {
             std::vector<Polygon> next;
             for (const Polygon& piece : pieces)
                 for (Polygon& q : cut_polygon(piece, c)) next.push_back(std::move(q));
             pieces = std::move(next);
         }
-        if (pieces.empty()) continue;
+        std::vector<glm::vec3> corners;  // the pieces as a fan each, slivers of no area left out
+        for (const Polygon& piece : pieces)
+            for (size_t i = 1; i + 1 < piece.size(); ++i) {
+                const glm::dvec3 e = glm::cross(piece[i] - piece[0], piece[i + 1] - piece[0]);
+                if (glm::dot(e, e) <= 1e-14) continue;
+                for (const glm::dvec3& q : {piece[0], piece[i], piece[i + 1]}) corners.emplace_back(q);
+            }
+        if (corners.empty()) continue;
         const bool never = (obj.flags & kObjectNeverOccludes) != 0;
         const int kind = (world.triangle_opaque[t] || never ? 0 : 1) +
                          (t < world.triangle_double_sided.size() && world.triangle_double_sided[t] ? 2 : 0);
         SceneNode& n = by_kind[kind];
-        for (const Polygon& piece : pieces) {
-            for (size_t i = 1; i + 1 < piece.size(); ++i) {
-                const glm::vec3 e = glm::cross(piece[i] - piece[0], piece[i + 1] - piece[0]);
-                if (glm::dot(e, e) <= 1e-14f) continue;  // a sliver of no area
-                for (const glm::vec3& q : {piece[0], piece[i], piece[i + 1]}) {
-                    n.indices.push_back(uint32_t(n.positions.size()));
-                    n.positions.push_back(q);
-                }
-            }
+        for (const glm::vec3& q : corners) {
+            n.indices.push_back(uint32_t(n.positions.size()));
+            n.positions.push_back(q);
         }
         n.material = kind;
         n.occluder = !never;

@@ -2,6 +2,7 @@
 #include "solver/shaft_hiding.h"
 
 #include "cells/eyes.h"
+#include "core/convex_clip.h"
 #include "core/random.h"
 #include "occluders/panels.h"
 #include "solver/region_hiding.h"
@@ -59,27 +60,6 @@ void convex_hull(glm::dvec2* pts, size_t n, Poly& out) {
         h[k++] = pts[i];
     }
     out.assign(h.begin(), h.begin() + std::ptrdiff_t(k - 1));
-}
-
-// The part of convex `in` (2D or 3D points) on one side of x[k] = at (keep_below: x[k] <= at), closed.
-// Corners made on the line get exactly `at` there, so pieces cut by a rectangle's side meet the next
-// rectangle's side exactly where the two sides coincide.
-template <class P>
-void clip(const std::vector<P>& in, int k, double at, bool keep_below, std::vector<P>& out) {
-    out.clear();
-    const size_t n = in.size();
-    for (size_t i = 0; i < n; ++i) {
-        const P& a = in[i];
-        const P& b = in[(i + 1) % n];
-        const bool a_in = keep_below ? a[k] <= at : a[k] >= at;
-        const bool b_in = keep_below ? b[k] <= at : b[k] >= at;
-        if (a_in) out.push_back(a);
-        if (a_in != b_in && a[k] != at && b[k] != at) {
-            P y = a + (at - a[k]) / (b[k] - a[k]) * (b - a);
-            y[k] = at;
-            out.push_back(y);
-        }
-    }
 }
 
 // A piece with no area: fewer than three corners, or no extent on an axis (a piece cut to a rectangle's

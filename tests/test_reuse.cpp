@@ -123,6 +123,13 @@ TEST(WorldEdit, ACutClipsTheTrianglesItMeets) {
     scene_area(after, &facing);
     EXPECT_NEAR(facing.z, 0.0, 1e-4);        // the two big faces lost the same area, and kept their facing
     EXPECT_NEAR(facing.y, 1.2 * 0.4, 1e-4);  // the top face is whole, the bottom (facing down) lost the strip
+    // A niche whose floor lies in the bottom face's plane (down to it, half through the wall) keeps that
+    // face whole, once: only the door's rectangle of the front face goes.
+    Aabb niche = door;
+    niche.min.y = 0.0f;
+    niche.max.z = 0.2f;
+    const SceneDesc cut_niche = edited_world(w, {{WorldEdit::Kind::kCut, "", niche, {}}});
+    EXPECT_NEAR(scene_area(before) - scene_area(cut_niche), 1.2 * 2.2, 1e-4);
     for (const SceneNode& n : after.nodes)
         for (size_t i = 0; i + 2 < n.indices.size(); i += 3) {
             const glm::vec3 c =
