@@ -7,7 +7,7 @@ whether the files are the same.
   python3 bench/reuse_edits.py PVSBAKE EDIT_WORLD WORLD.glb --edit NAME 'EDIT OPTIONS' [--edit ...]
                                [--out DIR] [-- BAKE OPTIONS]
 
-EDIT OPTIONS are samples/edit_world's (--move, --remove, --remove-in, --cut, --add-box). --base 'OPTIONS'
+EDIT OPTIONS are samples/edit_world's (--move, --remove, --remove-in, --cut, --add-box, --tile). --base 'OPTIONS'
 edits the world before the edit too (a crate that the edit then moves, say); the world is always written
 again by edit_world, so both bakes read the same writer's output.
 """
