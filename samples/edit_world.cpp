@@ -1,10 +1,11 @@
 // edit_world: writes a world again, with edits of the kind a level designer makes between two bakes:
 // an object moved or removed, objects within a box removed (a wall), a hole cut (a door), a crate added;
-// and, for measures of scale, the whole world tiled NX x NZ times.
+// and, for measures of scale, the whole world tiled NX x NZ times (closed in walls first with --enclose,
+// for a big world of sealed copies).
 // The incremental re-bake (`pvsbake bake NEW.glb --reuse OLD.h5`) is measured and tested on its output.
 //
 //   edit_world IN.glb OUT.glb [--move NAME dx,dy,dz] [--remove NAME] [--remove-in BOX] [--cut BOX]
-//                             [--add-box NAME BOX] [--tile NX,NZ [--tile-gap M]]
+//                             [--add-box NAME BOX] [--enclose T] [--tile NX,NZ [--tile-gap M]]
 //                                                           (BOX: x0,y0,z0,x1,y1,z1 in metres)
 //
 // Every object is written as it was loaded (world-space triangles, one node per object and kind of
@@ -106,12 +107,26 @@ int main(int argc, char** argv) {
         ->expected(2)
         ->check(CLI::Range(1, 64));
     app.add_option("--tile-gap", tile_gap, "metres between tiled copies")->check(CLI::Range(0.0, 1e6));
+    double enclose = 0.0;
+    app.add_option(
+           "--enclose", enclose,
+           "close the world in four walls T metres thick, T metres outside its bounds in x and z, from "
+           "T below its bottom up to its top: sight out through a leaking level's openings stops "
+           "there, so with --tile the copies do not see each other (applied after the other edits, "
+           "before --tile, whose step then includes the walls)")
+        ->check(CLI::Range(0.0, 1e3));
     CLI11_PARSE(app, argc, argv);
     try {
         pvs::Context ctx(pvs::Context::Options{pvs::LogLevel::kWarning, true, stderr});
         const pvs::World world = pvs::load_world(ctx, in_path);
+        pvs::Aabb outer = world.bounds;  // the world with its walls
+        if (enclose > 0.0) {
+            const pvs::Enclosure e = pvs::enclosure(world.bounds, float(enclose));
+            edits.insert(edits.end(), e.walls.begin(), e.walls.end());
+            outer = e.outer;
+        }
         if (!tile.empty()) {
-            pvs::WorldEdit t{pvs::WorldEdit::Kind::kTile, "", {}, world.bounds.size() + float(tile_gap)};
+            pvs::WorldEdit t{pvs::WorldEdit::Kind::kTile, "", {}, outer.size() + float(tile_gap)};
             t.copies = glm::ivec2(tile[0], tile[1]);
             edits.push_back(t);
         }

@@ -179,4 +179,21 @@ SceneDesc edited_world(const World& world, const std::vector<WorldEdit>& edits) 
     return scene;
 }
 
+Enclosure enclosure(const Aabb& bounds, float thickness) {
+    const float t = thickness, lo = bounds.min.y - t, hi = bounds.max.y;
+    Enclosure e;
+    e.outer = bounds;
+    e.outer.min -= glm::vec3(2.0f * t, t, 2.0f * t);
+    e.outer.max += glm::vec3(2.0f * t, 0.0f, 2.0f * t);
+    const glm::vec3 a = e.outer.min, b = e.outer.max;
+    const auto wall = [&](const char* name, glm::vec3 from, glm::vec3 to) {
+        e.walls.push_back({WorldEdit::Kind::kAddBox, name, Aabb::of(from, to), {}});
+    };
+    wall("enclosure_west", {a.x, lo, a.z}, {a.x + t, hi, b.z});
+    wall("enclosure_east", {b.x - t, lo, a.z}, {b.x, hi, b.z});
+    wall("enclosure_south", {a.x, lo, a.z}, {b.x, hi, a.z + t});
+    wall("enclosure_north", {a.x, lo, b.z - t}, {b.x, hi, b.z});
+    return e;
+}
+
 }  // namespace pvs

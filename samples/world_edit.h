@@ -22,6 +22,16 @@ struct WorldEdit {
                               // applied after every other edit; names get "@i,j"
 };
 
+// Four closed walls `thickness` metres thick around `bounds` (a world's), `thickness` metres outside it in x
+// and z, from `thickness` below its bottom up to its top: sight leaving a leaking level stops at them, and
+// no eye can stand above them. `outer` holds the world and its walls (the step of a tiling). Named
+// enclosure_west, _east, _south, _north.
+struct Enclosure {
+    std::vector<WorldEdit> walls;  // kAddBox edits
+    Aabb outer;
+};
+Enclosure enclosure(const Aabb& bounds, float thickness);
+
 // The world as a scene to write (io/gltf_writer.h): every object as loaded (world-space triangles, one node
 // per object and kind of triangle: opaque or see-through, one- or two-sided, so an object of one kind keeps
 // its name), with its flags, the view seeds and the view-volume boxes; the edits applied in order. Throws

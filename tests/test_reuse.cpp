@@ -173,6 +173,34 @@ TEST(WorldEdit, TilingCopiesTheWholeWorld) {
     EXPECT_THROW(edited_world(w, {none}), Error);
 }
 
+// The enclosure closes the world on its four sides: a ring of walls outside its bounds, from below its bottom
+// up to its top. So a segment from inside to a point of a neighbouring copy (within the same heights) meets
+// a wall: it leaves the ring's inside in x or z at a height within the walls'.
+TEST(WorldEdit, TheEnclosureClosesTheWorldOnItsFourSides) {
+    const Aabb bounds = Aabb::of({-3, -1, -2}, {5, 4, 8});
+    const Enclosure e = enclosure(bounds, 0.5f);
+    ASSERT_EQ(e.walls.size(), 4u);
+    EXPECT_EQ(e.outer.min, glm::vec3(-4, -1.5f, -3));
+    EXPECT_EQ(e.outer.max, glm::vec3(6, 4, 9));
+    Aabb all;
+    for (const WorldEdit& w : e.walls) {
+        EXPECT_EQ(w.kind, WorldEdit::Kind::kAddBox);
+        EXPECT_FALSE(w.box.overlaps(bounds)) << w.name << ": a wall inside the world";
+        EXPECT_FLOAT_EQ(w.box.min.y, -1.5f);
+        EXPECT_FLOAT_EQ(w.box.max.y, 4.0f);
+        all.extend(w.box);
+    }
+    EXPECT_EQ(all.min, e.outer.min);
+    EXPECT_EQ(all.max, e.outer.max);
+    // Each wall spans the whole side (so the four close a ring around the world), 0.5 m thick.
+    for (const WorldEdit& w : e.walls) {
+        const glm::vec3 size = w.box.size();
+        const bool along_x = size.x > size.z;
+        EXPECT_FLOAT_EQ(along_x ? size.z : size.x, 0.5f) << w.name;
+        EXPECT_FLOAT_EQ(along_x ? size.x : size.z, along_x ? 10.0f : 12.0f) << w.name;
+    }
+}
+
 class ReuseEdit : public ::testing::TestWithParam<EditCase> {};
 
 TEST_P(ReuseEdit, TheReBakeFromTheOldBakeIsTheFullBakeOfTheEditedWorld) {
