@@ -226,15 +226,16 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
         if (reuse) ctx.warn("--reuse: octree cells are baked in full (a reuse keeps the rows of grid cells)");
         octree_cells_and_pvs(ctx, config, world, view, scene, shrunk, bake, figures, journal, share);
     }
+    // 5. Ranked occluders per cell, once the cells are final (the octree's depend on the PVS); dealt like
+    //    the PVS (every process computes the same stages before the PVS, so the same occluders).
+    if (!bake.occluders.empty()) {
+        bake.ranked =
+            rank_occluders(ctx, config.ranking, world, bake.cells, bake.occluders, figures.ranking, share);
+    }
     if (share) {
-        // Every process holds the whole PVS now; rank 0 alone ranks, verifies and writes.
+        // Every process holds the whole PVS and ranking now; rank 0 alone verifies and writes.
         share->close();
         if (share->rank() != 0) return bake;
-    }
-
-    // 5. Ranked occluders per cell, once the cells are final (the octree's depend on the PVS).
-    if (!bake.occluders.empty()) {
-        bake.ranked = rank_occluders(ctx, config.ranking, world, bake.cells, bake.occluders, figures.ranking);
     }
 
     // 6. The figures of the bake (driver/report.h).

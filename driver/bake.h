@@ -40,8 +40,8 @@ std::vector<Occluder> solver_occluders(Context& ctx, const BakeConfig& config, c
 // Runs the bake of `world` (already loaded from world_path, whose content hash is world_hash).
 // With `journal`, the conservative PVS (grid or octree) takes the rows it holds and records those it
 // computes (docs/ALGORITHMS.md#resume); the bake is the same. With `share` (several processes,
-// driver/processes.h), its passes are dealt between the processes, and only rank 0 goes on after the PVS
-// (the others return the bake as it stands then); the sampled mode runs on rank 0 alone.
+// driver/processes.h), its passes and the occluder ranking are dealt between the processes, and only rank 0
+// goes on after them (the others return the bake as it stands then); the sampled mode runs on rank 0 alone.
 // With `reuse` (an older conservative bake of the same parameters, check_reuse()), a grid's PVS keeps the
 // bits of that bake an edit of the world cannot change and computes the rest (solver/reuse.h); the bake is
 // the same as without it (docs/ALGORITHMS.md#reuse). An octree is baked in full.

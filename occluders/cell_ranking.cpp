@@ -1,6 +1,7 @@
-// The ranking stage: occluders/ranking.h's per-cell ranking over every cell, in parallel (OpenMP over cells,
-// each cell's eyes drawn from its own seeded stream and its result kept in its own slot, then joined in cell
-// order, so that the output does not depend on the schedule). After Hudson et al., SoCG 1997.
+// The ranking stage: occluders/ranking.h's per-cell ranking over every cell, dealt to the threads and
+// processes of the bake (core/work_share.h; each cell's eyes drawn from its own seeded stream and its result
+// kept in its own slot, then joined in cell order, so that the output does not depend on who ranked which
+// cell). After Hudson et al., SoCG 1997.
 #include "occluders/cell_ranking.h"
 
 #include "cells/eyes.h"
@@ -9,12 +10,51 @@
 #include <fmt/format.h>
 
 #include <chrono>
+#include <cstring>
 
 namespace pvs {
 
+namespace {
+
+// The cells' lists as fixed records of 32-bit words, for uniting over processes (WorkShare::unite ORs
+// words; a record is written by the one process that ranked its cell and is zero elsewhere): the count,
+// then `per_cell` entries of RankedOccluder's five fields.
+class RankRecords {
+public:
+    RankRecords(size_t cells, uint32_t per_cell)
+        : stride_(1 + kFields * size_t(per_cell)), words_((cells * stride_ + 1) / 2, 0) {}
+    void put(size_t cell, const std::vector<RankedOccluder>& list) {
+        const uint32_t n = uint32_t(list.size());
+        std::memcpy(at(cell), &n, sizeof n);
+        if (n > 0) std::memcpy(at(cell) + sizeof n, list.data(), list.size() * sizeof(RankedOccluder));
+    }
+    void get(size_t cell, std::vector<RankedOccluder>& list) const {
+        uint32_t n = 0;
+        std::memcpy(&n, at(cell), sizeof n);
+        list.resize(n);
+        if (n > 0) std::memcpy(list.data(), at(cell) + sizeof n, list.size() * sizeof(RankedOccluder));
+    }
+    uint64_t* words() { return words_.data(); }
+    size_t size() const { return words_.size(); }
+
+private:
+    static constexpr size_t kFields = sizeof(RankedOccluder) / sizeof(uint32_t);
+    static_assert(sizeof(RankedOccluder) == kFields * sizeof(uint32_t), "RankedOccluder is 32-bit fields");
+    unsigned char* at(size_t cell) {
+        return reinterpret_cast<unsigned char*>(words_.data()) + 4 * cell * stride_;
+    }
+    const unsigned char* at(size_t cell) const {
+        return reinterpret_cast<const unsigned char*>(words_.data()) + 4 * cell * stride_;
+    }
+    size_t stride_;  // words of 32 bits per cell
+    std::vector<uint64_t> words_;
+};
+
+}  // namespace
+
 RankedOccluders rank_occluders(Context& ctx, const RankingConfig& config, const World& world,
                                const CellSet& cells, const std::vector<Occluder>& occluders,
-                               RankingFigures& figures) {
+                               RankingFigures& figures, WorkShare* share) {
     figures = RankingFigures{};
     RankedOccluders ranked;
     if (config.occluders_per_cell == 0) return ranked;
@@ -31,17 +71,25 @@ RankedOccluders rank_occluders(Context& ctx, const RankingConfig& config, const 
     const Occludees occludees(world);
     const int64_t n_cells = int64_t(cells.size());
     std::vector<std::vector<RankedOccluder>> per_cell(static_cast<size_t>(n_cells));
+    WorkShare alone;
+    WorkShare& deal = share ? *share : alone;
     ctx.progress_begin("occluder ranking", uint64_t(n_cells), "cells");
+    deal.begin(uint64_t(n_cells));
 #pragma omp parallel
     {
         std::vector<glm::vec3> eyes;
-#pragma omp for schedule(dynamic, 16)
-        for (int64_t c = 0; c < n_cells; ++c) {
+        for_each_dealt(deal, ctx, 16, [&](uint64_t c) {
             eyes.clear();
             sample_eye_points(cells, uint32_t(c), config.eyes_per_cell, config.seed, eyes);
             rank_cell_occluders(config, boxes, usable, occludees, eyes, per_cell[size_t(c)]);
-            ctx.progress_advance();
-        }
+        });
+    }
+    if (deal.processes() > 1) {  // every process gets every cell's list
+        RankRecords records(per_cell.size(), config.occluders_per_cell);
+        for (size_t c = 0; c < per_cell.size(); ++c)
+            if (!per_cell[c].empty()) records.put(c, per_cell[c]);
+        deal.unite(records.words(), records.size());
+        for (size_t c = 0; c < per_cell.size(); ++c) records.get(c, per_cell[c]);
     }
     ctx.progress_end();
     ranked.offsets.reserve(size_t(n_cells) + 1);

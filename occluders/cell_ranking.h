@@ -11,6 +11,7 @@
 #include "core/config.h"
 #include "core/context.h"
 #include "core/occluder.h"
+#include "core/work_share.h"
 #include "core/world.h"
 
 #include <vector>
@@ -27,9 +28,11 @@ struct RankingFigures {
     double seconds = 0.0;
 };
 
-// Ranks the proven occluders for every cell. config.occluders_per_cell == 0 gives an empty result.
+// Ranks the proven occluders for every cell. config.occluders_per_cell == 0 gives an empty result. With
+// `share`, the cells are dealt over its processes (collective: every process calls it, and every one gets
+// the whole result).
 RankedOccluders rank_occluders(Context& ctx, const RankingConfig& config, const World& world,
                                const CellSet& cells, const std::vector<Occluder>& occluders,
-                               RankingFigures& figures);
+                               RankingFigures& figures, WorkShare* share = nullptr);
 
 }  // namespace pvs
