@@ -15,8 +15,20 @@ checkpoint mode (the default) bakes WORLD three ways with the same options:
   default 2), one after the other: wall times, their ratio, each rank's peak memory (GNU time) and whether
   the files are the same outside /run.
 
+--project REPORT: no bake; from the report of a finished conservative grid bake (and the ranks and threads
+  per rank it ran with, --ranks R --threads T), the time the same bake would take on each of --cores
+  (default 2,16,64), nodes of --node-cores (default 16) each running one rank with a thread per core:
+      stages before the PVS (each rank computes them) / t  +  PVS CPU-seconds / P  +  ranking and writing / t
+  with t = min(P, node cores). The PVS CPU-seconds are its wall time times the ranks times their threads
+  (dealing keeps them busy; the phase ends wait, so this bounds it from above). The threaded stages are
+  assumed to scale linearly with t, which favours many cores. --scale CELLS,COST projects a bake of
+  CELLS times as many cells, each COST times as costly (e.g. another play height, from two bakes of a
+  smaller world); the stages before the PVS are kept as measured.
+
 usage: bench/bake_jobs.py PVSBAKE WORLD [--interval S] [--kill-at F] [--ranks R [--threads T]] [--out DIR]
                           [-- BAKE OPTIONS...]
+       bench/bake_jobs.py --project REPORT --ranks R --threads T [--cores 2,16,64] [--node-cores N]
+                          [--scale CELLS,COST]
 """
 import argparse
 import json
@@ -85,7 +97,48 @@ def compare_ranks(a, out_dir, log):
     return result
 
 
+def project(a):
+    with open(a.project) as f:
+        j = json.load(f)
+    timings = j["run"]["timings_s"]
+    stages = list(timings)
+    if "conservative_pvs" not in stages:
+        sys.exit(f"{a.project}: no conservative_pvs stage (a conservative bake's report is needed)")
+    at = stages.index("conservative_pvs")
+    before = sum(timings[s] for s in stages[:at] if s != "total")
+    after = sum(timings[s] for s in stages[at + 1 :] if s not in ("total", "verify"))
+    threads = max(1, a.threads // max(1, a.ranks)) if a.ranks else a.threads
+    cpu = timings["conservative_pvs"] * max(1, a.ranks) * threads
+    cells = j["figures"]["cells"]
+    cells_scale, cost_scale = (float(x) for x in a.scale.split(",")) if a.scale else (1.0, 1.0)
+    # Measured at `threads` per rank: to one thread's seconds.
+    before_1, after_1 = before * threads, after * threads
+    pvs_1 = cpu * cells_scale * cost_scale
+    after_1 *= cells_scale
+    out = {"report": a.project, "cells": cells, "measured_ranks": max(1, a.ranks),
+           "measured_threads_per_rank": threads, "stages_before_pvs_s": before,
+           "pvs_s": timings["conservative_pvs"], "pvs_cpu_s": cpu, "pvs_cpu_s_per_cell": cpu / cells,
+           "after_pvs_s": after, "scale": {"cells": cells_scale, "cost_per_cell": cost_scale},
+           "projected_cells": cells * cells_scale, "node_cores": a.node_cores, "projection": {}}
+    for p in (int(x) for x in a.cores.split(",")):
+        t = min(p, a.node_cores)
+        total = before_1 / t + pvs_1 / p + after_1 / t
+        out["projection"][str(p)] = {"nodes": -(-p // a.node_cores), "threads_per_rank": t,
+                                     "hours": total / 3600.0}
+    return out
+
+
 def main():
+    if "--project" in sys.argv:
+        ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+        ap.add_argument("--project", required=True, help="the report of a finished conservative bake")
+        ap.add_argument("--ranks", type=int, default=1, help="the ranks it ran with")
+        ap.add_argument("--threads", type=int, default=1, help="its threads in all (ranks x threads per rank)")
+        ap.add_argument("--cores", default="2,16,64")
+        ap.add_argument("--node-cores", type=int, default=16)
+        ap.add_argument("--scale", default=None, help="CELLS,COST: more cells, each costlier")
+        print(json.dumps(project(ap.parse_args()), indent=2))
+        return
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("pvsbake")
     ap.add_argument("world")
