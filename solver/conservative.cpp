@@ -4,6 +4,7 @@
 #include "solver/conservative.h"
 
 #include "cells/eyes.h"
+#include "core/box_tree.h"
 #include "occluders/panels.h"
 #include "rays/ray_sampler.h"
 #include "solver/depth_cube.h"
@@ -42,56 +43,17 @@ std::vector<std::vector<Aabb>> object_parts(const World& world) {
     return parts;
 }
 
-// A bounding volume hierarchy over the objects' bounds (median split on the longest axis of the centres).
-// Nodes are in pre-order: a node's children come after it, so a reverse walk sees children first.
-struct ObjectTree {
-    struct Node {
-        Aabb bounds;
-        int32_t left = -1, right = -1;  // children, -1 for a leaf
-        int32_t object = -1;            // the object of a leaf
-    };
-    std::vector<Node> nodes;
-};
-
-int32_t build_tree(const World& world, std::vector<uint32_t>& objects, size_t lo, size_t hi,
-                   ObjectTree& tree) {
-    const int32_t id = int32_t(tree.nodes.size());
-    tree.nodes.emplace_back();
-    Aabb bounds, centres;
-    for (size_t i = lo; i < hi; ++i) {
-        bounds.extend(world.objects[objects[i]].bounds);
-        centres.extend(world.objects[objects[i]].bounds.center());
-    }
-    tree.nodes[size_t(id)].bounds = bounds;
-    if (hi - lo == 1) {
-        tree.nodes[size_t(id)].object = int32_t(objects[lo]);
-        return id;
-    }
-    const glm::vec3 ext = centres.size();
-    const int axis = ext.x >= ext.y && ext.x >= ext.z ? 0 : (ext.y >= ext.z ? 1 : 2);
-    const size_t mid = (lo + hi) / 2;
-    std::nth_element(objects.begin() + std::ptrdiff_t(lo), objects.begin() + std::ptrdiff_t(mid),
-                     objects.begin() + std::ptrdiff_t(hi), [&](uint32_t a, uint32_t b) {
-                         const float ca = world.objects[a].bounds.center()[axis];
-                         const float cb = world.objects[b].bounds.center()[axis];
-                         return ca < cb || (ca == cb && a < b);
-                     });
-    const int32_t left = build_tree(world, objects, lo, mid, tree);
-    const int32_t right = build_tree(world, objects, mid, hi, tree);
-    tree.nodes[size_t(id)].left = left;
-    tree.nodes[size_t(id)].right = right;
-    return id;
-}
-
-// Over the objects that can ever be left out (not pvs_always_visible). An object with empty bounds is
-// never proven hidden (is_hidden() says visible), so it is listed: the safe side.
-ObjectTree object_tree(const World& world) {
+// The object tree (core/box_tree.h) over the objects that can ever be left out (not pvs_always_visible).
+// An object with empty bounds is never proven hidden (is_hidden() says visible), so it is listed: the safe
+// side.
+BoxTree object_tree(const World& world) {
+    std::vector<Aabb> bounds(world.objects.size());
     std::vector<uint32_t> objects;
-    for (uint32_t o = 0; o < world.objects.size(); ++o)
+    for (uint32_t o = 0; o < world.objects.size(); ++o) {
+        bounds[o] = world.objects[o].bounds;
         if (!(world.objects[o].flags & kObjectAlwaysVisible)) objects.push_back(o);
-    ObjectTree tree;
-    if (!objects.empty()) build_tree(world, objects, 0, objects.size(), tree);
-    return tree;
+    }
+    return BoxTree::build(bounds, &objects);
 }
 
 // Does the row list object o?
@@ -167,11 +129,33 @@ RayTargets ray_targets(const World& world) {
 }
 
 // What every thread shares: the world, its object tree, parts and ray targets, the occluders, the rays.
+// Trees over one occluder set (ShrunkOccluders::set): its boxes at each epsilon level, its panels and the
+// bounds of its slanted panels; a sample finds those near it through them, not by testing every one, so its
+// cost does not grow with the size of the world (docs/ALGORITHMS.md#object-bvh).
+struct OccluderTrees {
+    std::vector<BoxTree> boxes;  // per epsilon level
+    BoxTree panels;
+    std::vector<int8_t> panel_axis;  // per panel: panel_axis(), -1 when not flat along one axis
+    BoxTree slanted;
+};
+
+OccluderTrees occluder_trees(const ShrunkOccluders& set) {
+    OccluderTrees trees;
+    for (const std::vector<Aabb>& level : set.boxes) trees.boxes.push_back(BoxTree::build(level));
+    trees.panels = BoxTree::build(set.panels);
+    for (const Aabb& p : set.panels) trees.panel_axis.push_back(int8_t(panel_axis(p)));
+    std::vector<Aabb> slanted(set.slanted.size());
+    for (size_t i = 0; i < slanted.size(); ++i) slanted[i] = set.slanted[i].bounds;
+    trees.slanted = BoxTree::build(slanted);
+    return trees;
+}
+
 struct Shared {
     const World& world;
     const ShrunkOccluders& occ;
     const RayScene& scene;
-    ObjectTree tree;
+    BoxTree tree;                          // over the objects (object_tree())
+    std::vector<OccluderTrees> occ_trees;  // [set + 1]: the global set, then each block's
     std::vector<std::vector<Aabb>> parts;
     RayTargets targets;
     int cube_resolution;
@@ -197,8 +181,9 @@ public:
     // (ShrunkOccluders::set_for; every set has the same epsilon ladder).
     // With `hider` (the single-occluder pass, solver/region_hiding.h; of the same set), what a patch's cubes
     // leave open is also tried against one occluder at a time, exactly, before it is refined or listed.
-    void use(const ShrunkOccluders& occluders, const RegionHider* hider = nullptr) {
-        occ_ = &occluders;
+    void use(int32_t set, const RegionHider* hider = nullptr) {
+        occ_ = &sh_.occ.set(set);
+        trees_ = &sh_.occ_trees[size_t(set + 1)];
         hider_ = hider;
     }
 
@@ -308,7 +293,8 @@ public:
         while (k < eps.size() && eps[k] < r) ++k;
         if (k < eps.size()) {
             bool inside = false;
-            for (const Aabb& b : occ_->boxes[k]) inside = inside || b.contains(s);
+            trees_->boxes[k].walk([&](const Aabb& b) { return !inside && b.contains(s); },
+                                  [&](uint32_t) { inside = true; });
             if (inside) {  // its epsilon-cube, which holds the patch, lies in the solid
                 ++counts_.skipped;
                 return;
@@ -323,21 +309,27 @@ public:
             // object stays in it): drawing fewer is always safe, and these are nearly all that matter.
             Aabb reach = Aabb::of(s, s);
             for (const Aabb& b : interest_) reach.extend(b);
+            // Found through the set's trees; boxes are put back in the set's order, so that add_occluders()
+            // draws them in the same order as after a scan of every box.
+            const auto meets_reach = [&reach](const Aabb& b) { return b.overlaps(reach); };
+            found_.clear();
+            trees_->boxes[k].walk(meets_reach, [&](uint32_t i) { found_.push_back(i); });
+            std::sort(found_.begin(), found_.end());
             near_.clear();
-            for (const Aabb& b : occ_->boxes[k])
-                if (b.overlaps(reach)) near_.push_back(b);
+            for (uint32_t i : found_) near_.push_back(occ_->boxes[k][i]);
             // Panels (docs/ALGORITHMS.md#panel-inset) whose plane the patch's box does not reach, inset per
             // ray for that box; drawn first, they are cheap and hide many boxes behind them, which
             // add_occluders() then skips.
             near_panels_.clear();
             panel_spread_ = spread * (1.0 + 1e-6);
-            for (const Aabb& p : occ_->panels) {
-                const int a = panel_axis(p);
-                if (a >= 0 && p.overlaps(reach) &&
-                    std::abs(double(p.min[a]) - double(s[a])) > panel_spread_[a]) {
+            // (In the tree's order: a panel lowers a pixel to the least depth drawn there, whatever the
+            // order.)
+            trees_->panels.walk(meets_reach, [&](uint32_t i) {
+                const Aabb& p = occ_->panels[i];
+                const int a = trees_->panel_axis[i];
+                if (a >= 0 && std::abs(double(p.min[a]) - double(s[a])) > panel_spread_[a])
                     near_panels_.push_back(p);
-                }
-            }
+            });
             cube_.add_panels(near_panels_, panel_spread_);
             cube_.add_occluders(near_);
             for (int side = 0; side < 2; ++side)
@@ -362,9 +354,12 @@ public:
                 open_hulls(s, sides);
                 Aabb all = hulls_[0];  // the union of the octants' unions, to skip most panels at once
                 for (const Aabb& h : hulls_) all.extend(h);
-                for (uint32_t i = 0; i < occ_->slanted.size(); ++i)
-                    if (occ_->slanted[i].bounds.overlaps(all) && slanted_may_hide(occ_->slanted[i], s))
-                        near_slanted_.push_back(i);
+                trees_->slanted.walk([&all](const Aabb& b) { return b.overlaps(all); },
+                                     [&](uint32_t i) {
+                                         if (slanted_may_hide(occ_->slanted[i], s))
+                                             near_slanted_.push_back(i);
+                                     });
+                std::sort(near_slanted_.begin(), near_slanted_.end());
                 cube_.add_slanted_panels(occ_->slanted, near_slanted_, panel_spread_);
                 for (int side = 0; side < 2; ++side)
                     sides.open[size_t(side)] = unproven_each(cube_, sides.open[size_t(side)]);
@@ -577,51 +572,56 @@ private:
 
     // The objects of `open` the cube cannot prove hidden, in the order of `open`.
     std::vector<uint32_t> unproven(const DepthCube& cube, const std::vector<uint32_t>& open) {
-        const std::vector<ObjectTree::Node>& nodes = sh_.tree.nodes;
-        for (uint32_t o : open) open_mark_[o] = 1;
-        // Open objects under each node (children after parents: walk backwards).
-        for (size_t n = nodes.size(); n-- > 0;) {
-            const ObjectTree::Node& node = nodes[n];
-            open_under_[n] = node.object >= 0
-                                 ? open_mark_[size_t(node.object)]
-                                 : open_under_[size_t(node.left)] + open_under_[size_t(node.right)];
+        const std::vector<BoxTree::Node>& nodes = sh_.tree.nodes;
+        // Mark the nodes with an open object under them: each open leaf's path up to the first node marked
+        // already, so the cost follows the open objects, not the size of the tree.
+        for (uint32_t o : open) {
+            open_mark_[o] = 1;
+            for (int32_t n = sh_.tree.leaf[o]; n >= 0 && !open_under_[size_t(n)]; n = nodes[size_t(n)].parent)
+                open_under_[size_t(n)] = 1;
         }
         stack_.clear();
         if (!nodes.empty()) stack_.push_back(0);
         while (!stack_.empty()) {
             const int32_t n = stack_.back();
             stack_.pop_back();
-            if (open_under_[size_t(n)] == 0) continue;
-            const ObjectTree::Node& node = nodes[size_t(n)];
+            if (!open_under_[size_t(n)]) continue;
+            const BoxTree::Node& node = nodes[size_t(n)];
             ++counts_.tests;
             if (cube.is_hidden(node.bounds)) continue;  // every open object under it stays proven
-            if (node.object < 0) {
+            if (node.item < 0) {
                 stack_.push_back(node.right);
                 stack_.push_back(node.left);
                 continue;
             }
-            if (!parts_hidden(cube, uint32_t(node.object)))
-                open_mark_[size_t(node.object)] = 2;  // not proven from this sample
+            if (!parts_hidden(cube, uint32_t(node.item)))
+                open_mark_[size_t(node.item)] = 2;  // not proven from this sample
         }
         std::vector<uint32_t> out;
         for (uint32_t o : open) {
-            if (open_mark_[o] == 2) out.push_back(o);
+            // An object outside the tree (only pvs_always_visible ones are, and they are never open) is
+            // listed.
+            if (open_mark_[o] == 2 || sh_.tree.leaf[o] < 0) out.push_back(o);
             open_mark_[o] = 0;
+            for (int32_t n = sh_.tree.leaf[o]; n >= 0 && open_under_[size_t(n)]; n = nodes[size_t(n)].parent)
+                open_under_[size_t(n)] = 0;
         }
         return out;
     }
 
     const Shared& sh_;
     const ShrunkOccluders* occ_ = &sh_.occ;
+    const OccluderTrees* trees_ = &sh_.occ_trees.front();
     const RegionHider* hider_ = nullptr;
     std::vector<uint64_t> hidden_;  // scratch: one bit per object
     DepthCube cube_;
     DepthCube fine_;                        // the second look at floor samples (1 pixel when off)
     std::vector<uint8_t> open_mark_;        // per object: 0 not open, 1 open, 2 open and not proven
     std::vector<uint32_t> last_seen_part_;  // per object: the part parts_hidden() last found not hidden
-    std::vector<uint32_t> open_under_;      // per tree node
+    std::vector<uint8_t> open_under_;       // per tree node: an open object lies under it (unproven())
     std::vector<int32_t> stack_;
     std::vector<Aabb> interest_;     // bounds of the open objects: the only pixels worth drawing
+    std::vector<uint32_t> found_;    // scratch: indices found in a tree
     std::vector<Aabb> near_;         // the occluders drawn for the current sample
     std::vector<Aabb> near_panels_;  // the panels drawn for it
     std::array<Aabb, 8> hulls_;      // open_hulls()
@@ -678,10 +678,14 @@ void add_counts(ConservativeFigures& figures, const Counts& n, std::chrono::stea
 
 Shared make_shared(const ConservativeConfig& config, const World& world, const ShrunkOccluders& occluders,
                    const RayScene& scene) {
+    std::vector<OccluderTrees> trees;
+    trees.push_back(occluder_trees(occluders));
+    for (const ShrunkOccluders& block : occluders.block_sets) trees.push_back(occluder_trees(block));
     return Shared{world,
                   occluders,
                   scene,
                   object_tree(world),
+                  std::move(trees),
                   object_parts(world),
                   ray_targets(world),
                   config.cube_resolution,
@@ -740,7 +744,7 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
             }
             if (!box.is_empty()) {
                 const int32_t set = occluders.set_for(box);
-                solver.use(occluders.set(set), hiders ? &hiders->of(set) : nullptr);
+                solver.use(set, hiders ? &hiders->of(set) : nullptr);
                 // Only what the box's bound lists (docs/ALGORITHMS.md#octree-parent-bound).
                 const uint64_t* bound = bounds ? (*bounds)[size_t(ci)] : nullptr;
                 candidates.clear();
@@ -967,21 +971,20 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
                 const float plane = f.rect.min[f.axis];
                 if (row_lo && row_hi && f.set[0] != f.set[1]) {
                     // The regions on the two sides take their occluders from different blocks: once per side.
-                    solver.use(occluders.set(f.set[0]), hider(f.set[0]));
+                    solver.use(f.set[0], hider(f.set[0]));
                     solver.solve_face(
                         f.rect, f.axis,
                         with_seen(solver.sides_of(leavable, f.axis, plane, row_lo, nullptr, known_lo, nullptr,
                                                   hidden_row(f.cell[0]), nullptr),
                                   seen_row(f.cell[0]), nullptr));
-                    solver.use(occluders.set(f.set[1]), hider(f.set[1]));
+                    solver.use(f.set[1], hider(f.set[1]));
                     solver.solve_face(
                         f.rect, f.axis,
                         with_seen(solver.sides_of(leavable, f.axis, plane, nullptr, row_hi, nullptr, known_hi,
                                                   nullptr, hidden_row(f.cell[1])),
                                   nullptr, seen_row(f.cell[1])));
                 } else {
-                    solver.use(occluders.set(row_lo ? f.set[0] : f.set[1]),
-                               hider(row_lo ? f.set[0] : f.set[1]));
+                    solver.use(row_lo ? f.set[0] : f.set[1], hider(row_lo ? f.set[0] : f.set[1]));
                     solver.solve_face(
                         f.rect, f.axis,
                         with_seen(solver.sides_of(leavable, f.axis, plane, row_lo, row_hi, known_lo, known_hi,
