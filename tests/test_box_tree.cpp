@@ -2,6 +2,7 @@
 // box visits exactly the boxes a scan finds; and the tree's links (leaves, parents, pre-order) hold.
 #include "core/box_tree.h"
 #include "core/random.h"
+#include "tests/random_boxes.h"
 
 #include <gtest/gtest.h>
 
@@ -11,12 +12,7 @@
 namespace pvs {
 namespace {
 
-Aabb random_box(Rng& rng, float span, float max_size) {
-    const glm::vec3 lo(span * float(rng.uniform()), span * float(rng.uniform()), span * float(rng.uniform()));
-    const glm::vec3 size(max_size * float(rng.uniform()), max_size * float(rng.uniform()),
-                         max_size * float(rng.uniform()));
-    return Aabb::of(lo, lo + size);
-}
+using test::random_box;
 
 TEST(BoxTree, AWalkFindsWhatAScanFinds) {
     Rng rng(17, 3);
@@ -33,17 +29,23 @@ TEST(BoxTree, AWalkFindsWhatAScanFinds) {
         for (uint32_t i = 0; i < boxes.size(); ++i) {
             const bool in = std::find(items.begin(), items.end(), i) != items.end();
             ASSERT_EQ(tree.leaf[i] >= 0, in) << i;
-            if (in) EXPECT_EQ(tree.nodes[size_t(tree.leaf[i])].item, int32_t(i));
+            if (in) {
+                EXPECT_EQ(tree.nodes[size_t(tree.leaf[i])].item, int32_t(i));
+            }
         }
         for (size_t k = 0; k < tree.nodes.size(); ++k) {
             const BoxTree::Node& node = tree.nodes[k];
-            if (k > 0) EXPECT_LT(node.parent, int32_t(k)) << "children come after their parent";
+            if (k > 0) {
+                EXPECT_LT(node.parent, int32_t(k)) << "children come after their parent";
+            }
             if (node.item >= 0) continue;
             for (int32_t c : {node.left, node.right}) {
                 EXPECT_GT(c, int32_t(k));
                 EXPECT_EQ(tree.nodes[size_t(c)].parent, int32_t(k));
                 const Aabb& b = tree.nodes[size_t(c)].bounds;
-                if (!b.is_empty()) EXPECT_TRUE(node.bounds.overlaps(b));
+                if (!b.is_empty()) {
+                    EXPECT_TRUE(node.bounds.overlaps(b));
+                }
             }
         }
         for (int q = 0; q < 50; ++q) {

@@ -3,6 +3,7 @@
 #include "core/random.h"
 #include "occluders/slanted_panels.h"
 #include "solver/region_hiding.h"
+#include "tests/random_boxes.h"
 #include "tests/slanted_fixtures.h"
 #include "tests/test_util.h"
 
@@ -12,20 +13,12 @@ namespace pvs {
 namespace {
 
 using test::bumpy_sheet;
+using test::point_in;
+using test::random_box;
 using test::segment_meets_triangle;
 
 Context quiet_context() {
     return Context(Context::Options{LogLevel::kError, true, nullptr});
-}
-
-glm::vec3 point_in(const Aabb& b, Rng& rng) {
-    return b.min + b.size() * glm::vec3(rng.uniform(), rng.uniform(), rng.uniform());
-}
-
-Aabb random_box(Rng& rng, float span, float max_size) {
-    const glm::vec3 c = (glm::vec3(rng.uniform(), rng.uniform(), rng.uniform()) - 0.5f) * span;
-    const glm::vec3 h = glm::vec3(rng.uniform(), rng.uniform(), rng.uniform()) * max_size * 0.5f;
-    return Aabb::of(c - h, c + h);
 }
 
 // Does the segment p -> x cross the closed flat rectangle `panel` (flat along `axis`)?

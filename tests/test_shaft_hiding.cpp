@@ -3,6 +3,7 @@
 // points of the objects it proves hidden.
 #include "core/random.h"
 #include "solver/shaft_hiding.h"
+#include "tests/random_boxes.h"
 #include "tests/test_util.h"
 #include "tests/world_builder.h"
 
@@ -12,6 +13,8 @@
 
 namespace pvs {
 namespace {
+
+using test::point_in;
 
 Context quiet_context() {
     return Context(Context::Options{LogLevel::kError, true, nullptr});
@@ -79,10 +82,6 @@ bool covered(const ShrunkOccluders& occ, glm::dvec3 y, float c) {
     for (const Aabb& p : occ.panels)
         if (p.min.z == c && y.x >= p.min.x && y.x <= p.max.x && y.y >= p.min.y && y.y <= p.max.y) return true;
     return in_solid_interior(occ, y);
-}
-
-glm::vec3 point_in(const Aabb& b, Rng& rng) {
-    return b.min + b.size() * glm::vec3(rng.uniform(), rng.uniform(), rng.uniform());
 }
 
 Aabb box_around(glm::vec3 c, glm::vec3 half) {
