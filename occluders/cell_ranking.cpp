@@ -5,6 +5,7 @@
 #include "occluders/cell_ranking.h"
 
 #include "cells/eyes.h"
+#include "core/error.h"
 #include "occluders/ranking.h"
 
 #include <fmt/format.h>
@@ -22,8 +23,13 @@ namespace {
 class RankRecords {
 public:
     RankRecords(size_t cells, uint32_t per_cell)
-        : stride_(1 + kFields * size_t(per_cell)), words_((cells * stride_ + 1) / 2, 0) {}
+        : per_cell_(per_cell),
+          stride_(1 + kFields * size_t(per_cell)),
+          words_((cells * stride_ + 1) / 2, 0) {}
+    // `list` holds at most `per_cell` entries (rank_cell_occluders keeps occluders_per_cell at most).
     void put(size_t cell, const std::vector<RankedOccluder>& list) {
+        if (list.size() > per_cell_)
+            throw Error(ErrorKind::kInternal, "ranking: a cell's list outgrew its record");
         const uint32_t n = uint32_t(list.size());
         std::memcpy(at(cell), &n, sizeof n);
         if (n > 0) std::memcpy(at(cell) + sizeof n, list.data(), list.size() * sizeof(RankedOccluder));
@@ -46,6 +52,7 @@ private:
     const unsigned char* at(size_t cell) const {
         return reinterpret_cast<const unsigned char*>(words_.data()) + 4 * cell * stride_;
     }
+    size_t per_cell_;
     size_t stride_;  // words of 32 bits per cell
     std::vector<uint64_t> words_;
 };

@@ -128,7 +128,6 @@ RayTargets ray_targets(const World& world) {
     return out;
 }
 
-// What every thread shares: the world, its object tree, parts and ray targets, the occluders, the rays.
 // Trees over one occluder set (ShrunkOccluders::set): its boxes at each epsilon level, its panels and the
 // bounds of its slanted panels; a sample finds those near it through them, not by testing every one, so its
 // cost does not grow with the size of the world (docs/ALGORITHMS.md#object-bvh).
@@ -150,6 +149,8 @@ OccluderTrees occluder_trees(const ShrunkOccluders& set) {
     return trees;
 }
 
+// What every thread shares: the world, its object tree, parts and ray targets, the occluders and their
+// trees, the rays.
 struct Shared {
     const World& world;
     const ShrunkOccluders& occ;
