@@ -1,4 +1,4 @@
-// bench_depth_cube: speed of the conservative depth cube map (solver/depth_cube.h), one thread.
+// bench_depth_cube: speed of the conservative depth cube map (pvs/depth_cube.h), one thread.
 //
 //   bench_depth_cube [--repeats R]
 //
@@ -8,7 +8,7 @@
 // Prints one JSON object.
 #include "bench/bench_util.h"
 #include "core/random.h"
-#include "solver/depth_cube.h"
+#include "pvs/depth_cube.h"
 
 #include <nlohmann/json.hpp>
 

@@ -34,7 +34,7 @@
 #include "occluders/slanted_panels.h"
 #include "rays/ray_scene.h"
 #include "rays/surface_points.h"
-#include "solver/region_hiding.h"
+#include "pvs/region_hiding.h"
 
 #include <nlohmann/json.hpp>
 

@@ -123,7 +123,7 @@ struct RankingConfig {
     uint64_t seed = 0x72616e6bULL;     // [Limit: any] the same seed gives the same ranking for any threads
 };
 
-// The conservative solver (solver/conservative.h).
+// The conservative solver (pvs/conservative.h).
 struct ConservativeConfig {
     double epsilon_m = 0.125;      // [Limit: > 0] [Units: m] occluders shrink by this; cell faces are sampled
                                    // every 2 epsilon. Smaller: tighter PVS, slower bake (samples grow
@@ -142,9 +142,9 @@ struct ConservativeConfig {
     int shaft_budget = 0;  // [Limit: 0..4096] the shaft pass: an object the faces listed and no sight ray
                            // saw is tried once more against the whole eye region, cut into piece pairs
                            // each covered in one plane by panels and the proven solid, at most this many
-                           // pairs per (cell, object) (solver/shaft_hiding.h); 0 = off
+                           // pairs per (cell, object) (pvs/shaft_hiding.h); 0 = off
     bool single_occluder_pass = true;  // first, what ONE occluder hides from a cell's whole eye region is
-                                       // proven exactly (solver/region_hiding.h); the faces skip it
+                                       // proven exactly (pvs/region_hiding.h); the faces skip it
     int refine_levels = 4;  // [Limit: 0..8] adaptive refinement: patches of a face are first tested
                             // with occluders shrunk by epsilon * 2^levels (few samples), and only the
                             // objects not yet proven hidden go to patches half the size, down to epsilon;

@@ -1,5 +1,5 @@
 // pvsbake core: a convex polygon cut by an axis plane (Sutherland-Hodgman), for the shaft pass's pieces
-// (solver/shaft_hiding.cpp) and the world edits of the samples (samples/world_edit.cpp).
+// (pvs/shaft_hiding.cpp) and the world edits of the samples (samples/world_edit.cpp).
 #pragma once
 
 #include <vector>

@@ -1,4 +1,4 @@
-// pvsbake core: a bake's geometry print, what an incremental re-bake compares (solver/reuse.h): everything
+// pvsbake core: a bake's geometry print, what an incremental re-bake compares (pvs/reuse.h): everything
 // the conservative solver reads, hashed by place, so that a later bake can tell where its world differs.
 //
 // Conventions: glTF axes, metres. Tiles are cubes of `tile_m` from `origin`, index x fastest:

@@ -59,7 +59,7 @@ struct RankedOccluders {
     }
 };
 
-// The occluders of the conservative solver (solver/conservative.h): the proven solid, and boxes of it shrunk
+// The occluders of the conservative solver (pvs/conservative.h): the proven solid, and boxes of it shrunk
 // by each epsilon of a ladder (every point of a box of level k has its whole epsilon_m[k]-cube, the ball in
 // the Chebyshev metric, inside the proven solid: docs/ALGORITHMS.md#shrunk-occluders).
 struct ShrunkOccluders {
@@ -70,7 +70,7 @@ struct ShrunkOccluders {
     std::vector<Aabb> panels;
     // Convex polygons in other planes (occluders/slanted_panels.h), as found: the depth cube insets them per
     // ray for each patch's box (docs/ALGORITHMS.md#slanted-inset), and the single-occluder test
-    // (solver/region_hiding.h) uses them whole.
+    // (pvs/region_hiding.h) uses them whole.
     std::vector<SlantedPanel> slanted;
     VoxelMask solid;  // the proven solid (sealed off from the eyes, untouched, passed the sight probe and the
                       // ray check): no sight line from the eye space enters it

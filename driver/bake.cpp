@@ -10,8 +10,8 @@
 #include "occluders/synthesis.h"
 #include "rays/ray_sampler.h"
 #include "rays/ray_scene.h"
-#include "solver/conservative.h"
-#include "solver/reuse.h"
+#include "pvs/conservative.h"
+#include "pvs/reuse.h"
 
 #include <fmt/format.h>
 
@@ -145,7 +145,7 @@ void octree_cells_and_pvs(Context& ctx, const BakeConfig& config, const World& w
     masks.eyes = view.eyes;
     SampledFigures& sampled = figures.sampled;
     sampled.rays_per_eye = config.sampled.rays.rays_per_eye;
-    // Built once for all the boxes the octree considers (solver/region_hiding.h, solver/shaft_hiding.h).
+    // Built once for all the boxes the octree considers (pvs/region_hiding.h, pvs/shaft_hiding.h).
     std::optional<RegionHiders> hiders;
     if (conservative && config.conservative.single_occluder_pass) hiders.emplace(ctx, shrunk);
     std::optional<ShaftProvers> provers;

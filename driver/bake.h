@@ -1,6 +1,6 @@
 // pvsbake driver: the bake pipeline, from a loaded World to the BakeData written to the bake file:
 //   view volume (cells/view_volume.h) -> ray scene (rays/ray_scene.h) -> occluders (occluders/synthesis.h)
-//   -> cells and PVS (cells/grid.h or cells/octree.h; solver/conservative.h, or rays/ray_sampler.h in the
+//   -> cells and PVS (cells/grid.h or cells/octree.h; pvs/conservative.h, or rays/ray_sampler.h in the
 //   sampled mode) -> ranked occluders (occluders/cell_ranking.h) -> figures (driver/report.h)
 //   -> verification (driver/verify.h).
 // Each stage is a function over plain data; bake_world only calls them in order
@@ -43,7 +43,7 @@ std::vector<Occluder> solver_occluders(Context& ctx, const BakeConfig& config, c
 // driver/processes.h), its passes and the occluder ranking are dealt between the processes, and only rank 0
 // goes on after them (the others return the bake as it stands then); the sampled mode runs on rank 0 alone.
 // With `reuse` (an older conservative bake of the same parameters, check_reuse()), a grid's PVS keeps the
-// bits of that bake an edit of the world cannot change and computes the rest (solver/reuse.h); the bake is
+// bits of that bake an edit of the world cannot change and computes the rest (pvs/reuse.h); the bake is
 // the same as without it (docs/ALGORITHMS.md#reuse). An octree is baked in full.
 BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, const std::string& world_path,
                     const std::string& world_hash, RowJournal* journal = nullptr, WorkShare* share = nullptr,

@@ -14,7 +14,7 @@
 #include "io/bake_file.h"
 #include "occluders/cell_ranking.h"
 #include "occluders/synthesis.h"
-#include "solver/conservative.h"
+#include "pvs/conservative.h"
 
 #include <string>
 #include <vector>
@@ -40,7 +40,7 @@ struct StageFigures {
     ConservativeFigures conservative;
     SampledFigures sampled;
     RankingFigures ranking;
-    ReuseFigures reuse;  // an incremental re-bake (solver/reuse.h); zero without --reuse
+    ReuseFigures reuse;  // an incremental re-bake (pvs/reuse.h); zero without --reuse
 };
 
 // The figures of a bake's result, as stored in /figures and the report's figures{}: named numbers in a

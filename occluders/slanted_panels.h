@@ -1,7 +1,7 @@
 // pvsbake occluders: SLANTED PANELS, convex polygons in planes that are not axis planes, tiled exactly by
 // opaque triangles that share whole edges: the slopes, ramps and roofs that axis-aligned boxes and panels
 // (occluders/panels.h) cannot cover. docs/ALGORITHMS.md#slanted-panels says how they are grown and what
-// they promise; the solver's single-occluder test uses them (solver/region_hiding.h). The struct is
+// they promise; the solver's single-occluder test uses them (pvs/region_hiding.h). The struct is
 // core/occluder.h's SlantedPanel.
 //
 // Conventions: glTF axes (right-handed, +Y up, metres). A slanted panel's triangles all lie within

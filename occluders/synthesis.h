@@ -59,7 +59,7 @@ struct OccluderFigures {
 // and, for each epsilon of the ladder epsilon_m * 2^k, k = 0..levels, boxes of the proven solid SHRUNK by
 // it (eroded by ceil(epsilon / voxel) voxels in the Chebyshev metric, so every point of a shrunk box has its
 // whole epsilon-cube inside the proven solid: docs/ALGORITHMS.md#shrunk-occluders): the occluders of the
-// conservative solver (solver/conservative.h).
+// conservative solver (pvs/conservative.h).
 std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& config, const World& world,
                                            const ViewVolume& view, const RayScene& scene,
                                            OccluderFigures& figures, double epsilon_m = 0.0, int levels = 0,

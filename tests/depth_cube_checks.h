@@ -1,10 +1,10 @@
-// Test helpers for the depth cube (solver/depth_cube.h): the kernel against the reference on a scene's
+// Test helpers for the depth cube (pvs/depth_cube.h): the kernel against the reference on a scene's
 // occludees, and the conservative guarantee for an eye box checked on segments from it.
 #pragma once
 
 #include "core/math.h"
 #include "core/random.h"
-#include "solver/depth_cube.h"
+#include "pvs/depth_cube.h"
 
 #include <gtest/gtest.h>
 

@@ -7,7 +7,7 @@
 #include "driver/bake.h"
 #include "occluders/synthesis.h"
 #include "rays/ray_scene.h"
-#include "solver/conservative.h"
+#include "pvs/conservative.h"
 #include "tests/test_util.h"
 #include "tests/world_builder.h"
 
@@ -286,7 +286,7 @@ TEST(Conservative, TheOctreeCullsBehindTheWallAndIsTimedAsConservative) {
     EXPECT_FALSE(sampled_timed);
 }
 
-// The single-occluder pass (solver/region_hiding.h) only ever leaves objects out that the faces would have
+// The single-occluder pass (pvs/region_hiding.h) only ever leaves objects out that the faces would have
 // proved too, or that they could not for the shrinking and the pixels: with it, every row is a subset of
 // the row without it; it proves pairs on the wall scene; the target stays culled behind the wall and
 // listed through the doorway, with zero misses either way.

@@ -2,7 +2,7 @@
 // reference on fixed seeds (identical answers), and the conservative guarantee against dense ray sampling.
 #include "core/error.h"
 #include "core/random.h"
-#include "solver/depth_cube.h"
+#include "pvs/depth_cube.h"
 #include "tests/depth_cube_checks.h"
 #include "tests/test_util.h"
 

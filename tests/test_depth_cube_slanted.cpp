@@ -1,10 +1,10 @@
-// Slanted panels on the conservative depth cube (solver/depth_cube.h, add_slanted_panel()): who hides whom
+// Slanted panels on the conservative depth cube (pvs/depth_cube.h, add_slanted_panel()): who hides whom
 // behind off-axis walls, fusion of off-axis walls, the kernel against the plain reference (identical
 // answers), and the guarantee against the real triangles: a box proven hidden for an eye box is hidden from
 // every point of it, each segment meeting an opaque triangle.
 #include "core/random.h"
 #include "occluders/slanted_panels.h"
-#include "solver/depth_cube.h"
+#include "pvs/depth_cube.h"
 #include "tests/depth_cube_checks.h"
 #include "tests/slanted_fixtures.h"
 #include "tests/test_util.h"

@@ -1,8 +1,8 @@
-// The single-occluder pass (solver/region_hiding.h): exact tests of one panel or one box between a region
+// The single-occluder pass (pvs/region_hiding.h): exact tests of one panel or one box between a region
 // and an object, checked against many random segments, and the hider on a small scene.
 #include "core/random.h"
 #include "occluders/slanted_panels.h"
-#include "solver/region_hiding.h"
+#include "pvs/region_hiding.h"
 #include "tests/random_boxes.h"
 #include "tests/slanted_fixtures.h"
 #include "tests/test_util.h"

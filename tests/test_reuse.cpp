@@ -6,7 +6,7 @@
 #include "io/gltf_loader.h"
 #include "io/gltf_writer.h"
 #include "samples/world_edit.h"
-#include "solver/reuse.h"
+#include "pvs/reuse.h"
 #include "tests/test_util.h"
 #include "tests/world_builder.h"
 

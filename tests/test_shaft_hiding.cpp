@@ -1,8 +1,8 @@
-// The shaft pass (solver/shaft_hiding.h): a plane's cover by panels and the proven solid's slice, held to a
+// The shaft pass (pvs/shaft_hiding.h): a plane's cover by panels and the proven solid's slice, held to a
 // plain reference on many random segments, and the whole proof held to segments from random eyes to random
 // points of the objects it proves hidden.
 #include "core/random.h"
-#include "solver/shaft_hiding.h"
+#include "pvs/shaft_hiding.h"
 #include "tests/random_boxes.h"
 #include "tests/test_util.h"
 #include "tests/world_builder.h"

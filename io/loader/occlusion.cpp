@@ -4,7 +4,7 @@
 //
 // After: T. Hudson et al. Accelerated Occlusion Culling using Shadow Frusta. SoCG 1997; H. Zhang et al.
 // Visibility Culling using Hierarchical Occlusion Maps. SIGGRAPH 1997; P. Wonka, M. Wimmer, D. Schmalstieg.
-// Visibility Preprocessing with Occluder Fusion for Urban Walkthroughs. EGWR 2000 (solver/depth_cube.h, the
+// Visibility Preprocessing with Occluder Fusion for Urban Walkthroughs. EGWR 2000 (pvs/depth_cube.h, the
 // baker's double-precision version of the same rules).
 #include <pvsbake/occlusion.h>
 

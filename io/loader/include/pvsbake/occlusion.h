@@ -9,7 +9,7 @@
 // Shadow Frusta. SoCG 1997 (one occluder: is the box inside its shadow frustum?); fusing occluders on a
 // small conservative depth buffer as H. Zhang, D. Manocha, T. Hudson, K. Hoff. Visibility Culling using
 // Hierarchical Occlusion Maps. SIGGRAPH 1997 (a box is hidden when every pixel it touches is covered
-// nearer than it), with the coverage and depth rules of solver/depth_cube.h (the baker's from-point test of
+// nearer than it), with the coverage and depth rules of pvs/depth_cube.h (the baker's from-point test of
 // P. Wonka, M. Wimmer, D. Schmalstieg. Visibility Preprocessing with Occluder Fusion for Urban
 // Walkthroughs, EGWR 2000), written here in float with explicit margins, as a cube map so that every
 // direction around the eye is covered (the culler needs no view frustum).

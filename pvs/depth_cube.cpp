@@ -5,7 +5,7 @@
 // After: P. Wonka, M. Wimmer, D. Schmalstieg. Visibility Preprocessing with Occluder Fusion for Urban
 // Walkthroughs. EGWR 2000 (the from-point test on shrunk occluders); H. Zhang et al. Visibility Culling
 // using Hierarchical Occlusion Maps, SIGGRAPH 1997 (conservative depth comparisons on an occlusion map).
-#include "solver/depth_cube.h"
+#include "pvs/depth_cube.h"
 
 #include "core/error.h"
 

@@ -12,7 +12,7 @@
 // - always listed: pvs_always_visible objects and objects whose bounds meet the region
 //   (docs/ALGORITHMS.md#eye-region);
 // - the region's faces are cut into patches; a patch of Chebyshev radius r is tested from its centre s on a
-//   depth cube (solver/depth_cube.h) of the boxes shrunk by the smallest epsilon >= r
+//   depth cube (pvs/depth_cube.h) of the boxes shrunk by the smallest epsilon >= r
 //   (docs/ALGORITHMS.md#shrunk-occluders, docs/ALGORITHMS.md#chebyshev, docs/ALGORITHMS.md#patches,
 //   docs/ALGORITHMS.md#depth-cube); a patch wholly in the proven solid, or whose s lies in a shrunk box, is
 //   skipped;
@@ -22,9 +22,9 @@
 //   once (docs/ALGORITHMS.md#sight-rays);
 // - panels (occluders/panels.h) are drawn inset per ray for the patch's box (docs/ALGORITHMS.md#panel-inset);
 // - with --single-occluder-pass, what one panel or one box hides from the whole region (or patch) is left
-//   out first, proven exactly (solver/region_hiding.h, docs/ALGORITHMS.md#single-occluder);
+//   out first, proven exactly (pvs/region_hiding.h, docs/ALGORITHMS.md#single-occluder);
 // - with --shaft-budget, what the faces listed and no sight ray saw is tried once more against the whole
-//   region, in piece pairs each covered in one plane by panels and the proven solid (solver/shaft_hiding.h,
+//   region, in piece pairs each covered in one plane by panels and the proven solid (pvs/shaft_hiding.h,
 //   docs/ALGORITHMS.md#shaft-pass);
 // - a region whose eyes lie in one block uses that block's occluders, ShrunkOccluders::set_for (opt-in
 //   --occluder-block, unproven: docs/ALGORITHMS.md#block-occluders);
@@ -40,9 +40,9 @@
 #include "core/work_share.h"
 #include "core/world.h"
 #include "rays/ray_scene.h"
-#include "solver/region_hiding.h"
-#include "solver/reuse.h"
-#include "solver/shaft_hiding.h"
+#include "pvs/region_hiding.h"
+#include "pvs/reuse.h"
+#include "pvs/shaft_hiding.h"
 
 #include <vector>
 
@@ -61,7 +61,7 @@ struct ConservativeFigures {
     double region_seconds = 0.0;    // its time (grid; on boxes it is part of `seconds`)
     uint64_t patch_hidden = 0;      // (patch, object) pairs it proved hidden, of what a patch's cubes left
     uint64_t parent_hidden = 0;     // (octree box, object) pairs left out untested: its parent left them out
-    ShaftFigures shaft;             // the shaft pass (solver/shaft_hiding.h)
+    ShaftFigures shaft;             // the shaft pass (pvs/shaft_hiding.h)
     std::vector<uint64_t> samples_per_level;  // samples at each epsilon of the ladder
     double seconds = 0.0;
 };
@@ -91,7 +91,7 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
 // "shaft") is taken from the journal when it holds it and recorded there when computed, and the journal is
 // flushed at the end of each pass and phase; the PVS is the same (docs/ALGORITHMS.md#resume). With `share`,
 // the faces and cells of each pass are dealt between the processes of the bake, and every process gets the
-// whole PVS (docs/ALGORITHMS.md#processes). With `reuse` (a grid only; solver/reuse.h), the pairs it
+// whole PVS (docs/ALGORITHMS.md#processes). With `reuse` (a grid only; pvs/reuse.h), the pairs it
 // settles take its bit and no pass tests them; the PVS is the same (docs/ALGORITHMS.md#reuse).
 PvsSet bake_conservative_pvs(Context& ctx, const ConservativeConfig& config, const World& world,
                              const CellSet& cells, const ShrunkOccluders& occluders, const RayScene& scene,

@@ -1,6 +1,6 @@
 // The incremental re-bake: the geometry print and the plan of which (cell, object) pairs keep their bit
 // (docs/ALGORITHMS.md#reuse).
-#include "solver/reuse.h"
+#include "pvs/reuse.h"
 
 #include <fmt/format.h>
 #define XXH_STATIC_LINKING_ONLY  // XXH3_state_t on the stack

@@ -1,5 +1,5 @@
 // Objects one occluder hides from a whole region: the 64 corner segments, candidates by Embree.
-#include "solver/region_hiding.h"
+#include "pvs/region_hiding.h"
 
 #include "occluders/panels.h"
 

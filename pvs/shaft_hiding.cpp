@@ -1,11 +1,11 @@
 // The shaft pass: piece pairs of a region and an object, each covered in one plane by panels and the solid.
-#include "solver/shaft_hiding.h"
+#include "pvs/shaft_hiding.h"
 
 #include "cells/eyes.h"
 #include "core/convex_clip.h"
 #include "core/random.h"
 #include "occluders/panels.h"
-#include "solver/region_hiding.h"
+#include "pvs/region_hiding.h"
 
 #include <fmt/format.h>
 

@@ -1,5 +1,5 @@
 // pvsbake solver: objects that ONE occluder hides from a whole eye region, proven exactly: no shrinking, no
-// pixels, no patches. A first pass of the conservative solver (solver/conservative.h): what it proves for a
+// pixels, no patches. A first pass of the conservative solver (pvs/conservative.h): what it proves for a
 // cell's region, no face of the cell tests.
 //
 // Contract: panel_hides() and box_hides() are true only if EVERY segment from the region box to the object

@@ -1,15 +1,15 @@
 // The conservative solver: every cell's boundary cut into patches, refined where objects are not yet proven
 // hidden; a depth cube of the shrunk occluders from each patch centre. Safety argument:
 // docs/ALGORITHMS.md#conservative-pvs.
-#include "solver/conservative.h"
+#include "pvs/conservative.h"
 
 #include "cells/eyes.h"
 #include "core/box_tree.h"
 #include "occluders/panels.h"
 #include "rays/ray_sampler.h"
-#include "solver/depth_cube.h"
-#include "solver/region_hiding.h"
-#include "solver/shaft_hiding.h"
+#include "pvs/depth_cube.h"
+#include "pvs/region_hiding.h"
+#include "pvs/shaft_hiding.h"
 
 #include <fmt/format.h>
 
@@ -180,7 +180,7 @@ public:
 
     // The occluders of the next faces: those serving the eyes of the region whose face it is
     // (ShrunkOccluders::set_for; every set has the same epsilon ladder).
-    // With `hider` (the single-occluder pass, solver/region_hiding.h; of the same set), what a patch's cubes
+    // With `hider` (the single-occluder pass, pvs/region_hiding.h; of the same set), what a patch's cubes
     // leave open is also tried against one occluder at a time, exactly, before it is refined or listed.
     void use(int32_t set, const RegionHider* hider = nullptr) {
         occ_ = &sh_.occ.set(set);
@@ -203,7 +203,7 @@ public:
     // The open objects of `candidates` on each wanted side of the face at `plane` along `axis`, less those
     // the region of that side already lists (`known_lo`, `known_hi`: its row so far, or null;
     // docs/ALGORITHMS.md#refinement). Objects in `hidden_lo`, `hidden_hi` (the single-occluder pass proved
-    // them hidden from that side's region, solver/region_hiding.h) are left out too.
+    // them hidden from that side's region, pvs/region_hiding.h) are left out too.
     Sides sides_of(const std::vector<uint32_t>& candidates, int axis, float plane, uint64_t* row_lo,
                    uint64_t* row_hi, const uint64_t* known_lo = nullptr, const uint64_t* known_hi = nullptr,
                    const uint64_t* hidden_lo = nullptr, const uint64_t* hidden_hi = nullptr) {
@@ -444,7 +444,7 @@ public:
 
     const Counts& counts() const { return counts_; }
 
-    // The objects of `open` no single occluder hides from all of `rect` (solver/region_hiding.h).
+    // The objects of `open` no single occluder hides from all of `rect` (pvs/region_hiding.h).
     std::vector<uint32_t> hidden_by_one(const Aabb& rect, std::vector<uint32_t> open) {
         if (open.empty()) return open;
         hidden_.assign((sh_.world.objects.size() + 63) / 64, 0);
@@ -643,7 +643,7 @@ std::vector<uint32_t> leavable_objects(const World& world) {
     return out;
 }
 
-// The shaft pass over one region's row (solver/shaft_hiding.h, docs/ALGORITHMS.md#shaft-pass): every object
+// The shaft pass over one region's row (pvs/shaft_hiding.h, docs/ALGORITHMS.md#shaft-pass): every object
 // of `candidates` the row lists whose bounds do not meet the region and that no sight ray saw (`seen`, or
 // null) is tried once more against the whole region; proven hidden from every eye of it, it leaves the row.
 void shaft_row(const ShaftProver& prover, const World& world, const VoxelMask& eyes, const Aabb& region,
