@@ -143,6 +143,8 @@ struct ConservativeConfig {
                            // saw is tried once more against the whole eye region, cut into piece pairs
                            // each covered in one plane by panels and the proven solid, at most this many
                            // pairs per (cell, object) (pvs/shaft_hiding.h); 0 = off
+    bool shaft_fusion = true;  // the shaft pass's plane covers take in the umbrae of occluders in other
+                               // planes (docs/ALGORITHMS.md#cross-plane-fusion); false for measurement
     bool single_occluder_pass = true;  // first, what ONE occluder hides from a cell's whole eye region is
                                        // proven exactly (pvs/region_hiding.h); the faces skip it
     int refine_levels = 4;  // [Limit: 0..8] adaptive refinement: patches of a face are first tested
@@ -384,6 +386,13 @@ void visit_options(Config& c, Visitor&& v) {
                  "this many pairs per (cell, object); 0 = off",
                  0, 4096},
       c.conservative.shaft_budget);
+    v(
+        OptionSpec{
+            OptionGroup::kExperimental, "--shaft-fusion", "conservative.shaft_fusion", "",
+            "FOR MEASUREMENT ONLY: false keeps the shaft pass's covers to one plane's own occluders (no "
+            "umbrae of occluders in other planes), to measure what cross-plane fusion gives: the same "
+            "safety, a looser PVS"},
+        c.conservative.shaft_fusion);
     v(OptionSpec{OptionGroup::kConservative, "--panel-refine-levels", "conservative.panel_refine_levels",
                  "levels",
                  "floor patches are halved this many more times for the objects only the "

@@ -108,6 +108,8 @@ NamedValues run_figures(const BakeData& bake, const StageFigures& stages) {
         {"conservative_shaft_tests", double(cons.shaft.tests)},
         {"conservative_shaft_given_up", double(cons.shaft.certain)},
         {"conservative_shaft_out_of_budget", double(cons.shaft.out_of_budget)},
+        {"conservative_shaft_stuck", double(cons.shaft.stuck)},
+        {"conservative_shaft_umbrae", double(cons.shaft.umbrae)},
         {"conservative_shaft_seconds", cons.shaft.seconds},
         {"conservative_seconds", cons.seconds},
         {"reuse_pairs", double(stages.reuse.pairs)},

@@ -130,12 +130,40 @@ void walk_voxels(const VoxelMask& mask, glm::vec3 from, glm::vec3 to, Visit&& vi
     }
 }
 
-// Per thread: the pieces of a plane's cover.
-struct PlaneScratch {
-    std::vector<Poly> pieces, next;
-    Poly rest, part, band;
-    std::vector<uint32_t> near_rects;  // the plane's panels meeting the crossing's bounds
-};
+// More umbrae than this per plane tried: the rest of the plane's crossing is left open.
+constexpr size_t kMaxUmbrae = 16;
+// Rounds of umbra search through the open pieces of a crossing, after the search through its open corners.
+constexpr int kUmbraRounds = 2;
+// Open corner crossings the umbra search traces lines through (the first and the farthest from it).
+constexpr size_t kUmbraProbes = 2;
+// Pieces narrower than this (metres) count as covered: the rounding of double computations where two
+// covers meet along one line (docs/ALGORITHMS.md#cross-plane-fusion).
+constexpr double kSliverM = 1e-9;
+
+// How wide convex `p` is: the least, over its sides, of its farthest corner's distance from the side's line.
+double width(const Poly& p) {
+    if (p.size() < 3) return 0.0;
+    double w = INFINITY;
+    for (size_t i = 0; i < p.size(); ++i) {
+        const glm::dvec2 a = p[i], d = p[(i + 1) % p.size()] - a;
+        const double len = glm::length(d);
+        if (!(len > 0.0)) continue;
+        double far = 0.0;
+        for (const glm::dvec2& q : p) far = std::max(far, std::abs(d.x * (q.y - a.y) - d.y * (q.x - a.x)) / len);
+        w = std::min(w, far);
+    }
+    return w == INFINITY ? 0.0 : w;
+}
+
+bool sliver(const Poly& p) { return p.size() < 3 || width(p) <= kSliverM; }
+
+// Is p in the closed convex counter-clockwise polygon `poly`?
+bool inside(const Poly& poly, glm::dvec2 p) {
+    if (poly.size() < 3) return false;
+    for (size_t i = 0; i < poly.size(); ++i)
+        if (cross(poly[i], poly[(i + 1) % poly.size()], p) < 0.0) return false;
+    return true;
+}
 
 float down(double x) {
     float f = float(x);
@@ -147,6 +175,181 @@ float up(double x) {
 }
 
 }  // namespace
+
+// Per thread: the pieces of a plane's cover, and the umbrae found for it.
+struct ShaftProver::PlaneScratch {
+    std::vector<Poly> pieces, next;
+    Poly rest, part, band;
+    std::vector<uint32_t> near_rects;  // the plane's panels meeting the crossing's bounds
+    std::vector<glm::dvec2> open;      // corner crossings no panel or solid voxel of the plane covers
+    std::vector<Poly> umbrae;
+    std::vector<uint32_t> tried;  // occluders of umbra_scene_ whose umbrae were computed
+    std::vector<RayTouch> touches;
+    std::vector<glm::dvec3> corners;
+    Poly shadow, clipped, other;
+    std::array<glm::dvec2, 64> pts;
+};
+
+bool umbra_on_plane(const std::array<glm::dvec3, 8>& eyes, const glm::dvec3* corners, size_t n, int axis,
+                    double c, int side, Poly& out) {
+    const int a = axis, u = (a + 1) % 3, v = (a + 2) % 3;
+    if (n == 0 || n > 64) return false;
+    double h_max = 0.0;
+    for (size_t i = 0; i < n; ++i) {
+        const double h = (corners[i][a] - c) * side;
+        if (!(h >= 0.0)) return false;
+        h_max = std::max(h_max, h);
+    }
+    thread_local Poly shadow, next;
+    std::array<glm::dvec2, 64> pts;
+    bool first = true;
+    for (const glm::dvec3& q : eyes) {
+        const double hq = (q[a] - c) * side;
+        if (!(hq > h_max)) return false;
+        // The central projection from q onto the plane: y = p + (p - q) h_p / (h_q - h_p). A corner on the
+        // plane (h_p = 0) is its own projection, exactly, so covers meeting along such a corner's line meet
+        // exactly.
+        for (size_t i = 0; i < n; ++i) {
+            const glm::dvec3& p = corners[i];
+            const double s = (p[a] - c) * side / (hq - (p[a] - c) * side);
+            pts[i] = glm::dvec2(p[u] + (p[u] - q[u]) * s, p[v] + (p[v] - q[v]) * s);
+        }
+        convex_hull(pts.data(), n, shadow);
+        if (shadow.size() < 3) return false;
+        if (first) {
+            out = shadow;
+            first = false;
+            continue;
+        }
+        for (size_t i = 0; i < shadow.size() && out.size() >= 3; ++i) {
+            clip_line(out, shadow[i], shadow[(i + 1) % shadow.size()], false, next);
+            out.swap(next);
+        }
+        if (sliver(out)) return false;
+    }
+    return !sliver(out);
+}
+
+void ShaftProver::add_umbrae(const Aabb& region, const Aabb& target, int axis, double c, glm::dvec2 y,
+                             PlaneScratch& ps) const {
+    const int a = axis, u = (a + 1) % 3, v = (a + 2) % 3;
+    const double tol = kHideToleranceM;
+    const int region_side = double(region.min[a]) > c ? 1 : -1;
+    glm::dvec3 p;
+    p[a] = c;
+    p[u] = y.x;
+    p[v] = y.y;
+    const uint32_t n_boxes = uint32_t(boxes_.size()), n_flat = n_boxes + uint32_t(panels_.size());
+    // A box (a panel: flat along `flat`) clipped to one side of the plane and shrunk by tol on every side
+    // but its face on the plane; its umbra from the box with corners `eyes` on that side.
+    const auto box_umbra = [&](const Aabb& b, int flat, int part_side, const std::array<glm::dvec3, 8>& eyes) {
+        // Clipped to the slab between the plane and the eyes' box (grown by tol, so strictly nearer).
+        double near = part_side > 0 ? INFINITY : -INFINITY;
+        for (const glm::dvec3& q : eyes) near = part_side > 0 ? std::min(near, q[a]) : std::max(near, q[a]);
+        glm::dvec3 lo(b.min), hi(b.max);
+        if (part_side > 0) {
+            lo[a] = std::max(lo[a], c);
+            hi[a] = std::min(hi[a], near - tol);
+        } else {
+            hi[a] = std::min(hi[a], c);
+            lo[a] = std::max(lo[a], near + tol);
+        }
+        if (!(lo[a] <= hi[a])) return;
+        for (int k = 0; k < 3; ++k) {
+            if (k == flat) continue;
+            if (!(k == a && lo[a] == c)) lo[k] += tol;
+            if (!(k == a && hi[a] == c)) hi[k] -= tol;
+            if (!(lo[k] <= hi[k])) return;
+        }
+        if (!(lo[a] <= hi[a])) return;
+        // Only an occluder that hides the probed point from every eye corner is worth its umbra here.
+        for (const glm::dvec3& q : eyes) {
+            double t0 = 0.0, t1 = 1.0;
+            for (int k = 0; k < 3 && t0 <= t1; ++k) {
+                const double d = p[k] - q[k];
+                if (d == 0.0) {
+                    if (q[k] < lo[k] || q[k] > hi[k]) t1 = -1.0;
+                    continue;
+                }
+                double e0 = (lo[k] - q[k]) / d, e1 = (hi[k] - q[k]) / d;
+                if (e0 > e1) std::swap(e0, e1);
+                t0 = std::max(t0, e0);
+                t1 = std::min(t1, e1);
+            }
+            if (!(t0 <= t1)) return;
+        }
+        ps.corners.clear();
+        for (int i = 0; i < 8; ++i)
+            ps.corners.push_back(glm::dvec3(i & 1 ? hi.x : lo.x, i & 2 ? hi.y : lo.y, i & 4 ? hi.z : lo.z));
+        if (umbra_on_plane(eyes, ps.corners.data(), 8, a, c, part_side, ps.shadow))
+            ps.umbrae.push_back(ps.shadow);
+    };
+    const std::array<glm::dvec3, 8> rc = box_corners(region, tol), tc = box_corners(target, tol);
+    for (int from_region = 0; from_region < 2; ++from_region) {
+        // The line from one box's centre through p, on to the far side of the other box.
+        const glm::dvec3 o(from_region ? region.center() : target.center());
+        const Aabb& far_box = from_region ? target : region;
+        const double far = (p[a] - o[a]) > 0.0 ? double(far_box.max[a]) : double(far_box.min[a]);
+        if (!(std::abs(p[a] - o[a]) > 0.0)) continue;
+        const double t_end = (far - o[a]) / (p[a] - o[a]);
+        const glm::dvec3 d = (p - o) * t_end;
+        const float len = float(glm::length(d));
+        if (!(len > 0.0f)) continue;
+        const glm::vec3 dir(d / double(len));
+        ps.touches.clear();
+        umbra_scene_->trace_until(glm::vec3(o), &dir, &len, 1, ps.touches);
+        for (const RayTouch& t : ps.touches) {
+            const uint32_t k = t.object;
+            if (ps.tried.size() >= kMaxUmbrae) return;
+            if (std::find(ps.tried.begin(), ps.tried.end(), k) != ps.tried.end()) continue;
+            ps.tried.push_back(k);
+            if (k < n_flat) {
+                const Aabb& b = k < n_boxes ? boxes_[k] : panels_[k - n_boxes];
+                const int flat = k < n_boxes ? -1 : panel_axis_[k - n_boxes];
+                if (flat == a && double(b.min[a]) == c) continue;  // in the plane: a cover of its own
+                box_umbra(b, flat, region_side, rc);
+                box_umbra(b, flat, -region_side, tc);
+                continue;
+            }
+            // A slanted panel: segments crossing both faces of its slab inside the polygon (shrunk towards
+            // its centroid so that every edge moves in by at least tol) meet its triangles.
+            const SlantedPanel& sp = slanted_[k - n_flat];
+            const size_t n = sp.corners.size();
+            if (n < 3 || 2 * n > 64 || sp.edge_normal.size() != n || sp.edge_offset.size() != n) continue;
+            glm::dvec3 g(0.0);
+            for (const glm::dvec3& q : sp.corners) g += q;
+            g /= double(n);
+            double inner = INFINITY;
+            for (size_t i = 0; i < n; ++i)
+                inner = std::min(inner, glm::dot(sp.edge_normal[i], g) - sp.edge_offset[i]);
+            if (!(inner > 2.0 * tol)) continue;
+            const double shrink = tol / inner;
+            ps.corners.clear();
+            for (int f = -1; f <= 1; f += 2)
+                for (const glm::dvec3& q : sp.corners) {
+                    const glm::dvec3 in_plane = g + (q - g) * (1.0 - shrink);
+                    ps.corners.push_back(in_plane + sp.normal * (double(f) * sp.thickness +
+                                                                 (glm::dot(sp.normal, in_plane) - sp.offset) * -1.0));
+                }
+            int part_side = 0;
+            bool straddles = false;
+            for (const glm::dvec3& q : ps.corners) {
+                const int s = q[a] > c ? 1 : (q[a] < c ? -1 : 0);
+                if (s == 0 || (part_side != 0 && s != part_side)) straddles = true;
+                part_side = s;
+            }
+            if (straddles) continue;
+            const std::array<glm::dvec3, 8>& eyes = part_side == region_side ? rc : tc;
+            if (!umbra_on_plane(eyes, ps.corners.data(), n, a, c, part_side, ps.shadow)) continue;
+            if (!umbra_on_plane(eyes, ps.corners.data() + n, n, a, c, part_side, ps.other)) continue;
+            for (size_t i = 0; i < ps.other.size() && ps.shadow.size() >= 3; ++i) {
+                clip_line(ps.shadow, ps.other[i], ps.other[(i + 1) % ps.other.size()], false, ps.clipped);
+                ps.shadow.swap(ps.clipped);
+            }
+            if (!sliver(ps.shadow)) ps.umbrae.push_back(ps.shadow);
+        }
+    }
+}
 
 // A piece of the region (the bounds of its eye voxels' parts in a box, with an eye point) and a piece of
 // the object (the bounds of its triangles' parts in a box, with a point on one of them). Voxel and triangle
@@ -169,8 +372,8 @@ struct ShaftProver::Scratch {
     std::vector<glm::ivec3> run;
 };
 
-ShaftProver::ShaftProver(Context& ctx, const ShrunkOccluders& set)
-    : panels_(set.panels), slanted_(set.slanted), solid_(set.solid) {
+ShaftProver::ShaftProver(Context& ctx, const ShrunkOccluders& set, bool fusion)
+    : panels_(set.panels), slanted_(set.slanted), solid_(set.solid), fusion_(fusion) {
     std::array<std::vector<std::pair<float, uint32_t>>, 3> by_plane;
     for (uint32_t i = 0; i < panels_.size(); ++i) {
         const int a = panel_axis(panels_[i]);
@@ -221,14 +424,19 @@ ShaftProver::ShaftProver(Context& ctx, const ShrunkOccluders& set)
     Context quiet(Context::Options{LogLevel::kWarning, true, nullptr});
     scene_ =
         std::make_unique<RayScene>(quiet, box_world({}, panels_, false, slanted_), BuildQuality::kMedium, 1);
+    if (fusion_) {
+        if (!set.boxes.empty()) boxes_ = set.boxes.front();
+        umbra_scene_ = std::make_unique<RayScene>(quiet, box_world(boxes_, panels_, false, slanted_),
+                                                  BuildQuality::kMedium, 1);
+    }
     ctx.debug(fmt::format("shaft pass: {} panels in {} planes, {} slanted panels", panels_.size(),
                           planes_[0].size() + planes_[1].size() + planes_[2].size(), slanted_.size()));
 }
 
 ShaftProver::~ShaftProver() = default;
 
-bool ShaftProver::plane_covers(const Aabb& region, const Aabb& target, int axis, float c,
-                               PlaneMiss* miss) const {
+bool ShaftProver::plane_covers(const Aabb& region, const Aabb& target, int axis, float c, PlaneMiss* miss,
+                               uint64_t* umbrae) const {
     const int a = axis, u = (a + 1) % 3, v = (a + 2) % 3;
     const double cd = c, tol = kHideToleranceM;
     const bool below = double(region.max[a])<cd - tol&& double(target.min[a])> cd + tol;
@@ -238,6 +446,15 @@ bool ShaftProver::plane_covers(const Aabb& region, const Aabb& target, int axis,
     // segment from region to target crosses it (docs/ALGORITHMS.md#single-occluder) grown by tol on both
     // axes (a segment moved by e in the plane, |e| <= tol, runs between the grown boxes).
     thread_local PlaneScratch ps;
+    ps.umbrae.clear();
+    ps.tried.clear();
+    struct Count {
+        const PlaneScratch& ps;
+        uint64_t* to;
+        ~Count() {
+            if (to) *to += ps.umbrae.size();
+        }
+    } count{ps, umbrae};
     std::array<glm::dvec2, 64> pts;
     const std::array<glm::dvec3, 8> rc = box_corners(region, tol), tc = box_corners(target, tol);
     size_t n_pts = 0;
@@ -266,7 +483,7 @@ bool ShaftProver::plane_covers(const Aabb& region, const Aabb& target, int axis,
     const auto it = std::lower_bound(planes.begin(), planes.end(), c,
                                      [](const Plane& p, float value) { return p.c < value; });
     const bool has_panels = it != planes.end() && it->c == c;
-    {
+    if (!fusion_) {
         glm::dvec2 reach_lo(INFINITY), reach_hi(-INFINITY);
         if (has_panels) {
             reach_lo = it->lo;
@@ -289,6 +506,7 @@ bool ShaftProver::plane_covers(const Aabb& region, const Aabb& target, int axis,
     // Every corner crossing is a point of the crossing: one left open settles it (cheaper than the cover).
     {
         ps.near_rects.clear();
+        ps.open.clear();
         if (has_panels)
             for (uint32_t r = it->first; r < it->first + it->count; ++r) {
                 const Rect& rect = rects_[r];
@@ -327,6 +545,34 @@ bool ShaftProver::plane_covers(const Aabb& region, const Aabb& target, int axis,
             if (!in) {
                 open_lo = glm::min(open_lo, p);
                 open_hi = glm::max(open_hi, p);
+                ps.open.push_back(p);
+            }
+        }
+        // With fusion, an open corner crossing may lie in the umbra of an occluder of another plane: search
+        // through the first open crossing and the one farthest from it, then every open one must be in one.
+        if (fusion_ && !ps.open.empty()) {
+            size_t far = 0;
+            double far_d = -1.0;
+            for (size_t i = 0; i < ps.open.size(); ++i) {
+                const double d = glm::length(ps.open[i] - ps.open[0]);
+                if (d > far_d) far_d = d, far = i;
+            }
+            const size_t probes[kUmbraProbes] = {0, far};
+            for (size_t i = 0; i < kUmbraProbes && (i == 0 || probes[i] != probes[0]); ++i)
+                add_umbrae(region, target, a, cd, ps.open[probes[i]], ps);
+            open_lo = glm::dvec2(INFINITY);
+            open_hi = glm::dvec2(-INFINITY);
+            for (const glm::dvec2& p : ps.open) {
+                bool in = false;
+                for (const Poly& um : ps.umbrae)
+                    if (inside(um, p)) {
+                        in = true;
+                        break;
+                    }
+                if (!in) {
+                    open_lo = glm::min(open_lo, p);
+                    open_hi = glm::max(open_hi, p);
+                }
             }
         }
         if (open_lo.x <= open_hi.x) {
@@ -363,6 +609,42 @@ bool ShaftProver::plane_covers(const Aabb& region, const Aabb& target, int axis,
             ps.pieces.swap(ps.next);
             n_pieces = n_next;
             if (n_pieces > kMaxPieces) break;
+        }
+    }
+    // Less the umbrae of other planes' occluders: those found through the open corners, then those through
+    // the middle of what is left.
+    if (fusion_ && n_pieces > 0) {
+        const auto subtract = [&](const Poly& um) {
+            size_t n_next = 0;
+            for (size_t i = 0; i < n_pieces; ++i) {
+                ps.rest = ps.pieces[i];
+                for (size_t e = 0; e < um.size() && ps.rest.size() >= 3; ++e) {
+                    const glm::dvec2 e0 = um[e], e1 = um[(e + 1) % um.size()];
+                    clip_line(ps.rest, e0, e1, true, ps.part);
+                    if (!sliver(ps.part)) {
+                        if (ps.next.size() <= n_next) ps.next.resize(n_next + 1);
+                        ps.next[n_next++] = ps.part;
+                    }
+                    clip_line(ps.rest, e0, e1, false, ps.part);
+                    ps.rest.swap(ps.part);
+                }
+            }
+            ps.pieces.swap(ps.next);
+            n_pieces = n_next;
+        };
+        size_t done = 0;
+        for (int round = 0; round <= kUmbraRounds && n_pieces > 0 && n_pieces <= kMaxPieces; ++round) {
+            if (round > 0) {
+                glm::dvec2 mid(0.0);
+                for (const glm::dvec2& q : ps.pieces[0]) mid += q;
+                add_umbrae(region, target, a, cd, mid / double(ps.pieces[0].size()), ps);
+            }
+            if (done == ps.umbrae.size()) {
+                if (round > 0) break;
+                continue;
+            }
+            for (; done < ps.umbrae.size() && n_pieces > 0 && n_pieces <= kMaxPieces; ++done)
+                subtract(ps.umbrae[done]);
         }
     }
     if (n_pieces == 0) return true;
@@ -421,7 +703,7 @@ bool ShaftProver::plane_covers(const Aabb& region, const Aabb& target, int axis,
 }
 
 bool ShaftProver::try_pair(const Pair& pair, glm::vec3 from, glm::vec3 to, bool& line_blocked,
-                           PlaneMiss& miss, Scratch& sc) const {
+                           PlaneMiss& miss, Scratch& sc, uint64_t& umbrae) const {
     line_blocked = false;
     miss = PlaneMiss{};
     double best = INFINITY;
@@ -435,7 +717,7 @@ bool ShaftProver::try_pair(const Pair& pair, glm::vec3 from, glm::vec3 to, bool&
             if (tried[i].first == a && tried[i].second == c) return false;
         if (n_tried < tried.size()) tried[n_tried++] = {a, c};
         PlaneMiss m;
-        if (plane_covers(pair.region, pair.target, a, c, &m)) return true;
+        if (plane_covers(pair.region, pair.target, a, c, &m, &umbrae)) return true;
         if (m.axis >= 0) {
             const glm::dvec2 extent = glm::max(m.hi - m.lo, 1e-12), open = m.open_hi - m.open_lo;
             const double narrow = std::min(open.x / extent.x, open.y / extent.y);
@@ -706,7 +988,7 @@ bool ShaftProver::hides(const World& world, const VoxelMask& eyes, const ShaftRe
         }
         bool blocked = false;
         PlaneMiss miss;
-        if (try_pair(pair, pair.from, pair.point, blocked, miss, sc)) continue;
+        if (try_pair(pair, pair.from, pair.point, blocked, miss, sc, figures.umbrae)) continue;
         // A line from an eye to a point of the object that meets no occluder: every cover has a piece pair
         // holding it, and no plane covers that pair.
         if (!blocked) {
@@ -777,10 +1059,10 @@ bool ShaftProver::hides(const World& world, const VoxelMask& eyes, const ShaftRe
     return true;
 }
 
-ShaftProvers::ShaftProvers(Context& ctx, const ShrunkOccluders& occluders) {
-    provers_.push_back(std::make_unique<ShaftProver>(ctx, occluders));
+ShaftProvers::ShaftProvers(Context& ctx, const ShrunkOccluders& occluders, bool fusion) {
+    provers_.push_back(std::make_unique<ShaftProver>(ctx, occluders, fusion));
     for (const ShrunkOccluders& set : occluders.block_sets)
-        provers_.push_back(std::make_unique<ShaftProver>(ctx, set));
+        provers_.push_back(std::make_unique<ShaftProver>(ctx, set, fusion));
 }
 
 }  // namespace pvs

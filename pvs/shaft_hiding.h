@@ -6,10 +6,13 @@
 // Contract: plane_covers() is true only if every segment from the box `region` to the box `target` crosses
 // the plane (axis, c) at a point that lies, with its whole square of half-side kHideToleranceM in the plane,
 // in the union of the panels of that plane and of the interior of the proven solid's slice (both boxes lie
-// strictly on opposite sides of the plane). A segment crossing a panel meets an opaque triangle; one reaching
-// the interior of the proven solid is stopped by S. hides() is true only if every piece pair of a cover of
-// the region's eyes and of the object's triangles passes plane_covers() or slanted_hides(). So what it proves
-// is hidden from every eye of the region. The argument: docs/ALGORITHMS.md#shaft-pass.
+// strictly on opposite sides of the plane), or, with fusion, in the umbra of an occluder of another plane:
+// the segments from every point of `region` to it meet that occluder (a front umbra), or those from it to
+// every point of `target` do (a back umbra; the occluder misses `target`). A segment crossing a panel meets
+// an opaque triangle; one reaching the interior of the proven solid is stopped by S; one through an umbra
+// meets its occluder before its end. hides() is true only if every piece pair of a cover of the region's
+// eyes and of the object's triangles passes plane_covers() or slanted_hides(). So what it proves is hidden
+// from every eye of the region. The argument: docs/ALGORITHMS.md#shaft-pass and #cross-plane-fusion.
 #pragma once
 
 #include "core/cell_set.h"
@@ -18,6 +21,7 @@
 #include "core/world.h"
 #include "rays/ray_scene.h"
 
+#include <array>
 #include <memory>
 #include <vector>
 
@@ -30,6 +34,7 @@ struct ShaftFigures {
     uint64_t certain = 0;        // pairs given up at once: a line from an eye to the object meets no occluder
     uint64_t out_of_budget = 0;  // pairs given up when the budget of piece pairs ran out
     uint64_t stuck = 0;  // pairs given up on pieces that meet, cannot be halved or were halved too often
+    uint64_t umbrae = 0;  // umbrae of occluders in other planes computed (cross-plane fusion)
     double seconds = 0.0;
 
     ShaftFigures& operator+=(const ShaftFigures& o) {
@@ -39,6 +44,7 @@ struct ShaftFigures {
         certain += o.certain;
         out_of_budget += o.out_of_budget;
         stuck += o.stuck;
+        umbrae += o.umbrae;
         seconds += o.seconds;
         return *this;
     }
@@ -63,10 +69,21 @@ struct ShaftRegion {
 };
 ShaftRegion shaft_region(const VoxelMask& eyes, const Aabb& region);
 
+// The umbra on the plane x[axis] = c of the convex set conv(corners[0 .. n)) seen from the box with corners
+// `eyes`: the points y of the plane such that the segment from EVERY eye corner to y meets the set, which
+// by convexity is every segment from the box (docs/ALGORITHMS.md#cross-plane-fusion). `side` is +1 when the
+// eyes lie above the plane along the axis, -1 below; every corner must lie on that side or on the plane and
+// strictly nearer to it than every eye corner (else false). Writes the umbra, convex and counter-clockwise
+// in the plane's coordinates (axis + 1, axis + 2); false when it has no area.
+bool umbra_on_plane(const std::array<glm::dvec3, 8>& eyes, const glm::dvec3* corners, size_t n, int axis,
+                    double c, int side, std::vector<glm::dvec2>& out);
+
 // The occluders of one set (ShrunkOccluders: its panels, slanted panels and proven solid), indexed by plane.
+// With `fusion`, a plane's cover also takes in the umbrae of occluders in other planes, seen from either
+// piece (docs/ALGORITHMS.md#cross-plane-fusion).
 class ShaftProver {
 public:
-    ShaftProver(Context& ctx, const ShrunkOccluders& set);
+    ShaftProver(Context& ctx, const ShrunkOccluders& set, bool fusion = true);
     ~ShaftProver();
     ShaftProver(const ShaftProver&) = delete;
     ShaftProver& operator=(const ShaftProver&) = delete;
@@ -85,10 +102,12 @@ public:
         glm::dvec2 lo{0.0}, hi{0.0}, open_lo{0.0}, open_hi{0.0};
     };
     // Does every segment from `region` to `target` cross the plane x[axis] = c inside the panels of that
-    // plane and the proven solid's slice (see the contract above)? When not, and the boxes lie on opposite
-    // sides of the plane, `miss` (if given) says where.
-    bool plane_covers(const Aabb& region, const Aabb& target, int axis, float c,
-                      PlaneMiss* miss = nullptr) const;
+    // plane and the proven solid's slice (see the contract above), or, with fusion, at a point from which
+    // an occluder of another plane stops it on the way to either end? When not, and the boxes lie on
+    // opposite sides of the plane, `miss` (if given) says where. `umbrae` (if given) counts the umbrae
+    // computed.
+    bool plane_covers(const Aabb& region, const Aabb& target, int axis, float c, PlaneMiss* miss = nullptr,
+                      uint64_t* umbrae = nullptr) const;
 
 private:
     struct Plane {
@@ -105,7 +124,12 @@ private:
     // meets an occluder at all.
     // `miss`: of the planes tried, the one whose open part is narrowest across, relative to its crossing.
     bool try_pair(const Pair& pair, glm::vec3 from, glm::vec3 to, bool& line_blocked, PlaneMiss& miss,
-                  Scratch& sc) const;
+                  Scratch& sc, uint64_t& umbrae) const;
+    struct PlaneScratch;
+    // Adds to the scratch the umbrae on the plane (axis, c) of the occluders that the lines from the centre
+    // of each box through the plane's point y (in the plane's coordinates) meet, each occluder once.
+    void add_umbrae(const Aabb& region, const Aabb& target, int axis, double c, glm::dvec2 y,
+                    PlaneScratch& ps) const;
     bool meets_occluder(glm::vec3 from, glm::vec3 to, Scratch& sc) const;
 
     std::vector<Plane> planes_[3];  // per axis, by c
@@ -118,12 +142,15 @@ private:
     std::vector<SlantedPanel> slanted_;
     const VoxelMask& solid_;
     std::unique_ptr<RayScene> scene_;  // panels_, then slanted_, every triangle see-through
+    bool fusion_ = false;
+    std::vector<Aabb> boxes_;  // the boxes of the floor epsilon (inside the proven solid), for their umbrae
+    std::unique_ptr<RayScene> umbra_scene_;  // boxes_, panels_, then slanted_, every triangle see-through
 };
 
 // A ShaftProver for every set of a ShrunkOccluders (the global one and each block's), built once.
 class ShaftProvers {
 public:
-    ShaftProvers(Context& ctx, const ShrunkOccluders& occluders);
+    ShaftProvers(Context& ctx, const ShrunkOccluders& occluders, bool fusion = true);
     const ShaftProver& of(int32_t i) const { return *provers_[size_t(i + 1)]; }
 
 private:
