@@ -78,20 +78,8 @@ int main(int argc, char** argv) {
             std::fprintf(stderr, "error: %s: cannot read the compiler's visibility\n", vis_path.c_str());
             return 2;
         }
-        const nlohmann::json vis = nlohmann::json::parse(in);
-        const auto& nodes = vis["nodes"];
-        const auto& leaves = vis["leaves"];
-        const auto& fraction = vis["cluster_visible_triangle_fraction"];
-        auto cluster_of = [&](glm::vec3 p) {
-            int n = 0;
-            while (n >= 0) {
-                const auto& node = nodes[size_t(n)];
-                const float d = node["normal"][0].get<float>() * p.x + node["normal"][1].get<float>() * p.y +
-                                node["normal"][2].get<float>() * p.z;
-                n = node["children"][d >= node["dist"].get<float>() ? 0 : 1].get<int>();
-            }
-            return leaves[size_t(-n - 1)]["cluster"].get<int>();
-        };
+        const pvs::bench::CompilerVis vis = pvs::bench::CompilerVis::from_json(nlohmann::json::parse(in));
+        auto cluster_of = [&](glm::vec3 p) { return vis.cluster_of(p); };
         const double total = double(world.triangles.size());
         pvs::RayScene scene(ctx, world);
         // The lower bound: the sampled PVS of the bake's cells (rays/ray_sampler.h), as the CLI's sampled
@@ -113,7 +101,7 @@ int main(int argc, char** argv) {
             const int32_t cell = bake.cells.find(p);
             if (cell < 0) continue;
             const int cluster = cluster_of(p);
-            if (cluster < 0 || !fraction.contains(std::to_string(cluster))) continue;
+            if (cluster < 0 || !vis.has_fraction(cluster)) continue;
             double listed = 0.0, bound_listed = 0.0;
             for (uint32_t o = 0; o < bake.objects.size(); ++o) {
                 if (bake.pvs.test(uint32_t(cell), o)) listed += bake.objects[o].triangle_count;
@@ -127,7 +115,7 @@ int main(int argc, char** argv) {
             double visible = 0.0;
             for (size_t o = 0; o < hit.size(); ++o)
                 if (hit[o]) visible += world.objects[o].triangle_count;
-            const double c = fraction[std::to_string(cluster)].get<double>();
+            const double c = vis.fraction_of(cluster);
             ours.push_back(listed / total);
             compiler.push_back(c);
             seen.push_back(visible / total);
