@@ -134,6 +134,8 @@ void walk_voxels(const VoxelMask& mask, glm::vec3 from, glm::vec3 to, Visit&& vi
 constexpr size_t kMaxUmbrae = 16;
 // Rounds of umbra search through the open pieces of a crossing, after the search through its open corners.
 constexpr int kUmbraRounds = 2;
+// Planes of a piece pair tried again with umbrae when none covers it alone: the first ones the line met.
+constexpr size_t kFusedPlanes = 4;
 // Open corner crossings the umbra search traces lines through (the first and the farthest from it).
 constexpr size_t kUmbraProbes = 2;
 // Pieces narrower than this (metres) count as covered: the rounding of double computations where two
@@ -155,7 +157,20 @@ double width(const Poly& p) {
     return w == INFINITY ? 0.0 : w;
 }
 
-bool sliver(const Poly& p) { return p.size() < 3 || width(p) <= kSliverM; }
+bool sliver(const Poly& p) {
+    if (p.size() < 3) return true;
+    // The width is at least the area over the diameter, which the bounds' diagonal exceeds.
+    double area = 0.0;
+    glm::dvec2 lo = p[0], hi = p[0];
+    for (size_t i = 0; i < p.size(); ++i) {
+        const glm::dvec2 a = p[i], b = p[(i + 1) % p.size()];
+        area += a.x * b.y - a.y * b.x;
+        lo = glm::min(lo, a);
+        hi = glm::max(hi, a);
+    }
+    if (0.5 * std::abs(area) > 2.0 * kSliverM * glm::length(hi - lo)) return false;
+    return width(p) <= kSliverM;
+}
 
 // Is p in the closed convex counter-clockwise polygon `poly`?
 bool inside(const Poly& poly, glm::dvec2 p) {
@@ -437,6 +452,11 @@ ShaftProver::~ShaftProver() = default;
 
 bool ShaftProver::plane_covers(const Aabb& region, const Aabb& target, int axis, float c, PlaneMiss* miss,
                                uint64_t* umbrae) const {
+    return cover(region, target, axis, c, fusion_, miss, umbrae);
+}
+
+bool ShaftProver::cover(const Aabb& region, const Aabb& target, int axis, float c, bool fuse, PlaneMiss* miss,
+                        uint64_t* umbrae) const {
     const int a = axis, u = (a + 1) % 3, v = (a + 2) % 3;
     const double cd = c, tol = kHideToleranceM;
     const bool below = double(region.max[a])<cd - tol&& double(target.min[a])> cd + tol;
@@ -483,7 +503,7 @@ bool ShaftProver::plane_covers(const Aabb& region, const Aabb& target, int axis,
     const auto it = std::lower_bound(planes.begin(), planes.end(), c,
                                      [](const Plane& p, float value) { return p.c < value; });
     const bool has_panels = it != planes.end() && it->c == c;
-    if (!fusion_) {
+    if (!fuse) {
         glm::dvec2 reach_lo(INFINITY), reach_hi(-INFINITY);
         if (has_panels) {
             reach_lo = it->lo;
@@ -550,7 +570,7 @@ bool ShaftProver::plane_covers(const Aabb& region, const Aabb& target, int axis,
         }
         // With fusion, an open corner crossing may lie in the umbra of an occluder of another plane: search
         // through the first open crossing and the one farthest from it, then every open one must be in one.
-        if (fusion_ && !ps.open.empty()) {
+        if (fuse && !ps.open.empty()) {
             size_t far = 0;
             double far_d = -1.0;
             for (size_t i = 0; i < ps.open.size(); ++i) {
@@ -613,7 +633,7 @@ bool ShaftProver::plane_covers(const Aabb& region, const Aabb& target, int axis,
     }
     // Less the umbrae of other planes' occluders: those found through the open corners, then those through
     // the middle of what is left.
-    if (fusion_ && n_pieces > 0) {
+    if (fuse && n_pieces > 0) {
         const auto subtract = [&](const Poly& um) {
             size_t n_next = 0;
             for (size_t i = 0; i < n_pieces; ++i) {
@@ -717,7 +737,7 @@ bool ShaftProver::try_pair(const Pair& pair, glm::vec3 from, glm::vec3 to, bool&
             if (tried[i].first == a && tried[i].second == c) return false;
         if (n_tried < tried.size()) tried[n_tried++] = {a, c};
         PlaneMiss m;
-        if (plane_covers(pair.region, pair.target, a, c, &m, &umbrae)) return true;
+        if (cover(pair.region, pair.target, a, c, false, &m)) return true;
         if (m.axis >= 0) {
             const glm::dvec2 extent = glm::max(m.hi - m.lo, 1e-12), open = m.open_hi - m.open_lo;
             const double narrow = std::min(open.x / extent.x, open.y / extent.y);
@@ -769,7 +789,14 @@ bool ShaftProver::try_pair(const Pair& pair, glm::vec3 from, glm::vec3 to, bool&
         covered = end_run();
         return covered;
     });
-    return covered || end_run();
+    if (covered || end_run()) return true;
+    // No plane's own occluders cover the pair: the first planes the line met, with the umbrae of the
+    // occluders of other planes (cheap planes first: most pairs need no umbra).
+    if (fusion_)
+        for (size_t i = 0; i < std::min(n_tried, kFusedPlanes); ++i)
+            if (cover(pair.region, pair.target, tried[i].first, tried[i].second, true, nullptr, &umbrae))
+                return true;
+    return false;
 }
 
 ShaftRegion shaft_region(const VoxelMask& eyes, const Aabb& region) {

@@ -126,6 +126,9 @@ private:
     bool try_pair(const Pair& pair, glm::vec3 from, glm::vec3 to, bool& line_blocked, PlaneMiss& miss,
                   Scratch& sc, uint64_t& umbrae) const;
     struct PlaneScratch;
+    // plane_covers() with or without the umbrae of other planes' occluders.
+    bool cover(const Aabb& region, const Aabb& target, int axis, float c, bool fuse, PlaneMiss* miss,
+               uint64_t* umbrae = nullptr) const;
     // Adds to the scratch the umbrae on the plane (axis, c) of the occluders that the lines from the centre
     // of each box through the plane's point y (in the plane's coordinates) meet, each occluder once.
     void add_umbrae(const Aabb& region, const Aabb& target, int axis, double c, glm::dvec2 y,

@@ -519,6 +519,38 @@ TEST(Conservative, BehindTwoWallsAtDifferentDepthsTheShaftPassCulls) {
     EXPECT_GT(with_hidden, 0u);
 }
 
+// CROSS-PLANE FUSION (docs/ALGORITHMS.md#cross-plane-fusion). A closed room 14 x 3 x 8 m; two full-height
+// walls 5 cm thick (only their faces as occluders) meet at a right angle: the near one at x = 6 from z = 0
+// to 4, the far one at z = 4 from x = 6 to 12, closing a pocket open to the room only at x in [12, 14]. A
+// target in the pocket, near the corner, is hidden from the cell at x in [2, 3], z in [5, 6] by the two
+// walls together: every line from the cell passes the corner on one side or the other. Neither wall alone
+// hides it, the cubes lose the corner to the panels' inset, and one plane's cover never fuses the two
+// walls at their edge; the umbra of one wall on the other's plane does. The bake is verified by dense rays.
+TEST(Conservative, BehindTwoWallsMeetingAtACornerTheFusedShaftPassCulls) {
+    World w;
+    const glm::vec3 size(14, 3, 8);
+    add_closed_room(w, size);
+    test::add_box(w, "near", Aabb::of({5.975f, 0, 0}, {6.025f, size.y, 4.025f}));
+    test::add_box(w, "far", Aabb::of({5.975f, 0, 3.975f}, {12.0f, size.y, 4.025f}));
+    const uint32_t target = test::add_box(w, "target", Aabb::of({6.5f, 0.5f, 2.5f}, {7.0f, 2.5f, 3.5f}));
+    w.view_seeds = {{2.5f, 1.5f, 5.5f}, {9.0f, 1.5f, 1.5f}};
+    BakeConfig c = conservative_config();
+    const auto listed = [&](int budget, bool fusion, uint64_t& shaft_hidden) {
+        c.conservative.shaft_budget = budget;
+        c.conservative.shaft_fusion = fusion;
+        const BakeData bake = bake_without_misses(c, w);
+        shaft_hidden = uint64_t(figure(bake, "conservative_shaft_hidden"));
+        const int32_t cell = bake.cells.find({2.5f, 1.5f, 5.5f});
+        EXPECT_GE(cell, 0);
+        return cell < 0 || bake.pvs.test(uint32_t(cell), target);
+    };
+    uint64_t hidden = 0;
+    EXPECT_TRUE(listed(0, true, hidden)) << "the cubes alone prove it: the scene no longer tests the pass";
+    EXPECT_TRUE(listed(1024, false, hidden)) << "one plane's cover proved the corner: the scene is not telling";
+    EXPECT_FALSE(listed(1024, true, hidden)) << "the fused shaft pass did not prove what the corner hides";
+    EXPECT_GT(hidden, 0u);
+}
+
 // The safety property of block occluders, on the yard: no ray from eyes of a block (fresh ones, not those
 // synthesis used) reaches a point inside one of that block's shrunk boxes before an opaque triangle.
 TEST(Conservative, NoRayFromABlocksEyesReachesIntoItsOwnOccluders) {

@@ -381,5 +381,100 @@ TEST(ShaftHiding, TwoWallsAtARightAngleHideWhatNeitherHidesAlone) {
     }
 }
 
+// Two staggered rows of pillars (boxes of the proven solid, 0.6 m wide with 0.4 m gaps, the second row's
+// pillars over the first row's gaps) hide an object from a whole cell that neither row hides alone. The
+// plane across the second row is covered by its own solid slice and, in its gaps, by the umbrae of the
+// first row's pillars. Dense segments confirm it; with the second row moved over the first's pillars
+// (gaps in line), the object stays listed.
+TEST(ShaftHiding, StaggeredPillarsFuse) {
+    Context ctx = quiet_context();
+    for (const bool staggered : {true, false}) {
+        ShrunkOccluders occ;
+        occ.epsilon_m = {0.1};
+        std::vector<Aabb> pillars;
+        for (int k = -2; k < 9; ++k) {
+            pillars.push_back(Aabb::of({float(k), 0.0f, 5.0f}, {float(k) + 0.6f, 3.0f, 5.6f}));
+            const float x = float(k) + (staggered ? 0.5f : 0.0f);
+            pillars.push_back(Aabb::of({x, 0.0f, 6.0f}, {x + 0.6f, 3.0f, 6.6f}));
+        }
+        occ.boxes = {pillars};
+        VoxelMask& m = occ.solid;
+        m.origin = glm::vec3(-3.0f, -1.0f, -1.0f);
+        m.voxel_size_m = 0.1f;
+        m.dims = glm::ivec3(150, 50, 130);
+        m.bits.assign((m.count() + 63) / 64, 0);
+        for (int z = 0; z < m.dims.z; ++z)
+            for (int y = 0; y < m.dims.y; ++y)
+                for (int x = 0; x < m.dims.x; ++x) {
+                    const glm::vec3 c = m.origin + (glm::vec3(x, y, z) + 0.5f) * m.voxel_size_m;
+                    bool in = false;
+                    for (const Aabb& b : pillars) in = in || b.contains(c);
+                    if (in) {
+                        const uint64_t i = uint64_t(x) + uint64_t(m.dims.x) * (uint64_t(y) + uint64_t(m.dims.y) * uint64_t(z));
+                        m.bits[i >> 6] |= uint64_t(1) << (i & 63);
+                    }
+                }
+        World w;
+        const uint32_t object = test::add_box(w, "o", Aabb::of({2.8f, 1.0f, 10.0f}, {3.4f, 2.0f, 10.5f}));
+        const Aabb cell = Aabb::of({2.5f, 1.0f, 0.0f}, {3.5f, 2.0f, 1.0f});
+        const auto meets = [](const Aabb& b, glm::dvec3 q, glm::dvec3 x) {
+            double t0 = 0.0, t1 = 1.0;
+            for (int k = 0; k < 3; ++k) {
+                const double d = x[k] - q[k];
+                double e0 = (double(b.min[k]) - q[k]) / d, e1 = (double(b.max[k]) - q[k]) / d;
+                if (e0 > e1) std::swap(e0, e1);
+                t0 = std::max(t0, e0);
+                t1 = std::min(t1, e1);
+            }
+            return t0 <= t1;
+        };
+        Rng rng(17, 6);
+        bool all_blocked = true;
+        int first_row_misses = 0;
+        for (int s = 0; s < 100000 && all_blocked; ++s) {
+            const glm::dvec3 q(point_in(cell, rng)), x(point_in(w.objects[object].bounds, rng));
+            bool first = false, any = false;
+            for (size_t i = 0; i < pillars.size(); ++i)
+                if (meets(pillars[i], q, x)) {
+                    any = true;
+                    first = first || i % 2 == 0;
+                }
+            all_blocked = any;
+            first_row_misses += first ? 0 : 1;
+        }
+        EXPECT_EQ(all_blocked, staggered) << "the scene is not what the test means";
+        EXPECT_GT(first_row_misses, 0) << "the first row alone hides it";
+        const VoxelMask no_eyes;
+        const ShaftRegion shaft = shaft_region(no_eyes, cell);
+        ShaftFigures fig_on, fig_off;
+        const bool fused = ShaftProver(ctx, occ, true).hides(w, no_eyes, shaft, object, 1024, fig_on);
+        const bool alone = ShaftProver(ctx, occ, false).hides(w, no_eyes, shaft, object, 1024, fig_off);
+        EXPECT_EQ(fused, staggered) << (staggered ? "staggered" : "in line") << ": " << fig_on.tests
+                                    << " piece pairs, " << fig_on.umbrae << " umbrae";
+        EXPECT_FALSE(alone && !staggered);
+    }
+}
+
+// A wall (a panel) with a slit 2 cm wide, and a second wall behind it with a 2 cm slit in line, in front
+// of an object: sight passes both slits, so the object stays listed, with fusion as without.
+TEST(ShaftHiding, AnObjectBehindSlitsInLineStaysListed) {
+    Context ctx = quiet_context();
+    ShrunkOccluders occ;
+    occ.epsilon_m = {0.1};
+    occ.boxes = {{}};
+    for (const float z : {4.0f, 6.0f}) {
+        occ.panels.push_back(Aabb::of({-4.0f, 0.0f, z}, {2.99f, 3.0f, z}));
+        occ.panels.push_back(Aabb::of({3.01f, 0.0f, z}, {10.0f, 3.0f, z}));
+    }
+    World w;
+    const uint32_t object = test::add_box(w, "o", Aabb::of({2.5f, 1.0f, 9.0f}, {3.5f, 2.0f, 9.5f}));
+    const Aabb cell = Aabb::of({2.5f, 1.0f, 0.0f}, {3.5f, 2.0f, 1.0f});
+    const VoxelMask no_eyes;
+    const ShaftRegion shaft = shaft_region(no_eyes, cell);
+    ShaftFigures figures;
+    EXPECT_FALSE(ShaftProver(ctx, occ, true).hides(w, no_eyes, shaft, object, 4096, figures));
+    EXPECT_FALSE(ShaftProver(ctx, occ, false).hides(w, no_eyes, shaft, object, 4096, figures));
+}
+
 }  // namespace
 }  // namespace pvs
