@@ -151,7 +151,8 @@ double width(const Poly& p) {
         const double len = glm::length(d);
         if (!(len > 0.0)) continue;
         double far = 0.0;
-        for (const glm::dvec2& q : p) far = std::max(far, std::abs(d.x * (q.y - a.y) - d.y * (q.x - a.x)) / len);
+        for (const glm::dvec2& q : p)
+            far = std::max(far, std::abs(d.x * (q.y - a.y) - d.y * (q.x - a.x)) / len);
         w = std::min(w, far);
     }
     return w == INFINITY ? 0.0 : w;
@@ -257,7 +258,8 @@ void ShaftProver::add_umbrae(const Aabb& region, const Aabb& target, int axis, d
     const uint32_t n_boxes = uint32_t(boxes_.size()), n_flat = n_boxes + uint32_t(panels_.size());
     // A box (a panel: flat along `flat`) clipped to one side of the plane and shrunk by tol on every side
     // but its face on the plane; its umbra from the box with corners `eyes` on that side.
-    const auto box_umbra = [&](const Aabb& b, int flat, int part_side, const std::array<glm::dvec3, 8>& eyes) {
+    const auto box_umbra = [&](const Aabb& b, int flat, int part_side,
+                               const std::array<glm::dvec3, 8>& eyes) {
         // Clipped to the slab between the plane and the eyes' box (grown by tol, so strictly nearer).
         double near = part_side > 0 ? INFINITY : -INFINITY;
         for (const glm::dvec3& q : eyes) near = part_side > 0 ? std::min(near, q[a]) : std::max(near, q[a]);
@@ -300,19 +302,31 @@ void ShaftProver::add_umbrae(const Aabb& region, const Aabb& target, int axis, d
             ps.umbrae.push_back(ps.shadow);
     };
     const std::array<glm::dvec3, 8> rc = box_corners(region, tol), tc = box_corners(target, tol);
+    // The lines stay in the bounds of the two boxes (which hold p): what the pass reads for a pair lies
+    // there (pvs/reuse.h).
+    Aabb both = region;
+    both.extend(target);
     for (int from_region = 0; from_region < 2; ++from_region) {
-        // The line from one box's centre through p, on to the far side of the other box.
+        // The line from one box's centre through p, on until it leaves the bounds.
         const glm::dvec3 o(from_region ? region.center() : target.center());
-        const Aabb& far_box = from_region ? target : region;
-        const double far = (p[a] - o[a]) > 0.0 ? double(far_box.max[a]) : double(far_box.min[a]);
-        if (!(std::abs(p[a] - o[a]) > 0.0)) continue;
-        const double t_end = (far - o[a]) / (p[a] - o[a]);
-        const glm::dvec3 d = (p - o) * t_end;
+        const glm::dvec3 step = p - o;
+        double t_end = INFINITY;
+        for (int k = 0; k < 3; ++k)
+            if (step[k] != 0.0)
+                t_end = std::min(
+                    t_end, ((step[k] > 0.0 ? double(both.max[k]) : double(both.min[k])) - o[k]) / step[k]);
+        if (!(t_end >= 1.0 && t_end < INFINITY)) continue;
+        const glm::dvec3 d = step * t_end;
         const float len = float(glm::length(d));
         if (!(len > 0.0f)) continue;
         const glm::vec3 dir(d / double(len));
         ps.touches.clear();
         umbra_scene_->trace_until(glm::vec3(o), &dir, &len, 1, ps.touches);
+        // Nearest first, ties by index: the occluders tried, and so the answer, do not depend on the order
+        // Embree reports them in.
+        std::sort(ps.touches.begin(), ps.touches.end(), [](const RayTouch& x, const RayTouch& y) {
+            return x.t != y.t ? x.t < y.t : x.object < y.object;
+        });
         for (const RayTouch& t : ps.touches) {
             const uint32_t k = t.object;
             if (ps.tried.size() >= kMaxUmbrae) return;
@@ -343,8 +357,9 @@ void ShaftProver::add_umbrae(const Aabb& region, const Aabb& target, int axis, d
             for (int f = -1; f <= 1; f += 2)
                 for (const glm::dvec3& q : sp.corners) {
                     const glm::dvec3 in_plane = g + (q - g) * (1.0 - shrink);
-                    ps.corners.push_back(in_plane + sp.normal * (double(f) * sp.thickness +
-                                                                 (glm::dot(sp.normal, in_plane) - sp.offset) * -1.0));
+                    const double height =
+                        double(f) * sp.thickness - (glm::dot(sp.normal, in_plane) - sp.offset);
+                    ps.corners.push_back(in_plane + sp.normal * height);
                 }
             int part_side = 0;
             bool straddles = false;
@@ -565,7 +580,7 @@ bool ShaftProver::cover(const Aabb& region, const Aabb& target, int axis, float 
             if (!in) {
                 open_lo = glm::min(open_lo, p);
                 open_hi = glm::max(open_hi, p);
-                ps.open.push_back(p);
+                if (fuse) ps.open.push_back(p);
             }
         }
         // With fusion, an open corner crossing may lie in the umbra of an occluder of another plane: search

@@ -488,6 +488,16 @@ TEST(Conservative, BehindTwoOffAxisWallsIsCulledByTheirFusion) {
     EXPECT_TRUE(bake.pvs.test(uint32_t(near), target));
 }
 
+// Does a bake of `w` (verified by dense rays to have no miss) list `target` for the cell at `eye`?
+// `shaft_hidden`: the pairs its shaft pass proved hidden.
+bool listed_at(const BakeConfig& c, const World& w, glm::vec3 eye, uint32_t target, uint64_t& shaft_hidden) {
+    const BakeData bake = bake_without_misses(c, w);
+    shaft_hidden = uint64_t(figure(bake, "conservative_shaft_hidden"));
+    const int32_t cell = bake.cells.find(eye);
+    EXPECT_GE(cell, 0);
+    return cell < 0 || bake.pvs.test(uint32_t(cell), target);
+}
+
 // THE SHAFT PASS (docs/ALGORITHMS.md#shaft-pass). A closed room 14 x 3 x 8 m; two full-height walls 5 cm
 // thick (no solid in them, only their faces), the near one at x = 6 from z = 0 to 4.3, the far one at x = 9
 // from z = 4.45 to 8. A target at x in [11, 11.5], z in [3, 5] lies behind the two together: from the cell at
@@ -506,11 +516,7 @@ TEST(Conservative, BehindTwoWallsAtDifferentDepthsTheShaftPassCulls) {
     BakeConfig c = conservative_config();
     const auto listed = [&](int budget, uint64_t& shaft_hidden) {
         c.conservative.shaft_budget = budget;
-        const BakeData bake = bake_without_misses(c, w);
-        shaft_hidden = uint64_t(figure(bake, "conservative_shaft_hidden"));
-        const int32_t cell = bake.cells.find({2.5f, 1.5f, 3.5f});
-        EXPECT_GE(cell, 0);
-        return cell < 0 || bake.pvs.test(uint32_t(cell), target);
+        return listed_at(c, w, {2.5f, 1.5f, 3.5f}, target, shaft_hidden);
     };
     uint64_t without_hidden = 0, with_hidden = 0;
     EXPECT_TRUE(listed(0, without_hidden)) << "the cubes alone prove it: the scene no longer tests the pass";
@@ -538,11 +544,7 @@ TEST(Conservative, BehindTwoWallsMeetingAtACornerTheFusedShaftPassCulls) {
     const auto listed = [&](int budget, bool fusion, uint64_t& shaft_hidden) {
         c.conservative.shaft_budget = budget;
         c.conservative.shaft_fusion = fusion;
-        const BakeData bake = bake_without_misses(c, w);
-        shaft_hidden = uint64_t(figure(bake, "conservative_shaft_hidden"));
-        const int32_t cell = bake.cells.find({2.5f, 1.5f, 5.5f});
-        EXPECT_GE(cell, 0);
-        return cell < 0 || bake.pvs.test(uint32_t(cell), target);
+        return listed_at(c, w, {2.5f, 1.5f, 5.5f}, target, shaft_hidden);
     };
     uint64_t hidden = 0;
     EXPECT_TRUE(listed(0, true, hidden)) << "the cubes alone prove it: the scene no longer tests the pass";

@@ -90,6 +90,46 @@ Aabb box_around(glm::vec3 c, glm::vec3 half) {
     return Aabb::of(c - half, c + half);
 }
 
+// Does the segment q -> x meet the closed box (a slab test in double)?
+bool segment_meets_box(const Aabb& b, glm::dvec3 q, glm::dvec3 x) {
+    double t0 = 0.0, t1 = 1.0;
+    for (int k = 0; k < 3; ++k) {
+        const double d = x[k] - q[k];
+        if (d == 0.0) {
+            if (q[k] < b.min[k] || q[k] > b.max[k]) return false;
+            continue;
+        }
+        double e0 = (double(b.min[k]) - q[k]) / d, e1 = (double(b.max[k]) - q[k]) / d;
+        if (e0 > e1) std::swap(e0, e1);
+        t0 = std::max(t0, e0);
+        t1 = std::min(t1, e1);
+    }
+    return t0 <= t1;
+}
+
+// A random region below the panels (z in [0, 3]) and a random target above the slab (z in [9, 12]), boxes
+// of half-sizes up to 0.6 m, as the plane-cover tests draw them.
+std::pair<Aabb, Aabb> random_pair(Rng& rng) {
+    const Aabb region = box_around({rng.uniform() * 6.0f, rng.uniform() * 4.0f, rng.uniform() * 3.0f},
+                                   glm::vec3(rng.uniform(), rng.uniform(), rng.uniform()) * 0.6f);
+    const Aabb target = box_around({rng.uniform() * 6.0f, rng.uniform() * 4.0f, 9.0f + rng.uniform() * 3.0f},
+                                   glm::vec3(rng.uniform(), rng.uniform(), rng.uniform()) * 0.6f);
+    return {region, target};
+}
+
+// Segment s of a pair: the 64 corner segments first (s < 64), then random ones.
+std::pair<glm::dvec3, glm::dvec3> pair_segment(int s, const Aabb& region, const Aabb& target, Rng& rng) {
+    const glm::dvec3 q(s < 64 ? glm::vec3(s & 1 ? region.max.x : region.min.x,
+                                          s & 2 ? region.max.y : region.min.y,
+                                          s & 4 ? region.max.z : region.min.z)
+                              : point_in(region, rng));
+    const glm::dvec3 x(s < 64 ? glm::vec3(s & 8 ? target.max.x : target.min.x,
+                                          s & 16 ? target.max.y : target.min.y,
+                                          s & 32 ? target.max.z : target.min.z)
+                              : point_in(target, rng));
+    return {q, x};
+}
+
 // Whenever plane_covers() says so, every one of many segments from the region to the target (the 64 corner
 // segments and random ones) crosses the plane where the reference says covered; and where it says not, the
 // segments find an uncovered crossing in most cases (it gives up little).
@@ -103,23 +143,12 @@ TEST(ShaftHiding, APlaneCoverAgreesWithTheReferenceOnManySegments) {
         // The panels' plane or a plane across the middle of the slab's voxel layer at z in [7.5, 7.75].
         const bool slab = rng.below(2) == 1;
         const float c = slab ? 7.625f : kPanelZ;
-        const Aabb region = box_around({rng.uniform() * 6.0f, rng.uniform() * 4.0f, rng.uniform() * 3.0f},
-                                       glm::vec3(rng.uniform(), rng.uniform(), rng.uniform()) * 0.6f);
-        const Aabb target =
-            box_around({rng.uniform() * 6.0f, rng.uniform() * 4.0f, 9.0f + rng.uniform() * 3.0f},
-                       glm::vec3(rng.uniform(), rng.uniform(), rng.uniform()) * 0.6f);
+        const auto [region, target] = random_pair(rng);
         const bool cover = prover.plane_covers(region, target, 2, c);
         bool all = true;
         glm::dvec2 lo(INFINITY), hi(-INFINITY);  // the corner crossings' bounds
         for (int s = 0; s < 64 + 400 && all; ++s) {
-            const glm::dvec3 q(s < 64 ? glm::vec3(s & 1 ? region.max.x : region.min.x,
-                                                  s & 2 ? region.max.y : region.min.y,
-                                                  s & 4 ? region.max.z : region.min.z)
-                                      : point_in(region, rng));
-            const glm::dvec3 x(s < 64 ? glm::vec3(s & 8 ? target.max.x : target.min.x,
-                                                  s & 16 ? target.max.y : target.min.y,
-                                                  s & 32 ? target.max.z : target.min.z)
-                                      : point_in(target, rng));
+            const auto [q, x] = pair_segment(s, region, target, rng);
             const double t = (double(c) - q.z) / (x.z - q.z);
             const glm::dvec3 y = q + t * (x - q);
             all = covered(occ, y, c);
@@ -254,24 +283,13 @@ TEST(ShaftHiding, AFusedCoverBlocksEverySegment) {
     for (int i = 0; i < 3000; ++i) {
         const bool slab = rng.below(2) == 1;
         const float c = slab ? 7.625f : kPanelZ;
-        const Aabb region = box_around({rng.uniform() * 6.0f, rng.uniform() * 4.0f, rng.uniform() * 3.0f},
-                                       glm::vec3(rng.uniform(), rng.uniform(), rng.uniform()) * 0.6f);
-        const Aabb target =
-            box_around({rng.uniform() * 6.0f, rng.uniform() * 4.0f, 9.0f + rng.uniform() * 3.0f},
-                       glm::vec3(rng.uniform(), rng.uniform(), rng.uniform()) * 0.6f);
+        const auto [region, target] = random_pair(rng);
         uint64_t umbrae = 0;
         if (!fused.plane_covers(region, target, 2, c, nullptr, &umbrae)) continue;
         ++covers;
         only_fused += alone.plane_covers(region, target, 2, c) ? 0 : 1;
         for (int s = 0; s < 64 + 100; ++s) {
-            const glm::dvec3 q(s < 64 ? glm::vec3(s & 1 ? region.max.x : region.min.x,
-                                                  s & 2 ? region.max.y : region.min.y,
-                                                  s & 4 ? region.max.z : region.min.z)
-                                      : point_in(region, rng));
-            const glm::dvec3 x(s < 64 ? glm::vec3(s & 8 ? target.max.x : target.min.x,
-                                                  s & 16 ? target.max.y : target.min.y,
-                                                  s & 32 ? target.max.z : target.min.z)
-                                      : point_in(target, rng));
+            const auto [q, x] = pair_segment(s, region, target, rng);
             ASSERT_TRUE(segment_blocked(occ, q, x)) << "case " << i << " (plane z = " << c << ", " << umbrae
                                                     << " umbrae): a segment passes every occluder";
         }
@@ -287,29 +305,16 @@ TEST(ShaftHiding, TheUmbraHoldsOnlyPointsHiddenFromTheWholeBox) {
     Rng rng(11, 4);
     int inside_count = 0, agreed = 0, hidden_count = 0;
     for (int i = 0; i < 300; ++i) {
-        const Aabb eyes = box_around({rng.uniform() * 4.0f, rng.uniform() * 4.0f, 6.0f + rng.uniform() * 2.0f},
-                                     glm::vec3(0.05f) + glm::vec3(rng.uniform(), rng.uniform(), rng.uniform()));
+        const Aabb eyes =
+            box_around({rng.uniform() * 4.0f, rng.uniform() * 4.0f, 6.0f + rng.uniform() * 2.0f},
+                       glm::vec3(0.05f) + glm::vec3(rng.uniform(), rng.uniform(), rng.uniform()));
         // Between the plane z = 0 and the eyes (z > 4.9), as umbra_on_plane() asks.
         const Aabb occ = box_around({rng.uniform() * 4.0f, rng.uniform() * 4.0f, 1.5f + rng.uniform() * 1.5f},
                                     glm::vec3(0.1f) + glm::vec3(rng.uniform(), rng.uniform(), rng.uniform()));
         const std::array<glm::dvec3, 8> ec = box_corners(eyes), oc = box_corners(occ);
         std::vector<glm::dvec2> umbra;
         const bool some = umbra_on_plane(ec, oc.data(), 8, 2, 0.0, 1, umbra);
-        const auto meets = [&](glm::dvec3 q, glm::dvec3 y) {  // slab test of the segment against the box
-            double t0 = 0.0, t1 = 1.0;
-            for (int k = 0; k < 3; ++k) {
-                const double d = y[k] - q[k];
-                if (d == 0.0) {
-                    if (q[k] < occ.min[k] || q[k] > occ.max[k]) return false;
-                    continue;
-                }
-                double a = (double(occ.min[k]) - q[k]) / d, b = (double(occ.max[k]) - q[k]) / d;
-                if (a > b) std::swap(a, b);
-                t0 = std::max(t0, a);
-                t1 = std::min(t1, b);
-            }
-            return t0 <= t1;
-        };
+        const auto meets = [&](glm::dvec3 q, glm::dvec3 y) { return segment_meets_box(occ, q, y); };
         for (int s = 0; s < 40; ++s) {
             const glm::dvec3 y(-2.0 + 8.0 * rng.uniform(), -2.0 + 8.0 * rng.uniform(), 0.0);
             bool in = some && umbra.size() >= 3;
@@ -344,7 +349,7 @@ TEST(ShaftHiding, TwoWallsAtARightAngleHideWhatNeitherHidesAlone) {
         ShrunkOccluders occ;
         occ.epsilon_m = {0.1};
         occ.boxes = {{}};
-        occ.panels.push_back(Aabb::of({0.0f, 0.0f, gap}, {0.0f, 3.0f, 4.0f}));  // x = 0, z in [gap, 4]
+        occ.panels.push_back(Aabb::of({0.0f, 0.0f, gap}, {0.0f, 3.0f, 4.0f}));   // x = 0, z in [gap, 4]
         occ.panels.push_back(Aabb::of({0.0f, 0.0f, 0.0f}, {4.0f, 3.0f, 0.0f}));  // z = 0, x in [0, 4]
         World w;
         const uint32_t object = test::add_box(w, "o", Aabb::of({1.0f, 1.0f, 1.0f}, {1.5f, 2.0f, 1.5f}));
@@ -367,8 +372,8 @@ TEST(ShaftHiding, TwoWallsAtARightAngleHideWhatNeitherHidesAlone) {
         Rng rng(13, 5);
         bool all_blocked = true;
         for (int s = 0; s < 200000 && all_blocked; ++s)
-            all_blocked = blocked(glm::dvec3(point_in(cell, rng)),
-                                  glm::dvec3(point_in(w.objects[object].bounds, rng)));
+            all_blocked =
+                blocked(glm::dvec3(point_in(cell, rng)), glm::dvec3(point_in(w.objects[object].bounds, rng)));
         EXPECT_EQ(all_blocked, gap == 0.0f) << "the scene is not what the test means";
         RegionHider one(ctx, occ);
         uint64_t hidden_one = 0;
@@ -410,24 +415,14 @@ TEST(ShaftHiding, StaggeredPillarsFuse) {
                     bool in = false;
                     for (const Aabb& b : pillars) in = in || b.contains(c);
                     if (in) {
-                        const uint64_t i = uint64_t(x) + uint64_t(m.dims.x) * (uint64_t(y) + uint64_t(m.dims.y) * uint64_t(z));
+                        const uint64_t i = uint64_t(x) + uint64_t(m.dims.x) *
+                                                             (uint64_t(y) + uint64_t(m.dims.y) * uint64_t(z));
                         m.bits[i >> 6] |= uint64_t(1) << (i & 63);
                     }
                 }
         World w;
         const uint32_t object = test::add_box(w, "o", Aabb::of({2.8f, 1.0f, 10.0f}, {3.4f, 2.0f, 10.5f}));
         const Aabb cell = Aabb::of({2.5f, 1.0f, 0.0f}, {3.5f, 2.0f, 1.0f});
-        const auto meets = [](const Aabb& b, glm::dvec3 q, glm::dvec3 x) {
-            double t0 = 0.0, t1 = 1.0;
-            for (int k = 0; k < 3; ++k) {
-                const double d = x[k] - q[k];
-                double e0 = (double(b.min[k]) - q[k]) / d, e1 = (double(b.max[k]) - q[k]) / d;
-                if (e0 > e1) std::swap(e0, e1);
-                t0 = std::max(t0, e0);
-                t1 = std::min(t1, e1);
-            }
-            return t0 <= t1;
-        };
         Rng rng(17, 6);
         bool all_blocked = true;
         int first_row_misses = 0;
@@ -435,7 +430,7 @@ TEST(ShaftHiding, StaggeredPillarsFuse) {
             const glm::dvec3 q(point_in(cell, rng)), x(point_in(w.objects[object].bounds, rng));
             bool first = false, any = false;
             for (size_t i = 0; i < pillars.size(); ++i)
-                if (meets(pillars[i], q, x)) {
+                if (segment_meets_box(pillars[i], q, x)) {
                     any = true;
                     first = first || i % 2 == 0;
                 }
