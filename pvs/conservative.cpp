@@ -653,7 +653,20 @@ void shaft_row(const ShaftProver& prover, const World& world, const VoxelMask& e
     for (uint32_t o : candidates) {
         if (!row_lists(row, o) || (seen && row_lists(seen, o)) || world.objects[o].bounds.overlaps(region))
             continue;
-        if (prover.hides(world, eyes, shaft, o, budget, figures)) row[o >> 6] &= ~(uint64_t(1) << (o & 63));
+        const ShaftFigures before = figures;
+        const auto start = std::chrono::steady_clock::now();
+        const bool hidden = prover.hides(world, eyes, shaft, o, budget, figures);
+        const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        if (hidden) {
+            row[o >> 6] &= ~(uint64_t(1) << (o & 63));
+            figures.seconds_hidden += s;
+        } else if (figures.certain > before.certain) {
+            figures.seconds_certain += s;
+        } else if (figures.out_of_budget > before.out_of_budget) {
+            figures.seconds_out_of_budget += s;
+        } else {
+            figures.seconds_stuck += s;
+        }
     }
 }
 
@@ -1086,11 +1099,15 @@ PvsSet bake_conservative_pvs(Context& ctx, const ConservativeConfig& config, con
     if (figures.shaft.pairs > 0) {
         ctx.info(fmt::format(
             "shaft pass: {:.3f} M of {:.3f} M (cell, object) pairs proven hidden ({:.3f} M given up at once, "
-            "{:.3f} M out of budget, {:.3f} M on pieces that meet or cannot be halved), {:.2f} M piece "
-            "pairs, {:.1f} s",
+            "{:.3f} M out of budget, {:.3f} M on pieces that meet, {:.3f} M halved too often, {:.3f} M too "
+            "small to halve), {:.2f} M piece pairs, {:.1f} s; thread seconds on pairs proven / given up at "
+            "once / out of budget / stuck: {:.1f} / {:.1f} / {:.1f} / {:.1f}",
             double(figures.shaft.hidden) * 1e-6, double(figures.shaft.pairs) * 1e-6,
             double(figures.shaft.certain) * 1e-6, double(figures.shaft.out_of_budget) * 1e-6,
-            double(figures.shaft.stuck) * 1e-6, double(figures.shaft.tests) * 1e-6, figures.shaft.seconds));
+            double(figures.shaft.stuck_meet) * 1e-6, double(figures.shaft.stuck_depth) * 1e-6,
+            double(figures.shaft.stuck - figures.shaft.stuck_meet - figures.shaft.stuck_depth) * 1e-6,
+            double(figures.shaft.tests) * 1e-6, figures.shaft.seconds, figures.shaft.seconds_hidden,
+            figures.shaft.seconds_certain, figures.shaft.seconds_out_of_budget, figures.shaft.seconds_stuck));
     }
     ctx.info(fmt::format(
         "conservative PVS: one occluder hides {:.2f} M (cell, object) pairs from the whole region ({:.1f} s) "

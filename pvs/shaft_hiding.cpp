@@ -1026,6 +1026,7 @@ bool ShaftProver::hides(const World& world, const VoxelMask& eyes, const ShaftRe
         ++figures.tests;
         if (pair.region.overlaps(pair.target)) {
             ++figures.stuck;
+            ++figures.stuck_meet;
             return false;
         }
         bool blocked = false;
@@ -1039,6 +1040,7 @@ bool ShaftProver::hides(const World& world, const VoxelMask& eyes, const ShaftRe
         }
         if (pair.depth >= max_halvings) {  // a seam no one plane covers: deeper pieces rarely close it
             ++figures.stuck;
+            ++figures.stuck_depth;
             return false;
         }
         // What to halve: the longest side of the two pieces, where a side across a narrow strip left open by

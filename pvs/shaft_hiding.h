@@ -34,8 +34,12 @@ struct ShaftFigures {
     uint64_t certain = 0;        // pairs given up at once: a line from an eye to the object meets no occluder
     uint64_t out_of_budget = 0;  // pairs given up when the budget of piece pairs ran out
     uint64_t stuck = 0;  // pairs given up on pieces that meet, cannot be halved or were halved too often
+    uint64_t stuck_meet = 0;   // of them, on pieces that meet
+    uint64_t stuck_depth = 0;  // on pieces halved kBaseHalvings + log2(budget) times
     uint64_t umbrae = 0;  // umbrae of occluders in other planes computed (cross-plane fusion)
     double seconds = 0.0;
+    // Where the time went, by how each pair ended (shaft_row() times each pair).
+    double seconds_hidden = 0.0, seconds_certain = 0.0, seconds_out_of_budget = 0.0, seconds_stuck = 0.0;
 
     ShaftFigures& operator+=(const ShaftFigures& o) {
         pairs += o.pairs;
@@ -44,8 +48,14 @@ struct ShaftFigures {
         certain += o.certain;
         out_of_budget += o.out_of_budget;
         stuck += o.stuck;
+        stuck_meet += o.stuck_meet;
+        stuck_depth += o.stuck_depth;
         umbrae += o.umbrae;
         seconds += o.seconds;
+        seconds_hidden += o.seconds_hidden;
+        seconds_certain += o.seconds_certain;
+        seconds_out_of_budget += o.seconds_out_of_budget;
+        seconds_stuck += o.seconds_stuck;
         return *this;
     }
 };
