@@ -145,6 +145,8 @@ struct ConservativeConfig {
                            // pairs per (cell, object) (pvs/shaft_hiding.h); 0 = off
     bool shaft_fusion = true;  // the shaft pass's plane covers take in the umbrae of occluders in other
                                // planes (docs/ALGORITHMS.md#cross-plane-fusion); false for measurement
+    bool shaft_caps = true;  // the shaft pass also covers piece pairs with the convex caps of panels meeting
+                             // at edges (docs/ALGORITHMS.md#convex-caps); false for measurement
     bool single_occluder_pass = true;  // first, what ONE occluder hides from a cell's whole eye region is
                                        // proven exactly (pvs/region_hiding.h); the faces skip it
     int refine_levels = 4;  // [Limit: 0..8] adaptive refinement: patches of a face are first tested
@@ -393,6 +395,11 @@ void visit_options(Config& c, Visitor&& v) {
             "umbrae of occluders in other planes), to measure what cross-plane fusion gives: the same "
             "safety, a looser PVS"},
         c.conservative.shaft_fusion);
+    v(OptionSpec{OptionGroup::kExperimental, "--shaft-caps", "conservative.shaft_caps", "",
+                 "FOR MEASUREMENT ONLY: false leaves out the shaft pass's convex caps (the hull of a panel and "
+                 "its neighbours across edges that bend away, a ridge or an outer corner), to measure what "
+                 "they give: the same safety, a looser PVS"},
+      c.conservative.shaft_caps);
     v(OptionSpec{OptionGroup::kConservative, "--panel-refine-levels", "conservative.panel_refine_levels",
                  "levels",
                  "floor patches are halved this many more times for the objects only the "

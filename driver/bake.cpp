@@ -149,7 +149,8 @@ void octree_cells_and_pvs(Context& ctx, const BakeConfig& config, const World& w
     std::optional<RegionHiders> hiders;
     if (conservative && config.conservative.single_occluder_pass) hiders.emplace(ctx, shrunk);
     std::optional<ShaftProvers> provers;
-    if (conservative && config.conservative.shaft_budget > 0) provers.emplace(ctx, shrunk, config.conservative.shaft_fusion);
+    if (conservative && config.conservative.shaft_budget > 0)
+        provers.emplace(ctx, shrunk, config.conservative.shaft_fusion, config.conservative.shaft_caps);
     // A conservative box tests only what its parent lists (docs/ALGORITHMS.md#octree-parent-bound); the
     // sampled mode's rows prove nothing, so it samples every box afresh.
     const RegionPvsOracle oracle = [&](const std::vector<Aabb>& boxes, const std::vector<uint64_t>& streams,

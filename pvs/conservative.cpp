@@ -731,7 +731,7 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
     if (config.single_occluder_pass && !hiders) hiders = &own_hiders.emplace(ctx, occluders);
     if (!config.single_occluder_pass) hiders = nullptr;
     std::optional<ShaftProvers> own_provers;
-    if (config.shaft_budget > 0 && !provers) provers = &own_provers.emplace(ctx, occluders, config.shaft_fusion);
+    if (config.shaft_budget > 0 && !provers) provers = &own_provers.emplace(ctx, occluders, config.shaft_fusion, config.shaft_caps);
     if (config.shaft_budget <= 0) provers = nullptr;
     Counts total;
     ShaftFigures shaft;
@@ -1035,7 +1035,7 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
     // The shaft pass (docs/ALGORITHMS.md#shaft-pass), on the cells' finished rows.
     if (config.shaft_budget > 0) {
         const auto pass_start = std::chrono::steady_clock::now();
-        const ShaftProvers provers(ctx, occluders, config.shaft_fusion);
+        const ShaftProvers provers(ctx, occluders, config.shaft_fusion, config.shaft_caps);
         ShaftFigures shaft;
         ctx.progress_begin("shaft pass", cells.size(), "cells");
         // The seen rows of faces other processes solved; then each row of the pass comes from the process

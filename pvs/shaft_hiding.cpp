@@ -136,6 +136,8 @@ constexpr size_t kMaxUmbrae = 16;
 constexpr int kUmbraRounds = 2;
 // Planes of a piece pair tried again with umbrae when none covers it alone: the first ones the line met.
 constexpr size_t kFusedPlanes = 4;
+// The convex caps of this many of the first panels a line meets are tried.
+constexpr size_t kCapTouches = 4;
 // Open corner crossings the umbra search traces lines through (the first and the farthest from it).
 constexpr size_t kUmbraProbes = 2;
 // Pieces narrower than this (metres) count as covered: the rounding of double computations where two
@@ -402,7 +404,7 @@ struct ShaftProver::Scratch {
     std::vector<glm::ivec3> run;
 };
 
-ShaftProver::ShaftProver(Context& ctx, const ShrunkOccluders& set, bool fusion)
+ShaftProver::ShaftProver(Context& ctx, const ShrunkOccluders& set, bool fusion, bool caps)
     : panels_(set.panels), slanted_(set.slanted), solid_(set.solid), fusion_(fusion) {
     std::array<std::vector<std::pair<float, uint32_t>>, 3> by_plane;
     for (uint32_t i = 0; i < panels_.size(); ++i) {
@@ -459,8 +461,36 @@ ShaftProver::ShaftProver(Context& ctx, const ShrunkOccluders& set, bool fusion)
         umbra_scene_ = std::make_unique<RayScene>(quiet, box_world(boxes_, panels_, false, slanted_),
                                                   BuildQuality::kMedium, 1);
     }
-    ctx.debug(fmt::format("shaft pass: {} panels in {} planes, {} slanted panels", panels_.size(),
-                          planes_[0].size() + planes_[1].size() + planes_[2].size(), slanted_.size()));
+    if (caps) {
+        // Every panel and every slanted panel of no thickness is an opaque polygon (its triangles tile it).
+        for (uint32_t i = 0; i < panels_.size(); ++i) {
+            CapPolygon p;
+            const int a = panel_axis_[i];
+            if (a >= 0) {
+                const int u = (a + 1) % 3, v = (a + 2) % 3;
+                const Aabb& b = panels_[i];
+                for (int k = 0; k < 4; ++k) {
+                    glm::dvec3 x(b.min);
+                    x[u] = (k == 1 || k == 2) ? b.max[u] : b.min[u];
+                    x[v] = k >= 2 ? b.max[v] : b.min[v];
+                    p.corners.push_back(x);
+                }
+                p.normal[a] = 1.0;
+                p.offset = b.min[a];
+            }
+            cap_polygons_.push_back(std::move(p));
+        }
+        for (const SlantedPanel& sp : slanted_) {
+            CapPolygon p;
+            if (sp.thickness == 0.0) p = CapPolygon{sp.corners, sp.normal, sp.offset};
+            cap_polygons_.push_back(std::move(p));
+        }
+        caps_ = build_caps(cap_polygons_);
+    }
+    size_t n_caps = 0;
+    for (const ConvexCap& c : caps_) n_caps += c.empty() ? 0 : 1;
+    ctx.debug(fmt::format("shaft pass: {} panels in {} planes, {} slanted panels, {} convex caps", panels_.size(),
+                          planes_[0].size() + planes_[1].size() + planes_[2].size(), slanted_.size(), n_caps));
 }
 
 ShaftProver::~ShaftProver() = default;
@@ -737,8 +767,20 @@ bool ShaftProver::cover(const Aabb& region, const Aabb& target, int axis, float 
     return true;
 }
 
+bool ShaftProver::cap_covers(uint32_t polygon, const Aabb& region, const Aabb& target) const {
+    if (caps_.empty()) return false;
+    const CapPolygon& p = cap_polygons_[polygon];
+    if (p.corners.empty()) return false;
+    // Seen from the region: the cap on the region's side; seen from the target: the cap on the target's.
+    const auto cap_seen_from = [&](const Aabb& box) -> const ConvexCap& {
+        const double s = glm::dot(p.normal, glm::dvec3(box.center())) - p.offset;
+        return caps_[2 * size_t(polygon) + (s >= 0.0 ? 0 : 1)];
+    };
+    return cap_hides(cap_seen_from(region), region, target) || cap_hides(cap_seen_from(target), target, region);
+}
+
 bool ShaftProver::try_pair(const Pair& pair, glm::vec3 from, glm::vec3 to, bool& line_blocked,
-                           PlaneMiss& miss, Scratch& sc, uint64_t& umbrae) const {
+                           PlaneMiss& miss, Scratch& sc, ShaftFigures& figures) const {
     line_blocked = false;
     miss = PlaneMiss{};
     double best = INFINITY;
@@ -805,11 +847,25 @@ bool ShaftProver::try_pair(const Pair& pair, glm::vec3 from, glm::vec3 to, bool&
         return covered;
     });
     if (covered || end_run()) return true;
+    // The convex caps of the first panels the line met (docs/ALGORITHMS.md#convex-caps).
+    if (!caps_.empty()) {
+        uint32_t last = UINT32_MAX;
+        size_t tried_caps = 0;
+        for (const RayTouch& t : sc.touches) {
+            if (t.object == last) continue;
+            last = t.object;
+            if (tried_caps++ >= kCapTouches) break;
+            if (cap_covers(t.object, pair.region, pair.target)) {
+                ++figures.capped;
+                return true;
+            }
+        }
+    }
     // No plane's own occluders cover the pair: the first planes the line met, with the umbrae of the
     // occluders of other planes (cheap planes first: most pairs need no umbra).
     if (fusion_)
         for (size_t i = 0; i < std::min(n_tried, kFusedPlanes); ++i)
-            if (cover(pair.region, pair.target, tried[i].first, tried[i].second, true, nullptr, &umbrae))
+            if (cover(pair.region, pair.target, tried[i].first, tried[i].second, true, nullptr, &figures.umbrae))
                 return true;
     return false;
 }
@@ -1031,7 +1087,7 @@ bool ShaftProver::hides(const World& world, const VoxelMask& eyes, const ShaftRe
         }
         bool blocked = false;
         PlaneMiss miss;
-        if (try_pair(pair, pair.from, pair.point, blocked, miss, sc, figures.umbrae)) continue;
+        if (try_pair(pair, pair.from, pair.point, blocked, miss, sc, figures)) continue;
         // A line from an eye to a point of the object that meets no occluder: every cover has a piece pair
         // holding it, and no plane covers that pair.
         if (!blocked) {
@@ -1103,10 +1159,10 @@ bool ShaftProver::hides(const World& world, const VoxelMask& eyes, const ShaftRe
     return true;
 }
 
-ShaftProvers::ShaftProvers(Context& ctx, const ShrunkOccluders& occluders, bool fusion) {
-    provers_.push_back(std::make_unique<ShaftProver>(ctx, occluders, fusion));
+ShaftProvers::ShaftProvers(Context& ctx, const ShrunkOccluders& occluders, bool fusion, bool caps) {
+    provers_.push_back(std::make_unique<ShaftProver>(ctx, occluders, fusion, caps));
     for (const ShrunkOccluders& set : occluders.block_sets)
-        provers_.push_back(std::make_unique<ShaftProver>(ctx, set, fusion));
+        provers_.push_back(std::make_unique<ShaftProver>(ctx, set, fusion, caps));
 }
 
 }  // namespace pvs

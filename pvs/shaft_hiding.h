@@ -19,6 +19,7 @@
 #include "core/context.h"
 #include "core/occluder.h"
 #include "core/world.h"
+#include "pvs/convex_cap.h"
 #include "rays/ray_scene.h"
 
 #include <array>
@@ -37,6 +38,7 @@ struct ShaftFigures {
     uint64_t stuck_meet = 0;   // of them, on pieces that meet
     uint64_t stuck_depth = 0;  // on pieces halved kBaseHalvings + log2(budget) times
     uint64_t umbrae = 0;  // umbrae of occluders in other planes computed (cross-plane fusion)
+    uint64_t capped = 0;  // piece pairs a convex cap covered (pvs/convex_cap.h)
     double seconds = 0.0;
     // Where the time went, by how each pair ended (shaft_row() times each pair).
     double seconds_hidden = 0.0, seconds_certain = 0.0, seconds_out_of_budget = 0.0, seconds_stuck = 0.0;
@@ -51,6 +53,7 @@ struct ShaftFigures {
         stuck_meet += o.stuck_meet;
         stuck_depth += o.stuck_depth;
         umbrae += o.umbrae;
+        capped += o.capped;
         seconds += o.seconds;
         seconds_hidden += o.seconds_hidden;
         seconds_certain += o.seconds_certain;
@@ -90,10 +93,11 @@ bool umbra_on_plane(const std::array<glm::dvec3, 8>& eyes, const glm::dvec3* cor
 
 // The occluders of one set (ShrunkOccluders: its panels, slanted panels and proven solid), indexed by plane.
 // With `fusion`, a plane's cover also takes in the umbrae of occluders in other planes, seen from either
-// piece (docs/ALGORITHMS.md#cross-plane-fusion).
+// piece (docs/ALGORITHMS.md#cross-plane-fusion). With `caps`, a piece pair is also covered by the convex cap
+// of a panel the line meets and its neighbours across edges (pvs/convex_cap.h).
 class ShaftProver {
 public:
-    ShaftProver(Context& ctx, const ShrunkOccluders& set, bool fusion = true);
+    ShaftProver(Context& ctx, const ShrunkOccluders& set, bool fusion = true, bool caps = true);
     ~ShaftProver();
     ShaftProver(const ShaftProver&) = delete;
     ShaftProver& operator=(const ShaftProver&) = delete;
@@ -134,7 +138,10 @@ private:
     // meets an occluder at all.
     // `miss`: of the planes tried, the one whose open part is narrowest across, relative to its crossing.
     bool try_pair(const Pair& pair, glm::vec3 from, glm::vec3 to, bool& line_blocked, PlaneMiss& miss,
-                  Scratch& sc, uint64_t& umbrae) const;
+                  Scratch& sc, ShaftFigures& figures) const;
+    // Does the convex cap of a panel or slanted panel the line met (index into panels_, then slanted_) and
+    // its neighbours, seen from one of the pieces, cover the pair?
+    bool cap_covers(uint32_t polygon, const Aabb& region, const Aabb& target) const;
     struct PlaneScratch;
     // plane_covers() with or without the umbrae of other planes' occluders.
     bool cover(const Aabb& region, const Aabb& target, int axis, float c, bool fuse, PlaneMiss* miss,
@@ -158,12 +165,14 @@ private:
     bool fusion_ = false;
     std::vector<Aabb> boxes_;  // the boxes of the floor epsilon (inside the proven solid), for their umbrae
     std::unique_ptr<RayScene> umbra_scene_;  // boxes_, panels_, then slanted_, every triangle see-through
+    std::vector<CapPolygon> cap_polygons_;   // panels_, then slanted_ (none for a slab with thickness)
+    std::vector<ConvexCap> caps_;            // build_caps(cap_polygons_); empty without caps
 };
 
 // A ShaftProver for every set of a ShrunkOccluders (the global one and each block's), built once.
 class ShaftProvers {
 public:
-    ShaftProvers(Context& ctx, const ShrunkOccluders& occluders, bool fusion = true);
+    ShaftProvers(Context& ctx, const ShrunkOccluders& occluders, bool fusion = true, bool caps = true);
     const ShaftProver& of(int32_t i) const { return *provers_[size_t(i + 1)]; }
 
 private:

@@ -5,7 +5,9 @@
 #include "core/random.h"
 #include "pvs/region_hiding.h"
 #include "pvs/shaft_hiding.h"
+#include "occluders/slanted_panels.h"
 #include "tests/random_boxes.h"
+#include "tests/slanted_fixtures.h"
 #include "tests/test_util.h"
 #include "tests/world_builder.h"
 
@@ -378,11 +380,15 @@ TEST(ShaftHiding, TwoWallsAtARightAngleHideWhatNeitherHidesAlone) {
         RegionHider one(ctx, occ);
         uint64_t hidden_one = 0;
         EXPECT_EQ(one.hide(w, cell, {object}, &hidden_one), 0u) << "one wall alone hides it";
-        ShaftFigures fig_on, fig_off;
-        const bool fused = ShaftProver(ctx, occ, true).hides(w, no_eyes, shaft, object, 256, fig_on);
-        const bool alone = ShaftProver(ctx, occ, false).hides(w, no_eyes, shaft, object, 256, fig_off);
+        ShaftFigures fig_on, fig_off, fig_cap;
+        const bool fused = ShaftProver(ctx, occ, true, false).hides(w, no_eyes, shaft, object, 256, fig_on);
+        const bool alone = ShaftProver(ctx, occ, false, false).hides(w, no_eyes, shaft, object, 256, fig_off);
+        // The outer corner of the L is also a convex cap (pvs/convex_cap.h): it proves the pair alone.
+        const bool capped = ShaftProver(ctx, occ, false, true).hides(w, no_eyes, shaft, object, 256, fig_cap);
         EXPECT_EQ(fused, gap == 0.0f) << "gap " << gap << ": " << fig_on.tests << " piece pairs";
         EXPECT_FALSE(alone) << "one plane's cover proved the corner alone";
+        EXPECT_EQ(capped, gap == 0.0f) << "gap " << gap << ": " << fig_cap.tests << " piece pairs";
+        EXPECT_EQ(fig_cap.capped > 0, gap == 0.0f);
     }
 }
 
@@ -469,6 +475,63 @@ TEST(ShaftHiding, AnObjectBehindSlitsInLineStaysListed) {
     ShaftFigures figures;
     EXPECT_FALSE(ShaftProver(ctx, occ, true).hides(w, no_eyes, shaft, object, 4096, figures));
     EXPECT_FALSE(ShaftProver(ctx, occ, false).hides(w, no_eyes, shaft, object, 4096, figures));
+}
+
+// A gable roof (two thin slopes meeting at a ridge along x, no solid under them) hides an object under the
+// ridge from eyes above it that see both slopes: every line from them crosses one slope or the other.
+// No axis plane holds either slope, so plane covers and their umbrae never fuse them; the convex cap of the
+// two slopes (pvs/convex_cap.h) does. Dense segments confirm it; with a gap of 2 cm at the ridge the object
+// stays listed.
+TEST(ShaftHiding, TheTwoSlopesOfARoofRidgeHideWhatNeitherHidesAlone) {
+    Context ctx = quiet_context();
+    const auto slope = [](std::vector<glm::dvec3> corners, glm::dvec3 up) {
+        SlantedPanel p;
+        p.corners = std::move(corners);
+        p.normal = glm::normalize(glm::cross(p.corners[1] - p.corners[0], p.corners[2] - p.corners[0]));
+        if (glm::dot(p.normal, up) < 0.0) {
+            std::reverse(p.corners.begin(), p.corners.end());
+            p.normal = -p.normal;
+        }
+        p.offset = glm::dot(p.normal, p.corners[0]);
+        EXPECT_TRUE(set_slanted_edges(p));
+        for (const glm::dvec3& c : p.corners) p.bounds.extend(glm::vec3(c));
+        p.triangles = 2;
+        return p;
+    };
+    for (const double gap : {0.0, 0.02}) {
+        ShrunkOccluders occ;
+        occ.epsilon_m = {0.1};
+        occ.boxes = {{}};
+        // The ridge at y = 3, z = 2 from x = 0 to 4; the eaves at y = 2, z = 0 and z = 4.
+        occ.slanted.push_back(slope({{0, 2, 0}, {4, 2, 0}, {4, 3, 2}, {0, 3, 2}}, {0, 1, 0}));
+        occ.slanted.push_back(
+            slope({{0, 3 - gap / 2, 2 + gap}, {4, 3 - gap / 2, 2 + gap}, {4, 2, 4}, {0, 2, 4}}, {0, 1, 0}));
+        World w;
+        const uint32_t object = test::add_box(w, "o", Aabb::of({1.5f, 2.2f, 1.5f}, {2.5f, 2.6f, 2.5f}));
+        const Aabb cell = Aabb::of({1.5f, 4.0f, 1.0f}, {2.5f, 4.5f, 3.0f});
+        const VoxelMask no_eyes;
+        const ShaftRegion shaft = shaft_region(no_eyes, cell);
+        Rng rng(17, 2);
+        bool all_blocked = true;
+        for (int s = 0; s < 200000 && all_blocked; ++s) {
+            const glm::dvec3 q(point_in(cell, rng)), x(point_in(w.objects[object].bounds, rng));
+            bool blocked = false;
+            for (const SlantedPanel& p : occ.slanted)
+                blocked = blocked ||
+                          test::segment_meets_triangle(q, x, p.corners[0], p.corners[1], p.corners[2]) ||
+                          test::segment_meets_triangle(q, x, p.corners[0], p.corners[2], p.corners[3]);
+            all_blocked = blocked;
+        }
+        EXPECT_EQ(all_blocked, gap == 0.0) << "the scene is not what the test means";
+        RegionHider one(ctx, occ);
+        uint64_t hidden_one = 0;
+        EXPECT_EQ(one.hide(w, cell, {object}, &hidden_one), 0u) << "one slope alone hides it";
+        ShaftFigures without, with;
+        EXPECT_FALSE(ShaftProver(ctx, occ, true, false).hides(w, no_eyes, shaft, object, 1024, without))
+            << "plane covers fused the slopes: the scene no longer tests the caps";
+        EXPECT_EQ(ShaftProver(ctx, occ, true, true).hides(w, no_eyes, shaft, object, 1024, with), gap == 0.0)
+            << "gap " << gap << ": " << with.tests << " piece pairs";
+    }
 }
 
 }  // namespace

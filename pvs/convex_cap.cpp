@@ -1,0 +1,236 @@
+#include "pvs/convex_cap.h"
+
+#include "pvs/region_hiding.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numeric>
+
+namespace pvs {
+
+namespace {
+
+// A cap holds at most this many polygons and corners (its hull is found by trying every plane through three
+// corners).
+constexpr size_t kMaxCapPolygons = 6;
+constexpr size_t kMaxCapCorners = 28;
+// Corners this close are one; a corner this near a plane lies on it (the hull's faces and the polygons'
+// planes). Far below kHideToleranceM, by which every test keeps away from the hull's surface.
+constexpr double kSameM = 1e-9;
+constexpr double kOnPlaneM = 1e-7;
+// Two polygons are edge neighbours when an edge of each lies on the same line over at least this length.
+constexpr double kSharedEdgeM = 1e-4;
+// A neighbour bends away when one of its corners lies at least this far behind the polygon's plane.
+constexpr double kBendM = 1e-6;
+
+double side_of(const CapPolygon& p, const glm::dvec3& x) { return glm::dot(p.normal, x) - p.offset; }
+
+// Is x (on the polygon's plane) inside the convex polygon, within kSameM?
+bool inside(const CapPolygon& p, const glm::dvec3& x) {
+    const size_t n = p.corners.size();
+    glm::dvec3 area(0.0);
+    for (size_t i = 0; i < n; ++i) area += glm::cross(p.corners[i], p.corners[(i + 1) % n]);
+    const double turn = glm::dot(area, p.normal) >= 0.0 ? 1.0 : -1.0;
+    for (size_t i = 0; i < n; ++i) {
+        const glm::dvec3 a = p.corners[i], b = p.corners[(i + 1) % n];
+        const double len = glm::length(b - a);
+        if (!(len > 0.0)) continue;
+        if (turn * glm::dot(glm::cross(b - a, x - a), p.normal) / len < -kSameM) return false;
+    }
+    return true;
+}
+
+// Do an edge of a and an edge of b lie on one line over at least kSharedEdgeM?
+bool share_edge(const CapPolygon& a, const CapPolygon& b) {
+    const size_t na = a.corners.size(), nb = b.corners.size();
+    for (size_t i = 0; i < na; ++i) {
+        const glm::dvec3 p = a.corners[i], q = a.corners[(i + 1) % na];
+        const double len = glm::length(q - p);
+        if (!(len > kSharedEdgeM)) continue;
+        const glm::dvec3 d = (q - p) / len;
+        for (size_t j = 0; j < nb; ++j) {
+            const glm::dvec3 r = b.corners[j], s = b.corners[(j + 1) % nb];
+            if (glm::length(glm::cross(r - p, d)) > kOnPlaneM || glm::length(glm::cross(s - p, d)) > kOnPlaneM)
+                continue;
+            const double r0 = glm::dot(r - p, d), s0 = glm::dot(s - p, d);
+            if (std::min(len, std::max(r0, s0)) - std::max(0.0, std::min(r0, s0)) >= kSharedEdgeM) return true;
+        }
+    }
+    return false;
+}
+
+// The polygon seen from the side `sign` (+1: the side its normal points to): every corner of `other` lies
+// behind its plane or on it.
+bool behind(const CapPolygon& p, double sign, const CapPolygon& other) {
+    for (const glm::dvec3& x : other.corners)
+        if (sign * side_of(p, x) > kOnPlaneM) return false;
+    return true;
+}
+
+bool bends_away(const CapPolygon& p, double sign, const CapPolygon& other) {
+    for (const glm::dvec3& x : other.corners)
+        if (sign * side_of(p, x) < -kBendM) return true;
+    return false;
+}
+
+}  // namespace
+
+ConvexCap make_cap(const std::vector<const CapPolygon*>& polygons) {
+    ConvexCap cap;
+    if (polygons.size() < 2 || polygons.size() > kMaxCapPolygons) return cap;
+    std::vector<glm::dvec3> pts;
+    for (const CapPolygon* p : polygons)
+        for (const glm::dvec3& x : p->corners) {
+            bool known = false;
+            for (const glm::dvec3& y : pts) known = known || glm::length(x - y) <= kSameM;
+            if (!known) pts.push_back(x);
+        }
+    if (pts.size() < 4 || pts.size() > kMaxCapCorners) return cap;
+    // A volume: some corner off the first polygon's plane.
+    bool solid = false;
+    for (const glm::dvec3& x : pts) solid = solid || std::abs(side_of(*polygons[0], x)) > kBendM;
+    if (!solid) return cap;
+    const size_t n = pts.size();
+    for (size_t i = 0; i < n; ++i)
+        for (size_t j = i + 1; j < n; ++j)
+            for (size_t k = j + 1; k < n; ++k) {
+                glm::dvec3 m = glm::cross(pts[j] - pts[i], pts[k] - pts[i]);
+                const double len = glm::length(m);
+                if (!(len > 1e-12)) continue;
+                m /= len;
+                const double d = glm::dot(m, pts[i]);
+                double lo = 0.0, hi = 0.0;
+                for (const glm::dvec3& x : pts) {
+                    const double s = glm::dot(m, x) - d;
+                    lo = std::min(lo, s);
+                    hi = std::max(hi, s);
+                }
+                if (hi > kOnPlaneM && lo < -kOnPlaneM) continue;  // corners on both sides: no face
+                const glm::dvec3 out = hi <= kOnPlaneM ? m : -m;
+                const double off = hi <= kOnPlaneM ? d : -d;
+                bool known = false;
+                for (size_t f = 0; f < cap.normal.size() && !known; ++f)
+                    known = glm::dot(cap.normal[f], out) > 1.0 - 1e-12 && std::abs(cap.offset[f] - off) <= kOnPlaneM;
+                if (known) continue;
+                cap.normal.push_back(out);
+                cap.offset.push_back(off);
+            }
+    if (cap.normal.size() < 4) return ConvexCap{};
+    // A face is opaque when its corners all lie in one polygon of its plane.
+    cap.opaque.assign(cap.normal.size(), 0);
+    for (size_t f = 0; f < cap.normal.size(); ++f) {
+        for (const CapPolygon* p : polygons) {
+            if (std::abs(std::abs(glm::dot(p->normal, cap.normal[f])) - 1.0) > 1e-12) continue;
+            bool all = true;
+            for (const glm::dvec3& x : pts) {
+                if (std::abs(glm::dot(cap.normal[f], x) - cap.offset[f]) > kOnPlaneM) continue;
+                all = all && std::abs(side_of(*p, x)) <= kOnPlaneM && inside(*p, x);
+            }
+            if (all) {
+                cap.opaque[f] = 1;
+                break;
+            }
+        }
+    }
+    cap.polygons = uint32_t(polygons.size());
+    return cap;
+}
+
+std::vector<ConvexCap> build_caps(const std::vector<CapPolygon>& polygons) {
+    const size_t n = polygons.size();
+    std::vector<ConvexCap> caps(2 * n);
+    // Edge neighbours, by a sweep over the polygons' bounds along x.
+    std::vector<Aabb> bounds(n);
+    for (size_t i = 0; i < n; ++i)
+        for (const glm::dvec3& x : polygons[i].corners) bounds[i].extend(glm::vec3(x));
+    std::vector<uint32_t> order(n);
+    std::iota(order.begin(), order.end(), 0u);
+    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+        return bounds[a].min.x < bounds[b].min.x || (bounds[a].min.x == bounds[b].min.x && a < b);
+    });
+    std::vector<std::vector<uint32_t>> neighbours(n);
+    const float slack = float(kSharedEdgeM);
+    for (size_t oi = 0; oi < n; ++oi) {
+        const uint32_t a = order[oi];
+        if (polygons[a].corners.size() < 3) continue;
+        for (size_t oj = oi + 1; oj < n; ++oj) {
+            const uint32_t b = order[oj];
+            if (bounds[b].min.x > bounds[a].max.x + slack) break;
+            if (polygons[b].corners.size() < 3) continue;
+            const Aabb grown = Aabb::of(bounds[a].min - slack, bounds[a].max + slack);
+            if (!grown.overlaps(bounds[b])) continue;
+            if (std::abs(glm::dot(polygons[a].normal, polygons[b].normal)) > 1.0 - 1e-12) continue;  // parallel
+            if (!share_edge(polygons[a], polygons[b])) continue;
+            neighbours[a].push_back(b);
+            neighbours[b].push_back(a);
+        }
+    }
+    for (size_t i = 0; i < n; ++i) {
+        std::sort(neighbours[i].begin(), neighbours[i].end());
+        for (int s = 0; s < 2; ++s) {
+            const double sign = s == 0 ? 1.0 : -1.0;
+            const CapPolygon& a = polygons[i];
+            // The chosen polygons with the side each is seen from.
+            std::vector<std::pair<uint32_t, double>> chosen{{uint32_t(i), sign}};
+            for (const uint32_t b : neighbours[i]) {
+                if (chosen.size() >= kMaxCapPolygons) break;
+                const CapPolygon& pb = polygons[b];
+                if (!behind(a, sign, pb) || !bends_away(a, sign, pb)) continue;
+                // b seen from the side a lies behind.
+                double sb = 0.0;
+                for (const double t : {1.0, -1.0})
+                    if (behind(pb, t, a) && bends_away(pb, t, a)) sb = t;
+                if (sb == 0.0) continue;
+                bool fits = true;
+                for (const auto& [c, sc] : chosen)
+                    fits = fits && behind(polygons[c], sc, pb) && behind(pb, sb, polygons[c]);
+                if (fits) chosen.emplace_back(b, sb);
+            }
+            if (chosen.size() < 2) continue;
+            std::vector<const CapPolygon*> ps;
+            for (const auto& c : chosen) ps.push_back(&polygons[c.first]);
+            caps[2 * i + size_t(s)] = make_cap(ps);
+        }
+    }
+    return caps;
+}
+
+bool cap_hides(const ConvexCap& cap, const Aabb& from, const Aabb& to) {
+    if (cap.empty() || from.is_empty() || to.is_empty()) return false;
+    const double tol = kHideToleranceM;
+    const std::array<glm::dvec3, 8> fc = box_corners(from, tol), tc = box_corners(to, tol);
+    const size_t nf = cap.normal.size();
+    bool apart = false;
+    for (size_t f = 0; f < nf; ++f) {
+        bool all_out = true, any_sees = false;
+        for (const glm::dvec3& r : fc) {
+            const double s = glm::dot(cap.normal[f], r) - cap.offset[f];
+            all_out = all_out && s > tol;
+            any_sees = any_sees || s > -tol;
+        }
+        if (any_sees && !cap.opaque[f]) return false;
+        apart = apart || all_out;
+    }
+    if (!apart) return false;
+    for (const glm::dvec3& r : fc)
+        for (const glm::dvec3& t : tc) {
+            double lo = 0.0, hi = 1.0;
+            for (size_t f = 0; f < nf; ++f) {
+                const double a = glm::dot(cap.normal[f], r) - (cap.offset[f] - tol);
+                const double b = glm::dot(cap.normal[f], t) - (cap.offset[f] - tol);
+                if (a <= 0.0 && b <= 0.0) continue;
+                if (a > 0.0 && b > 0.0) return false;
+                const double s = a / (a - b);
+                if (a > 0.0) {
+                    lo = std::max(lo, s);
+                } else {
+                    hi = std::min(hi, s);
+                }
+                if (lo > hi) return false;
+            }
+        }
+    return true;
+}
+
+}  // namespace pvs
