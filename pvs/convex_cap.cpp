@@ -1,5 +1,6 @@
 #include "pvs/convex_cap.h"
 
+#include "core/convex_clip.h"
 #include "pvs/region_hiding.h"
 
 #include <algorithm>
@@ -13,8 +14,8 @@ namespace {
 
 // A cap holds at most this many polygons and corners (its hull is found by trying every plane through three
 // corners).
-constexpr size_t kMaxCapPolygons = 6;
-constexpr size_t kMaxCapCorners = 28;
+constexpr size_t kMaxCapPolygons = 8;
+constexpr size_t kMaxCapCorners = 32;
 // Corners this close are one; a corner this near a plane lies on it (the hull's faces and the polygons'
 // planes). Far below kHideToleranceM, by which every test keeps away from the hull's surface.
 constexpr double kSameM = 1e-9;
@@ -166,26 +167,42 @@ std::vector<ConvexCap> build_caps(const std::vector<CapPolygon>& polygons) {
             neighbours[b].push_back(a);
         }
     }
+    for (size_t i = 0; i < n; ++i) std::sort(neighbours[i].begin(), neighbours[i].end());
     for (size_t i = 0; i < n; ++i) {
-        std::sort(neighbours[i].begin(), neighbours[i].end());
         for (int s = 0; s < 2; ++s) {
-            const double sign = s == 0 ? 1.0 : -1.0;
-            const CapPolygon& a = polygons[i];
-            // The chosen polygons with the side each is seen from.
-            std::vector<std::pair<uint32_t, double>> chosen{{uint32_t(i), sign}};
-            for (const uint32_t b : neighbours[i]) {
-                if (chosen.size() >= kMaxCapPolygons) break;
-                const CapPolygon& pb = polygons[b];
-                if (!behind(a, sign, pb) || !bends_away(a, sign, pb)) continue;
-                // b seen from the side a lies behind.
-                double sb = 0.0;
-                for (const double t : {1.0, -1.0})
-                    if (behind(pb, t, a) && bends_away(pb, t, a)) sb = t;
-                if (sb == 0.0) continue;
-                bool fits = true;
-                for (const auto& [c, sc] : chosen)
-                    fits = fits && behind(polygons[c], sc, pb) && behind(pb, sb, polygons[c]);
-                if (fits) chosen.emplace_back(b, sb);
+            // Grown outwards from the polygon, neighbours of the chosen ones first, each with the side it is
+            // seen from: the one all the chosen polygons lie behind.
+            std::vector<std::pair<uint32_t, double>> chosen{{uint32_t(i), s == 0 ? 1.0 : -1.0}};
+            std::vector<glm::dvec3> corners = polygons[i].corners;
+            for (size_t next = 0; next < chosen.size() && chosen.size() < kMaxCapPolygons; ++next) {
+                const auto [c, sc] = chosen[next];
+                for (const uint32_t b : neighbours[c]) {
+                    if (chosen.size() >= kMaxCapPolygons) break;
+                    if (std::any_of(chosen.begin(), chosen.end(), [&](const auto& x) { return x.first == b; }))
+                        continue;
+                    const CapPolygon& pb = polygons[b];
+                    if (!behind(polygons[c], sc, pb) || !bends_away(polygons[c], sc, pb)) continue;
+                    double sb = 0.0;
+                    for (const double t : {1.0, -1.0}) {
+                        bool all = bends_away(pb, t, polygons[c]);
+                        for (const auto& [d, sd] : chosen) all = all && behind(pb, t, polygons[d]);
+                        if (all) sb = t;
+                    }
+                    if (sb == 0.0) continue;
+                    bool fits = true;
+                    for (const auto& [d, sd] : chosen) fits = fits && behind(polygons[d], sd, pb);
+                    if (!fits) continue;
+                    size_t added = 0;
+                    for (const glm::dvec3& x : pb.corners)
+                        added += std::none_of(corners.begin(), corners.end(),
+                                              [&](const glm::dvec3& y) { return glm::length(x - y) <= kSameM; });
+                    if (corners.size() + added > kMaxCapCorners) continue;
+                    for (const glm::dvec3& x : pb.corners)
+                        if (std::none_of(corners.begin(), corners.end(),
+                                         [&](const glm::dvec3& y) { return glm::length(x - y) <= kSameM; }))
+                            corners.push_back(x);
+                    chosen.emplace_back(b, sb);
+                }
             }
             if (chosen.size() < 2) continue;
             std::vector<const CapPolygon*> ps;
@@ -196,13 +213,12 @@ std::vector<ConvexCap> build_caps(const std::vector<CapPolygon>& polygons) {
     return caps;
 }
 
-bool cap_hides(const ConvexCap& cap, const Aabb& from, const Aabb& to) {
-    if (cap.empty() || from.is_empty() || to.is_empty()) return false;
+bool cap_guards(const ConvexCap& cap, const Aabb& from) {
+    if (cap.empty() || from.is_empty()) return false;
     const double tol = kHideToleranceM;
-    const std::array<glm::dvec3, 8> fc = box_corners(from, tol), tc = box_corners(to, tol);
-    const size_t nf = cap.normal.size();
+    const std::array<glm::dvec3, 8> fc = box_corners(from, tol);
     bool apart = false;
-    for (size_t f = 0; f < nf; ++f) {
+    for (size_t f = 0; f < cap.normal.size(); ++f) {
         bool all_out = true, any_sees = false;
         for (const glm::dvec3& r : fc) {
             const double s = glm::dot(cap.normal[f], r) - cap.offset[f];
@@ -212,7 +228,35 @@ bool cap_hides(const ConvexCap& cap, const Aabb& from, const Aabb& to) {
         if (any_sees && !cap.opaque[f]) return false;
         apart = apart || all_out;
     }
-    if (!apart) return false;
+    return apart;
+}
+
+void cap_slice(const ConvexCap& cap, int axis, double c, glm::dvec2 lo, glm::dvec2 hi,
+               std::vector<glm::dvec2>& out, std::vector<glm::dvec2>& scratch) {
+    const int a = axis, u = (a + 1) % 3, v = (a + 2) % 3;
+    out = {lo, {hi.x, lo.y}, hi, {lo.x, hi.y}};
+    for (size_t f = 0; f < cap.normal.size() && out.size() >= 3; ++f) {
+        // The face's half-space on the plane: n.x * y.x + n.y * y.y <= r.
+        const glm::dvec2 n(cap.normal[f][u], cap.normal[f][v]);
+        const double r = cap.offset[f] - kHideToleranceM - cap.normal[f][a] * c;
+        const double len2 = glm::dot(n, n);
+        if (!(len2 > 1e-24)) {
+            if (!(0.0 <= r)) out.clear();  // parallel to the plane, which lies outside it
+            continue;
+        }
+        // Left of the line through p0 along (-n.y, n.x) is where n.y <= r.
+        const glm::dvec2 p0 = n * (r / len2), p1 = p0 + glm::dvec2(-n.y, n.x);
+        clip_line(out, p0, p1, false, scratch);
+        out.swap(scratch);
+    }
+    if (out.size() < 3) out.clear();
+}
+
+bool cap_hides(const ConvexCap& cap, const Aabb& from, const Aabb& to) {
+    if (!cap_guards(cap, from) || to.is_empty()) return false;
+    const double tol = kHideToleranceM;
+    const std::array<glm::dvec3, 8> fc = box_corners(from, tol), tc = box_corners(to, tol);
+    const size_t nf = cap.normal.size();
     for (const glm::dvec3& r : fc)
         for (const glm::dvec3& t : tc) {
             double lo = 0.0, hi = 1.0;

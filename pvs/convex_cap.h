@@ -6,7 +6,8 @@
 // when the 64 segments between their corners do. The argument: docs/ALGORITHMS.md#convex-caps.
 //
 // Contract: cap_hides(cap, from, to) is true only if every segment from a point of box `from` to a point of
-// box `to` meets an opaque polygon of the cap (both boxes grown by kHideToleranceM, P shrunk by it).
+// box `to` meets an opaque polygon of the cap (both boxes grown by kHideToleranceM, P shrunk by it). Any
+// segment from a box the cap guards (cap_guards) that reaches a point of P's interior has met one before.
 #pragma once
 
 #include "core/math.h"
@@ -43,9 +44,19 @@ ConvexCap make_cap(const std::vector<const CapPolygon*>& polygons);
 // Empty where no neighbour bends away. Deterministic: neighbours in index order.
 std::vector<ConvexCap> build_caps(const std::vector<CapPolygon>& polygons);
 
-// See the contract above. The test: `from`, grown, lies strictly outside one face; every face that a corner
-// of `from` sees (or lies on) is opaque; and each of the 64 segments between the grown boxes' corners meets
-// P shrunk by the tolerance.
+// See the contract above. The test: cap_guards(cap, from), and each of the 64 segments between the grown
+// boxes' corners meets P shrunk by the tolerance.
 bool cap_hides(const ConvexCap& cap, const Aabb& from, const Aabb& to);
+
+// Does every segment from a point of box `from` (grown by kHideToleranceM) that meets P meet an opaque polygon
+// of the cap first? True when `from` lies strictly outside one face of P and every face that one of its
+// corners sees, or lies on, is opaque (docs/ALGORITHMS.md#convex-caps).
+bool cap_guards(const ConvexCap& cap, const Aabb& from);
+
+// The cross-section of P shrunk by kHideToleranceM with the plane x[axis] = c, in the plane's coordinates
+// (axis + 1, axis + 2), clipped to the rectangle [lo, hi]: convex, counter-clockwise; empty when none. A
+// segment from a box the cap guards that crosses the plane there has met an opaque polygon of the cap.
+void cap_slice(const ConvexCap& cap, int axis, double c, glm::dvec2 lo, glm::dvec2 hi,
+               std::vector<glm::dvec2>& out, std::vector<glm::dvec2>& scratch);
 
 }  // namespace pvs

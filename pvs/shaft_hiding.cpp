@@ -334,6 +334,7 @@ void ShaftProver::add_umbrae(const Aabb& region, const Aabb& target, int axis, d
             if (ps.tried.size() >= kMaxUmbrae) return;
             if (std::find(ps.tried.begin(), ps.tried.end(), k) != ps.tried.end()) continue;
             ps.tried.push_back(k);
+            if (k >= n_boxes) add_cap_slices(k - n_boxes, region, target, a, c, ps);
             if (k < n_flat) {
                 const Aabb& b = k < n_boxes ? boxes_[k] : panels_[k - n_boxes];
                 const int flat = k < n_boxes ? -1 : panel_axis_[k - n_boxes];
@@ -868,6 +869,25 @@ bool ShaftProver::try_pair(const Pair& pair, glm::vec3 from, glm::vec3 to, bool&
             if (cover(pair.region, pair.target, tried[i].first, tried[i].second, true, nullptr, &figures.umbrae))
                 return true;
     return false;
+}
+
+void ShaftProver::add_cap_slices(uint32_t polygon, const Aabb& region, const Aabb& target, int axis, double c,
+                                 PlaneScratch& ps) const {
+    if (caps_.empty()) return;
+    const CapPolygon& p = cap_polygons_[polygon];
+    if (p.corners.empty()) return;
+    const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+    Aabb both = region;
+    both.extend(target);
+    const glm::dvec2 lo(both.min[u], both.min[v]), hi(both.max[u], both.max[v]);
+    for (const Aabb* box : {&region, &target}) {
+        // The cap on the side of the box's centre, if it guards the whole box (docs/ALGORITHMS.md#convex-caps).
+        const double s = glm::dot(p.normal, glm::dvec3(box->center())) - p.offset;
+        const ConvexCap& cap = caps_[2 * size_t(polygon) + (s >= 0.0 ? 0 : 1)];
+        if (cap.empty() || !cap_guards(cap, *box)) continue;
+        cap_slice(cap, axis, c, lo, hi, ps.shadow, ps.clipped);
+        if (!ps.shadow.empty() && !sliver(ps.shadow)) ps.umbrae.push_back(ps.shadow);
+    }
 }
 
 ShaftRegion shaft_region(const VoxelMask& eyes, const Aabb& region) {

@@ -151,6 +151,10 @@ private:
     void add_umbrae(const Aabb& region, const Aabb& target, int axis, double c, glm::dvec2 y,
                     PlaneScratch& ps) const;
     bool meets_occluder(glm::vec3 from, glm::vec3 to, Scratch& sc) const;
+    // Adds to the scratch's umbrae the cross-sections with the plane (axis, c) of the convex caps of
+    // polygon `polygon` (index into panels_, then slanted_) that guard the region or the target piece.
+    void add_cap_slices(uint32_t polygon, const Aabb& region, const Aabb& target, int axis, double c,
+                        PlaneScratch& ps) const;
 
     std::vector<Plane> planes_[3];  // per axis, by c
     // Per axis and voxel layer across it, the bounds of the layer's solid voxels in the plane's coordinates

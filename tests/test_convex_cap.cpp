@@ -3,6 +3,7 @@
 #include "pvs/convex_cap.h"
 
 #include "core/random.h"
+#include "pvs/region_hiding.h"
 #include "tests/slanted_fixtures.h"
 
 #include <gtest/gtest.h>
@@ -114,6 +115,78 @@ TEST(ConvexCap, EverySegmentBetweenBoxesACapHidesMeetsAPolygon) {
         }
     }
     EXPECT_GT(claimed, pairs / 50) << claimed << " of " << pairs;
+}
+
+// Turned boxes' faces at +e0, +e1 and +e2 as cap polygons, the caps of a random one.
+struct RandomCap {
+    std::vector<CapPolygon> polygons;
+    std::vector<ConvexCap> caps;
+};
+RandomCap random_cap(Rng& rng) {
+    const glm::dvec3 h(0.5 + 2.0 * rng.uniform(), 0.5 + 2.0 * rng.uniform(), 0.5 + 2.0 * rng.uniform());
+    const glm::dvec3 e0 = glm::normalize(glm::dvec3(rng.uniform() - 0.5, rng.uniform() - 0.5, rng.uniform() - 0.5));
+    const glm::dvec3 e1 = glm::normalize(glm::cross(e0, glm::dvec3(0.3, 0.9, -0.2)));
+    const glm::dvec3 e2 = glm::cross(e0, e1);
+    const auto at = [&](double a, double b, double c) { return a * h.x * e0 + b * h.y * e1 + c * h.z * e2; };
+    RandomCap r;
+    r.polygons.push_back(polygon({at(1, -1, -1), at(1, 1, -1), at(1, 1, 1), at(1, -1, 1)}));
+    r.polygons.push_back(polygon({at(-1, 1, -1), at(-1, 1, 1), at(1, 1, 1), at(1, 1, -1)}));
+    r.polygons.push_back(polygon({at(-1, -1, 1), at(1, -1, 1), at(1, 1, 1), at(-1, 1, 1)}));
+    r.caps = build_caps(r.polygons);
+    return r;
+}
+
+// A cap's cross-section with an axis plane holds only points inside the shrunk hull, and every point deep
+// inside it; and every segment from a box the cap guards to a point inside the hull meets a polygon.
+TEST(ConvexCap, ASliceLiesInTheHullAndWhatACapGuardsMeetsItsPolygons) {
+    Rng rng(31, 7);
+    int guarded = 0, sliced = 0;
+    for (int trial = 0; trial < 200; ++trial) {
+        const RandomCap rc = random_cap(rng);
+        for (const ConvexCap& cap : rc.caps) {
+            if (cap.empty()) continue;
+            const auto depth = [&](const glm::dvec3& x) {  // how far inside every face
+                double d = INFINITY;
+                for (size_t f = 0; f < cap.normal.size(); ++f)
+                    d = std::min(d, cap.offset[f] - glm::dot(cap.normal[f], x));
+                return d;
+            };
+            const int axis = int(rng.below(3)), u = (axis + 1) % 3, v = (axis + 2) % 3;
+            const double c = (rng.uniform() - 0.5) * 4.0;
+            std::vector<glm::dvec2> slice, scratch;
+            cap_slice(cap, axis, c, glm::dvec2(-5.0), glm::dvec2(5.0), slice, scratch);
+            sliced += slice.empty() ? 0 : 1;
+            for (int s = 0; s < 2000; ++s) {
+                glm::dvec3 x;
+                x[axis] = c;
+                x[u] = (rng.uniform() - 0.5) * 10.0;
+                x[v] = (rng.uniform() - 0.5) * 10.0;
+                bool in = slice.size() >= 3;
+                for (size_t i = 0; i < slice.size() && in; ++i) {
+                    const glm::dvec2 a = slice[i], b = slice[(i + 1) % slice.size()];
+                    in = (b.x - a.x) * (x[v] - a.y) - (b.y - a.y) * (x[u] - a.x) >= 0.0;
+                }
+                const double d = depth(x);
+                if (in) ASSERT_GT(d, kHideToleranceM - 1e-9) << "a point of the slice lies outside the shrunk hull";
+                if (d > kHideToleranceM + 1e-6) ASSERT_TRUE(in) << "a point deep in the hull is not in the slice";
+            }
+            // A box the cap guards: every segment from it to a point of the hull meets a polygon first.
+            const glm::dvec3 c0((rng.uniform() - 0.5) * 16.0, (rng.uniform() - 0.5) * 16.0,
+                                (rng.uniform() - 0.5) * 16.0);
+            const Aabb from = Aabb::of(glm::vec3(c0), glm::vec3(c0 + 1.5 * glm::dvec3(rng.uniform(), rng.uniform(), rng.uniform())));
+            if (!cap_guards(cap, from)) continue;
+            ++guarded;
+            for (int s = 0; s < 2000; ++s) {
+                const glm::dvec3 x((rng.uniform() - 0.5) * 6.0, (rng.uniform() - 0.5) * 6.0,
+                                   (rng.uniform() - 0.5) * 6.0);
+                if (depth(x) <= kHideToleranceM) continue;
+                ASSERT_TRUE(meets_any(rc.polygons, point_in(from, rng), x))
+                    << "a segment from a guarded box reaches the hull's inside past the polygons";
+            }
+        }
+    }
+    EXPECT_GT(guarded, 20);
+    EXPECT_GT(sliced, 50);
 }
 
 }  // namespace
