@@ -1,5 +1,7 @@
 #include "core/context.h"
 
+#include <ctime>
+
 #include <fmt/format.h>
 #include <unistd.h>
 
@@ -91,17 +93,30 @@ void Context::print_progress(bool /*final_line*/) {
     std::fflush(options_.sink);
 }
 
-void Context::add_timing(const std::string& stage, double seconds) {
+void Context::add_timing(const std::string& stage, double seconds, double cpu_seconds) {
     {
         std::lock_guard<std::mutex> lock(mutex_);
         timings_.emplace_back(stage, seconds);
+        if (cpu_seconds >= 0.0) cpu_timings_.emplace_back(stage, cpu_seconds);
     }
-    debug(fmt::format("stage {} took {:.3f} s", stage, seconds));
+    debug(cpu_seconds >= 0.0 ? fmt::format("stage {} took {:.3f} s ({:.3f} CPU s)", stage, seconds, cpu_seconds)
+                             : fmt::format("stage {} took {:.3f} s", stage, seconds));
 }
 
 std::vector<std::pair<std::string, double>> Context::timings() const {
     std::lock_guard<std::mutex> lock(mutex_);
     return timings_;
+}
+
+std::vector<std::pair<std::string, double>> Context::cpu_timings() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return cpu_timings_;
+}
+
+double process_cpu_seconds() {
+    timespec t{};
+    if (clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t) != 0) return 0.0;
+    return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
 }
 
 }  // namespace pvs

@@ -46,9 +46,12 @@ public:
     uint64_t progress_done() const { return done_.load(std::memory_order_relaxed); }
     uint64_t progress_total() const { return total_; }
 
-    // Stage timings, in the order stages finished, seconds of wall time.
-    void add_timing(const std::string& stage, double seconds);
+    // Stage timings, in the order stages finished: seconds of wall time and, when measured (cpu_seconds >= 0),
+    // CPU seconds of the whole process (every thread) over the same span, so that a stage that leaves the
+    // threads idle shows itself (docs/USAGE.md, "Report").
+    void add_timing(const std::string& stage, double seconds, double cpu_seconds = -1.0);
     std::vector<std::pair<std::string, double>> timings() const;
+    std::vector<std::pair<std::string, double>> cpu_timings() const;  // the stages with CPU seconds
 
     bool quiet() const { return options_.quiet; }
 
@@ -59,7 +62,7 @@ private:
     bool tty_ = false;
     mutable std::mutex mutex_;
     std::vector<std::string> warnings_;
-    std::vector<std::pair<std::string, double>> timings_;
+    std::vector<std::pair<std::string, double>> timings_, cpu_timings_;
 
     std::string stage_;
     std::string unit_;
@@ -70,12 +73,18 @@ private:
     std::mutex progress_mutex_;
 };
 
-// Times a stage from construction to destruction and records it in the context.
+// CPU seconds the process (all its threads) has used so far.
+double process_cpu_seconds();
+
+// Times a stage from construction to destruction, wall and process CPU, and records it in the context.
 class ScopedTimer {
 public:
     ScopedTimer(Context& ctx, std::string stage)
-        : ctx_(ctx), stage_(std::move(stage)), start_(std::chrono::steady_clock::now()) {}
-    ~ScopedTimer() { ctx_.add_timing(stage_, seconds()); }
+        : ctx_(ctx),
+          stage_(std::move(stage)),
+          start_(std::chrono::steady_clock::now()),
+          cpu_start_(process_cpu_seconds()) {}
+    ~ScopedTimer() { ctx_.add_timing(stage_, seconds(), process_cpu_seconds() - cpu_start_); }
     double seconds() const {
         return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
     }
@@ -86,6 +95,7 @@ private:
     Context& ctx_;
     std::string stage_;
     std::chrono::steady_clock::time_point start_;
+    double cpu_start_;
 };
 
 }  // namespace pvs

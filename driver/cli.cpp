@@ -165,6 +165,13 @@ void set_threads(int threads) {
     if (threads > 0) omp_set_num_threads(threads);
 }
 
+// The CPU seconds of each stage (process-wide, every thread) and the threads the run had, as run figures:
+// the report divides them into each stage's thread utilisation (driver/report.h).
+void add_cpu_figures(const Context& ctx, RunRecord& run) {
+    run.figures.emplace_back("threads", double(omp_get_max_threads()));
+    for (const auto& [stage, cpu] : ctx.cpu_timings()) run.figures.emplace_back("cpu_seconds_" + stage, cpu);
+}
+
 void write_report(const std::string& path, const BakeData& bake, const Context& ctx) {
     if (path.empty()) return;
     write_file_atomically(path, bake_report_json(bake, ctx.warnings()));
@@ -370,6 +377,7 @@ int run_bake(Context& ctx, const BakeConfig& config, const std::string& world_pa
     if (share && share->rank() != 0) return kExitOk;
     if (reuse) bake.run.parameters.emplace_back("reuse", reuse_path);
     bake.run.timings_s = ctx.timings();
+    add_cpu_figures(ctx, bake.run);
     bake.run.figures.emplace_back("peak_memory_mb", peak_memory_mb());
     if (journal) {
         // Writing a chunk holds the journal's lock, so its seconds bound what checkpoints cost the bake.

@@ -12,11 +12,17 @@
 
 namespace pvs {
 
-// Starts the job's processes (MPI_Init_thread under MPI); once, from main, before anything else.
+// Starts the job's processes (MPI_Init_thread under MPI); once, from main, before anything else. MPI starts
+// only for a command that shares work between ranks (`bake`, `verify`: argv[1]) in a process an MPI launcher
+// started (mpirun sets OMPI_COMM_WORLD_SIZE, PMIX_RANK or PMI_RANK); every other command, and a bake run
+// alone, starts no MPI runtime (no orted daemon).
 void start_processes(int& argc, char**& argv);
+// Did start_processes() start MPI?
+bool processes_started();
 // Ends them (MPI_Finalize); once, from main, after everything else.
 void end_processes();
-// This process's rank and the number of processes: 0 and 1 without MPI.
+// This process's rank and the number of processes: 0 and 1 without MPI. Without MPI started, a process that
+// an MPI launcher started has the launcher's rank (so that only rank 0 of such a job speaks) and a count of 1.
 int process_rank();
 int process_count();
 // A share of the PVS passes between the processes, its progress shown by rank 0 on `ctx`; null for one

@@ -12,6 +12,8 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <mutex>
 
 namespace pvs {
@@ -94,9 +96,20 @@ private:
     std::mutex mutex_;
 };
 
+// The rank an MPI launcher gave this process, or -1 when none started it.
+int launcher_rank() {
+    for (const char* name : {"OMPI_COMM_WORLD_RANK", "PMIX_RANK", "PMI_RANK"}) {
+        const char* value = std::getenv(name);
+        if (value && *value) return std::max(0, std::atoi(value));
+    }
+    return std::getenv("OMPI_COMM_WORLD_SIZE") || std::getenv("PMI_SIZE") ? 0 : -1;
+}
+
 }  // namespace
 
 void start_processes(int& argc, char**& argv) {
+    const bool shared = argc >= 2 && (std::strcmp(argv[1], "bake") == 0 || std::strcmp(argv[1], "verify") == 0);
+    if (!shared || launcher_rank() < 0) return;
     int provided = 0;
     if (MPI_Init_thread(&argc, &argv, MPI_THREAD_SERIALIZED, &provided) != MPI_SUCCESS) return;
     g_started = true;
@@ -111,9 +124,14 @@ void end_processes() {
     g_started = false;
 }
 
+bool processes_started() {
+    return g_started;
+}
+
 int process_rank() {
+    if (!g_started) return std::max(0, launcher_rank());
     int rank = 0;
-    if (g_started) MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+    MPI_Comm_rank(MPI_COMM_WORLD, &rank);
     return rank;
 }
 

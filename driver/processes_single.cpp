@@ -4,6 +4,9 @@
 namespace pvs {
 
 void start_processes(int&, char**&) {}
+bool processes_started() {
+    return false;
+}
 void end_processes() {}
 int process_rank() {
     return 0;

@@ -209,6 +209,16 @@ std::string bake_report_json(const BakeData& bake, const std::vector<std::string
     run["parameters"] = run_params;
     run["figures"] = values_json(bake.run.figures);
     run["timings_s"] = values_json(bake.run.timings_s);
+    // Each stage's thread utilisation: CPU seconds / wall seconds / threads (1: every thread busy all along;
+    // 1 / threads: one thread works, the others wait).
+    double threads = 0.0;
+    for (const auto& [k, v] : bake.run.figures)
+        if (k == "threads") threads = v;
+    nlohmann::ordered_json use = nlohmann::ordered_json::object();
+    for (const auto& [stage, wall] : bake.run.timings_s)
+        for (const auto& [k, cpu] : bake.run.figures)
+            if (threads > 0.0 && wall > 0.0 && k == "cpu_seconds_" + stage) use[stage] = cpu / wall / threads;
+    run["utilisation"] = use;
     j["run"] = run;
     j["warnings"] = warnings;
     return j.dump(2) + "\n";

@@ -3,7 +3,8 @@
 //
 // Keys: tool, version, world, world_hash, mode, pvs_kind ("conservative" or "aggressive"), objects,
 // triangles, cells, parameters{}, figures{}, verification{ran, figures..., misses[]},
-// run{parameters{}, figures{}, timings_s{}}, warnings[]. Numbers are plain JSON numbers; misses carry the
+// run{parameters{}, figures{}, timings_s{}, utilisation{}}, warnings[]. utilisation: per stage, its CPU
+// seconds (run figure cpu_seconds_<stage>) over its wall seconds and the run's threads (run figure threads). Numbers are plain JSON numbers; misses carry the
 // object's name.
 #pragma once
 

@@ -69,6 +69,14 @@ TEST(Cli, BakeInfoQueryOnTheSampleWorld) {
     EXPECT_TRUE(j["conservative"].get<bool>()) << "the default mode is conservative";
     EXPECT_FALSE(contains(j["pvs_kind"].get<std::string>(), "aggressive"));
     EXPECT_TRUE(j["run"]["timings_s"].contains("conservative_pvs"));
+    // Each stage's thread utilisation: CPU seconds over wall seconds and threads, so at most about 1.
+    for (const char* stage : {"voxelize", "occluders", "conservative_pvs"}) {
+        ASSERT_TRUE(j["run"]["utilisation"].contains(stage)) << stage;
+        const double u = j["run"]["utilisation"][stage].get<double>();
+        EXPECT_GT(u, 0.0) << stage;
+        EXPECT_LT(u, 1.5) << stage;
+    }
+    EXPECT_GT(j["run"]["figures"]["threads"].get<double>(), 0.0);
     EXPECT_EQ(j["verification"]["figures"]["missed_pairs"].get<double>(), 0.0);
     EXPECT_TRUE(j["verification"]["ran"].get<bool>());
     EXPECT_TRUE(j["verification"]["figures"].contains("overestimation_mean"));
