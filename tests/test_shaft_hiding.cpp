@@ -481,31 +481,39 @@ TEST(ShaftHiding, AnObjectBehindSlitsInLineStaysListed) {
 // ridge from eyes above it that see both slopes: every line from them crosses one slope or the other.
 // No axis plane holds either slope, so plane covers and their umbrae never fuse them; the convex cap of the
 // two slopes (pvs/convex_cap.h) does. Dense segments confirm it; with a gap of 2 cm at the ridge the object
+
+// A slanted panel of no thickness: the quad `corners` (two triangles), its normal turned towards `up`.
+SlantedPanel slanted_quad(std::vector<glm::dvec3> corners, glm::dvec3 up) {
+    SlantedPanel p;
+    p.corners = std::move(corners);
+    p.normal = glm::normalize(glm::cross(p.corners[1] - p.corners[0], p.corners[2] - p.corners[0]));
+    if (glm::dot(p.normal, up) < 0.0) {
+        std::reverse(p.corners.begin(), p.corners.end());
+        p.normal = -p.normal;
+    }
+    p.offset = glm::dot(p.normal, p.corners[0]);
+    EXPECT_TRUE(set_slanted_edges(p));
+    for (const glm::dvec3& c : p.corners) p.bounds.extend(glm::vec3(c));
+    p.triangles = 2;
+    return p;
+}
+
+// Does the segment meet the quad (its two triangles)?
+bool segment_meets_quad(const glm::dvec3& q, const glm::dvec3& x, const std::vector<glm::dvec3>& c) {
+    return test::segment_meets_triangle(q, x, c[0], c[1], c[2]) || test::segment_meets_triangle(q, x, c[0], c[2], c[3]);
+}
+
 // stays listed.
 TEST(ShaftHiding, TheTwoSlopesOfARoofRidgeHideWhatNeitherHidesAlone) {
     Context ctx = quiet_context();
-    const auto slope = [](std::vector<glm::dvec3> corners, glm::dvec3 up) {
-        SlantedPanel p;
-        p.corners = std::move(corners);
-        p.normal = glm::normalize(glm::cross(p.corners[1] - p.corners[0], p.corners[2] - p.corners[0]));
-        if (glm::dot(p.normal, up) < 0.0) {
-            std::reverse(p.corners.begin(), p.corners.end());
-            p.normal = -p.normal;
-        }
-        p.offset = glm::dot(p.normal, p.corners[0]);
-        EXPECT_TRUE(set_slanted_edges(p));
-        for (const glm::dvec3& c : p.corners) p.bounds.extend(glm::vec3(c));
-        p.triangles = 2;
-        return p;
-    };
     for (const double gap : {0.0, 0.02}) {
         ShrunkOccluders occ;
         occ.epsilon_m = {0.1};
         occ.boxes = {{}};
         // The ridge at y = 3, z = 2 from x = 0 to 4; the eaves at y = 2, z = 0 and z = 4.
-        occ.slanted.push_back(slope({{0, 2, 0}, {4, 2, 0}, {4, 3, 2}, {0, 3, 2}}, {0, 1, 0}));
+        occ.slanted.push_back(slanted_quad({{0, 2, 0}, {4, 2, 0}, {4, 3, 2}, {0, 3, 2}}, {0, 1, 0}));
         occ.slanted.push_back(
-            slope({{0, 3 - gap / 2, 2 + gap}, {4, 3 - gap / 2, 2 + gap}, {4, 2, 4}, {0, 2, 4}}, {0, 1, 0}));
+            slanted_quad({{0, 3 - gap / 2, 2 + gap}, {4, 3 - gap / 2, 2 + gap}, {4, 2, 4}, {0, 2, 4}}, {0, 1, 0}));
         World w;
         const uint32_t object = test::add_box(w, "o", Aabb::of({1.5f, 2.2f, 1.5f}, {2.5f, 2.6f, 2.5f}));
         const Aabb cell = Aabb::of({1.5f, 4.0f, 1.0f}, {2.5f, 4.5f, 3.0f});
@@ -516,10 +524,7 @@ TEST(ShaftHiding, TheTwoSlopesOfARoofRidgeHideWhatNeitherHidesAlone) {
         for (int s = 0; s < 200000 && all_blocked; ++s) {
             const glm::dvec3 q(point_in(cell, rng)), x(point_in(w.objects[object].bounds, rng));
             bool blocked = false;
-            for (const SlantedPanel& p : occ.slanted)
-                blocked = blocked ||
-                          test::segment_meets_triangle(q, x, p.corners[0], p.corners[1], p.corners[2]) ||
-                          test::segment_meets_triangle(q, x, p.corners[0], p.corners[2], p.corners[3]);
+            for (const SlantedPanel& p : occ.slanted) blocked = blocked || segment_meets_quad(q, x, p.corners);
             all_blocked = blocked;
         }
         EXPECT_EQ(all_blocked, gap == 0.0) << "the scene is not what the test means";
@@ -531,6 +536,48 @@ TEST(ShaftHiding, TheTwoSlopesOfARoofRidgeHideWhatNeitherHidesAlone) {
             << "plane covers fused the slopes: the scene no longer tests the caps";
         EXPECT_EQ(ShaftProver(ctx, occ, true, true).hides(w, no_eyes, shaft, object, 1024, with), gap == 0.0)
             << "gap " << gap << ": " << with.tests << " piece pairs";
+    }
+}
+
+// Two walls meeting at 37 degrees (thin: a panel in the plane x = 0 for z in [0, 4], and a slanted panel
+// from the same corner edge at 37 degrees to it), seen from in front of the wedge's tip, hide an object
+// inside the wedge that neither hides alone. Their outer faces make a convex cap. Dense segments confirm
+// it; with a gap of 2 cm at the corner the object stays listed.
+TEST(ShaftHiding, TwoWallsAt37DegreesHideWhatNeitherHidesAlone) {
+    Context ctx = quiet_context();
+    const double angle = 37.0 * 3.14159265358979323846 / 180.0;
+    const double s = std::sin(angle), co = std::cos(angle);
+    for (const double gap : {0.0, 0.02}) {
+        ShrunkOccluders occ;
+        occ.epsilon_m = {0.1};
+        occ.boxes = {{}};
+        occ.panels.push_back(Aabb::of({0.0f, 0.0f, float(gap)}, {0.0f, 3.0f, 4.0f}));
+        occ.slanted.push_back(
+            slanted_quad({{0, 0, 0}, {4 * s, 0, 4 * co}, {4 * s, 3, 4 * co}, {0, 3, 0}}, {co, 0, -s}));
+        World w;
+        const uint32_t object = test::add_box(w, "o", Aabb::of({0.3f, 1.0f, 1.8f}, {0.6f, 2.0f, 2.4f}));
+        const Aabb cell = Aabb::of({-0.5f, 1.0f, -2.5f}, {1.0f, 2.0f, -1.5f});
+        const VoxelMask no_eyes;
+        const ShaftRegion shaft = shaft_region(no_eyes, cell);
+        Rng rng(37, 1);
+        bool all_blocked = true;
+        for (int k = 0; k < 200000 && all_blocked; ++k) {
+            const glm::dvec3 q(point_in(cell, rng)), x(point_in(w.objects[object].bounds, rng));
+            bool blocked = segment_meets_quad(q, x, occ.slanted[0].corners);
+            if (!blocked && (q.x < 0.0) != (x.x < 0.0)) {  // the wall in x = 0
+                const glm::dvec3 y = q + (0.0 - q.x) / (x.x - q.x) * (x - q);
+                blocked = y.y >= 0.0 && y.y <= 3.0 && y.z >= gap && y.z <= 4.0;
+            }
+            all_blocked = blocked;
+        }
+        EXPECT_EQ(all_blocked, gap == 0.0) << "the scene is not what the test means";
+        RegionHider one(ctx, occ);
+        uint64_t hidden_one = 0;
+        EXPECT_EQ(one.hide(w, cell, {object}, &hidden_one), 0u) << "one wall alone hides it";
+        ShaftFigures with;
+        EXPECT_EQ(ShaftProver(ctx, occ, false, true).hides(w, no_eyes, shaft, object, 1024, with), gap == 0.0)
+            << "gap " << gap << ": " << with.tests << " piece pairs";
+        EXPECT_EQ(with.capped > 0, gap == 0.0);
     }
 }
 
