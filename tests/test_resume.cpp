@@ -360,14 +360,14 @@ std::vector<std::string> mpirun(int ranks) {
     return {"/usr/bin/mpirun", "--oversubscribe", "-np", std::to_string(ranks), PVSBAKE_BINARY};
 }
 
-void expect_same_under_mpirun(const std::vector<std::string>& extra) {
+void expect_same_under_mpirun(const std::vector<std::string>& extra, int ranks = 2) {
     test::TempDir dir;
     const std::string one = dir.file("one.h5"), two = dir.file("two.h5"), log = dir.file("log.txt");
     ASSERT_EQ(wait_for(spawn(bake_args(one, extra), log)), 0) << test::read_file(log);
     std::vector<std::string> one_thread = extra;
     one_thread.insert(one_thread.end(), {"--threads", "1"});
     const std::vector<std::string> args = bake_args(two, one_thread);
-    ASSERT_EQ(wait_for(spawn(args, log, mpirun(2))), 0) << test::read_file(log);
+    ASSERT_EQ(wait_for(spawn(args, log, mpirun(ranks))), 0) << test::read_file(log);
     EXPECT_FALSE(fs::exists(two + ".checkpoint"));
     const std::string diff = dir.file("h5diff.txt");
     EXPECT_EQ(test::h5diff_outside_run(one, two, diff), 0) << test::read_file(diff);
@@ -375,6 +375,23 @@ void expect_same_under_mpirun(const std::vector<std::string>& extra) {
 
 TEST(Processes, TwoRanksBakeTheGridOneProcessBakes) {
     expect_same_under_mpirun({"--shaft-budget", "16"});
+}
+
+TEST(Processes, ThreeRanksBakeTheGridOneProcessBakes) {
+    expect_same_under_mpirun({"--shaft-budget", "16"}, 3);
+}
+
+// A command that shares no work starts no MPI under mpirun either (driver/processes.h), and only rank 0
+// speaks: the ranks' output holds the file's summary once.
+TEST(Processes, UnderMpirunACommandThatSharesNoWorkSpeaksOnce) {
+    test::TempDir dir;
+    const std::string out = dir.file("x.h5"), log = dir.file("log.txt"), info = dir.file("info.txt");
+    ASSERT_EQ(wait_for(spawn(bake_args(out, {}), log)), 0) << test::read_file(log);
+    ASSERT_EQ(wait_for(spawn({"info", out}, info, mpirun(3))), 0) << test::read_file(info);
+    const std::string text = test::read_file(info);
+    const size_t first = text.find("pvs_objects_mean");
+    ASSERT_NE(first, std::string::npos) << text;
+    EXPECT_EQ(text.find("pvs_objects_mean", first + 1), std::string::npos) << "more than one rank spoke:\n" << text;
 }
 
 TEST(Processes, TwoRanksBakeTheOctreeOneProcessBakes) {
