@@ -18,10 +18,15 @@ checkpoint mode (the default) bakes WORLD three ways with the same options:
 --project REPORT: no bake; from the report of a finished conservative grid bake (and the ranks and threads
   per rank it ran with, --ranks R --threads T), the time the same bake would take on each of --cores
   (default 2,16,64), nodes of --node-cores (default 16) each running one rank with a thread per core:
-      stages before the PVS (each rank computes them) / t  +  PVS CPU-seconds / P  +  ranking and writing / t
-  with t = min(P, node cores). The PVS CPU-seconds are its wall time times the ranks times their threads
-  (dealing keeps them busy; the phase ends wait, so this bounds it from above). The threaded stages are
-  assumed to scale linearly with t, which favours many cores. --scale CELLS,COST projects a bake of
+      sum over the stages before the PVS (each rank computes them) of  serial + parallel / t
+      +  PVS CPU-seconds / P  +  the same sum over ranking and writing
+  with t = min(P, node cores). Only the outermost stages count (the inner ones, NESTED below, are parts
+  of them). A stage's serial and parallel seconds come from its wall seconds W and CPU seconds C at T
+  threads (run figures cpu_seconds_<stage> and threads, in reports since they were recorded): with
+  W = serial + parallel / T and C = serial + parallel, parallel = (C - W) T / (T - 1) (Amdahl's law from one
+  run); a report without them, or of one thread, takes every stage as wholly parallel, which favours many
+  cores. The PVS CPU-seconds are its wall time times the ranks times their threads (dealing keeps them
+  busy; the phase ends wait, so this bounds it from above). --scale CELLS,COST projects a bake of
   CELLS times as many cells, each COST times as costly (e.g. another play height, from two bakes of a
   smaller world); the stages before the PVS are kept as measured.
 
@@ -97,34 +102,59 @@ def compare_ranks(a, out_dir, log):
     return result
 
 
+# Stages timed inside another stage (view_volume holds voxelize and flood; occluders holds the solid, the
+# probes, the boxes and the shrinking): left out of the sums, which take their outer stage.
+NESTED = {"voxelize", "flood", "solid", "sight_probe", "gap_probe", "seal_probe", "boxes", "shrink",
+          "block_occluders", "verify_miss_widths"}
+
+
+def amdahl(wall, cpu, threads):
+    """A stage's (serial, parallel) seconds of one thread from its wall and CPU seconds at `threads`."""
+    if cpu is None or threads <= 1:
+        return 0.0, wall * max(1, threads)
+    parallel = max(0.0, (cpu - wall) * threads / (threads - 1))
+    return max(0.0, wall - parallel / threads), parallel
+
+
 def project(a):
     with open(a.project) as f:
         j = json.load(f)
     timings = j["run"]["timings_s"]
+    figures = j["run"].get("figures", {})
     stages = list(timings)
     if "conservative_pvs" not in stages:
         sys.exit(f"{a.project}: no conservative_pvs stage (a conservative bake's report is needed)")
     at = stages.index("conservative_pvs")
-    before = sum(timings[s] for s in stages[:at] if s != "total")
-    after = sum(timings[s] for s in stages[at + 1 :] if s not in ("total", "verify"))
+    skip = NESTED | {"total", "verify", "conservative_pvs"}
     threads = max(1, a.threads // max(1, a.ranks)) if a.ranks else a.threads
+    parts = {}
+    for s in stages:
+        if s in skip:
+            continue
+        serial, parallel = amdahl(timings[s], figures.get("cpu_seconds_" + s), threads)
+        parts[s] = {"wall_s": timings[s], "serial_s": serial, "parallel_s": parallel,
+                    "after_pvs": stages.index(s) > at}
+    before = sum(timings[s] for s in parts if not parts[s]["after_pvs"])
+    after = sum(timings[s] for s in parts if parts[s]["after_pvs"])
     cpu = timings["conservative_pvs"] * max(1, a.ranks) * threads
     cells = j["figures"]["cells"]
     cells_scale, cost_scale = (float(x) for x in a.scale.split(",")) if a.scale else (1.0, 1.0)
-    # Measured at `threads` per rank: to one thread's seconds.
-    before_1, after_1 = before * threads, after * threads
     pvs_1 = cpu * cells_scale * cost_scale
-    after_1 *= cells_scale
     out = {"report": a.project, "cells": cells, "measured_ranks": max(1, a.ranks),
            "measured_threads_per_rank": threads, "stages_before_pvs_s": before,
            "pvs_s": timings["conservative_pvs"], "pvs_cpu_s": cpu, "pvs_cpu_s_per_cell": cpu / cells,
-           "after_pvs_s": after, "scale": {"cells": cells_scale, "cost_per_cell": cost_scale},
+           "after_pvs_s": after, "stages": parts, "amdahl": any("cpu_seconds_" + s in figures for s in parts),
+           "scale": {"cells": cells_scale, "cost_per_cell": cost_scale},
            "projected_cells": cells * cells_scale, "node_cores": a.node_cores, "projection": {}}
     for p in (int(x) for x in a.cores.split(",")):
         t = min(p, a.node_cores)
-        total = before_1 / t + pvs_1 / p + after_1 / t
+        before_p = sum(v["serial_s"] + v["parallel_s"] / t for v in parts.values() if not v["after_pvs"])
+        # After the PVS (ranking, writing) the work grows with the cells.
+        after_p = cells_scale * sum(v["serial_s"] + v["parallel_s"] / t for v in parts.values() if v["after_pvs"])
+        total = before_p + pvs_1 / p + after_p
         out["projection"][str(p)] = {"nodes": -(-p // a.node_cores), "threads_per_rank": t,
-                                     "hours": total / 3600.0}
+                                     "stages_before_pvs_s": before_p, "pvs_s": pvs_1 / p,
+                                     "after_pvs_s": after_p, "seconds": total, "hours": total / 3600.0}
     return out
 
 
