@@ -5,7 +5,6 @@
 #include "core/random.h"
 #include "pvs/region_hiding.h"
 #include "pvs/shaft_hiding.h"
-#include "occluders/panels.h"
 #include "occluders/slanted_panels.h"
 #include "tests/random_boxes.h"
 #include "tests/slanted_fixtures.h"
@@ -108,6 +107,24 @@ bool segment_meets_box(const Aabb& b, glm::dvec3 q, glm::dvec3 x) {
         t1 = std::min(t1, e1);
     }
     return t0 <= t1;
+}
+
+// Do all of `n` random segments from `from` to `to` meet one of the occluders (a panel is a flat closed box;
+// a slanted panel of no thickness is its quad of two triangles)? The slow reference of the scene tests.
+bool dense_segments_blocked(const ShrunkOccluders& occ, const Aabb& from, const Aabb& to, Rng rng,
+                            int n = 200000) {
+    for (int s = 0; s < n; ++s) {
+        const glm::dvec3 q(point_in(from, rng)), x(point_in(to, rng));
+        bool blocked = false;
+        for (const Aabb& p : occ.panels) blocked = blocked || segment_meets_box(p, q, x);
+        for (const SlantedPanel& p : occ.slanted) {
+            const std::vector<glm::dvec3>& c = p.corners;
+            for (size_t i = 1; i + 1 < c.size() && !blocked; ++i)
+                blocked = test::segment_meets_triangle(q, x, c[0], c[i], c[i + 1]);
+        }
+        if (!blocked) return false;
+    }
+    return true;
 }
 
 // A random region below the panels (z in [0, 3]) and a random target above the slab (z in [9, 12]), boxes
@@ -359,24 +376,7 @@ TEST(ShaftHiding, TwoWallsAtARightAngleHideWhatNeitherHidesAlone) {
         const Aabb cell = Aabb::of({-2.0f, 1.0f, -2.0f}, {-1.0f, 2.0f, -1.0f});
         const VoxelMask no_eyes;
         const ShaftRegion shaft = shaft_region(no_eyes, cell);
-        const auto blocked = [&](glm::dvec3 q, glm::dvec3 x) {
-            for (int k = 0; k < 2; ++k) {  // panel k lies in the plane x[axis] = 0, axis 0 then 2
-                const int axis = k == 0 ? 0 : 2;
-                if (!((q[axis] < 0.0) != (x[axis] < 0.0))) continue;
-                glm::dvec3 y = q + (0.0 - q[axis]) / (x[axis] - q[axis]) * (x - q);
-                y[axis] = 0.0;
-                const Aabb& p = occ.panels[size_t(k)];
-                bool in = true;
-                for (int j = 0; j < 3; ++j) in = in && y[j] >= p.min[j] && y[j] <= p.max[j];
-                if (in) return true;
-            }
-            return false;
-        };
-        Rng rng(13, 5);
-        bool all_blocked = true;
-        for (int s = 0; s < 200000 && all_blocked; ++s)
-            all_blocked =
-                blocked(glm::dvec3(point_in(cell, rng)), glm::dvec3(point_in(w.objects[object].bounds, rng)));
+        const bool all_blocked = dense_segments_blocked(occ, cell, w.objects[object].bounds, Rng(13, 5));
         EXPECT_EQ(all_blocked, gap == 0.0f) << "the scene is not what the test means";
         RegionHider one(ctx, occ);
         uint64_t hidden_one = 0;
@@ -499,11 +499,6 @@ SlantedPanel slanted_quad(std::vector<glm::dvec3> corners, glm::dvec3 up) {
     return p;
 }
 
-// Does the segment meet the quad (its two triangles)?
-bool segment_meets_quad(const glm::dvec3& q, const glm::dvec3& x, const std::vector<glm::dvec3>& c) {
-    return test::segment_meets_triangle(q, x, c[0], c[1], c[2]) || test::segment_meets_triangle(q, x, c[0], c[2], c[3]);
-}
-
 // stays listed.
 TEST(ShaftHiding, TheTwoSlopesOfARoofRidgeHideWhatNeitherHidesAlone) {
     Context ctx = quiet_context();
@@ -520,14 +515,7 @@ TEST(ShaftHiding, TheTwoSlopesOfARoofRidgeHideWhatNeitherHidesAlone) {
         const Aabb cell = Aabb::of({1.5f, 4.0f, 1.0f}, {2.5f, 4.5f, 3.0f});
         const VoxelMask no_eyes;
         const ShaftRegion shaft = shaft_region(no_eyes, cell);
-        Rng rng(17, 2);
-        bool all_blocked = true;
-        for (int s = 0; s < 200000 && all_blocked; ++s) {
-            const glm::dvec3 q(point_in(cell, rng)), x(point_in(w.objects[object].bounds, rng));
-            bool blocked = false;
-            for (const SlantedPanel& p : occ.slanted) blocked = blocked || segment_meets_quad(q, x, p.corners);
-            all_blocked = blocked;
-        }
+        const bool all_blocked = dense_segments_blocked(occ, cell, w.objects[object].bounds, Rng(17, 2));
         EXPECT_EQ(all_blocked, gap == 0.0) << "the scene is not what the test means";
         RegionHider one(ctx, occ);
         uint64_t hidden_one = 0;
@@ -560,17 +548,7 @@ TEST(ShaftHiding, TwoWallsAt37DegreesHideWhatNeitherHidesAlone) {
         const Aabb cell = Aabb::of({-0.5f, 1.0f, -2.5f}, {1.0f, 2.0f, -1.5f});
         const VoxelMask no_eyes;
         const ShaftRegion shaft = shaft_region(no_eyes, cell);
-        Rng rng(37, 1);
-        bool all_blocked = true;
-        for (int k = 0; k < 200000 && all_blocked; ++k) {
-            const glm::dvec3 q(point_in(cell, rng)), x(point_in(w.objects[object].bounds, rng));
-            bool blocked = segment_meets_quad(q, x, occ.slanted[0].corners);
-            if (!blocked && (q.x < 0.0) != (x.x < 0.0)) {  // the wall in x = 0
-                const glm::dvec3 y = q + (0.0 - q.x) / (x.x - q.x) * (x - q);
-                blocked = y.y >= 0.0 && y.y <= 3.0 && y.z >= gap && y.z <= 4.0;
-            }
-            all_blocked = blocked;
-        }
+        const bool all_blocked = dense_segments_blocked(occ, cell, w.objects[object].bounds, Rng(37, 1));
         EXPECT_EQ(all_blocked, gap == 0.0) << "the scene is not what the test means";
         RegionHider one(ctx, occ);
         uint64_t hidden_one = 0;
@@ -606,23 +584,7 @@ TEST(ShaftHiding, AStaircaseHidesWhatNoSingleStepHides) {
         const Aabb cell = Aabb::of({1.0f, 0.5f, 0.0f}, {2.0f, 1.0f, 1.0f});
         const VoxelMask no_eyes;
         const ShaftRegion shaft = shaft_region(no_eyes, cell);
-        const auto blocked = [&](glm::dvec3 q, glm::dvec3 x) {
-            for (const Aabb& p : occ.panels) {
-                const int a = panel_axis(p);
-                if (!((q[a] < double(p.min[a])) != (x[a] < double(p.min[a])))) continue;
-                glm::dvec3 y = q + (double(p.min[a]) - q[a]) / (x[a] - q[a]) * (x - q);
-                y[a] = p.min[a];
-                bool in = true;
-                for (int j = 0; j < 3; ++j) in = in && y[j] >= p.min[j] && y[j] <= p.max[j];
-                if (in) return true;
-            }
-            return false;
-        };
-        Rng rng(19, 4);
-        bool all_blocked = true;
-        for (int k = 0; k < 200000 && all_blocked; ++k)
-            all_blocked =
-                blocked(glm::dvec3(point_in(cell, rng)), glm::dvec3(point_in(w.objects[object].bounds, rng)));
+        const bool all_blocked = dense_segments_blocked(occ, cell, w.objects[object].bounds, Rng(19, 4));
         EXPECT_EQ(all_blocked, slit == 0.0f) << "the scene is not what the test means";
         RegionHider one(ctx, occ);
         uint64_t hidden_one = 0;
