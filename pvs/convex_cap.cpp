@@ -1,6 +1,7 @@
 #include "pvs/convex_cap.h"
 
 #include "core/convex_clip.h"
+#include "occluders/panels.h"
 #include "pvs/region_hiding.h"
 
 #include <algorithm>
@@ -77,6 +78,33 @@ bool bends_away(const CapPolygon& p, double sign, const CapPolygon& other) {
 
 }  // namespace
 
+std::vector<CapPolygon> cap_polygons(const std::vector<Aabb>& panels, const std::vector<SlantedPanel>& slanted) {
+    std::vector<CapPolygon> out;
+    out.reserve(panels.size() + slanted.size());
+    for (const Aabb& b : panels) {
+        CapPolygon p;
+        const int a = panel_axis(b);
+        if (a >= 0) {
+            const int u = (a + 1) % 3, v = (a + 2) % 3;
+            for (int k = 0; k < 4; ++k) {
+                glm::dvec3 x(b.min);
+                x[u] = (k == 1 || k == 2) ? b.max[u] : b.min[u];
+                x[v] = k >= 2 ? b.max[v] : b.min[v];
+                p.corners.push_back(x);
+            }
+            p.normal[a] = 1.0;
+            p.offset = b.min[a];
+        }
+        out.push_back(std::move(p));
+    }
+    for (const SlantedPanel& sp : slanted) {
+        CapPolygon p;
+        if (sp.thickness == 0.0) p = CapPolygon{sp.corners, sp.normal, sp.offset};
+        out.push_back(std::move(p));
+    }
+    return out;
+}
+
 ConvexCap make_cap(const std::vector<const CapPolygon*>& polygons) {
     ConvexCap cap;
     if (polygons.size() < 2 || polygons.size() > kMaxCapPolygons) return cap;
@@ -135,6 +163,7 @@ ConvexCap make_cap(const std::vector<const CapPolygon*>& polygons) {
         }
     }
     cap.polygons = uint32_t(polygons.size());
+    for (const glm::dvec3& x : pts) cap.bounds.extend(glm::vec3(x));
     return cap;
 }
 
@@ -155,11 +184,11 @@ std::vector<ConvexCap> build_caps(const std::vector<CapPolygon>& polygons) {
     for (size_t oi = 0; oi < n; ++oi) {
         const uint32_t a = order[oi];
         if (polygons[a].corners.size() < 3) continue;
+        const Aabb grown = Aabb::of(bounds[a].min - slack, bounds[a].max + slack);
         for (size_t oj = oi + 1; oj < n; ++oj) {
             const uint32_t b = order[oj];
-            if (bounds[b].min.x > bounds[a].max.x + slack) break;
+            if (bounds[b].min.x > grown.max.x) break;
             if (polygons[b].corners.size() < 3) continue;
-            const Aabb grown = Aabb::of(bounds[a].min - slack, bounds[a].max + slack);
             if (!grown.overlaps(bounds[b])) continue;
             if (std::abs(glm::dot(polygons[a].normal, polygons[b].normal)) > 1.0 - 1e-12) continue;  // parallel
             if (!share_edge(polygons[a], polygons[b])) continue;

@@ -11,6 +11,7 @@
 #pragma once
 
 #include "core/math.h"
+#include "core/occluder.h"
 
 #include <cstdint>
 #include <vector>
@@ -31,8 +32,14 @@ struct ConvexCap {
     std::vector<double> offset;
     std::vector<uint8_t> opaque;
     uint32_t polygons = 0;  // how many polygons it was made of
+    Aabb bounds;            // of the polygons' corners
     bool empty() const { return normal.empty(); }
 };
+
+// The opaque polygons of a set of occluders, indexed as the shaft pass indexes them: each panel (a flat
+// box; none for a box flat along no axis), then each slanted panel of no thickness (none for a slab with
+// thickness).
+std::vector<CapPolygon> cap_polygons(const std::vector<Aabb>& panels, const std::vector<SlantedPanel>& slanted);
 
 // The hull of `polygons`, its faces found among the planes through three of their corners (the polygons are
 // few: a cap has at most kMaxCapPolygons). Empty when the corners are too many or span no volume.

@@ -2,6 +2,8 @@
 // (docs/ALGORITHMS.md#reuse).
 #include "pvs/reuse.h"
 
+#include "pvs/convex_cap.h"
+
 #include <fmt/format.h>
 #define XXH_STATIC_LINKING_ONLY  // XXH3_state_t on the stack
 #include <xxhash.h>
@@ -21,7 +23,7 @@ constexpr uint64_t kMaxTiles = uint64_t(1) << 20;
 constexpr size_t kMaxChangedBoxes = 64;  // the changed tiles are merged into at most this many boxes
 
 // Element kinds, so that equal numbers of different kinds hash differently.
-enum Tag : uint64_t { kTriangle = 1, kShrunkBox = 2, kPanel = 3, kSlanted = 4, kMask = 5 };
+enum Tag : uint64_t { kTriangle = 1, kShrunkBox = 2, kPanel = 3, kSlanted = 4, kMask = 5, kCap = 6 };
 
 class Hasher {
 public:
@@ -226,6 +228,17 @@ GeometryPrint geometry_print(const ConservativeConfig& config, const World& worl
         for (const glm::dvec3& c : s.corners) h.add(c);
         add_element(p, s.bounds, h.digest());
     }
+
+    // The shaft pass's convex caps: a cap is used where a line meets its first polygon, but it reaches as
+    // far as its neighbours, so it is printed in every tile its hull's bounds meet.
+    if (config.shaft_budget > 0 && config.shaft_caps)
+        for (const ConvexCap& cap : build_caps(cap_polygons(occluders.panels, occluders.slanted))) {
+            if (cap.empty()) continue;
+            Hasher h(kCap);
+            for (size_t f = 0; f < cap.normal.size(); ++f)
+                h.add(cap.normal[f]).add(cap.offset[f]).add(uint64_t(cap.opaque[f]));
+            add_element(p, cap.bounds, h.digest());
+        }
 
     const bool indexed = config.shaft_budget > 0;  // the shaft pass seeds its lines by the object's index
     p.objects.reserve(world.objects.size());

@@ -22,9 +22,10 @@
 namespace pvs {
 
 // The print of everything the conservative solver reads (core/geometry_print.h): the triangles with their
-// opacity, the shrunk boxes of every epsilon, the panels and slanted panels, the proven solid, the free
-// voxels and the eye voxels; and per object, its triangles, opacity and flags (its index too when the shaft
-// pass, whose random lines are seeded by it, is on). Deterministic. Empty when `eyes` is.
+// opacity, the shrunk boxes of every epsilon, the panels and slanted panels (with the shaft pass, its convex
+// caps over their polygons' bounds), the proven solid, the free voxels and the eye voxels; and per object,
+// its triangles, opacity and flags (its index too when the shaft pass, whose random lines are seeded by it,
+// is on). Deterministic. Empty when `eyes` is.
 GeometryPrint geometry_print(const ConservativeConfig& config, const World& world,
                              const ShrunkOccluders& occluders, const VoxelMask& eyes);
 

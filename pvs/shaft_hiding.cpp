@@ -464,28 +464,7 @@ ShaftProver::ShaftProver(Context& ctx, const ShrunkOccluders& set, bool fusion, 
     }
     if (caps) {
         // Every panel and every slanted panel of no thickness is an opaque polygon (its triangles tile it).
-        for (uint32_t i = 0; i < panels_.size(); ++i) {
-            CapPolygon p;
-            const int a = panel_axis_[i];
-            if (a >= 0) {
-                const int u = (a + 1) % 3, v = (a + 2) % 3;
-                const Aabb& b = panels_[i];
-                for (int k = 0; k < 4; ++k) {
-                    glm::dvec3 x(b.min);
-                    x[u] = (k == 1 || k == 2) ? b.max[u] : b.min[u];
-                    x[v] = k >= 2 ? b.max[v] : b.min[v];
-                    p.corners.push_back(x);
-                }
-                p.normal[a] = 1.0;
-                p.offset = b.min[a];
-            }
-            cap_polygons_.push_back(std::move(p));
-        }
-        for (const SlantedPanel& sp : slanted_) {
-            CapPolygon p;
-            if (sp.thickness == 0.0) p = CapPolygon{sp.corners, sp.normal, sp.offset};
-            cap_polygons_.push_back(std::move(p));
-        }
+        cap_polygons_ = cap_polygons(panels_, slanted_);
         caps_ = build_caps(cap_polygons_);
     }
     size_t n_caps = 0;

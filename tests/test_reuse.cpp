@@ -293,5 +293,35 @@ TEST(GeometryPrint, AMovedBoxChangesOnlyTheTilesItMeets) {
     EXPECT_GE(changed, 2u);
 }
 
+// With the shaft pass, a convex cap (pvs/convex_cap.h) is tried wherever a line meets its first polygon, but
+// its hull reaches as far as its neighbours: a change to a neighbour must change the print all along the
+// polygon, not only where the neighbour lies (docs/ALGORITHMS.md#reuse). A long wall A (x = 2, z from 1 to
+// 14) meets a short one B (z = 1) at a corner; B grows from x = 6 to 7. The tile around A's far end, which B
+// never meets, changes with the caps and not without.
+TEST(GeometryPrint, AChangedNeighbourOfAConvexCapChangesThePrintAlongItsPolygon) {
+    VoxelMask eyes;
+    eyes.origin = glm::vec3(0.0f);
+    eyes.voxel_size_m = 0.25f;
+    eyes.dims = glm::ivec3(64);
+    eyes.bits.assign(size_t(eyes.count() + 63) / 64, ~uint64_t(0));
+    const World w;
+    ShrunkOccluders a, b;
+    for (ShrunkOccluders* o : {&a, &b}) o->panels.push_back(Aabb::of({2.0f, 0.0f, 1.0f}, {2.0f, 3.0f, 14.0f}));
+    a.panels.push_back(Aabb::of({2.0f, 0.0f, 1.0f}, {6.0f, 3.0f, 1.0f}));
+    b.panels.push_back(Aabb::of({2.0f, 0.0f, 1.0f}, {7.0f, 3.0f, 1.0f}));
+    const glm::vec3 far_end(2.0f, 1.0f, 13.0f);
+    uint64_t tile = 0;
+    GeometryPrint probe = geometry_print(ConservativeConfig{}, w, a, eyes);
+    while (!probe.tile_box(tile).contains(far_end)) ++tile;
+    ASSERT_FALSE(probe.tile_box(tile).overlaps(b.panels[1])) << "the scene is not what the test means";
+    for (const bool caps : {true, false}) {
+        ConservativeConfig config;
+        config.shaft_budget = 64;
+        config.shaft_caps = caps;
+        const GeometryPrint pa = geometry_print(config, w, a, eyes), pb = geometry_print(config, w, b, eyes);
+        EXPECT_EQ(pa.tiles[tile] != pb.tiles[tile], caps) << "caps " << caps;
+    }
+}
+
 }  // namespace
 }  // namespace pvs
