@@ -19,6 +19,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <memory>
 
 namespace pvs {
 
@@ -27,6 +28,7 @@ namespace {
 constexpr uint64_t kWrap = uint64_t(1) << 16;            // the summed-area table's modulus
 constexpr uint64_t kBlock = 64;                          // voxels per first-level block of the seed scan
 constexpr uint64_t kParallelVoxels = uint64_t(1) << 21;  // smaller grids build their table on one thread
+constexpr int kTileRows = 16;  // the seed cubes' wavefront runs over tiles of kTileRows^2 rows (y, z)
 
 void validate(const BoxConfig& config) {
     if (config.max_boxes < 1) {
@@ -78,7 +80,7 @@ uint64_t solid_count(const VoxelGrid& grid, const BitVolume& solid) {
 struct EmptySums {
     glm::ivec3 dims{0};
     uint64_t sx = 0, sxy = 0;  // strides of y and z
-    std::vector<uint16_t> sums;
+    std::unique_ptr<uint16_t[]> sums;  // (dims.x + 1) * (dims.y + 1) * (dims.z + 1)
 
     uint32_t at(int x, int y, int z) const {
         return sums[uint64_t(x) + sx * uint64_t(y) + sxy * uint64_t(z)];
@@ -112,37 +114,46 @@ EmptySums build_empty_sums(const VoxelGrid& grid, const BitVolume& solid) {
     const int nx = grid.dims.x, ny = grid.dims.y, nz = grid.dims.z;
     t.sx = uint64_t(nx) + 1;
     t.sxy = t.sx * (uint64_t(ny) + 1);
-    t.sums.assign(t.sxy * (uint64_t(nz) + 1), 0);
-    uint16_t* s = t.sums.data();
+    t.sums.reset(new uint16_t[t.sxy * (uint64_t(nz) + 1)]);  // every entry is written below
+    uint16_t* s = t.sums.get();
     const uint64_t sx = t.sx, sxy = t.sxy;
     const bool parallel = grid.count() >= kParallelVoxels;
-    // Along x: running counts of each row. Rows are independent.
-#pragma omp parallel for schedule(static) if (parallel)
-    for (int64_t r = 0; r < int64_t(ny) * nz; ++r) {
-        const int y = int(r % ny), z = int(r / ny);
-        const uint64_t src = grid.index(0, y, z);
-        uint16_t* row = s + sx * uint64_t(y + 1) + sxy * uint64_t(z + 1);
-        uint16_t run = 0;
-        for (int x = 0; x < nx; ++x) {
-            run = uint16_t(run + (solid.get(src + uint64_t(x)) ? 0 : 1));
-            row[x + 1] = run;
+#pragma omp parallel if (parallel)
+    {
+        // The zero borders: the slice z = 0 and the row y = 0 of every slice (x = 0 is set with its row).
+#pragma omp for schedule(static) nowait
+        for (int z = 1; z <= nz; ++z) std::memset(s + sxy * uint64_t(z), 0, sx * sizeof(uint16_t));
+#pragma omp single nowait
+        std::memset(s, 0, sxy * sizeof(uint16_t));
+        // Along x: running counts of each row. Rows are independent.
+#pragma omp for schedule(static)
+        for (int64_t r = 0; r < int64_t(ny) * nz; ++r) {
+            const int y = int(r % ny), z = int(r / ny);
+            const uint64_t src = grid.index(0, y, z);
+            uint16_t* row = s + sx * uint64_t(y + 1) + sxy * uint64_t(z + 1);
+            uint16_t run = 0;
+            row[0] = 0;
+            for (int x = 0; x < nx; ++x) {
+                run = uint16_t(run + (solid.get(src + uint64_t(x)) ? 0 : 1));
+                row[x + 1] = run;
+            }
         }
-    }
-    // Along y, then along z: add the previous row (slice) to each row (slice).
-#pragma omp parallel for schedule(static) if (parallel)
-    for (int z = 1; z <= nz; ++z) {
-        for (int y = 2; y <= ny; ++y) {
-            uint16_t* row = s + sx * uint64_t(y) + sxy * uint64_t(z);
-            const uint16_t* prev = row - sx;
-            for (uint64_t x = 0; x < sx; ++x) row[x] = uint16_t(row[x] + prev[x]);
+        // Along y, then along z: add the previous row (slice) to each row (slice).
+#pragma omp for schedule(static)
+        for (int z = 1; z <= nz; ++z) {
+            for (int y = 2; y <= ny; ++y) {
+                uint16_t* row = s + sx * uint64_t(y) + sxy * uint64_t(z);
+                const uint16_t* prev = row - sx;
+                for (uint64_t x = 0; x < sx; ++x) row[x] = uint16_t(row[x] + prev[x]);
+            }
         }
-    }
-#pragma omp parallel for schedule(static) if (parallel)
-    for (int y = 1; y <= ny; ++y) {
-        for (int z = 2; z <= nz; ++z) {
-            uint16_t* row = s + sx * uint64_t(y) + sxy * uint64_t(z);
-            const uint16_t* prev = row - sxy;
-            for (uint64_t x = 0; x < sx; ++x) row[x] = uint16_t(row[x] + prev[x]);
+#pragma omp for schedule(static)
+        for (int y = 1; y <= ny; ++y) {
+            for (int z = 2; z <= nz; ++z) {
+                uint16_t* row = s + sx * uint64_t(y) + sxy * uint64_t(z);
+                const uint16_t* prev = row - sxy;
+                for (uint64_t x = 0; x < sx; ++x) row[x] = uint16_t(row[x] + prev[x]);
+            }
         }
     }
     return t;
@@ -152,35 +163,46 @@ EmptySums build_empty_sums(const VoxelGrid& grid, const BitVolume& solid) {
 // kMaxSeedCube (0 for non-solid voxels):
 //   cube(p) = solid(p) ? 1 + min over the 7 voxels p + e, e in {0, 1}^3 \ {0}, of cube(p + e) : 0
 // (the cube of edge k at p is p and the seven cubes of edge k - 1 at the p + e). Capping commutes with
-// the recurrence, so the capped values are exact up to the cap. Sequential: rows (y, z) on one
-// anti-diagonal y + z could run in parallel, but a fork and join per diagonal (hundreds of them) cost
-// more than they save, and far more on a loaded machine.
-std::vector<uint8_t> build_seed_cubes(const VoxelGrid& grid, const BitVolume& solid) {
-    const int nx = grid.dims.x, ny = grid.dims.y, nz = grid.dims.z;
-    std::vector<uint8_t> cube(grid.count(), 0);
-    for (int d = ny - 1 + nz - 1; d >= 0; --d) {
-        const int z_lo = std::max(0, d - (ny - 1)), z_hi = std::min(nz - 1, d);
-        for (int z = z_lo; z <= z_hi; ++z) {
-            const int y = d - z;
-            const uint64_t base = grid.index(0, y, z);
-            uint8_t* c = cube.data() + base;
-            if (y + 1 >= ny || z + 1 >= nz) {
-                for (int x = 0; x < nx; ++x) c[x] = solid.get(base + uint64_t(x)) ? 1 : 0;
-                continue;
-            }
-            const uint8_t* cy = cube.data() + grid.index(0, y + 1, z);
-            const uint8_t* cz = cube.data() + grid.index(0, y, z + 1);
-            const uint8_t* cyz = cube.data() + grid.index(0, y + 1, z + 1);
-            c[nx - 1] = solid.get(base + uint64_t(nx - 1)) ? 1 : 0;
-            for (int x = nx - 2; x >= 0; --x) {
-                if (!solid.get(base + uint64_t(x))) {
-                    c[x] = 0;
-                    continue;
-                }
-                const uint8_t m =
-                    std::min({c[x + 1], cy[x], cy[x + 1], cz[x], cz[x + 1], cyz[x], cyz[x + 1]});
-                c[x] = m >= kMaxSeedCube ? uint8_t(kMaxSeedCube) : uint8_t(m + 1);
-            }
+// the recurrence, so the capped values are exact up to the cap. A row (y, z) needs the rows (y + 1, z),
+// (y, z + 1) and (y + 1, z + 1), so tiles of rows run as a wavefront: the tiles on one anti-diagonal
+// ty + tz are independent once those of the next are done (one barrier per diagonal of tiles). Each
+// value is the recurrence's, so the cubes do not depend on the thread count.
+void seed_cube_row(const VoxelGrid& grid, const BitVolume& solid, uint8_t* cube, int y, int z) {
+    const int nx = grid.dims.x;
+    const uint64_t base = grid.index(0, y, z);
+    uint8_t* c = cube + base;
+    if (y + 1 >= grid.dims.y || z + 1 >= grid.dims.z) {
+        for (int x = 0; x < nx; ++x) c[x] = solid.get(base + uint64_t(x)) ? 1 : 0;
+        return;
+    }
+    const uint8_t* cy = cube + grid.index(0, y + 1, z);
+    const uint8_t* cz = cube + grid.index(0, y, z + 1);
+    const uint8_t* cyz = cube + grid.index(0, y + 1, z + 1);
+    c[nx - 1] = solid.get(base + uint64_t(nx - 1)) ? 1 : 0;
+    for (int x = nx - 2; x >= 0; --x) {
+        if (!solid.get(base + uint64_t(x))) {
+            c[x] = 0;
+            continue;
+        }
+        const uint8_t m = std::min({c[x + 1], cy[x], cy[x + 1], cz[x], cz[x + 1], cyz[x], cyz[x + 1]});
+        c[x] = m >= kMaxSeedCube ? uint8_t(kMaxSeedCube) : uint8_t(m + 1);
+    }
+}
+
+std::unique_ptr<uint8_t[]> build_seed_cubes(const VoxelGrid& grid, const BitVolume& solid) {
+    const int ny = grid.dims.y, nz = grid.dims.z;
+    std::unique_ptr<uint8_t[]> cube(new uint8_t[grid.count()]);  // every entry is written below
+    const int tiles_y = (ny + kTileRows - 1) / kTileRows, tiles_z = (nz + kTileRows - 1) / kTileRows;
+    const bool parallel = grid.count() >= kParallelVoxels;
+#pragma omp parallel if (parallel)
+    for (int d = tiles_y - 1 + tiles_z - 1; d >= 0; --d) {
+        const int tz_lo = std::max(0, d - (tiles_y - 1)), tz_hi = std::min(tiles_z - 1, d);
+#pragma omp for schedule(dynamic, 1)
+        for (int tz = tz_lo; tz <= tz_hi; ++tz) {
+            const int ty = d - tz;
+            for (int z = std::min(nz, (tz + 1) * kTileRows) - 1; z >= tz * kTileRows; --z)
+                for (int y = std::min(ny, (ty + 1) * kTileRows) - 1; y >= ty * kTileRows; --y)
+                    seed_cube_row(grid, solid, cube.get(), y, z);
         }
     }
     return cube;
@@ -240,6 +262,30 @@ uint8_t block_max(const uint8_t* v, uint64_t n) {
     return m;
 }
 
+// Sets the cube sizes of voxels lo..hi (inclusive) to 0, skipping the blocks of 64 whose bound in `l1` is
+// already 0, and setting that bound to 0 for each whole block cleared. A box grown later often lies mostly
+// in boxes grown before it (growth goes through covered voxels), so most of its blocks are skipped.
+void clear_cubes(uint8_t* cube, uint8_t* l1, uint64_t lo, uint64_t hi) {
+    uint64_t b0 = lo / kBlock, b1 = hi / kBlock;
+    if (b0 == b1) {
+        if (l1[b0]) std::memset(cube + lo, 0, size_t(hi - lo + 1));
+        return;
+    }
+    if (lo % kBlock) {
+        if (l1[b0]) std::memset(cube + lo, 0, size_t((b0 + 1) * kBlock - lo));
+        ++b0;
+    }
+    if ((hi + 1) % kBlock) {
+        if (l1[b1]) std::memset(cube + b1 * kBlock, 0, size_t(hi + 1 - b1 * kBlock));
+        --b1;  // b1 was at least b0 + 1 here, so no wrap
+    }
+    for (uint64_t b = b0; b <= b1; ++b) {
+        if (!l1[b]) continue;
+        std::memset(cube + b * kBlock, 0, size_t(kBlock));
+        l1[b] = 0;
+    }
+}
+
 }  // namespace
 
 std::vector<VoxelBox> grow_boxes(Context& ctx, const VoxelGrid& grid, const BitVolume& solid,
@@ -260,24 +306,41 @@ std::vector<VoxelBox> grow_boxes(Context& ctx, const VoxelGrid& grid, const BitV
     std::vector<VoxelBox> grown;  // those of at least min_box_volume_m3, in grown order
     {
         const EmptySums sums = build_empty_sums(grid, solid);
-        std::vector<uint8_t> cube = build_seed_cubes(grid, solid);
-        std::array<uint64_t, kMaxSeedCube + 1> sizes{};
-        for (uint8_t c : cube) ++sizes[c];
-        // Upper bounds of the cube sizes in blocks of 64 voxels (l1) and of 64 blocks (l2). They only go
-        // stale upward (covering sets cube sizes to 0) and are made exact again when scanned.
+        const std::unique_ptr<uint8_t[]> cube = build_seed_cubes(grid, solid);
+        // Which cube sizes occur, and upper bounds of the cube sizes in blocks of 64 voxels (l1) and of 64
+        // blocks (l2). The bounds only go stale upward (covering sets cube sizes to 0) and are made exact
+        // again when scanned.
+        std::array<uint8_t, kMaxSeedCube + 1> sizes{};
         const uint64_t n1 = (n + kBlock - 1) / kBlock, n2 = (n1 + kBlock - 1) / kBlock;
         std::vector<uint8_t> l1(n1), l2(n2);
-        for (uint64_t b = 0; b < n1; ++b)
-            l1[b] = block_max(&cube[b * kBlock], std::min(kBlock, n - b * kBlock));
-        for (uint64_t g = 0; g < n2; ++g)
-            l2[g] = block_max(&l1[g * kBlock], std::min(kBlock, n1 - g * kBlock));
+        const bool parallel = n >= kParallelVoxels;
+#pragma omp parallel if (parallel)
+        {
+            std::array<uint8_t, kMaxSeedCube + 1> seen{};
+#pragma omp for schedule(static)
+            for (uint64_t b = 0; b < n1; ++b) {
+                const uint8_t* v = &cube[b * kBlock];
+                const uint64_t len = std::min(kBlock, n - b * kBlock);
+                uint8_t m = 0;
+                for (uint64_t i = 0; i < len; ++i) {
+                    seen[v[i]] = 1;
+                    m = std::max(m, v[i]);
+                }
+                l1[b] = m;
+            }
+#pragma omp critical(grow_boxes_sizes)
+            for (size_t k = 0; k < seen.size(); ++k) sizes[k] |= seen[k];
+#pragma omp for schedule(static)
+            for (uint64_t g = 0; g < n2; ++g)
+                l2[g] = block_max(&l1[g * kBlock], std::min(kBlock, n1 - g * kBlock));
+        }
 
         // 2. and 3. Growth from the seeds in order, until the stop rule.
         const uint64_t cap = uint64_t(kGrowFactor) * config.max_boxes;
         bool stop = false;
         ctx.progress_begin("boxes", 0, "boxes");
         for (int s = kMaxSeedCube; s >= 1 && !stop; --s) {
-            if (sizes[size_t(s)] == 0) continue;
+            if (!sizes[size_t(s)]) continue;
             for (uint64_t g = 0; g < n2 && !stop; ++g) {
                 if (l2[g] < s) continue;
                 const uint64_t b_end = std::min(n1, (g + 1) * kBlock);
@@ -291,8 +354,8 @@ std::vector<VoxelBox> grow_boxes(Context& ctx, const VoxelGrid& grid, const BitV
                         // Cover: no voxel of the box seeds again.
                         for (int z = box.lo.z; z <= box.hi.z; ++z) {
                             for (int y = box.lo.y; y <= box.hi.y; ++y) {
-                                std::memset(&cube[grid.index(box.lo.x, y, z)], 0,
-                                            size_t(box.hi.x - box.lo.x + 1));
+                                clear_cubes(cube.get(), l1.data(), grid.index(box.lo.x, y, z),
+                                            grid.index(box.hi.x, y, z));
                             }
                         }
                         if (volume_m3(grid, box.volume()) >= config.min_box_volume_m3) {
