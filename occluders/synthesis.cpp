@@ -243,47 +243,37 @@ void mark_boxes(const VoxelGrid& grid, const std::vector<VoxelBox>& boxes,
 
 // Boxes of the proven solid eroded by each epsilon of the ladder: a voxel stays when every voxel within k
 // (Chebyshev) is proven solid; voxels within k of the grid's border go (outside the grid is unknown).
-// The levels are independent, so big grids grow them on all threads at once, one level a thread (each
-// grow_boxes() then holds its own table and seed cubes, about 3.2 bytes a voxel); the boxes do not depend
-// on the thread count.
+// The levels run one after another, each on all threads (dilate() and grow_boxes() are parallel), so the
+// stage holds one level's table and seed cubes whatever the thread count; the boxes do not depend on it.
 std::vector<std::vector<Aabb>> shrunk_boxes(Context& ctx, const VoxelGrid& grid, const BitVolume& proven,
                                             const BoxConfig& bc, const std::vector<double>& epsilon_m) {
     const double voxel_m3 = double(grid.voxel_size_m) * grid.voxel_size_m * grid.voxel_size_m;
+    const int64_t words = int64_t(proven.words.size());
+    const bool parallel = words >= (int64_t(1) << 14);
     BitVolume not_proven;
-    not_proven.reset(grid.count());
-    for (size_t w = 0; w < proven.words.size(); ++w) not_proven.words[w] = ~proven.words[w];
+    not_proven.words.resize(proven.words.size());
+#pragma omp parallel for schedule(static) if (parallel)
+    for (int64_t w = 0; w < words; ++w) not_proven.words[size_t(w)] = ~proven.words[size_t(w)];
     BoxConfig sc = bc;
     sc.min_box_volume_m3 = 0.0;  // every shrunk box helps fusion
     sc.max_boxes = std::max<uint32_t>(bc.max_boxes, 1024);
-    const int levels = int(epsilon_m.size());
-    std::vector<std::vector<Aabb>> out(static_cast<size_t>(levels));
-    std::vector<std::string> lines(static_cast<size_t>(levels));
-    // grow_boxes()'s own progress and timer would interleave across levels: they go to a quiet context.
+    std::vector<std::vector<Aabb>> out(epsilon_m.size());
+    // grow_boxes()'s own progress and timer would repeat per level: they go to a quiet context.
     Context quiet(Context::Options{LogLevel::kWarning, true, nullptr});
-    const bool parallel = grid.count() >= (uint64_t(1) << 22);
-    std::exception_ptr failure;  // the first exception of a level (none may leave an OpenMP region)
-#pragma omp parallel for schedule(dynamic, 1) if (parallel)
-    for (int level = 0; level < levels; ++level) try {
-            const double eps = epsilon_m[size_t(level)];
-            const int k = std::max(1, int(std::ceil(eps / double(grid.voxel_size_m) - 1e-9)));
-            const BitVolume near_not = dilate(grid, not_proven, k);
-            BitVolume eroded;
-            eroded.reset(grid.count());
-            for (size_t w = 0; w < proven.words.size(); ++w)
-                eroded.words[w] = proven.words[w] & ~near_not.words[w];
-            clear_border(grid, eroded, k);
-            std::vector<Aabb>& level_boxes = out[size_t(level)];
-            for (const VoxelBox& vb : grow_boxes(quiet, grid, eroded, sc, nullptr))
-                level_boxes.push_back(box_bounds(grid, vb));
-            lines[size_t(level)] =
-                fmt::format("occluders shrunk by {} m ({} voxels): {} boxes of {:.0f} m3 of solid", eps, k,
-                            level_boxes.size(), double(eroded.count()) * voxel_m3);
-        } catch (...) {
-#pragma omp critical(shrunk_boxes_failure)
-            if (!failure) failure = std::current_exception();
-        }
-    if (failure) std::rethrow_exception(failure);
-    for (const std::string& line : lines) ctx.info(line);
+    for (size_t level = 0; level < epsilon_m.size(); ++level) {
+        const double eps = epsilon_m[level];
+        const int k = std::max(1, int(std::ceil(eps / double(grid.voxel_size_m) - 1e-9)));
+        BitVolume eroded = dilate(grid, not_proven, k);
+#pragma omp parallel for schedule(static) if (parallel)
+        for (int64_t w = 0; w < words; ++w)
+            eroded.words[size_t(w)] = proven.words[size_t(w)] & ~eroded.words[size_t(w)];
+        clear_border(grid, eroded, k);
+        std::vector<Aabb>& level_boxes = out[level];
+        for (const VoxelBox& vb : grow_boxes(quiet, grid, eroded, sc, nullptr))
+            level_boxes.push_back(box_bounds(grid, vb));
+        ctx.info(fmt::format("occluders shrunk by {} m ({} voxels): {} boxes of {:.0f} m3 of solid", eps, k,
+                             level_boxes.size(), double(eroded.count()) * voxel_m3));
+    }
     return out;
 }
 

@@ -6,6 +6,7 @@
 #include "voxels/voxels.h"
 
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include <vector>
 
@@ -251,6 +252,54 @@ TEST(Dilate, MatchesTheDefinitionOnRandomSets) {
             ASSERT_EQ(inner.get(i), in.get(i) && !border)
                 << c.x << "," << c.y << "," << c.z << " k " << radius;
         }
+    }
+}
+
+// On a grid big enough for the word loops to run on several threads (rows of 131 voxels, so the rows and
+// planes start at every offset in a word): the same bits at 1 and 3 threads, and those of a reference that
+// sets the (2r + 1)^3 cube around each set voxel of a sparse set.
+TEST(Dilate, BigGridsMatchASparseReferenceAtAnyThreadCount) {
+    VoxelGrid g;
+    g.voxel_size_m = 1.0f;
+    g.dims = glm::ivec3(131, 97, 103);
+    BitVolume in;
+    in.reset(g.count());
+    Rng rng(5, 3);
+    for (int k = 0; k < 400; ++k) in.set(rng.below(g.count()));
+    in.set(g.index(g.dims.x - 1, 5, 7));
+    in.set(g.index(0, g.dims.y - 1, g.dims.z - 1));
+    for (const int radius : {1, 4}) {
+        BitVolume want;
+        want.reset(g.count());
+        for (uint64_t i = 0; i < g.count(); ++i) {
+            if (!in.get(i)) continue;
+            const glm::ivec3 c = g.coords(i);
+            const glm::ivec3 lo = glm::max(c - radius, glm::ivec3(0)), hi = glm::min(c + radius, g.dims - 1);
+            for (int z = lo.z; z <= hi.z; ++z)
+                for (int y = lo.y; y <= hi.y; ++y)
+                    for (int x = lo.x; x <= hi.x; ++x) want.set(g.index(x, y, z));
+        }
+        const int threads = omp_get_max_threads();
+        omp_set_num_threads(1);
+        const BitVolume one = dilate(g, in, radius);
+        BitVolume one_inner = want;
+        clear_border(g, one_inner, radius);
+        omp_set_num_threads(3);
+        const BitVolume three = dilate(g, in, radius);
+        BitVolume three_inner = want;
+        clear_border(g, three_inner, radius);
+        omp_set_num_threads(threads);
+        EXPECT_TRUE(one.words == want.words) << "radius " << radius;
+        EXPECT_TRUE(three.words == want.words) << "radius " << radius;
+        EXPECT_TRUE(one_inner.words == three_inner.words) << "radius " << radius;
+        uint64_t inside = 0;
+        for (uint64_t i = 0; i < g.count(); ++i) {
+            const glm::ivec3 c = g.coords(i);
+            const bool border = glm::any(glm::lessThan(c, glm::ivec3(radius))) ||
+                                glm::any(glm::greaterThanEqual(c, g.dims - radius));
+            inside += want.get(i) && !border;
+        }
+        EXPECT_EQ(three_inner.count(), inside) << "radius " << radius;
     }
 }
 

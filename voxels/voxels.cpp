@@ -109,33 +109,32 @@ struct Voxelizer {
 
 namespace {
 
-// out |= in shifted by `by` bits along the linear index (positive: to higher indices), bits shifted past
-// either end dropped. Word-wise: the bits of word w land in words w + q and w + q + 1.
-void or_shifted(const BitVolume& in, int64_t by, BitVolume& out) {
-    const int64_t n = int64_t(in.words.size());
+// Word w of `in` shifted by `by` bits along the linear index (positive: to higher indices), bits shifted
+// past either end dropped: the bits of word w come from words w - q and w - q - 1 (or w + q, w + q + 1).
+uint64_t shifted_word(const uint64_t* src, int64_t n, int64_t w, int64_t by) {
     const int64_t q = (by >= 0 ? by : -by) >> 6;
     const int r = int((by >= 0 ? by : -by) & 63);
-    const uint64_t* src = in.words.data();
-    uint64_t* dst = out.words.data();
     if (by >= 0) {
-        for (int64_t w = n - 1; w >= q; --w) {
-            const uint64_t lo = src[w - q], below = w - q - 1 >= 0 ? src[w - q - 1] : 0;
-            dst[w] |= r == 0 ? lo : (lo << r) | (below >> (64 - r));
-        }
-    } else {
-        for (int64_t w = 0; w + q < n; ++w) {
-            const uint64_t hi = src[w + q], above = w + q + 1 < n ? src[w + q + 1] : 0;
-            dst[w] |= r == 0 ? hi : (hi >> r) | (above << (64 - r));
-        }
+        if (w < q) return 0;
+        const uint64_t lo = src[w - q], below = w - q - 1 >= 0 ? src[w - q - 1] : 0;
+        return r == 0 ? lo : (lo << r) | (below >> (64 - r));
     }
+    if (w + q >= n) return 0;
+    const uint64_t hi = src[w + q], above = w + q + 1 < n ? src[w + q + 1] : 0;
+    return r == 0 ? hi : (hi >> r) | (above << (64 - r));
 }
 
-// Sets bits [lo, hi) of the volume.
-void set_range(BitVolume& v, uint64_t lo, uint64_t hi) {
-    for (uint64_t i = lo; i < hi && (i & 63); ++i) v.set(i);
-    uint64_t i = std::max(lo, std::min(hi, (lo + 63) & ~uint64_t(63)));
-    for (; i + 64 <= hi; i += 64) v.words[i >> 6] = ~uint64_t(0);
-    for (; i < hi; ++i) v.set(i);
+// The bits of word w whose index i satisfies lo <= i mod period < hi (0 <= lo <= hi <= period).
+uint64_t periodic_mask(uint64_t w, uint64_t period, uint64_t lo, uint64_t hi) {
+    const uint64_t first = w * 64, end = first + 64;
+    uint64_t mask = 0;
+    for (uint64_t base = first - first % period; base < end; base += period) {
+        const uint64_t a = std::max(first, base + lo), b = std::min(end, base + hi);
+        if (a >= b) continue;
+        const uint64_t bits = b - a;  // 1..64
+        mask |= (bits == 64 ? ~uint64_t(0) : ((uint64_t(1) << bits) - 1)) << (a - first);
+    }
+    return mask;
 }
 
 }  // namespace
@@ -143,34 +142,38 @@ void set_range(BitVolume& v, uint64_t lo, uint64_t hi) {
 // Per axis, by doubling: a set grown by `reach` voxels along the axis, ORed with itself moved by up to
 // `reach` + 1 more voxels either way, is grown by twice that plus one (at most `radius`). A move along the
 // axis is a shift of the linear index by a multiple of the axis's stride; the bits that would cross the end
-// of their line (into the next row or plane) are masked off, so the result is exact.
+// of their line (into the next row or plane) are masked off, so the result is exact. Each word of a move
+// depends only on the volume before it (double-buffered), so the words run in parallel and the result does
+// not depend on the thread count.
 BitVolume dilate(const VoxelGrid& g, const BitVolume& in, int radius) {
     BitVolume a = in;
     if (radius <= 0) return a;
     const uint64_t count = g.count();
+    const int64_t words = int64_t(a.words.size());
     const int64_t stride[3] = {1, int64_t(g.dims.x), int64_t(g.dims.x) * int64_t(g.dims.y)};
-    BitVolume moved, keep;
+    BitVolume b;
+    b.words.resize(a.words.size());
     for (int axis = 0; axis < 3; ++axis) {
         const int64_t n = g.dims[axis];
-        const uint64_t line_period = uint64_t(stride[axis] * n);  // a block of whole lines along the axis
+        const uint64_t period = uint64_t(stride[axis] * n);  // a block of whole lines along the axis
         int reach = 0;
         while (reach < radius) {
             const int step = std::min(reach + 1, radius - reach);
             for (const int dir : {1, -1}) {
-                moved.reset(count);
-                or_shifted(a, dir * step * stride[axis], moved);
-                if (axis < 2) {
-                    // Keep only the voxels whose coordinate on the axis is >= step (moved up) or
-                    // <= n - 1 - step (moved down): the rest came from another line.
-                    keep.reset(count);
-                    const uint64_t band = uint64_t(stride[axis]) * uint64_t(std::max<int64_t>(0, n - step));
-                    for (uint64_t base = 0; base < count; base += line_period) {
-                        const uint64_t lo = dir > 0 ? base + uint64_t(stride[axis]) * uint64_t(step) : base;
-                        set_range(keep, lo, std::min(count, lo + band));
-                    }
-                    for (size_t w = 0; w < moved.words.size(); ++w) moved.words[w] &= keep.words[w];
+                // Moved up, keep the voxels whose coordinate on the axis is >= step; moved down, those
+                // <= n - 1 - step: the rest came from another line. Along z nothing wraps.
+                const uint64_t s = uint64_t(stride[axis]), kept = uint64_t(std::max<int64_t>(0, n - step));
+                const uint64_t lo = dir > 0 ? s * uint64_t(step) : 0, hi = lo + s * kept;
+                const int64_t by = dir * step * stride[axis];
+                const uint64_t* src = a.words.data();
+                uint64_t* dst = b.words.data();
+#pragma omp parallel for schedule(static) if (words >= (int64_t(1) << 14))
+                for (int64_t w = 0; w < words; ++w) {
+                    uint64_t moved = shifted_word(src, words, w, by);
+                    if (axis < 2) moved &= periodic_mask(uint64_t(w), period, lo, hi);
+                    dst[w] = src[w] | moved;
                 }
-                for (size_t w = 0; w < a.words.size(); ++w) a.words[w] |= moved.words[w];
+                std::swap(a.words, b.words);
             }
             reach += step;
         }
@@ -181,16 +184,23 @@ BitVolume dilate(const VoxelGrid& g, const BitVolume& in, int radius) {
 
 void clear_border(const VoxelGrid& g, BitVolume& v, int k) {
     if (k <= 0) return;
-    BitVolume keep;
-    keep.reset(g.count());
-    if (2 * k < g.dims.x && 2 * k < g.dims.y && 2 * k < g.dims.z) {
-        for (int z = k; z < g.dims.z - k; ++z)
-            for (int y = k; y < g.dims.y - k; ++y) {
-                const uint64_t row = g.index(0, y, z);
-                set_range(keep, row + uint64_t(k), row + uint64_t(g.dims.x - k));
-            }
+    // Per axis, the kept coordinates [k, dims - k) as a range of the index modulo the axis's period.
+    uint64_t period[3], lo[3], hi[3];
+    uint64_t stride = 1;
+    for (int axis = 0; axis < 3; ++axis) {
+        const int64_t n = g.dims[axis];
+        period[axis] = stride * uint64_t(std::max<int64_t>(n, 1));
+        lo[axis] = stride * uint64_t(std::min<int64_t>(k, n));
+        hi[axis] = std::max(lo[axis], stride * uint64_t(std::max<int64_t>(0, n - k)));
+        stride = period[axis];
     }
-    for (size_t w = 0; w < v.words.size(); ++w) v.words[w] &= keep.words[w];
+    const int64_t words = int64_t(v.words.size());
+#pragma omp parallel for schedule(static) if (words >= (int64_t(1) << 14))
+    for (int64_t w = 0; w < words; ++w) {
+        uint64_t keep = ~uint64_t(0);
+        for (int axis = 0; axis < 3; ++axis) keep &= periodic_mask(uint64_t(w), period[axis], lo[axis], hi[axis]);
+        v.words[size_t(w)] &= keep;
+    }
 }
 
 void voxelize_opaque(Context& ctx, const World& world, const VoxelGrid& grid, BitVolume& touched,
