@@ -26,14 +26,17 @@ checkpoint mode (the default) bakes WORLD three ways with the same options:
   W = serial + parallel / T and C = serial + parallel, parallel = (C - W) T / (T - 1) (Amdahl's law from one
   run); a report without them, or of one thread, takes every stage as wholly parallel, which favours many
   cores. The PVS CPU-seconds are its wall time times the ranks times their threads (dealing keeps them
-  busy; the phase ends wait, so this bounds it from above). --scale CELLS,COST projects a bake of
+  busy; the phase ends wait, so this bounds it from above). --one-thread REPORT1, the report of the same
+  bake at one thread, fits each stage from the two wall times instead (W1 = serial + parallel, W = serial +
+  parallel / T): CPU seconds count threads that spin-wait at OpenMP's joins as busy, which favours many
+  cores, and two wall times do not. --scale CELLS,COST projects a bake of
   CELLS times as many cells, each COST times as costly (e.g. another play height, from two bakes of a
   smaller world); the stages before the PVS are kept as measured.
 
 usage: bench/bake_jobs.py PVSBAKE WORLD [--interval S] [--kill-at F] [--ranks R [--threads T]] [--out DIR]
                           [-- BAKE OPTIONS...]
        bench/bake_jobs.py --project REPORT --ranks R --threads T [--cores 2,16,64] [--node-cores N]
-                          [--scale CELLS,COST]
+                          [--one-thread REPORT1] [--scale CELLS,COST]
 """
 import argparse
 import json
@@ -116,10 +119,20 @@ def amdahl(wall, cpu, threads):
     return max(0.0, wall - parallel / threads), parallel
 
 
+def amdahl_two(wall_1, wall, threads):
+    """A stage's (serial, parallel) seconds of one thread from its wall seconds at 1 and at `threads`."""
+    parallel = max(0.0, (wall_1 - wall) * threads / (threads - 1)) if threads > 1 else wall_1
+    return max(0.0, wall_1 - parallel), min(parallel, wall_1)
+
+
 def project(a):
     with open(a.project) as f:
         j = json.load(f)
     timings = j["run"]["timings_s"]
+    timings_1 = None
+    if a.one_thread:
+        with open(a.one_thread) as f:
+            timings_1 = json.load(f)["run"]["timings_s"]
     figures = j["run"].get("figures", {})
     stages = list(timings)
     if "conservative_pvs" not in stages:
@@ -131,7 +144,10 @@ def project(a):
     for s in stages:
         if s in skip:
             continue
-        serial, parallel = amdahl(timings[s], figures.get("cpu_seconds_" + s), threads)
+        if timings_1 is not None and s in timings_1:
+            serial, parallel = amdahl_two(timings_1[s], timings[s], threads)
+        else:
+            serial, parallel = amdahl(timings[s], figures.get("cpu_seconds_" + s), threads)
         parts[s] = {"wall_s": timings[s], "serial_s": serial, "parallel_s": parallel,
                     "after_pvs": stages.index(s) > at}
     before = sum(timings[s] for s in parts if not parts[s]["after_pvs"])
@@ -143,7 +159,8 @@ def project(a):
     out = {"report": a.project, "cells": cells, "measured_ranks": max(1, a.ranks),
            "measured_threads_per_rank": threads, "stages_before_pvs_s": before,
            "pvs_s": timings["conservative_pvs"], "pvs_cpu_s": cpu, "pvs_cpu_s_per_cell": cpu / cells,
-           "after_pvs_s": after, "stages": parts, "amdahl": any("cpu_seconds_" + s in figures for s in parts),
+           "after_pvs_s": after, "stages": parts, "amdahl": timings_1 is not None or any("cpu_seconds_" + s in figures for s in parts),
+           "fit": "two wall times" if timings_1 is not None else "CPU seconds",
            "scale": {"cells": cells_scale, "cost_per_cell": cost_scale},
            "projected_cells": cells * cells_scale, "node_cores": a.node_cores, "projection": {}}
     for p in (int(x) for x in a.cores.split(",")):
@@ -167,6 +184,7 @@ def main():
         ap.add_argument("--cores", default="2,16,64")
         ap.add_argument("--node-cores", type=int, default=16)
         ap.add_argument("--scale", default=None, help="CELLS,COST: more cells, each costlier")
+        ap.add_argument("--one-thread", default=None, help="the same bake's report at one thread")
         print(json.dumps(project(ap.parse_args()), indent=2))
         return
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)

@@ -9,11 +9,16 @@ import tempfile
 script = sys.argv[1]
 
 
-def project(report, cores="2,16"):
+def project(report, cores="2,16", one_thread=None):
     with tempfile.NamedTemporaryFile("w", suffix=".json", delete=False) as f:
         json.dump(report, f)
+    extra = []
+    if one_thread is not None:
+        with tempfile.NamedTemporaryFile("w", suffix=".json", delete=False) as g:
+            json.dump(one_thread, g)
+        extra = ["--one-thread", g.name]
     out = subprocess.run([sys.executable, script, "--project", f.name, "--ranks", "1", "--threads", "2",
-                          "--cores", cores], capture_output=True, text=True, check=True)
+                          "--cores", cores] + extra, capture_output=True, text=True, check=True)
     return json.loads(out.stdout)
 
 
@@ -41,4 +46,17 @@ close(o["projection"]["16"]["after_pvs_s"], 2.0 / 16)
 o = project({"figures": {"cells": 10}, "run": {"timings_s": timings, "figures": {}}})
 assert not o["amdahl"]
 close(o["projection"]["16"]["stages_before_pvs_s"], 12.0 * 2 / 16)
+# From two wall times (1 and 2 threads), whatever the CPU seconds say (threads spinning at joins count as
+# busy): occluders 16 s alone and 10 s on two threads: parallel 12, serial 4. view_volume the same at both:
+# serial. A stage the one-thread report lacks falls back to the CPU seconds.
+timings_1 = dict(timings, occluders=16.0, view_volume=2.0)
+del timings_1["occluder_ranking"]
+o = project({"figures": {"cells": 10}, "run": {"timings_s": timings, "figures": figures}},
+            one_thread={"run": {"timings_s": timings_1}})
+assert o["fit"] == "two wall times"
+close(o["stages"]["occluders"]["serial_s"], 4.0)
+close(o["stages"]["occluders"]["parallel_s"], 12.0)
+close(o["stages"]["view_volume"]["serial_s"], 2.0)
+close(o["stages"]["occluder_ranking"]["parallel_s"], 2.0)
+close(o["projection"]["16"]["stages_before_pvs_s"], 2.0 + 4.0 + 12.0 / 16)
 print("ok")
