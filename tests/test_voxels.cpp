@@ -370,6 +370,57 @@ TEST(Sight, RunsDownALongTunnelBothWaysAndThroughACorner) {
     }
 }
 
+// The sweep's definition, a voxel at a time: per octant (sx, sy, sz), a voxel is reached when it is open
+// and a source, or open and one of its 7 predecessors (minus a nonzero combination of sx, sy, sz steps)
+// is reached; sight_reach is the union over the octants. Against it, at 1 and 3 threads (the octants run
+// on several threads and OR their rows into one volume), on grids whose rows end at odd offsets.
+TEST(Sight, EqualsAVoxelByVoxelSweepAtAnyThreadCount) {
+    Rng rng(23, 5);
+    for (int trial = 0; trial < 4; ++trial) {
+        VoxelGrid g;
+        g.voxel_size_m = 1.0f;
+        g.dims = {37 + 41 * trial, 9 + trial, 7 + 2 * trial};
+        BitVolume blocked, sources;
+        blocked.reset(g.count());
+        sources.reset(g.count());
+        for (uint64_t i = 0; i < g.count(); ++i) {
+            if (rng.uniform() < 0.3f) blocked.set(i);
+            if (rng.uniform() < 0.002f) sources.set(i);
+        }
+        std::vector<uint8_t> want(g.count(), 0);
+        for (int octant = 0; octant < 8; ++octant) {
+            const glm::ivec3 st(octant & 1 ? -1 : 1, octant & 2 ? -1 : 1, octant & 4 ? -1 : 1);
+            std::vector<uint8_t> reach(g.count(), 0);
+            for (int kz = 0; kz < g.dims.z; ++kz)
+                for (int ky = 0; ky < g.dims.y; ++ky)
+                    for (int kx = 0; kx < g.dims.x; ++kx) {
+                        const glm::ivec3 c(st.x > 0 ? kx : g.dims.x - 1 - kx, st.y > 0 ? ky : g.dims.y - 1 - ky,
+                                           st.z > 0 ? kz : g.dims.z - 1 - kz);
+                        const uint64_t i = g.index(c.x, c.y, c.z);
+                        if (blocked.get(i)) continue;
+                        bool r = sources.get(i);
+                        for (int e = 1; e < 8 && !r; ++e) {
+                            const glm::ivec3 p = c - glm::ivec3(e & 1 ? st.x : 0, e & 2 ? st.y : 0, e & 4 ? st.z : 0);
+                            r = g.inside(p) && reach[g.index(p.x, p.y, p.z)];
+                        }
+                        reach[i] = r;
+                        want[i] |= r;
+                    }
+        }
+        const int threads = omp_get_max_threads();
+        for (const int t : {1, 3}) {
+            omp_set_num_threads(t);
+            const BitVolume seen = sight_reach(g, blocked, sources);
+            omp_set_num_threads(threads);
+            uint64_t wrong = 0;
+            for (uint64_t i = 0; i < g.count(); ++i) wrong += seen.get(i) != bool(want[i]);
+            EXPECT_EQ(wrong, 0u) << "trial " << trial << ", " << t << " threads";
+            for (uint64_t i = g.count(); i < seen.words.size() * 64; ++i)
+                ASSERT_FALSE(seen.get(i)) << "a bit past the last voxel, trial " << trial;
+        }
+    }
+}
+
 // Property: every voxel a straight ray from a source voxel passes before it enters a blocked voxel is in
 // sight_reach (random grids, blocked voxels and rays; rays marched in steps of a tenth of a voxel).
 TEST(Sight, HoldsEveryVoxelARayReaches) {

@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <atomic>
 #include <limits>
 
 namespace pvs {
@@ -143,18 +144,45 @@ struct RowBits {
     }
 };
 
+// The 64 bits of `v` from bit `pos` on (bits past the end read 0).
+uint64_t bits_at(const BitVolume& v, uint64_t pos) {
+    const uint64_t w = pos >> 6, r = pos & 63;
+    const uint64_t lo = w < v.words.size() ? v.words[w] : 0;
+    if (r == 0) return lo;
+    const uint64_t hi = w + 1 < v.words.size() ? v.words[w + 1] : 0;
+    return (lo >> r) | (hi << (64 - r));
+}
+
+// Each row a word at a time; rows are independent, so they run in parallel.
 RowBits to_rows(const VoxelGrid& g, const BitVolume& v, bool invert) {
     RowBits r;
-    r.words_per_row = (g.dims.x + 63) / 64;
-    r.w.assign(size_t(g.dims.y) * size_t(g.dims.z) * size_t(r.words_per_row), 0);
-    for (int z = 0; z < g.dims.z; ++z)
-        for (int y = 0; y < g.dims.y; ++y) {
-            uint64_t* out = r.row(g, y, z);
-            const uint64_t base = g.index(0, y, z);
-            for (int x = 0; x < g.dims.x; ++x)
-                if (v.get(base + uint64_t(x)) != invert) out[x >> 6] |= uint64_t(1) << (x & 63);
+    const int W = (g.dims.x + 63) / 64;
+    r.words_per_row = W;
+    r.w.resize(size_t(g.dims.y) * size_t(g.dims.z) * size_t(W));
+    const int tail = g.dims.x % 64;
+    const int64_t rows = int64_t(g.dims.y) * g.dims.z;
+#pragma omp parallel for schedule(static)
+    for (int64_t k = 0; k < rows; ++k) {
+        const int y = int(k % g.dims.y), z = int(k / g.dims.y);
+        uint64_t* out = r.row(g, y, z);
+        const uint64_t base = g.index(0, y, z);
+        for (int w = 0; w < W; ++w) {
+            const uint64_t bits = bits_at(v, base + uint64_t(w) * 64);
+            out[w] = invert ? ~bits : bits;
         }
+        if (tail) out[W - 1] &= (uint64_t(1) << tail) - 1;
+    }
     return r;
+}
+
+// ORs `bits` into `v` at bit `pos` (within v's words), atomically: a row's first and last words may be
+// another row's too.
+void or_bits_at(BitVolume& v, uint64_t pos, uint64_t bits) {
+    if (!bits) return;
+    const uint64_t w = pos >> 6, r = pos & 63;
+    std::atomic_ref<uint64_t>(v.words[w]).fetch_or(bits << r, std::memory_order_relaxed);
+    if (r && (bits >> (64 - r)))
+        std::atomic_ref<uint64_t>(v.words[w + 1]).fetch_or(bits >> (64 - r), std::memory_order_relaxed);
 }
 
 // Bits of `seed` (within `open`) spread along x through runs of `open`, upwards (x increasing) when
@@ -191,23 +219,24 @@ void fill_row(const uint64_t* seed, const uint64_t* open, uint64_t* out, int wor
 BitVolume sight_reach(const VoxelGrid& g, const BitVolume& blocked, const BitVolume& sources) {
     const RowBits open = to_rows(g, blocked, true), src = to_rows(g, sources, false);
     const int W = open.words_per_row;
+    const size_t plane_words = size_t(g.dims.y) * size_t(W);
+    // What any octant reaches, ORed in as each row is done (atomically: octants run on several threads).
     RowBits seen;
     seen.words_per_row = W;
     seen.w.assign(open.w.size(), 0);
 #pragma omp parallel
     {
-        RowBits reach;
-        reach.words_per_row = W;
-        reach.w.assign(open.w.size(), 0);
-        RowBits mine;
-        mine.words_per_row = W;
-        mine.w.assign(open.w.size(), 0);
+        // A sweep reads only the plane before the current one: two planes a thread.
+        std::vector<uint64_t> planes(2 * plane_words);
         std::vector<uint64_t> in(static_cast<size_t>(W)), pred(static_cast<size_t>(W));
 #pragma omp for schedule(dynamic, 1)
         for (int octant = 0; octant < 8; ++octant) {
             const int sx = octant & 1 ? -1 : 1, sy = octant & 2 ? -1 : 1, sz = octant & 4 ? -1 : 1;
             for (int kz = 0; kz < g.dims.z; ++kz) {
                 const int z = sz > 0 ? kz : g.dims.z - 1 - kz;
+                uint64_t* current = planes.data() + size_t(kz & 1) * plane_words;
+                const uint64_t* previous = planes.data() + size_t((kz + 1) & 1) * plane_words;
+                const auto row_of = [&](const uint64_t* plane, int y) { return plane + size_t(y) * size_t(W); };
                 for (int ky = 0; ky < g.dims.y; ++ky) {
                     const int y = sy > 0 ? ky : g.dims.y - 1 - ky;
                     // Steps into (x, y, z) from the previous row and plane: (y - sy), (z - sz) or both.
@@ -216,9 +245,9 @@ BitVolume sight_reach(const VoxelGrid& g, const BitVolume& blocked, const BitVol
                     auto add = [&](const uint64_t* r) {
                         for (int w = 0; w < W; ++w) pred[size_t(w)] |= r[w];
                     };
-                    if (has_y) add(reach.row(g, y - sy, z));
-                    if (has_z) add(reach.row(g, y, z - sz));
-                    if (has_y && has_z) add(reach.row(g, y - sy, z - sz));
+                    if (has_y) add(row_of(current, y - sy));
+                    if (has_z) add(row_of(previous, y));
+                    if (has_y && has_z) add(row_of(previous, y - sy));
                     // ... with or without a step along x (edge and corner steps), then along x in the row.
                     const uint64_t* s = src.row(g, y, z);
                     for (int w = 0; w < W; ++w) {
@@ -228,25 +257,32 @@ BitVolume sight_reach(const VoxelGrid& g, const BitVolume& blocked, const BitVol
                                                      : (p >> 1) | (w + 1 < W ? pred[size_t(w + 1)] << 63 : 0);
                         in[size_t(w)] = s[w] | p | shifted;
                     }
-                    uint64_t* out = reach.row(g, y, z);
+                    uint64_t* out = current + size_t(y) * size_t(W);
                     fill_row(in.data(), open.row(g, y, z), out, W, sx > 0);
-                    uint64_t* m = mine.row(g, y, z);
-                    for (int w = 0; w < W; ++w) m[w] |= out[w];
+                    uint64_t* m = seen.row(g, y, z);
+                    for (int w = 0; w < W; ++w) {
+                        std::atomic_ref<uint64_t> word(m[w]);
+                        if (out[w] & ~word.load(std::memory_order_relaxed))
+                            word.fetch_or(out[w], std::memory_order_relaxed);
+                    }
                 }
             }
         }
-#pragma omp critical
-        for (size_t i = 0; i < seen.w.size(); ++i) seen.w[i] |= mine.w[i];
     }
     BitVolume out;
     out.reset(g.count());
-    for (int z = 0; z < g.dims.z; ++z)
-        for (int y = 0; y < g.dims.y; ++y) {
-            const uint64_t* r = seen.row(g, y, z);
-            const uint64_t base = g.index(0, y, z);
-            for (int x = 0; x < g.dims.x; ++x)
-                if ((r[x >> 6] >> (x & 63)) & 1u) out.set(base + uint64_t(x));
+    const int64_t rows = int64_t(g.dims.y) * g.dims.z;
+    const int tail = g.dims.x % 64;
+#pragma omp parallel for schedule(static)
+    for (int64_t k = 0; k < rows; ++k) {
+        const int y = int(k % g.dims.y), z = int(k / g.dims.y);
+        const uint64_t* r = seen.row(g, y, z);
+        const uint64_t base = g.index(0, y, z);
+        for (int w = 0; w < W; ++w) {
+            const uint64_t bits = w + 1 == W && tail ? r[w] & ((uint64_t(1) << tail) - 1) : r[w];
+            or_bits_at(out, base + uint64_t(w) * 64, bits);
         }
+    }
     return out;
 }
 
