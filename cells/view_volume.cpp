@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <limits>
 
 namespace pvs {
 
@@ -87,6 +88,8 @@ ViewVolume build_view_volume(Context& ctx, const ViewVolumeConfig& config, const
     if (play) {
         band.reset(grid.count());
         const int reach = int(std::floor(config.play_height_m / grid.voxel_size_m));
+        // Columns are independent; two slices may share a word of the band, so bits are set atomically.
+#pragma omp parallel for schedule(static)
         for (int z = 0; z < grid.dims.z; ++z)
             for (int x = 0; x < grid.dims.x; ++x) {
                 int last_floor = -1 << 30;
@@ -97,7 +100,7 @@ ViewVolume build_view_volume(Context& ctx, const ViewVolumeConfig& config, const
                     } else if (touched.get(i)) {
                         last_floor = -1 << 30;
                     } else if (y - last_floor <= reach) {
-                        band.set(i);
+                        band.set_atomic(i);
                     }
                 }
             }
@@ -160,8 +163,32 @@ ViewVolume build_view_volume(Context& ctx, const ViewVolumeConfig& config, const
     }
     vv.eye_volume_m3 = double(n_eyes) * voxel_m3;
     vv.view_volume_m3 = double(n_view) * voxel_m3;
-    for (uint64_t i = 0; i < grid.count(); ++i) {
-        if (view.get(i)) vv.view_bounds.extend(grid.voxel_box(grid.coords(i)));
+    // The view's bounds: the least and greatest voxel coordinates of its set bits, a word at a time over
+    // all threads (min and max do not depend on the order).
+    {
+        glm::ivec3 lo(std::numeric_limits<int>::max()), hi(std::numeric_limits<int>::min());
+        const int64_t words = int64_t(view.words.size());
+#pragma omp parallel
+        {
+            glm::ivec3 my_lo = lo, my_hi = hi;
+#pragma omp for schedule(static)
+            for (int64_t w = 0; w < words; ++w) {
+                for (uint64_t bits = view.words[size_t(w)]; bits; bits &= bits - 1) {
+                    const glm::ivec3 c = grid.coords(uint64_t(w) * 64 + uint64_t(__builtin_ctzll(bits)));
+                    my_lo = glm::min(my_lo, c);
+                    my_hi = glm::max(my_hi, c);
+                }
+            }
+#pragma omp critical(view_bounds)
+            {
+                lo = glm::min(lo, my_lo);
+                hi = glm::max(hi, my_hi);
+            }
+        }
+        if (lo.x <= hi.x) {  // not empty (n_view > 0 here, so always)
+            vv.view_bounds.extend(grid.voxel_box(lo));
+            vv.view_bounds.extend(grid.voxel_box(hi));
+        }
     }
     vv.eyes = to_mask(grid, std::move(eyes));
     vv.view = to_mask(grid, std::move(view));

@@ -33,18 +33,30 @@ float exit_distance(glm::vec3 o, glm::vec3 d, const Aabb& b) {
 // Eye points for the check, spread over the eye mask's voxels (or, with none, over free voxels of the grid).
 std::vector<glm::vec3> check_eyes(const VoxelMask& eye_mask, const VoxelGrid& grid, const BitVolume& blocked,
                                   uint32_t count, uint64_t seed) {
-    std::vector<uint64_t> candidates;
-    for (uint64_t i = 0; i < grid.count(); ++i) {
-        const bool ok = !eye_mask.empty() ? eye_mask.get(i) : !blocked.get(i);
-        if (ok) candidates.push_back(i);
-    }
+    // The candidates are the set bits of the eye mask (or the free voxels), in index order: counted per
+    // word, and the k-th found by a binary search over the running counts and a select in its word.
+    const uint64_t count_voxels = grid.count();
+    const size_t words = size_t((count_voxels + 63) / 64);
+    const auto word = [&](size_t w) {
+        uint64_t bits = !eye_mask.empty() ? eye_mask.bits[w] : ~blocked.words[w];
+        if (w + 1 == words && count_voxels % 64) bits &= (uint64_t(1) << (count_voxels % 64)) - 1;
+        return bits;
+    };
+    std::vector<uint64_t> before(words + 1, 0);  // candidates in the words before each
+    for (size_t w = 0; w < words; ++w) before[w + 1] = before[w] + uint64_t(__builtin_popcountll(word(w)));
+    const auto candidate = [&](uint64_t r) {
+        const size_t w = size_t(std::upper_bound(before.begin(), before.end(), r) - before.begin()) - 1;
+        uint64_t bits = word(w);
+        for (uint64_t k = before[w]; k < r; ++k) bits &= bits - 1;
+        return uint64_t(w) * 64 + uint64_t(__builtin_ctzll(bits));
+    };
     std::vector<glm::vec3> eyes;
-    if (candidates.empty()) return eyes;
+    const uint64_t n = before[words];
+    if (n == 0) return eyes;
     Rng rng(seed, 0x434845434bULL);
-    const uint64_t n = candidates.size();
     for (uint32_t k = 0; k < count; ++k) {
         const uint64_t a = uint64_t(k) * n / count, b = std::max(a + 1, uint64_t(k + 1) * n / count);
-        const uint64_t i = candidates[std::min<uint64_t>(n - 1, a + uint64_t(rng.uniform() * float(b - a)))];
+        const uint64_t i = candidate(std::min<uint64_t>(n - 1, a + uint64_t(rng.uniform() * float(b - a))));
         eyes.push_back(grid.voxel_center(grid.coords(i)) +
                        (glm::vec3(rng.uniform(), rng.uniform(), rng.uniform()) - 0.5f) * grid.voxel_size_m);
     }
@@ -65,7 +77,8 @@ void carve_seen_solid(Context& ctx, const OccluderConfig& config, uint32_t probe
     ScopedTimer timer(ctx, "sight_probe");
     const std::vector<glm::vec3> eyes =
         check_eyes(eye_mask, grid, touched, probe_eyes, config.check_seed ^ 0x5052);
-    std::vector<uint8_t> seen(grid.count(), 0);
+    BitVolume seen;  // solid voxels a probe ray passed
+    seen.reset(grid.count());
     uint64_t into_solid = 0, escaped = 0, narrow = 0;
     const float min_width_m = float(least_width_m(config));
     const float step = grid.voxel_size_m;  // a corner a step skips is covered by the 26-neighbour carving
@@ -103,28 +116,22 @@ void carve_seen_solid(Context& ctx, const OccluderConfig& config, uint32_t probe
                         ++narrow;
                         break;
                     }
-                    seen[i] = 1;  // a benign race: every writer writes 1
+                    seen.set_atomic(i);
                     hit_solid = true;
                 }
                 into_solid += hit_solid;
             }
         }
     }
+    // Carve each seen voxel and its 26 neighbours: the seen set dilated by one voxel, a word at a time.
+    const BitVolume carve = dilate(grid, seen, 1);
     uint64_t carved = 0;
-    for (uint64_t i = 0; i < grid.count(); ++i) {
-        if (!seen[i]) continue;
-        const glm::ivec3 c = grid.coords(i);
-        for (int dz = -1; dz <= 1; ++dz)
-            for (int dy = -1; dy <= 1; ++dy)
-                for (int dx = -1; dx <= 1; ++dx) {
-                    const glm::ivec3 n = c + glm::ivec3(dx, dy, dz);
-                    if (!grid.inside(n)) continue;
-                    const uint64_t j = grid.index(n.x, n.y, n.z);
-                    if (solid.solid.get(j)) {
-                        solid.solid.clear(j);
-                        ++carved;
-                    }
-                }
+    const int64_t words = int64_t(carve.words.size());
+#pragma omp parallel for schedule(static) reduction(+ : carved)
+    for (int64_t w = 0; w < words; ++w) {
+        const uint64_t gone = solid.solid.words[size_t(w)] & carve.words[size_t(w)];
+        carved += uint64_t(__builtin_popcountll(gone));
+        solid.solid.words[size_t(w)] &= ~gone;
     }
     figures.probe_rays = uint64_t(eyes.size()) * config.probe_rays_per_eye;
     figures.probe_rays_into_solid = into_solid;
