@@ -256,6 +256,97 @@ void set_bits(BitVolume& bits, uint64_t lo, uint64_t hi) {
     for (uint64_t w = w0 + 1; w < w1; ++w) bits.words[w] = ~uint64_t(0);
 }
 
+// The voxels of a and b both hold.
+VoxelBox intersection(const VoxelBox& a, const VoxelBox& b) {
+    return VoxelBox{glm::max(a.lo, b.lo), glm::min(a.hi, b.hi)};
+}
+
+// Boxes filed by the cells of a coarse grid (at most kBucketsPerAxis per axis) they meet, to find the one
+// sharing most voxels with a box without testing them all.
+constexpr int kBucketsPerAxis = 16;
+class BoxBuckets {
+public:
+    explicit BoxBuckets(glm::ivec3 dims)
+        : size_(glm::max((dims + kBucketsPerAxis - 1) / kBucketsPerAxis, glm::ivec3(1))),
+          cells_(size_t(kBucketsPerAxis) * kBucketsPerAxis * kBucketsPerAxis) {}
+
+    void add(const VoxelBox& box) {
+        const uint32_t id = uint32_t(boxes_.size());
+        boxes_.push_back(box);
+        seen_.push_back(0);
+        visit(box, [&](std::vector<uint32_t>& cell) { cell.push_back(id); });
+    }
+
+    // The filed box sharing most voxels with `box` (nullptr when none shares any; the first filed of
+    // equals, so the answer does not depend on the filing).
+    const VoxelBox* most_overlapping(const VoxelBox& box, uint64_t& shared) {
+        ++stamp_;
+        shared = 0;
+        uint32_t best = UINT32_MAX;
+        visit(box, [&](std::vector<uint32_t>& cell) {
+            for (const uint32_t id : cell) {
+                if (seen_[id] == stamp_) continue;
+                seen_[id] = stamp_;
+                const uint64_t v = intersection(box, boxes_[id]).volume();
+                if (v > shared || (v == shared && v > 0 && id < best)) {
+                    shared = v;
+                    best = id;
+                }
+            }
+        });
+        return best == UINT32_MAX ? nullptr : &boxes_[best];
+    }
+
+private:
+    template <class F>
+    void visit(const VoxelBox& box, F&& f) {
+        const glm::ivec3 lo = glm::clamp(box.lo / size_, glm::ivec3(0), glm::ivec3(kBucketsPerAxis - 1));
+        const glm::ivec3 hi = glm::clamp(box.hi / size_, glm::ivec3(0), glm::ivec3(kBucketsPerAxis - 1));
+        for (int z = lo.z; z <= hi.z; ++z)
+            for (int y = lo.y; y <= hi.y; ++y)
+                for (int x = lo.x; x <= hi.x; ++x)
+                    f(cells_[size_t(x) + size_t(kBucketsPerAxis) * (size_t(y) + size_t(kBucketsPerAxis) * z)]);
+    }
+
+    glm::ivec3 size_;
+    std::vector<std::vector<uint32_t>> cells_;
+    std::vector<VoxelBox> boxes_;
+    std::vector<uint32_t> seen_;
+    uint32_t stamp_ = 0;
+};
+
+// Rows along x of a box: what walking it row by row costs, more than its voxels do.
+uint64_t rows_of(const VoxelBox& b) {
+    return b.volume() ? uint64_t(b.hi.y - b.lo.y + 1) * uint64_t(b.hi.z - b.lo.z + 1) : 0;
+}
+
+// `box` less `cut` as at most six disjoint boxes (slabs below and above along z, then y, then x), when they
+// have fewer rows along x than the box; else the whole box. Returns how many.
+int box_minus(const VoxelBox& box, const VoxelBox* cut, std::array<VoxelBox, 6>& out) {
+    out[0] = box;
+    if (!cut) return 1;
+    const VoxelBox in = intersection(box, *cut);
+    int n = 0;
+    VoxelBox rest = box;
+    for (int a = 2; a >= 0; --a) {
+        if (rest.lo[a] < in.lo[a]) {
+            out[size_t(n)] = rest;
+            out[size_t(n++)].hi[a] = in.lo[a] - 1;
+        }
+        if (rest.hi[a] > in.hi[a]) {
+            out[size_t(n)] = rest;
+            out[size_t(n++)].lo[a] = in.hi[a] + 1;
+        }
+        rest.lo[a] = in.lo[a];
+        rest.hi[a] = in.hi[a];
+    }
+    uint64_t rows = 0;
+    for (int p = 0; p < n; ++p) rows += rows_of(out[size_t(p)]);
+    if (rows < rows_of(box)) return n;
+    out[0] = box;
+    return 1;
+}
+
 uint8_t block_max(const uint8_t* v, uint64_t n) {
     uint8_t m = 0;
     for (uint64_t i = 0; i < n; ++i) m = std::max(m, v[i]);
@@ -338,6 +429,7 @@ std::vector<VoxelBox> grow_boxes(Context& ctx, const VoxelGrid& grid, const BitV
         // 2. and 3. Growth from the seeds in order, until the stop rule.
         const uint64_t cap = uint64_t(kGrowFactor) * config.max_boxes;
         bool stop = false;
+        BoxBuckets covering(grid.dims);  // every box grown
         ctx.progress_begin("boxes", 0, "boxes");
         for (int s = kMaxSeedCube; s >= 1 && !stop; --s) {
             if (!sizes[size_t(s)]) continue;
@@ -351,13 +443,22 @@ std::vector<VoxelBox> grow_boxes(Context& ctx, const VoxelGrid& grid, const BitV
                         if (cube[i] != s) continue;
                         const VoxelBox box = grow_from(sums, grid.coords(i), s);
                         ++st.grown;
-                        // Cover: no voxel of the box seeds again.
-                        for (int z = box.lo.z; z <= box.hi.z; ++z) {
-                            for (int y = box.lo.y; y <= box.hi.y; ++y) {
-                                clear_cubes(cube.get(), l1.data(), grid.index(box.lo.x, y, z),
-                                            grid.index(box.hi.x, y, z));
+                        // Cover: no voxel of the box seeds again. The box grown before that shares most
+                        // of it is clear already (growth goes through covered voxels), so only the rest
+                        // is cleared.
+                        uint64_t shared = 0;
+                        std::array<VoxelBox, 6> rest;
+                        const int parts = box_minus(box, covering.most_overlapping(box, shared), rest);
+                        for (int p = 0; p < parts; ++p) {
+                            const VoxelBox& b = rest[size_t(p)];
+                            for (int z = b.lo.z; z <= b.hi.z; ++z) {
+                                for (int y = b.lo.y; y <= b.hi.y; ++y) {
+                                    clear_cubes(cube.get(), l1.data(), grid.index(b.lo.x, y, z),
+                                                grid.index(b.hi.x, y, z));
+                                }
                             }
                         }
+                        covering.add(box);
                         if (volume_m3(grid, box.volume()) >= config.min_box_volume_m3) {
                             ctx.progress_advance(1);
                             grown.push_back(box);
@@ -377,22 +478,35 @@ std::vector<VoxelBox> grow_boxes(Context& ctx, const VoxelGrid& grid, const BitV
                      [](const VoxelBox& a, const VoxelBox& b) { return a.volume() > b.volume(); });
     BitVolume cover;
     cover.reset(n);
+    BoxBuckets kept_boxes(grid.dims);
     for (const VoxelBox& box : grown) {
         if (kept.size() >= config.max_boxes) break;
         const uint64_t volume = box.volume();
         if (volume_m3(grid, volume) < config.min_box_volume_m3) continue;
+        // What kept boxes cover of it: all it shares with the kept box sharing most, and what the cover
+        // holds of the rest.
         uint64_t covered = 0;
-        for (int z = box.lo.z; z <= box.hi.z; ++z) {
-            for (int y = box.lo.y; y <= box.hi.y; ++y) {
-                covered += count_bits(cover, grid.index(box.lo.x, y, z), grid.index(box.hi.x, y, z));
+        std::array<VoxelBox, 6> rest;
+        const int parts = box_minus(box, kept_boxes.most_overlapping(box, covered), rest);
+        if (parts == 1 && rest[0] == box) covered = 0;  // not cut: the rows count the shared voxels too
+        for (int p = 0; p < parts; ++p) {
+            const VoxelBox& b = rest[size_t(p)];
+            for (int z = b.lo.z; z <= b.hi.z; ++z) {
+                for (int y = b.lo.y; y <= b.hi.y; ++y) {
+                    covered += count_bits(cover, grid.index(b.lo.x, y, z), grid.index(b.hi.x, y, z));
+                }
             }
         }
         if (!adds_enough(volume - covered, volume, config.min_added_share)) continue;
         kept.push_back(box);
+        kept_boxes.add(box);
         st.covered_voxels += volume - covered;
-        for (int z = box.lo.z; z <= box.hi.z; ++z) {
-            for (int y = box.lo.y; y <= box.hi.y; ++y) {
-                set_bits(cover, grid.index(box.lo.x, y, z), grid.index(box.hi.x, y, z));
+        for (int p = 0; p < parts; ++p) {
+            const VoxelBox& b = rest[size_t(p)];
+            for (int z = b.lo.z; z <= b.hi.z; ++z) {
+                for (int y = b.lo.y; y <= b.hi.y; ++y) {
+                    set_bits(cover, grid.index(b.lo.x, y, z), grid.index(b.hi.x, y, z));
+                }
             }
         }
     }
