@@ -233,18 +233,27 @@ std::vector<Aabb> bounds_of(const VoxelGrid& grid, const std::vector<VoxelBox>& 
     return out;
 }
 
-// Sets (value true) or clears the voxels of every box whose flag in `rejected` equals `which`.
+// Sets (value true) or clears the voxels of every box whose flag in `rejected` equals `which`, a row of
+// each box at a time, whole words between its ends.
 void mark_boxes(const VoxelGrid& grid, const std::vector<VoxelBox>& boxes,
                 const std::vector<uint8_t>& rejected, uint8_t which, bool value, BitVolume& out) {
+    const auto mark = [&](uint64_t w, uint64_t mask) { value ? out.words[w] |= mask : out.words[w] &= ~mask; };
     for (size_t b = 0; b < boxes.size(); ++b) {
         if (rejected[b] != which) continue;
         const VoxelBox& vb = boxes[b];
         for (int z = vb.lo.z; z <= vb.hi.z; ++z)
-            for (int y = vb.lo.y; y <= vb.hi.y; ++y)
-                for (int x = vb.lo.x; x <= vb.hi.x; ++x) {
-                    const uint64_t i = grid.index(x, y, z);
-                    value ? out.set(i) : out.clear(i);
+            for (int y = vb.lo.y; y <= vb.hi.y; ++y) {
+                const uint64_t lo = grid.index(vb.lo.x, y, z), hi = grid.index(vb.hi.x, y, z);
+                const uint64_t w0 = lo >> 6, w1 = hi >> 6;
+                const uint64_t m0 = ~uint64_t(0) << (lo & 63), m1 = ~uint64_t(0) >> (63 - (hi & 63));
+                if (w0 == w1) {
+                    mark(w0, m0 & m1);
+                    continue;
                 }
+                mark(w0, m0);
+                for (uint64_t w = w0 + 1; w < w1; ++w) mark(w, ~uint64_t(0));
+                mark(w1, m1);
+            }
     }
 }
 
