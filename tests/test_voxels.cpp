@@ -132,6 +132,83 @@ TEST(Flood, StaysInASealedRoom) {
     EXPECT_FALSE(f.reached.get(g.index(outside.x, outside.y, outside.z)));
 }
 
+// A sealed level is flooded level by level on all threads: the same voxels at 1 and 3 threads as a plain
+// breadth-first search with the same steps, flying and walking (random band and glass), on a grid big
+// enough for its levels to run in parallel. A hole in the shell makes it leak: then the path comes from
+// the search on one thread, and the voxels are the same again.
+TEST(Flood, SealedLevelsMatchABreadthFirstSearchAtAnyThreadCount) {
+    Context ctx = quiet_context();
+    VoxelGrid g;
+    g.voxel_size_m = 1.0f;
+    g.dims = {120, 50, 110};
+    Rng rng(41, 2);
+    BitVolume blocked, band, glass;
+    blocked.reset(g.count());
+    band.reset(g.count());
+    glass.reset(g.count());
+    for (uint64_t i = 0; i < g.count(); ++i) {
+        const glm::ivec3 c = g.coords(i);
+        const bool shell = glm::any(glm::equal(c, glm::ivec3(0))) || glm::any(glm::equal(c, g.dims - 1));
+        if (shell || rng.uniform() < 0.12f) blocked.set(i);
+        if (rng.uniform() < 0.8f) band.set(i);
+        if (rng.uniform() < 0.03f) glass.set(i);
+    }
+    const std::vector<glm::vec3> seeds = {{60.5f, 25.5f, 55.5f}, {10.5f, 40.5f, 100.5f}};
+    for (const glm::vec3& p : seeds) blocked.clear(g.index(int(p.x), int(p.y), int(p.z)));
+    const glm::ivec3 steps[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+    for (const bool walking : {false, true}) {
+        const WalkRules rules{band, glass};
+        const WalkRules* walk = walking ? &rules : nullptr;
+        std::vector<uint8_t> want(g.count(), 0);
+        std::vector<uint64_t> queue;
+        for (const glm::vec3& p : seeds) {
+            const uint64_t i = g.index(int(p.x), int(p.y), int(p.z));
+            want[i] = 1;
+            queue.push_back(i);
+        }
+        for (size_t q = 0; q < queue.size(); ++q) {
+            const uint64_t i = queue[q];
+            for (int s = 0; s < 6; ++s) {
+                const glm::ivec3 n = g.coords(i) + steps[s];
+                if (!g.inside(n)) continue;
+                const uint64_t j = g.index(n.x, n.y, n.z);
+                if (want[j] || blocked.get(j)) continue;
+                // Walking: into the band from anywhere, out of it sideways or down, outside it only down;
+                // glass only from above.
+                if (walking && s != 3 && ((!band.get(j) && (s == 2 || !band.get(i))) || glass.get(j))) continue;
+                want[j] = 1;
+                queue.push_back(j);
+            }
+        }
+        ASSERT_GT(queue.size(), 100000u) << "too small a flood to run in parallel";
+        const int threads = omp_get_max_threads();
+        for (const int t : {1, 3}) {
+            omp_set_num_threads(t);
+            const FloodResult f = flood_free_space(ctx, g, blocked, seeds, 4, walk);
+            omp_set_num_threads(threads);
+            EXPECT_FALSE(f.leaked);
+            uint64_t wrong = 0;
+            for (uint64_t i = 0; i < g.count(); ++i) wrong += f.reached.get(i) != bool(want[i]);
+            EXPECT_EQ(wrong, 0u) << (walking ? "walking" : "flying") << ", " << t << " threads";
+            EXPECT_EQ(f.reached_count, queue.size());
+        }
+    }
+    // A hole to the outside at the seed's height: the flood leaks, and reaches what the search reaches.
+    BitVolume holed = blocked;
+    for (int x = 0; x < 61; ++x) holed.clear(g.index(x, 25, 55));
+    const int threads = omp_get_max_threads();
+    omp_set_num_threads(3);
+    const FloodResult a = flood_free_space(ctx, g, holed, seeds);
+    omp_set_num_threads(1);
+    const FloodResult b = flood_free_space(ctx, g, holed, seeds);
+    omp_set_num_threads(threads);
+    EXPECT_TRUE(a.leaked);
+    EXPECT_FALSE(a.leak_path.empty());
+    EXPECT_EQ(a.leak_path.size(), b.leak_path.size());
+    EXPECT_TRUE(a.reached.words == b.reached.words);
+    EXPECT_GT(a.reached_count, 100000u);
+}
+
 TEST(Flood, FindsTheLeakAndItsPathLeavesThroughTheHole) {
     Context ctx = quiet_context();
     const World w = room(true);

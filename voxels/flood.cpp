@@ -1,4 +1,5 @@
-// Breadth-first flood of free voxels from seeds; the first border voxel reached gives the leak path.
+// Flood of free voxels from seeds: on all threads for the reached set; breadth first on one thread when it
+// leaks, for the path from a seed to the first border voxel reached.
 #include "voxels/flood.h"
 
 #include <fmt/format.h>
@@ -40,6 +41,64 @@ int64_t nearest_free(const VoxelGrid& g, const BitVolume& blocked, glm::ivec3 c,
     return -1;
 }
 
+// May the flood step from voxel i to its free neighbour j by step s? Walking: into the band from anywhere;
+// out of it only sideways off a ledge or down; from the air outside it only down (falling).
+bool may_step(const WalkRules* walk, int s, uint64_t i, uint64_t j) {
+    return !(walk && s != kStepDown &&
+             ((!walk->band.get(j) && (s == kStepUp || !walk->band.get(i))) || walk->glass.get(j)));
+}
+
+// What the flood reaches from `frontier` (its voxels already set in `reached`), without the order: level
+// by level, a big level's voxels expanded on all threads, each voxel joining the next level once (the
+// thread whose atomic OR sets its bit). The set is the breadth-first search's, for any thread count.
+void reach_in_parallel(const VoxelGrid& grid, const BitVolume& blocked, const WalkRules* walk,
+                       std::vector<uint64_t> frontier, BitVolume& reached) {
+    std::vector<uint64_t> next;
+    while (!frontier.empty()) {
+        next.clear();
+        const int64_t n = int64_t(frontier.size());
+#pragma omp parallel if (n >= 4096)
+        {
+            std::vector<uint64_t> mine;
+#pragma omp for schedule(static) nowait
+            for (int64_t k = 0; k < n; ++k) {
+                const uint64_t i = frontier[size_t(k)];
+                const glm::ivec3 c = grid.coords(i);
+                for (int s = 0; s < 6; ++s) {
+                    const glm::ivec3 nb = c + kSteps[s];
+                    if (!grid.inside(nb)) continue;
+                    const uint64_t j = grid.index(nb.x, nb.y, nb.z);
+                    const uint64_t bit = uint64_t(1) << (j & 63);
+                    std::atomic_ref<uint64_t> word(reached.words[j >> 6]);
+                    if ((word.load(std::memory_order_relaxed) & bit) || blocked.get(j) || !may_step(walk, s, i, j))
+                        continue;
+                    if (word.fetch_or(bit, std::memory_order_relaxed) & bit) continue;  // another thread's
+                    mine.push_back(j);
+                }
+            }
+#pragma omp critical(flood_next)
+            next.insert(next.end(), mine.begin(), mine.end());
+        }
+        std::swap(frontier, next);
+    }
+}
+
+// Does the reached set touch the grid's border layer? (Walking, the band may reach the grid's top above the
+// highest floor: that is no way out, so the top layer does not count.)
+bool reaches_border(const VoxelGrid& g, const BitVolume& reached, bool walking) {
+    for (int z = 0; z < g.dims.z; ++z)
+        for (int y = 0; y < g.dims.y; ++y) {
+            if (walking && y == g.dims.y - 1) continue;
+            if (z == 0 || z == g.dims.z - 1 || y == 0 || y == g.dims.y - 1) {
+                for (int x = 0; x < g.dims.x; ++x)
+                    if (reached.get(g.index(x, y, z))) return true;
+            } else if (reached.get(g.index(0, y, z)) || reached.get(g.index(g.dims.x - 1, y, z))) {
+                return true;
+            }
+        }
+    return false;
+}
+
 }  // namespace
 
 FloodResult flood_free_space(Context& ctx, const VoxelGrid& grid, const BitVolume& blocked,
@@ -48,8 +107,6 @@ FloodResult flood_free_space(Context& ctx, const VoxelGrid& grid, const BitVolum
     ScopedTimer timer(ctx, "flood");
     FloodResult r;
     r.reached.reset(grid.count());
-    // came_from[i]: the step index that entered voxel i (0..5), kSeedMark for seeds; 0xff = not reached.
-    std::vector<uint8_t> came_from(grid.count(), 0xff);
     std::vector<uint64_t> frontier, next;
     for (const glm::vec3& s : seeds) {
         if (!is_finite(s) || !grid.bounds().contains(s)) {
@@ -73,11 +130,24 @@ FloodResult flood_free_space(Context& ctx, const VoxelGrid& grid, const BitVolum
             ++r.seeds_moved;
         }
         ++r.seeds_used;
-        if (came_from[uint64_t(i)] != 0xff) continue;
-        came_from[uint64_t(i)] = kSeedMark;
+        if (r.reached.get(uint64_t(i))) continue;
         r.reached.set(uint64_t(i));
         frontier.push_back(uint64_t(i));
     }
+    // A sealed level (the usual case) needs only the reached set: on all threads. A leaking one is flooded
+    // again breadth first on one thread, for the leak path (the first border voxel in that order and the
+    // steps back to a seed), which then gives the same set.
+    const BitVolume seeded = r.reached;
+    reach_in_parallel(grid, blocked, walk, frontier, r.reached);
+    if (!reaches_border(grid, r.reached, walk != nullptr)) {
+        r.reached_count = r.reached.count();
+        ctx.debug(fmt::format("flood: {} seeds, {} voxels reached, sealed", r.seeds_used, r.reached_count));
+        return r;
+    }
+    r.reached = seeded;
+    // came_from[i]: the step index that entered voxel i (0..5), kSeedMark for seeds; 0xff = not reached.
+    std::vector<uint8_t> came_from(grid.count(), 0xff);
+    for (const uint64_t i : frontier) came_from[i] = kSeedMark;
     int64_t leak_voxel = -1;
     while (!frontier.empty()) {
         next.clear();
@@ -90,12 +160,7 @@ FloodResult flood_free_space(Context& ctx, const VoxelGrid& grid, const BitVolum
                 const glm::ivec3 n = c + kSteps[s];
                 if (!grid.inside(n)) continue;
                 const uint64_t j = grid.index(n.x, n.y, n.z);
-                if (came_from[j] != 0xff || blocked.get(j)) continue;
-                // Walking: into the band from anywhere; out of it only sideways off a ledge or down; from the
-                // air outside it only down (falling).
-                if (walk && s != kStepDown &&
-                    ((!walk->band.get(j) && (s == kStepUp || !walk->band.get(i))) || walk->glass.get(j)))
-                    continue;
+                if (came_from[j] != 0xff || blocked.get(j) || !may_step(walk, s, i, j)) continue;
                 came_from[j] = uint8_t(s);
                 r.reached.set(j);
                 next.push_back(j);
