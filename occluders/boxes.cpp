@@ -27,7 +27,8 @@ namespace {
 
 constexpr uint64_t kWrap = uint64_t(1) << 16;            // the summed-area table's modulus
 constexpr uint64_t kBlock = 64;                          // voxels per first-level block of the seed scan
-constexpr uint64_t kParallelVoxels = uint64_t(1) << 21;  // smaller grids build their table on one thread
+constexpr uint64_t kParallelVoxels = uint64_t(1) << 21;  // smaller grids build their table, cubes and bounds
+                                                         // on one thread
 constexpr int kTileRows = 16;  // the seed cubes' wavefront runs over tiles of kTileRows^2 rows (y, z)
 
 void validate(const BoxConfig& config) {

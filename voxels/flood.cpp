@@ -137,14 +137,14 @@ FloodResult flood_free_space(Context& ctx, const VoxelGrid& grid, const BitVolum
     // A sealed level (the usual case) needs only the reached set: on all threads. A leaking one is flooded
     // again breadth first on one thread, for the leak path (the first border voxel in that order and the
     // steps back to a seed), which then gives the same set.
-    const BitVolume seeded = r.reached;
     reach_in_parallel(grid, blocked, walk, frontier, r.reached);
     if (!reaches_border(grid, r.reached, walk != nullptr)) {
         r.reached_count = r.reached.count();
         ctx.debug(fmt::format("flood: {} seeds, {} voxels reached, sealed", r.seeds_used, r.reached_count));
         return r;
     }
-    r.reached = seeded;
+    r.reached.reset(grid.count());  // back to the seeds alone
+    for (const uint64_t i : frontier) r.reached.set(i);
     // came_from[i]: the step index that entered voxel i (0..5), kSeedMark for seeds; 0xff = not reached.
     std::vector<uint8_t> came_from(grid.count(), 0xff);
     for (const uint64_t i : frontier) came_from[i] = kSeedMark;
