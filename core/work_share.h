@@ -14,9 +14,11 @@
 
 #include "core/context.h"
 
+#include <algorithm>
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
+#include <vector>
 
 namespace pvs {
 
@@ -41,6 +43,8 @@ public:
     virtual void advance(Context& ctx, uint64_t n) { ctx.progress_advance(n); }
     // ORs words[0, n) over every process.
     virtual void unite(uint64_t* /*words*/, size_t /*n*/) {}
+    // Sums values[0, n) over every process (the counts of a dealt pass; each process counts its own items).
+    virtual void add(uint64_t* /*values*/, size_t /*n*/) {}
     // Waits until every process calls it.
     virtual void barrier() {}
     // Ends the sharing (frees what the processes share); collective. No pass may begin after it.
@@ -60,6 +64,34 @@ void for_each_dealt(WorkShare& share, Context& ctx, uint64_t batch, Fn&& fn) {
         for (uint64_t i = first; i < first + n; ++i) fn(i);
         share.advance(ctx, n);
     }
+}
+
+// Every process's `words`, one after another in rank order, on every process. Collective.
+inline std::vector<uint64_t> gather_all(WorkShare& share, const std::vector<uint64_t>& words) {
+    const size_t processes = size_t(share.processes()), rank = size_t(share.rank());
+    if (processes == 1) return words;
+    std::vector<uint64_t> sizes(processes, 0);
+    sizes[rank] = words.size();
+    share.unite(sizes.data(), sizes.size());
+    size_t at = 0, total = 0;
+    for (size_t p = 0; p < processes; ++p) {
+        if (p == rank) at = total;
+        total += size_t(sizes[p]);
+    }
+    std::vector<uint64_t> all(total, 0);
+    std::copy(words.begin(), words.end(), all.begin() + std::ptrdiff_t(at));
+    share.unite(all.data(), all.size());
+    return all;
+}
+
+// Gives every process `words` as process `owner` holds them (the others' are replaced, whatever their size):
+// for a result one process computed alone. Collective.
+inline void take_from(WorkShare& share, int owner, std::vector<uint64_t>& words) {
+    if (share.processes() == 1) return;
+    uint64_t n = share.rank() == owner ? uint64_t(words.size()) : 0;
+    share.unite(&n, 1);
+    if (share.rank() != owner) words.assign(size_t(n), 0);
+    share.unite(words.data(), words.size());
 }
 
 }  // namespace pvs

@@ -67,7 +67,7 @@ void store_verification(const VerifyResult& result, BakeData& bake) {
 std::vector<Occluder> solver_occluders(Context& ctx, const BakeConfig& config, const World& world,
                                        const ViewVolume& view, const RayScene& scene,
                                        OccluderFigures& figures, BlockFigures& blocks,
-                                       ShrunkOccluders& shrunk) {
+                                       ShrunkOccluders& shrunk, WorkShare* share) {
     const bool conservative = config.mode == BakeMode::kConservative;
     // The epsilon ladder only as high as the cells' faces can use (conservative_levels_used()).
     const double largest_cell = largest_cell_edge_m(config.cells);
@@ -75,7 +75,7 @@ std::vector<Occluder> solver_occluders(Context& ctx, const BakeConfig& config, c
     occluders.gap_tolerance_m = config.gap.tolerance_m;
     std::vector<Occluder> boxes = synthesize_occluders(
         ctx, occluders, world, view, scene, figures, config.conservative.epsilon_m,
-        conservative_levels_used(config.conservative, largest_cell), conservative ? &shrunk : nullptr);
+        conservative_levels_used(config.conservative, largest_cell), conservative ? &shrunk : nullptr, share);
     if (conservative && config.occluders.block_m > 0.0) {
         // Blocks of whole cells from the cells' origin (the view bounds' corner, for the grid and the
         // octree's roots), so that every cell lies in one block.
@@ -211,7 +211,7 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
     ShrunkOccluders shrunk;
     if (config.occluders.enabled || conservative) {
         bake.occluders =
-            solver_occluders(ctx, config, world, view, scene, figures.occluders, figures.blocks, shrunk);
+            solver_occluders(ctx, config, world, view, scene, figures.occluders, figures.blocks, shrunk, share);
     }
     // What a later re-bake after an edit compares (docs/ALGORITHMS.md#reuse).
     if (conservative) {
@@ -228,24 +228,18 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
         octree_cells_and_pvs(ctx, config, world, view, scene, shrunk, bake, figures, journal, share);
     }
     // 5. Ranked occluders per cell, once the cells are final (the octree's depend on the PVS); dealt like
-    //    the PVS (every process computes the same stages before the PVS, so the same occluders).
+    //    the PVS (every process ends the stages before the PVS with the same occluders).
     if (!bake.occluders.empty()) {
         bake.ranked =
             rank_occluders(ctx, config.ranking, world, bake.cells, bake.occluders, figures.ranking, share);
     }
-    if (share) {
-        // Every process holds the whole PVS and ranking now; rank 0 alone verifies and writes.
-        share->close();
-        if (share->rank() != 0) return bake;
-    }
-
     // 6. The figures of the bake (driver/report.h).
     figures.shrunk_boxes = shrunk.boxes.empty() ? 0 : shrunk.boxes[0].size();
     figures.epsilon_levels = shrunk.epsilon_m.size();
     bake.figures = bake_figures(config, world, view, bake, figures);
     bake.run.figures = run_figures(bake, figures);
 
-    // 7. Verification by rays (docs/ALGORITHMS.md#verification).
+    // 7. Verification by rays (docs/ALGORITHMS.md#verification), its passes dealt like the PVS's.
     if (config.verify.enabled) {
         if (config.verify.rays.seed == config.sampled.rays.seed) {
             ctx.warn(
@@ -253,10 +247,12 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
         }
         VerifyConfig verify = config.verify;
         verify.gap_tolerance_m = config.gap.tolerance_m;
-        const VerifyResult result = verify_pvs(ctx, verify, world, scene, bake.cells, bake.pvs);
+        const VerifyResult result = verify_pvs(ctx, verify, world, scene, bake.cells, bake.pvs, share);
         log_verify_summary(ctx, result, world);
         store_verification(result, bake);
     }
+    // Every process holds the whole bake now; rank 0 alone writes it.
+    if (share) share->close();
     return bake;
 }
 

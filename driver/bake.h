@@ -32,16 +32,19 @@ std::vector<ObjectRecord> object_records(const World& world);
 // conservative mode, the solver's occluders (`shrunk`; per block too when config.occluders.block_m > 0,
 // blocks of whole cells). Deterministic: the same config and world give the same occluders, so tools can
 // rebuild a bake's occluders from its stored parameters (core/config.h config_from_parameters).
+// With `share`, the work is dealt between the processes of an MPI bake (occluders/synthesis.h); the
+// occluders per block are computed by every process.
 std::vector<Occluder> solver_occluders(Context& ctx, const BakeConfig& config, const World& world,
                                        const ViewVolume& view, const RayScene& scene,
                                        OccluderFigures& figures, BlockFigures& blocks,
-                                       ShrunkOccluders& shrunk);
+                                       ShrunkOccluders& shrunk, WorkShare* share = nullptr);
 
 // Runs the bake of `world` (already loaded from world_path, whose content hash is world_hash).
 // With `journal`, the conservative PVS (grid or octree) takes the rows it holds and records those it
 // computes (docs/ALGORITHMS.md#resume); the bake is the same. With `share` (several processes,
-// driver/processes.h), its passes and the occluder ranking are dealt between the processes, and only rank 0
-// goes on after them (the others return the bake as it stands then); the sampled mode runs on rank 0 alone.
+// driver/processes.h), the costly parts of the stages before the PVS, its passes, the occluder ranking and
+// the verification are dealt between the processes, and every process returns the same bake (rank 0 writes
+// it); the sampled mode runs on rank 0 alone.
 // With `reuse` (an older conservative bake of the same parameters, check_reuse()), a grid's PVS keeps the
 // bits of that bake an edit of the world cannot change and computes the rest (pvs/reuse.h); the bake is
 // the same as without it (docs/ALGORITHMS.md#reuse). An octree is baked in full.

@@ -429,7 +429,13 @@ int run_verify(Context& ctx, BakeConfig config, const std::string& world_path, c
     check_bake_matches_world(ctx, bake, world, hash);
     ctx.info(fmt::format("verifying {} ({}) against {}", bake_path, pvs_kind(bake), world_path));
     RayScene scene(ctx, world, BuildQuality::kMedium, config.run.threads);
-    const VerifyResult result = verify_pvs(ctx, config.verify, world, scene, bake.cells, bake.pvs);
+    // Several processes (mpirun): the passes are dealt; rank 0 alone writes (driver/processes.h).
+    const std::unique_ptr<WorkShare> share = make_work_share(ctx);
+    const VerifyResult result = verify_pvs(ctx, config.verify, world, scene, bake.cells, bake.pvs, share.get());
+    if (share) {
+        share->close();
+        if (share->rank() != 0) return kExitOk;
+    }
     log_verify_summary(ctx, result, world);
     store_verification(result, bake);
     if (write_back) write_bake_file(bake_path, bake);
@@ -736,9 +742,9 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
         return kExitBadInput;
     }
 
-    // Under mpirun rank 0 speaks for the job (driver/processes.h), and only bake is shared between ranks: the
-    // other commands run on rank 0 alone.
-    if (process_rank() > 0 && !bake->parsed()) return kExitOk;
+    // Under mpirun rank 0 speaks for the job (driver/processes.h), and only bake and verify are shared between
+    // ranks: the other commands run on rank 0 alone.
+    if (process_rank() > 0 && !bake->parsed() && !verify->parsed()) return kExitOk;
     if (process_rank() > 0) common.quiet = true;
     Context ctx = make_context(common, log);
     try {

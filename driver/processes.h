@@ -1,8 +1,8 @@
 // pvsbake driver: the processes of a bake. One, or the ranks of an MPI job when pvsbake is built with
 // PVSBAKE_MPI=ON and started by mpirun (docs/ALGORITHMS.md#processes). Every rank runs the whole command: the
-// stages before the PVS on its own (they are deterministic), the PVS with its passes dealt between the ranks
-// (core/work_share.h), and so is the occluder ranking; rank 0 alone runs the stages after them (verification)
-// and writes the output.
+// stages before the PVS with their probes, ray check and shrunk levels dealt between the ranks
+// (docs/ALGORITHMS.md#dealt-stages), the PVS with its passes dealt (core/work_share.h), and so are the
+// occluder ranking and the verification; rank 0 alone writes the output.
 #pragma once
 
 #include "core/context.h"

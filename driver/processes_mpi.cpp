@@ -78,6 +78,11 @@ public:
         }
     }
 
+    void add(uint64_t* values, size_t n) override {
+        check(MPI_Allreduce(MPI_IN_PLACE, values, int(n), MPI_UINT64_T, MPI_SUM, MPI_COMM_WORLD),
+              "MPI_Allreduce");
+    }
+
     void barrier() override { check(MPI_Barrier(MPI_COMM_WORLD), "MPI_Barrier"); }
 
     void close() override {

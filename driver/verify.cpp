@@ -13,6 +13,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstring>
+#include <type_traits>
 #include <cmath>
 #include <limits>
 
@@ -552,6 +554,68 @@ namespace {
 constexpr uint32_t kWidthTries = 1024;
 
 // Measures the opening of every reported miss and splits the missed pairs into narrow and wide.
+// Records of trivially copyable type as whole words, and back.
+template <class T>
+void put_record(std::vector<uint64_t>& out, const T& r) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    const size_t at = out.size();
+    out.resize(at + (sizeof(T) + 7) / 8, 0);
+    std::memcpy(&out[at], &r, sizeof(T));
+}
+template <class T>
+T get_record(const uint64_t*& in) {
+    T r;
+    std::memcpy(static_cast<void*>(&r), in, sizeof(T));
+    in += (sizeof(T) + 7) / 8;
+    return r;
+}
+
+// After a dealt pass, every process takes what the others wrote of the cells they were dealt
+// (docs/ALGORITHMS.md#dealt-verification): the rows of objects seen and aimed at (united), and per cell its
+// misses, missed rays, aimed rounds, neighbour rays spent and the witnesses of this pass (`found`), as the
+// process that verified the cell holds them. `mine`: the cells this process verified in the pass.
+void share_cells(WorkShare& share, const std::vector<uint8_t>& mine, CellVerifier::Shared& s,
+                 std::vector<uint64_t>* spent, std::vector<std::vector<Witness>>* found) {
+    if (share.processes() == 1) return;
+    share.unite(s.sampled.words.data(), s.sampled.words.size());
+    share.unite(s.aimed_at.words.data(), s.aimed_at.words.size());
+    std::vector<uint64_t> own;
+    for (uint32_t c = 0; c < uint32_t(mine.size()); ++c) {
+        if (!mine[c]) continue;
+        const std::vector<Witness>* w = found ? &(*found)[c] : nullptr;
+        own.insert(own.end(), {uint64_t(c), s.cell_missed_rays[c], s.rounds_of[c], spent ? (*spent)[c] : 0,
+                               uint64_t(s.cell_misses[c].size()), uint64_t(w ? w->size() : 0)});
+        for (const Miss& m : s.cell_misses[c]) put_record(own, m);
+        if (w)
+            for (const Witness& x : *w) put_record(own, x);
+    }
+    const std::vector<uint64_t> all = gather_all(share, own);
+    for (const uint64_t* in = all.data(); in < all.data() + all.size();) {
+        const uint32_t c = uint32_t(in[0]);
+        s.cell_missed_rays[c] = in[1];
+        s.rounds_of[c] = uint32_t(in[2]);
+        if (spent) (*spent)[c] = in[3];
+        const uint64_t n_misses = in[4], n_witnesses = in[5];
+        in += 6;
+        s.cell_misses[c].clear();
+        for (uint64_t k = 0; k < n_misses; ++k) s.cell_misses[c].push_back(get_record<Miss>(in));
+        if (found) (*found)[c].clear();
+        for (uint64_t k = 0; k < n_witnesses; ++k) {
+            const Witness x = get_record<Witness>(in);
+            if (found) (*found)[c].push_back(x);
+        }
+    }
+}
+
+// A pass's counts summed over the processes.
+void share_counts(WorkShare& share, Counts& c) {
+    static_assert(sizeof(Counts) % sizeof(uint64_t) == 0 && std::is_trivially_copyable_v<Counts>);
+    uint64_t words[sizeof(Counts) / sizeof(uint64_t)];
+    std::memcpy(words, &c, sizeof c);
+    share.add(words, sizeof(Counts) / sizeof(uint64_t));
+    std::memcpy(&c, words, sizeof c);
+}
+
 void measure_miss_widths(Context& ctx, const VerifyConfig& config, const RayScene& scene,
                          const CellSet& cells, VerifyResult& result) {
     result.gap_tolerance_m = config.gap_tolerance_m;
@@ -589,8 +653,11 @@ void measure_miss_widths(Context& ctx, const VerifyConfig& config, const RayScen
 }  // namespace
 
 VerifyResult verify_pvs(Context& ctx, const VerifyConfig& config, const World& world, const RayScene& scene,
-                        const CellSet& cells, const PvsSet& pvs) {
+                        const CellSet& cells, const PvsSet& pvs, WorkShare* share) {
     ScopedTimer timer(ctx, "verify");
+    WorkShare alone;
+    WorkShare& deal = share ? *share : alone;
+    std::vector<uint8_t> mine(cells.size(), 0);  // the cells this process verified in the current pass
     const auto start = std::chrono::steady_clock::now();
     VerifyResult result;
     const uint32_t n_cells = uint32_t(cells.size());
@@ -645,18 +712,24 @@ VerifyResult verify_pvs(Context& ctx, const VerifyConfig& config, const World& w
     Counts counts;
     const uint64_t first_budget = result.aimed_rays_per_cell - neighbour_budget;
     ctx.progress_begin("verify", n_cells, "cells");
-#pragma omp parallel
+    deal.begin(n_cells);
     {
-        CellVerifier v(shared);
-#pragma omp for schedule(dynamic, 4)
-        for (int64_t ci = 0; ci < int64_t(n_cells); ++ci) {
-            v.first_pass(uint32_t(ci), result.rays_per_eye, aim, first_budget);
-            ctx.progress_advance();
-        }
+        Counts pass;
+#pragma omp parallel
+        {
+            CellVerifier v(shared);
+            for_each_dealt(deal, ctx, 4, [&](uint64_t c) {
+                mine[c] = 1;
+                v.first_pass(uint32_t(c), result.rays_per_eye, aim, first_budget);
+            });
 #pragma omp critical
-        counts.add(v.counts);
+            pass.add(v.counts);
+        }
+        share_counts(deal, pass);
+        counts.add(pass);
     }
     ctx.progress_end();
+    share_cells(deal, mine, shared, nullptr, neighbours ? &shared.witnesses : nullptr);
     if (neighbours) {
         // Neighbour passes until one finds nothing new (or kMaxNeighbourPasses): each aims at what the last
         // one found in the cells around (the first at all the first pass found).
@@ -666,37 +739,51 @@ VerifyResult verify_pvs(Context& ctx, const VerifyConfig& config, const World& w
         for (uint32_t pass = 1; pass <= kMaxNeighbourPasses; ++pass) {
             const uint64_t before = counts.neighbour_new;
             ctx.progress_begin(fmt::format("verify neighbours {}", pass), n_cells, "cells");
+            std::fill(mine.begin(), mine.end(), 0);
+            deal.begin(n_cells);
+            Counts pass_counts;
 #pragma omp parallel
             {
                 CellVerifier v(shared);
                 v.pass_ = pass;
-#pragma omp for schedule(dynamic, 4)
-                for (int64_t ci = 0; ci < int64_t(n_cells); ++ci) {
+                for_each_dealt(deal, ctx, 4, [&](uint64_t ci) {
                     const uint32_t c = uint32_t(ci);
+                    mine[c] = 1;
                     found[c].clear();
                     const uint64_t left = aim_capped ? neighbour_budget - spent[c] : UINT64_MAX;
                     spent[c] += v.neighbour_pass(c, touching[c], shared.witnesses, found[c], left);
-                    ctx.progress_advance();
-                }
+                });
 #pragma omp critical
-                counts.add(v.counts);
+                pass_counts.add(v.counts);
             }
             ctx.progress_end();
+            share_counts(deal, pass_counts);
+            counts.add(pass_counts);
+            share_cells(deal, mine, shared, &spent, &found);
             ++result.neighbour_passes;
             std::swap(shared.witnesses, found);
             if (counts.neighbour_new == before) break;
         }
         if (aim_capped) {
+            std::fill(mine.begin(), mine.end(), 0);
+            ctx.progress_begin("verify spare rounds", n_cells, "cells");
+            deal.begin(n_cells);
+            Counts pass_counts;
 #pragma omp parallel
             {
                 CellVerifier v(shared);
-#pragma omp for schedule(dynamic, 4)
-                for (int64_t ci = 0; ci < int64_t(n_cells); ++ci)
+                for_each_dealt(deal, ctx, 4, [&](uint64_t ci) {
+                    mine[ci] = 1;
                     if (spent[size_t(ci)] < neighbour_budget)
                         v.spare_rounds(uint32_t(ci), neighbour_budget - spent[size_t(ci)]);
+                });
 #pragma omp critical
-                counts.add(v.counts);
+                pass_counts.add(v.counts);
             }
+            ctx.progress_end();
+            share_counts(deal, pass_counts);
+            counts.add(pass_counts);
+            share_cells(deal, mine, shared, &spent, nullptr);
         }
     }
     std::vector<std::vector<Miss>>& cell_misses = shared.cell_misses;

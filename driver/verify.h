@@ -44,6 +44,7 @@
 #include "core/config.h"
 #include "core/context.h"
 #include "core/pvs_set.h"
+#include "core/work_share.h"
 #include "core/world.h"
 #include "io/bake_file.h"
 #include "rays/ray_scene.h"
@@ -106,8 +107,11 @@ struct VerifyResult {
     NamedValues run_figures() const;
 };
 
+// With `share` (the processes of an MPI job), each pass's cells are dealt between the processes and what they
+// found is passed to every process after the pass (docs/ALGORITHMS.md#dealt-verification): every process
+// returns the same result, the one process alone would. Collective then.
 VerifyResult verify_pvs(Context& ctx, const VerifyConfig& config, const World& world, const RayScene& scene,
-                        const CellSet& cells, const PvsSet& pvs);
+                        const CellSet& cells, const PvsSet& pvs, WorkShare* share = nullptr);
 
 // Prints the summary lines of a verification.
 void log_verify_summary(Context& ctx, const VerifyResult& result, const World& world);

@@ -119,8 +119,11 @@ struct Gap {
 }  // namespace
 
 GapProbeFigures probe_gaps(Context& ctx, const BitVolume& touched, const VoxelMask& eyes,
-                           const RayScene& scene, double tolerance_m, uint32_t lines, Solid& solid) {
+                           const RayScene& scene, double tolerance_m, uint32_t lines, Solid& solid,
+                           WorkShare* share) {
     ScopedTimer timer(ctx, "gap_probe");
+    WorkShare alone;
+    WorkShare& deal = share ? *share : alone;
     const auto start = std::chrono::steady_clock::now();
     GapProbeFigures figures;
     const VoxelGrid& grid = solid.grid;
@@ -162,6 +165,7 @@ GapProbeFigures probe_gaps(Context& ctx, const BitVolume& touched, const VoxelMa
     leaky.reset(grid.count());
     uint64_t pairs = 0, open_edges = 0, gaps_found = 0, traced = 0, leaks = 0;
     ctx.progress_begin("gap probe", blocks.size(), "blocks");
+    deal.begin(blocks.size());
 #pragma omp parallel reduction(+ : pairs, open_edges, gaps_found, traced, leaks)
     {
         std::vector<TriangleCorners> tris;
@@ -169,8 +173,7 @@ GapProbeFigures probe_gaps(Context& ctx, const BitVolume& touched, const VoxelMa
         std::vector<glm::vec3> origins, dirs;
         std::vector<RayTouch> touches;
         std::vector<float> hit;
-#pragma omp for schedule(dynamic, 64)
-        for (int64_t k = 0; k < int64_t(blocks.size()); ++k) {
+        for_each_dealt(deal, ctx, 64, [&](uint64_t k) {
             const glm::vec3 lo = grid.origin + glm::vec3(blocks[size_t(k)] * kBlockVoxels) * h;
             const Aabb box = Aabb::of(lo, lo + glm::vec3(block_m));
             const glm::vec3 centre = lo + 0.5f * glm::vec3(block_m);
@@ -229,10 +232,7 @@ GapProbeFigures probe_gaps(Context& ctx, const BitVolume& touched, const VoxelMa
                 }
             }
             gaps_found += gaps.size();
-            if (gaps.empty()) {
-                ctx.progress_advance();
-                continue;
-            }
+            if (gaps.empty()) return;
             // Lines across each gap: a fan over the plane perpendicular to it (half turn: a line goes both
             // ways), each traced both ways from the middle.
             origins.clear();
@@ -292,10 +292,19 @@ GapProbeFigures probe_gaps(Context& ctx, const BitVolume& touched, const VoxelMa
                     } while (walk.next());
                 }
             }
-            ctx.progress_advance();
-        }
+        });
     }
     ctx.progress_end();
+    // The processes' finds and counts together (docs/ALGORITHMS.md#processes).
+    deal.unite(seen.words.data(), seen.words.size());
+    deal.unite(leaky.words.data(), leaky.words.size());
+    uint64_t counts[5] = {pairs, open_edges, gaps_found, traced, leaks};
+    deal.add(counts, 5);
+    pairs = counts[0];
+    open_edges = counts[1];
+    gaps_found = counts[2];
+    traced = counts[3];
+    leaks = counts[4];
     figures.pairs = pairs;
     figures.open_edges = open_edges;
     figures.gaps = gaps_found;

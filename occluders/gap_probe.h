@@ -28,6 +28,7 @@
 #pragma once
 
 #include "core/context.h"
+#include "core/work_share.h"
 #include "occluders/solid.h"
 #include "rays/ray_scene.h"
 
@@ -58,8 +59,10 @@ struct GapProbeFigures {
 
 // `eyes`: the view volume's eye mask on the solid's grid (empty: sight starts outside the world).
 // `tolerance_m` > 0: the gap tolerance T; gaps narrower than kGapWidthShare T stay closed. `lines` per gap
-// (0: off).
+// (0: off). With `share`, the blocks are dealt between the processes and their finds united
+// (docs/ALGORITHMS.md#processes): every process ends with the same solid.
 GapProbeFigures probe_gaps(Context& ctx, const BitVolume& touched, const VoxelMask& eyes,
-                           const RayScene& scene, double tolerance_m, uint32_t lines, Solid& solid);
+                           const RayScene& scene, double tolerance_m, uint32_t lines, Solid& solid,
+                           WorkShare* share = nullptr);
 
 }  // namespace pvs

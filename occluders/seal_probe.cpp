@@ -5,6 +5,7 @@
 
 #include "cells/eyes.h"
 #include "core/random.h"
+#include "core/work_share.h"
 #include "voxels/voxel_walk.h"
 
 #include <fmt/format.h>
@@ -63,8 +64,10 @@ constexpr uint32_t kOpeningTries = 256;
 
 SealProbeFigures probe_seals(Context& ctx, const BitVolume& touched, const VoxelMask& eyes,
                              const RayScene& scene, uint32_t rays, double reach_m, int rounds, uint64_t seed,
-                             double min_width_m, Solid& solid) {
+                             double min_width_m, Solid& solid, WorkShare* share) {
     ScopedTimer timer(ctx, "seal_probe");
+    WorkShare alone;
+    WorkShare& deal = share ? *share : alone;
     const auto start = std::chrono::steady_clock::now();
     SealProbeFigures figures;
     if (rays == 0 || rounds <= 0) return figures;
@@ -98,13 +101,13 @@ SealProbeFigures probe_seals(Context& ctx, const BitVolume& touched, const Voxel
         BitVolume seen;  // written by every thread (an atomic OR), read only after the loop
         seen.reset(grid.count());
         ctx.progress_begin(fmt::format("seal probe, round {}", round + 1), frontier.size(), "voxels");
+        deal.begin(frontier.size());
 #pragma omp parallel reduction(+ : walked, segments, leaks, narrow)
         {
             std::vector<glm::vec3> dirs, origins, seg_dirs;
             std::vector<float> tfar;
             std::vector<uint8_t> blocked;
-#pragma omp for schedule(dynamic, 256)
-            for (int64_t f = 0; f < int64_t(frontier.size()); ++f) {
+            for_each_dealt(deal, ctx, 256, [&](uint64_t f) {
                 const uint64_t vi = frontier[size_t(f)];
                 const Aabb box = grid.voxel_box(grid.coords(vi));
                 Rng rng(round_seed, vi ^ 0x5345414cULL);
@@ -130,10 +133,7 @@ SealProbeFigures probe_seals(Context& ctx, const BitVolume& touched, const Voxel
                         if (solid.solid.get(i) && ++solid_steps > kMaxSolidSteps) break;
                     }
                 }
-                if (origins.empty()) {
-                    ctx.progress_advance();
-                    continue;
-                }
+                if (origins.empty()) return;
                 segments += origins.size();
                 blocked.resize(origins.size());
                 scene.occluded_opaque(origins.data(), seg_dirs.data(), tfar.data(), uint32_t(origins.size()),
@@ -160,10 +160,19 @@ SealProbeFigures probe_seals(Context& ctx, const BitVolume& touched, const Voxel
                         if (solid.solid.get(i)) seen.set_atomic(i);
                     }
                 }
-                ctx.progress_advance();
-            }
+            });
         }
         ctx.progress_end();
+        // The processes' finds and counts together (docs/ALGORITHMS.md#processes): every process then
+        // opens the same voxels and probes the same next frontier.
+        deal.unite(seen.words.data(), seen.words.size());
+        deal.unite(leaky.words.data(), leaky.words.size());
+        uint64_t counts[4] = {walked, segments, leaks, narrow};
+        deal.add(counts, 4);
+        walked = counts[0];
+        segments = counts[1];
+        leaks = counts[2];
+        narrow = counts[3];
         figures.rays += walked;
         figures.segments += segments;
         figures.leaks += leaks;

@@ -21,10 +21,13 @@
 //
 // Still sampling, not proof: a crack can be missed (a slot seen from no frontier point along no sampled
 // direction, or whose eye side lies beyond `reach_m`). Every bake is verified by rays (driver/verify.h).
-// Deterministic: the rays of a voxel depend only on the seed and the voxel's index.
+// Deterministic: the rays of a voxel depend only on the seed and the voxel's index. With `share`, each round's
+// frontier is dealt between the processes and their finds united (docs/ALGORITHMS.md#processes): every
+// process ends with the same solid.
 #pragma once
 
 #include "core/context.h"
+#include "core/work_share.h"
 #include "occluders/solid.h"
 #include "rays/ray_scene.h"
 
@@ -49,6 +52,6 @@ struct SealProbeFigures {
 // (rays/clearance.h; 0: every unblocked segment); narrower ones are counted in `narrow`.
 SealProbeFigures probe_seals(Context& ctx, const BitVolume& touched, const VoxelMask& eyes,
                              const RayScene& scene, uint32_t rays, double reach_m, int rounds, uint64_t seed,
-                             double min_width_m, Solid& solid);
+                             double min_width_m, Solid& solid, WorkShare* share = nullptr);
 
 }  // namespace pvs

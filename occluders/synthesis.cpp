@@ -16,6 +16,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <exception>
 #include <limits>
 #include <sstream>
@@ -73,7 +74,7 @@ double least_width_m(const OccluderConfig& config) {
 // seen (through a crack): carve them and their neighbours out of the solid.
 void carve_seen_solid(Context& ctx, const OccluderConfig& config, uint32_t probe_eyes, const VoxelGrid& grid,
                       const BitVolume& touched, const VoxelMask& eye_mask, const RayScene& scene,
-                      Solid& solid, OccluderFigures& figures) {
+                      Solid& solid, OccluderFigures& figures, WorkShare& share) {
     ScopedTimer timer(ctx, "sight_probe");
     const std::vector<glm::vec3> eyes =
         check_eyes(eye_mask, grid, touched, probe_eyes, config.check_seed ^ 0x5052);
@@ -83,13 +84,14 @@ void carve_seen_solid(Context& ctx, const OccluderConfig& config, uint32_t probe
     const float min_width_m = float(least_width_m(config));
     const float step = grid.voxel_size_m;  // a corner a step skips is covered by the 26-neighbour carving
     const Aabb gb = grid.bounds();
+    ctx.progress_begin("sight probe", eyes.size(), "eyes");
+    share.begin(eyes.size());
 #pragma omp parallel reduction(+ : into_solid, escaped, narrow)
     {
         std::vector<glm::vec3> dirs;
         std::vector<RayTouch> touches;
         std::vector<float> stop;
-#pragma omp for schedule(dynamic, 4)
-        for (int64_t e = 0; e < int64_t(eyes.size()); ++e) {
+        for_each_dealt(share, ctx, 4, [&](uint64_t e) {
             dirs.clear();
             touches.clear();
             sample_sphere_directions(config.probe_rays_per_eye, config.check_seed, uint64_t(e), dirs);
@@ -121,8 +123,16 @@ void carve_seen_solid(Context& ctx, const OccluderConfig& config, uint32_t probe
                 }
                 into_solid += hit_solid;
             }
-        }
+        });
     }
+    ctx.progress_end();
+    // The processes' seen voxels and counts together (docs/ALGORITHMS.md#processes).
+    share.unite(seen.words.data(), seen.words.size());
+    uint64_t counts[3] = {into_solid, escaped, narrow};
+    share.add(counts, 3);
+    into_solid = counts[0];
+    escaped = counts[1];
+    narrow = counts[2];
     // Carve each seen voxel and its 26 neighbours: the seen set dilated by one voxel, a word at a time.
     const BitVolume carve = dilate(grid, seen, 1);
     uint64_t carved = 0;
@@ -156,18 +166,18 @@ constexpr uint32_t kNearCheckRays = 16;
 constexpr float kNearCheckReachM = 4.0f;
 std::vector<uint8_t> check_boxes(Context& ctx, const OccluderConfig& config, const std::vector<Aabb>& boxes,
                                  const std::vector<glm::vec3>& eyes, uint32_t rays_per_eye, uint64_t stream,
-                                 const RayScene& scene, uint64_t& rays,
+                                 const RayScene& scene, uint64_t& rays, WorkShare& share,
                                  const VoxelMask* near_eyes = nullptr) {
     std::vector<uint8_t> rejected(boxes.size(), 0);
     uint64_t rays_total = 0;
     ctx.progress_begin("occluder check", boxes.size(), "boxes");
+    share.begin(boxes.size());
 #pragma omp parallel reduction(+ : rays_total)
     {
         std::vector<glm::vec3> origins, dirs, near;
         std::vector<float> tfar;
         std::vector<uint8_t> blocked;
-#pragma omp for schedule(dynamic, 1)
-        for (int64_t b = 0; b < int64_t(boxes.size()); ++b) {
+        for_each_dealt(share, ctx, 1, [&](uint64_t b) {
             const Aabb& box = boxes[size_t(b)];
             Rng rng(config.check_seed, stream + uint64_t(b));
             origins.clear();
@@ -218,10 +228,17 @@ std::vector<uint8_t> check_boxes(Context& ctx, const OccluderConfig& config, con
                         break;
                     }
             }
-            ctx.progress_advance();
-        }
+        });
     }
     ctx.progress_end();
+    // The processes' verdicts and rays together (docs/ALGORITHMS.md#processes).
+    if (share.processes() > 1) {
+        std::vector<uint64_t> bits((boxes.size() + 63) / 64, 0);
+        for (size_t b = 0; b < boxes.size(); ++b) bits[b / 64] |= uint64_t(rejected[b]) << (b % 64);
+        share.unite(bits.data(), bits.size());
+        for (size_t b = 0; b < boxes.size(); ++b) rejected[b] = uint8_t((bits[b / 64] >> (b % 64)) & 1);
+        share.add(&rays_total, 1);
+    }
     rays += rays_total;
     return rejected;
 }
@@ -262,7 +279,8 @@ void mark_boxes(const VoxelGrid& grid, const std::vector<VoxelBox>& boxes,
 // The levels run one after another, each on all threads (dilate() and grow_boxes() are parallel), so the
 // stage holds one level's table and seed cubes whatever the thread count; the boxes do not depend on it.
 std::vector<std::vector<Aabb>> shrunk_boxes(Context& ctx, const VoxelGrid& grid, const BitVolume& proven,
-                                            const BoxConfig& bc, const std::vector<double>& epsilon_m) {
+                                            const BoxConfig& bc, const std::vector<double>& epsilon_m,
+                                            WorkShare& share) {
     const double voxel_m3 = double(grid.voxel_size_m) * grid.voxel_size_m * grid.voxel_size_m;
     const int64_t words = int64_t(proven.words.size());
     const bool parallel = words >= (int64_t(1) << 14);
@@ -274,21 +292,54 @@ std::vector<std::vector<Aabb>> shrunk_boxes(Context& ctx, const VoxelGrid& grid,
     sc.min_box_volume_m3 = 0.0;  // every shrunk box helps fusion
     sc.max_boxes = std::max<uint32_t>(bc.max_boxes, 1024);
     std::vector<std::vector<Aabb>> out(epsilon_m.size());
+    std::vector<uint64_t> eroded_voxels(epsilon_m.size(), 0);
+    const auto k_of = [&](size_t level) {
+        return std::max(1, int(std::ceil(epsilon_m[level] / double(grid.voxel_size_m) - 1e-9)));
+    };
+    // Under MPI each process grows the levels dealt to it (level mod processes), one after another, each
+    // on all its threads; then every process takes each level's boxes from the one that grew them.
+    const auto owner = [&](size_t level) { return int(level % size_t(share.processes())); };
     // grow_boxes()'s own progress and timer would repeat per level: they go to a quiet context.
     Context quiet(Context::Options{LogLevel::kWarning, true, nullptr});
     for (size_t level = 0; level < epsilon_m.size(); ++level) {
-        const double eps = epsilon_m[level];
-        const int k = std::max(1, int(std::ceil(eps / double(grid.voxel_size_m) - 1e-9)));
+        if (owner(level) != share.rank()) continue;
+        const int k = k_of(level);
         BitVolume eroded = dilate(grid, not_proven, k);
 #pragma omp parallel for schedule(static) if (parallel)
         for (int64_t w = 0; w < words; ++w)
             eroded.words[size_t(w)] = proven.words[size_t(w)] & ~eroded.words[size_t(w)];
         clear_border(grid, eroded, k);
-        std::vector<Aabb>& level_boxes = out[level];
         for (const VoxelBox& vb : grow_boxes(quiet, grid, eroded, sc, nullptr))
-            level_boxes.push_back(box_bounds(grid, vb));
-        ctx.info(fmt::format("occluders shrunk by {} m ({} voxels): {} boxes of {:.0f} m3 of solid", eps, k,
-                             level_boxes.size(), double(eroded.count()) * voxel_m3));
+            out[level].push_back(box_bounds(grid, vb));
+        eroded_voxels[level] = eroded.count();
+    }
+    if (share.processes() > 1) {
+        // A level as words: its eroded voxels, then each box's six floats, two to a word.
+        for (size_t level = 0; level < epsilon_m.size(); ++level) {
+            std::vector<uint64_t> packed;
+            if (owner(level) == share.rank()) {
+                packed.assign(1 + 3 * out[level].size(), 0);
+                packed[0] = eroded_voxels[level];
+                for (size_t b = 0; b < out[level].size(); ++b) {
+                    const Aabb& a = out[level][b];
+                    const float f[6] = {a.min.x, a.min.y, a.min.z, a.max.x, a.max.y, a.max.z};
+                    std::memcpy(&packed[1 + 3 * b], f, sizeof f);
+                }
+            }
+            take_from(share, owner(level), packed);
+            eroded_voxels[level] = packed.at(0);
+            out[level].resize((packed.size() - 1) / 3);
+            for (size_t b = 0; b < out[level].size(); ++b) {
+                float f[6];
+                std::memcpy(f, &packed[1 + 3 * b], sizeof f);
+                out[level][b] = Aabb::of(glm::vec3(f[0], f[1], f[2]), glm::vec3(f[3], f[4], f[5]));
+            }
+        }
+    }
+    for (size_t level = 0; level < epsilon_m.size(); ++level) {
+        ctx.info(fmt::format("occluders shrunk by {} m ({} voxels): {} boxes of {:.0f} m3 of solid",
+                             epsilon_m[level], k_of(level), out[level].size(),
+                             double(eroded_voxels[level]) * voxel_m3));
     }
     return out;
 }
@@ -338,8 +389,10 @@ constexpr double kSlantedMinAreaM2 = 0.25;
 std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& config, const World& world,
                                            const ViewVolume& view, const RayScene& scene,
                                            OccluderFigures& figures, double epsilon_m, int levels,
-                                           ShrunkOccluders* shrunk) {
+                                           ShrunkOccluders* shrunk, WorkShare* share) {
     ScopedTimer timer(ctx, "occluders");
+    WorkShare alone;
+    WorkShare& deal = share ? *share : alone;
     const auto start = std::chrono::steady_clock::now();
     // The voxels: the view volume's, or the world's at the default size when there is no view volume.
     VoxelGrid grid = view.grid;
@@ -355,10 +408,11 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
     add_closed_boxes(ctx, closed_box_objects(world), view.eyes, solid);
     figures.solid_m3 = solid.solid_m3;
     if (config.probe_eyes > 0)
-        carve_seen_solid(ctx, config, config.probe_eyes, grid, *touched, view.eyes, scene, solid, figures);
+        carve_seen_solid(ctx, config, config.probe_eyes, grid, *touched, view.eyes, scene, solid, figures,
+                         deal);
     if (config.gap_lines > 0) {
         const GapProbeFigures gf =
-            probe_gaps(ctx, *touched, view.eyes, scene, config.gap_tolerance_m, config.gap_lines, solid);
+            probe_gaps(ctx, *touched, view.eyes, scene, config.gap_tolerance_m, config.gap_lines, solid, share);
         figures.gap_voxels = gf.voxels;
         figures.gap_gaps = gf.gaps;
         figures.gap_lines = gf.lines;
@@ -368,7 +422,7 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
     if (config.seal_rays > 0) {
         const SealProbeFigures sf =
             probe_seals(ctx, *touched, view.eyes, scene, config.seal_rays, config.seal_reach_m, kSealRounds,
-                        config.check_seed, least_width_m(config), solid);
+                        config.check_seed, least_width_m(config), solid, share);
         figures.seal_frontier_voxels = sf.frontier_voxels;
         figures.seal_narrow = sf.narrow;
         figures.seal_rays = sf.rays;
@@ -389,7 +443,7 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
         check_eyes(view.eyes, grid, *touched, config.check_eyes, config.check_seed);
     const std::vector<uint8_t> rejected =
         check_boxes(ctx, config, bounds_of(grid, boxes), eyes, config.check_rays_per_eye, 0, scene,
-                    figures.check_rays, &view.eyes);
+                    figures.check_rays, deal, &view.eyes);
 
     if (shrunk != nullptr) {
         // The proven solid: the carved solid less every rejected box, then eroded per epsilon.
@@ -411,7 +465,7 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
             "slanted panels: {} opaque triangles off the axis planes ({:.0f} m2) give {} convex "
             "polygons of at least {} m2 ({:.0f} m2)",
             sf.slanted_triangles, sf.slanted_area_m2, sf.panels, kSlantedMinAreaM2, sf.panel_area_m2));
-        shrunk->boxes = shrunk_boxes(ctx, grid, proven, bc, shrunk->epsilon_m);
+        shrunk->boxes = shrunk_boxes(ctx, grid, proven, bc, shrunk->epsilon_m, deal);
         std::vector<uint64_t> free_bits(proven.words.size());
         for (size_t w = 0; w < proven.words.size(); ++w)
             free_bits[w] = ~(proven.words[w] | touched->words[w]);
@@ -475,6 +529,7 @@ BlockFigures synthesize_block_occluders(Context& ctx, const OccluderConfig& conf
                                         float block_m, ShrunkOccluders& shrunk) {
     ScopedTimer timer(ctx, "block_occluders");
     const auto start = std::chrono::steady_clock::now();
+    WorkShare alone;  // each block's own probes, on this process
     BlockFigures figures;
     if (!view.voxelized || view.eyes.empty() || !(block_m > 0.0f) || shrunk.epsilon_m.empty() ||
         shrunk.solid.empty()) {
@@ -544,7 +599,7 @@ BlockFigures synthesize_block_occluders(Context& ctx, const OccluderConfig& conf
             OccluderFigures f;
             if (config.block_probe_eyes > 0)
                 carve_seen_solid(quiet, config, config.block_probe_eyes, window, touched, eyes, scene, solid,
-                                 f);
+                                 f, alone);
             // What only the block's eyes leave is proven box by box: boxes grown to cover it (up to
             // kBlockCheckBoxes, however small), each checked with segments from the block's own eyes; the
             // block's proven solid is the accepted boxes, with the global proven solid (proven for every
@@ -559,18 +614,18 @@ BlockFigures synthesize_block_occluders(Context& ctx, const OccluderConfig& conf
                                                             config.check_seed ^ (block_index << 8));
             const std::vector<uint8_t> rejected =
                 check_boxes(quiet, config, bounds_of(window, boxes), check, config.check_rays_per_eye, 0,
-                            scene, f.check_rays);
+                            scene, f.check_rays, alone);
             BitVolume proven = global;
             mark_boxes(window, boxes, rejected, 0, true, proven);
             ShrunkOccluders set;
             set.epsilon_m = shrunk.epsilon_m;
-            set.boxes = shrunk_boxes(quiet, window, proven, bc, shrunk.epsilon_m);
+            set.boxes = shrunk_boxes(quiet, window, proven, bc, shrunk.epsilon_m, alone);
             // The boxes the solver will draw are checked once more, from the same eyes at fresh points: a
             // box any segment reaches is dropped (drawing fewer occluders is always safe).
             for (size_t k = 0; k < set.boxes.size(); ++k) {
                 const std::vector<uint8_t> seen =
                     check_boxes(quiet, config, set.boxes[k], check, config.check_rays_per_eye,
-                                uint64_t(k + 1) << 32, scene, f.check_rays);
+                                uint64_t(k + 1) << 32, scene, f.check_rays, alone);
                 std::vector<Aabb> kept;
                 for (size_t i = 0; i < seen.size(); ++i)
                     if (!seen[i]) kept.push_back(set.boxes[k][i]);

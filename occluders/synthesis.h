@@ -15,6 +15,7 @@
 #include "cells/view_volume.h"
 #include "core/config.h"
 #include "core/context.h"
+#include "core/work_share.h"
 #include "core/occluder.h"
 #include "core/world.h"
 #include "rays/ray_scene.h"
@@ -60,10 +61,13 @@ struct OccluderFigures {
 // it (eroded by ceil(epsilon / voxel) voxels in the Chebyshev metric, so every point of a shrunk box has its
 // whole epsilon-cube inside the proven solid: docs/ALGORITHMS.md#shrunk-occluders): the occluders of the
 // conservative solver (pvs/conservative.h).
+// With `share` (the processes of an MPI bake), the probes' rays, the ray check's boxes and the shrunk levels
+// are dealt between the processes and their results united or passed on (docs/ALGORITHMS.md#processes):
+// every process returns the same occluders, as one process alone would. Collective then.
 std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& config, const World& world,
                                            const ViewVolume& view, const RayScene& scene,
                                            OccluderFigures& figures, double epsilon_m = 0.0, int levels = 0,
-                                           ShrunkOccluders* shrunk = nullptr);
+                                           ShrunkOccluders* shrunk = nullptr, WorkShare* share = nullptr);
 
 struct BlockFigures {
     uint32_t blocks = 0;           // blocks holding eyes

@@ -4,9 +4,13 @@
 #include "core/error.h"
 #include "core/row_journal.h"
 #include "io/checkpoint.h"
+#include "io/gltf_writer.h"
+#include "samples/crack_set.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -392,6 +396,60 @@ TEST(Processes, UnderMpirunACommandThatSharesNoWorkSpeaksOnce) {
     const size_t first = text.find("pvs_objects_mean");
     ASSERT_NE(first, std::string::npos) << text;
     EXPECT_EQ(text.find("pvs_objects_mean", first + 1), std::string::npos) << "more than one rank spoke:\n" << text;
+}
+
+// The stages before the PVS dealt between the ranks (docs/ALGORITHMS.md#processes): a world with cracks
+// that the sight, gap and seal probes find, baked with every probe on by one process of two threads and by
+// three ranks of one: the same file (its figures hold each probe's counts and what it removed).
+TEST(Processes, ThreeRanksDealTheProbesAndTheShrunkLevelsAsOneProcessComputesThem) {
+    test::TempDir dir;
+    CrackSetSpec spec;
+    spec.widths_m = {0.002f, 0.01f, 0.05f};
+    spec.cases_per_width = 5;  // each kind once per width
+    const std::string world = dir.file("cracks.glb");
+    write_glb(make_crack_set(spec).scene, world);
+    const std::string one = dir.file("one.h5"), three = dir.file("three.h5"), log = dir.file("log.txt"),
+                      report = dir.file("one.json");
+    const auto args = [&](const std::string& out, const char* threads) {
+        return std::vector<std::string>{"bake", world, "-o", out, "--eyes", "2", "--rays", "64", "-q",
+                                        "--no-verify", "--threads", threads, "--report", out + ".json"};
+    };
+    ASSERT_EQ(wait_for(spawn(args(one, "2"), log)), 0) << test::read_file(log);
+    ASSERT_EQ(wait_for(spawn(args(three, "1"), log, mpirun(3))), 0) << test::read_file(log);
+    const std::string diff = dir.file("h5diff.txt");
+    EXPECT_EQ(test::h5diff_outside_run(one, three, diff), 0) << test::read_file(diff);
+    // The probes found openings, so their united finds are what the files compare.
+    const auto j = nlohmann::json::parse(test::read_file(one + ".json"));
+    EXPECT_GT(j["figures"]["occluder_gap_removed_voxels"].get<double>() +
+                  j["figures"]["occluder_seal_removed_voxels"].get<double>(),
+              0.0)
+        << j["figures"].dump(1);
+}
+
+// The verification dealt between the ranks (docs/ALGORITHMS.md#dealt-verification): a sampled bake (which
+// misses objects, so misses, witnesses and neighbour passes all cross between the ranks) verified by one
+// process of two threads and by three ranks of one writes the same verification into the file.
+TEST(Processes, ThreeRanksVerifyAsOneProcessVerifies) {
+    test::TempDir dir;
+    const std::string baked = dir.file("sampled.h5"), one = dir.file("one.h5"), three = dir.file("three.h5"),
+                      log = dir.file("log.txt");
+    ASSERT_EQ(wait_for(spawn(bake_args(baked, {"--mode", "sampled"}), log)), 0) << test::read_file(log);
+    fs::copy_file(baked, one);
+    fs::copy_file(baked, three);
+    const auto args = [&](const std::string& file, const char* threads) {
+        return std::vector<std::string>{"verify",        test::sample_world(), file,      "-q",
+                                        "--threads",     threads,              "--report", file + ".json",
+                                        "--verify-eyes", "4",                  "--verify-rays-per-eye", "256"};
+    };
+    // Exit 3: the sampled bake misses objects.
+    ASSERT_EQ(wait_for(spawn(args(one, "2"), log)), 3) << test::read_file(log);
+    ASSERT_EQ(wait_for(spawn(args(three, "1"), log, mpirun(3))), 3) << test::read_file(log);
+    const std::string diff = dir.file("h5diff.txt");
+    EXPECT_EQ(test::h5diff_outside_run(one, three, diff), 0) << test::read_file(diff);
+    const auto j = nlohmann::json::parse(test::read_file(one + ".json"));
+    const auto& f = j["verification"]["figures"];
+    EXPECT_GT(f["missed_pairs"].get<double>(), 0.0) << f.dump(1);
+    EXPECT_GT(f["neighbour_passes"].get<double>(), 0.0) << f.dump(1);
 }
 
 TEST(Processes, TwoRanksBakeTheOctreeOneProcessBakes) {
