@@ -139,10 +139,13 @@ struct ConservativeConfig {
     bool slanted_cubes = false;    // slanted panels are drawn on the depth cubes too, inset per ray
                                    // (docs/ALGORITHMS.md#slanted-inset): exact, a little tighter on levels of
                                    // slopes and roofs, slower
-    int shaft_budget = 0;  // [Limit: 0..4096] the shaft pass: an object the faces listed and no sight ray
-                           // saw is tried once more against the whole eye region, cut into piece pairs
-                           // each covered in one plane by panels and the proven solid, at most this many
-                           // pairs per (cell, object) (pvs/shaft_hiding.h); 0 = off
+    int shaft_budget = 64;  // [Limit: 0..4096] the shaft pass: an object the faces listed and no sight ray
+                            // saw is tried once more against the whole eye region, cut into piece pairs
+                            // each covered in one plane by panels and the proven solid, at most this many
+                            // pairs per (cell, object) (pvs/shaft_hiding.h); 0 = off
+    uint64_t shaft_max_pairs = 4'000'000;  // [Limit: >= 0] the shaft pass runs over a grid's cells (an octree
+                                           // level's boxes) only when cells x leavable objects is at most
+                                           // this (docs/ALGORITHMS.md#shaft-cap); 0 = no limit
     bool shaft_fusion = true;  // the shaft pass's plane covers take in the umbrae of occluders in other
                                // planes (docs/ALGORITHMS.md#cross-plane-fusion); false for measurement
     bool shaft_caps = true;  // the shaft pass also covers piece pairs with the convex caps of panels meeting
@@ -388,6 +391,12 @@ void visit_options(Config& c, Visitor&& v) {
                  "this many pairs per (cell, object); 0 = off",
                  0, 4096},
       c.conservative.shaft_budget);
+    v(OptionSpec{OptionGroup::kConservative, "--shaft-max-pairs", "conservative.shaft_max_pairs", "pairs",
+                 "the shaft pass runs over a grid's cells (an octree level's boxes) only when their number "
+                 "times the objects is at most this, so that big levels keep their bake time (the pass costs "
+                 "about a thread-millisecond a pair it tries); 0 = no limit",
+                 0, 1e15},
+      c.conservative.shaft_max_pairs);
     v(
         OptionSpec{
             OptionGroup::kExperimental, "--shaft-fusion", "conservative.shaft_fusion", "",

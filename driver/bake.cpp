@@ -113,6 +113,20 @@ void grid_cells_and_pvs(Context& ctx, const BakeConfig& config, const World& wor
     if (config.mode == BakeMode::kConservative) {
         std::optional<ReusePlan> plan;
         if (reuse) {
+            // The shaft pass's cap is decided by the cells and objects (docs/ALGORITHMS.md#shaft-cap): an old
+            // bake that decided otherwise holds rows this bake would not compute, so it cannot be reused.
+            double skipped = 0.0;
+            for (const auto& [name, value] : reuse->figures)
+                if (name == "conservative_shaft_skipped_candidates") skipped = value;
+            const bool ran = config.conservative.shaft_budget > 0 && skipped == 0.0;
+            const bool runs = shaft_pass_runs(config.conservative, world, bake.cells.size());
+            if (ran != runs) {
+                throw bad_input(fmt::format(
+                    "--reuse: the old bake {} the shaft pass and this one would {}: {} cells x the objects "
+                    "{} --shaft-max-pairs {} now; bake without --reuse",
+                    ran ? "ran" : "did not run", runs ? "run it" : "not", bake.cells.size(),
+                    runs ? "are within" : "are over", config.conservative.shaft_max_pairs));
+            }
             ScopedTimer t(ctx, "reuse_plan");
             plan = plan_reuse(ctx, config.conservative, world, bake.cells, bake.print,
                               ReuseSource{reuse->cells, reuse->pvs, reuse->print});
@@ -148,15 +162,15 @@ void octree_cells_and_pvs(Context& ctx, const BakeConfig& config, const World& w
     // Built once for all the boxes the octree considers (pvs/region_hiding.h, pvs/shaft_hiding.h).
     std::optional<RegionHiders> hiders;
     if (conservative && config.conservative.single_occluder_pass) hiders.emplace(ctx, shrunk);
-    std::optional<ShaftProvers> provers;
-    if (conservative && config.conservative.shaft_budget > 0)
-        provers.emplace(ctx, shrunk, config.conservative.shaft_fusion, config.conservative.shaft_caps);
+    std::optional<ShaftProvers> provers;  // built at the first level the shaft pass runs on
     // A conservative box tests only what its parent lists (docs/ALGORITHMS.md#octree-parent-bound); the
     // sampled mode's rows prove nothing, so it samples every box afresh.
     const RegionPvsOracle oracle = [&](const std::vector<Aabb>& boxes, const std::vector<uint64_t>& streams,
                                        const std::vector<const uint64_t*>& bounds, PvsSet& rows) {
         if (conservative) {
             // A box's stream names it in every run (its node's index): the journal's key.
+            if (!provers && shaft_pass_runs(config.conservative, world, boxes.size()))
+                provers.emplace(ctx, shrunk, config.conservative.shaft_fusion, config.conservative.shaft_caps);
             conservative_box_rows(ctx, config.conservative, world, boxes, masks.eyes, shrunk, scene, rows,
                                   figures.conservative, hiders ? &*hiders : nullptr, &bounds,
                                   provers ? &*provers : nullptr, journal, &streams, share);

@@ -74,6 +74,8 @@ NamedValues bake_figures(const BakeConfig& config, const World& world, const Vie
         {"ranked_occluder_hidden_triangle_share_mean", stages.ranking.hidden_triangle_share_mean},
         {"conservative_shrunk_occluders", double(stages.shrunk_boxes)},
         {"conservative_epsilon_levels", double(stages.epsilon_levels)},
+        // The shaft pass's cap (docs/ALGORITHMS.md#shaft-cap): regions x objects of the passes not run.
+        {"conservative_shaft_skipped_candidates", double(stages.conservative.shaft.skipped_candidates)},
         {"pvs_objects_mean", double(listed) / n_cells},
         {"pvs_objects_max", double(listed_max)},
         {"pvs_share_of_objects_mean",

@@ -643,6 +643,26 @@ std::vector<uint32_t> leavable_objects(const World& world) {
     return out;
 }
 
+}  // namespace
+
+bool shaft_pass_runs(const ConservativeConfig& config, const World& world, uint64_t regions) {
+    if (config.shaft_budget <= 0) return false;
+    const uint64_t pairs = regions * uint64_t(leavable_objects(world).size());
+    return config.shaft_max_pairs == 0 || pairs <= config.shaft_max_pairs;
+}
+
+namespace {
+
+// The pass cap's note: what was skipped, and how to run it.
+void note_shaft_skipped(Context& ctx, const ConservativeConfig& config, uint64_t regions, uint64_t leavable,
+                        ShaftFigures& shaft) {
+    shaft.skipped_candidates += regions * leavable;
+    ctx.info(fmt::format("shaft pass: not run: {} regions x {} objects = {} candidate pairs, over "
+                         "--shaft-max-pairs {} (raise it to run the pass, at about a thread-millisecond a pair "
+                         "it tries)",
+                         regions, leavable, regions * leavable, config.shaft_max_pairs));
+}
+
 // The shaft pass over one region's row (pvs/shaft_hiding.h, docs/ALGORITHMS.md#shaft-pass): every object
 // of `candidates` the row lists whose bounds do not meet the region and that no sight ray saw (`seen`, or
 // null) is tried once more against the whole region; proven hidden from every eye of it, it leaves the row.
@@ -730,11 +750,13 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
     std::optional<RegionHiders> own_hiders;
     if (config.single_occluder_pass && !hiders) hiders = &own_hiders.emplace(ctx, occluders);
     if (!config.single_occluder_pass) hiders = nullptr;
+    const bool shaft_runs = shaft_pass_runs(config, world, boxes.size());
     std::optional<ShaftProvers> own_provers;
-    if (config.shaft_budget > 0 && !provers) provers = &own_provers.emplace(ctx, occluders, config.shaft_fusion, config.shaft_caps);
-    if (config.shaft_budget <= 0) provers = nullptr;
+    if (shaft_runs && !provers) provers = &own_provers.emplace(ctx, occluders, config.shaft_fusion, config.shaft_caps);
+    if (!shaft_runs) provers = nullptr;
     Counts total;
     ShaftFigures shaft;
+    if (config.shaft_budget > 0 && !shaft_runs) note_shaft_skipped(ctx, config, boxes.size(), leavable.size(), shaft);
     uint64_t region_hidden = 0, skipped = 0;
     WorkShare alone;
     WorkShare& share = shared_work ? *shared_work : alone;
@@ -926,9 +948,10 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
     PvsSet face_rows = PvsSet::make(uint32_t(2 * faces.size()), n_objects);  // face * 2 + side
     // What sight rays saw, per cell, for the shaft pass: a cell has at most one face in a phase, so each row
     // is written by one thread at a time.
-    PvsSet seen = PvsSet::make(config.shaft_budget > 0 ? uint32_t(cells.size()) : 0, n_objects);
+    const bool shaft_runs = shaft_pass_runs(config, world, cells.size());
+    PvsSet seen = PvsSet::make(shaft_runs ? uint32_t(cells.size()) : 0, n_objects);
     const auto seen_row = [&](int32_t cell) -> uint64_t* {
-        return config.shaft_budget > 0 && cell >= 0 ? seen.row(uint32_t(cell)) : nullptr;
+        return shaft_runs && cell >= 0 ? seen.row(uint32_t(cell)) : nullptr;
     };
     // Resuming (docs/ALGORITHMS.md#resume): a face's rows depend only on the cells' rows as its phase
     // started, so a face whose every wanted side the journal holds is taken from it. The seen rows recorded
@@ -942,7 +965,7 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
             if (!journal->find("face", key, face_rows.row(uint32_t(key)), face_rows.words_per_row))
                 return false;
         }
-        if (config.shaft_budget > 0) {
+        if (shaft_runs) {
             std::vector<uint64_t> snapshot(seen.words_per_row);
             for (int side = 0; side < 2; ++side) {
                 if (!f.wanted[size_t(side)]) continue;
@@ -961,7 +984,7 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
             if (!f.wanted[size_t(side)]) continue;
             const uint64_t key = 2 * uint64_t(fi) + uint64_t(side);
             journal->record("face", key, face_rows.row(uint32_t(key)), face_rows.words_per_row);
-            if (config.shaft_budget > 0)
+            if (shaft_runs)
                 journal->record("face_seen", key, seen_row(f.cell[size_t(side)]), seen.words_per_row);
         }
     };
@@ -1032,8 +1055,13 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
         total += solver.counts();
     }
     ctx.progress_end();
-    // The shaft pass (docs/ALGORITHMS.md#shaft-pass), on the cells' finished rows.
-    if (config.shaft_budget > 0) {
+    // The shaft pass (docs/ALGORITHMS.md#shaft-pass), on the cells' finished rows, when the cap allows it
+    // (docs/ALGORITHMS.md#shaft-cap).
+    if (config.shaft_budget > 0 && !shaft_runs) {
+        ShaftFigures shaft;
+        note_shaft_skipped(ctx, config, cells.size(), leavable.size(), shaft);
+        figures.shaft += shaft;
+    } else if (shaft_runs) {
         const auto pass_start = std::chrono::steady_clock::now();
         const ShaftProvers provers(ctx, occluders, config.shaft_fusion, config.shaft_caps);
         ShaftFigures shaft;

@@ -86,6 +86,12 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
                            const ShaftProvers* provers = nullptr, RowJournal* journal = nullptr,
                            const std::vector<uint64_t>* keys = nullptr, WorkShare* share = nullptr);
 
+// Whether the shaft pass runs over `regions` cells or boxes of `world` (docs/ALGORITHMS.md#shaft-cap): its
+// budget is on and regions x the objects a pass may leave out is at most config.shaft_max_pairs (0: no
+// limit). A function of the config, the world and the count alone, so a bake decides it alike on every
+// process and in every run.
+bool shaft_pass_runs(const ConservativeConfig& config, const World& world, uint64_t regions);
+
 // The conservative PVS of every cell. On a grid each face shared by two cells is computed once.
 // With `journal` (a grid only): every finished row of a pass (tables "hidden", "face", "face_seen",
 // "shaft") is taken from the journal when it holds it and recorded there when computed, and the journal is

@@ -39,6 +39,7 @@ struct ShaftFigures {
     uint64_t stuck_depth = 0;  // on pieces halved kBaseHalvings + log2(budget) times
     uint64_t umbrae = 0;  // umbrae of occluders in other planes computed (cross-plane fusion)
     uint64_t capped = 0;  // piece pairs a convex cap covered (pvs/convex_cap.h)
+    uint64_t skipped_candidates = 0;  // regions x objects of the passes not run for the pair cap
     double seconds = 0.0;
     // Where the time went, by how each pair ended (shaft_row() times each pair).
     double seconds_hidden = 0.0, seconds_certain = 0.0, seconds_out_of_budget = 0.0, seconds_stuck = 0.0;
@@ -54,6 +55,7 @@ struct ShaftFigures {
         stuck_depth += o.stuck_depth;
         umbrae += o.umbrae;
         capped += o.capped;
+        skipped_candidates += o.skipped_candidates;
         seconds += o.seconds;
         seconds_hidden += o.seconds_hidden;
         seconds_certain += o.seconds_certain;

@@ -525,6 +525,38 @@ TEST(Conservative, BehindTwoWallsAtDifferentDepthsTheShaftPassCulls) {
     EXPECT_GT(with_hidden, 0u);
 }
 
+// THE SHAFT PASS'S CAP (docs/ALGORITHMS.md#shaft-cap): the scene above, whose target only the pass proves,
+// on the grid and the octree. Within the cap (the default) the pass runs and culls the target; a cap below
+// cells x objects skips it (the target stays listed, the figure says how many candidates were skipped), and
+// the file is then the one a bake with the pass off writes.
+TEST(Conservative, TheShaftPassRunsWithinItsCapAndIsSkippedOverIt) {
+    World w;
+    const glm::vec3 size(14, 3, 8);
+    add_closed_room(w, size);
+    test::add_box(w, "near", Aabb::of({5.975f, 0, 0}, {6.025f, size.y, 4.3f}));
+    test::add_box(w, "far", Aabb::of({8.975f, 0, 4.45f}, {9.025f, size.y, size.z}));
+    const uint32_t target = test::add_box(w, "target", Aabb::of({11, 0.5f, 3}, {11.5f, 2.5f, 5}));
+    w.view_seeds = {{2.5f, 1.5f, 3.5f}, {12.5f, 1.5f, 4}};
+    const glm::vec3 eye(2.5f, 1.5f, 3.5f);
+    for (const CellKind kind : {CellKind::kGrid, CellKind::kOctree}) {
+        BakeConfig c = conservative_config();
+        c.cells.kind = kind;
+        c.conservative.shaft_budget = 1024;
+        const BakeData within = bake_without_misses(c, w);
+        EXPECT_EQ(figure(within, "conservative_shaft_skipped_candidates"), 0.0);
+        EXPECT_FALSE(within.pvs.test(uint32_t(within.cells.find(eye)), target)) << "within the cap";
+        c.conservative.shaft_max_pairs = 1;
+        const BakeData over = bake_without_misses(c, w);
+        EXPECT_GT(figure(over, "conservative_shaft_skipped_candidates"), 0.0);
+        EXPECT_TRUE(over.pvs.test(uint32_t(over.cells.find(eye)), target)) << "over the cap";
+        c.conservative.shaft_budget = 0;
+        c.conservative.shaft_max_pairs = BakeConfig().conservative.shaft_max_pairs;
+        const BakeData off = bake_without_misses(c, w);
+        EXPECT_EQ(over.pvs.words, off.pvs.words);
+        EXPECT_EQ(figure(off, "conservative_shaft_skipped_candidates"), 0.0);
+    }
+}
+
 // CROSS-PLANE FUSION (docs/ALGORITHMS.md#cross-plane-fusion). A closed room 14 x 3 x 8 m; two full-height
 // walls 5 cm thick (only their faces as occluders) meet at a right angle: the near one at x = 6 from z = 0
 // to 4, the far one at z = 4 from x = 6 to 12, closing a pocket open to the room only at x in [12, 14]. A
