@@ -168,10 +168,22 @@ void octree_cells_and_pvs(Context& ctx, const BakeConfig& config, const World& w
     const RegionPvsOracle oracle = [&](const std::vector<Aabb>& boxes, const std::vector<uint64_t>& streams,
                                        const std::vector<const uint64_t*>& bounds, PvsSet& rows) {
         if (conservative) {
+            // The shaft pass's cap, for the cells these boxes can still split into
+            // (docs/ALGORITHMS.md#shaft-cap).
+            ConservativeConfig level = config.conservative;
+            const uint64_t reach = octree_shaft_regions(boxes, config.cells.min_cell_size_m);
+            if (level.shaft_budget > 0 && !shaft_pass_runs(level, world, reach)) {
+                level.shaft_budget = 0;
+                const uint64_t candidates = shaft_candidates(world, reach);
+                figures.conservative.shaft.skipped_candidates += candidates;
+                ctx.info(fmt::format("shaft pass: not run on {} octree boxes: the {} cells they can split into "
+                                     "x the objects = {} candidate pairs, over --shaft-max-pairs {}",
+                                     boxes.size(), reach, candidates, level.shaft_max_pairs));
+            }
+            if (!provers && level.shaft_budget > 0)
+                provers.emplace(ctx, shrunk, level.shaft_fusion, level.shaft_caps);
             // A box's stream names it in every run (its node's index): the journal's key.
-            if (!provers && shaft_pass_runs(config.conservative, world, boxes.size()))
-                provers.emplace(ctx, shrunk, config.conservative.shaft_fusion, config.conservative.shaft_caps);
-            conservative_box_rows(ctx, config.conservative, world, boxes, masks.eyes, shrunk, scene, rows,
+            conservative_box_rows(ctx, level, world, boxes, masks.eyes, shrunk, scene, rows,
                                   figures.conservative, hiders ? &*hiders : nullptr, &bounds,
                                   provers ? &*provers : nullptr, journal, &streams, share);
             if (journal) journal->flush();  // an octree level is a stage's end

@@ -645,10 +645,26 @@ std::vector<uint32_t> leavable_objects(const World& world) {
 
 }  // namespace
 
+uint64_t shaft_candidates(const World& world, uint64_t regions) {
+    return regions * uint64_t(leavable_objects(world).size());
+}
+
 bool shaft_pass_runs(const ConservativeConfig& config, const World& world, uint64_t regions) {
     if (config.shaft_budget <= 0) return false;
-    const uint64_t pairs = regions * uint64_t(leavable_objects(world).size());
-    return config.shaft_max_pairs == 0 || pairs <= config.shaft_max_pairs;
+    return config.shaft_max_pairs == 0 || shaft_candidates(world, regions) <= config.shaft_max_pairs;
+}
+
+uint64_t octree_shaft_regions(const std::vector<Aabb>& boxes, double min_cell_m) {
+    uint64_t regions = 0;
+    for (const Aabb& b : boxes) {
+        const glm::vec3 size = b.size();
+        const double edge = std::max({double(size.x), double(size.y), double(size.z)});
+        uint64_t split = 1;  // cells along an edge
+        while (min_cell_m > 0.0 && double(split) * min_cell_m < edge * (1.0 - 1e-6) && split < (1u << 20))
+            split *= 2;
+        regions += split * split * split;
+    }
+    return regions;
 }
 
 namespace {

@@ -91,6 +91,12 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
 // limit). A function of the config, the world and the count alone, so a bake decides it alike on every
 // process and in every run.
 bool shaft_pass_runs(const ConservativeConfig& config, const World& world, uint64_t regions);
+// The count that rule compares: regions x the objects a pass may leave out (all but always-visible ones).
+uint64_t shaft_candidates(const World& world, uint64_t regions);
+// The regions an octree level's `boxes` stand for in that rule: the cells of `min_cell_m` each box can still
+// be split into ((edge / min_cell_m)^3, the edge rounded up to min_cell_m times a power of two), so that a
+// level of few big boxes is not cheaper than the leaves it decides.
+uint64_t octree_shaft_regions(const std::vector<Aabb>& boxes, double min_cell_m);
 
 // The conservative PVS of every cell. On a grid each face shared by two cells is computed once.
 // With `journal` (a grid only): every finished row of a pass (tables "hidden", "face", "face_seen",
