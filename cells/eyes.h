@@ -23,6 +23,14 @@ namespace pvs {
 void sample_eye_points_in(const CellSet& cells, const Aabb& box, uint64_t stream, uint32_t count,
                           uint64_t seed, std::vector<glm::vec3>& out);
 
+// The eye voxels of `cells` meeting `box`, in index order (none without an eye mask): what
+// sample_eye_points_in() draws from.
+std::vector<uint64_t> eye_voxels_in(const CellSet& cells, const Aabb& box);
+// sample_eye_points_in() with the box's eye voxels given (eye_voxels_in()): the same points, without walking
+// the mask again, for callers that draw many times from one box.
+void sample_eye_points_from(const CellSet& cells, const Aabb& box, const std::vector<uint64_t>& voxels,
+                            uint64_t stream, uint32_t count, uint64_t seed, std::vector<glm::vec3>& out);
+
 // Appends `count` stratified random eye points of the cell to `out`.
 inline void sample_eye_points(const CellSet& cells, uint32_t cell, uint32_t count, uint64_t seed,
                               std::vector<glm::vec3>& out) {

@@ -87,6 +87,8 @@ struct AimedRays {
     std::vector<RayTouch> touches;      // ray = index into directions
     std::vector<glm::vec3> batch_eyes;  // the eye points of batch `batch` of the rounds
     uint32_t batch = UINT32_MAX;
+    std::vector<uint64_t> cell_voxels;  // the eye voxels of cell `voxels_of` (eye_voxels_in), drawn from
+    uint32_t voxels_of = UINT32_MAX;    // by every batch of the cell's rounds
 };
 
 // Appends one ray per object of `targets` from `eye` at a random point on the object (none for an object
@@ -129,8 +131,13 @@ bool trace_round(const RayScene& scene, const World& world, const std::vector<do
     if (batch != out.batch) {
         out.batch = batch;
         out.batch_eyes.clear();
-        sample_eye_points_in(cells, cells.cells[c].bounds, cell_stream(kAimedEyeStream, c, batch),
-                             kRoundEyesPerBatch, seed, out.batch_eyes);
+        if (out.voxels_of != c) {
+            out.voxels_of = c;
+            out.cell_voxels = eye_voxels_in(cells, cells.cells[c].bounds);
+        }
+        sample_eye_points_from(cells, cells.cells[c].bounds, out.cell_voxels,
+                               cell_stream(kAimedEyeStream, c, batch), kRoundEyesPerBatch, seed,
+                               out.batch_eyes);
     }
     out.eyes.clear();
     out.directions.clear();

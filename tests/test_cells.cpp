@@ -73,6 +73,32 @@ TEST(Eyes, StratifiedInsideTheCellAndDeterministic) {
     for (int h : hits) EXPECT_EQ(h, 1);
 }
 
+// Drawing from the eye voxels gathered once (what verification's rounds do) gives the points a fresh walk of
+// the mask gives, all in eye voxels of the cell.
+TEST(Eyes, FromGatheredEyeVoxelsTheSamePointsAsFromTheMask) {
+    Context ctx = quiet_context();
+    CellSet g = build_uniform_grid(ctx, CellConfig{CellKind::kGrid, 2.0}, Aabb::of({0, 0, 0}, {4, 2, 2}));
+    g.eyes.origin = glm::vec3(0.0f);
+    g.eyes.voxel_size_m = 0.25f;
+    g.eyes.dims = glm::ivec3(16, 8, 8);
+    g.eyes.bits.assign(size_t(g.eyes.count() + 63) / 64, 0);
+    for (uint64_t i = 0; i < g.eyes.count(); ++i)
+        if ((i * 2654435761u) % 7 < 3) g.eyes.bits[i / 64] |= uint64_t(1) << (i % 64);
+    const std::vector<uint64_t> voxels = eye_voxels_in(g, g.cells[1].bounds);
+    ASSERT_FALSE(voxels.empty());
+    for (uint64_t stream = 0; stream < 8; ++stream) {
+        std::vector<glm::vec3> walked, drawn;
+        sample_eye_points_in(g, g.cells[1].bounds, stream, 5, 42, walked);
+        sample_eye_points_from(g, g.cells[1].bounds, voxels, stream, 5, 42, drawn);
+        ASSERT_EQ(walked.size(), 5u);
+        EXPECT_EQ(walked, drawn) << "stream " << stream;
+        for (const glm::vec3& p : drawn) {
+            EXPECT_TRUE(g.cells[1].bounds.contains(p));
+            EXPECT_TRUE(g.eyes.contains(p)) << p.x << " " << p.y << " " << p.z;
+        }
+    }
+}
+
 TEST(Directions, UnitAndSpreadOverTheSphere) {
     std::vector<glm::vec3> d;
     sample_sphere_directions(2048, 7, 3, d);

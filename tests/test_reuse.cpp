@@ -260,6 +260,30 @@ TEST(Reuse, AnOldBakeOfOtherParametersOrNoneIsRefusedBeforeAnyStage) {
     EXPECT_FALSE(std::filesystem::exists(dir.file("new.h5"))) << "a refused bake writes nothing";
 }
 
+// The shaft pass's cap is decided by cells x objects (docs/ALGORITHMS.md#shaft-cap): an old bake whose pass
+// ran, at a cap its world just meets, is refused for an edited world of more objects, whose bake would not
+// run it (the old rows hold what only the pass proved).
+TEST(Reuse, AnOldBakeWhosePassTheShaftCapNowSkipsIsRefused) {
+    test::TempDir dir;
+    Context ctx(Context::Options{LogLevel::kWarning, true, nullptr});
+    const World sample = load_world(ctx, test::sample_world());
+    const std::string old_world = dir.file("old.glb"), new_world = dir.file("new.glb");
+    write_glb(edited_world(sample, {}), old_world);
+    write_glb(edited_world(sample, door_and_new_crate(sample)), new_world);
+    const std::string log = dir.file("log.txt"), report = dir.file("old.json");
+    ASSERT_EQ(run(bake_args(old_world, dir.file("probe.h5")) + " --report '" + report + "'", log), 0)
+        << test::read_file(log);
+    const nlohmann::json j = nlohmann::json::parse(test::read_file(report));
+    const std::string cap = " --shaft-max-pairs " + std::to_string(j.at("cells").get<uint64_t>() *
+                                                                    j.at("objects").get<uint64_t>());
+    ASSERT_EQ(run(bake_args(old_world, dir.file("old.h5")) + cap, log), 0) << test::read_file(log);
+    EXPECT_EQ(run(bake_args(new_world, dir.file("new.h5")) + cap + " --reuse '" + dir.file("old.h5") + "'",
+                  log),
+              2);
+    EXPECT_NE(test::read_file(log).find("shaft pass"), std::string::npos) << test::read_file(log);
+    EXPECT_FALSE(std::filesystem::exists(dir.file("new.h5"))) << "a refused bake writes nothing";
+}
+
 // A print over a 16 m cube of eye voxels: a box moved changes the tiles its old and new bounds meet, and no
 // other; the same world prints the same.
 TEST(GeometryPrint, AMovedBoxChangesOnlyTheTilesItMeets) {
