@@ -430,6 +430,8 @@ ShaftProver::ShaftProver(Context& ctx, const ShrunkOccluders& set, bool fusion, 
         }
     }
     if (!solid_.empty()) {
+        // Each layer's bounds, row by row along x on all threads: a row adds its x range to its y and z
+        // layers, and each of its voxels its y, z square to its x layer. Min and max merge in any order.
         const glm::ivec3 n = solid_.dims;
         const double h = solid_.voxel_size_m;
         const glm::dvec3 o(solid_.origin);
@@ -437,21 +439,46 @@ ShaftProver::ShaftProver(Context& ctx, const ShrunkOccluders& set, bool fusion, 
             layer_lo_[a].assign(size_t(n[a]), glm::dvec2(INFINITY));
             layer_hi_[a].assign(size_t(n[a]), glm::dvec2(-INFINITY));
         }
-        for (size_t w = 0; w < solid_.bits.size(); ++w) {
-            for (uint64_t bits = solid_.bits[w]; bits != 0; bits &= bits - 1) {
-                const uint64_t i = uint64_t(w) * 64 + uint64_t(std::countr_zero(bits));
-                if (i >= solid_.count()) break;
-                const glm::ivec3 g(int(i % uint64_t(n.x)), int((i / uint64_t(n.x)) % uint64_t(n.y)),
-                                   int(i / (uint64_t(n.x) * uint64_t(n.y))));
-                const glm::dvec3 lo = o + glm::dvec3(g) * h, hi = o + glm::dvec3(g + 1) * h;
-                for (int a = 0; a < 3; ++a) {
-                    const int u = (a + 1) % 3, v = (a + 2) % 3;
-                    glm::dvec2& l = layer_lo_[a][size_t(g[a])];
-                    glm::dvec2& r = layer_hi_[a][size_t(g[a])];
-                    l = glm::min(l, glm::dvec2(lo[u], lo[v]));
-                    r = glm::max(r, glm::dvec2(hi[u], hi[v]));
+        const auto at = [&](int axis, int k) { return o[axis] + double(k) * h; };
+#pragma omp parallel
+        {
+            std::array<std::vector<glm::dvec2>, 3> lo, hi;
+            for (int a = 0; a < 3; ++a) {
+                lo[size_t(a)].assign(size_t(n[a]), glm::dvec2(INFINITY));
+                hi[size_t(a)].assign(size_t(n[a]), glm::dvec2(-INFINITY));
+            }
+#pragma omp for schedule(static)
+            for (int z = 0; z < n.z; ++z) {
+                for (int y = 0; y < n.y; ++y) {
+                    const uint64_t first = (uint64_t(z) * uint64_t(n.y) + uint64_t(y)) * uint64_t(n.x);
+                    const uint64_t end = first + uint64_t(n.x);
+                    int x_min = -1, x_max = -1;
+                    for (uint64_t w = first >> 6; w <= (end - 1) >> 6; ++w) {
+                        uint64_t bits = solid_.bits[w];
+                        if (w == first >> 6) bits &= ~uint64_t(0) << (first & 63);
+                        if (w == (end - 1) >> 6) bits &= ~uint64_t(0) >> (63 - ((end - 1) & 63));
+                        for (; bits != 0; bits &= bits - 1) {
+                            const int x = int(w * 64 + uint64_t(std::countr_zero(bits)) - first);
+                            if (x_min < 0) x_min = x;
+                            x_max = x;
+                            lo[0][size_t(x)] = glm::min(lo[0][size_t(x)], glm::dvec2(at(1, y), at(2, z)));
+                            hi[0][size_t(x)] = glm::max(hi[0][size_t(x)], glm::dvec2(at(1, y + 1), at(2, z + 1)));
+                        }
+                    }
+                    if (x_min < 0) continue;
+                    // Layer y: (z, x); layer z: (x, y).
+                    lo[1][size_t(y)] = glm::min(lo[1][size_t(y)], glm::dvec2(at(2, z), at(0, x_min)));
+                    hi[1][size_t(y)] = glm::max(hi[1][size_t(y)], glm::dvec2(at(2, z + 1), at(0, x_max + 1)));
+                    lo[2][size_t(z)] = glm::min(lo[2][size_t(z)], glm::dvec2(at(0, x_min), at(1, y)));
+                    hi[2][size_t(z)] = glm::max(hi[2][size_t(z)], glm::dvec2(at(0, x_max + 1), at(1, y + 1)));
                 }
             }
+#pragma omp critical(shaft_layers)
+            for (int a = 0; a < 3; ++a)
+                for (size_t k = 0; k < size_t(n[a]); ++k) {
+                    layer_lo_[a][k] = glm::min(layer_lo_[a][k], lo[size_t(a)][k]);
+                    layer_hi_[a][k] = glm::max(layer_hi_[a][k], hi[size_t(a)][k]);
+                }
         }
     }
     Context quiet(Context::Options{LogLevel::kWarning, true, nullptr});
@@ -1159,6 +1186,7 @@ bool ShaftProver::hides(const World& world, const VoxelMask& eyes, const ShaftRe
 }
 
 ShaftProvers::ShaftProvers(Context& ctx, const ShrunkOccluders& occluders, bool fusion, bool caps) {
+    ScopedTimer timer(ctx, "shaft_provers");
     provers_.push_back(std::make_unique<ShaftProver>(ctx, occluders, fusion, caps));
     for (const ShrunkOccluders& set : occluders.block_sets)
         provers_.push_back(std::make_unique<ShaftProver>(ctx, set, fusion, caps));
