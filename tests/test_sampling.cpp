@@ -615,7 +615,9 @@ GridWorld make_grid_world() {
 void expect_same_misses(const VerifyResult& a, const VerifyResult& b, bool widths = true) {
     ASSERT_EQ(a.misses.size(), b.misses.size());
     for (size_t i = 0; i < a.misses.size(); ++i) {
-        if (widths) EXPECT_EQ(a.misses[i].opening_width_m, b.misses[i].opening_width_m);
+        if (widths) {
+            EXPECT_EQ(a.misses[i].opening_width_m, b.misses[i].opening_width_m);
+        }
         EXPECT_EQ(a.misses[i].cell, b.misses[i].cell);
         EXPECT_EQ(a.misses[i].object, b.misses[i].object);
         EXPECT_EQ(a.misses[i].eye, b.misses[i].eye);
