@@ -63,14 +63,22 @@ uint64_t clip_grid_to_view(Context& ctx, CellSet& cells, const VoxelMask& view, 
     cells.view = view;
     cells.eyes = eyes;
     if (view.empty()) return 0;
+    // Which cells hold eye space, on all threads; then the kept cells renumbered in grid order.
+    const VoxelMask& held = eyes.empty() ? view : eyes;
+    std::vector<uint8_t> meets(cells.grid_to_cell.size(), 0);
+    const int64_t slots = int64_t(meets.size());
+#pragma omp parallel for schedule(dynamic, 64)
+    for (int64_t g = 0; g < slots; ++g) {
+        const int32_t c = cells.grid_to_cell[size_t(g)];
+        if (c >= 0) meets[size_t(g)] = mask_meets_box(held, cells.cells[size_t(c)].bounds) ? 1 : 0;
+    }
     std::vector<Cell> kept;
     kept.reserve(cells.cells.size());
     uint64_t dropped = 0;
     for (size_t g = 0; g < cells.grid_to_cell.size(); ++g) {
         const int32_t c = cells.grid_to_cell[g];
         if (c < 0) continue;
-        const bool any = mask_meets_box(eyes.empty() ? view : eyes, cells.cells[size_t(c)].bounds);
-        if (!any) {
+        if (!meets[g]) {
             cells.grid_to_cell[g] = -1;
             ++dropped;
             continue;
