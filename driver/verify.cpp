@@ -623,6 +623,32 @@ void share_counts(WorkShare& share, Counts& c) {
     std::memcpy(&c, words, sizeof c);
 }
 
+// One pass over the cells, dealt between the threads and the processes: fn(verifier, cell) for each cell
+// dealt to this process (marked in `mine`, cleared first). Returns the pass's counts summed over every
+// process; the caller then passes the cells' records on (share_cells()).
+template <class Fn>
+Counts dealt_pass(Context& ctx, WorkShare& deal, CellVerifier::Shared& shared, std::vector<uint8_t>& mine,
+                  const std::string& label, uint32_t pass, Fn&& fn) {
+    std::fill(mine.begin(), mine.end(), 0);
+    ctx.progress_begin(label, mine.size(), "cells");
+    deal.begin(mine.size());
+    Counts counts;
+#pragma omp parallel
+    {
+        CellVerifier v(shared);
+        v.pass_ = pass;
+        for_each_dealt(deal, ctx, 4, [&](uint64_t c) {
+            mine[c] = 1;
+            fn(v, uint32_t(c));
+        });
+#pragma omp critical
+        counts.add(v.counts);
+    }
+    ctx.progress_end();
+    share_counts(deal, counts);
+    return counts;
+}
+
 void measure_miss_widths(Context& ctx, const VerifyConfig& config, const RayScene& scene,
                          const CellSet& cells, VerifyResult& result) {
     result.gap_tolerance_m = config.gap_tolerance_m;
@@ -718,24 +744,9 @@ VerifyResult verify_pvs(Context& ctx, const VerifyConfig& config, const World& w
     if (neighbours) shared.witnesses.resize(n_cells);
     Counts counts;
     const uint64_t first_budget = result.aimed_rays_per_cell - neighbour_budget;
-    ctx.progress_begin("verify", n_cells, "cells");
-    deal.begin(n_cells);
-    {
-        Counts pass;
-#pragma omp parallel
-        {
-            CellVerifier v(shared);
-            for_each_dealt(deal, ctx, 4, [&](uint64_t c) {
-                mine[c] = 1;
-                v.first_pass(uint32_t(c), result.rays_per_eye, aim, first_budget);
-            });
-#pragma omp critical
-            pass.add(v.counts);
-        }
-        share_counts(deal, pass);
-        counts.add(pass);
-    }
-    ctx.progress_end();
+    counts.add(dealt_pass(ctx, deal, shared, mine, "verify", 0, [&](CellVerifier& v, uint32_t c) {
+        v.first_pass(c, result.rays_per_eye, aim, first_budget);
+    }));
     share_cells(deal, mine, shared, nullptr, neighbours ? &shared.witnesses : nullptr);
     if (neighbours) {
         // Neighbour passes until one finds nothing new (or kMaxNeighbourPasses): each aims at what the last
@@ -745,51 +756,25 @@ VerifyResult verify_pvs(Context& ctx, const VerifyConfig& config, const World& w
         std::vector<std::vector<Witness>> found(n_cells);
         for (uint32_t pass = 1; pass <= kMaxNeighbourPasses; ++pass) {
             const uint64_t before = counts.neighbour_new;
-            ctx.progress_begin(fmt::format("verify neighbours {}", pass), n_cells, "cells");
-            std::fill(mine.begin(), mine.end(), 0);
-            deal.begin(n_cells);
-            Counts pass_counts;
-#pragma omp parallel
-            {
-                CellVerifier v(shared);
-                v.pass_ = pass;
-                for_each_dealt(deal, ctx, 4, [&](uint64_t ci) {
-                    const uint32_t c = uint32_t(ci);
-                    mine[c] = 1;
-                    found[c].clear();
-                    const uint64_t left = aim_capped ? neighbour_budget - spent[c] : UINT64_MAX;
-                    spent[c] += v.neighbour_pass(c, touching[c], shared.witnesses, found[c], left);
-                });
-#pragma omp critical
-                pass_counts.add(v.counts);
-            }
-            ctx.progress_end();
-            share_counts(deal, pass_counts);
-            counts.add(pass_counts);
+            counts.add(dealt_pass(ctx, deal, shared, mine, fmt::format("verify neighbours {}", pass), pass,
+                                  [&](CellVerifier& v, uint32_t c) {
+                                      found[c].clear();
+                                      const uint64_t left =
+                                          aim_capped ? neighbour_budget - spent[c] : UINT64_MAX;
+                                      spent[c] += v.neighbour_pass(c, touching[c], shared.witnesses,
+                                                                   found[c], left);
+                                  }));
             share_cells(deal, mine, shared, &spent, &found);
             ++result.neighbour_passes;
             std::swap(shared.witnesses, found);
             if (counts.neighbour_new == before) break;
         }
         if (aim_capped) {
-            std::fill(mine.begin(), mine.end(), 0);
-            ctx.progress_begin("verify spare rounds", n_cells, "cells");
-            deal.begin(n_cells);
-            Counts pass_counts;
-#pragma omp parallel
-            {
-                CellVerifier v(shared);
-                for_each_dealt(deal, ctx, 4, [&](uint64_t ci) {
-                    mine[ci] = 1;
-                    if (spent[size_t(ci)] < neighbour_budget)
-                        v.spare_rounds(uint32_t(ci), neighbour_budget - spent[size_t(ci)]);
-                });
-#pragma omp critical
-                pass_counts.add(v.counts);
-            }
-            ctx.progress_end();
-            share_counts(deal, pass_counts);
-            counts.add(pass_counts);
+            counts.add(dealt_pass(ctx, deal, shared, mine, "verify spare rounds", 0,
+                                  [&](CellVerifier& v, uint32_t c) {
+                                      if (spent[c] < neighbour_budget)
+                                          v.spare_rounds(c, neighbour_budget - spent[c]);
+                                  }));
             share_cells(deal, mine, shared, &spent, nullptr);
         }
     }

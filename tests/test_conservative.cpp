@@ -505,14 +505,20 @@ bool listed_at(const BakeConfig& c, const World& w, glm::vec3 eye, uint32_t targ
 // inside its end. Neither wall alone hides it (so the single-occluder pass cannot), and the depth cubes lose
 // more than that margin to their pixels and the panels' inset; cut into piece pairs, each covered by one
 // wall, the shaft pass proves it.
-TEST(Conservative, BehindTwoWallsAtDifferentDepthsTheShaftPassCulls) {
+World two_walls_at_different_depths(uint32_t& target) {
     World w;
     const glm::vec3 size(14, 3, 8);
     add_closed_room(w, size);
     test::add_box(w, "near", Aabb::of({5.975f, 0, 0}, {6.025f, size.y, 4.3f}));
     test::add_box(w, "far", Aabb::of({8.975f, 0, 4.45f}, {9.025f, size.y, size.z}));
-    const uint32_t target = test::add_box(w, "target", Aabb::of({11, 0.5f, 3}, {11.5f, 2.5f, 5}));
+    target = test::add_box(w, "target", Aabb::of({11, 0.5f, 3}, {11.5f, 2.5f, 5}));
     w.view_seeds = {{2.5f, 1.5f, 3.5f}, {12.5f, 1.5f, 4}};
+    return w;
+}
+
+TEST(Conservative, BehindTwoWallsAtDifferentDepthsTheShaftPassCulls) {
+    uint32_t target = 0;
+    const World w = two_walls_at_different_depths(target);
     BakeConfig c = conservative_config();
     const auto listed = [&](int budget, uint64_t& shaft_hidden) {
         c.conservative.shaft_budget = budget;
@@ -530,13 +536,8 @@ TEST(Conservative, BehindTwoWallsAtDifferentDepthsTheShaftPassCulls) {
 // cells x objects skips it (the target stays listed, the figure says how many candidates were skipped), and
 // the file is then the one a bake with the pass off writes.
 TEST(Conservative, TheShaftPassRunsWithinItsCapAndIsSkippedOverIt) {
-    World w;
-    const glm::vec3 size(14, 3, 8);
-    add_closed_room(w, size);
-    test::add_box(w, "near", Aabb::of({5.975f, 0, 0}, {6.025f, size.y, 4.3f}));
-    test::add_box(w, "far", Aabb::of({8.975f, 0, 4.45f}, {9.025f, size.y, size.z}));
-    const uint32_t target = test::add_box(w, "target", Aabb::of({11, 0.5f, 3}, {11.5f, 2.5f, 5}));
-    w.view_seeds = {{2.5f, 1.5f, 3.5f}, {12.5f, 1.5f, 4}};
+    uint32_t target = 0;
+    const World w = two_walls_at_different_depths(target);
     const glm::vec3 eye(2.5f, 1.5f, 3.5f);
     for (const CellKind kind : {CellKind::kGrid, CellKind::kOctree}) {
         BakeConfig c = conservative_config();
