@@ -4,6 +4,7 @@
 
 #include "core/error.h"
 #include "io/gltf_loader.h"
+#include "samples/random_world.h"
 #include "tests/gltf_fixtures.h"
 #include "tests/test_util.h"
 
@@ -215,6 +216,46 @@ TEST(GltfWriter, RoundTripThroughLoader) {
     ASSERT_EQ(w.view_volume_boxes.size(), 1u);
     expect_near(w.view_volume_boxes[0].min, {-10, -1, -10});
     expect_near(w.view_volume_boxes[0].max, {20, 5, 20});
+}
+
+// scene_of: a world written as a scene and loaded again is the same world (objects, triangles in order, their
+// positions bit for bit, flags, seeds and view boxes), on the sample scene's world (every material kind and
+// flag) and on a random world (turned and hollow walls, see-through blocks).
+TEST(GltfWriter, AWorldWrittenAsASceneLoadsAsTheSameWorld) {
+    TempDir dir;
+    Context ctx = quiet_context();
+    const std::string first = dir.file("first.glb");
+    write_glb(sample_scene(), first);
+    const std::vector<World> worlds = {load_world(ctx, first), make_random_world(3, 0).world};
+    for (size_t k = 0; k < worlds.size(); ++k) {
+        SCOPED_TRACE("world " + std::to_string(k));
+        const World& a = worlds[k];
+        const std::string path = dir.file("again" + std::to_string(k) + ".glb");
+        write_glb(scene_of(a), path);
+        const World b = load_world(ctx, path);
+        ASSERT_EQ(b.objects.size(), a.objects.size());
+        ASSERT_EQ(b.triangles.size(), a.triangles.size());
+        for (size_t o = 0; o < a.objects.size(); ++o) {
+            EXPECT_EQ(b.objects[o].name, a.objects[o].name);
+            EXPECT_EQ(b.objects[o].flags, a.objects[o].flags) << a.objects[o].name;
+            EXPECT_EQ(b.objects[o].first_triangle, a.objects[o].first_triangle);
+            EXPECT_EQ(b.objects[o].triangle_count, a.objects[o].triangle_count);
+            EXPECT_EQ(b.objects[o].bounds.min, a.objects[o].bounds.min);
+            EXPECT_EQ(b.objects[o].bounds.max, a.objects[o].bounds.max);
+        }
+        for (size_t t = 0; t < a.triangles.size(); ++t) {
+            for (int v = 0; v < 3; ++v)
+                EXPECT_EQ(b.positions[b.triangles[t].v[v]], a.positions[a.triangles[t].v[v]]) << t;
+            EXPECT_EQ(b.triangle_opaque[t], a.triangle_opaque[t]) << t;
+            EXPECT_EQ(b.triangle_double_sided[t], a.triangle_double_sided[t]) << t;
+        }
+        EXPECT_EQ(b.view_seeds, a.view_seeds);
+        ASSERT_EQ(b.view_volume_boxes.size(), a.view_volume_boxes.size());
+        for (size_t v = 0; v < a.view_volume_boxes.size(); ++v) {
+            EXPECT_EQ(b.view_volume_boxes[v].min, a.view_volume_boxes[v].min);
+            EXPECT_EQ(b.view_volume_boxes[v].max, a.view_volume_boxes[v].max);
+        }
+    }
 }
 
 TEST(GltfWriter, SeedsOnlySceneHasNoBuffer) {

@@ -3,39 +3,16 @@
 
 #include "core/cell_set.h"
 #include "core/world.h"
+#include "samples/random_world.h"
 
 #include <string>
 
 namespace pvs::test {
 
-// Appends a box as one object: 12 triangles, or 10 with face `open_face` left out (0 and 1: z min and
-// max; 2 and 3: y; 4 and 5: x). opaque=false: seen through (glass).
+// Appends a box as one object: 12 triangles, or 10 with face `open_face` left out (samples/random_world.h).
 inline uint32_t add_box_faces(World& world, const std::string& name, const Aabb& b, bool opaque,
                               uint32_t extra_flags, int open_face) {
-    const uint32_t base = uint32_t(world.positions.size());
-    for (int i = 0; i < 8; ++i) {
-        world.positions.emplace_back(i & 1 ? b.max.x : b.min.x, i & 2 ? b.max.y : b.min.y,
-                                     i & 4 ? b.max.z : b.min.z);
-    }
-    static const uint32_t kFaces[12][3] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
-                                           {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
-    WorldObject obj;
-    obj.name = name;
-    obj.node_path = name;
-    obj.bounds = b;
-    obj.first_triangle = uint32_t(world.triangles.size());
-    obj.triangle_count = open_face >= 0 ? 10 : 12;
-    obj.flags = (opaque ? kObjectHasOpaque : kObjectHasSeeThrough) | extra_flags;
-    for (int k = 0; k < 12; ++k) {
-        if (k / 2 == open_face) continue;
-        const auto& f = kFaces[k];
-        world.triangles.push_back(Triangle{{base + f[0], base + f[1], base + f[2]}});
-        world.triangle_opaque.push_back(opaque ? 1 : 0);
-        world.triangle_double_sided.push_back(0);
-    }
-    world.objects.push_back(obj);
-    world.bounds.extend(b);
-    return uint32_t(world.objects.size() - 1);
+    return add_box_object(world, name, b, opaque, extra_flags, open_face);
 }
 
 // A closed box (12 triangles) as one object. opaque=false: seen through (glass).
