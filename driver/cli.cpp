@@ -14,6 +14,7 @@
 #include "io/file_hash.h"
 #include "io/gltf_loader.h"
 #include "io/gltf_writer.h"
+#include "io/runtime_file.h"
 #include "occluders/synthesis.h"
 #include "rays/ray_scene.h"
 
@@ -342,13 +343,30 @@ std::unique_ptr<RowJournal> open_journal(Context& ctx, const BakeConfig& config,
     return journal;
 }
 
+// The runtime file of the bake at bake_path (io/runtime_file.h), and a line saying what it holds.
+void write_runtime_file(Context& ctx, const std::string& bake_path, const std::string& runtime_path) {
+    ScopedTimer t(ctx, "export");
+    const RuntimeFileFigures f = export_runtime_file(bake_path, runtime_path);
+    std::string parts;
+    for (const auto& [tag, bytes] : f.sections) parts += fmt::format("{}{} {}", parts.empty() ? "" : ", ", tag, bytes);
+    ctx.info(fmt::format("wrote {} ({} bytes: {})", runtime_path, f.file_bytes, parts));
+}
+
+// export BAKE.h5 -o LEVEL.pvsr
+int run_export(Context& ctx, const std::string& bake_path, const std::string& runtime_path) {
+    check_output_writable(runtime_path, "the runtime file");
+    write_runtime_file(ctx, bake_path, runtime_path);
+    return kExitOk;
+}
+
 // bake WORLD -o OUT.h5
 int run_bake(Context& ctx, const BakeConfig& config, const std::string& world_path,
              const std::string& out_path, const std::string& report_path, ResumeMode resume,
-             const std::string& reuse_path) {
+             const std::string& reuse_path, const std::string& runtime_path) {
     ScopedTimer total(ctx, "total");
     // Before any stage: a bad output path must not cost a night's bake.
     check_output_writable(out_path, "the output");
+    if (!runtime_path.empty()) check_output_writable(runtime_path, "the runtime file");
     if (!report_path.empty()) check_output_writable(report_path, "the report");
     set_threads(config.run.threads);
     const std::string hash = hash_file_hex(world_path);
@@ -407,6 +425,7 @@ int run_bake(Context& ctx, const BakeConfig& config, const std::string& world_pa
     ctx.info(fmt::format("wrote {} ({}, {} cells, mean PVS {:.1f} of {} objects)", out_path, pvs_kind(bake),
                          bake.cells.size(), figure_or(bake.figures, "pvs_objects_mean", 0.0),
                          bake.objects.size()));
+    if (!runtime_path.empty()) write_runtime_file(ctx, out_path, runtime_path);
     // Misses through openings narrower than the gap tolerance are outside the promise (reported, no failure).
     const double wide =
         bake.verification.ran ? figure_or(bake.verification.figures, "wide_missed_pairs", 0.0) : 0.0;
@@ -593,7 +612,7 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
     CommonOptions common;
     std::string world_path, out_path, bake_path, mode = "conservative";
     bool no_verify = false, no_write = false, json = false, resume = false, restart = false;
-    std::string reuse_path;
+    std::string reuse_path, runtime_path;
     std::vector<double> point;
 
     CLI::App* bake =
@@ -622,6 +641,10 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
                         ->required()
                         ->group(title);
                     bake->add_option("--report", common.report_path, "also write a JSON report here")
+                        ->group(title);
+                    bake->add_option("--runtime-output", runtime_path,
+                                     "also write the runtime file a game ships (.pvsr, as pvsbake export "
+                                     "writes it)")
                         ->group(title);
                     bake->add_flag("--resume", resume,
                                    "continue from the checkpoint OUT.checkpoint/ of a killed bake (a bake "
@@ -706,6 +729,12 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
     info->add_option("bake", bake_path, "the bake file")->required();
     info->add_flag("--json", json, "print JSON (the same shape as the bake report)");
 
+    CLI::App* exporter = app.add_subcommand(
+        "export", "write the runtime file a game ships (.pvsr: docs/FORMAT.md) from a bake file");
+    exporter->add_option("bake", bake_path, "the bake file")->required();
+    exporter->add_option("-o,--output", runtime_path, "the runtime file to write (.pvsr)")->required();
+    add_common(*exporter, common, "Options");
+
     CLI::App* query = app.add_subcommand("query", "the cell holding a point and the objects its PVS lists");
     query->add_option("bake", bake_path, "the bake file")->required();
     query->add_option("point", point, "X Y Z in metres")->expected(3)->required();
@@ -717,7 +746,7 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
         if (!known) {
             if (log)
                 std::fprintf(log,
-                             "error: unknown subcommand '%s' (use bake, verify, occluders, info or query; "
+                             "error: unknown subcommand '%s' (use bake, verify, occluders, export, info or query; "
                              "see pvsbake --help)\n",
                              argv[1]);
             return kExitBadInput;
@@ -759,7 +788,7 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
                             resume    ? ResumeMode::kResume
                             : restart ? ResumeMode::kRestart
                                       : ResumeMode::kAuto,
-                            reuse_path);
+                            reuse_path, runtime_path);
         }
         if (verify->parsed()) {
             validate(config);
@@ -773,6 +802,7 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
         }
         if (info->parsed()) return run_info(bake_path, json, out);
         if (query->parsed()) return run_query(bake_path, point, json, out);
+        if (exporter->parsed()) return run_export(ctx, bake_path, runtime_path);
     } catch (const Error& e) {
         ctx.error(e.what());
         abort_processes(exit_status(e.kind()));

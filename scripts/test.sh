@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Set up, build and run the whole test suite. CI=true runs the long checks at a smaller size.
-# Then the runtime loader's round-trip and fuzz tests and the run-time culler's tests again, built with
+# Then the runtime loader's round-trip and fuzz tests, the runtime file's tests and the run-time culler's
+# tests again, built with
 # AddressSanitizer and UBSan (PVSBAKE_SANITIZE) in their own folder (ASAN_BUILD_DIR, default build-asan;
 # only the loader, the libraries and those tests are built there, not the pvsbake command or the benches).
 # SKIP_ASAN=1 skips that part.
@@ -15,13 +16,14 @@ if [ "${SKIP_ASAN:-0}" != 1 ]; then
     cmake -S . -B "$ASAN_DIR" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPVSBAKE_SANITIZE=ON \
       -DPVSBAKE_BUILD_BENCH=OFF >/dev/null
   fi
-  cmake --build "$ASAN_DIR" -j "$(nproc)" --target test_runtime_loader test_runtime_loader_fuzz test_runtime_occlusion \
+  cmake --build "$ASAN_DIR" -j "$(nproc)" --target test_runtime_loader test_runtime_loader_fuzz test_runtime_file test_runtime_occlusion \
     pvsbake_walkthrough
   # No leak checking: HDF5 1.10.8 itself leaks a few allocations on some damaged files (every leak
   # LeakSanitizer reports in the fuzz test is inside libhdf5; the other tests leak nothing).
   export ASAN_OPTIONS=detect_leaks=0:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
   "$ASAN_DIR/tests/test_runtime_loader"
   "$ASAN_DIR/tests/test_runtime_loader_fuzz"
+  "$ASAN_DIR/tests/test_runtime_file"
   "$ASAN_DIR/tests/test_runtime_occlusion"
-  echo "test: the loader's and the culler's tests pass under AddressSanitizer and UBSan ($ASAN_DIR)"
+  echo "test: the loaders' and the culler's tests pass under AddressSanitizer and UBSan ($ASAN_DIR)"
 fi

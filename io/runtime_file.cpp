@@ -1,0 +1,324 @@
+// pvsbake io: writes the runtime file (io/runtime_file.h; docs/FORMAT.md, "The runtime file") from the
+// arrays the bake file's validating reader gives (io/loader/bake_reader.h).
+#include "io/runtime_file.h"
+
+#include "core/error.h"
+#include "io/atomic_file.h"
+#include "io/hdf5_file.h"
+#include "io/loader/bake_reader.h"
+#include "io/loader/mask_bricks.h"
+#include "io/loader/row_code.h"
+#include "runtime/pvsr.h"
+
+#include <fmt/format.h>
+#include <xxhash.h>
+
+#include <algorithm>
+#include <cstring>
+#include <limits>
+
+namespace pvs {
+namespace {
+
+using pvsbake::detail::FileCells;
+using pvsbake::detail::FileMask;
+using pvsbake::detail::FileObjects;
+using pvsbake::detail::FileOccluders;
+using pvsbake::detail::FilePvs;
+
+// Little-endian bytes of plain values (the machines the baker runs on are little-endian: checked below).
+template <class T>
+void put(std::string& out, const T& v) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    out.append(reinterpret_cast<const char*>(&v), sizeof(T));
+}
+template <class T>
+void put_all(std::string& out, const std::vector<T>& v) {
+    if (!v.empty()) out.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
+}
+
+struct Section {
+    uint32_t tag = 0;
+    uint32_t item_bytes = 1;
+    uint64_t count = 0;
+    std::string bytes;
+};
+
+std::string tag_name(uint32_t tag) {
+    std::string s(4, ' ');
+    for (int i = 0; i < 4; ++i) s[size_t(i)] = char((tag >> (8 * i)) & 0xff);
+    return s;
+}
+
+// Values that fit 16 bits as 2 bytes each, else 4.
+Section index_section(uint32_t tag, const std::vector<uint32_t>& values) {
+    Section s{tag, 4, values.size(), {}};
+    const uint32_t top = values.empty() ? 0 : *std::max_element(values.begin(), values.end());
+    if (top <= std::numeric_limits<uint16_t>::max()) {
+        s.item_bytes = 2;
+        for (uint32_t v : values) put(s.bytes, uint16_t(v));
+    } else {
+        put_all(s.bytes, values);
+    }
+    return s;
+}
+
+template <class T>
+Section array_section(uint32_t tag, uint32_t item_bytes, const std::vector<T>& values) {
+    Section s{tag, item_bytes, uint64_t(values.size()) * sizeof(T) / item_bytes, {}};
+    put_all(s.bytes, values);
+    return s;
+}
+
+// A mask as bricks (io/loader/mask_bricks.h): as the file holds them (format 1.4), or made from its bits.
+void bricks_of(FileMask& m, std::vector<uint32_t>& index, std::vector<uint8_t>& bytes) {
+    if (!m.brick_index.empty()) {
+        index = std::move(m.brick_index);
+        bytes = std::move(m.brick_bytes);
+    } else {
+        pvsbake::detail::make_bricks(m.bytes, m.dims, index, bytes);
+    }
+}
+
+struct Bake {
+    pvsbake::BakeInfo info;
+    FileObjects objects;
+    FileCells cells;
+    FilePvs pvs;
+    FileOccluders occluders;
+};
+
+std::string assemble(const std::string& path, Bake& b) {
+    const uint32_t objects = uint32_t(b.objects.names.size());
+    const uint32_t cells = b.cells.count;
+    if (objects >= PVSR_MAX_OBJECTS)
+        throw bad_input(fmt::format("{}: {} objects, over the runtime file's {}", path, objects, PVSR_MAX_OBJECTS));
+    std::vector<Section> sections;
+
+    // LEVL: the grid and the masks' voxels.
+    {
+        Section s{PVSR_TAG('L', 'E', 'V', 'L'), PVSR_LEVEL_BYTES, 1, {}};
+        const FileMask& m = b.cells.view;
+        const bool eyes = b.cells.eyes.present && m.present && b.cells.eyes.voxel_size_m == m.voxel_size_m &&
+                          std::equal(m.origin, m.origin + 3, b.cells.eyes.origin) &&
+                          std::equal(m.dims, m.dims + 3, b.cells.eyes.dims);
+        for (int a = 0; a < 3; ++a) put(s.bytes, b.cells.origin[a]);
+        put(s.bytes, b.cells.cell_size_m);
+        for (int a = 0; a < 3; ++a) put(s.bytes, b.cells.dims[a]);
+        put(s.bytes, uint32_t(b.cells.node_first_child.size()));
+        for (int a = 0; a < 3; ++a) put(s.bytes, m.present ? m.origin[a] : 0.0f);
+        put(s.bytes, m.present ? m.voxel_size_m : 0.0f);
+        for (int a = 0; a < 3; ++a) put(s.bytes, m.present ? m.dims[a] : 0);
+        put(s.bytes, uint32_t((m.present ? PVSR_MASK_VIEW : 0u) | (eyes ? PVSR_MASK_EYES : 0u)));
+        sections.push_back(std::move(s));
+        if (m.present) {
+            std::vector<uint32_t> index;
+            std::vector<uint8_t> bytes;
+            bricks_of(b.cells.view, index, bytes);
+            sections.push_back(array_section(PVSR_TAG('V', 'I', 'D', 'X'), 4, index));
+            sections.push_back(array_section(PVSR_TAG('V', 'B', 'I', 'T'), 64, bytes));
+            if (eyes) {
+                bricks_of(b.cells.eyes, index, bytes);
+                sections.push_back(array_section(PVSR_TAG('E', 'I', 'D', 'X'), 4, index));
+                sections.push_back(array_section(PVSR_TAG('E', 'B', 'I', 'T'), 64, bytes));
+            }
+        }
+    }
+    // STRS: what the bake is.
+    {
+        Section s{PVSR_TAG('S', 'T', 'R', 'S'), 1, 0, {}};
+        const std::pair<const char*, const std::string*> pairs[] = {{"tool_version", &b.info.tool_version},
+                                                                    {"world_path", &b.info.world_path},
+                                                                    {"world_hash", &b.info.world_hash},
+                                                                    {"mode", &b.info.mode}};
+        for (const auto& [key, value] : pairs) {
+            s.bytes += key;
+            s.bytes.push_back('\0');
+            s.bytes += *value;
+            s.bytes.push_back('\0');
+        }
+        s.count = s.bytes.size();
+        sections.push_back(std::move(s));
+    }
+    // GRID, NODE, and CGRD (a grid cell's box is its grid box: 4 bytes, not 24) or CBOX.
+    sections.push_back(array_section(PVSR_TAG('G', 'R', 'I', 'D'), 4, b.cells.grid_to_cell));
+    if (b.cells.kind == 1) {
+        Section s{PVSR_TAG('N', 'O', 'D', 'E'), PVSR_NODE_BYTES, b.cells.node_first_child.size(), {}};
+        for (size_t i = 0; i < b.cells.node_first_child.size(); ++i) {
+            for (int a = 0; a < 3; ++a)  // as Aabb::center() and the HDF5 loader
+                put(s.bytes, 0.5f * (b.cells.node_bounds[6 * i + size_t(a)] + b.cells.node_bounds[6 * i + 3 + size_t(a)]));
+            put(s.bytes, b.cells.node_first_child[i]);
+            put(s.bytes, b.cells.node_cell[i]);
+        }
+        sections.push_back(std::move(s));
+    }
+    {
+        std::vector<uint32_t> cell_grid;
+        bool derived = b.cells.kind == 0;
+        if (derived) {
+            cell_grid.assign(cells, UINT32_MAX);
+            for (size_t g = 0; g < b.cells.grid_to_cell.size() && derived; ++g) {
+                const int32_t c = b.cells.grid_to_cell[g];
+                if (c < 0) continue;
+                derived = cell_grid[size_t(c)] == UINT32_MAX && g <= UINT32_MAX;
+                cell_grid[size_t(c)] = uint32_t(g);
+            }
+            const int32_t* d = b.cells.dims;
+            for (uint32_t c = 0; c < cells && derived; ++c) {
+                const uint32_t g = cell_grid[c];
+                if (g == UINT32_MAX) {
+                    derived = false;
+                    break;
+                }
+                const uint32_t idx[3] = {g % uint32_t(d[0]), g / uint32_t(d[0]) % uint32_t(d[1]),
+                                         g / (uint32_t(d[0]) * uint32_t(d[1]))};
+                for (int a = 0; a < 3; ++a) {
+                    const float lo = b.cells.origin[a] + float(idx[a]) * b.cells.cell_size_m;
+                    const float hi = b.cells.origin[a] + float(idx[a] + 1) * b.cells.cell_size_m;
+                    derived = derived && lo == b.cells.bounds[6 * c + size_t(a)] &&
+                              hi == b.cells.bounds[6 * c + 3 + size_t(a)];
+                }
+            }
+        }
+        if (derived)
+            sections.push_back(array_section(PVSR_TAG('C', 'G', 'R', 'D'), 4, cell_grid));
+        else
+            sections.push_back(array_section(PVSR_TAG('C', 'B', 'O', 'X'), 24, b.cells.bounds));
+    }
+    // CROW, ROFF, CODE (and the padding the decoders read into).
+    {
+        if (b.pvs.code_offsets.empty()) {  // a format 1.0 file: code its rows now
+            pvsbake::detail::RowCode code =
+                pvsbake::detail::encode_rows(b.pvs.rows.data(), b.pvs.unique_rows, b.pvs.row_bytes, objects);
+            b.pvs.code = std::move(code.code);
+            b.pvs.code_offsets = std::move(code.offsets);
+        }
+        const uint64_t code_size = b.pvs.code_offsets.back();
+        sections.push_back(index_section(PVSR_TAG('C', 'R', 'O', 'W'), b.pvs.cell_row));
+        sections.push_back(index_section(PVSR_TAG('R', 'O', 'F', 'F'), b.pvs.code_offsets));
+        Section s{PVSR_TAG('C', 'O', 'D', 'E'), 1, code_size, {}};
+        s.bytes.assign(reinterpret_cast<const char*>(b.pvs.code.data()), size_t(code_size));
+        s.bytes.append(pvsbake::detail::code_padding(objects), '\0');
+        sections.push_back(std::move(s));
+    }
+    // Objects.
+    {
+        sections.push_back(array_section(PVSR_TAG('O', 'B', 'O', 'X'), 24, b.objects.bounds));
+        sections.push_back(array_section(PVSR_TAG('O', 'T', 'R', 'I'), 4, b.objects.triangle_count));
+        sections.push_back(array_section(PVSR_TAG('O', 'F', 'L', 'G'), 4, b.objects.flags));
+        Section offsets{PVSR_TAG('O', 'N', 'A', 'M'), 4, uint64_t(objects) + 1, {}};
+        Section names{PVSR_TAG('O', 'S', 'T', 'R'), 1, 0, {}};
+        for (const std::string& n : b.objects.names) {
+            put(offsets.bytes, uint32_t(names.bytes.size()));
+            names.bytes += n;
+            names.bytes.push_back('\0');
+        }
+        put(offsets.bytes, uint32_t(names.bytes.size()));
+        names.count = names.bytes.size();
+        if (names.bytes.size() > UINT32_MAX) throw bad_input(fmt::format("{}: the object names pass 4 GiB", path));
+        sections.push_back(std::move(offsets));
+        sections.push_back(std::move(names));
+    }
+    // Ranked occluders: only the boxes a ranking names, renumbered in order of first use.
+    if (!b.occluders.ranked_offsets.empty()) {
+        std::vector<uint32_t> renumber(size_t(b.occluders.count), UINT32_MAX);
+        Section boxes{PVSR_TAG('R', 'B', 'O', 'X'), 24, 0, {}};
+        Section entries{PVSR_TAG('R', 'E', 'N', 'T'), PVSR_RANKED_BYTES, b.occluders.ranked_box.size(), {}};
+        for (size_t e = 0; e < b.occluders.ranked_box.size(); ++e) {
+            const uint32_t box = b.occluders.ranked_box[e];
+            if (renumber[box] == UINT32_MAX) {
+                renumber[box] = uint32_t(boxes.count++);
+                for (int a = 0; a < 6; ++a) put(boxes.bytes, b.occluders.bounds[6 * size_t(box) + size_t(a)]);
+            }
+            put(entries.bytes, renumber[box]);
+            put(entries.bytes, b.occluders.ranked_score[e]);
+            put(entries.bytes, b.occluders.ranked_solid_angle_sr[e]);
+            put(entries.bytes, b.occluders.ranked_hidden_objects[e]);
+            put(entries.bytes, b.occluders.ranked_hidden_triangle_share[e]);
+        }
+        sections.push_back(std::move(boxes));
+        sections.push_back(array_section(PVSR_TAG('R', 'O', 'F', 'S'), 4, b.occluders.ranked_offsets));
+        sections.push_back(std::move(entries));
+    }
+
+    // The header, the table, the sections at multiples of 64.
+    const auto aligned = [](uint64_t n) { return (n + PVSR_ALIGN - 1) / PVSR_ALIGN * PVSR_ALIGN; };
+    std::string out(PVSR_HEADER_BYTES, '\0');
+    std::string table;
+    uint64_t at = aligned(PVSR_HEADER_BYTES + uint64_t(sections.size()) * PVSR_ENTRY_BYTES);
+    for (const Section& s : sections) {
+        const uint64_t bytes = aligned(s.bytes.size());
+        put(table, s.tag);
+        put(table, s.item_bytes);
+        put(table, at);
+        put(table, s.count);
+        put(table, bytes);
+        at += bytes;
+    }
+    out += table;
+    out.resize(size_t(aligned(out.size())), '\0');
+    for (const Section& s : sections) {
+        out += s.bytes;
+        out.resize(size_t(aligned(out.size())), '\0');
+    }
+    static const uint8_t kMagic[8] = {'P', 'V', 'S', 'R', 0x0d, 0x0a, 0x1a, 0x0a};
+    std::memcpy(out.data(), kMagic, 8);
+    std::string head;
+    put(head, uint16_t(PVSR_VERSION_MAJOR));
+    put(head, uint16_t(PVSR_VERSION_MINOR));
+    put(head, uint32_t(PVSR_HEADER_BYTES));
+    put(head, uint64_t(out.size()));
+    put(head, uint64_t(0));  // the checksum, below
+    put(head, uint32_t(sections.size()));
+    put(head, uint32_t(b.info.conservative ? PVSR_FLAG_CONSERVATIVE : 0u));
+    put(head, objects);
+    put(head, cells);
+    put(head, uint32_t(b.cells.kind));
+    std::memcpy(out.data() + 8, head.data(), head.size());
+    const uint64_t sum = XXH64(out.data() + PVSR_CHECKSUMMED_FROM, out.size() - PVSR_CHECKSUMMED_FROM, 0);
+    std::memcpy(out.data() + 24, &sum, 8);
+    return out;
+}
+
+}  // namespace
+
+std::string runtime_file_bytes(const std::string& bake_path, RuntimeFileFigures* figures) {
+    static_assert(sizeof(float) == 4);
+    const uint16_t probe = 1;
+    if (*reinterpret_cast<const uint8_t*>(&probe) != 1)
+        throw bad_input("the runtime file is written on little-endian machines only");
+    Bake b = h5::read_file(bake_path, [&](const pvsbake::detail::Reader& r, hid_t root) {
+        Bake bake;
+        bake.info = pvsbake::detail::read_header(r, root);
+        bake.objects = pvsbake::detail::read_objects(r, root);
+        bake.cells = pvsbake::detail::read_cells(r, root, /*read_eyes=*/true, /*bricks=*/true);
+        const uint32_t objects = uint32_t(bake.objects.names.size());
+        bake.pvs = pvsbake::detail::read_pvs(r, root, objects, bake.cells.count, /*want_rows=*/false);
+        bake.occluders = pvsbake::detail::read_occluders(r, root, objects, bake.cells.count, /*want_boxes=*/false);
+        return bake;
+    });
+    std::string bytes = assemble(bake_path, b);
+    if (figures) {
+        figures->file_bytes = bytes.size();
+        figures->sections.clear();
+        const uint32_t n = *reinterpret_cast<const uint32_t*>(bytes.data() + 32);
+        for (uint32_t i = 0; i < n; ++i) {
+            const char* e = bytes.data() + PVSR_HEADER_BYTES + size_t(i) * PVSR_ENTRY_BYTES;
+            uint32_t tag;
+            uint64_t size;
+            std::memcpy(&tag, e, 4);
+            std::memcpy(&size, e + 24, 8);
+            figures->sections.emplace_back(tag_name(tag), size);
+        }
+    }
+    return bytes;
+}
+
+RuntimeFileFigures export_runtime_file(const std::string& bake_path, const std::string& out_path) {
+    RuntimeFileFigures figures;
+    const std::string bytes = runtime_file_bytes(bake_path, &figures);
+    write_file_atomically(out_path, bytes);
+    return figures;
+}
+
+}  // namespace pvs

@@ -1,0 +1,26 @@
+// pvsbake io: the runtime file (.pvsr), what a game ships: cells, masks, PVS rows, objects and ranked
+// occluders of a bake, flat, little-endian, checksummed, every section 64-byte aligned (docs/FORMAT.md,
+// "The runtime file"), read in place by the C99 runtime runtime/pvsr.h. The HDF5 bake file stays the
+// product of `pvsbake bake` and the input of every tool; this is exported from it.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace pvs {
+
+struct RuntimeFileFigures {
+    uint64_t file_bytes = 0;
+    std::vector<std::pair<std::string, uint64_t>> sections;  // tag, bytes (padding to 64 included)
+};
+
+// The runtime file of the bake file at bake_path, as bytes. Throws pvs::Error (bad input) naming the file
+// and what is wrong when the bake cannot be read or does not fit the runtime format (over 2^27 objects).
+std::string runtime_file_bytes(const std::string& bake_path, RuntimeFileFigures* figures = nullptr);
+
+// Writes it to out_path, whole or not at all (io/atomic_file.h).
+RuntimeFileFigures export_runtime_file(const std::string& bake_path, const std::string& out_path);
+
+}  // namespace pvs

@@ -1,0 +1,869 @@
+/* pvsr: the pvsbake runtime (pvsr.h). C99 and the C standard library only. The file's layout and every
+ * check made here: docs/FORMAT.md, "The runtime file". */
+#include "pvsr.h"
+
+#include <math.h>
+#include <string.h>
+
+#if defined(_MSC_VER)
+#include <intrin.h>
+#endif
+
+/* ---- Little pieces */
+
+static uint16_t rd16(const uint8_t* p) {
+    uint16_t v;
+    memcpy(&v, p, 2);
+    return v;
+}
+static uint32_t rd32(const uint8_t* p) {
+    uint32_t v;
+    memcpy(&v, p, 4);
+    return v;
+}
+static uint64_t rd64(const uint8_t* p) {
+    uint64_t v;
+    memcpy(&v, p, 8);
+    return v;
+}
+static float rdf(const uint8_t* p) {
+    float v;
+    memcpy(&v, p, 4);
+    return v;
+}
+static int32_t rdi32(const uint8_t* p) {
+    int32_t v;
+    memcpy(&v, p, 4);
+    return v;
+}
+
+/* Trailing zero bits of a non-zero word. */
+static unsigned ctz64(uint64_t w) {
+#if defined(__GNUC__) || defined(__clang__)
+    return (unsigned)__builtin_ctzll(w);
+#elif defined(_MSC_VER) && defined(_M_X64)
+    unsigned long i;
+    _BitScanForward64(&i, w);
+    return (unsigned)i;
+#else
+    unsigned n = 0;
+    while ((w & 1u) == 0) {
+        w >>= 1;
+        ++n;
+    }
+    return n;
+#endif
+}
+
+/* Item i of an array of 2- or 4-byte unsigned integers (CROW, ROFF). */
+static uint32_t index_at(const pvsr_array* a, uint64_t i) {
+    return a->item_bytes == 2 ? rd16(a->at + 2 * i) : rd32(a->at + 4 * i);
+}
+
+static const char* const kEmpty = "";
+
+/* ---- XXH64 (the xxHash specification, seed given) */
+
+#define P64_1 0x9E3779B185EBCA87ull
+#define P64_2 0xC2B2AE3D27D4EB4Full
+#define P64_3 0x165667B19E3779F9ull
+#define P64_4 0x85EBCA77C2B2AE63ull
+#define P64_5 0x27D4EB2F165667C5ull
+
+static uint64_t rotl64(uint64_t x, int r) {
+    return (x << r) | (x >> (64 - r));
+}
+static uint64_t xxh_round(uint64_t acc, uint64_t input) {
+    acc += input * P64_2;
+    acc = rotl64(acc, 31);
+    return acc * P64_1;
+}
+static uint64_t xxh_merge(uint64_t acc, uint64_t val) {
+    acc ^= xxh_round(0, val);
+    return acc * P64_1 + P64_4;
+}
+
+uint64_t pvsr_xxh64(const void* data, size_t size, uint64_t seed) {
+    const uint8_t* p = (const uint8_t*)data;
+    const uint8_t* const end = p + size;
+    uint64_t h;
+    if (size >= 32) {
+        const uint8_t* const limit = end - 32;
+        uint64_t v1 = seed + P64_1 + P64_2, v2 = seed + P64_2, v3 = seed, v4 = seed - P64_1;
+        do {
+            v1 = xxh_round(v1, rd64(p));
+            v2 = xxh_round(v2, rd64(p + 8));
+            v3 = xxh_round(v3, rd64(p + 16));
+            v4 = xxh_round(v4, rd64(p + 24));
+            p += 32;
+        } while (p <= limit);
+        h = rotl64(v1, 1) + rotl64(v2, 7) + rotl64(v3, 12) + rotl64(v4, 18);
+        h = xxh_merge(h, v1);
+        h = xxh_merge(h, v2);
+        h = xxh_merge(h, v3);
+        h = xxh_merge(h, v4);
+    } else {
+        h = seed + P64_5;
+    }
+    h += (uint64_t)size;
+    while (end - p >= 8) {
+        h ^= xxh_round(0, rd64(p));
+        h = rotl64(h, 27) * P64_1 + P64_4;
+        p += 8;
+    }
+    if (end - p >= 4) {
+        h ^= (uint64_t)rd32(p) * P64_1;
+        h = rotl64(h, 23) * P64_2 + P64_3;
+        p += 4;
+    }
+    while (p < end) {
+        h ^= (uint64_t)(*p) * P64_5;
+        h = rotl64(h, 11) * P64_1;
+        ++p;
+    }
+    h ^= h >> 33;
+    h *= P64_2;
+    h ^= h >> 29;
+    h *= P64_3;
+    h ^= h >> 32;
+    return h;
+}
+
+/* ---- The PVS code (docs/FORMAT.md, "The PVS code"): a bounded reader of one row's Rice-coded gaps */
+
+#define PVSR_END 0xffffffffu
+
+typedef struct gap_reader {
+    const uint8_t* bits;
+    uint64_t pos; /* bit position, bit 0 = the lowest bit of bits[0] */
+    uint32_t left, k, limit;
+    uint32_t last; /* + 1 wraps to 0 at the start */
+} gap_reader;
+
+static uint64_t peek(const gap_reader* g) {
+    return rd64(g->bits + (g->pos >> 3)) >> (g->pos & 7);
+}
+
+static void gap_init(gap_reader* g, const uint8_t* bits, uint32_t count, uint32_t k, uint32_t limit) {
+    g->bits = bits;
+    g->pos = 0;
+    g->left = count;
+    g->k = k;
+    g->limit = limit;
+    g->last = 0xffffffffu;
+}
+
+static uint32_t gap_stop(gap_reader* g) {
+    g->left = 0;
+    return PVSR_END;
+}
+
+/* The next index, increasing, below limit; PVSR_END at the row's end. Reads at most 27 bits an object
+ * plus 16 bytes past the row's start whatever the bits (the file pads the code so). */
+static uint32_t gap_next(gap_reader* g) {
+    uint64_t w, q = 0, low, next;
+    if (g->left == 0) return PVSR_END;
+    --g->left;
+    w = peek(g);
+    if (w != 0) {
+        const uint32_t z = ctz64(w);
+        if (z + 1 + g->k <= 57) {
+            const uint32_t lo = (uint32_t)(w >> (z + 1)) & ((1u << g->k) - 1u);
+            g->pos += z + 1 + g->k;
+            g->last += 1 + ((z << g->k) | lo);
+            return g->last < g->limit ? g->last : gap_stop(g);
+        }
+    }
+    for (;;) {
+        w = peek(g);
+        if (w != 0) {
+            const uint32_t z = ctz64(w);
+            q += z;
+            g->pos += z + 1;
+            break;
+        }
+        {
+            const uint32_t valid = 64 - (uint32_t)(g->pos & 7);
+            q += valid;
+            g->pos += valid;
+        }
+        if (q > g->limit) return gap_stop(g);
+    }
+    if (q > g->limit) return gap_stop(g);
+    low = peek(g) & (((uint64_t)1 << g->k) - 1);
+    g->pos += g->k;
+    next = (uint64_t)g->last + 1 + ((q << g->k) | low);
+    if ((next & 0xffffffffu) >= g->limit || (q << g->k) >= g->limit) return gap_stop(g);
+    g->last = (uint32_t)next;
+    return g->last;
+}
+
+/* A varint of checked code. */
+static uint32_t varint(const uint8_t** p) {
+    uint32_t v = 0;
+    int shift;
+    for (shift = 0;; shift += 7) {
+        const uint8_t b = *(*p)++;
+        v |= (uint32_t)(b & 0x7f) << shift;
+        if ((b & 0x80) == 0) return v;
+    }
+}
+
+/* The readers of row r: key (and diff for a row coded against a key row; returns 1 then). */
+static int row_readers(const pvsr_level* l, uint32_t r, gap_reader* key, gap_reader* diff) {
+    const uint8_t* p = l->code.at + index_at(&l->row_offsets, r);
+    const uint32_t ref = varint(&p);
+    const uint32_t head = varint(&p);
+    const uint8_t* q;
+    uint32_t key_head;
+    if (ref == 0) {
+        gap_init(key, p, head >> 5, head & 31, l->object_count);
+        return 0;
+    }
+    gap_init(diff, p, head >> 5, head & 31, l->object_count);
+    q = l->code.at + index_at(&l->row_offsets, r - ref);
+    (void)varint(&q); /* 0: a key row (checked) */
+    key_head = varint(&q);
+    gap_init(key, q, key_head >> 5, key_head & 31, l->object_count);
+    return 1;
+}
+
+/* ---- Opening: every check (docs/FORMAT.md, "The runtime file", "What the runtime checks") */
+
+typedef struct opening {
+    pvsr_level* l;
+    char* message;
+    size_t message_size;
+} opening;
+
+static pvsr_status fail(opening* o, pvsr_status status, const char* what) {
+    if (o->message != NULL && o->message_size > 0) {
+        size_t n = strlen(what);
+        if (n >= o->message_size) n = o->message_size - 1;
+        memcpy(o->message, what, n);
+        o->message[n] = '\0';
+    }
+    memset(o->l, 0, sizeof *o->l);
+    return status;
+}
+
+/* Section `tag` of the table: 1 and *out when present with items of item_bytes (0: 2 or 4), else 0.
+ * The table was checked: every section lies in the file. */
+static int section(const pvsr_level* l, uint32_t tag, pvsr_array* out) {
+    const uint32_t n = rd32(l->bytes + 32);
+    uint32_t i;
+    for (i = 0; i < n; ++i) {
+        const uint8_t* e = l->bytes + PVSR_HEADER_BYTES + (uint64_t)i * PVSR_ENTRY_BYTES;
+        if (rd32(e) == tag) {
+            out->item_bytes = rd32(e + 4);
+            out->at = l->bytes + rd64(e + 8);
+            out->count = rd64(e + 16);
+            out->bytes = rd64(e + 24);
+            return 1;
+        }
+    }
+    memset(out, 0, sizeof *out);
+    return 0;
+}
+
+/* A required or optional section with the expected item size (0: 2 or 4) and count. */
+static const char* need(const pvsr_level* l, uint32_t tag, uint32_t item_bytes, uint64_t count, int required,
+                        pvsr_array* out) {
+    if (!section(l, tag, out)) return required ? "a required section is missing" : NULL;
+    if (item_bytes == 0 ? (out->item_bytes != 2 && out->item_bytes != 4) : out->item_bytes != item_bytes)
+        return "a section's item size is wrong";
+    if (count != UINT64_MAX && out->count != count) return "a section's item count disagrees with the level";
+    return NULL;
+}
+
+static int finite_box(const uint8_t* p) {
+    int a;
+    for (a = 0; a < 6; ++a)
+        if (!isfinite(rdf(p + 4 * a))) return 0;
+    return 1;
+}
+
+/* A box may be empty (min +inf, max -inf, the bake's empty object) but holds no NaN. */
+static int box_without_nan(const uint8_t* p) {
+    int a;
+    for (a = 0; a < 6; ++a)
+        if (isnan(rdf(p + 4 * a))) return 0;
+    return 1;
+}
+
+static const char* check_table(pvsr_level* l) {
+    const uint32_t n = rd32(l->bytes + 32);
+    const uint64_t table_end = PVSR_HEADER_BYTES + (uint64_t)n * PVSR_ENTRY_BYTES;
+    uint32_t i, j;
+    if (n > 64 || table_end > l->size) return "the section table does not fit the file";
+    for (i = 0; i < n; ++i) {
+        const uint8_t* e = l->bytes + PVSR_HEADER_BYTES + (uint64_t)i * PVSR_ENTRY_BYTES;
+        const uint32_t item = rd32(e + 4);
+        const uint64_t at = rd64(e + 8), count = rd64(e + 16), bytes = rd64(e + 24);
+        if (at % PVSR_ALIGN != 0 || at < table_end || at > l->size || bytes > l->size - at)
+            return "a section lies outside the file or off its 64-byte alignment";
+        if (item == 0 || item > 64 || count > bytes / item) return "a section's size disagrees with its items";
+        for (j = 0; j < i; ++j) {
+            const uint8_t* f = l->bytes + PVSR_HEADER_BYTES + (uint64_t)j * PVSR_ENTRY_BYTES;
+            const uint64_t at2 = rd64(f + 8), bytes2 = rd64(f + 24);
+            if (rd32(f) == rd32(e)) return "a section appears twice";
+            if (at < at2 + bytes2 && at2 < at + bytes) return "two sections overlap";
+        }
+    }
+    return NULL;
+}
+
+static const char* check_level(pvsr_level* l) {
+    pvsr_array a;
+    const uint8_t* p;
+    uint64_t g;
+    int k;
+    const char* bad = need(l, PVSR_TAG('L', 'E', 'V', 'L'), PVSR_LEVEL_BYTES, 1, 1, &a);
+    if (bad) return bad;
+    p = a.at;
+    for (k = 0; k < 3; ++k) {
+        l->origin[k] = rdf(p + 4 * k);
+        l->dims[k] = rdi32(p + 16 + 4 * k);
+        l->mask_origin[k] = rdf(p + 32 + 4 * k);
+        l->mask_dims[k] = rdi32(p + 48 + 4 * k);
+    }
+    l->cell_size_m = rdf(p + 12);
+    l->node_count = rd32(p + 28);
+    l->mask_voxel_m = rdf(p + 44);
+    l->mask_flags = rd32(p + 60);
+    if (l->mask_flags & ~(PVSR_MASK_VIEW | PVSR_MASK_EYES)) return "the level's mask flags are unknown";
+    if (!(isfinite(l->cell_size_m) && l->cell_size_m > 0.0f)) return "the cell size is not a positive number";
+    g = 1;
+    for (k = 0; k < 3; ++k) {
+        if (!isfinite(l->origin[k])) return "the grid's origin is not finite";
+        if (l->dims[k] < 0 || l->dims[k] > (1 << 20)) return "the grid's dimensions are out of range";
+        g *= (uint64_t)l->dims[k];
+    }
+    if (g > (1u << 31)) return "the grid has too many cells";
+    if (l->cell_kind > 1) return "the cell kind is neither grid nor octree";
+    if (l->cell_kind == 0 && l->node_count != 0) return "a grid with octree nodes";
+    bad = need(l, PVSR_TAG('G', 'R', 'I', 'D'), 4, g, 1, &l->grid_to_cell);
+    if (bad) return bad;
+    if (l->mask_flags & PVSR_MASK_VIEW) {
+        uint64_t bricks = 1;
+        if (!(isfinite(l->mask_voxel_m) && l->mask_voxel_m > 0.0f)) return "the mask's voxel size is not positive";
+        for (k = 0; k < 3; ++k) {
+            if (!isfinite(l->mask_origin[k])) return "the mask's origin is not finite";
+            if (l->mask_dims[k] < 0 || l->mask_dims[k] > (1 << 24)) return "the mask's dimensions are out of range";
+            l->brick_dims[k] = (int32_t)(((uint32_t)l->mask_dims[k] + 7u) / 8u);
+            bricks *= (uint64_t)l->brick_dims[k];
+        }
+        if (bricks > (1u << 30)) return "the mask has too many bricks";
+        bad = need(l, PVSR_TAG('V', 'I', 'D', 'X'), 4, bricks, 1, &l->view_index);
+        if (!bad) bad = need(l, PVSR_TAG('V', 'B', 'I', 'T'), 64, UINT64_MAX, 1, &l->view_bits);
+        if (!bad && (l->mask_flags & PVSR_MASK_EYES)) {
+            bad = need(l, PVSR_TAG('E', 'I', 'D', 'X'), 4, bricks, 1, &l->eye_index);
+            if (!bad) bad = need(l, PVSR_TAG('E', 'B', 'I', 'T'), 64, UINT64_MAX, 1, &l->eye_bits);
+        }
+        if (bad) return bad;
+        {
+            const pvsr_array* idx[2] = {&l->view_index, &l->eye_index};
+            const pvsr_array* bits[2] = {&l->view_bits, &l->eye_bits};
+            int m;
+            for (m = 0; m < 2; ++m) {
+                uint64_t b;
+                for (b = 0; b < idx[m]->count; ++b)
+                    if (rd32(idx[m]->at + 4 * b) >= 2 + bits[m]->count) return "a mask brick index is out of range";
+            }
+        }
+    } else if (l->mask_flags & PVSR_MASK_EYES) {
+        return "an eye mask without a view mask";
+    }
+    return NULL;
+}
+
+static const char* check_cells(pvsr_level* l) {
+    const uint32_t c = l->cell_count;
+    const int32_t top = (int32_t)(l->cell_kind == 0 ? c : l->node_count);
+    uint64_t i;
+    const char* bad;
+    if (c > (1u << 31) || l->node_count > (1u << 31)) return "too many cells or nodes";
+    for (i = 0; i < l->grid_to_cell.count; ++i) {
+        const int32_t v = rdi32(l->grid_to_cell.at + 4 * i);
+        if (v < -1 || v >= top) return "a grid position names a cell or node out of range";
+    }
+    if (l->cell_kind == 1) {
+        bad = need(l, PVSR_TAG('N', 'O', 'D', 'E'), PVSR_NODE_BYTES, l->node_count, 1, &l->nodes);
+        if (bad) return bad;
+        for (i = 0; i < l->node_count; ++i) {
+            const uint8_t* n = l->nodes.at + PVSR_NODE_BYTES * i;
+            const int32_t first = rdi32(n + 12), cell = rdi32(n + 16);
+            int k;
+            for (k = 0; k < 3; ++k)
+                if (!isfinite(rdf(n + 4 * k))) return "an octree node's centre is not finite";
+            /* Children come after their parent, so a descent always ends. */
+            if (first != -1 && (first <= (int64_t)i || (uint64_t)first + 8 > l->node_count))
+                return "an octree node's children are out of order or range";
+            if (cell < -1 || cell >= (int64_t)c) return "an octree node names a cell out of range";
+        }
+    }
+    if (section(l, PVSR_TAG('C', 'G', 'R', 'D'), &l->cell_grid)) {
+        bad = need(l, PVSR_TAG('C', 'G', 'R', 'D'), 4, c, 1, &l->cell_grid);
+        if (bad) return bad;
+        if (l->cell_kind != 0) return "an octree's cells given by grid positions";
+        for (i = 0; i < c; ++i)
+            if (rd32(l->cell_grid.at + 4 * i) >= l->grid_to_cell.count) return "a cell's grid position is out of range";
+    } else {
+        bad = need(l, PVSR_TAG('C', 'B', 'O', 'X'), 24, c, 1, &l->cell_boxes);
+        if (bad) return bad;
+        for (i = 0; i < c; ++i)
+            if (!finite_box(l->cell_boxes.at + 24 * i)) return "a cell's box is not finite";
+    }
+    return NULL;
+}
+
+static const char* check_rows(pvsr_level* l) {
+    const uint32_t n = l->object_count;
+    uint64_t i, code_size, padding;
+    const char* bad = need(l, PVSR_TAG('C', 'R', 'O', 'W'), 0, l->cell_count, 1, &l->cell_row);
+    if (!bad) bad = need(l, PVSR_TAG('R', 'O', 'F', 'F'), 0, UINT64_MAX, 1, &l->row_offsets);
+    if (!bad) bad = need(l, PVSR_TAG('C', 'O', 'D', 'E'), 1, UINT64_MAX, 1, &l->code);
+    if (bad) return bad;
+    if (l->row_offsets.count < 1 || l->row_offsets.count - 1 > 0xffffffffu) return "the row offsets are empty";
+    l->row_count = (uint32_t)(l->row_offsets.count - 1);
+    code_size = l->code.count;
+    l->code_bytes = code_size;
+    /* The decoders read whole words past a row: the section holds the code and then at least this much. */
+    padding = 4 * (uint64_t)n + 24;
+    if (l->code.bytes < code_size + padding) return "the PVS code is not followed by its padding";
+    if (l->row_count == 0 && l->cell_count > 0) return "cells but no PVS rows";
+    for (i = 0; i < l->cell_count; ++i)
+        if (index_at(&l->cell_row, i) >= l->row_count) return "a cell's row is out of range";
+    if (index_at(&l->row_offsets, 0) != 0 || index_at(&l->row_offsets, l->row_count) != code_size)
+        return "the row offsets do not start at 0 and end at the code's size";
+    for (i = 0; i < l->row_count; ++i) {
+        const uint64_t begin = index_at(&l->row_offsets, i), end = index_at(&l->row_offsets, i + 1);
+        const uint8_t* p = l->code.at + begin;
+        const uint8_t* const stop = l->code.at + end;
+        uint32_t fields[2];
+        int f;
+        if (end < begin + 2) return "a PVS row's offsets decrease or leave no room for it";
+        for (f = 0; f < 2; ++f) {
+            uint64_t v = 0;
+            int shift;
+            for (shift = 0;; shift += 7) {
+                uint8_t b;
+                if (p == stop || shift > 28) return "a PVS row's head is damaged";
+                b = *p++;
+                v |= (uint64_t)(b & 0x7f) << shift;
+                if ((b & 0x80) == 0) break;
+            }
+            if (v > 0xffffffffu) return "a PVS row's head is damaged";
+            fields[f] = (uint32_t)v;
+        }
+        if (fields[0] > i) return "a PVS row refers to a row after it";
+        if (fields[0] > 0) {
+            const uint8_t* q = l->code.at + index_at(&l->row_offsets, i - fields[0]);
+            if (varint(&q) != 0) return "a PVS row refers to a row that is not a key row";
+        }
+        if ((fields[1] & 31) > 24) return "a PVS row's Rice parameter is above 24";
+        if ((fields[1] >> 5) > n) return "a PVS row has more indices than objects";
+        if ((uint64_t)(fields[1] >> 5) * (1 + (fields[1] & 31)) > (uint64_t)(stop - p) * 8)
+            return "a PVS row's code runs past the row";
+    }
+    return NULL;
+}
+
+static const char* check_objects(pvsr_level* l) {
+    const uint32_t n = l->object_count;
+    uint64_t i;
+    const char* bad = need(l, PVSR_TAG('O', 'B', 'O', 'X'), 24, n, 1, &l->object_boxes);
+    if (!bad) bad = need(l, PVSR_TAG('O', 'T', 'R', 'I'), 4, n, 1, &l->object_triangles);
+    if (!bad) bad = need(l, PVSR_TAG('O', 'F', 'L', 'G'), 4, n, 1, &l->object_flags);
+    if (!bad) bad = need(l, PVSR_TAG('O', 'N', 'A', 'M'), 4, (uint64_t)n + 1, 1, &l->name_offsets);
+    if (!bad) bad = need(l, PVSR_TAG('O', 'S', 'T', 'R'), 1, UINT64_MAX, 1, &l->names);
+    if (bad) return bad;
+    if (n >= PVSR_MAX_OBJECTS) return "too many objects";
+    l->total_triangles = 0;
+    for (i = 0; i < n; ++i) {
+        const uint32_t a = rd32(l->name_offsets.at + 4 * i), b = rd32(l->name_offsets.at + 4 * i + 4);
+        if (!box_without_nan(l->object_boxes.at + 24 * i)) return "an object's box holds a NaN";
+        if (b <= a || b > l->names.count || l->names.at[b - 1] != 0)
+            return "an object's name is out of range or not NUL-terminated";
+        l->total_triangles += rd32(l->object_triangles.at + 4 * i);
+    }
+    if (rd32(l->name_offsets.at) != 0 && n > 0) return "the names do not start at 0";
+    return NULL;
+}
+
+static const char* check_ranked(pvsr_level* l) {
+    uint64_t c, e;
+    const char* bad;
+    if (!section(l, PVSR_TAG('R', 'O', 'F', 'S'), &l->ranked_offsets)) return NULL; /* no ranking */
+    bad = need(l, PVSR_TAG('R', 'O', 'F', 'S'), 4, (uint64_t)l->cell_count + 1, 1, &l->ranked_offsets);
+    if (!bad) bad = need(l, PVSR_TAG('R', 'B', 'O', 'X'), 24, UINT64_MAX, 1, &l->occluder_boxes);
+    if (!bad) bad = need(l, PVSR_TAG('R', 'E', 'N', 'T'), PVSR_RANKED_BYTES, UINT64_MAX, 1, &l->ranked);
+    if (bad) return bad;
+    if (l->occluder_boxes.count > 0xffffffffu) return "too many occluder boxes";
+    l->occluder_box_count = (uint32_t)l->occluder_boxes.count;
+    for (e = 0; e < l->occluder_boxes.count; ++e)
+        if (!finite_box(l->occluder_boxes.at + 24 * e)) return "an occluder box is not finite";
+    if (rd32(l->ranked_offsets.at) != 0 || rd32(l->ranked_offsets.at + 4 * (uint64_t)l->cell_count) != l->ranked.count)
+        return "the ranked offsets do not start at 0 and end at the entries' count";
+    for (c = 0; c < l->cell_count; ++c) {
+        const uint32_t a = rd32(l->ranked_offsets.at + 4 * c), b = rd32(l->ranked_offsets.at + 4 * c + 4);
+        if (b < a) return "the ranked offsets decrease";
+        for (e = a; e < b; ++e) {
+            const uint8_t* r = l->ranked.at + PVSR_RANKED_BYTES * e;
+            const float score = rdf(r + 4), sa = rdf(r + 8), hidden = rdf(r + 12), share = rdf(r + 16);
+            if (rd32(r) >= l->occluder_boxes.count) return "a ranked occluder names a box out of range";
+            if (!(isfinite(score) && score >= 0.0f) || (e > a && score > rdf(r - PVSR_RANKED_BYTES + 4)))
+                return "a ranked occluder's score is not finite, negative, or above the one before it";
+            if (!(sa >= 0.0f && sa <= 12.5664f) || !(hidden >= 0.0f && hidden <= (float)l->object_count) ||
+                !(share >= 0.0f && share <= 1.0f))
+                return "a ranked occluder's measure is out of range";
+        }
+    }
+    return NULL;
+}
+
+static const char* check_strings(pvsr_level* l) {
+    uint64_t i, fields = 0;
+    const char* bad = need(l, PVSR_TAG('S', 'T', 'R', 'S'), 1, UINT64_MAX, 1, &l->strings);
+    if (bad) return bad;
+    if (l->strings.count > 0 && l->strings.at[l->strings.count - 1] != 0) return "the strings are not NUL-terminated";
+    for (i = 0; i < l->strings.count; ++i) fields += l->strings.at[i] == 0;
+    if (fields % 2 != 0) return "the strings are not key and value pairs";
+    return NULL;
+}
+
+pvsr_status pvsr_open(pvsr_level* level, const void* data, size_t size, char* message, size_t message_size) {
+    static const uint8_t kMagic[8] = {'P', 'V', 'S', 'R', 0x0d, 0x0a, 0x1a, 0x0a};
+    const uint8_t* b = (const uint8_t*)data;
+    opening o;
+    const char* bad;
+    const uint16_t probe = 1;
+    if (level == NULL) return PVSR_INVALID_ARGUMENT;
+    o.l = level;
+    o.message = message;
+    o.message_size = message_size;
+    memset(level, 0, sizeof *level);
+    if (data == NULL) return fail(&o, PVSR_INVALID_ARGUMENT, "no bytes (a null pointer)");
+    if (*(const uint8_t*)&probe != 1) return fail(&o, PVSR_UNSUPPORTED, "this runtime reads on little-endian machines only");
+    if (size < PVSR_HEADER_BYTES || memcmp(b, kMagic, 8) != 0)
+        return fail(&o, PVSR_NOT_A_RUNTIME_FILE, "not a pvsbake runtime file (no PVSR magic)");
+    level->bytes = b;
+    level->size = size;
+    level->version_major = rd16(b + 8);
+    level->version_minor = rd16(b + 10);
+    if (level->version_major > PVSR_VERSION_MAJOR)
+        return fail(&o, PVSR_VERSION_TOO_NEW, "a newer major version of the runtime file than this runtime reads");
+    if (level->version_major < 1) return fail(&o, PVSR_CORRUPT, "version 0 is not a runtime file version");
+    if (rd32(b + 12) != PVSR_HEADER_BYTES) return fail(&o, PVSR_CORRUPT, "the header's size is wrong");
+    if (rd64(b + 16) != (uint64_t)size)
+        return fail(&o, PVSR_CORRUPT, "the file's size is not the size its header says (truncated or padded)");
+    if (pvsr_xxh64(b + PVSR_CHECKSUMMED_FROM, size - PVSR_CHECKSUMMED_FROM, 0) != rd64(b + 24))
+        return fail(&o, PVSR_CORRUPT, "the bytes do not match the file's checksum (damaged)");
+    level->flags = rd32(b + 36);
+    if (level->flags & ~PVSR_FLAG_CONSERVATIVE) return fail(&o, PVSR_CORRUPT, "unknown header flags");
+    level->object_count = rd32(b + 40);
+    level->cell_count = rd32(b + 44);
+    level->cell_kind = rd32(b + 48);
+    bad = check_table(level);
+    if (!bad) bad = check_level(level);
+    if (!bad) bad = check_cells(level);
+    if (!bad) bad = check_rows(level);
+    if (!bad) bad = check_objects(level);
+    if (!bad) bad = check_ranked(level);
+    if (!bad) bad = check_strings(level);
+    if (bad) return fail(&o, PVSR_CORRUPT, bad);
+    if (message != NULL && message_size > 0) message[0] = '\0';
+    return PVSR_OK;
+}
+
+const char* pvsr_status_name(pvsr_status status) {
+    switch (status) {
+        case PVSR_OK: return "ok";
+        case PVSR_NOT_A_RUNTIME_FILE: return "not a runtime file";
+        case PVSR_VERSION_TOO_NEW: return "version too new";
+        case PVSR_CORRUPT: return "corrupt";
+        case PVSR_UNSUPPORTED: return "unsupported machine";
+        case PVSR_INVALID_ARGUMENT: return "invalid argument";
+    }
+    return "unknown status";
+}
+
+/* ---- Queries */
+
+uint32_t pvsr_cell_count(const pvsr_level* l) {
+    return l ? l->cell_count : 0;
+}
+uint32_t pvsr_object_count(const pvsr_level* l) {
+    return l ? l->object_count : 0;
+}
+uint32_t pvsr_cell_kind(const pvsr_level* l) {
+    return l ? l->cell_kind : 0;
+}
+size_t pvsr_words_per_row(const pvsr_level* l) {
+    return l ? ((size_t)l->object_count + 63) / 64 : 0;
+}
+
+static int mask_voxel(const pvsr_level* l, int eyes, int64_t x, int64_t y, int64_t z) {
+    const pvsr_array* index = eyes ? &l->eye_index : &l->view_index;
+    const pvsr_array* bits = eyes ? &l->eye_bits : &l->view_bits;
+    const uint64_t b = (uint64_t)(x >> 3) + (uint64_t)l->brick_dims[0] * ((uint64_t)(y >> 3) + (uint64_t)l->brick_dims[1] * (uint64_t)(z >> 3));
+    const uint32_t t = rd32(index->at + 4 * b);
+    if (t < 2) return t == 1;
+    return (bits->at[(uint64_t)(t - 2) * 64 + (uint64_t)(z & 7) * 8 + (uint64_t)(y & 7)] >> (x & 7)) & 1;
+}
+
+/* Voxels are closed boxes: a point on a face of a set voxel is in (core/cell_set.h VoxelMask::contains). */
+static int mask_contains(const pvsr_level* l, int eyes, float x, float y, float z) {
+    const float p[3] = {x, y, z};
+    int lo[3], hi[3], a, i, j, k;
+    for (a = 0; a < 3; ++a) {
+        const float rel = (p[a] - l->mask_origin[a]) / l->mask_voxel_m;
+        float f;
+        if (!(rel >= 0.0f) || rel > (float)l->mask_dims[a]) return 0;
+        f = floorf(rel);
+        hi[a] = (int)f < l->mask_dims[a] - 1 ? (int)f : l->mask_dims[a] - 1;
+        if (rel == f) {
+            lo[a] = (int)f - 1 > 0 ? (int)f - 1 : 0;
+            if (lo[a] > hi[a]) lo[a] = hi[a];
+        } else {
+            lo[a] = hi[a];
+        }
+        if (hi[a] < 0) return 0;
+    }
+    for (k = lo[2]; k <= hi[2]; ++k)
+        for (j = lo[1]; j <= hi[1]; ++j)
+            for (i = lo[0]; i <= hi[0]; ++i)
+                if (mask_voxel(l, eyes, i, j, k)) return 1;
+    return 0;
+}
+
+int32_t pvsr_find_cell(const pvsr_level* l, float x, float y, float z) {
+    const float p[3] = {x, y, z};
+    int idx[3], a;
+    uint64_t g;
+    int32_t n;
+    if (l == NULL || l->cell_count == 0 || !isfinite(x) || !isfinite(y) || !isfinite(z)) return -1;
+    if ((l->mask_flags & PVSR_MASK_VIEW) && !mask_contains(l, 0, x, y, z)) return -1;
+    for (a = 0; a < 3; ++a) {
+        const float rel = (p[a] - l->origin[a]) / l->cell_size_m;
+        int f;
+        if (!(rel >= 0.0f) || rel > (float)l->dims[a] || l->dims[a] == 0) return -1;
+        f = (int)floorf(rel);
+        idx[a] = f < l->dims[a] - 1 ? f : l->dims[a] - 1;
+    }
+    g = (uint64_t)idx[0] + (uint64_t)l->dims[0] * ((uint64_t)idx[1] + (uint64_t)l->dims[1] * (uint64_t)idx[2]);
+    n = rdi32(l->grid_to_cell.at + 4 * g);
+    if (l->cell_kind == 0) return n;
+    while (n >= 0) { /* children come after their parent (checked): this ends */
+        const uint8_t* node = l->nodes.at + PVSR_NODE_BYTES * (uint64_t)n;
+        const int32_t first = rdi32(node + 12);
+        if (first < 0) return rdi32(node + 16);
+        n = first + (x >= rdf(node) ? 1 : 0) + (y >= rdf(node + 4) ? 2 : 0) + (z >= rdf(node + 8) ? 4 : 0);
+    }
+    return -1;
+}
+
+int pvsr_in_eye_space(const pvsr_level* l, float x, float y, float z) {
+    if (pvsr_find_cell(l, x, y, z) < 0) return 0;
+    return !(l->mask_flags & PVSR_MASK_EYES) || mask_contains(l, 1, x, y, z);
+}
+
+int pvsr_cell_bounds(const pvsr_level* l, uint32_t cell, float box[6]) {
+    int a;
+    if (l == NULL || box == NULL || cell >= l->cell_count) return 0;
+    if (l->cell_boxes.at != NULL) {
+        for (a = 0; a < 6; ++a) box[a] = rdf(l->cell_boxes.at + 24 * (uint64_t)cell + 4 * a);
+        return 1;
+    }
+    {
+        const uint32_t g = rd32(l->cell_grid.at + 4 * (uint64_t)cell);
+        const uint32_t idx[3] = {g % (uint32_t)l->dims[0], g / (uint32_t)l->dims[0] % (uint32_t)l->dims[1],
+                                 g / ((uint32_t)l->dims[0] * (uint32_t)l->dims[1])};
+        for (a = 0; a < 3; ++a) {
+            box[a] = l->origin[a] + (float)idx[a] * l->cell_size_m;
+            box[3 + a] = l->origin[a] + (float)(idx[a] + 1) * l->cell_size_m;
+        }
+    }
+    return 1;
+}
+
+/* Walks the cell's row: calls visit for each visible object in increasing order; returns how many. */
+#define PVSR_STACK_WORDS 256
+static uint32_t walk(const pvsr_level* l, uint32_t cell, pvsr_visit_fn visit, void* user) {
+    gap_reader key, diff;
+    uint32_t count = 0, i, a, b;
+    if (l == NULL || cell >= l->cell_count) return 0;
+    if (!row_readers(l, index_at(&l->cell_row, cell), &key, &diff)) {
+        for (i = gap_next(&key); i != PVSR_END; i = gap_next(&key)) {
+            if (visit) visit(user, i);
+            ++count;
+        }
+        return count;
+    }
+    if (l->object_count <= 64u * PVSR_STACK_WORDS) {
+        /* The key row XOR the difference in a bit set on the stack: branch-light. */
+        uint64_t bits[PVSR_STACK_WORDS];
+        const size_t words = pvsr_words_per_row(l);
+        size_t w;
+        memset(bits, 0, words * sizeof(uint64_t));
+        for (i = gap_next(&key); i != PVSR_END; i = gap_next(&key)) bits[i >> 6] |= (uint64_t)1 << (i & 63);
+        for (i = gap_next(&diff); i != PVSR_END; i = gap_next(&diff)) bits[i >> 6] ^= (uint64_t)1 << (i & 63);
+        for (w = 0; w < words; ++w) {
+            uint64_t v;
+            for (v = bits[w]; v != 0; v &= v - 1) {
+                if (visit) visit(user, (uint32_t)(w * 64) + ctz64(v));
+                ++count;
+            }
+        }
+        return count;
+    }
+    a = gap_next(&key);
+    b = gap_next(&diff);
+    for (;;) { /* the key row XOR the difference: an index in both cancels */
+        if (a < b) {
+            if (visit) visit(user, a);
+            ++count;
+            a = gap_next(&key);
+        } else if (b < a) {
+            if (visit) visit(user, b);
+            ++count;
+            b = gap_next(&diff);
+        } else {
+            if (a == PVSR_END) return count;
+            a = gap_next(&key);
+            b = gap_next(&diff);
+        }
+    }
+}
+
+uint32_t pvsr_visit_visible(const pvsr_level* l, uint32_t cell, pvsr_visit_fn visit, void* user) {
+    return walk(l, cell, visit, user);
+}
+
+uint32_t pvsr_visible_count(const pvsr_level* l, uint32_t cell) {
+    return walk(l, cell, NULL, NULL);
+}
+
+typedef struct list_sink {
+    uint32_t* out;
+    size_t capacity, n;
+} list_sink;
+static void to_list(void* user, uint32_t object) {
+    list_sink* s = (list_sink*)user;
+    if (s->n < s->capacity) s->out[s->n] = object;
+    ++s->n;
+}
+
+uint32_t pvsr_visible_objects(const pvsr_level* l, uint32_t cell, uint32_t* objects, size_t capacity) {
+    list_sink s;
+    s.out = objects;
+    s.capacity = objects ? capacity : 0;
+    s.n = 0;
+    return walk(l, cell, to_list, &s);
+}
+
+static void to_bits(void* user, uint32_t object) {
+    uint64_t* words = (uint64_t*)user;
+    words[object >> 6] |= (uint64_t)1 << (object & 63);
+}
+
+uint32_t pvsr_fill_bitset(const pvsr_level* l, uint32_t cell, uint64_t* words, size_t word_count) {
+    if (l == NULL || words == NULL || cell >= l->cell_count || word_count < pvsr_words_per_row(l)) return 0xffffffffu;
+    memset(words, 0, word_count * sizeof(uint64_t));
+    return walk(l, cell, to_bits, words);
+}
+
+int pvsr_is_visible(const pvsr_level* l, uint32_t cell, uint32_t object) {
+    gap_reader key, diff;
+    uint32_t i;
+    int in;
+    if (l == NULL || cell >= l->cell_count || object >= l->object_count) return 0;
+    if (!row_readers(l, index_at(&l->cell_row, cell), &key, &diff)) {
+        for (i = gap_next(&key); i < object; i = gap_next(&key)) {
+        }
+        return i == object;
+    }
+    for (i = gap_next(&key); i < object; i = gap_next(&key)) {
+    }
+    in = i == object;
+    for (i = gap_next(&diff); i < object; i = gap_next(&diff)) {
+    }
+    return in != (i == object);
+}
+
+const char* pvsr_object_name(const pvsr_level* l, uint32_t object) {
+    if (l == NULL || object >= l->object_count) return kEmpty;
+    return (const char*)l->names.at + rd32(l->name_offsets.at + 4 * (uint64_t)object);
+}
+
+int pvsr_object_bounds(const pvsr_level* l, uint32_t object, float box[6]) {
+    int a;
+    if (l == NULL || box == NULL || object >= l->object_count) return 0;
+    for (a = 0; a < 6; ++a) box[a] = rdf(l->object_boxes.at + 24 * (uint64_t)object + 4 * a);
+    return 1;
+}
+
+uint32_t pvsr_object_triangles(const pvsr_level* l, uint32_t object) {
+    if (l == NULL || object >= l->object_count) return 0;
+    return rd32(l->object_triangles.at + 4 * (uint64_t)object);
+}
+
+uint32_t pvsr_object_flags(const pvsr_level* l, uint32_t object) {
+    if (l == NULL || object >= l->object_count) return 0;
+    return rd32(l->object_flags.at + 4 * (uint64_t)object);
+}
+
+uint64_t pvsr_total_triangles(const pvsr_level* l) {
+    return l ? l->total_triangles : 0;
+}
+
+uint32_t pvsr_occluder_count(const pvsr_level* l, uint32_t cell) {
+    if (l == NULL || cell >= l->cell_count || l->ranked_offsets.at == NULL) return 0;
+    return rd32(l->ranked_offsets.at + 4 * (uint64_t)cell + 4) - rd32(l->ranked_offsets.at + 4 * (uint64_t)cell);
+}
+
+int pvsr_occluder(const pvsr_level* l, uint32_t cell, uint32_t rank, pvsr_ranked_occluder* out) {
+    const uint8_t* r;
+    int a;
+    if (out == NULL || rank >= pvsr_occluder_count(l, cell)) return 0;
+    r = l->ranked.at + PVSR_RANKED_BYTES * ((uint64_t)rd32(l->ranked_offsets.at + 4 * (uint64_t)cell) + rank);
+    for (a = 0; a < 6; ++a) out->box[a] = rdf(l->occluder_boxes.at + 24 * (uint64_t)rd32(r) + 4 * a);
+    out->score = rdf(r + 4);
+    out->solid_angle_sr = rdf(r + 8);
+    out->hidden_objects = rdf(r + 12);
+    out->hidden_triangle_share = rdf(r + 16);
+    return 1;
+}
+
+uint32_t pvsr_occluder_boxes(const pvsr_level* l, uint32_t cell, float* boxes, uint32_t capacity) {
+    const uint32_t count = pvsr_occluder_count(l, cell);
+    uint32_t k, n = count < capacity ? count : capacity;
+    if (boxes == NULL) return 0;
+    for (k = 0; k < n; ++k) {
+        pvsr_ranked_occluder o;
+        pvsr_occluder(l, cell, k, &o);
+        memcpy(boxes + 6 * (size_t)k, o.box, sizeof o.box);
+    }
+    return n;
+}
+
+int pvsr_is_conservative(const pvsr_level* l) {
+    return l != NULL && (l->flags & PVSR_FLAG_CONSERVATIVE) != 0;
+}
+
+const char* pvsr_mode_label(const pvsr_level* l) {
+    return pvsr_is_conservative(l) ? "conservative" : "aggressive";
+}
+
+const char* pvsr_string(const pvsr_level* l, const char* key) {
+    uint64_t i = 0;
+    if (l == NULL || key == NULL || l->strings.at == NULL) return kEmpty;
+    while (i < l->strings.count) {
+        const char* k = (const char*)l->strings.at + i;
+        const size_t kn = strlen(k); /* NUL-terminated: checked at open */
+        const char* v = k + kn + 1;
+        if (strcmp(k, key) == 0) return v;
+        i += kn + 1 + strlen(v) + 1;
+    }
+    return kEmpty;
+}

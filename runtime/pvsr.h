@@ -1,0 +1,174 @@
+/* pvsr: the pvsbake runtime, for games. Reads a runtime file (.pvsr, docs/FORMAT.md, "The runtime file"),
+ * written by `pvsbake export BAKE.h5 -o LEVEL.pvsr`, from memory the game provides (a mapped file, a pak
+ * entry), without copying it and without allocating: pvsr_open() checks the bytes once, then every query
+ * reads them in place. C99, the C standard library only (string.h, math.h); copy pvsr.h and pvsr.c into a
+ * game's tree, or link pvsbake's install. pvsr.hpp wraps it for C++17.
+ *
+ * Conventions: glTF axes (right-handed, +Y up), metres. Boxes are float[6]: min x, y, z, max x, y, z.
+ * Object and cell indices are the bake's. A point outside the view volume has no cell (pvsr_find_cell()
+ * gives -1): draw everything there. A bake whose pvsr_is_conservative() is 1 lists every object any eye of
+ * the cell may see; otherwise it is "aggressive" (sampled: it may miss small or grazing objects).
+ *
+ * Safety: pvsr_open() refuses (with a status and a one-line reason) any bytes that are not a whole,
+ * consistent runtime file of a version it reads: the checksum, every size, offset and index, and the head
+ * of every PVS row are checked, and the row decoder is bounded, so no query of an opened level reads
+ * outside its bytes or returns an index out of range, whatever the bytes were. The memory must stay
+ * unchanged and alive while the level is used. An opened level is read-only: any number of threads may
+ * query it at once. Queries with an index out of range return 0, -1 or "" as each says.
+ *
+ *   pvsr_level level;
+ *   char why[256];
+ *   if (pvsr_open(&level, bytes, size, why, sizeof why) != PVSR_OK) { puts(why); ... }
+ *   int32_t cell = pvsr_find_cell(&level, x, y, z);         -1: outside the view volume, draw all
+ *   if (cell >= 0) pvsr_visit_visible(&level, (uint32_t)cell, draw_object, &scene);
+ */
+#ifndef PVSR_H
+#define PVSR_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define PVSR_VERSION_MAJOR 1 /* the newest file version this runtime reads: 1.x */
+#define PVSR_VERSION_MINOR 0
+
+typedef enum pvsr_status {
+    PVSR_OK = 0,
+    PVSR_NOT_A_RUNTIME_FILE = 1, /* too short, or the magic bytes are not there */
+    PVSR_VERSION_TOO_NEW = 2,    /* a newer major version than this runtime reads */
+    PVSR_CORRUPT = 3,            /* damaged or inconsistent: the checksum, a size, an offset or an index */
+    PVSR_UNSUPPORTED = 4,        /* a big-endian machine (the file is little-endian) */
+    PVSR_INVALID_ARGUMENT = 5    /* a null pointer where one is required */
+} pvsr_status;
+
+/* "ok", "not a runtime file", ... (static strings). */
+const char* pvsr_status_name(pvsr_status status);
+
+/* One array of the file: `count` items of `item_bytes` each, at `at` (a pointer into the file's bytes). */
+typedef struct pvsr_array {
+    const uint8_t* at;
+    uint64_t count, bytes; /* bytes: the whole section, padding included */
+    uint32_t item_bytes;
+} pvsr_array;
+
+/* An opened level: pointers into the caller's bytes and a few counts, filled by pvsr_open(). Read its
+ * fields through the functions below; their layout may change between versions of this runtime. */
+typedef struct pvsr_level {
+    const uint8_t* bytes;
+    uint64_t size;
+    uint32_t version_major, version_minor;
+    uint32_t flags, mask_flags;
+    uint32_t object_count, cell_count, cell_kind, node_count, row_count, occluder_box_count;
+    float origin[3], cell_size_m;
+    int32_t dims[3];
+    float mask_origin[3], mask_voxel_m;
+    int32_t mask_dims[3], brick_dims[3];
+    pvsr_array grid_to_cell, nodes, cell_grid, cell_boxes, view_index, view_bits, eye_index, eye_bits,
+        cell_row, row_offsets, code, object_boxes, object_triangles, object_flags, name_offsets, names,
+        occluder_boxes, ranked_offsets, ranked, strings;
+    uint64_t code_bytes; /* the code without its padding */
+    uint64_t total_triangles;
+} pvsr_level;
+
+/* Checks `size` bytes at `data` (8-byte aligned: a mapped file or malloc'ed block is) and fills *level.
+ * message (may be NULL) receives a NUL-terminated, possibly shortened, one-line reason ("" when ok). On
+ * failure *level is zeroed: every query of it answers as for an empty level. Costs one pass over the bytes
+ * (the checksum) and one over the cells, rows and objects; allocates nothing. */
+pvsr_status pvsr_open(pvsr_level* level, const void* data, size_t size, char* message, size_t message_size);
+
+uint32_t pvsr_cell_count(const pvsr_level* level);
+uint32_t pvsr_object_count(const pvsr_level* level);
+uint32_t pvsr_cell_kind(const pvsr_level* level); /* 0 grid, 1 octree */
+/* 64-bit words a PVS bit set of this level needs: ceil(objects / 64). */
+size_t pvsr_words_per_row(const pvsr_level* level);
+
+/* ---- Cells */
+/* The cell holding (x, y, z), or -1 outside the view volume or every cell. O(1) on a grid, O(depth) on an
+ * octree. Grid cells are half-open except on the grid's max faces; view voxels are closed boxes. */
+int32_t pvsr_find_cell(const pvsr_level* level, float x, float y, float z);
+/* 1 when (x, y, z) is in the EYE SPACE (the free voxels where the bake's eyes are, closed boxes), where the
+ * bake's promises hold; pvsr_find_cell() also answers in a rim a voxel wide around it. A game that culls
+ * moving objects with the ranked occluders should do so only where this is 1. Levels without an eye mask:
+ * 1 wherever pvsr_find_cell() finds a cell. */
+int pvsr_in_eye_space(const pvsr_level* level, float x, float y, float z);
+/* The box of cell c into box[6]; 0 (box untouched) when c is out of range. */
+int pvsr_cell_bounds(const pvsr_level* level, uint32_t cell, float box[6]);
+
+/* ---- The potentially visible set of a cell */
+typedef void (*pvsr_visit_fn)(void* user, uint32_t object);
+/* Calls visit(user, object) for every object visible from the cell, in increasing order; returns how many
+ * (0 for a cell out of range). Allocates nothing (a bit set of up to 2 KiB on the stack for levels of
+ * up to 16,384 objects). */
+uint32_t pvsr_visit_visible(const pvsr_level* level, uint32_t cell, pvsr_visit_fn visit, void* user);
+/* The number of objects visible from the cell. */
+uint32_t pvsr_visible_count(const pvsr_level* level, uint32_t cell);
+/* Writes up to capacity visible object indices in increasing order; returns how many there are (may be
+ * more than capacity). */
+uint32_t pvsr_visible_objects(const pvsr_level* level, uint32_t cell, uint32_t* objects, size_t capacity);
+/* Fills words[0 .. word_count) with the cell's PVS as a bit set (object i = bit i % 64 of word i / 64; the
+ * words past the objects zero); returns the number of visible objects, or UINT32_MAX (words untouched)
+ * when word_count < pvsr_words_per_row(), words is NULL or the cell is out of range. */
+uint32_t pvsr_fill_bitset(const pvsr_level* level, uint32_t cell, uint64_t* words, size_t word_count);
+/* 1 when object o is visible from the cell; 0 otherwise or out of range. */
+int pvsr_is_visible(const pvsr_level* level, uint32_t cell, uint32_t object);
+
+/* ---- Objects: name (UTF-8, NUL-terminated, in the file's bytes; "" out of range), bounds, triangles,
+ * flags (bit 0 opaque, 1 see-through, 2 always visible, 3 never occludes). */
+const char* pvsr_object_name(const pvsr_level* level, uint32_t object);
+int pvsr_object_bounds(const pvsr_level* level, uint32_t object, float box[6]);
+uint32_t pvsr_object_triangles(const pvsr_level* level, uint32_t object);
+uint32_t pvsr_object_flags(const pvsr_level* level, uint32_t object);
+uint64_t pvsr_total_triangles(const pvsr_level* level);
+
+/* ---- Ranked occluders of a cell, best first (docs/FORMAT.md, "Ranked occluders"): boxes inside the
+ * opaque solid worth testing at run time to cull moving objects. box is float[6]; score higher is better;
+ * solid_angle_sr the largest from the cell's sampled eyes; hidden_objects the mean number of objects, and
+ * hidden_triangle_share the mean share of the world's triangles, wholly in its shadow. */
+typedef struct pvsr_ranked_occluder {
+    float box[6];
+    float score;
+    float solid_angle_sr;
+    float hidden_objects;
+    float hidden_triangle_share;
+} pvsr_ranked_occluder;
+uint32_t pvsr_occluder_count(const pvsr_level* level, uint32_t cell);
+/* The occluder of that rank (0 = best) into *out: 1, or 0 (out untouched) out of range. */
+int pvsr_occluder(const pvsr_level* level, uint32_t cell, uint32_t rank, pvsr_ranked_occluder* out);
+/* The boxes of the best min(count, capacity) occluders of the cell into boxes (6 floats each), best first;
+ * returns how many were written. */
+uint32_t pvsr_occluder_boxes(const pvsr_level* level, uint32_t cell, float* boxes, uint32_t capacity);
+
+/* ---- What the bake is */
+int pvsr_is_conservative(const pvsr_level* level);
+const char* pvsr_mode_label(const pvsr_level* level); /* "conservative" or "aggressive" */
+/* The bake's strings by key: "tool_version", "world_path", "world_hash", "mode"; "" when absent. They live
+ * in the file's bytes. */
+const char* pvsr_string(const pvsr_level* level, const char* key);
+
+/* ---- The file's layout (docs/FORMAT.md, "The runtime file"), for writers and tools. Little-endian.
+ * A 64-byte header, then the section table (PVSR_ENTRY_BYTES an entry), then the sections, each at an offset
+ * that is a multiple of 64, in any order. */
+#define PVSR_HEADER_BYTES 64
+#define PVSR_ENTRY_BYTES 32
+#define PVSR_ALIGN 64
+#define PVSR_CHECKSUMMED_FROM 32 /* the checksum covers bytes [32, file size) */
+#define PVSR_FLAG_CONSERVATIVE 1u
+#define PVSR_MASK_VIEW 1u
+#define PVSR_MASK_EYES 2u
+#define PVSR_TAG(a, b, c, d) ((uint32_t)(a) | (uint32_t)(b) << 8 | (uint32_t)(c) << 16 | (uint32_t)(d) << 24)
+#define PVSR_LEVEL_BYTES 64        /* 'LEVL': the cells' grid and the masks' voxels */
+#define PVSR_NODE_BYTES 20         /* 'NODE': float center[3], int32 first_child, int32 cell */
+#define PVSR_RANKED_BYTES 20       /* 'RENT': uint32 box, float score, solid angle, hidden objects, share */
+#define PVSR_MAX_OBJECTS (1u << 27) /* the PVS code's limit */
+
+/* ---- The checksum of the file (docs/FORMAT.md): XXH64 with seed 0, exposed for tools and tests. */
+uint64_t pvsr_xxh64(const void* data, size_t size, uint64_t seed);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* PVSR_H */

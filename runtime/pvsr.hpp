@@ -1,0 +1,87 @@
+// pvsr: the pvsbake runtime for C++17 (runtime/pvsr.h holds the contracts). A header over the C99 runtime:
+// no exceptions, no allocation; a Level views the bytes it was opened on, which must stay unchanged and alive.
+//
+//   pvsr::Level level;
+//   std::string why;
+//   if (level.open(bytes, size, &why) != PVSR_OK) { ... why ... }
+//   const int32_t cell = level.find_cell(x, y, z);           // -1: outside the view volume, draw all
+//   if (cell >= 0) level.for_each_visible(uint32_t(cell), [&](uint32_t object) { draw(object); });
+#pragma once
+
+#include "pvsr.h"
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <type_traits>
+
+namespace pvsr {
+
+class Level {
+public:
+    // Opens `size` bytes at `data` (pvsr_open); on failure the level is empty and *why (if given) says why.
+    pvsr_status open(const void* data, size_t size, std::string* why = nullptr) noexcept {
+        char message[256];
+        const pvsr_status s = pvsr_open(&level_, data, size, message, sizeof message);
+        if (why != nullptr) {
+            try {
+                *why = message;
+            } catch (...) {
+            }
+        }
+        return s;
+    }
+
+    uint32_t cell_count() const noexcept { return pvsr_cell_count(&level_); }
+    uint32_t object_count() const noexcept { return pvsr_object_count(&level_); }
+    uint32_t cell_kind() const noexcept { return pvsr_cell_kind(&level_); }  // 0 grid, 1 octree
+    size_t words_per_row() const noexcept { return pvsr_words_per_row(&level_); }
+
+    int32_t find_cell(float x, float y, float z) const noexcept { return pvsr_find_cell(&level_, x, y, z); }
+    bool in_eye_space(float x, float y, float z) const noexcept { return pvsr_in_eye_space(&level_, x, y, z) != 0; }
+    bool cell_bounds(uint32_t cell, float box[6]) const noexcept { return pvsr_cell_bounds(&level_, cell, box) != 0; }
+
+    // Calls visit(object) for every object visible from the cell, in increasing order; returns how many.
+    template <class F>
+    uint32_t for_each_visible(uint32_t cell, F&& visit) const {
+        using Fn = std::remove_reference_t<F>;
+        return pvsr_visit_visible(
+            &level_, cell, [](void* user, uint32_t object) { (*static_cast<Fn*>(user))(object); },
+            const_cast<void*>(static_cast<const void*>(&visit)));
+    }
+    uint32_t visible_count(uint32_t cell) const noexcept { return pvsr_visible_count(&level_, cell); }
+    uint32_t visible_objects(uint32_t cell, uint32_t* objects, size_t capacity) const noexcept {
+        return pvsr_visible_objects(&level_, cell, objects, capacity);
+    }
+    uint32_t fill_bitset(uint32_t cell, uint64_t* words, size_t word_count) const noexcept {
+        return pvsr_fill_bitset(&level_, cell, words, word_count);
+    }
+    bool is_visible(uint32_t cell, uint32_t object) const noexcept { return pvsr_is_visible(&level_, cell, object) != 0; }
+
+    std::string_view object_name(uint32_t object) const noexcept { return pvsr_object_name(&level_, object); }
+    bool object_bounds(uint32_t object, float box[6]) const noexcept {
+        return pvsr_object_bounds(&level_, object, box) != 0;
+    }
+    uint32_t object_triangles(uint32_t object) const noexcept { return pvsr_object_triangles(&level_, object); }
+    uint32_t object_flags(uint32_t object) const noexcept { return pvsr_object_flags(&level_, object); }
+    uint64_t total_triangles() const noexcept { return pvsr_total_triangles(&level_); }
+
+    uint32_t occluder_count(uint32_t cell) const noexcept { return pvsr_occluder_count(&level_, cell); }
+    bool occluder(uint32_t cell, uint32_t rank, pvsr_ranked_occluder& out) const noexcept {
+        return pvsr_occluder(&level_, cell, rank, &out) != 0;
+    }
+    uint32_t occluder_boxes(uint32_t cell, float* boxes, uint32_t capacity) const noexcept {
+        return pvsr_occluder_boxes(&level_, cell, boxes, capacity);
+    }
+
+    bool is_conservative() const noexcept { return pvsr_is_conservative(&level_) != 0; }
+    const char* mode_label() const noexcept { return pvsr_mode_label(&level_); }
+    std::string_view string(const char* key) const noexcept { return pvsr_string(&level_, key); }
+
+    const pvsr_level& c_level() const noexcept { return level_; }
+
+private:
+    pvsr_level level_{};
+};
+
+}  // namespace pvsr

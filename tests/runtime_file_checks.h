@@ -1,0 +1,185 @@
+// Checks of the runtime file (io/runtime_file.h) against the HDF5 loader, for test_runtime_file and
+// test_runtime_export: an exported bake answers every query of the C99 runtime (runtime/pvsr.h, through
+// runtime/pvsr.hpp) as the HDF5 loader answers it on the bake file.
+#pragma once
+
+#include "io/bake_file.h"
+#include "io/runtime_file.h"
+#include "runtime/pvsr.h"
+#include "runtime/pvsr.hpp"
+#include "tests/bake_fixtures.h"
+#include "tests/test_util.h"
+
+#include <pvsbake/loader.h>
+
+#include <gtest/gtest.h>
+#include <xxhash.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace pvs::test {
+
+// The file's bytes in 8-byte aligned memory, as a mapped file or a pak's buffer would be.
+struct Bytes {
+    std::vector<uint64_t> words;
+    size_t size = 0;
+    explicit Bytes(const std::string& s) : words((s.size() + 7) / 8), size(s.size()) {
+        if (size) std::memcpy(words.data(), s.data(), size);
+    }
+    const void* data() const { return words.data(); }
+    uint8_t* bytes() { return reinterpret_cast<uint8_t*>(words.data()); }
+};
+
+// Sets the checksum of a (changed) file right again.
+inline void rechecksum(Bytes& b) {
+    const uint64_t sum = XXH64(b.bytes() + PVSR_CHECKSUMMED_FROM, b.size - PVSR_CHECKSUMMED_FROM, 0);
+    std::memcpy(b.bytes() + 24, &sum, 8);
+}
+
+inline std::string opened_message(const Bytes& b, pvsr_status* status) {
+    pvsr_level level;
+    char message[256];
+    *status = pvsr_open(&level, b.data(), b.size, message, sizeof message);
+    return message;
+}
+
+// Every query of the runtime equals the HDF5 loader's on the same bake.
+inline void expect_same_as_loader(const pvsr::Level& got, const pvsbake::Bake& want, uint32_t seed) {
+    ASSERT_EQ(got.cell_count(), want.cell_count());
+    ASSERT_EQ(got.object_count(), want.object_count());
+    EXPECT_EQ(got.cell_kind(), uint32_t(want.cell_kind()));
+    EXPECT_EQ(got.words_per_row(), want.words_per_row());
+    EXPECT_EQ(got.is_conservative(), want.is_conservative());
+    EXPECT_STREQ(got.mode_label(), want.mode_label());
+    EXPECT_EQ(got.string("tool_version"), want.tool_version());
+    EXPECT_EQ(got.string("world_path"), want.world_path());
+    EXPECT_EQ(got.string("world_hash"), want.world_hash());
+    EXPECT_EQ(got.string("mode"), want.mode());
+    EXPECT_EQ(got.string("no such key"), "");
+    EXPECT_EQ(got.total_triangles(), want.total_triangles());
+    for (uint32_t o = 0; o <= want.object_count(); ++o) {  // one past the end too
+        EXPECT_EQ(got.object_name(o), want.object_name(o));
+        EXPECT_EQ(got.object_triangles(o), want.object_triangles(o));
+        EXPECT_EQ(got.object_flags(o), want.object_flags(o));
+        float box[6] = {7, 7, 7, 7, 7, 7};
+        const bool in = got.object_bounds(o, box);
+        EXPECT_EQ(in, o < want.object_count());
+        if (in) {
+            const pvsbake::Box w = want.object_bounds(o);
+            for (int a = 0; a < 3; ++a) {
+                EXPECT_EQ(box[a], w.min[a]);
+                EXPECT_EQ(box[3 + a], w.max[a]);
+            }
+        }
+    }
+    std::vector<uint64_t> got_words(want.words_per_row() + 1), want_words(want.words_per_row() + 1);
+    std::vector<uint32_t> list(want.object_count() + 1);
+    for (uint32_t c = 0; c <= want.cell_count(); ++c) {  // one past the end: nothing
+        SCOPED_TRACE("cell " + std::to_string(c));
+        std::vector<uint32_t> walked, expected;
+        const uint32_t n = got.for_each_visible(c, [&](uint32_t o) { walked.push_back(o); });
+        if (c < want.cell_count()) want.for_each_visible(c, [&](uint32_t o) { expected.push_back(o); });
+        ASSERT_EQ(walked, expected);
+        EXPECT_EQ(n, expected.size());
+        EXPECT_EQ(got.visible_count(c), expected.size());
+        EXPECT_EQ(got.visible_objects(c, list.data(), list.size()), expected.size());
+        EXPECT_TRUE(std::equal(expected.begin(), expected.end(), list.begin()));
+        if (expected.size() > 1) {  // a short buffer: the count, the first ones
+            EXPECT_EQ(got.visible_objects(c, list.data(), 1), expected.size());
+            EXPECT_EQ(list[0], expected[0]);
+        }
+        EXPECT_EQ(got.fill_bitset(c, got_words.data(), got_words.size()),
+                  want.fill_bitset(c, want_words.data(), want_words.size()));
+        if (c < want.cell_count()) {
+            EXPECT_EQ(got_words, want_words);
+        }
+        if (want.words_per_row() > 0) {
+            EXPECT_EQ(got.fill_bitset(c, got_words.data(), want.words_per_row() - 1), UINT32_MAX);
+        }
+        const uint32_t step = want.object_count() > 1000 ? 37 : 1;  // every object of small bakes
+        for (uint32_t o = 0; o <= want.object_count(); o += step)
+            ASSERT_EQ(got.is_visible(c, o), want.is_visible(c, o)) << o;
+        for (const uint32_t o : expected) ASSERT_TRUE(got.is_visible(c, o)) << o;
+        float box[6] = {7, 7, 7, 7, 7, 7};
+        EXPECT_EQ(got.cell_bounds(c, box), c < want.cell_count());
+        if (c < want.cell_count()) {
+            const pvsbake::Box w = want.cell_bounds(c);
+            for (int a = 0; a < 3; ++a) {
+                EXPECT_EQ(box[a], w.min[a]);
+                EXPECT_EQ(box[3 + a], w.max[a]);
+            }
+        }
+        ASSERT_EQ(got.occluder_count(c), want.occluder_count(c));
+        std::vector<float> boxes(6 * size_t(want.occluder_count(c)) + 6);
+        EXPECT_EQ(got.occluder_boxes(c, boxes.data(), want.occluder_count(c) + 1), want.occluder_count(c));
+        for (uint32_t k = 0; k < want.occluder_count(c); ++k) {
+            pvsr_ranked_occluder g;
+            ASSERT_TRUE(got.occluder(c, k, g));
+            const pvsbake::RankedOccluder w = want.occluders(c)[k];
+            for (int a = 0; a < 3; ++a) {
+                EXPECT_EQ(g.box[a], w.box.min[a]);
+                EXPECT_EQ(g.box[3 + a], w.box.max[a]);
+                EXPECT_EQ(boxes[6 * k + size_t(a)], w.box.min[a]);
+            }
+            EXPECT_EQ(g.score, w.score);
+            EXPECT_EQ(g.solid_angle_sr, w.solid_angle_sr);
+            EXPECT_EQ(g.hidden_objects, w.hidden_objects);
+            EXPECT_EQ(g.hidden_triangle_share, w.hidden_triangle_share);
+        }
+        pvsr_ranked_occluder none;
+        EXPECT_FALSE(got.occluder(c, want.occluder_count(c), none));
+    }
+    // Lookups at random points in and around the cells, on cell and voxel faces, and not finite.
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (uint32_t c = 0; c < want.cell_count(); ++c) {
+        const pvsbake::Box b = want.cell_bounds(c);
+        for (int a = 0; a < 3; ++a) {
+            lo[a] = std::min(lo[a], b.min[a]);
+            hi[a] = std::max(hi[a], b.max[a]);
+        }
+    }
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> u(-0.2f, 1.2f);
+    const int points = in_ci() ? 4000 : 40000;
+    int found = 0;
+    for (int i = 0; i < points && want.cell_count() > 0; ++i) {
+        float p[3];
+        for (int a = 0; a < 3; ++a) {
+            p[a] = lo[a] + u(rng) * (hi[a] - lo[a]);
+            if (i % 3 == 1) p[a] = lo[a] + std::round((p[a] - lo[a]) * 8.0f) / 8.0f;  // on many faces
+        }
+        ASSERT_EQ(got.find_cell(p[0], p[1], p[2]), want.find_cell(p[0], p[1], p[2])) << p[0] << " " << p[1] << " " << p[2];
+        ASSERT_EQ(got.in_eye_space(p[0], p[1], p[2]), want.in_eye_space(p[0], p[1], p[2]));
+        found += want.find_cell(p[0], p[1], p[2]) >= 0;
+    }
+    if (want.cell_count() > 0) {
+        EXPECT_GT(found, 0);
+    }
+    EXPECT_EQ(got.find_cell(std::nanf(""), 0, 0), -1);
+    EXPECT_EQ(got.find_cell(0, INFINITY, 0), -1);
+    EXPECT_EQ(got.find_cell(1e30f, -1e30f, 1e30f), -1);
+}
+
+// Writes the bake as HDF5, exports it, and checks the runtime against the HDF5 loader.
+inline void round_trip(const BakeData& bake, uint32_t seed) {
+    TempDir dir;
+    const std::string h5 = dir.file("bake.h5");
+    pvsbake::Bake loaded;
+    write_and_load(bake, h5, loaded);
+    RuntimeFileFigures figures;
+    const Bytes bytes(runtime_file_bytes(h5, &figures));
+    EXPECT_EQ(figures.file_bytes, bytes.size);
+    EXPECT_EQ(bytes.size % PVSR_ALIGN, 0u);
+    pvsr::Level level;
+    std::string why = "not set";
+    ASSERT_EQ(level.open(bytes.data(), bytes.size, &why), PVSR_OK) << why;
+    EXPECT_EQ(why, "");
+    expect_same_as_loader(level, loaded, seed);
+}
+
+}  // namespace pvs::test

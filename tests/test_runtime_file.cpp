@@ -1,0 +1,171 @@
+// Tests the runtime file (io/runtime_file.h) and the C99 runtime that reads it (runtime/pvsr.h): an exported
+// bake answers every query as the HDF5 loader does on the same bake (every cell, every object, random points
+// for the lookups; grids and octrees, with and without masks, object counts around the word edges and past
+// the stack bit set); damaged files are refused with a named reason, and hostile ones (any byte changed and
+// the checksum made right again) are refused or stay in range; the runtime's XXH64 equals libxxhash's.
+// Links the loader, io and core only, so that scripts/test.sh runs it under the sanitizers too
+// (test_runtime_export has the tests that bake or run the pvsbake command).
+#include "tests/runtime_file_checks.h"
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <random>
+#include <string>
+
+namespace pvs {
+namespace {
+
+using test::Bytes;
+using test::opened_message;
+using test::rechecksum;
+using test::round_trip;
+
+TEST(RuntimeFile, GridsAndOctreesAnswerAsTheHdf5Loader) {
+    for (const bool octree : {false, true})
+        for (const bool view : {false, true}) {
+            SCOPED_TRACE(std::string(octree ? "octree" : "grid") + (view ? " with masks" : ""));
+            round_trip(test::coherent_bake(133, {7, 3, 6}, octree, view, 3 + uint32_t(octree)), 11);
+        }
+}
+
+// Around the 64-bit words, none at all, and past the 16,384 objects the walk XORs on the stack (it merges
+// the two rows' indices there).
+TEST(RuntimeFile, ObjectCountsAroundTheEdges) {
+    for (const uint32_t objects : {0u, 1u, 63u, 64u, 65u, 16400u}) {
+        SCOPED_TRACE(std::to_string(objects) + " objects");
+        round_trip(test::coherent_bake(objects, {3, 2, 3}, objects % 2 == 1, true, 5), 12);
+    }
+}
+
+// ---- Damaged and hostile files
+
+class RuntimeFileDamage : public ::testing::Test {
+protected:
+    void SetUp() override {
+        test::TempDir dir;
+        const std::string h5 = dir.file("d.h5");
+        write_bake_file(h5, test::coherent_bake(70, {4, 2, 3}, true, true, 8));
+        file_ = runtime_file_bytes(h5);
+    }
+    std::string file_;
+};
+
+TEST_F(RuntimeFileDamage, EachDamageIsRefusedWithItsReason) {
+    pvsr_status s;
+    {
+        Bytes b(file_.substr(0, file_.size() - 64));
+        EXPECT_NE(opened_message(b, &s).find("truncated"), std::string::npos);
+        EXPECT_EQ(s, PVSR_CORRUPT);
+    }
+    {
+        Bytes b(file_.substr(0, 40));
+        EXPECT_NE(opened_message(b, &s).find("not a pvsbake runtime file"), std::string::npos);
+        EXPECT_EQ(s, PVSR_NOT_A_RUNTIME_FILE);
+    }
+    {
+        Bytes b("PK\x03\x04 a zip, not a level" + std::string(80, ' '));
+        opened_message(b, &s);
+        EXPECT_EQ(s, PVSR_NOT_A_RUNTIME_FILE);
+    }
+    {
+        Bytes b(file_);
+        b.bytes()[b.size / 2] ^= 0x10;
+        EXPECT_NE(opened_message(b, &s).find("checksum"), std::string::npos);
+        EXPECT_EQ(s, PVSR_CORRUPT);
+    }
+    {
+        Bytes b(file_);
+        b.bytes()[8] = PVSR_VERSION_MAJOR + 1;  // the version lies before the checksummed bytes
+        EXPECT_NE(opened_message(b, &s).find("newer major version"), std::string::npos);
+        EXPECT_EQ(s, PVSR_VERSION_TOO_NEW);
+    }
+    {
+        Bytes b(file_);
+        b.bytes()[26] ^= 1;  // the checksum itself
+        EXPECT_NE(opened_message(b, &s).find("checksum"), std::string::npos);
+    }
+    {
+        // A hostile file: a cell's row out of range, with the checksum made right.
+        Bytes b(file_);
+        pvsr_level l;
+        ASSERT_EQ(pvsr_open(&l, b.data(), b.size, nullptr, 0), PVSR_OK);
+        const size_t at = size_t(l.cell_row.at - static_cast<const uint8_t*>(b.data()));
+        if (l.cell_row.item_bytes == 2) {
+            const uint16_t bad = uint16_t(l.row_count);
+            std::memcpy(b.bytes() + at, &bad, 2);
+        } else {
+            const uint32_t bad = l.row_count;
+            std::memcpy(b.bytes() + at, &bad, 4);
+        }
+        rechecksum(b);
+        EXPECT_NE(opened_message(b, &s).find("a cell's row is out of range"), std::string::npos);
+        EXPECT_EQ(s, PVSR_CORRUPT);
+    }
+    pvsr_level l;
+    EXPECT_EQ(pvsr_open(nullptr, file_.data(), file_.size(), nullptr, 0), PVSR_INVALID_ARGUMENT);
+    EXPECT_EQ(pvsr_open(&l, nullptr, 0, nullptr, 0), PVSR_INVALID_ARGUMENT);
+    EXPECT_STREQ(pvsr_status_name(PVSR_CORRUPT), "corrupt");
+    // A refused level is empty: queries answer as for no level.
+    EXPECT_EQ(pvsr_cell_count(&l), 0u);
+    EXPECT_EQ(pvsr_find_cell(&l, 0, 0, 0), -1);
+    EXPECT_EQ(pvsr_visible_count(&l, 0), 0u);
+    EXPECT_STREQ(pvsr_object_name(&l, 0), "");
+}
+
+// Any byte changed, the checksum made right: the runtime refuses the file, or every query of it stays in
+// range (run under the sanitizers by scripts/test.sh: no read outside the bytes).
+TEST_F(RuntimeFileDamage, HostileBytesAreRefusedOrStayInRange) {
+    std::mt19937 rng(20261127u);
+    const int trials = test::in_ci() ? 3000 : 30000;
+    int refused = 0;
+    for (int t = 0; t < trials; ++t) {
+        Bytes b(file_);
+        const int changes = 1 + int(rng() % 4);
+        for (int k = 0; k < changes; ++k) {
+            const size_t at = PVSR_CHECKSUMMED_FROM + rng() % (b.size - PVSR_CHECKSUMMED_FROM);
+            b.bytes()[at] = uint8_t(rng() % 4 == 0 ? rng() : b.bytes()[at] ^ (1u << (rng() % 8)));
+        }
+        rechecksum(b);
+        pvsr_level l;
+        if (pvsr_open(&l, b.data(), b.size, nullptr, 0) != PVSR_OK) {
+            ++refused;
+            continue;
+        }
+        const uint32_t objects = pvsr_object_count(&l);
+        for (uint32_t c = 0; c < pvsr_cell_count(&l); ++c) {
+            pvsr_visit_visible(&l, c, [](void* user, uint32_t o) {
+                if (o >= *static_cast<const uint32_t*>(user)) ADD_FAILURE() << "index " << o << " out of range";
+            }, const_cast<uint32_t*>(&objects));
+            pvsr_is_visible(&l, c, objects / 2);
+            float box[6];
+            pvsr_cell_bounds(&l, c, box);
+            for (uint32_t k = 0; k < pvsr_occluder_count(&l, c); ++k) {
+                pvsr_ranked_occluder o;
+                pvsr_occluder(&l, c, k, &o);
+            }
+        }
+        for (uint32_t o = 0; o < objects; ++o) (void)std::strlen(pvsr_object_name(&l, o));
+        for (int p = 0; p < 50; ++p) {
+            const float x = float(rng() % 2000) / 100.0f - 5.0f, y = float(rng() % 1000) / 100.0f - 2.0f,
+                        z = float(rng() % 2000) / 100.0f - 5.0f;
+            const int32_t c = pvsr_find_cell(&l, x, y, z);
+            EXPECT_LT(c, int32_t(pvsr_cell_count(&l)));
+            pvsr_in_eye_space(&l, x, y, z);
+        }
+        (void)std::strlen(pvsr_string(&l, "mode"));
+    }
+    EXPECT_GT(refused, trials / 4) << "the checks should refuse most changes";
+}
+
+TEST(RuntimeFile, Xxh64EqualsLibxxhash) {
+    std::mt19937 rng(7);
+    std::vector<uint8_t> data(5000);
+    for (uint8_t& v : data) v = uint8_t(rng());
+    for (size_t n = 0; n < 300; ++n)
+        ASSERT_EQ(pvsr_xxh64(data.data() + n % 8, n, n * 31), XXH64(data.data() + n % 8, n, n * 31)) << n;
+    EXPECT_EQ(pvsr_xxh64(data.data(), data.size(), 0), XXH64(data.data(), data.size(), 0));
+}
+
+}  // namespace
+}  // namespace pvs
