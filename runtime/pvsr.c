@@ -442,7 +442,7 @@ static const char* check_rows(pvsr_level* l) {
         const uint8_t* const stop = l->code.at + end;
         uint32_t fields[2];
         int f;
-        if (end < begin + 2) return "a PVS row's offsets decrease or leave no room for it";
+        if (end < begin + 2 || end > code_size) return "a PVS row's offsets decrease, pass the code or leave no room for it";
         for (f = 0; f < 2; ++f) {
             uint64_t v = 0;
             int shift;
@@ -507,7 +507,7 @@ static const char* check_ranked(pvsr_level* l) {
         return "the ranked offsets do not start at 0 and end at the entries' count";
     for (c = 0; c < l->cell_count; ++c) {
         const uint32_t a = rd32(l->ranked_offsets.at + 4 * c), b = rd32(l->ranked_offsets.at + 4 * c + 4);
-        if (b < a) return "the ranked offsets decrease";
+        if (b < a || b > l->ranked.count) return "the ranked offsets decrease or pass the entries";
         for (e = a; e < b; ++e) {
             const uint8_t* r = l->ranked.at + PVSR_RANKED_BYTES * e;
             const float score = rdf(r + 4), sa = rdf(r + 8), hidden = rdf(r + 12), share = rdf(r + 16);

@@ -4,6 +4,7 @@
 #   scripts/setup.sh            install what is missing, configure, build
 #   BUILD_DIR=... BUILD_TYPE=... scripts/setup.sh   another folder or build type
 #   PVSBAKE_MPI=OFF scripts/setup.sh                 without MPI (one process per bake)
+#   PVSBAKE_TEST_TOOLS=1 scripts/setup.sh            also the tools only the tests use (scripts/test.sh)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -24,6 +25,17 @@ PACKAGES=(
   xvfb xauth          # xvfb-run: pvsview's headless screenshots and their tests without a display
   python3             # the loader's install tests: a ctypes game, the exported-symbol check
 )
+
+# Only the tests use these: the runtime (runtime/pvsr.h) built and run on other machines, and fuzzed.
+TEST_PACKAGES=(
+  clang libclang-rt-14-dev  # Clang: the runtime built as C99 and C++17 by a second compiler; libFuzzer
+  gcc-multilib              # the runtime for 32-bit x86 (gcc -m32)
+  gcc-mingw-w64-x86-64 wine wine64  # the runtime for Windows, its test run under Wine
+  emscripten nodejs         # the runtime for WebAssembly, its test run under Node
+)
+if [ "${PVSBAKE_TEST_TOOLS:-0}" = 1 ]; then
+  PACKAGES+=("${TEST_PACKAGES[@]}")
+fi
 
 missing=()
 for p in "${PACKAGES[@]}"; do

@@ -7,7 +7,7 @@
 # SKIP_ASAN=1 skips that part.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-scripts/setup.sh
+PVSBAKE_TEST_TOOLS=1 scripts/setup.sh
 (cd "${BUILD_DIR:-build}" && ctest --output-on-failure -j "$(nproc)" --timeout 900)
 
 if [ "${SKIP_ASAN:-0}" != 1 ]; then

@@ -1,0 +1,52 @@
+/* libFuzzer target of the C99 runtime (runtime/pvsr.h): any bytes, with the checksum made right (so that the
+ * mutations reach the structural checks), are refused by pvsr_open() or every query of the level stays inside
+ * the bytes and in range. Built with Clang, -fsanitize=fuzzer,address,undefined (tests/CMakeLists.txt); run
+ *   fuzz_runtime_file -runs=1000000 CORPUS_DIR SEEDS_DIR
+ * with the seeds make_runtime_seeds writes. docs/RESULTS.md has the runs. */
+#include "pvsr.h"
+
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+static void visit(void* user, uint32_t object) {
+    if (object >= *(const uint32_t*)user) abort(); /* an index out of range */
+}
+
+int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size);
+
+int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+    /* The bytes, 8-byte aligned in a buffer of exactly their size (ASan sees any read past them). */
+    uint8_t* bytes = (uint8_t*)malloc(size ? size : 1);
+    pvsr_level level;
+    uint32_t c, k, objects;
+    size_t i;
+    if (bytes == NULL) return 0;
+    if (size) memcpy(bytes, data, size);
+    if (size >= 64) {
+        const uint64_t sum = pvsr_xxh64(bytes + 32, size - 32, 0);
+        memcpy(bytes + 24, &sum, 8);
+        memcpy(bytes + 16, &(uint64_t){(uint64_t)size}, 8);
+    }
+    if (pvsr_open(&level, bytes, size, NULL, 0) == PVSR_OK) {
+        objects = pvsr_object_count(&level);
+        for (c = 0; c < pvsr_cell_count(&level) && c < 4096; ++c) {
+            float box[6];
+            pvsr_ranked_occluder o;
+            pvsr_visit_visible(&level, c, visit, &objects);
+            (void)pvsr_is_visible(&level, c, objects / 2);
+            (void)pvsr_cell_bounds(&level, c, box);
+            for (k = 0; k < pvsr_occluder_count(&level, c) && k < 64; ++k) (void)pvsr_occluder(&level, c, k, &o);
+        }
+        for (k = 0; k < objects && k < 4096; ++k) (void)strlen(pvsr_object_name(&level, k));
+        (void)strlen(pvsr_string(&level, "mode"));
+        for (i = 0; i + 12 <= size && i < 12 * 64; i += 12) {
+            float p[3];
+            memcpy(p, data + i, 12);
+            if (pvsr_find_cell(&level, p[0], p[1], p[2]) >= (int32_t)pvsr_cell_count(&level)) abort();
+            (void)pvsr_in_eye_space(&level, p[0], p[1], p[2]);
+        }
+    }
+    free(bytes);
+    return 0;
+}

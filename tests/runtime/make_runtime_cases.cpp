@@ -1,0 +1,106 @@
+// make_runtime_cases OUT_DIR: runtime files and what the HDF5 loader (pvsbake/loader.h) answers on their bake
+// files, as OUT_DIR/cases.txt, for runtime_check (tests/runtime/runtime_check.c) to compare the C99 runtime
+// against on other machines: grids and octrees with masks and ranked occluders, no objects, and more objects
+// than the runtime's stack bit set holds. Floats are written as their bits (hex), names as hex bytes.
+#include "io/bake_file.h"
+#include "io/runtime_file.h"
+#include "tests/bake_fixtures.h"
+
+#include <pvsbake/loader.h>
+
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <string>
+
+namespace {
+
+unsigned bits(float f) {
+    uint32_t u;
+    std::memcpy(&u, &f, 4);
+    return u;
+}
+
+void write_case(std::FILE* out, const std::filesystem::path& dir, const std::string& name, const pvs::BakeData& bake,
+                uint32_t seed) {
+    const std::string h5 = (dir / (name + ".h5")).string();
+    pvs::write_bake_file(h5, bake);
+    std::ofstream((dir / (name + ".pvsr")).string(), std::ios::binary) << pvs::runtime_file_bytes(h5);
+    pvsbake::Bake b;
+    const pvsbake::LoadResult r = b.load(h5);
+    if (!r) {
+        std::fprintf(stderr, "make_runtime_cases: %s\n", r.message.c_str());
+        std::exit(1);
+    }
+    std::filesystem::remove(h5);
+    std::fprintf(out, "case %s.pvsr\nlevel %u %u %d %d %llu\n", name.c_str(), b.cell_count(), b.object_count(),
+                 int(b.cell_kind()), b.is_conservative() ? 1 : 0, (unsigned long long)b.total_triangles());
+    for (uint32_t c = 0; c < b.cell_count(); ++c) {
+        std::fprintf(out, "cell %u %u", c, b.visible_count(c));
+        b.for_each_visible(c, [&](uint32_t o) { std::fprintf(out, " %u", o); });
+        const pvsbake::Box box = b.cell_bounds(c);
+        std::fprintf(out, "\nbounds %x %x %x %x %x %x\noccluders %u", bits(box.min[0]), bits(box.min[1]), bits(box.min[2]),
+                     bits(box.max[0]), bits(box.max[1]), bits(box.max[2]), b.occluder_count(c));
+        for (const pvsbake::RankedOccluder& o : b.occluders(c))
+            std::fprintf(out, "\n%x %x %x %x %x %x %x %x %x %x", bits(o.box.min[0]), bits(o.box.min[1]), bits(o.box.min[2]),
+                         bits(o.box.max[0]), bits(o.box.max[1]), bits(o.box.max[2]), bits(o.score), bits(o.solid_angle_sr),
+                         bits(o.hidden_objects), bits(o.hidden_triangle_share));
+        std::fprintf(out, "\n");
+    }
+    for (uint32_t o = 0; o < b.object_count(); ++o) {
+        const pvsbake::Box box = b.object_bounds(o);
+        std::string hex;
+        char h[3];
+        for (const char ch : b.object_name(o)) {
+            std::snprintf(h, sizeof h, "%02x", unsigned(uint8_t(ch)));
+            hex += h;
+        }
+        std::fprintf(out, "object %u %u %u %x %x %x %x %x %x %s\n", o, b.object_triangles(o), b.object_flags(o),
+                     bits(box.min[0]), bits(box.min[1]), bits(box.min[2]), bits(box.max[0]), bits(box.max[1]),
+                     bits(box.max[2]), hex.empty() ? "-" : hex.c_str());
+    }
+    // Points in and around the cells, a third of them on a 1/8 m lattice (on cell and voxel faces).
+    float lo[3] = {1e30f, 1e30f, 1e30f}, hi[3] = {-1e30f, -1e30f, -1e30f};
+    for (uint32_t c = 0; c < b.cell_count(); ++c) {
+        const pvsbake::Box box = b.cell_bounds(c);
+        for (int a = 0; a < 3; ++a) {
+            lo[a] = std::min(lo[a], box.min[a]);
+            hi[a] = std::max(hi[a], box.max[a]);
+        }
+    }
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> u(-0.2f, 1.2f);
+    for (int i = 0; i < 2000 && b.cell_count() > 0; ++i) {
+        float p[3];
+        for (int a = 0; a < 3; ++a) {
+            p[a] = lo[a] + u(rng) * (hi[a] - lo[a]);
+            if (i % 3 == 1) p[a] = lo[a] + float(int((p[a] - lo[a]) * 8.0f)) / 8.0f;
+        }
+        std::fprintf(out, "point %x %x %x %d %d\n", bits(p[0]), bits(p[1]), bits(p[2]), b.find_cell(p[0], p[1], p[2]),
+                     b.in_eye_space(p[0], p[1], p[2]) ? 1 : 0);
+    }
+    std::fprintf(out, "end\n");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    if (argc != 2) {
+        std::fprintf(stderr, "usage: make_runtime_cases OUT_DIR\n");
+        return 2;
+    }
+    const std::filesystem::path dir = argv[1];
+    std::filesystem::create_directories(dir);
+    std::FILE* out = std::fopen((dir / "cases.txt").string().c_str(), "w");
+    if (!out) return 1;
+    write_case(out, dir, "grid", pvs::test::coherent_bake(133, {7, 3, 6}, false, true, 4), 1);
+    write_case(out, dir, "octree", pvs::test::coherent_bake(70, {4, 2, 3}, true, true, 8), 2);
+    write_case(out, dir, "sampled_grid_without_masks", pvs::test::coherent_bake(64, {3, 2, 4}, false, false, 5), 3);
+    write_case(out, dir, "no_objects", pvs::test::coherent_bake(0, {2, 2, 2}, false, true, 6), 4);
+    write_case(out, dir, "many_objects", pvs::test::coherent_bake(16400, {3, 1, 2}, true, false, 7), 5);
+    std::fclose(out);
+    std::printf("make_runtime_cases: 5 cases in %s\n", argv[1]);
+    return 0;
+}
