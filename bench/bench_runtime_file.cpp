@@ -60,7 +60,7 @@ nlohmann::ordered_json measure(const std::string& bake_path, int repeats, int qu
     j["bake"] = bake_path;
     j["bake_file_bytes"] = std::filesystem::file_size(bake_path);
     pvs::RuntimeFileFigures figures;
-    const std::string bytes = pvs::runtime_file_bytes(bake_path, &figures);
+    const std::string bytes = pvs::runtime_file_bytes(bake_path, {}, &figures);
     j["runtime_file_bytes"] = figures.file_bytes;
     nlohmann::ordered_json sections;
     for (const auto& [tag, size] : figures.sections) sections[tag] = size;

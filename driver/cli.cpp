@@ -344,18 +344,20 @@ std::unique_ptr<RowJournal> open_journal(Context& ctx, const BakeConfig& config,
 }
 
 // The runtime file of the bake at bake_path (io/runtime_file.h), and a line saying what it holds.
-void write_runtime_file(Context& ctx, const std::string& bake_path, const std::string& runtime_path) {
+void write_runtime_file(Context& ctx, const std::string& bake_path, const std::string& runtime_path,
+                        const RuntimeFileOptions& options = {}) {
     ScopedTimer t(ctx, "export");
-    const RuntimeFileFigures f = export_runtime_file(bake_path, runtime_path);
+    const RuntimeFileFigures f = export_runtime_file(bake_path, runtime_path, options);
     std::string parts;
     for (const auto& [tag, bytes] : f.sections) parts += fmt::format("{}{} {}", parts.empty() ? "" : ", ", tag, bytes);
     ctx.info(fmt::format("wrote {} ({} bytes: {})", runtime_path, f.file_bytes, parts));
 }
 
 // export BAKE.h5 -o LEVEL.pvsr
-int run_export(Context& ctx, const std::string& bake_path, const std::string& runtime_path) {
+int run_export(Context& ctx, const std::string& bake_path, const std::string& runtime_path,
+               const RuntimeFileOptions& options) {
     check_output_writable(runtime_path, "the runtime file");
-    write_runtime_file(ctx, bake_path, runtime_path);
+    write_runtime_file(ctx, bake_path, runtime_path, options);
     return kExitOk;
 }
 
@@ -733,6 +735,10 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
         "export", "write the runtime file a game ships (.pvsr: docs/FORMAT.md) from a bake file");
     exporter->add_option("bake", bake_path, "the bake file")->required();
     exporter->add_option("-o,--output", runtime_path, "the runtime file to write (.pvsr)")->required();
+    RuntimeFileOptions runtime_options;
+    exporter->add_flag("--occluder-measures", runtime_options.occluder_measures,
+                       "also each ranked occluder's score, solid angle and hidden shares (16 bytes an entry; a "
+                       "culler needs only the boxes, in rank order)");
     add_common(*exporter, common, "Options");
 
     CLI::App* query = app.add_subcommand("query", "the cell holding a point and the objects its PVS lists");
@@ -802,7 +808,7 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
         }
         if (info->parsed()) return run_info(bake_path, json, out);
         if (query->parsed()) return run_query(bake_path, point, json, out);
-        if (exporter->parsed()) return run_export(ctx, bake_path, runtime_path);
+        if (exporter->parsed()) return run_export(ctx, bake_path, runtime_path, runtime_options);
     } catch (const Error& e) {
         ctx.error(e.what());
         abort_processes(exit_status(e.kind()));

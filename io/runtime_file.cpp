@@ -16,6 +16,7 @@
 #include <algorithm>
 #include <cstring>
 #include <limits>
+#include <unordered_map>
 
 namespace pvs {
 namespace {
@@ -80,6 +81,70 @@ void bricks_of(FileMask& m, std::vector<uint32_t>& index, std::vector<uint8_t>& 
     }
 }
 
+// Masks as tiles of 4 x 4 x 4 bricks of 8 x 8 x 8 voxels (docs/FORMAT.md, "The runtime file"): a tile is empty,
+// full, or names a block of 64 brick references; a reference is an empty or full brick, or names 64 bytes of
+// bits. Identical bricks and identical blocks are stored once, for every mask added (the view and eye masks
+// share most of theirs).
+struct MaskTiles {
+    int32_t brick_dims[3], tile_dims[3];
+    std::vector<uint32_t> refs;    // 64 per block
+    std::vector<uint8_t> bricks;   // 64 bytes per distinct mixed brick
+    std::unordered_map<std::string, uint32_t> brick_of, block_of;
+
+    explicit MaskTiles(const int32_t dims[3]) {
+        for (int a = 0; a < 3; ++a) {
+            brick_dims[a] = int32_t(pvsbake::detail::bricks_along(dims[a]));
+            tile_dims[a] = (brick_dims[a] + PVSR_TILE_BRICKS - 1) / PVSR_TILE_BRICKS;
+        }
+    }
+
+    // The tiles of one mask given as bricks (io/loader/mask_bricks.h).
+    std::vector<uint32_t> add(const std::vector<uint32_t>& index, const std::vector<uint8_t>& bytes) {
+        const int T = PVSR_TILE_BRICKS;
+        std::vector<uint32_t> tiles(size_t(tile_dims[0]) * size_t(tile_dims[1]) * size_t(tile_dims[2]));
+        std::vector<uint32_t> block(size_t(T * T * T));
+        for (int tz = 0; tz < tile_dims[2]; ++tz)
+            for (int ty = 0; ty < tile_dims[1]; ++ty)
+                for (int tx = 0; tx < tile_dims[0]; ++tx) {
+                    bool empty = true, full = true;
+                    for (int k = 0; k < T * T * T; ++k) {
+                        const int bx = tx * T + k % T, by = ty * T + k / T % T, bz = tz * T + k / (T * T);
+                        uint32_t ref = PVSR_BRICK_EMPTY;
+                        if (bx < brick_dims[0] && by < brick_dims[1] && bz < brick_dims[2]) {
+                            const uint32_t t = index[size_t(bx) + size_t(brick_dims[0]) *
+                                                         (size_t(by) + size_t(brick_dims[1]) * size_t(bz))];
+                            if (t == pvsbake::detail::kBrickFull) {
+                                ref = PVSR_BRICK_FULL;
+                            } else if (t >= pvsbake::detail::kFirstBrick) {
+                                const std::string bits(
+                                    reinterpret_cast<const char*>(&bytes[size_t(t - pvsbake::detail::kFirstBrick) * 64]), 64);
+                                auto [it, fresh] = brick_of.emplace(bits, uint32_t(bricks.size() / 64));
+                                if (fresh) bricks.insert(bricks.end(), bits.begin(), bits.end());
+                                ref = PVSR_FIRST_BRICK + it->second;
+                            }
+                        }
+                        // A brick past the mask's edge counts as full for a full tile: no voxel there is looked up.
+                        const bool outside = bx >= brick_dims[0] || by >= brick_dims[1] || bz >= brick_dims[2];
+                        empty = empty && ref == PVSR_BRICK_EMPTY;
+                        full = full && (ref == PVSR_BRICK_FULL || outside);
+                        block[size_t(k)] = ref;
+                    }
+                    uint32_t& tile = tiles[size_t(tx) + size_t(tile_dims[0]) * (size_t(ty) + size_t(tile_dims[1]) * size_t(tz))];
+                    if (empty) {
+                        tile = PVSR_BRICK_EMPTY;
+                    } else if (full) {
+                        tile = PVSR_BRICK_FULL;
+                    } else {
+                        const std::string key(reinterpret_cast<const char*>(block.data()), block.size() * 4);
+                        auto [it, fresh] = block_of.emplace(key, uint32_t(refs.size() / block.size()));
+                        if (fresh) refs.insert(refs.end(), block.begin(), block.end());
+                        tile = PVSR_FIRST_BRICK + it->second;
+                    }
+                }
+        return tiles;
+    }
+};
+
 struct Bake {
     pvsbake::BakeInfo info;
     FileObjects objects;
@@ -88,7 +153,7 @@ struct Bake {
     FileOccluders occluders;
 };
 
-std::string assemble(const std::string& path, Bake& b) {
+std::string assemble(const std::string& path, Bake& b, const RuntimeFileOptions& options) {
     const uint32_t objects = uint32_t(b.objects.names.size());
     const uint32_t cells = b.cells.count;
     if (objects >= PVSR_MAX_OBJECTS)
@@ -112,16 +177,17 @@ std::string assemble(const std::string& path, Bake& b) {
         put(s.bytes, uint32_t((m.present ? PVSR_MASK_VIEW : 0u) | (eyes ? PVSR_MASK_EYES : 0u)));
         sections.push_back(std::move(s));
         if (m.present) {
+            MaskTiles tiles(m.dims);
             std::vector<uint32_t> index;
             std::vector<uint8_t> bytes;
             bricks_of(b.cells.view, index, bytes);
-            sections.push_back(array_section(PVSR_TAG('V', 'I', 'D', 'X'), 4, index));
-            sections.push_back(array_section(PVSR_TAG('V', 'B', 'I', 'T'), 64, bytes));
+            sections.push_back(array_section(PVSR_TAG('V', 'T', 'I', 'L'), 4, tiles.add(index, bytes)));
             if (eyes) {
                 bricks_of(b.cells.eyes, index, bytes);
-                sections.push_back(array_section(PVSR_TAG('E', 'I', 'D', 'X'), 4, index));
-                sections.push_back(array_section(PVSR_TAG('E', 'B', 'I', 'T'), 64, bytes));
+                sections.push_back(array_section(PVSR_TAG('E', 'T', 'I', 'L'), 4, tiles.add(index, bytes)));
             }
+            sections.push_back(index_section(PVSR_TAG('M', 'R', 'E', 'F'), tiles.refs));
+            sections.push_back(array_section(PVSR_TAG('M', 'B', 'I', 'T'), 64, tiles.bricks));
         }
     }
     // STRS: what the bake is.
@@ -219,26 +285,35 @@ std::string assemble(const std::string& path, Bake& b) {
         sections.push_back(std::move(offsets));
         sections.push_back(std::move(names));
     }
-    // Ranked occluders: only the boxes a ranking names, renumbered in order of first use.
+    // Ranked occluders: only the boxes a ranking names, renumbered in order of first use; each entry's box in
+    // 1, 2 or 4 bytes; the measures only when asked for (a culler needs the boxes in rank order).
     if (!b.occluders.ranked_offsets.empty()) {
-        std::vector<uint32_t> renumber(size_t(b.occluders.count), UINT32_MAX);
+        std::vector<uint32_t> renumber(size_t(b.occluders.count), UINT32_MAX), entry_box;
         Section boxes{PVSR_TAG('R', 'B', 'O', 'X'), 24, 0, {}};
-        Section entries{PVSR_TAG('R', 'E', 'N', 'T'), PVSR_RANKED_BYTES, b.occluders.ranked_box.size(), {}};
+        Section measures{PVSR_TAG('R', 'M', 'E', 'A'), PVSR_MEASURE_BYTES, b.occluders.ranked_box.size(), {}};
         for (size_t e = 0; e < b.occluders.ranked_box.size(); ++e) {
             const uint32_t box = b.occluders.ranked_box[e];
             if (renumber[box] == UINT32_MAX) {
                 renumber[box] = uint32_t(boxes.count++);
                 for (int a = 0; a < 6; ++a) put(boxes.bytes, b.occluders.bounds[6 * size_t(box) + size_t(a)]);
             }
-            put(entries.bytes, renumber[box]);
-            put(entries.bytes, b.occluders.ranked_score[e]);
-            put(entries.bytes, b.occluders.ranked_solid_angle_sr[e]);
-            put(entries.bytes, b.occluders.ranked_hidden_objects[e]);
-            put(entries.bytes, b.occluders.ranked_hidden_triangle_share[e]);
+            entry_box.push_back(renumber[box]);
+            put(measures.bytes, b.occluders.ranked_score[e]);
+            put(measures.bytes, b.occluders.ranked_solid_angle_sr[e]);
+            put(measures.bytes, b.occluders.ranked_hidden_objects[e]);
+            put(measures.bytes, b.occluders.ranked_hidden_triangle_share[e]);
+        }
+        Section list{PVSR_TAG('R', 'L', 'S', 'T'), 4, entry_box.size(), {}};
+        if (boxes.count <= 256) {
+            list.item_bytes = 1;
+            for (uint32_t v : entry_box) put(list.bytes, uint8_t(v));
+        } else {
+            list = index_section(PVSR_TAG('R', 'L', 'S', 'T'), entry_box);
         }
         sections.push_back(std::move(boxes));
         sections.push_back(array_section(PVSR_TAG('R', 'O', 'F', 'S'), 4, b.occluders.ranked_offsets));
-        sections.push_back(std::move(entries));
+        sections.push_back(std::move(list));
+        if (options.occluder_measures) sections.push_back(std::move(measures));
     }
 
     // The header, the table, the sections at multiples of 64.
@@ -282,7 +357,8 @@ std::string assemble(const std::string& path, Bake& b) {
 
 }  // namespace
 
-std::string runtime_file_bytes(const std::string& bake_path, RuntimeFileFigures* figures) {
+std::string runtime_file_bytes(const std::string& bake_path, const RuntimeFileOptions& options,
+                               RuntimeFileFigures* figures) {
     static_assert(sizeof(float) == 4);
     const uint16_t probe = 1;
     if (*reinterpret_cast<const uint8_t*>(&probe) != 1)
@@ -297,7 +373,7 @@ std::string runtime_file_bytes(const std::string& bake_path, RuntimeFileFigures*
         bake.occluders = pvsbake::detail::read_occluders(r, root, objects, bake.cells.count, /*want_boxes=*/false);
         return bake;
     });
-    std::string bytes = assemble(bake_path, b);
+    std::string bytes = assemble(bake_path, b, options);
     if (figures) {
         figures->file_bytes = bytes.size();
         figures->sections.clear();
@@ -314,9 +390,10 @@ std::string runtime_file_bytes(const std::string& bake_path, RuntimeFileFigures*
     return bytes;
 }
 
-RuntimeFileFigures export_runtime_file(const std::string& bake_path, const std::string& out_path) {
+RuntimeFileFigures export_runtime_file(const std::string& bake_path, const std::string& out_path,
+                                       const RuntimeFileOptions& options) {
     RuntimeFileFigures figures;
-    const std::string bytes = runtime_file_bytes(bake_path, &figures);
+    const std::string bytes = runtime_file_bytes(bake_path, options, &figures);
     write_file_atomically(out_path, bytes);
     return figures;
 }

@@ -16,11 +16,17 @@ struct RuntimeFileFigures {
     std::vector<std::pair<std::string, uint64_t>> sections;  // tag, bytes (padding to 64 included)
 };
 
+struct RuntimeFileOptions {
+    bool occluder_measures = false;  // also each ranked occluder's score, solid angle and hidden shares
+};
+
 // The runtime file of the bake file at bake_path, as bytes. Throws pvs::Error (bad input) naming the file
 // and what is wrong when the bake cannot be read or does not fit the runtime format (over 2^27 objects).
-std::string runtime_file_bytes(const std::string& bake_path, RuntimeFileFigures* figures = nullptr);
+std::string runtime_file_bytes(const std::string& bake_path, const RuntimeFileOptions& options = {},
+                               RuntimeFileFigures* figures = nullptr);
 
 // Writes it to out_path, whole or not at all (io/atomic_file.h).
-RuntimeFileFigures export_runtime_file(const std::string& bake_path, const std::string& out_path);
+RuntimeFileFigures export_runtime_file(const std::string& bake_path, const std::string& out_path,
+                                       const RuntimeFileOptions& options = {});
 
 }  // namespace pvs

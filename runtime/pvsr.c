@@ -60,6 +60,12 @@ static uint32_t index_at(const pvsr_array* a, uint64_t i) {
     return a->item_bytes == 2 ? rd16(a->at + 2 * i) : rd32(a->at + 4 * i);
 }
 
+/* Entry e of the ranked occluders: its box (1, 2 or 4 bytes an entry). */
+static uint32_t ranked_box(const pvsr_level* l, uint64_t e) {
+    const pvsr_array* a = &l->ranked_boxes;
+    return a->item_bytes == 1 ? a->at[e] : a->item_bytes == 2 ? rd16(a->at + 2 * e) : rd32(a->at + 4 * e);
+}
+
 static const char* const kEmpty = "";
 
 /* ---- XXH64 (the xxHash specification, seed given) */
@@ -345,32 +351,28 @@ static const char* check_level(pvsr_level* l) {
     bad = need(l, PVSR_TAG('G', 'R', 'I', 'D'), 4, g, 1, &l->grid_to_cell);
     if (bad) return bad;
     if (l->mask_flags & PVSR_MASK_VIEW) {
-        uint64_t bricks = 1;
+        uint64_t tiles = 1, t;
         if (!(isfinite(l->mask_voxel_m) && l->mask_voxel_m > 0.0f)) return "the mask's voxel size is not positive";
         for (k = 0; k < 3; ++k) {
             if (!isfinite(l->mask_origin[k])) return "the mask's origin is not finite";
             if (l->mask_dims[k] < 0 || l->mask_dims[k] > (1 << 24)) return "the mask's dimensions are out of range";
-            l->brick_dims[k] = (int32_t)(((uint32_t)l->mask_dims[k] + 7u) / 8u);
-            bricks *= (uint64_t)l->brick_dims[k];
+            l->tile_dims[k] = (int32_t)(((uint32_t)l->mask_dims[k] + 8u * PVSR_TILE_BRICKS - 1u) / (8u * PVSR_TILE_BRICKS));
+            tiles *= (uint64_t)l->tile_dims[k];
         }
-        if (bricks > (1u << 30)) return "the mask has too many bricks";
-        bad = need(l, PVSR_TAG('V', 'I', 'D', 'X'), 4, bricks, 1, &l->view_index);
-        if (!bad) bad = need(l, PVSR_TAG('V', 'B', 'I', 'T'), 64, UINT64_MAX, 1, &l->view_bits);
-        if (!bad && (l->mask_flags & PVSR_MASK_EYES)) {
-            bad = need(l, PVSR_TAG('E', 'I', 'D', 'X'), 4, bricks, 1, &l->eye_index);
-            if (!bad) bad = need(l, PVSR_TAG('E', 'B', 'I', 'T'), 64, UINT64_MAX, 1, &l->eye_bits);
-        }
+        if (tiles > (1u << 30)) return "the mask has too many tiles";
+        bad = need(l, PVSR_TAG('V', 'T', 'I', 'L'), 4, tiles, 1, &l->view_tiles);
+        if (!bad && (l->mask_flags & PVSR_MASK_EYES)) bad = need(l, PVSR_TAG('E', 'T', 'I', 'L'), 4, tiles, 1, &l->eye_tiles);
+        if (!bad) bad = need(l, PVSR_TAG('M', 'R', 'E', 'F'), 0, UINT64_MAX, 1, &l->mask_refs);
+        if (!bad) bad = need(l, PVSR_TAG('M', 'B', 'I', 'T'), 64, UINT64_MAX, 1, &l->mask_bits);
         if (bad) return bad;
-        {
-            const pvsr_array* idx[2] = {&l->view_index, &l->eye_index};
-            const pvsr_array* bits[2] = {&l->view_bits, &l->eye_bits};
-            int m;
-            for (m = 0; m < 2; ++m) {
-                uint64_t b;
-                for (b = 0; b < idx[m]->count; ++b)
-                    if (rd32(idx[m]->at + 4 * b) >= 2 + bits[m]->count) return "a mask brick index is out of range";
-            }
+        if (l->mask_refs.count % 64 != 0) return "the mask's brick references are not whole blocks";
+        for (t = 0; t < tiles; ++t) {
+            if (rd32(l->view_tiles.at + 4 * t) >= PVSR_FIRST_BRICK + l->mask_refs.count / 64 ||
+                (l->eye_tiles.at != NULL && rd32(l->eye_tiles.at + 4 * t) >= PVSR_FIRST_BRICK + l->mask_refs.count / 64))
+                return "a mask tile is out of range";
         }
+        for (t = 0; t < l->mask_refs.count; ++t)
+            if (index_at(&l->mask_refs, t) >= PVSR_FIRST_BRICK + l->mask_bits.count) return "a mask brick reference is out of range";
     } else if (l->mask_flags & PVSR_MASK_EYES) {
         return "an eye mask without a view mask";
     }
@@ -497,22 +499,27 @@ static const char* check_ranked(pvsr_level* l) {
     if (!section(l, PVSR_TAG('R', 'O', 'F', 'S'), &l->ranked_offsets)) return NULL; /* no ranking */
     bad = need(l, PVSR_TAG('R', 'O', 'F', 'S'), 4, (uint64_t)l->cell_count + 1, 1, &l->ranked_offsets);
     if (!bad) bad = need(l, PVSR_TAG('R', 'B', 'O', 'X'), 24, UINT64_MAX, 1, &l->occluder_boxes);
-    if (!bad) bad = need(l, PVSR_TAG('R', 'E', 'N', 'T'), PVSR_RANKED_BYTES, UINT64_MAX, 1, &l->ranked);
+    if (!bad && !section(l, PVSR_TAG('R', 'L', 'S', 'T'), &l->ranked_boxes)) bad = "a required section is missing";
+    if (!bad && l->ranked_boxes.item_bytes != 1 && l->ranked_boxes.item_bytes != 2 && l->ranked_boxes.item_bytes != 4)
+        bad = "a section's item size is wrong";
+    if (!bad && section(l, PVSR_TAG('R', 'M', 'E', 'A'), &l->ranked_measures))
+        bad = need(l, PVSR_TAG('R', 'M', 'E', 'A'), PVSR_MEASURE_BYTES, l->ranked_boxes.count, 1, &l->ranked_measures);
     if (bad) return bad;
     if (l->occluder_boxes.count > 0xffffffffu) return "too many occluder boxes";
     l->occluder_box_count = (uint32_t)l->occluder_boxes.count;
     for (e = 0; e < l->occluder_boxes.count; ++e)
         if (!finite_box(l->occluder_boxes.at + 24 * e)) return "an occluder box is not finite";
-    if (rd32(l->ranked_offsets.at) != 0 || rd32(l->ranked_offsets.at + 4 * (uint64_t)l->cell_count) != l->ranked.count)
+    for (e = 0; e < l->ranked_boxes.count; ++e)
+        if (ranked_box(l, e) >= l->occluder_boxes.count) return "a ranked occluder names a box out of range";
+    if (rd32(l->ranked_offsets.at) != 0 || rd32(l->ranked_offsets.at + 4 * (uint64_t)l->cell_count) != l->ranked_boxes.count)
         return "the ranked offsets do not start at 0 and end at the entries' count";
     for (c = 0; c < l->cell_count; ++c) {
         const uint32_t a = rd32(l->ranked_offsets.at + 4 * c), b = rd32(l->ranked_offsets.at + 4 * c + 4);
-        if (b < a || b > l->ranked.count) return "the ranked offsets decrease or pass the entries";
-        for (e = a; e < b; ++e) {
-            const uint8_t* r = l->ranked.at + PVSR_RANKED_BYTES * e;
-            const float score = rdf(r + 4), sa = rdf(r + 8), hidden = rdf(r + 12), share = rdf(r + 16);
-            if (rd32(r) >= l->occluder_boxes.count) return "a ranked occluder names a box out of range";
-            if (!(isfinite(score) && score >= 0.0f) || (e > a && score > rdf(r - PVSR_RANKED_BYTES + 4)))
+        if (b < a || b > l->ranked_boxes.count) return "the ranked offsets decrease or pass the entries";
+        for (e = a; e < b && l->ranked_measures.at != NULL; ++e) {
+            const uint8_t* r = l->ranked_measures.at + PVSR_MEASURE_BYTES * e;
+            const float score = rdf(r), sa = rdf(r + 4), hidden = rdf(r + 8), share = rdf(r + 12);
+            if (!(isfinite(score) && score >= 0.0f) || (e > a && score > rdf(r - PVSR_MEASURE_BYTES)))
                 return "a ranked occluder's score is not finite, negative, or above the one before it";
             if (!(sa >= 0.0f && sa <= 12.5664f) || !(hidden >= 0.0f && hidden <= (float)l->object_count) ||
                 !(share >= 0.0f && share <= 1.0f))
@@ -604,12 +611,15 @@ size_t pvsr_words_per_row(const pvsr_level* l) {
 }
 
 static int mask_voxel(const pvsr_level* l, int eyes, int64_t x, int64_t y, int64_t z) {
-    const pvsr_array* index = eyes ? &l->eye_index : &l->view_index;
-    const pvsr_array* bits = eyes ? &l->eye_bits : &l->view_bits;
-    const uint64_t b = (uint64_t)(x >> 3) + (uint64_t)l->brick_dims[0] * ((uint64_t)(y >> 3) + (uint64_t)l->brick_dims[1] * (uint64_t)(z >> 3));
-    const uint32_t t = rd32(index->at + 4 * b);
-    if (t < 2) return t == 1;
-    return (bits->at[(uint64_t)(t - 2) * 64 + (uint64_t)(z & 7) * 8 + (uint64_t)(y & 7)] >> (x & 7)) & 1;
+    const pvsr_array* tiles = eyes ? &l->eye_tiles : &l->view_tiles;
+    const uint64_t t = (uint64_t)(x >> 5) + (uint64_t)l->tile_dims[0] * ((uint64_t)(y >> 5) + (uint64_t)l->tile_dims[1] * (uint64_t)(z >> 5));
+    const uint32_t tile = rd32(tiles->at + 4 * t);
+    uint32_t ref;
+    if (tile < PVSR_FIRST_BRICK) return tile == PVSR_BRICK_FULL;
+    ref = index_at(&l->mask_refs, (uint64_t)(tile - PVSR_FIRST_BRICK) * 64 + (uint64_t)((x >> 3) & 3) +
+                                      4 * ((uint64_t)((y >> 3) & 3) + 4 * (uint64_t)((z >> 3) & 3)));
+    if (ref < PVSR_FIRST_BRICK) return ref == PVSR_BRICK_FULL;
+    return (l->mask_bits.at[(uint64_t)(ref - PVSR_FIRST_BRICK) * 64 + (uint64_t)(z & 7) * 8 + (uint64_t)(y & 7)] >> (x & 7)) & 1;
 }
 
 /* Voxels are closed boxes: a point on a face of a set voxel is in (core/cell_set.h VoxelMask::contains). */
@@ -823,16 +833,25 @@ uint32_t pvsr_occluder_count(const pvsr_level* l, uint32_t cell) {
 }
 
 int pvsr_occluder(const pvsr_level* l, uint32_t cell, uint32_t rank, pvsr_ranked_occluder* out) {
-    const uint8_t* r;
+    uint64_t e;
     int a;
     if (out == NULL || rank >= pvsr_occluder_count(l, cell)) return 0;
-    r = l->ranked.at + PVSR_RANKED_BYTES * ((uint64_t)rd32(l->ranked_offsets.at + 4 * (uint64_t)cell) + rank);
-    for (a = 0; a < 6; ++a) out->box[a] = rdf(l->occluder_boxes.at + 24 * (uint64_t)rd32(r) + 4 * a);
-    out->score = rdf(r + 4);
-    out->solid_angle_sr = rdf(r + 8);
-    out->hidden_objects = rdf(r + 12);
-    out->hidden_triangle_share = rdf(r + 16);
+    e = (uint64_t)rd32(l->ranked_offsets.at + 4 * (uint64_t)cell) + rank;
+    for (a = 0; a < 6; ++a) out->box[a] = rdf(l->occluder_boxes.at + 24 * (uint64_t)ranked_box(l, e) + 4 * a);
+    if (l->ranked_measures.at != NULL) {
+        const uint8_t* r = l->ranked_measures.at + PVSR_MEASURE_BYTES * e;
+        out->score = rdf(r);
+        out->solid_angle_sr = rdf(r + 4);
+        out->hidden_objects = rdf(r + 8);
+        out->hidden_triangle_share = rdf(r + 12);
+    } else {
+        out->score = out->solid_angle_sr = out->hidden_objects = out->hidden_triangle_share = NAN;
+    }
     return 1;
+}
+
+int pvsr_has_occluder_measures(const pvsr_level* l) {
+    return l != NULL && l->ranked_measures.at != NULL;
 }
 
 uint32_t pvsr_occluder_boxes(const pvsr_level* l, uint32_t cell, float* boxes, uint32_t capacity) {

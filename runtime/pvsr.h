@@ -65,10 +65,10 @@ typedef struct pvsr_level {
     float origin[3], cell_size_m;
     int32_t dims[3];
     float mask_origin[3], mask_voxel_m;
-    int32_t mask_dims[3], brick_dims[3];
-    pvsr_array grid_to_cell, nodes, cell_grid, cell_boxes, view_index, view_bits, eye_index, eye_bits,
+    int32_t mask_dims[3], tile_dims[3];
+    pvsr_array grid_to_cell, nodes, cell_grid, cell_boxes, view_tiles, eye_tiles, mask_refs, mask_bits,
         cell_row, row_offsets, code, object_boxes, object_triangles, object_flags, name_offsets, names,
-        occluder_boxes, ranked_offsets, ranked, strings;
+        occluder_boxes, ranked_offsets, ranked_boxes, ranked_measures, strings;
     uint64_t code_bytes; /* the code without its padding */
     uint64_t total_triangles;
 } pvsr_level;
@@ -135,11 +135,13 @@ typedef struct pvsr_ranked_occluder {
     float hidden_triangle_share;
 } pvsr_ranked_occluder;
 uint32_t pvsr_occluder_count(const pvsr_level* level, uint32_t cell);
-/* The occluder of that rank (0 = best) into *out: 1, or 0 (out untouched) out of range. */
+/* The occluder of that rank (0 = best) into *out: 1, or 0 (out untouched) out of range. Its measures are NaN
+ * when the file does not hold them (pvsr_has_occluder_measures: `pvsbake export --occluder-measures`). */
 int pvsr_occluder(const pvsr_level* level, uint32_t cell, uint32_t rank, pvsr_ranked_occluder* out);
 /* The boxes of the best min(count, capacity) occluders of the cell into boxes (6 floats each), best first;
  * returns how many were written. */
 uint32_t pvsr_occluder_boxes(const pvsr_level* level, uint32_t cell, float* boxes, uint32_t capacity);
+int pvsr_has_occluder_measures(const pvsr_level* level);
 
 /* ---- What the bake is */
 int pvsr_is_conservative(const pvsr_level* level);
@@ -161,8 +163,12 @@ const char* pvsr_string(const pvsr_level* level, const char* key);
 #define PVSR_TAG(a, b, c, d) ((uint32_t)(a) | (uint32_t)(b) << 8 | (uint32_t)(c) << 16 | (uint32_t)(d) << 24)
 #define PVSR_LEVEL_BYTES 64        /* 'LEVL': the cells' grid and the masks' voxels */
 #define PVSR_NODE_BYTES 20         /* 'NODE': float center[3], int32 first_child, int32 cell */
-#define PVSR_RANKED_BYTES 20       /* 'RENT': uint32 box, float score, solid angle, hidden objects, share */
+#define PVSR_MEASURE_BYTES 16      /* 'RMEA': float score, solid angle, hidden objects, hidden triangle share */
 #define PVSR_MAX_OBJECTS (1u << 27) /* the PVS code's limit */
+#define PVSR_TILE_BRICKS 4          /* a mask tile is 4 x 4 x 4 bricks of 8 x 8 x 8 voxels */
+#define PVSR_BRICK_EMPTY 0u         /* a tile or brick reference: no voxel set */
+#define PVSR_BRICK_FULL 1u          /* every voxel set */
+#define PVSR_FIRST_BRICK 2u         /* 2 + j: block (tile) or bits (brick) j */
 
 /* ---- The checksum of the file (docs/FORMAT.md): XXH64 with seed 0, exposed for tools and tests. */
 uint64_t pvsr_xxh64(const void* data, size_t size, uint64_t seed);

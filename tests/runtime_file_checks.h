@@ -126,10 +126,15 @@ inline void expect_same_as_loader(const pvsr::Level& got, const pvsbake::Bake& w
                 EXPECT_EQ(g.box[3 + a], w.box.max[a]);
                 EXPECT_EQ(boxes[6 * k + size_t(a)], w.box.min[a]);
             }
-            EXPECT_EQ(g.score, w.score);
-            EXPECT_EQ(g.solid_angle_sr, w.solid_angle_sr);
-            EXPECT_EQ(g.hidden_objects, w.hidden_objects);
-            EXPECT_EQ(g.hidden_triangle_share, w.hidden_triangle_share);
+            if (pvsr_has_occluder_measures(&got.c_level())) {
+                EXPECT_EQ(g.score, w.score);
+                EXPECT_EQ(g.solid_angle_sr, w.solid_angle_sr);
+                EXPECT_EQ(g.hidden_objects, w.hidden_objects);
+                EXPECT_EQ(g.hidden_triangle_share, w.hidden_triangle_share);
+            } else {
+                EXPECT_TRUE(std::isnan(g.score) && std::isnan(g.solid_angle_sr) && std::isnan(g.hidden_objects) &&
+                            std::isnan(g.hidden_triangle_share));
+            }
         }
         pvsr_ranked_occluder none;
         EXPECT_FALSE(got.occluder(c, want.occluder_count(c), none));
@@ -165,21 +170,28 @@ inline void expect_same_as_loader(const pvsr::Level& got, const pvsbake::Bake& w
     EXPECT_EQ(got.find_cell(1e30f, -1e30f, 1e30f), -1);
 }
 
-// Writes the bake as HDF5, exports it, and checks the runtime against the HDF5 loader.
+// Writes the bake as HDF5, exports it (with and without the ranked occluders' measures), and checks the
+// runtime against the HDF5 loader.
 inline void round_trip(const BakeData& bake, uint32_t seed) {
     TempDir dir;
     const std::string h5 = dir.file("bake.h5");
     pvsbake::Bake loaded;
     write_and_load(bake, h5, loaded);
-    RuntimeFileFigures figures;
-    const Bytes bytes(runtime_file_bytes(h5, &figures));
-    EXPECT_EQ(figures.file_bytes, bytes.size);
-    EXPECT_EQ(bytes.size % PVSR_ALIGN, 0u);
-    pvsr::Level level;
-    std::string why = "not set";
-    ASSERT_EQ(level.open(bytes.data(), bytes.size, &why), PVSR_OK) << why;
-    EXPECT_EQ(why, "");
-    expect_same_as_loader(level, loaded, seed);
+    for (const bool measures : {false, true}) {
+        SCOPED_TRACE(measures ? "with measures" : "without measures");
+        RuntimeFileOptions options;
+        options.occluder_measures = measures;
+        RuntimeFileFigures figures;
+        const Bytes bytes(runtime_file_bytes(h5, options, &figures));
+        EXPECT_EQ(figures.file_bytes, bytes.size);
+        EXPECT_EQ(bytes.size % PVSR_ALIGN, 0u);
+        pvsr::Level level;
+        std::string why = "not set";
+        ASSERT_EQ(level.open(bytes.data(), bytes.size, &why), PVSR_OK) << why;
+        EXPECT_EQ(why, "");
+        EXPECT_EQ(pvsr_has_occluder_measures(&level.c_level()) != 0, measures && !bake.ranked.offsets.empty());
+        expect_same_as_loader(level, loaded, seed);
+    }
 }
 
 }  // namespace pvs::test

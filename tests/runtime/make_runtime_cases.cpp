@@ -24,10 +24,12 @@ unsigned bits(float f) {
 }
 
 void write_case(std::FILE* out, const std::filesystem::path& dir, const std::string& name, const pvs::BakeData& bake,
-                uint32_t seed) {
+                uint32_t seed, bool measures) {
     const std::string h5 = (dir / (name + ".h5")).string();
     pvs::write_bake_file(h5, bake);
-    std::ofstream((dir / (name + ".pvsr")).string(), std::ios::binary) << pvs::runtime_file_bytes(h5);
+    pvs::RuntimeFileOptions options;
+    options.occluder_measures = measures;
+    std::ofstream((dir / (name + ".pvsr")).string(), std::ios::binary) << pvs::runtime_file_bytes(h5, options);
     pvsbake::Bake b;
     const pvsbake::LoadResult r = b.load(h5);
     if (!r) {
@@ -95,11 +97,11 @@ int main(int argc, char** argv) {
     std::filesystem::create_directories(dir);
     std::FILE* out = std::fopen((dir / "cases.txt").string().c_str(), "w");
     if (!out) return 1;
-    write_case(out, dir, "grid", pvs::test::coherent_bake(133, {7, 3, 6}, false, true, 4), 1);
-    write_case(out, dir, "octree", pvs::test::coherent_bake(70, {4, 2, 3}, true, true, 8), 2);
-    write_case(out, dir, "sampled_grid_without_masks", pvs::test::coherent_bake(64, {3, 2, 4}, false, false, 5), 3);
-    write_case(out, dir, "no_objects", pvs::test::coherent_bake(0, {2, 2, 2}, false, true, 6), 4);
-    write_case(out, dir, "many_objects", pvs::test::coherent_bake(16400, {3, 1, 2}, true, false, 7), 5);
+    write_case(out, dir, "grid", pvs::test::coherent_bake(133, {7, 3, 6}, false, true, 4), 1, true);
+    write_case(out, dir, "octree", pvs::test::coherent_bake(70, {4, 2, 3}, true, true, 8), 2, false);
+    write_case(out, dir, "sampled_grid_without_masks", pvs::test::coherent_bake(64, {3, 2, 4}, false, false, 5), 3, true);
+    write_case(out, dir, "no_objects", pvs::test::coherent_bake(0, {2, 2, 2}, false, true, 6), 4, false);
+    write_case(out, dir, "many_objects", pvs::test::coherent_bake(16400, {3, 1, 2}, true, false, 7), 5, false);
     std::fclose(out);
     std::printf("make_runtime_cases: 5 cases in %s\n", argv[1]);
     return 0;
