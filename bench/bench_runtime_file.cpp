@@ -1,17 +1,19 @@
 // bench_runtime_file: the runtime file (io/runtime_file.h) and the C99 runtime (runtime/pvsr.h) against the
 // HDF5 loader (pvsbake/loader.h), on bakes.
 //
-//   bench_runtime_file BAKE.h5 [BAKE.h5 ...] [--repeats R] [--queries Q]
+//   bench_runtime_file BAKE.h5 [BAKE.h5 ...] [--repeats R] [--queries Q] [--max-chain N]
 //
 // For each bake: the runtime file's size and its sections' sizes, against the HDF5 file's size and what the
 // HDF5 loader holds in memory (its footprint); the time of pvsr_open (checksum and every check) on the
 // bytes mapped from a file written to the temporary folder, first on a fresh mapping (the pages come from the
 // page cache as a game's first touch would) and then the median of R opens; the HDF5 loader's load (median
 // of R); and one frame's work in each: find_cell of a random point in a random cell plus walking that cell's
-// PVS (median over batches of Q queries; the same points for both). Prints one JSON object.
+// PVS (median over batches of Q queries; the same points for all): the runtime through its C++ wrapper
+// (runtime/pvsr.hpp, the visit inlined), through the C callback, and the HDF5 loader. Prints one JSON object.
 #include "bench/bench_util.h"
 #include "io/runtime_file.h"
 #include "runtime/pvsr.h"
+#include "runtime/pvsr.hpp"
 
 #include <pvsbake/loader.h>
 
@@ -55,12 +57,15 @@ struct Point {
     float p[3];
 };
 
-nlohmann::ordered_json measure(const std::string& bake_path, int repeats, int queries) {
+nlohmann::ordered_json measure(const std::string& bake_path, int repeats, int queries, uint32_t max_chain) {
     nlohmann::ordered_json j;
     j["bake"] = bake_path;
     j["bake_file_bytes"] = std::filesystem::file_size(bake_path);
     pvs::RuntimeFileFigures figures;
-    const std::string bytes = pvs::runtime_file_bytes(bake_path, {}, &figures);
+    pvs::RuntimeFileOptions options;
+    options.max_chain = max_chain;
+    j["max_chain"] = max_chain;
+    const std::string bytes = pvs::runtime_file_bytes(bake_path, options, &figures);
     j["runtime_file_bytes"] = figures.file_bytes;
     nlohmann::ordered_json sections;
     for (const auto& [tag, size] : figures.sections) sections[tag] = size;
@@ -130,14 +135,22 @@ nlohmann::ordered_json measure(const std::string& bake_path, int repeats, int qu
         points.push_back(p);
     }
     uint64_t sink = 0;
-    std::vector<double> runtime_us, hdf5_us;
+    std::vector<double> runtime_us, runtime_c_us, hdf5_us;
+    pvsr::Level wrapped;
+    wrapped.open(m.at, m.size);
     for (int r = 0; r < repeats && !points.empty(); ++r) {
         auto start = std::chrono::steady_clock::now();
+        for (const Point& p : points) {
+            const int32_t c = wrapped.find_cell(p.p[0], p.p[1], p.p[2]);
+            if (c >= 0) wrapped.for_each_visible(uint32_t(c), [&](uint32_t o) { sink += o; });
+        }
+        runtime_us.push_back(seconds_since(start) * 1e6 / double(points.size()));
+        start = std::chrono::steady_clock::now();
         for (const Point& p : points) {
             const int32_t c = pvsr_find_cell(&level, p.p[0], p.p[1], p.p[2]);
             if (c >= 0) sink += pvsr_visit_visible(&level, uint32_t(c), [](void* u, uint32_t o) { *static_cast<uint64_t*>(u) += o; }, &sink);
         }
-        runtime_us.push_back(seconds_since(start) * 1e6 / double(points.size()));
+        runtime_c_us.push_back(seconds_since(start) * 1e6 / double(points.size()));
         start = std::chrono::steady_clock::now();
         for (const Point& p : points) {
             const int32_t c = bake.find_cell(p.p[0], p.p[1], p.p[2]);
@@ -146,6 +159,7 @@ nlohmann::ordered_json measure(const std::string& bake_path, int repeats, int qu
         hdf5_us.push_back(seconds_since(start) * 1e6 / double(points.size()));
     }
     j["runtime_query_median_us"] = runtime_us.empty() ? 0.0 : median(runtime_us);
+    j["runtime_c_callback_query_median_us"] = runtime_c_us.empty() ? 0.0 : median(runtime_c_us);
     j["hdf5_query_median_us"] = hdf5_us.empty() ? 0.0 : median(hdf5_us);
     j["checksum_of_walks"] = sink % 1000;  // keeps the walks from being optimized away
     std::filesystem::remove(path);
@@ -157,21 +171,24 @@ nlohmann::ordered_json measure(const std::string& bake_path, int repeats, int qu
 int main(int argc, char** argv) {
     std::vector<std::string> bakes;
     int repeats = 11, queries = 2000;
+    uint32_t max_chain = 4;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         if (a == "--repeats" && i + 1 < argc) {
             repeats = std::max(1, std::atoi(argv[++i]));
+        } else if (a == "--max-chain" && i + 1 < argc) {
+            max_chain = uint32_t(std::max(1, std::atoi(argv[++i])));
         } else if (a == "--queries" && i + 1 < argc) {
             queries = std::max(1, std::atoi(argv[++i]));
         } else if (a == "--help" || a.rfind("--", 0) == 0) {
-            std::fprintf(stderr, "usage: bench_runtime_file BAKE.h5 [BAKE.h5 ...] [--repeats R] [--queries Q]\n");
+            std::fprintf(stderr, "usage: bench_runtime_file BAKE.h5 [BAKE.h5 ...] [--repeats R] [--queries Q] [--max-chain N]\n");
             return a == "--help" ? 0 : 2;
         } else {
             bakes.push_back(a);
         }
     }
     if (bakes.empty()) {
-        std::fprintf(stderr, "usage: bench_runtime_file BAKE.h5 [BAKE.h5 ...] [--repeats R] [--queries Q]\n");
+        std::fprintf(stderr, "usage: bench_runtime_file BAKE.h5 [BAKE.h5 ...] [--repeats R] [--queries Q] [--max-chain N]\n");
         return 2;
     }
     nlohmann::ordered_json out;
@@ -180,7 +197,7 @@ int main(int argc, char** argv) {
     out["queries"] = queries;
     for (const std::string& b : bakes) {
         try {
-            out["bakes"].push_back(measure(b, repeats, queries));
+            out["bakes"].push_back(measure(b, repeats, queries, max_chain));
         } catch (const std::exception& e) {
             std::fprintf(stderr, "%s: %s\n", b.c_str(), e.what());
             return 2;

@@ -218,8 +218,8 @@ std::string assemble(const std::string& path, Bake& b, const RuntimeFileOptions&
         }
         sections.push_back(std::move(s));
     }
+    std::vector<uint32_t> cell_grid;  // each cell's grid position (a grid whose cells are their grid boxes)
     {
-        std::vector<uint32_t> cell_grid;
         bool derived = b.cells.kind == 0;
         if (derived) {
             cell_grid.assign(cells, UINT32_MAX);
@@ -246,24 +246,40 @@ std::string assemble(const std::string& path, Bake& b, const RuntimeFileOptions&
                 }
             }
         }
-        if (derived)
+        if (derived) {
             sections.push_back(array_section(PVSR_TAG('C', 'G', 'R', 'D'), 4, cell_grid));
-        else
+        } else {
+            cell_grid.clear();
             sections.push_back(array_section(PVSR_TAG('C', 'B', 'O', 'X'), 24, b.cells.bounds));
-    }
-    // CROW, ROFF, CODE (and the padding the decoders read into).
-    {
-        if (b.pvs.code_offsets.empty()) {  // a format 1.0 file: code its rows now
-            pvsbake::detail::RowCode code =
-                pvsbake::detail::encode_rows(b.pvs.rows.data(), b.pvs.unique_rows, b.pvs.row_bytes, objects);
-            b.pvs.code = std::move(code.code);
-            b.pvs.code_offsets = std::move(code.offsets);
         }
-        const uint64_t code_size = b.pvs.code_offsets.back();
+    }
+    // CROW, ROFF, CODE (and the padding the decoders read into): the rows coded again, each against the
+    // cheapest of its cell's earlier neighbours along -x, -y and -z (a grid) and the rows before it, in chains
+    // of at most PVSR_MAX_CHAIN rows (2 past the runtime's stack bit set: PVSR_STACK_OBJECTS).
+    {
+        std::vector<uint64_t> first_cell(size_t(b.pvs.unique_rows), UINT64_MAX);
+        for (uint32_t c = 0; c < cells; ++c) first_cell[b.pvs.cell_row[c]] = std::min<uint64_t>(first_cell[b.pvs.cell_row[c]], c);
+        const int32_t* d = b.cells.dims;
+        const auto neighbours = [&](uint64_t r, std::vector<uint64_t>& out) {
+            if (cell_grid.empty() || first_cell[size_t(r)] == UINT64_MAX) return;
+            const uint32_t g = cell_grid[size_t(first_cell[size_t(r)])];
+            const int64_t at[3] = {int64_t(g % uint32_t(d[0])), int64_t(g / uint32_t(d[0]) % uint32_t(d[1])),
+                                   int64_t(g / (uint32_t(d[0]) * uint32_t(d[1])))};
+            const int64_t stride[3] = {1, d[0], int64_t(d[0]) * d[1]};
+            for (int a = 0; a < 3; ++a) {
+                if (at[a] == 0) continue;
+                const int32_t n = b.cells.grid_to_cell[size_t(int64_t(g) - stride[a])];
+                if (n >= 0) out.push_back(b.pvs.cell_row[size_t(n)]);
+            }
+        };
+        const uint32_t max_chain = std::clamp<uint32_t>(options.max_chain, 1, objects <= PVSR_STACK_OBJECTS ? PVSR_MAX_CHAIN : 2);
+        const pvsbake::detail::RowCode code = pvsbake::detail::encode_rows_chained(
+            b.pvs.rows.data(), b.pvs.unique_rows, b.pvs.row_bytes, max_chain, neighbours);
+        const uint64_t code_size = code.offsets.back();
         sections.push_back(index_section(PVSR_TAG('C', 'R', 'O', 'W'), b.pvs.cell_row));
-        sections.push_back(index_section(PVSR_TAG('R', 'O', 'F', 'F'), b.pvs.code_offsets));
+        sections.push_back(index_section(PVSR_TAG('R', 'O', 'F', 'F'), code.offsets));
         Section s{PVSR_TAG('C', 'O', 'D', 'E'), 1, code_size, {}};
-        s.bytes.assign(reinterpret_cast<const char*>(b.pvs.code.data()), size_t(code_size));
+        s.bytes.assign(reinterpret_cast<const char*>(code.code.data()), size_t(code_size));
         s.bytes.append(pvsbake::detail::code_padding(objects), '\0');
         sections.push_back(std::move(s));
     }
@@ -369,7 +385,7 @@ std::string runtime_file_bytes(const std::string& bake_path, const RuntimeFileOp
         bake.objects = pvsbake::detail::read_objects(r, root);
         bake.cells = pvsbake::detail::read_cells(r, root, /*read_eyes=*/true, /*bricks=*/true);
         const uint32_t objects = uint32_t(bake.objects.names.size());
-        bake.pvs = pvsbake::detail::read_pvs(r, root, objects, bake.cells.count, /*want_rows=*/false);
+        bake.pvs = pvsbake::detail::read_pvs(r, root, objects, bake.cells.count, /*want_rows=*/true);
         bake.occluders = pvsbake::detail::read_occluders(r, root, objects, bake.cells.count, /*want_boxes=*/false);
         return bake;
     });

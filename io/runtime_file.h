@@ -18,6 +18,9 @@ struct RuntimeFileFigures {
 
 struct RuntimeFileOptions {
     bool occluder_measures = false;  // also each ranked occluder's score, solid angle and hidden shares
+    // Rows XORed to decode one PVS row, 1 (every row whole) to PVSR_MAX_CHAIN: longer chains code rows
+    // against more similar ones (smaller) and cost more to walk. Past PVSR_STACK_OBJECTS objects, at most 2.
+    uint32_t max_chain = 4;
 };
 
 // The runtime file of the bake file at bake_path, as bytes. Throws pvs::Error (bad input) naming the file

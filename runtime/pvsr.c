@@ -55,6 +55,17 @@ static unsigned ctz64(uint64_t w) {
 #endif
 }
 
+/* Set bits of a word. */
+static unsigned popcount64(uint64_t w) {
+#if defined(__GNUC__) || defined(__clang__)
+    return (unsigned)__builtin_popcountll(w);
+#else
+    unsigned n = 0;
+    for (; w != 0; w &= w - 1) ++n;
+    return n;
+#endif
+}
+
 /* Item i of an array of 2- or 4-byte unsigned integers (CROW, ROFF). */
 static uint32_t index_at(const pvsr_array* a, uint64_t i) {
     return a->item_bytes == 2 ? rd16(a->at + 2 * i) : rd32(a->at + 4 * i);
@@ -215,23 +226,18 @@ static uint32_t varint(const uint8_t** p) {
     }
 }
 
-/* The readers of row r: key (and diff for a row coded against a key row; returns 1 then). */
-static int row_readers(const pvsr_level* l, uint32_t r, gap_reader* key, gap_reader* diff) {
-    const uint8_t* p = l->code.at + index_at(&l->row_offsets, r);
-    const uint32_t ref = varint(&p);
-    const uint32_t head = varint(&p);
-    const uint8_t* q;
-    uint32_t key_head;
-    if (ref == 0) {
-        gap_init(key, p, head >> 5, head & 31, l->object_count);
-        return 0;
+/* The readers of row r's chain (docs/FORMAT.md, "The runtime file"): the row, the row it is coded against,
+ * and so on to a key row, at most PVSR_MAX_CHAIN (checked at open). Returns how many; the row is their XOR. */
+static int row_chain(const pvsr_level* l, uint32_t r, gap_reader readers[PVSR_MAX_CHAIN]) {
+    int n = 0;
+    for (;;) {
+        const uint8_t* p = l->code.at + index_at(&l->row_offsets, r);
+        const uint32_t ref = varint(&p);
+        const uint32_t head = varint(&p);
+        gap_init(&readers[n++], p, head >> 5, head & 31, l->object_count);
+        if (ref == 0 || n == PVSR_MAX_CHAIN) return n;
+        r -= ref;
     }
-    gap_init(diff, p, head >> 5, head & 31, l->object_count);
-    q = l->code.at + index_at(&l->row_offsets, r - ref);
-    (void)varint(&q); /* 0: a key row (checked) */
-    key_head = varint(&q);
-    gap_init(key, q, key_head >> 5, key_head & 31, l->object_count);
-    return 1;
 }
 
 /* ---- Opening: every check (docs/FORMAT.md, "The runtime file", "What the runtime checks") */
@@ -421,6 +427,7 @@ static const char* check_cells(pvsr_level* l) {
 
 static const char* check_rows(pvsr_level* l) {
     const uint32_t n = l->object_count;
+    const uint32_t max_chain = n <= PVSR_STACK_OBJECTS ? PVSR_MAX_CHAIN : 2;
     uint64_t i, code_size, padding;
     const char* bad = need(l, PVSR_TAG('C', 'R', 'O', 'W'), 0, l->cell_count, 1, &l->cell_row);
     if (!bad) bad = need(l, PVSR_TAG('R', 'O', 'F', 'F'), 0, UINT64_MAX, 1, &l->row_offsets);
@@ -459,9 +466,16 @@ static const char* check_rows(pvsr_level* l) {
             fields[f] = (uint32_t)v;
         }
         if (fields[0] > i) return "a PVS row refers to a row after it";
-        if (fields[0] > 0) {
-            const uint8_t* q = l->code.at + index_at(&l->row_offsets, i - fields[0]);
-            if (varint(&q) != 0) return "a PVS row refers to a row that is not a key row";
+        if (fields[0] > 0) { /* the rows before it were checked: follow its chain to a key row */
+            uint64_t at = i - fields[0];
+            uint32_t length = 2;
+            for (;;) {
+                const uint8_t* q = l->code.at + index_at(&l->row_offsets, at);
+                const uint32_t ref = varint(&q);
+                if (ref == 0) break;
+                if (++length > max_chain) return "a PVS row's chain of references is too long";
+                at -= ref;
+            }
         }
         if ((fields[1] & 31) > 24) return "a PVS row's Rice parameter is above 24";
         if ((fields[1] >> 5) > n) return "a PVS row has more indices than objects";
@@ -697,108 +711,120 @@ int pvsr_cell_bounds(const pvsr_level* l, uint32_t cell, float box[6]) {
     return 1;
 }
 
-/* Walks the cell's row: calls visit for each visible object in increasing order; returns how many. */
-#define PVSR_STACK_WORDS 256
-static uint32_t walk(const pvsr_level* l, uint32_t cell, pvsr_visit_fn visit, void* user) {
-    gap_reader key, diff;
+/* XORs the rows of the chain in readers into words (ceil(objects / 64) of them). */
+static void xor_chain(gap_reader* chain, int n, uint64_t* words) {
+    int k;
+    uint32_t i;
+    for (k = 0; k < n; ++k)
+        for (i = gap_next(&chain[k]); i != PVSR_END; i = gap_next(&chain[k])) words[i >> 6] ^= (uint64_t)1 << (i & 63);
+}
+
+/* What a walk gives each visible object to: a callback, or a list (counting past its capacity). */
+typedef struct sink {
+    pvsr_visit_fn visit;
+    void* user;
+    uint32_t* list;
+    size_t capacity;
+} sink;
+
+/* Walks the cell's row: gives each visible object to the sink in increasing order; returns how many. */
+static uint32_t walk(const pvsr_level* l, uint32_t cell, const sink* s) {
+    gap_reader chain[PVSR_MAX_CHAIN];
     uint32_t count = 0, i, a, b;
+    int n;
     if (l == NULL || cell >= l->cell_count) return 0;
-    if (!row_readers(l, index_at(&l->cell_row, cell), &key, &diff)) {
-        for (i = gap_next(&key); i != PVSR_END; i = gap_next(&key)) {
-            if (visit) visit(user, i);
-            ++count;
-        }
+    n = row_chain(l, index_at(&l->cell_row, cell), chain);
+#define PVSR_GIVE(object)                                                 \
+    do {                                                                  \
+        if (s->list != NULL) {                                            \
+            if (count < s->capacity) s->list[count] = (object);           \
+        } else if (s->visit != NULL) {                                    \
+            s->visit(s->user, (object));                                  \
+        }                                                                 \
+        ++count;                                                          \
+    } while (0)
+    if (n == 1) {
+        for (i = gap_next(&chain[0]); i != PVSR_END; i = gap_next(&chain[0])) PVSR_GIVE(i);
         return count;
     }
-    if (l->object_count <= 64u * PVSR_STACK_WORDS) {
-        /* The key row XOR the difference in a bit set on the stack: branch-light. */
-        uint64_t bits[PVSR_STACK_WORDS];
+    if (l->object_count <= PVSR_STACK_OBJECTS) {
+        /* The chain's rows XORed in a bit set on the stack: branch-light. */
+        uint64_t bits[PVSR_STACK_OBJECTS / 64];
         const size_t words = pvsr_words_per_row(l);
         size_t w;
         memset(bits, 0, words * sizeof(uint64_t));
-        for (i = gap_next(&key); i != PVSR_END; i = gap_next(&key)) bits[i >> 6] |= (uint64_t)1 << (i & 63);
-        for (i = gap_next(&diff); i != PVSR_END; i = gap_next(&diff)) bits[i >> 6] ^= (uint64_t)1 << (i & 63);
+        xor_chain(chain, n, bits);
         for (w = 0; w < words; ++w) {
             uint64_t v;
-            for (v = bits[w]; v != 0; v &= v - 1) {
-                if (visit) visit(user, (uint32_t)(w * 64) + ctz64(v));
-                ++count;
-            }
+            for (v = bits[w]; v != 0; v &= v - 1) PVSR_GIVE((uint32_t)(w * 64) + ctz64(v));
         }
         return count;
     }
-    a = gap_next(&key);
-    b = gap_next(&diff);
-    for (;;) { /* the key row XOR the difference: an index in both cancels */
+    /* Past the stack bit set chains hold two rows (checked at open): merge them, an index in both cancels. */
+    a = gap_next(&chain[0]);
+    b = gap_next(&chain[1]);
+    for (;;) {
         if (a < b) {
-            if (visit) visit(user, a);
-            ++count;
-            a = gap_next(&key);
+            PVSR_GIVE(a);
+            a = gap_next(&chain[0]);
         } else if (b < a) {
-            if (visit) visit(user, b);
-            ++count;
-            b = gap_next(&diff);
+            PVSR_GIVE(b);
+            b = gap_next(&chain[1]);
         } else {
             if (a == PVSR_END) return count;
-            a = gap_next(&key);
-            b = gap_next(&diff);
+            a = gap_next(&chain[0]);
+            b = gap_next(&chain[1]);
         }
     }
+#undef PVSR_GIVE
 }
 
 uint32_t pvsr_visit_visible(const pvsr_level* l, uint32_t cell, pvsr_visit_fn visit, void* user) {
-    return walk(l, cell, visit, user);
+    sink s;
+    s.visit = visit;
+    s.user = user;
+    s.list = NULL;
+    s.capacity = 0;
+    return walk(l, cell, &s);
 }
 
 uint32_t pvsr_visible_count(const pvsr_level* l, uint32_t cell) {
-    return walk(l, cell, NULL, NULL);
-}
-
-typedef struct list_sink {
-    uint32_t* out;
-    size_t capacity, n;
-} list_sink;
-static void to_list(void* user, uint32_t object) {
-    list_sink* s = (list_sink*)user;
-    if (s->n < s->capacity) s->out[s->n] = object;
-    ++s->n;
+    return pvsr_visit_visible(l, cell, NULL, NULL);
 }
 
 uint32_t pvsr_visible_objects(const pvsr_level* l, uint32_t cell, uint32_t* objects, size_t capacity) {
-    list_sink s;
-    s.out = objects;
-    s.capacity = objects ? capacity : 0;
-    s.n = 0;
-    return walk(l, cell, to_list, &s);
-}
-
-static void to_bits(void* user, uint32_t object) {
-    uint64_t* words = (uint64_t*)user;
-    words[object >> 6] |= (uint64_t)1 << (object & 63);
+    static uint32_t none;
+    sink s;
+    s.visit = NULL;
+    s.user = NULL;
+    s.list = objects != NULL ? objects : &none; /* a list of no room: counts */
+    s.capacity = objects != NULL ? capacity : 0;
+    return walk(l, cell, &s);
 }
 
 uint32_t pvsr_fill_bitset(const pvsr_level* l, uint32_t cell, uint64_t* words, size_t word_count) {
+    gap_reader chain[PVSR_MAX_CHAIN];
+    uint32_t count = 0;
+    size_t w;
     if (l == NULL || words == NULL || cell >= l->cell_count || word_count < pvsr_words_per_row(l)) return 0xffffffffu;
     memset(words, 0, word_count * sizeof(uint64_t));
-    return walk(l, cell, to_bits, words);
+    xor_chain(chain, row_chain(l, index_at(&l->cell_row, cell), chain), words);
+    for (w = 0; w < pvsr_words_per_row(l); ++w) count += popcount64(words[w]);
+    return count;
 }
 
 int pvsr_is_visible(const pvsr_level* l, uint32_t cell, uint32_t object) {
-    gap_reader key, diff;
+    gap_reader chain[PVSR_MAX_CHAIN];
     uint32_t i;
-    int in;
+    int in = 0, n, k;
     if (l == NULL || cell >= l->cell_count || object >= l->object_count) return 0;
-    if (!row_readers(l, index_at(&l->cell_row, cell), &key, &diff)) {
-        for (i = gap_next(&key); i < object; i = gap_next(&key)) {
+    n = row_chain(l, index_at(&l->cell_row, cell), chain);
+    for (k = 0; k < n; ++k) { /* in when an odd number of the chain's rows hold it */
+        for (i = gap_next(&chain[k]); i < object; i = gap_next(&chain[k])) {
         }
-        return i == object;
+        in ^= i == object;
     }
-    for (i = gap_next(&key); i < object; i = gap_next(&key)) {
-    }
-    in = i == object;
-    for (i = gap_next(&diff); i < object; i = gap_next(&diff)) {
-    }
-    return in != (i == object);
+    return in;
 }
 
 const char* pvsr_object_name(const pvsr_level* l, uint32_t object) {

@@ -165,6 +165,8 @@ const char* pvsr_string(const pvsr_level* level, const char* key);
 #define PVSR_NODE_BYTES 20         /* 'NODE': float center[3], int32 first_child, int32 cell */
 #define PVSR_MEASURE_BYTES 16      /* 'RMEA': float score, solid angle, hidden objects, hidden triangle share */
 #define PVSR_MAX_OBJECTS (1u << 27) /* the PVS code's limit */
+#define PVSR_MAX_CHAIN 8            /* rows XORed to decode one row: a key row and up to 7 coded against it */
+#define PVSR_STACK_OBJECTS 16384    /* objects of the bit set a walk keeps on the stack; past it, chains of 2 */
 #define PVSR_TILE_BRICKS 4          /* a mask tile is 4 x 4 x 4 bricks of 8 x 8 x 8 voxels */
 #define PVSR_BRICK_EMPTY 0u         /* a tile or brick reference: no voxel set */
 #define PVSR_BRICK_FULL 1u          /* every voxel set */

@@ -42,8 +42,19 @@ public:
     bool cell_bounds(uint32_t cell, float box[6]) const noexcept { return pvsr_cell_bounds(&level_, cell, box) != 0; }
 
     // Calls visit(object) for every object visible from the cell, in increasing order; returns how many.
+    // Levels of up to PVSR_STACK_OBJECTS objects are walked from a bit set on the stack (2 KiB at most), with
+    // visit inlined; larger ones through the C callback.
     template <class F>
     uint32_t for_each_visible(uint32_t cell, F&& visit) const {
+        if (object_count() <= PVSR_STACK_OBJECTS) {
+            uint64_t bits[PVSR_STACK_OBJECTS / 64];
+            const size_t words = words_per_row();
+            const uint32_t n = pvsr_fill_bitset(&level_, cell, bits, words);
+            if (n == UINT32_MAX) return 0;
+            for (size_t w = 0; w < words; ++w)
+                for (uint64_t v = bits[w]; v != 0; v &= v - 1) visit(uint32_t(w * 64) + uint32_t(ctz(v)));
+            return n;
+        }
         using Fn = std::remove_reference_t<F>;
         return pvsr_visit_visible(
             &level_, cell, [](void* user, uint32_t object) { (*static_cast<Fn*>(user))(object); },
@@ -81,6 +92,15 @@ public:
     const pvsr_level& c_level() const noexcept { return level_; }
 
 private:
+    static int ctz(uint64_t v) noexcept {
+#if defined(__GNUC__) || defined(__clang__)
+        return __builtin_ctzll(v);
+#else
+        int n = 0;
+        for (; (v & 1) == 0; v >>= 1) ++n;
+        return n;
+#endif
+    }
     pvsr_level level_{};
 };
 

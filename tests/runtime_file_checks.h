@@ -170,17 +170,19 @@ inline void expect_same_as_loader(const pvsr::Level& got, const pvsbake::Bake& w
     EXPECT_EQ(got.find_cell(1e30f, -1e30f, 1e30f), -1);
 }
 
-// Writes the bake as HDF5, exports it (with and without the ranked occluders' measures), and checks the
-// runtime against the HDF5 loader.
+// Writes the bake as HDF5, exports it (without the ranked occluders' measures and every row whole, with them
+// and chains of up to 8 rows, and with the defaults), and checks the runtime against the HDF5 loader.
 inline void round_trip(const BakeData& bake, uint32_t seed) {
     TempDir dir;
     const std::string h5 = dir.file("bake.h5");
     pvsbake::Bake loaded;
     write_and_load(bake, h5, loaded);
-    for (const bool measures : {false, true}) {
-        SCOPED_TRACE(measures ? "with measures" : "without measures");
+    for (const int variant : {0, 1, 2}) {
+        const bool measures = variant == 1;
+        SCOPED_TRACE(variant == 0 ? "rows whole" : variant == 1 ? "measures, chains of 8" : "defaults");
         RuntimeFileOptions options;
         options.occluder_measures = measures;
+        if (variant < 2) options.max_chain = variant == 0 ? 1 : 8;
         RuntimeFileFigures figures;
         const Bytes bytes(runtime_file_bytes(h5, options, &figures));
         EXPECT_EQ(figures.file_bytes, bytes.size);

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <functional>
 
 // Compiled into the loader (no library to link for games): xxHash's header-only mode.
 #define XXH_INLINE_ALL
@@ -132,6 +133,70 @@ RowCode encode_rows(const uint8_t* rows, uint64_t row_count, uint32_t row_bytes,
     }
     out.offsets.push_back(uint32_t(out.code.size()));
     (void)objects;
+    return out;
+}
+
+RowCode encode_rows_chained(const uint8_t* rows, uint64_t row_count, uint32_t row_bytes, uint32_t max_chain,
+                            const std::function<void(uint64_t, std::vector<uint64_t>&)>& neighbours) {
+    const uint32_t words = (row_bytes + 7) / 8;
+    std::vector<uint64_t> packed(size_t(row_count) * words, 0);
+    for (uint64_t r = 0; r < row_count; ++r) {
+        uint64_t* w = packed.data() + size_t(r) * words;
+        for (uint32_t j = 0; j < row_bytes; ++j)
+            w[j / 8] |= uint64_t(rows[size_t(r) * row_bytes + j]) << (8 * (j % 8));
+    }
+    RowCode out;
+    out.offsets.reserve(size_t(row_count) + 1);
+    std::vector<uint32_t> chain(size_t(row_count), 1);  // rows in each row's chain, itself included
+    std::vector<uint32_t> idx, diff_idx, best_idx;
+    std::vector<uint64_t> diff(words), candidates, keys;
+    for (uint64_t r = 0; r < row_count; ++r) {
+        out.offsets.push_back(uint32_t(out.code.size()));
+        const uint64_t* w = packed.data() + size_t(r) * words;
+        set_bits(w, words, idx);
+        auto [best_k, best_bits] = best_rice(idx);
+        const uint64_t whole_bits = best_bits;
+        uint64_t best_ref = 0;
+        best_idx = idx;
+        // Candidates: the rows the caller names (spatial neighbours), the last kKeyWindow rows and the last
+        // kKeyWindow key rows; the three with the fewest differing bits are costed exactly.
+        candidates.clear();
+        neighbours(r, candidates);
+        for (uint64_t i = r > kKeyWindow ? r - kKeyWindow : 0; i < r; ++i) candidates.push_back(i);
+        for (size_t i = keys.size() > kKeyWindow ? keys.size() - kKeyWindow : 0; i < keys.size(); ++i)
+            candidates.push_back(keys[i]);
+        std::sort(candidates.begin(), candidates.end());
+        candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+        std::pair<uint32_t, uint64_t> near[3] = {{UINT32_MAX, 0}, {UINT32_MAX, 0}, {UINT32_MAX, 0}};
+        for (const uint64_t cand : candidates) {
+            if (cand >= r || chain[size_t(cand)] >= max_chain) continue;
+            const uint64_t* kw = packed.data() + size_t(cand) * words;
+            uint32_t n = 0;
+            for (uint32_t j = 0; j < words && n < near[2].first; ++j) n += uint32_t(__builtin_popcountll(w[j] ^ kw[j]));
+            if (n >= near[2].first) continue;
+            near[2] = {n, cand};
+            std::sort(near, near + 3);
+        }
+        for (const auto& [n, cand] : near) {
+            if (n == UINT32_MAX) continue;
+            const uint64_t* kw = packed.data() + size_t(cand) * words;
+            for (uint32_t j = 0; j < words; ++j) diff[j] = w[j] ^ kw[j];
+            set_bits(diff.data(), words, diff_idx);
+            const auto [dk, dbits] = best_rice(diff_idx);
+            // As encode_rows: a row coded against another must save a fifth of its bits, or it is better kept
+            // as a key row later rows can be coded against (the reference's varint counted as 16 bits).
+            if (dbits + 16 < best_bits && double(dbits + 16) <= kDiffGain * double(whole_bits)) {
+                best_bits = dbits + 16;
+                best_k = dk;
+                best_ref = r - cand;
+                best_idx = diff_idx;
+            }
+        }
+        put_row(out.code, uint32_t(best_ref), best_idx, best_k);
+        if (best_ref > 0) chain[size_t(r)] = chain[size_t(r - best_ref)] + 1;
+        if (best_ref == 0) keys.push_back(r);
+    }
+    out.offsets.push_back(uint32_t(out.code.size()));
     return out;
 }
 

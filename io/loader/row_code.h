@@ -13,6 +13,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -31,6 +32,15 @@ struct RowCode {
 // coded against the most similar of the last 32 key rows when that saves a fifth of its bits or more.
 // objects < kMaxCodedObjects; bits past `objects` in a row must be zero.
 RowCode encode_rows(const uint8_t* rows, uint64_t row_count, uint32_t row_bytes, uint32_t objects);
+
+// Codes the rows as encode_rows does, but a row may be coded against any earlier row, itself perhaps coded
+// against another: each row's chain (the row, the row it is coded against, and so on to a key row) holds at
+// most max_chain rows, and decoding it XORs them all (the runtime file: docs/FORMAT.md, "The runtime file").
+// A row's candidates are the rows neighbours(r, out) appends (earlier ones count; the caller's spatial
+// neighbours), the last 32 rows and the last 32 key rows; the three with the fewest differing bits are costed
+// exactly, and the cheapest of them and the row coded whole is kept.
+RowCode encode_rows_chained(const uint8_t* rows, uint64_t row_count, uint32_t row_bytes, uint32_t max_chain,
+                            const std::function<void(uint64_t, std::vector<uint64_t>&)>& neighbours);
 
 // "" when code and offsets are a sound code of row_count rows of `objects` objects: offsets start at 0,
 // increase, end at code_size; every varint is whole, every reference is a key row before it, every index
