@@ -912,3 +912,431 @@ const char* pvsr_string(const pvsr_level* l, const char* key) {
     }
     return kEmpty;
 }
+
+/* ---- The culler of moving objects: a port of pvsbake::OcclusionCuller (io/loader/occlusion.cpp, whose
+ * conventions and constants it keeps; docs/ALGORITHMS.md#runtime-culler), the same answers. */
+
+#define CULL_NEAR_PLANE_M 1e-3f
+#define CULL_DEPTH_SLACK 1e-5f
+#define CULL_RECT_PAD 1e-5f
+#define CULL_MARGIN_M 1e-5
+#define CULL_MARGIN_REL 1e-6
+
+static float fmaxf3(float a, float b, float c) {
+    return fmaxf(a, fmaxf(b, c));
+}
+
+static int usable_box(const float b[6]) {
+    int a;
+    for (a = 0; a < 3; ++a)
+        if (!isfinite(b[a]) || !isfinite(b[3 + a]) || b[a] > b[3 + a]) return 0;
+    return 1;
+}
+
+/* Largest |coordinate| of the eye and the box: the scale of the margins. */
+static double scale_of(const double eye[3], const float b[6]) {
+    double m = 0.0;
+    int a;
+    for (a = 0; a < 3; ++a) {
+        m = fmax(m, fabs(eye[a]));
+        m = fmax(m, fabs((double)b[a]));
+        m = fmax(m, fabs((double)b[3 + a]));
+    }
+    return m;
+}
+
+typedef struct face_box {
+    float d_min, d_max, u_lo, u_hi, v_lo, v_hi;
+} face_box;
+
+static face_box face_box_of(const float b[6], const float eye[3], int face) {
+    const int a = face / 2, ua = (a + 1) % 3, va = (a + 2) % 3;
+    const float lo = b[a] - eye[a], hi = b[3 + a] - eye[a];
+    face_box fb;
+    if (face % 2 == 0) {
+        fb.d_min = lo;
+        fb.d_max = hi;
+    } else {
+        fb.d_min = -hi;
+        fb.d_max = -lo;
+    }
+    fb.u_lo = b[ua] - eye[ua];
+    fb.u_hi = b[3 + ua] - eye[ua];
+    fb.v_lo = b[va] - eye[va];
+    fb.v_hi = b[3 + va] - eye[va];
+    return fb;
+}
+
+static int finite_face_box(const face_box* f) {
+    return isfinite(f->d_min) && isfinite(f->d_max) && isfinite(f->u_lo) && isfinite(f->u_hi) && isfinite(f->v_lo) &&
+           isfinite(f->v_hi);
+}
+
+static float dist_to_zero(float lo, float hi) {
+    return fmaxf3(0.0f, lo, -hi);
+}
+
+static void slab(float lo, float hi, float c, float* enter, float* exit) {
+    if (c > 0.0f) {
+        *enter = lo / c;
+        *exit = hi / c;
+    } else if (c < 0.0f) {
+        *enter = hi / c;
+        *exit = lo / c;
+    } else if (lo <= 0.0f && 0.0f <= hi) {
+        *enter = -INFINITY;
+        *exit = INFINITY;
+    } else {
+        *enter = INFINITY;
+        *exit = -INFINITY;
+    }
+}
+
+static int clampi(int x, int lo, int hi) {
+    return x < lo ? lo : x > hi ? hi : x;
+}
+
+static int first_pixel_reaching(const float* g, float lo, int r) {
+    int i = clampi((int)floorf((lo + 1.0f) * 0.5f * (float)r), 0, r - 1);
+    while (i > 0 && g[i] >= lo) --i;
+    while (i < r - 1 && g[i + 1] < lo) ++i;
+    return i;
+}
+
+static int last_pixel_reaching(const float* g, float hi, int r) {
+    int i = clampi((int)floorf((hi + 1.0f) * 0.5f * (float)r), 0, r - 1);
+    while (i < r - 1 && g[i + 1] <= hi) ++i;
+    while (i > 0 && g[i] > hi) --i;
+    return i;
+}
+
+static float pad_low(float x) {
+    const float y = x - CULL_RECT_PAD * fmaxf(1.0f, fabsf(x));
+    return y > -1.0f ? fminf(y, 1.0f) : -1.0f;
+}
+
+static float pad_high(float x) {
+    const float y = x + CULL_RECT_PAD * fmaxf(1.0f, fabsf(x));
+    return y < 1.0f ? fmaxf(y, -1.0f) : 1.0f;
+}
+
+static int culler_resolution(int resolution) {
+    if (resolution <= 0) return 0;
+    resolution = (resolution + 1) & ~1;
+    return clampi(resolution, PVSR_CULLER_MIN_RESOLUTION, PVSR_CULLER_MAX_RESOLUTION);
+}
+
+size_t pvsr_culler_memory_bytes(int resolution) {
+    const size_t r = (size_t)culler_resolution(resolution);
+    return r == 0 ? 0 : sizeof(float) * (6 * r * r + 7 * (r + 1));
+}
+
+int pvsr_culler_init(pvsr_culler* c, int resolution, void* memory, size_t memory_bytes) {
+    const int r = culler_resolution(resolution);
+    size_t k;
+    int f;
+    if (c == NULL) return 0;
+    memset(c, 0, sizeof *c);
+    for (f = 0; f < 6; ++f) {
+        c->written[f][0] = 0;
+        c->written[f][1] = -1;
+        c->written[f][2] = 0;
+        c->written[f][3] = -1;
+    }
+    if (r > 0) {
+        float* m = (float*)memory;
+        if (memory == NULL || memory_bytes < pvsr_culler_memory_bytes(r)) return 0; /* ok stays 0: culls nothing */
+        c->depth = m;
+        m += 6 * (size_t)r * (size_t)r;
+        c->grid = m;
+        m += r + 1;
+        c->col_enter = m;
+        m += r + 1;
+        c->col_exit = m;
+        m += r + 1;
+        c->row_enter = m;
+        m += r + 1;
+        c->row_exit = m;
+        m += r + 1;
+        c->corner_prev = m;
+        m += r + 1;
+        c->corner_cur = m;
+        for (k = 0; k <= (size_t)r; ++k) c->grid[k] = (float)(-1.0 + 2.0 * (double)k / (double)r);
+        for (k = 0; k < 6 * (size_t)r * (size_t)r; ++k) c->depth[k] = INFINITY;
+    }
+    c->resolution = r;
+    c->ok = 1;
+    return 1;
+}
+
+static void build_frustum(const pvsr_culler* c, const float b[6], double delta, pvsr_culler_frustum* fr) {
+    const double* e = c->eye_d;
+    double lo[3], hi[3];
+    int below[3], above[3], a, k3, si, sj;
+    fr->planes = 0;
+    fr->usable = 1;
+    for (a = 0; a < 3; ++a) {
+        lo[a] = (double)b[a] + delta - e[a];
+        hi[a] = (double)b[3 + a] - delta - e[a];
+        fr->usable = fr->usable && lo[a] < hi[a];
+        below[a] = 0.0 < lo[a];
+        above[a] = hi[a] < 0.0;
+        fr->lo[a] = below[a] ? lo[a] : -INFINITY;
+        fr->hi[a] = above[a] ? hi[a] : INFINITY;
+    }
+    if (!fr->usable) return;
+    for (k3 = 0; k3 < 3 && fr->usable; ++k3) {
+        const int i = (k3 + 1) % 3, j = (k3 + 2) % 3;
+        for (si = 0; si < 2; ++si) {
+            for (sj = 0; sj < 2; ++sj) {
+                const int front_i = si == 0 ? below[i] : above[i];
+                const int front_j = sj == 0 ? below[j] : above[j];
+                double pi, pj, ni, nj, side, *n;
+                if (front_i == front_j) continue;
+                pi = si == 0 ? lo[i] : hi[i];
+                pj = sj == 0 ? lo[j] : hi[j];
+                ni = -pj;
+                nj = pi;
+                side = ni * 0.5 * (lo[i] + hi[i]) + nj * 0.5 * (lo[j] + hi[j]);
+                if (!(side != 0.0) || fr->planes == 6) {
+                    fr->usable = 0;
+                    break;
+                }
+                if (side < 0.0) {
+                    ni = -ni;
+                    nj = -nj;
+                }
+                n = fr->n[fr->planes];
+                n[k3] = 0.0;
+                n[i] = ni;
+                n[j] = nj;
+                fr->w[fr->planes] = 0.0;
+                ++fr->planes;
+            }
+            if (!fr->usable) break;
+        }
+    }
+}
+
+static int vertex_lo(float x, int r) {
+    const int v = (int)floorf((fmaxf(x, -1.0f) + 1.0f) * 0.5f * (float)r) - 1;
+    return v > 0 ? v : 0;
+}
+
+static int vertex_hi(float x, int r) {
+    const int v = (int)ceilf((fminf(x, 1.0f) + 1.0f) * 0.5f * (float)r) + 1;
+    return v < r ? v : r;
+}
+
+static float corner_pixel(const float* p, const float* c, int i) {
+    const float a = p[i] > p[i + 1] ? p[i] : p[i + 1];
+    const float b = c[i] > c[i + 1] ? c[i] : c[i + 1];
+    return a > b ? a : b;
+}
+
+static void rasterize(pvsr_culler* c, const float b[6]) {
+    const int r = c->resolution;
+    const float* g = c->grid;
+    int face;
+    for (face = 0; face < 6; ++face) {
+        const face_box fb = face_box_of(b, c->eye, face);
+        float d_lo, u0, u1, v0, v1, *face_depth;
+        int iv0, iv1, jv0, jv1, iv, jv;
+        int* w;
+        if (!finite_face_box(&fb)) return;
+        d_lo = fmaxf(fb.d_min, CULL_NEAR_PLANE_M);
+        if (!(d_lo < fb.d_max)) continue;
+        u0 = fb.u_lo >= 0.0f ? fb.u_lo / fb.d_max : fb.u_lo / d_lo;
+        u1 = fb.u_hi >= 0.0f ? fb.u_hi / d_lo : fb.u_hi / fb.d_max;
+        v0 = fb.v_lo >= 0.0f ? fb.v_lo / fb.d_max : fb.v_lo / d_lo;
+        v1 = fb.v_hi >= 0.0f ? fb.v_hi / d_lo : fb.v_hi / fb.d_max;
+        if (u0 > 1.0f || u1 < -1.0f || v0 > 1.0f || v1 < -1.0f) continue;
+        iv0 = vertex_lo(u0, r);
+        iv1 = vertex_hi(u1, r);
+        jv0 = vertex_lo(v0, r);
+        jv1 = vertex_hi(v1, r);
+        if (iv1 - iv0 < 1 || jv1 - jv0 < 1) continue;
+        for (iv = iv0; iv <= iv1; ++iv) slab(fb.u_lo, fb.u_hi, g[iv], &c->col_enter[iv], &c->col_exit[iv]);
+        for (jv = jv0; jv <= jv1; ++jv) slab(fb.v_lo, fb.v_hi, g[jv], &c->row_enter[jv], &c->row_exit[jv]);
+        face_depth = c->depth + (size_t)face * (size_t)r * (size_t)r;
+        w = c->written[face];
+        for (jv = jv0; jv <= jv1; ++jv) {
+            const float re = fmaxf(d_lo, c->row_enter[jv]), rx = fminf(fb.d_max, c->row_exit[jv]);
+            float* swap;
+            for (iv = iv0; iv <= iv1; ++iv) {
+                const float enter = fmaxf(re, c->col_enter[iv]);
+                const float exit = fminf(rx, c->col_exit[iv]);
+                const float hit_depth = enter * (1.0f + CULL_DEPTH_SLACK);
+                c->corner_cur[iv] = exit >= hit_depth ? hit_depth : INFINITY;
+            }
+            if (jv > jv0) {
+                float* const row = face_depth + (size_t)(jv - 1) * (size_t)r;
+                int i, first = iv0, last = iv1 - 1;
+                for (i = iv0; i < iv1; ++i) {
+                    const float d = corner_pixel(c->corner_prev, c->corner_cur, i);
+                    row[i] = d < row[i] ? d : row[i];
+                }
+                while (first <= last && !(corner_pixel(c->corner_prev, c->corner_cur, first) < INFINITY)) ++first;
+                while (last >= first && !(corner_pixel(c->corner_prev, c->corner_cur, last) < INFINITY)) --last;
+                if (first <= last) {
+                    if (w[0] > w[1]) {
+                        w[0] = first;
+                        w[1] = last;
+                        w[2] = jv - 1;
+                        w[3] = jv - 1;
+                    } else {
+                        w[0] = w[0] < first ? w[0] : first;
+                        w[1] = w[1] > last ? w[1] : last;
+                        w[2] = w[2] < jv - 1 ? w[2] : jv - 1;
+                        w[3] = w[3] > jv - 1 ? w[3] : jv - 1;
+                    }
+                }
+            }
+            swap = c->corner_prev;
+            c->corner_prev = c->corner_cur;
+            c->corner_cur = swap;
+        }
+    }
+}
+
+static int inside_shadow(const pvsr_culler_frustum* fr, const double q_min[3], const double q_max[3]) {
+    int a, p;
+    for (a = 0; a < 3; ++a)
+        if (!(q_min[a] >= fr->lo[a] && q_max[a] <= fr->hi[a])) return 0;
+    for (p = 0; p < fr->planes; ++p) {
+        const double* n = fr->n[p];
+        double s = 0.0;
+        for (a = 0; a < 3; ++a) s += n[a] * (n[a] >= 0.0 ? q_min[a] : q_max[a]);
+        if (!(s > fr->w[p])) return 0;
+    }
+    return 1;
+}
+
+static int hidden_by_shadow_frusta(const pvsr_culler* c, const float box[6]) {
+    double delta, q_min[3], q_max[3];
+    size_t k;
+    int a;
+    if (!c->eye_ok || c->frustum_count == 0 || !usable_box(box)) return 0;
+    delta = CULL_MARGIN_M + CULL_MARGIN_REL * scale_of(c->eye_d, box);
+    for (a = 0; a < 3; ++a) {
+        q_min[a] = (double)box[a] - delta - c->eye_d[a];
+        q_max[a] = (double)box[3 + a] + delta - c->eye_d[a];
+    }
+    for (k = 0; k < c->frustum_count; ++k)
+        if (c->frusta[k].usable && inside_shadow(&c->frusta[k], q_min, q_max)) return 1;
+    return 0;
+}
+
+static int hidden_by_depth_cube(const pvsr_culler* c, const float box[6]) {
+    const int r = c->resolution;
+    int near_eye = 1, any_face = 0, a, face;
+    if (!c->eye_ok || r == 0 || c->used == 0 || !usable_box(box)) return 0;
+    for (a = 0; a < 3; ++a)
+        near_eye = near_eye && box[a] - c->eye[a] <= CULL_NEAR_PLANE_M && box[3 + a] - c->eye[a] >= -CULL_NEAR_PLANE_M;
+    if (near_eye) return 0;
+    for (face = 0; face < 6; ++face) {
+        const face_box fb = face_box_of(box, c->eye, face);
+        float lower, u0, u1, v0, v1, limit;
+        int i0, i1, j0, j1, i, j;
+        const int* w = c->written[face];
+        const float* face_depth;
+        if (!finite_face_box(&fb)) return 0;
+        lower = fmaxf(fmaxf3(fb.d_min, dist_to_zero(fb.u_lo, fb.u_hi), dist_to_zero(fb.v_lo, fb.v_hi)), CULL_NEAR_PLANE_M);
+        if (lower > fb.d_max * (1.0f + CULL_DEPTH_SLACK)) continue;
+        lower = fminf(lower, fb.d_max);
+        any_face = 1;
+        u0 = fb.u_lo >= 0.0f ? fb.u_lo / fb.d_max : fb.u_lo / lower;
+        u1 = fb.u_hi >= 0.0f ? fb.u_hi / lower : fb.u_hi / fb.d_max;
+        v0 = fb.v_lo >= 0.0f ? fb.v_lo / fb.d_max : fb.v_lo / lower;
+        v1 = fb.v_hi >= 0.0f ? fb.v_hi / lower : fb.v_hi / fb.d_max;
+        i0 = first_pixel_reaching(c->grid, pad_low(u0), r);
+        i1 = last_pixel_reaching(c->grid, pad_high(u1), r);
+        j0 = first_pixel_reaching(c->grid, pad_low(v0), r);
+        j1 = last_pixel_reaching(c->grid, pad_high(v1), r);
+        if (i0 > i1 || j0 > j1) continue;
+        if (i0 < w[0] || i1 > w[1] || j0 < w[2] || j1 > w[3]) return 0;
+        limit = lower * (1.0f - CULL_DEPTH_SLACK);
+        face_depth = c->depth + (size_t)face * (size_t)r * (size_t)r;
+        for (j = j0; j <= j1; ++j) {
+            const float* const row = face_depth + (size_t)j * (size_t)r;
+            for (i = i0; i <= i1; ++i)
+                if (!(row[i] < limit)) return 0;
+        }
+    }
+    return any_face;
+}
+
+int pvsr_culler_classify(const pvsr_culler* c, const float box[6]) {
+    if (c == NULL || box == NULL || !c->eye_ok || c->used == 0 || !usable_box(box)) return PVSR_CULL_VISIBLE;
+    if (hidden_by_shadow_frusta(c, box)) return PVSR_CULL_SHADOW_FRUSTUM;
+    if (hidden_by_depth_cube(c, box)) return PVSR_CULL_DEPTH_CUBE;
+    return PVSR_CULL_VISIBLE;
+}
+
+int pvsr_culler_is_hidden(const pvsr_culler* c, const float box[6]) {
+    return pvsr_culler_classify(c, box) != PVSR_CULL_VISIBLE;
+}
+
+void pvsr_culler_begin_frame(pvsr_culler* c, const float eye[3], const float* boxes, size_t count) {
+    const int r = c != NULL ? c->resolution : 0;
+    size_t k, n;
+    int face, a;
+    if (c == NULL) return;
+    for (face = 0; face < 6; ++face) { /* clear what the last frame wrote */
+        int* w = c->written[face];
+        int i, j;
+        for (j = w[2]; j <= w[3]; ++j) {
+            float* row = c->depth + ((size_t)face * (size_t)r + (size_t)j) * (size_t)r;
+            for (i = w[0]; i <= w[1]; ++i) row[i] = INFINITY;
+        }
+        w[0] = 0;
+        w[1] = -1;
+        w[2] = 0;
+        w[3] = -1;
+    }
+    c->used = 0;
+    c->redundant = 0;
+    c->frustum_count = 0;
+    c->candidate_count = 0;
+    c->eye_ok = c->ok && eye != NULL && isfinite(eye[0]) && isfinite(eye[1]) && isfinite(eye[2]);
+    if (!c->eye_ok) return;
+    for (a = 0; a < 3; ++a) {
+        c->eye[a] = eye[a];
+        c->eye_d[a] = (double)eye[a];
+    }
+    if (boxes == NULL) count = 0;
+    /* The usable boxes (the first PVSR_CULLER_MAX_OCCLUDERS), nearest first; one the nearer ones hide is skipped. */
+    for (k = 0; k < count && c->candidate_count < PVSR_CULLER_MAX_OCCLUDERS; ++k) {
+        pvsr_culler_candidate cand;
+        int touches_eye = 1;
+        double dist2 = 0.0;
+        memcpy(cand.box, boxes + 6 * k, sizeof cand.box);
+        if (!usable_box(cand.box)) continue;
+        cand.delta = CULL_MARGIN_M + CULL_MARGIN_REL * scale_of(c->eye_d, cand.box);
+        for (a = 0; a < 3; ++a) {
+            const double d = fmax(0.0, fmax((double)cand.box[a] - c->eye_d[a], c->eye_d[a] - (double)cand.box[3 + a]));
+            touches_eye = touches_eye && (double)cand.box[a] - cand.delta <= c->eye_d[a] &&
+                          c->eye_d[a] <= (double)cand.box[3 + a] + cand.delta;
+            dist2 += d * d;
+        }
+        if (touches_eye) continue;
+        cand.dist2 = dist2;
+        /* Insertion in order of distance (stable: ties keep their order). */
+        n = c->candidate_count++;
+        while (n > 0 && c->candidates[n - 1].dist2 > dist2) {
+            c->candidates[n] = c->candidates[n - 1];
+            --n;
+        }
+        c->candidates[n] = cand;
+    }
+    for (k = 0; k < c->candidate_count; ++k) {
+        const pvsr_culler_candidate* cand = &c->candidates[k];
+        if (c->used > 0 && pvsr_culler_classify(c, cand->box) != PVSR_CULL_VISIBLE) {
+            ++c->redundant;
+            continue;
+        }
+        ++c->used;
+        if (r > 0) rasterize(c, cand->box);
+        build_frustum(c, cand->box, cand->delta, &c->frusta[c->frustum_count++]);
+    }
+}

@@ -150,6 +150,65 @@ const char* pvsr_mode_label(const pvsr_level* level); /* "conservative" or "aggr
  * in the file's bytes. */
 const char* pvsr_string(const pvsr_level* level, const char* key);
 
+/* ---- The culler of moving objects (characters, vehicles, props: what no PVS lists) against a few occluder
+ * boxes, such as a cell's ranked occluders: the same tests and answers as pvsbake/occlusion.h, whose
+ * conventions it follows (read them there): shadow frusta of single boxes, then a float depth cube around the
+ * eye that fuses them; "hidden" only when certainly hidden (docs/ALGORITHMS.md#runtime-culler). Boxes are
+ * float[6] (min x, y, z, max x, y, z), SOLID. No allocation: the depth cube lives in memory the caller gives
+ * (pvsr_culler_memory_bytes). Between pvsr_culler_begin_frame() calls any number of threads may test boxes.
+ *
+ *   static pvsr_culler culler;                     (about 20 KiB; keep one per thread that begins frames)
+ *   void* memory = malloc(pvsr_culler_memory_bytes(32));
+ *   pvsr_culler_init(&culler, 32, memory, pvsr_culler_memory_bytes(32));
+ *   each frame: n = pvsr_occluder_boxes(&level, cell, boxes, 16);
+ *               pvsr_culler_begin_frame(&culler, eye, boxes, n);
+ *               for each moving object: if (!pvsr_culler_is_hidden(&culler, box)) draw(object);
+ */
+#define PVSR_CULLER_MAX_OCCLUDERS 64 /* more are ignored: pass the best first */
+#define PVSR_CULLER_MIN_RESOLUTION 2
+#define PVSR_CULLER_MAX_RESOLUTION 256
+
+typedef enum pvsr_cull_path {
+    PVSR_CULL_VISIBLE = 0,        /* not proven hidden: draw it */
+    PVSR_CULL_SHADOW_FRUSTUM = 1, /* inside the shadow frustum of one occluder */
+    PVSR_CULL_DEPTH_CUBE = 2      /* hidden by the fused depth cube only */
+} pvsr_cull_path;
+
+typedef struct pvsr_culler_frustum {
+    double lo[3], hi[3], n[6][3], w[6];
+    int planes, usable;
+} pvsr_culler_frustum;
+
+typedef struct pvsr_culler_candidate {
+    float box[6];
+    double delta, dist2;
+} pvsr_culler_candidate;
+
+/* A culler: its fields are the runtime's (their layout may change between versions). */
+typedef struct pvsr_culler {
+    int ok, eye_ok, resolution;
+    float eye[3];
+    double eye_d[3];
+    size_t used, redundant, frustum_count, candidate_count;
+    pvsr_culler_candidate candidates[PVSR_CULLER_MAX_OCCLUDERS];
+    pvsr_culler_frustum frusta[PVSR_CULLER_MAX_OCCLUDERS];
+    int written[6][4]; /* per face: i0, i1, j0, j1 of the written pixels (empty when i0 > i1) */
+    float *grid, *depth, *col_enter, *col_exit, *row_enter, *row_exit, *corner_prev, *corner_cur;
+} pvsr_culler;
+
+/* Bytes of memory a culler of that resolution needs (pixels per cube face edge, rounded up to even and
+ * clamped to [2, 256]; 0 or less: shadow frusta only, no memory). */
+size_t pvsr_culler_memory_bytes(int resolution);
+/* Sets the culler up on `memory` (4-byte aligned, at least pvsr_culler_memory_bytes(resolution) bytes, kept
+ * while the culler is used). 1, or 0 when the memory is missing or too small: then it culls nothing. */
+int pvsr_culler_init(pvsr_culler* culler, int resolution, void* memory, size_t memory_bytes);
+/* Prepares a frame: the eye (float[3]) and `count` occluder boxes (6 floats each, count * 6 floats). */
+void pvsr_culler_begin_frame(pvsr_culler* culler, const float eye[3], const float* boxes, size_t count);
+/* 1 only if the box (float[6]) is certainly hidden from this frame's eye. */
+int pvsr_culler_is_hidden(const pvsr_culler* culler, const float box[6]);
+/* Which test proved it (pvsr_cull_path). */
+int pvsr_culler_classify(const pvsr_culler* culler, const float box[6]);
+
 /* ---- The file's layout (docs/FORMAT.md, "The runtime file"), for writers and tools. Little-endian.
  * A 64-byte header, then the section table (PVSR_ENTRY_BYTES an entry), then the sections, each at an offset
  * that is a multiple of 64, in any order. */

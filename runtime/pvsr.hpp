@@ -14,6 +14,7 @@
 #include <string>
 #include <string_view>
 #include <type_traits>
+#include <vector>
 
 namespace pvsr {
 
@@ -102,6 +103,38 @@ private:
 #endif
     }
     pvsr_level level_{};
+};
+
+// The culler of moving objects (pvsr_culler in pvsr.h) with its memory: allocated once here, never per frame.
+class Culler {
+public:
+    // resolution: pixels per cube face edge (0: shadow frusta only). ok() is false when the memory could not
+    // be allocated: then it culls nothing.
+    explicit Culler(int resolution = 32) noexcept {
+        try {
+            memory_.resize(pvsr_culler_memory_bytes(resolution) / sizeof(float) + 1);
+            ok_ = pvsr_culler_init(&culler_, resolution, memory_.data(), memory_.size() * sizeof(float)) != 0;
+        } catch (...) {
+            pvsr_culler_init(&culler_, resolution, nullptr, 0);
+        }
+    }
+    Culler(const Culler&) = delete;  // it points into its own memory
+    Culler& operator=(const Culler&) = delete;
+
+    bool ok() const noexcept { return ok_; }
+    // The eye (float[3]) and `count` occluder boxes of 6 floats each, such as Level::occluder_boxes gives.
+    void begin_frame(const float eye[3], const float* boxes, size_t count) noexcept {
+        pvsr_culler_begin_frame(&culler_, eye, boxes, count);
+    }
+    bool is_hidden(const float box[6]) const noexcept { return pvsr_culler_is_hidden(&culler_, box) != 0; }
+    pvsr_cull_path classify(const float box[6]) const noexcept {
+        return pvsr_cull_path(pvsr_culler_classify(&culler_, box));
+    }
+
+private:
+    std::vector<float> memory_;
+    pvsr_culler culler_{};
+    bool ok_ = false;
 };
 
 }  // namespace pvsr

@@ -7,6 +7,8 @@
 // (test_runtime_export has the tests that bake or run the pvsbake command).
 #include "tests/runtime_file_checks.h"
 
+#include <pvsbake/occlusion.h>
+
 #include <gtest/gtest.h>
 
 #include <cstring>
@@ -156,6 +158,63 @@ TEST_F(RuntimeFileDamage, HostileBytesAreRefusedOrStayInRange) {
         (void)std::strlen(pvsr_string(&l, "mode"));
     }
     EXPECT_GT(refused, trials / 4) << "the checks should refuse most changes";
+}
+
+// The C99 culler answers as pvsbake::OcclusionCuller (io/loader/occlusion.cpp, itself checked against rays by
+// test_runtime_occlusion) on random scenes: the same path for every box, the same occluders used and skipped,
+// at every resolution (0: shadow frusta only), and a culler without its memory culls nothing.
+TEST(RuntimeFile, TheCullerAnswersAsTheLoadersCuller) {
+    std::mt19937 rng(20261128u);
+    std::uniform_real_distribution<float> u(-20.0f, 20.0f), size(0.2f, 6.0f), thin(0.05f, 0.6f);
+    const auto random_box = [&](bool flat) {
+        pvsbake::Box b;
+        for (int a = 0; a < 3; ++a) {
+            b.min[a] = u(rng);
+            b.max[a] = b.min[a] + (flat && a == int(rng() % 3) ? thin(rng) : size(rng));
+        }
+        return b;
+    };
+    uint64_t hidden = 0, fused = 0, total = 0;
+    for (const int resolution : {0, 2, 32, 64}) {
+        pvsbake::OcclusionCuller want(resolution);
+        std::vector<float> memory(pvsr_culler_memory_bytes(resolution) / sizeof(float) + 1);
+        pvsr_culler got;
+        ASSERT_EQ(pvsr_culler_init(&got, resolution, memory.data(), memory.size() * sizeof(float)), 1);
+        for (int scene = 0; scene < (test::in_ci() ? 40 : 200); ++scene) {
+            std::vector<pvsbake::Box> occluders;
+            const int n = 1 + int(rng() % 24);
+            for (int k = 0; k < n; ++k) occluders.push_back(random_box(k % 2 == 0));
+            const float eye[3] = {u(rng) * 0.5f, u(rng) * 0.5f, u(rng) * 0.5f};
+            want.begin_frame(eye, occluders);
+            pvsr_culler_begin_frame(&got, eye, &occluders[0].min[0], occluders.size());
+            ASSERT_EQ(got.used, want.occluders_used());
+            ASSERT_EQ(got.redundant, want.occluders_redundant());
+            for (int q = 0; q < 300; ++q) {
+                const pvsbake::Box box = random_box(false);
+                const int path = pvsr_culler_classify(&got, &box.min[0]);
+                ASSERT_EQ(path, int(want.classify(box))) << "resolution " << resolution << " scene " << scene;
+                hidden += path != PVSR_CULL_VISIBLE;
+                fused += path == PVSR_CULL_DEPTH_CUBE;
+                ++total;
+            }
+        }
+    }
+    EXPECT_GT(hidden, total / 100) << "the scenes should hide something";
+    EXPECT_GT(fused, 0u) << "some boxes should be hidden by fused occluders only";
+    // No memory: it culls nothing.
+    pvsr_culler none;
+    EXPECT_EQ(pvsr_culler_init(&none, 32, nullptr, 0), 0);
+    const float eye[3] = {0, 0, 0}, wall[6] = {1, -5, -5, 2, 5, 5}, behind[6] = {4, -1, -1, 5, 1, 1};
+    pvsr_culler_begin_frame(&none, eye, wall, 1);
+    EXPECT_EQ(pvsr_culler_is_hidden(&none, behind), 0);
+    pvsr::Culler wrapped(32);  // the C++ wrapper: the same culler with its memory
+    ASSERT_TRUE(wrapped.ok());
+    wrapped.begin_frame(eye, wall, 1);
+    EXPECT_TRUE(wrapped.is_hidden(behind));
+    pvsr_culler frusta;
+    ASSERT_EQ(pvsr_culler_init(&frusta, 0, nullptr, 0), 1);
+    pvsr_culler_begin_frame(&frusta, eye, wall, 1);
+    EXPECT_EQ(pvsr_culler_classify(&frusta, behind), PVSR_CULL_SHADOW_FRUSTUM);
 }
 
 TEST(RuntimeFile, Xxh64EqualsLibxxhash) {

@@ -7,6 +7,7 @@
 #include "tests/bake_fixtures.h"
 
 #include <pvsbake/loader.h>
+#include <pvsbake/occlusion.h>
 
 #include <cstdio>
 #include <cstring>
@@ -14,6 +15,7 @@
 #include <fstream>
 #include <random>
 #include <string>
+#include <vector>
 
 namespace {
 
@@ -82,6 +84,62 @@ void write_case(std::FILE* out, const std::filesystem::path& dir, const std::str
         }
         std::fprintf(out, "point %x %x %x %d %d\n", bits(p[0]), bits(p[1]), bits(p[2]), b.find_cell(p[0], p[1], p[2]),
                      b.in_eye_space(p[0], p[1], p[2]) ? 1 : 0);
+    }
+    // The culler of moving objects: from a random eye in a cell, with the cell's ranked occluders (and, for
+    // more fusion, the next cells' too) at 32 pixels a face, the path of random boxes around it.
+    pvsbake::OcclusionCuller culler(32);
+    for (uint32_t c = 0; c < b.cell_count() && c < 40; ++c) {
+        std::vector<pvsbake::Box> boxes;
+        for (uint32_t k = c; k < b.cell_count() && k < c + 4; ++k)
+            for (const pvsbake::RankedOccluder& o : b.occluders(k)) boxes.push_back(o.box);
+        if (boxes.empty()) continue;
+        const pvsbake::Box cell = b.cell_bounds(c);
+        float eye[3];
+        for (int a = 0; a < 3; ++a) eye[a] = cell.min[a] + (cell.max[a] - cell.min[a]) * std::uniform_real_distribution<float>(0.0f, 1.0f)(rng);
+        culler.begin_frame(eye, boxes);
+        std::fprintf(out, "cull %x %x %x %zu", bits(eye[0]), bits(eye[1]), bits(eye[2]), boxes.size());
+        for (const pvsbake::Box& o : boxes)
+            for (int a = 0; a < 6; ++a) std::fprintf(out, " %x", bits(a < 3 ? o.min[a] : o.max[a - 3]));
+        std::fprintf(out, "\n");
+        for (int q = 0; q < 30; ++q) {
+            pvsbake::Box box;
+            for (int a = 0; a < 3; ++a) {
+                box.min[a] = lo[a] + u(rng) * (hi[a] - lo[a]);
+                box.max[a] = box.min[a] + 0.1f + 2.0f * std::uniform_real_distribution<float>(0.0f, 1.0f)(rng);
+            }
+            std::fprintf(out, "box %x %x %x %x %x %x %d\n", bits(box.min[0]), bits(box.min[1]), bits(box.min[2]),
+                         bits(box.max[0]), bits(box.max[1]), bits(box.max[2]), int(culler.classify(box)));
+        }
+    }
+    // Random scenes of walls and blocks around the eye, where the depth cube fuses occluders.
+    std::uniform_real_distribution<float> w(-20.0f, 20.0f), size(0.2f, 6.0f), thin(0.05f, 0.6f);
+    for (int scene = 0; scene < 40; ++scene) {
+        std::vector<pvsbake::Box> boxes;
+        const int n = 4 + int(rng() % 40);
+        for (int k = 0; k < n; ++k) {
+            pvsbake::Box o;
+            const int flat = int(rng() % 3);
+            for (int a = 0; a < 3; ++a) {
+                o.min[a] = w(rng) * 0.6f;
+                o.max[a] = o.min[a] + (k % 2 == 0 && a == flat ? thin(rng) : size(rng));
+            }
+            boxes.push_back(o);
+        }
+        const float eye[3] = {w(rng) * 0.2f, w(rng) * 0.2f, w(rng) * 0.2f};
+        culler.begin_frame(eye, boxes);
+        std::fprintf(out, "cull %x %x %x %zu", bits(eye[0]), bits(eye[1]), bits(eye[2]), boxes.size());
+        for (const pvsbake::Box& o : boxes)
+            for (int a = 0; a < 6; ++a) std::fprintf(out, " %x", bits(a < 3 ? o.min[a] : o.max[a - 3]));
+        std::fprintf(out, "\n");
+        for (int q = 0; q < 100; ++q) {
+            pvsbake::Box box;
+            for (int a = 0; a < 3; ++a) {
+                box.min[a] = w(rng);
+                box.max[a] = box.min[a] + size(rng) * 0.5f;
+            }
+            std::fprintf(out, "box %x %x %x %x %x %x %d\n", bits(box.min[0]), bits(box.min[1]), bits(box.min[2]),
+                         bits(box.max[0]), bits(box.max[1]), bits(box.max[2]), int(culler.classify(box)));
+        }
     }
     std::fprintf(out, "end\n");
 }

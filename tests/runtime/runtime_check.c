@@ -12,6 +12,8 @@
 #include <string.h>
 
 static int failures = 0;
+static unsigned long culled = 0;
+static pvsr_culler culler;
 
 #define CHECK(cond, ...)                              \
     do {                                              \
@@ -175,6 +177,32 @@ static int run_case(FILE* in, const char* folder) {
             got_hex[1] = '\0';
             for (; got[at] != '\0' && 2 * at + 2 < sizeof got_hex; ++at) snprintf(got_hex + 2 * at, 3, "%02x", (unsigned)(uint8_t)got[at]);
             CHECK(strcmp(got_hex, hex) == 0, "%s: object %lu name differs", name, o);
+        } else if (strcmp(word, "cull") == 0) {
+            unsigned long e[3], v;
+            float eye[3], *boxes;
+            size_t count, k;
+            if (fscanf(in, "%lx %lx %lx %lu", &e[0], &e[1], &e[2], &n) != 4) return 0;
+            count = (size_t)n;
+            boxes = (float*)malloc(sizeof(float) * 6 * (count + 1));
+            if (boxes == NULL) return 0;
+            for (k = 0; k < 6 * count; ++k) {
+                if (fscanf(in, "%lx", &v) != 1) {
+                    free(boxes);
+                    return 0;
+                }
+                boxes[k] = float_of(v);
+            }
+            for (k = 0; k < 3; ++k) eye[k] = float_of(e[k]);
+            pvsr_culler_begin_frame(&culler, eye, boxes, count);
+            free(boxes);
+        } else if (strcmp(word, "box") == 0) {
+            unsigned long b[6];
+            float box[6];
+            int path;
+            if (fscanf(in, "%lx %lx %lx %lx %lx %lx %d", &b[0], &b[1], &b[2], &b[3], &b[4], &b[5], &path) != 7) return 0;
+            for (i = 0; i < 6; ++i) box[i] = float_of(b[i]);
+            ++culled;
+            CHECK(pvsr_culler_classify(&culler, box) == path, "%s: the culler's answer for a box differs", name);
         } else if (strcmp(word, "point") == 0) {
             unsigned long p[3];
             long cell;
@@ -205,6 +233,13 @@ int main(int argc, char** argv) {
         fprintf(stderr, "usage: runtime_check CASES.txt\n");
         return 2;
     }
+    {
+        static float memory[6 * 32 * 32 + 7 * 33];
+        if (sizeof memory < pvsr_culler_memory_bytes(32) || !pvsr_culler_init(&culler, 32, memory, sizeof memory)) {
+            fprintf(stderr, "runtime_check: the culler's memory is too small\n");
+            return 1;
+        }
+    }
     in = fopen(argv[1], "r");
     if (in == NULL) {
         fprintf(stderr, "runtime_check: cannot open %s\n", argv[1]);
@@ -228,6 +263,8 @@ int main(int argc, char** argv) {
         ++cases;
     }
     fclose(in);
-    if (failures == 0) printf("runtime_check: %d cases, every query as expected (%u-bit pointers)\n", cases, (unsigned)(8 * sizeof(void*)));
+    if (failures == 0)
+        printf("runtime_check: %d cases and %lu culled boxes, every query as expected (%u-bit pointers)\n", cases, culled,
+               (unsigned)(8 * sizeof(void*)));
     return failures == 0 && cases > 0 ? 0 : 1;
 }
