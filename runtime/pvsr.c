@@ -611,6 +611,14 @@ const char* pvsr_status_name(pvsr_status status) {
 
 /* ---- Queries */
 
+size_t pvsr_level_bytes(void) {
+    return sizeof(pvsr_level);
+}
+
+size_t pvsr_culler_bytes(void) {
+    return sizeof(pvsr_culler);
+}
+
 uint32_t pvsr_cell_count(const pvsr_level* l) {
     return l ? l->cell_count : 0;
 }
@@ -922,8 +930,18 @@ const char* pvsr_string(const pvsr_level* l, const char* key) {
 #define CULL_MARGIN_M 1e-5
 #define CULL_MARGIN_REL 1e-6
 
+/* As std::max and std::min (the loader's culler uses them): no library call in the inner loops. */
+static float maxf(float a, float b) {
+    return a < b ? b : a;
+}
+static float minf(float a, float b) {
+    return b < a ? b : a;
+}
+static double maxd(double a, double b) {
+    return a < b ? b : a;
+}
 static float fmaxf3(float a, float b, float c) {
-    return fmaxf(a, fmaxf(b, c));
+    return maxf(maxf(a, b), c);
 }
 
 static int usable_box(const float b[6]) {
@@ -938,9 +956,9 @@ static double scale_of(const double eye[3], const float b[6]) {
     double m = 0.0;
     int a;
     for (a = 0; a < 3; ++a) {
-        m = fmax(m, fabs(eye[a]));
-        m = fmax(m, fabs((double)b[a]));
-        m = fmax(m, fabs((double)b[3 + a]));
+        m = maxd(m, fabs(eye[a]));
+        m = maxd(m, fabs((double)b[a]));
+        m = maxd(m, fabs((double)b[3 + a]));
     }
     return m;
 }
@@ -1011,13 +1029,13 @@ static int last_pixel_reaching(const float* g, float hi, int r) {
 }
 
 static float pad_low(float x) {
-    const float y = x - CULL_RECT_PAD * fmaxf(1.0f, fabsf(x));
-    return y > -1.0f ? fminf(y, 1.0f) : -1.0f;
+    const float y = x - CULL_RECT_PAD * maxf(1.0f, fabsf(x));
+    return y > -1.0f ? minf(y, 1.0f) : -1.0f;
 }
 
 static float pad_high(float x) {
-    const float y = x + CULL_RECT_PAD * fmaxf(1.0f, fabsf(x));
-    return y < 1.0f ? fmaxf(y, -1.0f) : 1.0f;
+    const float y = x + CULL_RECT_PAD * maxf(1.0f, fabsf(x));
+    return y < 1.0f ? maxf(y, -1.0f) : 1.0f;
 }
 
 static int culler_resolution(int resolution) {
@@ -1119,12 +1137,12 @@ static void build_frustum(const pvsr_culler* c, const float b[6], double delta, 
 }
 
 static int vertex_lo(float x, int r) {
-    const int v = (int)floorf((fmaxf(x, -1.0f) + 1.0f) * 0.5f * (float)r) - 1;
+    const int v = (int)floorf((maxf(x, -1.0f) + 1.0f) * 0.5f * (float)r) - 1;
     return v > 0 ? v : 0;
 }
 
 static int vertex_hi(float x, int r) {
-    const int v = (int)ceilf((fminf(x, 1.0f) + 1.0f) * 0.5f * (float)r) + 1;
+    const int v = (int)ceilf((minf(x, 1.0f) + 1.0f) * 0.5f * (float)r) + 1;
     return v < r ? v : r;
 }
 
@@ -1144,7 +1162,7 @@ static void rasterize(pvsr_culler* c, const float b[6]) {
         int iv0, iv1, jv0, jv1, iv, jv;
         int* w;
         if (!finite_face_box(&fb)) return;
-        d_lo = fmaxf(fb.d_min, CULL_NEAR_PLANE_M);
+        d_lo = maxf(fb.d_min, CULL_NEAR_PLANE_M);
         if (!(d_lo < fb.d_max)) continue;
         u0 = fb.u_lo >= 0.0f ? fb.u_lo / fb.d_max : fb.u_lo / d_lo;
         u1 = fb.u_hi >= 0.0f ? fb.u_hi / d_lo : fb.u_hi / fb.d_max;
@@ -1161,11 +1179,11 @@ static void rasterize(pvsr_culler* c, const float b[6]) {
         face_depth = c->depth + (size_t)face * (size_t)r * (size_t)r;
         w = c->written[face];
         for (jv = jv0; jv <= jv1; ++jv) {
-            const float re = fmaxf(d_lo, c->row_enter[jv]), rx = fminf(fb.d_max, c->row_exit[jv]);
+            const float re = maxf(d_lo, c->row_enter[jv]), rx = minf(fb.d_max, c->row_exit[jv]);
             float* swap;
             for (iv = iv0; iv <= iv1; ++iv) {
-                const float enter = fmaxf(re, c->col_enter[iv]);
-                const float exit = fminf(rx, c->col_exit[iv]);
+                const float enter = maxf(re, c->col_enter[iv]);
+                const float exit = minf(rx, c->col_exit[iv]);
                 const float hit_depth = enter * (1.0f + CULL_DEPTH_SLACK);
                 c->corner_cur[iv] = exit >= hit_depth ? hit_depth : INFINITY;
             }
@@ -1241,9 +1259,9 @@ static int hidden_by_depth_cube(const pvsr_culler* c, const float box[6]) {
         const int* w = c->written[face];
         const float* face_depth;
         if (!finite_face_box(&fb)) return 0;
-        lower = fmaxf(fmaxf3(fb.d_min, dist_to_zero(fb.u_lo, fb.u_hi), dist_to_zero(fb.v_lo, fb.v_hi)), CULL_NEAR_PLANE_M);
+        lower = maxf(fmaxf3(fb.d_min, dist_to_zero(fb.u_lo, fb.u_hi), dist_to_zero(fb.v_lo, fb.v_hi)), CULL_NEAR_PLANE_M);
         if (lower > fb.d_max * (1.0f + CULL_DEPTH_SLACK)) continue;
-        lower = fminf(lower, fb.d_max);
+        lower = minf(lower, fb.d_max);
         any_face = 1;
         u0 = fb.u_lo >= 0.0f ? fb.u_lo / fb.d_max : fb.u_lo / lower;
         u1 = fb.u_hi >= 0.0f ? fb.u_hi / lower : fb.u_hi / fb.d_max;
@@ -1314,7 +1332,7 @@ void pvsr_culler_begin_frame(pvsr_culler* c, const float eye[3], const float* bo
         if (!usable_box(cand.box)) continue;
         cand.delta = CULL_MARGIN_M + CULL_MARGIN_REL * scale_of(c->eye_d, cand.box);
         for (a = 0; a < 3; ++a) {
-            const double d = fmax(0.0, fmax((double)cand.box[a] - c->eye_d[a], c->eye_d[a] - (double)cand.box[3 + a]));
+            const double d = maxd(0.0, maxd((double)cand.box[a] - c->eye_d[a], c->eye_d[a] - (double)cand.box[3 + a]));
             touches_eye = touches_eye && (double)cand.box[a] - cand.delta <= c->eye_d[a] &&
                           c->eye_d[a] <= (double)cand.box[3 + a] + cand.delta;
             dist2 += d * d;

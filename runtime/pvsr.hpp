@@ -130,6 +130,8 @@ public:
     pvsr_cull_path classify(const float box[6]) const noexcept {
         return pvsr_cull_path(pvsr_culler_classify(&culler_, box));
     }
+    // Occluders this frame uses (those touching the eye and those nearer ones already hide are skipped).
+    size_t occluders_used() const noexcept { return culler_.used; }
 
 private:
     std::vector<float> memory_;

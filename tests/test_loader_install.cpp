@@ -148,7 +148,7 @@ TEST_F(Installed, PkgConfigGame) {
 
 // A Python script loads the shared library with ctypes, finds the cells of random points and walks their
 // PVS; every answer equals `pvsbake query --json` on the same point, on a grid and an octree bake of the
-// sample world.
+// sample world; and the same through the installed C99 runtime's shared library on the bakes' runtime files.
 TEST_F(Installed, PythonCtypesMatchesQuery) {
     const std::string script = test::source_file("tests/install/ctypes_query.py");
     const std::string shared = lib + "/" + PVSBAKE_LOADER_SONAME;
@@ -160,9 +160,12 @@ TEST_F(Installed, PythonCtypesMatchesQuery) {
                   log),
             0)
             << test::read_file(log);
+        const std::string level = dir.file(cells + ".pvsr");
+        ASSERT_EQ(shell(std::string(PVSBAKE_BINARY) + " export " + out + " -o " + level + " --quiet", log), 0)
+            << test::read_file(log);
         const int points = test::in_ci() ? 40 : 100;
         EXPECT_EQ(shell("python3 " + script + " " + shared + " " + out + " " + PVSBAKE_BINARY + " " +
-                            std::to_string(points) + " 11",
+                            std::to_string(points) + " 11 " + lib + "/libpvsbake_runtime.so " + level,
                         log),
                   0)
             << test::read_file(log);

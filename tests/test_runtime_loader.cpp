@@ -6,6 +6,7 @@
 // (test_runtime_loader_package has the tests that need the pvsbake command or an install).
 #include "core/error.h"
 #include "io/bake_file.h"
+#include "io/runtime_file.h"
 #include "io/loader/row_code.h"
 #include "tests/bake_fixtures.h"
 #include "tests/test_util.h"
@@ -672,6 +673,21 @@ TEST(RuntimeLoaderExample, WalksThroughASmallBake) {
     EXPECT_NE(
         std::system((std::string(PVSBAKE_WALKTHROUGH) + " " + dir.file("none.h5") + " 2> /dev/null").c_str()),
         0);
+    // The same bake as a runtime file (the C99 runtime and its culler): the same frames, the same culling.
+    const std::string level = dir.file("walk.pvsr"), out2 = dir.file("out2.txt");
+    test::write_file(level, runtime_file_bytes(path));
+    ASSERT_EQ(std::system((std::string(PVSBAKE_WALKTHROUGH) + " " + level + " --frames 48 > " + out2).c_str()), 0);
+    const std::string text2 = test::read_file(out2);
+    EXPECT_NE(text2.find("(runtime file)"), std::string::npos) << text2;
+    const auto frames_of = [](const std::string& t) {  // everything from the first frame, timings cut
+        std::string s = t.substr(t.find("frame    0"));
+        for (size_t at = s.find(" at "); at != std::string::npos; at = s.find(" at ", at + 1)) {
+            const size_t end = s.find(" a frame", at);
+            if (end != std::string::npos) s.erase(at, end - at);
+        }
+        return s;
+    };
+    EXPECT_EQ(frames_of(text2), frames_of(text));
 }
 
 }  // namespace

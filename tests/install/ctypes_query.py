@@ -1,13 +1,14 @@
 #!/usr/bin/env python3
 """A Python game over the installed shared loader through ctypes (tests/test_loader_install.cpp).
 
-    ctypes_query.py LIB BAKE PVSBAKE POINTS SEED
+    ctypes_query.py LIB BAKE PVSBAKE POINTS SEED [RUNTIME_LIB LEVEL.pvsr]
 
 Loads BAKE with the shared library LIB, then for POINTS random points (fixed SEED) in and around the
 bake's cells (most in a random cell's box) finds the cell and walks its PVS (visit callback, list and
 bit set), and checks every answer against `PVSBAKE query BAKE --json -- X Y Z` on the same point: the
-cell, its box and the names of the visible objects. Prints one summary line; exit status 1 with the
-first difference.
+cell, its box and the names of the visible objects. With RUNTIME_LIB and LEVEL.pvsr (`pvsbake export BAKE`),
+the same through the C99 runtime's shared library reading the runtime file from memory (what a game that
+ships no HDF5 does). Prints one summary line; exit status 1 with the first difference.
 """
 import ctypes
 import json
@@ -55,10 +56,71 @@ def bind(lib):
 VISIT = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_uint32)
 
 
+class Runtime:
+    """The C99 runtime (runtime/pvsr.h) over a runtime file's bytes, with the loader's call shapes."""
+
+    def __init__(self, lib_path, level_path):
+        self.lib = lib = ctypes.CDLL(lib_path)
+        level_p = ctypes.c_void_p
+        sigs = {
+            "pvsr_level_bytes": (ctypes.c_size_t, []),
+            "pvsr_open": (ctypes.c_int, [level_p, ctypes.c_void_p, ctypes.c_size_t, ctypes.c_char_p, ctypes.c_size_t]),
+            "pvsr_status_name": (ctypes.c_char_p, [ctypes.c_int]),
+            "pvsr_cell_count": (ctypes.c_uint32, [level_p]),
+            "pvsr_object_count": (ctypes.c_uint32, [level_p]),
+            "pvsr_words_per_row": (ctypes.c_size_t, [level_p]),
+            "pvsr_find_cell": (ctypes.c_int32, [level_p, ctypes.c_float, ctypes.c_float, ctypes.c_float]),
+            "pvsr_cell_bounds": (ctypes.c_int, [level_p, ctypes.c_uint32, ctypes.POINTER(ctypes.c_float)]),
+            "pvsr_visit_visible": (ctypes.c_uint32, [level_p, ctypes.c_uint32, ctypes.c_void_p, ctypes.c_void_p]),
+            "pvsr_visible_objects": (ctypes.c_uint32, [level_p, ctypes.c_uint32, ctypes.POINTER(ctypes.c_uint32),
+                                                       ctypes.c_size_t]),
+            "pvsr_fill_bitset": (ctypes.c_uint32, [level_p, ctypes.c_uint32, ctypes.POINTER(ctypes.c_uint64),
+                                                   ctypes.c_size_t]),
+            "pvsr_object_name": (ctypes.c_char_p, [level_p, ctypes.c_uint32]),
+        }
+        for name, (restype, argtypes) in sigs.items():
+            fn = getattr(lib, name)
+            fn.restype = restype
+            fn.argtypes = argtypes
+        data = open(level_path, "rb").read()
+        # The bytes in 8-byte aligned memory that lives as long as the level (a game would map the file).
+        self.bytes = (ctypes.c_uint64 * ((len(data) + 7) // 8))()
+        ctypes.memmove(self.bytes, data, len(data))
+        self.level = ctypes.create_string_buffer(lib.pvsr_level_bytes())
+        message = ctypes.create_string_buffer(256)
+        status = lib.pvsr_open(self.level, self.bytes, len(data), message, len(message))
+        if status != 0:
+            fail("%s: %s (%s)" % (level_path, message.value.decode(), lib.pvsr_status_name(status).decode()))
+        broken = (ctypes.c_uint64 * len(self.bytes))()
+        ctypes.memmove(broken, data, len(data) - 1)
+        if lib.pvsr_open(ctypes.create_string_buffer(lib.pvsr_level_bytes()), broken, len(data) - 1, message,
+                         len(message)) == 0 or b"truncated" not in message.value:
+            fail("%s less its last byte opened: %r" % (level_path, message.value))
+
+    def check(self, cell, objects, words, names, expect, where):
+        lib, level = self.lib, self.level
+        box = (ctypes.c_float * 6)()
+        if not lib.pvsr_cell_bounds(level, cell, box) or list(box) != expect["cell_bounds"]:
+            fail("%s: the runtime's cell %d box %r, pvsbake query %r" % (where, cell, list(box), expect["cell_bounds"]))
+        walked = []
+        visit = VISIT(lambda user, o: walked.append(o))
+        listed = (ctypes.c_uint32 * max(objects, 1))()
+        bits = (ctypes.c_uint64 * max(words, 1))()
+        n = lib.pvsr_visit_visible(level, cell, ctypes.cast(visit, ctypes.c_void_p), None)
+        m = lib.pvsr_visible_objects(level, cell, listed, objects)
+        b = lib.pvsr_fill_bitset(level, cell, bits, words)
+        from_bits = [o for o in range(objects) if bits[o // 64] >> (o % 64) & 1]
+        if not (n == m == b == len(walked) == len(from_bits)) or list(listed[:m]) != walked or from_bits != walked:
+            fail("%s: the runtime's cell %d: the visit, the list and the bit set disagree" % (where, cell))
+        if [lib.pvsr_object_name(level, o).decode() for o in walked] != expect["visible"]:
+            fail("%s: the runtime's cell %d lists other objects than pvsbake query" % (where, cell))
+
+
 def main():
-    if len(sys.argv) != 6:
-        fail("usage: ctypes_query.py LIB BAKE PVSBAKE POINTS SEED")
+    if len(sys.argv) not in (6, 8):
+        fail("usage: ctypes_query.py LIB BAKE PVSBAKE POINTS SEED [RUNTIME_LIB LEVEL.pvsr]")
     lib_path, bake_path, pvsbake, points, seed = sys.argv[1:6]
+    runtime = Runtime(sys.argv[6], sys.argv[7]) if len(sys.argv) == 8 else None
     lib = ctypes.CDLL(lib_path)
     bind(lib)
 
@@ -98,6 +160,9 @@ def main():
         else:
             p = [f32(rng.uniform(lo[i] - 0.1 * (hi[i] - lo[i]), hi[i] + 0.1 * (hi[i] - lo[i]))) for i in range(3)]
         cell = lib.pvsbake_find_cell(bake, *p)
+        if runtime is not None and runtime.lib.pvsr_find_cell(runtime.level, *p) != cell:
+            fail("point %r: the runtime finds cell %d, the loader %d"
+                 % (p, runtime.lib.pvsr_find_cell(runtime.level, *p), cell))
         query = subprocess.run([pvsbake, "query", bake_path, "--json", "--"] + [repr(x) for x in p],
                                capture_output=True, text=True)
         if query.returncode != 0:
@@ -124,12 +189,15 @@ def main():
         if [names[o] for o in walked] != expect["visible"] or n != expect["visible_count"]:
             fail("%s: cell %d: the library lists %d objects, pvsbake query %d (or other names)"
                  % (where, cell, n, expect["visible_count"]))
+        if runtime is not None:
+            runtime.check(cell, objects, words, names, expect, where)
     kind = "octree" if lib.pvsbake_cell_kind(bake) == 1 else "grid"
     lib.pvsbake_free(bake)
     if inside == 0:
         fail("no random point fell in a cell")
-    print("ctypes_query: %s: %d %s cells, %d points, %d in a cell, all as pvsbake query"
-          % (bake_path, cells, kind, int(points), inside))
+    print("ctypes_query: %s: %d %s cells, %d points, %d in a cell, all as pvsbake query%s"
+          % (bake_path, cells, kind, int(points), inside,
+             ", and the same through the runtime file" if runtime is not None else ""))
 
 
 if __name__ == "__main__":

@@ -1,6 +1,7 @@
 // pvsbake example helpers: the camera path of the game-loop example (pvsbake_walkthrough) and the moving
 // objects it culls. Shared with bench/bench_runtime_cull.cpp, which follows the same path and moves the
-// same objects to check the culler against rays. Uses pvsbake::loader only.
+// same objects to check the culler against rays. A level is any type with cell_count(), cell_bounds(c)
+// giving a pvsbake::Box and find_cell(x, y, z): pvsbake::Bake, or the example's view of a runtime file.
 //
 // Conventions: glTF axes (right-handed, +Y up), metres, seconds.
 #pragma once
@@ -35,7 +36,8 @@ inline Vec3 spline(Vec3 p0, Vec3 p1, Vec3 p2, Vec3 p3, float t) {
 // Waypoints: `count` cell centres, each in a face neighbour of the one before (the one straight ahead when
 // it can, else turning), never back into a cell already visited while another way is open. Starts at the
 // first cell whose centre lies in the view volume.
-inline std::vector<Vec3> waypoints(const Bake& bake, uint32_t count) {
+template <class Level>
+inline std::vector<Vec3> waypoints(const Level& bake, uint32_t count) {
     std::vector<Vec3> path;
     std::vector<bool> visited(bake.cell_count(), false);
     int32_t cell = -1;
@@ -108,7 +110,8 @@ inline Vec3 random_heading(std::mt19937& rng, float speed) {
 }
 
 // `count` movers at random points of random cells (points in the view volume), from a fixed seed.
-inline std::vector<Mover> spawn_movers(const Bake& bake, uint32_t count, std::mt19937& rng) {
+template <class Level>
+inline std::vector<Mover> spawn_movers(const Level& bake, uint32_t count, std::mt19937& rng) {
     std::vector<Mover> movers;
     if (bake.cell_count() == 0) return movers;
     std::uniform_real_distribution<float> u(0.0f, 1.0f);
@@ -125,7 +128,8 @@ inline std::vector<Mover> spawn_movers(const Bake& bake, uint32_t count, std::mt
 }
 
 // One time step of dt_s seconds.
-inline void step_movers(const Bake& bake, std::vector<Mover>& movers, float dt_s, std::mt19937& rng) {
+template <class Level>
+inline void step_movers(const Level& bake, std::vector<Mover>& movers, float dt_s, std::mt19937& rng) {
     for (Mover& m : movers) {
         const Vec3 next{m.at.x + m.velocity.x * dt_s, m.at.y, m.at.z + m.velocity.z * dt_s};
         if (bake.find_cell(next.x, next.y, next.z) >= 0) {

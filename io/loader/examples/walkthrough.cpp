@@ -6,13 +6,16 @@
 // every frame the occlusion culler (pvsbake/occlusion.h) tests their boxes against the current cell's ranked
 // occluders; the example prints how many it culled and what that cost.
 //
-//   pvsbake_walkthrough BAKE.h5 [--frames N] [--objects M] [--seed S] [--quiet]
+//   pvsbake_walkthrough BAKE.h5|LEVEL.pvsr [--frames N] [--objects M] [--seed S] [--quiet]
 //
-// Links pvsbake::loader only (find_package(pvsbake) + target_link_libraries(game pvsbake::loader)).
+// A bake file goes through the HDF5 loader (pvsbake::loader: pvsbake/loader.h, pvsbake/occlusion.h); a
+// runtime file (`pvsbake export`) through the C99 runtime (runtime/pvsr.hpp), which a game ships without
+// HDF5. Both give the same frames.
 #include "walk.h"
 
 #include <pvsbake/loader.h>
 #include <pvsbake/occlusion.h>
+#include <pvsr.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -20,6 +23,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <fstream>
 #include <random>
 #include <string>
 #include <vector>
@@ -28,11 +32,67 @@ namespace {
 
 using pvsbake::walk::Vec3;
 
+// A runtime file as the loop below uses a level: pvsr::Level with the HDF5 loader's boxes, and its culler.
+struct RuntimeLevel {
+    std::vector<uint64_t> bytes;  // the file, 8-byte aligned (a game would map it)
+    pvsr::Level level;
+    uint32_t cell_count() const { return level.cell_count(); }
+    uint32_t object_count() const { return level.object_count(); }
+    uint64_t total_triangles() const { return level.total_triangles(); }
+    uint32_t object_triangles(uint32_t o) const { return level.object_triangles(o); }
+    const char* mode_label() const { return level.mode_label(); }
+    std::string mode() const { return std::string(level.string("mode")); }
+    const char* kind() const { return level.cell_kind() == 0 ? "grid" : "octree"; }
+    int32_t find_cell(float x, float y, float z) const { return level.find_cell(x, y, z); }
+    bool in_eye_space(float x, float y, float z) const { return level.in_eye_space(x, y, z); }
+    pvsbake::Box cell_bounds(uint32_t c) const {
+        float b[6] = {0, 0, 0, 0, 0, 0};
+        level.cell_bounds(c, b);
+        return pvsbake::Box{{b[0], b[1], b[2]}, {b[3], b[4], b[5]}};
+    }
+    template <class F>
+    void for_each_visible(uint32_t c, F&& visit) const {
+        level.for_each_visible(c, visit);
+    }
+    uint32_t occluder_boxes(uint32_t c, pvsbake::Box* out, uint32_t capacity) const {
+        static_assert(sizeof(pvsbake::Box) == 6 * sizeof(float), "a Box is six floats");
+        return level.occluder_boxes(c, &out[0].min[0], capacity);
+    }
+};
+
+struct RuntimeCuller {
+    pvsr::Culler culler;
+    void begin_frame(const float eye[3], const pvsbake::Box* boxes, uint32_t count) {
+        culler.begin_frame(eye, count ? &boxes[0].min[0] : nullptr, count);
+    }
+    int classify(const pvsbake::Box& box) const { return int(culler.classify(&box.min[0])); }
+    size_t occluders_used() const { return culler.occluders_used(); }
+};
+
+struct LoaderLevel {
+    pvsbake::Bake bake;
+    const char* kind() const { return bake.cell_kind() == pvsbake::CellKind::kGrid ? "grid" : "octree"; }
+};
+
+struct LoaderCuller {
+    pvsbake::OcclusionCuller culler;
+    void begin_frame(const float eye[3], const pvsbake::Box* boxes, uint32_t count) {
+        culler.begin_frame(eye, boxes, count);
+    }
+    int classify(const pvsbake::Box& box) const { return int(culler.classify(box)); }
+    size_t occluders_used() const { return culler.occluders_used(); }
+};
+
+// The game loop over a level (pvsbake::Bake or RuntimeLevel) and its culler. Path values: 0 visible, 1 one
+// shadow frustum, 2 the fused depth cube (both cullers number them so).
+template <class Level, class Culler>
+int play(const Level& bake, Culler& culler, int frames, int movers_wanted, unsigned seed, bool quiet);
+
 }  // namespace
 
 int main(int argc, char** argv) {
     if (argc < 2) {
-        std::fprintf(stderr, "usage: %s BAKE.h5 [--frames N] [--objects M] [--seed S] [--quiet]\n", argv[0]);
+        std::fprintf(stderr, "usage: %s BAKE.h5|LEVEL.pvsr [--frames N] [--objects M] [--seed S] [--quiet]\n", argv[0]);
         return 2;
     }
     int frames = 240;
@@ -48,29 +108,62 @@ int main(int argc, char** argv) {
         if (std::strcmp(argv[i], "--quiet") == 0) quiet = true;
     }
 
-    // Level load.
+    // Level load: a runtime file (its magic) through the C99 runtime, anything else through the HDF5 loader.
     const auto t0 = std::chrono::steady_clock::now();
-    pvsbake::Bake bake;
-    const pvsbake::LoadResult loaded = bake.load(argv[1]);
+    std::ifstream file(argv[1], std::ios::binary | std::ios::ate);
+    char magic[4] = {0, 0, 0, 0};
+    if (file) {
+        file.seekg(0);
+        file.read(magic, 4);
+    }
+    if (file && std::memcmp(magic, "PVSR", 4) == 0) {
+        RuntimeLevel level;
+        file.seekg(0, std::ios::end);
+        const size_t size = size_t(file.tellg());
+        level.bytes.resize((size + 7) / 8);
+        file.seekg(0);
+        file.read(reinterpret_cast<char*>(level.bytes.data()), std::streamsize(size));
+        std::string why;
+        if (!file || level.level.open(level.bytes.data(), size, &why) != PVSR_OK) {
+            std::fprintf(stderr, "%s: %s\n", argv[1], why.empty() ? "cannot read" : why.c_str());
+            return 1;
+        }
+        const double load_ms =
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+        std::printf("loaded %s in %.1f ms (runtime file): %u cells (%s), %u objects, %llu triangles, %s PVS (%s)\n",
+                    argv[1], load_ms, level.cell_count(), level.kind(), level.object_count(),
+                    (unsigned long long)level.total_triangles(), level.mode_label(), level.mode().c_str());
+        RuntimeCuller culler;  // allocates once; every frame reuses it
+        return play(level, culler, frames, movers_wanted, seed, quiet);
+    }
+    LoaderLevel level;
+    const pvsbake::LoadResult loaded = level.bake.load(argv[1]);
     const double load_ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     if (!loaded) {
         std::fprintf(stderr, "%s (%s)\n", loaded.message.c_str(), pvsbake::status_name(loaded.status));
         return 1;
     }
+    const pvsbake::Bake& bake = level.bake;
+    std::printf("loaded %s in %.1f ms: %u cells (%s), %u objects, %llu triangles, %s PVS (%s)\n", argv[1],
+                load_ms, bake.cell_count(), level.kind(), bake.object_count(),
+                (unsigned long long)bake.total_triangles(), bake.mode_label(), bake.mode().c_str());
+    LoaderCuller culler;  // allocates once; every frame reuses it
+    return play(bake, culler, frames, movers_wanted, seed, quiet);
+}
+
+namespace {
+
+template <class Level, class Culler>
+int play(const Level& bake, Culler& culler, int frames, int movers_wanted, unsigned seed, bool quiet) {
     const uint32_t objects = bake.object_count();
     const uint64_t triangles = bake.total_triangles();
-    std::printf("loaded %s in %.1f ms: %u cells (%s), %u objects, %llu triangles, %s PVS (%s)\n", argv[1],
-                load_ms, bake.cell_count(), bake.cell_kind() == pvsbake::CellKind::kGrid ? "grid" : "octree",
-                objects, (unsigned long long)triangles, bake.mode_label(), bake.mode().c_str());
-
     // The camera path: 8 frames per segment between waypoints; 30 frames a second for the moving objects.
     const std::vector<Vec3> way =
         pvsbake::walk::waypoints(bake, uint32_t(frames / pvsbake::walk::kFramesPerSegment + 2));
     std::mt19937 rng(seed);
     std::vector<pvsbake::walk::Mover> movers =
         pvsbake::walk::spawn_movers(bake, uint32_t(movers_wanted), rng);
-    pvsbake::OcclusionCuller culler;  // allocates once; every frame reuses it
     uint64_t drawn_objects = 0, drawn_triangles = 0, outside = 0;
     uint64_t moving_tested = 0, moving_culled = 0, culled_by_frusta = 0, occluders_used = 0,
              frames_culling = 0;
@@ -108,9 +201,9 @@ int main(int argc, char** argv) {
         culler.begin_frame(eye_m, occluders, occluder_count);
         uint32_t culled = 0;
         for (const pvsbake::walk::Mover& m : movers) {
-            const pvsbake::OcclusionCuller::Path path = culler.classify(pvsbake::walk::mover_box(m));
-            culled += path != pvsbake::OcclusionCuller::Path::kVisible;
-            culled_by_frusta += path == pvsbake::OcclusionCuller::Path::kShadowFrustum;
+            const int path = culler.classify(pvsbake::walk::mover_box(m));
+            culled += path != 0;
+            culled_by_frusta += path == 1;
         }
         cull_us += std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - c0).count();
         moving_tested += movers.size();
@@ -141,3 +234,5 @@ int main(int argc, char** argv) {
         (unsigned long long)frames_culling);
     return 0;
 }
+
+}  // namespace
