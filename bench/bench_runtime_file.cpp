@@ -1,7 +1,7 @@
 // bench_runtime_file: the runtime file (io/runtime_file.h) and the C99 runtime (runtime/pvsr.h) against the
 // HDF5 loader (pvsbake/loader.h), on bakes.
 //
-//   bench_runtime_file BAKE.h5 [BAKE.h5 ...] [--repeats R] [--queries Q] [--max-chain N]
+//   bench_runtime_file BAKE.h5 [BAKE.h5 ...] [--repeats R] [--queries Q] [--max-chain N] [--merge-cells K]
 //
 // For each bake: the runtime file's size and its sections' sizes, against the HDF5 file's size and what the
 // HDF5 loader holds in memory (its footprint); the time of pvsr_open (checksum and every check) on the
@@ -9,7 +9,8 @@
 // page cache as a game's first touch would) and then the median of R opens; the HDF5 loader's load (median
 // of R); and one frame's work in each: find_cell of a random point in a random cell plus walking that cell's
 // PVS (median over batches of Q queries; the same points for all): the runtime through its C++ wrapper
-// (runtime/pvsr.hpp, the visit inlined), through the C callback, and the HDF5 loader. Prints one JSON object.
+// (runtime/pvsr.hpp, the visit inlined), through the C callback, and the HDF5 loader; and the mean share of
+// the world's triangles the runtime file's cells list (what --merge-cells costs). Prints one JSON object.
 #include "bench/bench_util.h"
 #include "io/runtime_file.h"
 #include "runtime/pvsr.h"
@@ -57,14 +58,17 @@ struct Point {
     float p[3];
 };
 
-nlohmann::ordered_json measure(const std::string& bake_path, int repeats, int queries, uint32_t max_chain) {
+nlohmann::ordered_json measure(const std::string& bake_path, int repeats, int queries, uint32_t max_chain,
+                               uint32_t merge_cells) {
     nlohmann::ordered_json j;
     j["bake"] = bake_path;
     j["bake_file_bytes"] = std::filesystem::file_size(bake_path);
     pvs::RuntimeFileFigures figures;
     pvs::RuntimeFileOptions options;
     options.max_chain = max_chain;
+    options.merge_cells = merge_cells;
     j["max_chain"] = max_chain;
+    j["merge_cells"] = merge_cells;
     const std::string bytes = pvs::runtime_file_bytes(bake_path, options, &figures);
     j["runtime_file_bytes"] = figures.file_bytes;
     nlohmann::ordered_json sections;
@@ -161,6 +165,14 @@ nlohmann::ordered_json measure(const std::string& bake_path, int repeats, int qu
     j["runtime_query_median_us"] = runtime_us.empty() ? 0.0 : median(runtime_us);
     j["runtime_c_callback_query_median_us"] = runtime_c_us.empty() ? 0.0 : median(runtime_c_us);
     j["hdf5_query_median_us"] = hdf5_us.empty() ? 0.0 : median(hdf5_us);
+    // What the cells list: the mean share of the world's triangles, over every cell (the cost of a merge).
+    double share = 0.0;
+    for (uint32_t c = 0; c < wrapped.cell_count(); ++c) {
+        uint64_t tris = 0;
+        wrapped.for_each_visible(c, [&](uint32_t o) { tris += wrapped.object_triangles(o); });
+        share += double(tris) / double(std::max<uint64_t>(1, wrapped.total_triangles()));
+    }
+    j["listed_triangle_share_mean"] = wrapped.cell_count() ? share / double(wrapped.cell_count()) : 0.0;
     j["checksum_of_walks"] = sink % 1000;  // keeps the walks from being optimized away
     std::filesystem::remove(path);
     return j;
@@ -171,24 +183,26 @@ nlohmann::ordered_json measure(const std::string& bake_path, int repeats, int qu
 int main(int argc, char** argv) {
     std::vector<std::string> bakes;
     int repeats = 11, queries = 2000;
-    uint32_t max_chain = 4;
+    uint32_t max_chain = 4, merge_cells = 1;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         if (a == "--repeats" && i + 1 < argc) {
             repeats = std::max(1, std::atoi(argv[++i]));
+        } else if (a == "--merge-cells" && i + 1 < argc) {
+            merge_cells = uint32_t(std::max(1, std::atoi(argv[++i])));
         } else if (a == "--max-chain" && i + 1 < argc) {
             max_chain = uint32_t(std::max(1, std::atoi(argv[++i])));
         } else if (a == "--queries" && i + 1 < argc) {
             queries = std::max(1, std::atoi(argv[++i]));
         } else if (a == "--help" || a.rfind("--", 0) == 0) {
-            std::fprintf(stderr, "usage: bench_runtime_file BAKE.h5 [BAKE.h5 ...] [--repeats R] [--queries Q] [--max-chain N]\n");
+            std::fprintf(stderr, "usage: bench_runtime_file BAKE.h5 [BAKE.h5 ...] [--repeats R] [--queries Q] [--max-chain N] [--merge-cells K]\n");
             return a == "--help" ? 0 : 2;
         } else {
             bakes.push_back(a);
         }
     }
     if (bakes.empty()) {
-        std::fprintf(stderr, "usage: bench_runtime_file BAKE.h5 [BAKE.h5 ...] [--repeats R] [--queries Q] [--max-chain N]\n");
+        std::fprintf(stderr, "usage: bench_runtime_file BAKE.h5 [BAKE.h5 ...] [--repeats R] [--queries Q] [--max-chain N] [--merge-cells K]\n");
         return 2;
     }
     nlohmann::ordered_json out;
@@ -197,7 +211,7 @@ int main(int argc, char** argv) {
     out["queries"] = queries;
     for (const std::string& b : bakes) {
         try {
-            out["bakes"].push_back(measure(b, repeats, queries, max_chain));
+            out["bakes"].push_back(measure(b, repeats, queries, max_chain, merge_cells));
         } catch (const std::exception& e) {
             std::fprintf(stderr, "%s: %s\n", b.c_str(), e.what());
             return 2;

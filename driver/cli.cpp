@@ -744,6 +744,11 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
                          "(1: every row whole)")
         ->check(CLI::Range(1, 8))
         ->capture_default_str();
+    exporter->add_option("--merge-cells", runtime_options.merge_cells,
+                         "K > 1 (grid bakes): each cell lists what its block of K x K x K cells lists, so the block "
+                         "shares one row: a smaller file, more drawn, still conservative (1: off)")
+        ->check(CLI::Range(1, 16))
+        ->capture_default_str();
     add_common(*exporter, common, "Options");
 
     CLI::App* query = app.add_subcommand("query", "the cell holding a point and the objects its PVS lists");

@@ -190,22 +190,6 @@ std::string assemble(const std::string& path, Bake& b, const RuntimeFileOptions&
             sections.push_back(array_section(PVSR_TAG('M', 'B', 'I', 'T'), 64, tiles.bricks));
         }
     }
-    // STRS: what the bake is.
-    {
-        Section s{PVSR_TAG('S', 'T', 'R', 'S'), 1, 0, {}};
-        const std::pair<const char*, const std::string*> pairs[] = {{"tool_version", &b.info.tool_version},
-                                                                    {"world_path", &b.info.world_path},
-                                                                    {"world_hash", &b.info.world_hash},
-                                                                    {"mode", &b.info.mode}};
-        for (const auto& [key, value] : pairs) {
-            s.bytes += key;
-            s.bytes.push_back('\0');
-            s.bytes += *value;
-            s.bytes.push_back('\0');
-        }
-        s.count = s.bytes.size();
-        sections.push_back(std::move(s));
-    }
     // GRID, NODE, and CGRD (a grid cell's box is its grid box: 4 bytes, not 24) or CBOX.
     sections.push_back(array_section(PVSR_TAG('G', 'R', 'I', 'D'), 4, b.cells.grid_to_cell));
     if (b.cells.kind == 1) {
@@ -252,6 +236,59 @@ std::string assemble(const std::string& path, Bake& b, const RuntimeFileOptions&
             cell_grid.clear();
             sections.push_back(array_section(PVSR_TAG('C', 'B', 'O', 'X'), 24, b.cells.bounds));
         }
+    }
+    // --merge-cells K: each cell takes the union of the rows of its block of K x K x K grid cells, so that the
+    // cells of a block share one row (conservative by construction: a row only grows).
+    const uint32_t merge = std::max<uint32_t>(1, options.merge_cells);
+    const std::string merge_text = std::to_string(merge);
+    if (merge > 1) {
+        if (cell_grid.empty())
+            throw bad_input(fmt::format("{}: --merge-cells needs a grid bake whose cells are its grid boxes", path));
+        const int32_t* d = b.cells.dims;
+        const uint32_t bytes = b.pvs.row_bytes;
+        std::unordered_map<uint64_t, uint32_t> block_of;  // block key -> merged row
+        std::vector<uint8_t> merged;
+        std::vector<uint32_t> cell_block(cells);
+        for (uint32_t c = 0; c < cells; ++c) {
+            const uint32_t g = cell_grid[c];
+            const uint64_t key = uint64_t(g % uint32_t(d[0]) / merge) +
+                                 (uint64_t(g / uint32_t(d[0]) % uint32_t(d[1]) / merge) << 21) +
+                                 (uint64_t(g / (uint32_t(d[0]) * uint32_t(d[1])) / merge) << 42);
+            auto [it, fresh] = block_of.emplace(key, uint32_t(block_of.size()));
+            if (fresh) merged.resize(merged.size() + bytes, 0);
+            const uint8_t* row = &b.pvs.rows[size_t(b.pvs.cell_row[c]) * bytes];
+            uint8_t* into = &merged[size_t(it->second) * bytes];
+            for (uint32_t j = 0; j < bytes; ++j) into[j] |= row[j];
+            cell_block[c] = it->second;
+        }
+        // Each distinct merged row once, in order of the first cell that uses it.
+        std::unordered_map<std::string, uint32_t> row_of;
+        std::vector<uint8_t> rows;
+        for (uint32_t c = 0; c < cells; ++c) {
+            const std::string row(reinterpret_cast<const char*>(&merged[size_t(cell_block[c]) * bytes]), bytes);
+            auto [it, fresh] = row_of.emplace(row, uint32_t(row_of.size()));
+            if (fresh) rows.insert(rows.end(), row.begin(), row.end());
+            b.pvs.cell_row[c] = it->second;
+        }
+        b.pvs.rows = std::move(rows);
+        b.pvs.unique_rows = row_of.size();
+    }
+    // STRS: what the bake is.
+    {
+        Section s{PVSR_TAG('S', 'T', 'R', 'S'), 1, 0, {}};
+        const std::pair<const char*, const std::string*> pairs[] = {{"tool_version", &b.info.tool_version},
+                                                                    {"world_path", &b.info.world_path},
+                                                                    {"world_hash", &b.info.world_hash},
+                                                                    {"mode", &b.info.mode},
+                                                                    {"cell_merge", &merge_text}};
+        for (const auto& [key, value] : pairs) {
+            s.bytes += key;
+            s.bytes.push_back('\0');
+            s.bytes += *value;
+            s.bytes.push_back('\0');
+        }
+        s.count = s.bytes.size();
+        sections.push_back(std::move(s));
     }
     // CROW, ROFF, CODE (and the padding the decoders read into): the rows coded again, each against the
     // cheapest of its cell's earlier neighbours along -x, -y and -z (a grid) and the rows before it, in chains

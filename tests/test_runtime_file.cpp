@@ -5,14 +5,18 @@
 // the checksum made right again) are refused or stay in range; the runtime's XXH64 equals libxxhash's.
 // Links the loader, io and core only, so that scripts/test.sh runs it under the sanitizers too
 // (test_runtime_export has the tests that bake or run the pvsbake command).
+#include "core/error.h"
 #include "tests/runtime_file_checks.h"
 
 #include <pvsbake/occlusion.h>
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
+#include <map>
 #include <random>
+#include <set>
 #include <string>
 
 namespace pvs {
@@ -37,6 +41,59 @@ TEST(RuntimeFile, ObjectCountsAroundTheEdges) {
     for (const uint32_t objects : {0u, 1u, 63u, 64u, 65u, 16400u}) {
         SCOPED_TRACE(std::to_string(objects) + " objects");
         round_trip(test::coherent_bake(objects, {3, 2, 3}, objects % 2 == 1, true, 5), 12);
+    }
+}
+
+// --merge-cells K: every cell lists the union of its K x K x K block's rows (so never less than its own row:
+// conservative), the cells of a block share it, and the file says so; an octree bake is refused.
+TEST(RuntimeFile, MergedCellsListTheUnionOfTheirBlock) {
+    test::TempDir dir;
+    const std::string h5 = dir.file("m.h5");
+    write_bake_file(h5, test::coherent_bake(90, {7, 3, 6}, false, true, 9));
+    pvsbake::Bake bake;
+    ASSERT_TRUE(bake.load(h5));
+    for (const uint32_t k : {2u, 3u}) {
+        RuntimeFileOptions options;
+        options.merge_cells = k;
+        const Bytes bytes(runtime_file_bytes(h5, options));
+        pvsr::Level level;
+        ASSERT_EQ(level.open(bytes.data(), bytes.size), PVSR_OK);
+        EXPECT_EQ(level.string("cell_merge"), std::to_string(k));
+        // The union of each block's rows, from the HDF5 loader.
+        std::map<int, std::set<uint32_t>> block_union;
+        // The grid's origin is cell 0's min corner (the fixture keeps grid position 0), cells of 1.5 m.
+        const pvsbake::Box first = bake.cell_bounds(0);
+        const auto block_of = [&](uint32_t c) {
+            const pvsbake::Box box = bake.cell_bounds(c);
+            int key = 0;
+            for (int a = 2; a >= 0; --a) {
+                const int index = int(std::lround((box.min[a] - first.min[a]) / 1.5f));
+                key = key * 64 + index / int(k);
+            }
+            return key;
+        };
+        for (uint32_t c = 0; c < bake.cell_count(); ++c)
+            bake.for_each_visible(c, [&](uint32_t o) { block_union[block_of(c)].insert(o); });
+        uint64_t grew = 0;
+        for (uint32_t c = 0; c < bake.cell_count(); ++c) {
+            std::set<uint32_t> got;
+            level.for_each_visible(c, [&](uint32_t o) { got.insert(o); });
+            bake.for_each_visible(c, [&](uint32_t o) { EXPECT_TRUE(got.count(o)) << "cell " << c << " lost " << o; });
+            EXPECT_EQ(got, block_union[block_of(c)]) << "cell " << c;
+            grew += got.size() - bake.visible_count(c);
+        }
+        EXPECT_GT(grew, 0u) << "a merge lists more";
+    }
+    // Not a grid: refused, naming the option.
+    const std::string octree = dir.file("o.h5");
+    write_bake_file(octree, test::coherent_bake(20, {3, 2, 3}, true, false, 9));
+    RuntimeFileOptions options;
+    options.merge_cells = 2;
+    try {
+        runtime_file_bytes(octree, options);
+        ADD_FAILURE() << "an octree merged";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("--merge-cells"), std::string::npos) << e.what();
     }
 }
 
