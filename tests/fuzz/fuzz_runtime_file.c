@@ -1,6 +1,7 @@
 /* libFuzzer target of the C99 runtime (runtime/pvsr.h): any bytes, with the checksum made right (so that the
  * mutations reach the structural checks), are refused by pvsr_open() or every query of the level stays inside
- * the bytes and in range. Built with Clang, -fsanitize=fuzzer,address,undefined (tests/CMakeLists.txt); run
+ * the bytes and in range; and the culler of moving objects, given the bytes as floats (an eye, occluder boxes,
+ * boxes to test: any values, NaN and infinities too), stays in its memory. Built with Clang, -fsanitize=fuzzer,address,undefined (tests/CMakeLists.txt); run
  *   fuzz_runtime_file -runs=1000000 CORPUS_DIR SEEDS_DIR
  * with the seeds make_runtime_seeds writes. docs/RESULTS.md has the runs. */
 #include "pvsr.h"
@@ -45,6 +46,25 @@ int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
             memcpy(p, data + i, 12);
             if (pvsr_find_cell(&level, p[0], p[1], p[2]) >= (int32_t)pvsr_cell_count(&level)) abort();
             (void)pvsr_in_eye_space(&level, p[0], p[1], p[2]);
+        }
+    }
+    {
+        /* The culler: eye, up to 12 occluders and up to 16 boxes from the bytes as floats. */
+        static pvsr_culler culler;
+        static float memory[6 * 8 * 8 + 7 * 9];
+        static int ready = 0;
+        const size_t floats = size / 4;
+        float* f = (float*)malloc(sizeof(float) * (floats + 1));
+        if (f != NULL) {
+            size_t boxes, q;
+            if (!ready) ready = pvsr_culler_init(&culler, 8, memory, sizeof memory);
+            memcpy(f, data, 4 * floats);
+            if (floats >= 3) {
+                boxes = (floats - 3) / 6;
+                pvsr_culler_begin_frame(&culler, f, f + 3, boxes < 12 ? boxes : 12);
+                for (q = 0; q < 16 && 3 + 6 * (q + 1) <= floats; ++q) (void)pvsr_culler_classify(&culler, f + 3 + 6 * q);
+            }
+            free(f);
         }
     }
     free(bytes);
