@@ -29,7 +29,7 @@ PACKAGES=(
 # Only the tests use these: the runtime (runtime/pvsr.h) built and run on other machines, and fuzzed.
 TEST_PACKAGES=(
   clang libclang-rt-14-dev  # Clang: the runtime built as C99 and C++17 by a second compiler; libFuzzer
-  gcc-multilib              # the runtime for 32-bit x86 (gcc -m32)
+  gcc-multilib g++-multilib # the runtime for 32-bit x86 (gcc -m32), as C and as C++
   gcc-mingw-w64-x86-64 wine wine64  # the runtime for Windows, its test run under Wine
   emscripten nodejs         # the runtime for WebAssembly, its test run under Node
 )
