@@ -10,7 +10,9 @@
 // of R); and one frame's work in each: find_cell of a random point in a random cell plus walking that cell's
 // PVS (median over batches of Q queries; the same points for all): the runtime through its C++ wrapper
 // (runtime/pvsr.hpp, the visit inlined), through the C callback, and the HDF5 loader; and the mean share of
-// the world's triangles the runtime file's cells list (what --merge-cells costs). Prints one JSON object.
+// the world's triangles the runtime file's cells list (what --merge-cells costs); and how many answers differ
+// from the HDF5 loader's (every cell's objects, box and ranked occluder boxes, and the cell and eye space of
+// the query points: 0 expected). Prints one JSON object.
 #include "bench/bench_util.h"
 #include "io/runtime_file.h"
 #include "runtime/pvsr.h"
@@ -173,6 +175,33 @@ nlohmann::ordered_json measure(const std::string& bake_path, int repeats, int qu
         share += double(tris) / double(std::max<uint64_t>(1, wrapped.total_triangles()));
     }
     j["listed_triangle_share_mean"] = wrapped.cell_count() ? share / double(wrapped.cell_count()) : 0.0;
+    // Every answer the same as the HDF5 loader's (a merged file lists more by design: not compared): every
+    // cell's objects, box and ranked occluder boxes, and the cell and eye space of the Q points above.
+    uint64_t mismatches = 0;
+    if (merge_cells == 1) {
+        std::vector<uint32_t> got, want;
+        for (uint32_t c = 0; c < bake.cell_count(); ++c) {
+            got.clear();
+            want.clear();
+            wrapped.for_each_visible(c, [&](uint32_t o) { got.push_back(o); });
+            bake.for_each_visible(c, [&](uint32_t o) { want.push_back(o); });
+            mismatches += got != want;
+            float box[6];
+            wrapped.cell_bounds(c, box);
+            const pvsbake::Box w = bake.cell_bounds(c);
+            mismatches += std::memcmp(box, w.min, 12) != 0 || std::memcmp(box + 3, w.max, 12) != 0;
+            std::vector<float> boxes(6 * size_t(bake.occluder_count(c)) + 6);
+            std::vector<pvsbake::Box> want_boxes(bake.occluder_count(c) + 1);
+            const uint32_t n = wrapped.occluder_boxes(c, boxes.data(), bake.occluder_count(c));
+            const uint32_t m = bake.occluder_boxes(c, want_boxes.data(), bake.occluder_count(c));
+            mismatches += n != m || (n > 0 && std::memcmp(boxes.data(), want_boxes.data(), size_t(n) * 24) != 0);
+        }
+        for (const Point& p : points) {
+            mismatches += wrapped.find_cell(p.p[0], p.p[1], p.p[2]) != bake.find_cell(p.p[0], p.p[1], p.p[2]);
+            mismatches += wrapped.in_eye_space(p.p[0], p.p[1], p.p[2]) != bake.in_eye_space(p.p[0], p.p[1], p.p[2]);
+        }
+        j["answers_differing_from_hdf5_loader"] = mismatches;
+    }
     j["checksum_of_walks"] = sink % 1000;  // keeps the walks from being optimized away
     std::filesystem::remove(path);
     return j;

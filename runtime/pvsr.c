@@ -11,31 +11,19 @@
 
 /* ---- Little pieces */
 
-static uint16_t rd16(const uint8_t* p) {
-    uint16_t v;
-    memcpy(&v, p, 2);
-    return v;
-}
-static uint32_t rd32(const uint8_t* p) {
-    uint32_t v;
-    memcpy(&v, p, 4);
-    return v;
-}
-static uint64_t rd64(const uint8_t* p) {
-    uint64_t v;
-    memcpy(&v, p, 8);
-    return v;
-}
-static float rdf(const uint8_t* p) {
-    float v;
-    memcpy(&v, p, 4);
-    return v;
-}
-static int32_t rdi32(const uint8_t* p) {
-    int32_t v;
-    memcpy(&v, p, 4);
-    return v;
-}
+/* Little-endian values at any address (the host is little-endian: checked at open). */
+#define PVSR_READER(name, type)              \
+    static type name(const uint8_t* p) {     \
+        type v;                              \
+        memcpy(&v, p, sizeof v);             \
+        return v;                            \
+    }
+PVSR_READER(rd16, uint16_t)
+PVSR_READER(rd32, uint32_t)
+PVSR_READER(rd64, uint64_t)
+PVSR_READER(rdf, float)
+PVSR_READER(rdi32, int32_t)
+#undef PVSR_READER
 
 /* Trailing zero bits of a non-zero word. */
 static unsigned ctz64(uint64_t w) {

@@ -3,6 +3,7 @@
 // write it (the same bytes), or fail with exit 2 and no file.
 #include "driver/bake.h"
 #include "driver/cli.h"
+#include "io/bake_file.h"
 #include "io/gltf_writer.h"
 #include "samples/random_world.h"
 #include "tests/runtime_file_checks.h"
@@ -48,6 +49,20 @@ TEST(RuntimeExport, ARealBakeAnswersAsTheHdf5Loader) {
         const BakeData bake = bake_world(ctx, config, random.world, "random.glb", "");
         ASSERT_GT(bake.cells.size(), 0u);
         round_trip(bake, 13);
+    }
+}
+
+// The bundled sample world, a grid and an octree (quick sampled bakes): every query the same.
+TEST(RuntimeExport, TheSampleWorldAnswersAsTheHdf5Loader) {
+    test::TempDir dir;
+    for (const std::string cells : {"grid", "octree"}) {
+        SCOPED_TRACE(cells);
+        const std::string h5 = dir.file(cells + ".h5");
+        ASSERT_EQ(run_pvsbake({"bake", test::sample_world(), "-o", h5, "--cells", cells, "--mode", "sampled",
+                               "--no-verify", "-q", "--eyes", "4", "--rays", "256"}),
+                  0);
+        BakeData bake = read_bake_file(h5);
+        round_trip(bake, 17);
     }
 }
 
