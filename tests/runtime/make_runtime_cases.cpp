@@ -88,6 +88,18 @@ void write_case(std::FILE* out, const std::filesystem::path& dir, const std::str
     // The culler of moving objects: from a random eye in a cell, with the cell's ranked occluders (and, for
     // more fusion, the next cells' too) at 32 pixels a face, the path of random boxes around it.
     pvsbake::OcclusionCuller culler(32);
+    // A "cull" line (the frame: eye and occluders, as the culler begins it) and a "box" line (a box, its path).
+    const auto begin_cull = [&](const float eye[3], const std::vector<pvsbake::Box>& boxes) {
+        culler.begin_frame(eye, boxes);
+        std::fprintf(out, "cull %x %x %x %zu", bits(eye[0]), bits(eye[1]), bits(eye[2]), boxes.size());
+        for (const pvsbake::Box& o : boxes)
+            for (int a = 0; a < 6; ++a) std::fprintf(out, " %x", bits(a < 3 ? o.min[a] : o.max[a - 3]));
+        std::fprintf(out, "\n");
+    };
+    const auto cull_box = [&](const pvsbake::Box& box) {
+        std::fprintf(out, "box %x %x %x %x %x %x %d\n", bits(box.min[0]), bits(box.min[1]), bits(box.min[2]),
+                     bits(box.max[0]), bits(box.max[1]), bits(box.max[2]), int(culler.classify(box)));
+    };
     for (uint32_t c = 0; c < b.cell_count() && c < 40; ++c) {
         std::vector<pvsbake::Box> boxes;
         for (uint32_t k = c; k < b.cell_count() && k < c + 4; ++k)
@@ -96,19 +108,14 @@ void write_case(std::FILE* out, const std::filesystem::path& dir, const std::str
         const pvsbake::Box cell = b.cell_bounds(c);
         float eye[3];
         for (int a = 0; a < 3; ++a) eye[a] = cell.min[a] + (cell.max[a] - cell.min[a]) * std::uniform_real_distribution<float>(0.0f, 1.0f)(rng);
-        culler.begin_frame(eye, boxes);
-        std::fprintf(out, "cull %x %x %x %zu", bits(eye[0]), bits(eye[1]), bits(eye[2]), boxes.size());
-        for (const pvsbake::Box& o : boxes)
-            for (int a = 0; a < 6; ++a) std::fprintf(out, " %x", bits(a < 3 ? o.min[a] : o.max[a - 3]));
-        std::fprintf(out, "\n");
+        begin_cull(eye, boxes);
         for (int q = 0; q < 30; ++q) {
             pvsbake::Box box;
             for (int a = 0; a < 3; ++a) {
                 box.min[a] = lo[a] + u(rng) * (hi[a] - lo[a]);
                 box.max[a] = box.min[a] + 0.1f + 2.0f * std::uniform_real_distribution<float>(0.0f, 1.0f)(rng);
             }
-            std::fprintf(out, "box %x %x %x %x %x %x %d\n", bits(box.min[0]), bits(box.min[1]), bits(box.min[2]),
-                         bits(box.max[0]), bits(box.max[1]), bits(box.max[2]), int(culler.classify(box)));
+            cull_box(box);
         }
     }
     // Random scenes of walls and blocks around the eye, where the depth cube fuses occluders.
@@ -126,19 +133,14 @@ void write_case(std::FILE* out, const std::filesystem::path& dir, const std::str
             boxes.push_back(o);
         }
         const float eye[3] = {w(rng) * 0.2f, w(rng) * 0.2f, w(rng) * 0.2f};
-        culler.begin_frame(eye, boxes);
-        std::fprintf(out, "cull %x %x %x %zu", bits(eye[0]), bits(eye[1]), bits(eye[2]), boxes.size());
-        for (const pvsbake::Box& o : boxes)
-            for (int a = 0; a < 6; ++a) std::fprintf(out, " %x", bits(a < 3 ? o.min[a] : o.max[a - 3]));
-        std::fprintf(out, "\n");
+        begin_cull(eye, boxes);
         for (int q = 0; q < 100; ++q) {
             pvsbake::Box box;
             for (int a = 0; a < 3; ++a) {
                 box.min[a] = w(rng);
                 box.max[a] = box.min[a] + size(rng) * 0.5f;
             }
-            std::fprintf(out, "box %x %x %x %x %x %x %d\n", bits(box.min[0]), bits(box.min[1]), bits(box.min[2]),
-                         bits(box.max[0]), bits(box.max[1]), bits(box.max[2]), int(culler.classify(box)));
+            cull_box(box);
         }
     }
     std::fprintf(out, "end\n");
