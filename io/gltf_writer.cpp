@@ -117,52 +117,6 @@ SceneNode make_box_node(const std::string& name, const Aabb& box, int material) 
     return node;
 }
 
-SceneDesc scene_of(const World& world) {
-    SceneDesc scene;
-    // Material 2 * see_through + double_sided.
-    for (const bool see_through : {false, true})
-        for (const bool double_sided : {false, true})
-            scene.materials.push_back(SceneMaterial{
-                fmt::format("{}{}", see_through ? "see_through" : "opaque", double_sided ? "_double_sided" : ""),
-                see_through ? glm::vec4(0.5f, 0.7f, 0.9f, 0.4f) : glm::vec4(0.7f, 0.7f, 0.7f, 1.0f),
-                see_through ? SceneMaterial::Alpha::kBlend : SceneMaterial::Alpha::kOpaque, double_sided});
-    for (const WorldObject& object : world.objects) {
-        SceneNode node;
-        node.name = object.name;
-        node.occluder = !(object.flags & kObjectNeverOccludes);
-        node.always_visible = (object.flags & kObjectAlwaysVisible) != 0;
-        int material = -1;
-        for (uint32_t t = object.first_triangle; t < object.first_triangle + object.triangle_count; ++t) {
-            // A triangle of a never-occluding object is not opaque in the world; its material is.
-            const bool see_through = !world.triangle_opaque[t] && !(object.flags & kObjectNeverOccludes);
-            const int m = 2 * int(see_through) + int(world.triangle_double_sided[t] != 0);
-            if (material >= 0 && m != material)
-                throw bad_input(fmt::format("scene_of: object '{}' mixes materials, which one node cannot say",
-                                            object.name));
-            material = m;
-            for (const uint32_t v : world.triangles[t].v) {
-                node.indices.push_back(uint32_t(node.positions.size()));
-                node.positions.push_back(world.positions[v]);
-            }
-        }
-        node.material = std::max(material, 0);
-        scene.nodes.push_back(std::move(node));
-    }
-    for (size_t k = 0; k < world.view_seeds.size(); ++k) {
-        SceneNode seed;
-        seed.name = fmt::format("view_seed_{}", k);
-        seed.translation = world.view_seeds[k];
-        seed.view_seed = true;
-        scene.nodes.push_back(std::move(seed));
-    }
-    for (size_t k = 0; k < world.view_volume_boxes.size(); ++k) {
-        SceneNode box = make_box_node(fmt::format("view_volume_{}", k), world.view_volume_boxes[k]);
-        box.view_volume = true;
-        scene.nodes.push_back(std::move(box));
-    }
-    return scene;
-}
-
 void write_glb(const SceneDesc& scene, const std::string& path) {
     check_scene(scene);
     using nlohmann::json;

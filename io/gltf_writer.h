@@ -7,7 +7,6 @@
 #pragma once
 
 #include "core/math.h"
-#include "core/world.h"
 
 #include <cstdint>
 #include <string>
@@ -43,13 +42,6 @@ struct SceneDesc {
 
 // A closed box (12 triangles, outward facing) as a node.
 SceneNode make_box_node(const std::string& name, const Aabb& box, int material = -1);
-
-// The world as a scene: one node per object, holding its triangles in world space, with one of four
-// materials (opaque or BLEND, single- or double-sided) taken from its triangles; its flags always visible and
-// never occludes as extras; the view seeds as empty nodes and the view volume boxes as box nodes marked so.
-// Loading what write_glb writes of it gives the same objects, triangles and flags. Throws pvs::Error when an
-// object mixes opaque and see-through (or single- and double-sided) triangles, which one material cannot say.
-SceneDesc scene_of(const World& world);
 
 // Writes the scene as .glb. Throws pvs::Error on failure and leaves no file behind.
 void write_glb(const SceneDesc& scene, const std::string& path);

@@ -1,11 +1,12 @@
 // make_random_world: writes one of the property tests' random closed box worlds (samples/random_world.h) to
-// a .glb, so that the command-line tools and benchmarks (bench_truth) can bake and measure it.
+// a .glb (through edited_world, samples/world_edit.h, with no edit), so that the command-line tools and benchmarks (bench_truth) can bake and measure it.
 //
 //   make_random_world OUT.glb [--seed S] [--attempt A]
 //
 // Deterministic: the same seed and attempt give the same bytes.
 #include "io/gltf_writer.h"
 #include "samples/random_world.h"
+#include "samples/world_edit.h"
 
 #include <CLI/CLI.hpp>
 
@@ -25,7 +26,7 @@ int main(int argc, char** argv) {
     CLI11_PARSE(app, argc, argv);
     try {
         const pvs::RandomWorld random = pvs::make_random_world(seed, attempt);
-        pvs::write_glb(pvs::scene_of(random.world), out_path);
+        pvs::write_glb(pvs::edited_world(random.world, {}), out_path);  // the world as it is
         std::fprintf(stderr, "wrote %s: %zu objects, %zu triangles, %zu view seeds\n", out_path.c_str(),
                      random.world.objects.size(), random.world.triangles.size(),
                      random.world.view_seeds.size());

@@ -6,6 +6,7 @@
 #include "io/bake_file.h"
 #include "io/gltf_writer.h"
 #include "samples/random_world.h"
+#include "samples/world_edit.h"
 #include "tests/runtime_file_checks.h"
 
 #include <gtest/gtest.h>
@@ -78,7 +79,7 @@ TEST(RuntimeExport, ExportAndBakeWriteIt) {
     EXPECT_FALSE(std::filesystem::exists(dir.file("x.pvsr")));
     // From bake: the same bytes as exporting its bake file.
     const std::string world = dir.file("random.glb");
-    write_glb(scene_of(make_random_world(4, 0).world), world);
+    write_glb(edited_world(make_random_world(4, 0).world, {}), world);
     const std::string baked = dir.file("r.h5"), level = dir.file("r.pvsr");
     ASSERT_EQ(run_pvsbake({"bake", world, "-o", baked, "--runtime-output", level, "--no-verify", "-q",
                            "--cell-size", "4"}),
