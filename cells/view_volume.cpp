@@ -2,6 +2,7 @@
 // the play height band, grow by one voxel.
 #include "cells/view_volume.h"
 
+#include "cells/world_extent.h"
 #include "core/error.h"
 #include "voxels/flood.h"
 #include "voxels/voxels.h"
@@ -12,10 +13,6 @@
 #include <limits>
 
 namespace pvs {
-
-namespace {
-constexpr double kVoidPadM = 1.0;  // [Units: m] voxels of empty space around the world
-}  // namespace
 
 namespace {
 
@@ -41,6 +38,39 @@ std::string leak_path_obj(const std::vector<glm::vec3>& path) {
     return out;
 }
 
+VoxelGrid view_voxel_grid(const ViewVolumeConfig& config, const World& world, double preferred_m, int pad_voxels) {
+    const glm::vec3 e = world.bounds.size();
+    const auto outliers = [&] {
+        const std::string far = describe_reaches(world, farthest_objects(world, 3));
+        return far.empty() ? std::string("no object reaches far from the rest: the world is just large")
+                           : far;
+    };
+    const bool automatic = !(config.voxel_size_m > 0.0);
+    const double size = automatic ? default_voxel_size(world.bounds, preferred_m, config.max_voxels)
+                                  : config.voxel_size_m;
+    const int pad = pad_voxels > 0 ? pad_voxels : void_pad_voxels(size);
+    const double count = voxel_grid_count(world.bounds, size, pad);
+    if (!automatic && count > double(config.max_voxels)) {
+        throw bad_input(fmt::format(
+            "view volume: --voxel-size {} m over the world's bounds ({:.1f} x {:.1f} x {:.1f} m) makes {:.3g} "
+            "voxels, over --max-voxels {}: {}. Use a larger --voxel-size, or raise --max-voxels ({:.1f} GiB "
+            "of voxels at 2 bytes each)",
+            size, e.x, e.y, e.z, count, config.max_voxels, outliers(), count * 2.0 / double(1 << 30)));
+    }
+    const double cells = config.cell_edge_m > 0.0 ? config.cell_edge_m : std::numeric_limits<double>::infinity();
+    const double limit = std::min(config.max_voxel_size_m, cells);
+    if (automatic && size > preferred_m && size > limit && !config.allow_coarse_voxels) {
+        const double wanted = voxel_grid_count(world.bounds, preferred_m, void_pad_voxels(preferred_m));
+        throw bad_input(fmt::format(
+            "view volume: the world's bounds ({:.1f} x {:.1f} x {:.1f} m) need {:.3g} m voxels to stay within "
+            "--max-voxels {}, coarser than {} {} m: {}. Remove the stray geometry, or raise --max-voxels "
+            "({} m voxels need {:.3g}, {:.1f} GiB), or pass --allow-coarse-voxels to bake anyway",
+            e.x, e.y, e.z, size, config.max_voxels, limit < config.max_voxel_size_m ? "the cells'" : "--max-voxel-size",
+            limit, outliers(), preferred_m, wanted, wanted * 2.0 / double(1 << 30)));
+    }
+    return make_voxel_grid(world.bounds, size, pad);
+}
+
 ViewVolume build_view_volume(Context& ctx, const ViewVolumeConfig& config, const World& world) {
     ScopedTimer timer(ctx, "view_volume");
     ViewVolume vv;
@@ -52,13 +82,26 @@ ViewVolume build_view_volume(Context& ctx, const ViewVolumeConfig& config, const
     if (config.use_world_seeds) seeds.insert(seeds.end(), world.view_seeds.begin(), world.view_seeds.end());
     const bool play = config.play_height_m > 0.0;
     if (boxes.empty() && seeds.empty() && !play) {
-        ctx.warn(
-            "view volume: no view seeds, view boxes or play height: eyes may be anywhere in the world's "
-            "bounds, so the bake is larger and slower than it needs to be (add pvs_view_seed nodes or "
-            "--view-seed)");
+        if (config.need_sources && !config.eyes_anywhere) {
+            throw bad_input(
+                "view volume: a conservative bake needs to know where eyes can be, and there are no view "
+                "seeds, view boxes or play height: add pvs_view_seed nodes in the playable space (or "
+                "--view-seed x,y,z), pvs_view_volume boxes (or --view-box), or --play-height; "
+                "--eyes-anywhere bakes with eyes anywhere in the world's bounds (larger, slower, looser)");
+        }
+        const std::string what =
+            "view volume: no view seeds, view boxes or play height: eyes may be anywhere in the world's bounds";
+        if (config.eyes_anywhere) {
+            ctx.info(what + " (--eyes-anywhere)");
+        } else {
+            ctx.warn(what + ", so the bake is larger and slower than it needs to be (add pvs_view_seed nodes or "
+                            "--view-seed)");
+        }
         vv.sources = {"world_bounds"};
         vv.view_bounds = world.bounds;
         vv.eye_volume_m3 = vv.view_volume_m3 = vv.world_bounds_m3;
+        // The voxels occluder synthesis makes of the world, at the default size, within the same caps.
+        vv.grid = view_voxel_grid(config, world, kDefaultVoxelSizeM, 2);
         return vv;
     }
     for (const Aabb& b : boxes) {
@@ -68,13 +111,10 @@ ViewVolume build_view_volume(Context& ctx, const ViewVolumeConfig& config, const
         }
     }
     vv.voxelized = true;
-    const double size = config.voxel_size_m > 0.0
-                            ? config.voxel_size_m
-                            : default_voxel_size(world.bounds, config.auto_voxel_size_m, config.max_voxels);
-    // Pad by a metre (at least 2 voxels): around a sealed level the padding is solid the flood never
-    // reaches, thick enough to stay an occluder after shrinking, so thin floors and walls of the shell
-    // still occlude with the void behind them.
-    const VoxelGrid grid = make_voxel_grid(world.bounds, size, std::max(2, int(std::ceil(kVoidPadM / size))));
+    // Pad by a metre (at least 2 voxels, void_pad_voxels()): around a sealed level the padding is solid the
+    // flood never reaches, thick enough to stay an occluder after shrinking, so thin floors and walls of the
+    // shell still occlude with the void behind them.
+    const VoxelGrid grid = view_voxel_grid(config, world, config.auto_voxel_size_m, 0);
     ctx.info(fmt::format("view volume: {} m voxels, {} x {} x {} = {:.1f} M voxels", grid.voxel_size_m,
                          grid.dims.x, grid.dims.y, grid.dims.z, double(grid.count()) * 1e-6));
     BitVolume touched, upward;

@@ -10,7 +10,8 @@
 //     band, steps off ledges and falls, and never walks sideways through a see-through surface. So eyes
 //     never get over a wall, out through the sky or through a window into the inside of walls or the
 //     void around a level: places a body cannot reach, where eyes would see the backs of everything.
-// None given: the world bounds, with a warning (the bake is larger and slower than it needs to be).
+// None given: the world bounds, with a warning (the bake is larger and slower than it needs to be); the
+// conservative mode refuses that unless asked (--eyes-anywhere).
 //
 // Conventions: voxels as in voxels/voxels.h. Two masks come out:
 //   eyes  - the free voxels left after the intersection: eye points are drawn here (never in a voxel an
@@ -37,7 +38,8 @@ struct ViewVolume {
     std::vector<std::string> sources;  // "boxes", "flood", "play_height", or "world_bounds"
     VoxelMask eyes;
     VoxelMask view;
-    VoxelGrid grid;     // the voxels of the masks (when voxelized)
+    VoxelGrid grid;     // the voxels of the masks (when voxelized); without a source, the grid occluder
+                        // synthesis voxelizes the world on
     BitVolume touched;  // voxels an opaque triangle touches (for occluder synthesis)
     Aabb view_bounds;   // bounds of `view` (or the world bounds)
     double eye_volume_m3 = 0.0;
@@ -52,7 +54,17 @@ struct ViewVolume {
     uint32_t seeds_dropped = 0;
 };
 
+// Throws pvs::Error (bad input) when there is no source and config.need_sources without eyes_anywhere, and
+// when the voxels break their caps (view_voxel_grid()).
 ViewVolume build_view_volume(Context& ctx, const ViewVolumeConfig& config, const World& world);
+
+// The voxel grid of the world's bounds a view volume uses: config.voxel_size_m, or automatic
+// (`preferred_m`, coarser to stay within config.max_voxels: default_voxel_size()), padded by `pad_voxels`
+// (0 = void_pad_voxels()). Refuses (pvs::Error, bad input) an explicit size over max_voxels, and an
+// automatic size coarser than max_voxel_size_m or cell_edge_m unless allow_coarse_voxels; the message
+// names the objects that reach farthest from the rest (cells/world_extent.h) and the options that would
+// bake anyway (docs/ALGORITHMS.md#world-extent).
+VoxelGrid view_voxel_grid(const ViewVolumeConfig& config, const World& world, double preferred_m, int pad_voxels);
 
 // The leak path as a Wavefront OBJ polyline ("v x y z" lines and one "l 1 2 ..."), which VTK, Blender and
 // most viewers load over the world.

@@ -59,7 +59,15 @@ double largest_cell_edge_m(const CellConfig& config);
 struct ViewVolumeConfig {
     double voxel_size_m = 0.0;          // [Limit: >= 0] [Units: m] 0 = automatic (kDefaultVoxelSizeM, coarser
                                         // when the grid would pass max_voxels)
-    uint64_t max_voxels = 200'000'000;  // [Limit: >= 1000] voxels the automatic size may use (2 bytes each)
+    uint64_t max_voxels = 200'000'000;  // [Limit: >= 1000] voxels a bake may use (2 bytes each): the automatic
+                                        // size grows to stay within it; an explicit size over it is refused
+    double max_voxel_size_m = 0.25;     // [Limit: > 0] [Units: m] the automatic size grows at most to this
+                                        // edge (and never past the cells'); a world that needs coarser voxels
+                                        // is refused, naming its farthest-reaching objects
+                                        // (cells/world_extent.h)
+    bool allow_coarse_voxels = false;   // bake anyway when the automatic size passes max_voxel_size_m
+    bool eyes_anywhere = false;         // with no seeds, boxes or play height: eyes anywhere in the world's
+                                        // bounds (the conservative mode refuses such a bake otherwise)
     double play_height_m = 0.0;         // [Limit: >= 0] [Units: m] keep only space up to this height above
                                         // upward-facing opaque surfaces; 0 = off
     bool use_world_seeds = true;        // flood from the world's pvs_view_seed nodes
@@ -68,6 +76,11 @@ struct ViewVolumeConfig {
     std::vector<glm::vec3> seeds;       // --view-seed, metres
     double auto_voxel_size_m = 0.25;  // [Units: m] what "automatic" aims at; not an option: the bake sets it
                                       // to conservative_voxel_size_m(epsilon) in conservative mode
+    // Not options: the bake sets them (driver/bake.cpp view_volume_config).
+    double cell_edge_m = 0.0;         // [Units: m] the partition's smallest cell edge: automatic voxels are
+                                      // never coarser (0 = no such limit)
+    bool need_sources = false;        // refuse a view volume with no source unless eyes_anywhere (the
+                                      // conservative mode: its promise is about where eyes can be)
 };
 constexpr double kDefaultVoxelSizeM = 0.25;
 
@@ -274,8 +287,23 @@ void visit_options(Config& c, Visitor&& v) {
                  0, 100},
       c.view.voxel_size_m);
     v(OptionSpec{OptionGroup::kViewVolume, "--max-voxels", "view.max_voxels", "voxels",
-                 "voxels the automatic voxel size may use", 1000, 1e10},
+                 "voxels a bake may use: the automatic voxel size grows to stay within it, an explicit "
+                 "--voxel-size over it is refused",
+                 1000, 1e10},
       c.view.max_voxels);
+    v(OptionSpec{OptionGroup::kViewVolume, "--max-voxel-size", "view.max_voxel_size_m", "m",
+                 "the automatic voxel size grows to fit --max-voxels at most to this edge (and never past the "
+                 "cells' edge): a world that needs coarser voxels is refused, naming the objects that reach "
+                 "farthest from the rest (a stray vertex?)",
+                 1e-4, 100},
+      c.view.max_voxel_size_m);
+    v(OptionSpec{OptionGroup::kViewVolume, "--allow-coarse-voxels", "view.allow_coarse_voxels", "",
+                 "bake anyway when the world needs voxels coarser than --max-voxel-size or the cells"},
+      c.view.allow_coarse_voxels);
+    v(OptionSpec{OptionGroup::kViewVolume, "--eyes-anywhere", "view.eyes_anywhere", "",
+                 "with no view seeds, view boxes or play height, eyes may be anywhere in the world's bounds "
+                 "(a conservative bake is refused without a view volume otherwise)"},
+      c.view.eyes_anywhere);
     v(OptionSpec{OptionGroup::kViewVolume, "--play-height", "view.play_height_m", "m",
                  "eyes only up to this height above upward-facing floors, 0 = anywhere", 0, 1e4},
       c.view.play_height_m);

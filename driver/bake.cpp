@@ -41,8 +41,12 @@ std::vector<ObjectRecord> object_records(const World& world) {
 
 ViewVolumeConfig view_volume_config(const BakeConfig& config) {
     ViewVolumeConfig view = config.view;
-    if (config.mode == BakeMode::kConservative)
+    if (config.mode == BakeMode::kConservative) {
         view.auto_voxel_size_m = conservative_voxel_size_m(config.conservative.epsilon_m);
+        view.need_sources = true;
+    }
+    view.cell_edge_m =
+        config.cells.kind == CellKind::kGrid ? config.cells.cell_size_m : config.cells.min_cell_size_m;
     return view;
 }
 

@@ -8,6 +8,7 @@
 #include "io/gltf_loader.h"
 
 #include "core/error.h"
+#include "io/gltf_references.h"
 
 #include <fmt/format.h>
 #include <tiny_gltf.h>
@@ -173,7 +174,25 @@ bool looks_like_json(const std::string& bytes) {
     return i < bytes.size() && bytes[i] == '{';
 }
 
-tinygltf::Model parse_gltf(Context& ctx, const std::string& path, const std::string& bytes) {
+bool no_file_exists(const std::string&, void*) {
+    return false;
+}
+
+std::string path_as_is(const std::string& path, void*) {
+    return path;
+}
+
+bool no_file_read(std::vector<unsigned char>*, std::string* err, const std::string& path, void*) {
+    if (err) *err += fmt::format("external file '{}' is not read: the world was given as bytes", path);
+    return false;
+}
+
+bool no_file_write(std::string* err, const std::string&, const std::vector<unsigned char>&, void*) {
+    if (err) *err += "writing files is not allowed";
+    return false;
+}
+
+tinygltf::Model parse_gltf(Context& ctx, const std::string& path, const std::string& bytes, bool files) {
     if (bytes.size() > std::numeric_limits<uint32_t>::max()) {
         throw bad_input(fmt::format("{}: file too large for glTF (4 GiB or more)", path));
     }
@@ -188,8 +207,18 @@ tinygltf::Model parse_gltf(Context& ctx, const std::string& path, const std::str
     std::string base_dir = std::filesystem::path(path).parent_path().string();
     if (base_dir.empty()) base_dir = ".";
 
+    // The numbers tinygltf reads as "absent" when they do not fit its ints (io/gltf_references.h).
+    if (binary) {
+        const size_t json_end = kGlbHeaderBytes + kGlbChunkHeaderBytes + read_u32(bytes, 12);
+        const int64_t bin = json_end < length ? int64_t(read_u32(bytes, json_end)) : -1;
+        check_gltf_references(path, bytes.substr(kGlbHeaderBytes + kGlbChunkHeaderBytes, read_u32(bytes, 12)), bin);
+    } else {
+        check_gltf_references(path, bytes.substr(0, length), -1);
+    }
+
     tinygltf::TinyGLTF gltf;
     gltf.SetImageLoader(&skip_image, nullptr);
+    if (!files) gltf.SetFsCallbacks({&no_file_exists, &path_as_is, &no_file_read, &no_file_write, nullptr});
     tinygltf::Model model;
     std::string err;
     std::string warn;
@@ -389,10 +418,18 @@ private:
     // Reads an accessor as count * components numbers, sparse values applied. Fully bounds-checked.
     std::vector<double> read_accessor(int index, const std::string& what, int* components);
     const std::vector<glm::dvec3>& positions_of(int accessor_index, const std::string& what);
+    // Every position finite and within the accessor's declared min/max (when declared).
+    void check_declared_bounds(int accessor_index, const std::string& what,
+                               const std::vector<glm::dvec3>& positions) const;
     std::vector<uint32_t> indices_of(int accessor_index, const std::string& what);
     // Checks that count elements of elem_bytes at stride fit in view bytes from offset.
     void check_range(const std::string& what, uint64_t offset, uint64_t count, uint64_t elem_bytes,
                      uint64_t stride, uint64_t view_bytes) const;
+    // Index and vertex data never share bytes: a bufferView used as both (the glTF-Validator's
+    // BUFFER_VIEW_TARGET_OVERRIDE), or index and vertex views that overlap in a buffer, is bad input.
+    enum ViewRole : uint8_t { kVertexData = 1, kIndexData = 2 };
+    void note_view_role(int accessor_index, ViewRole role);
+    void check_view_overlaps() const;
     // Returns the bytes of a bufferView after checking it lies inside its buffer.
     std::pair<const unsigned char*, size_t> view_bytes(int view, const std::string& what) const;
     void check_extensions();
@@ -411,6 +448,8 @@ private:
     std::vector<uint8_t> node_state_;  // 0 unvisited, 1 on the current path, 2 done
     std::unordered_map<int, std::vector<glm::dvec3>> position_cache_;
     std::vector<uint32_t> remap_;  // scratch: accessor vertex -> primitive vertex, kUnmapped when unused
+    std::vector<uint8_t> view_roles_;  // per bufferView: ViewRole bits
+    std::vector<int> view_role_accessor_;  // per bufferView: an accessor that gave it a role
 
     uint64_t skipped_non_triangle_ = 0;
     uint64_t skipped_no_position_ = 0;
@@ -420,6 +459,8 @@ private:
     uint64_t non_bool_extras_ = 0;
     std::string non_bool_example_;
     uint64_t empty_objects_ = 0;
+    uint64_t ragged_lists_ = 0;  // triangle lists whose count is not a multiple of 3
+    std::string ragged_example_;
 };
 
 std::string Loader::node_name(int n) const {
@@ -585,12 +626,18 @@ std::vector<double> Loader::read_accessor(int index, const std::string& what_in,
                     vsize);
         const unsigned char* ip = ibytes + a.sparse.indices.byteOffset;
         const unsigned char* vp = vbytes + a.sparse.values.byteOffset;
+        double previous = -1.0;
         for (int s = 0; s < scount; ++s, ip += istride, vp += elem_bytes) {
             const double target = read_component(ip, itype, false);
             if (target >= double(count)) {
                 fail(fmt::format("{}: sparse index {} = {} out of range (count {})", what, s,
                                  uint64_t(target), count));
             }
+            if (target <= previous) {
+                fail(fmt::format("{}: sparse index {} = {} does not increase (the one before is {})", what, s,
+                                 uint64_t(target), uint64_t(previous)));
+            }
+            previous = target;
             for (int c = 0; c < ncomp; ++c) {
                 values[size_t(target) * size_t(ncomp) + size_t(c)] =
                     read_component(vp + c * csize, a.componentType, a.normalized);
@@ -619,7 +666,91 @@ const std::vector<glm::dvec3>& Loader::positions_of(int accessor_index, const st
     for (size_t i = 0; i < positions.size(); ++i) {
         positions[i] = glm::dvec3(values[3 * i], values[3 * i + 1], values[3 * i + 2]);
     }
+    check_declared_bounds(accessor_index, what, positions);
     return position_cache_.emplace(accessor_index, std::move(positions)).first->second;
+}
+
+void Loader::check_declared_bounds(int accessor_index, const std::string& what,
+                                   const std::vector<glm::dvec3>& positions) const {
+    const tinygltf::Accessor& a = model_.accessors[size_t(accessor_index)];
+    const auto vertex = [&](size_t i) {
+        const glm::dvec3 p = positions[i];
+        return fmt::format("vertex {} = ({:g}, {:g}, {:g})", i, p.x, p.y, p.z);
+    };
+    for (size_t i = 0; i < positions.size(); ++i) {
+        if (!std::isfinite(positions[i].x) || !std::isfinite(positions[i].y) || !std::isfinite(positions[i].z))
+            fail(fmt::format("{} (accessor {}): {} is not finite", what, accessor_index, vertex(i)));
+    }
+    // Normalized integers declare their bounds in stored units (glTF 2.0, 3.6.2.5); only float and plain
+    // integer data are compared. The declared numbers pass through float: allow that rounding.
+    if (a.minValues.size() != 3 || a.maxValues.size() != 3 || a.normalized) return;
+    const glm::dvec3 lo(a.minValues[0], a.minValues[1], a.minValues[2]);
+    const glm::dvec3 hi(a.maxValues[0], a.maxValues[1], a.maxValues[2]);
+    const double slack =
+        1e-5 * std::max({1.0, std::fabs(lo.x), std::fabs(lo.y), std::fabs(lo.z), std::fabs(hi.x), std::fabs(hi.y),
+                         std::fabs(hi.z)});
+    for (size_t i = 0; i < positions.size(); ++i) {
+        const glm::dvec3 p = positions[i];
+        for (int c = 0; c < 3; ++c) {
+            if (p[c] >= lo[c] - slack && p[c] <= hi[c] + slack) continue;
+            fail(fmt::format("{} (accessor {}): {} lies outside the accessor's declared bounds min ({:g}, {:g}, "
+                             "{:g}) max ({:g}, {:g}, {:g}): the file's vertex data or its bounds are wrong",
+                             what, accessor_index, vertex(i), lo.x, lo.y, lo.z, hi.x, hi.y, hi.z));
+        }
+    }
+}
+
+void Loader::note_view_role(int accessor_index, ViewRole role) {
+    if (accessor_index < 0 || size_t(accessor_index) >= model_.accessors.size()) return;
+    const int view = model_.accessors[size_t(accessor_index)].bufferView;
+    if (view < 0 || size_t(view) >= model_.bufferViews.size()) return;
+    if (view_roles_.empty()) {
+        view_roles_.assign(model_.bufferViews.size(), 0);
+        view_role_accessor_.assign(model_.bufferViews.size(), -1);
+    }
+    uint8_t& roles = view_roles_[size_t(view)];
+    if ((roles | role) == (kVertexData | kIndexData)) {
+        const int other = view_role_accessor_[size_t(view)];
+        fail(fmt::format("bufferView {} holds both vertex data and indices (accessors {} and {})", view,
+                         role == kIndexData ? other : accessor_index, role == kIndexData ? accessor_index : other));
+    }
+    roles |= role;
+    view_role_accessor_[size_t(view)] = accessor_index;
+}
+
+void Loader::check_view_overlaps() const {
+    struct Span {
+        int buffer;
+        size_t begin, end;
+        uint8_t role;
+        int view;
+    };
+    std::vector<Span> spans;
+    for (size_t v = 0; v < view_roles_.size(); ++v) {
+        if (!view_roles_[v]) continue;
+        const tinygltf::BufferView& bv = model_.bufferViews[v];
+        spans.push_back({bv.buffer, bv.byteOffset, bv.byteOffset + bv.byteLength, view_roles_[v], int(v)});
+    }
+    std::sort(spans.begin(), spans.end(), [](const Span& a, const Span& b) {
+        return a.buffer != b.buffer ? a.buffer < b.buffer : a.begin < b.begin;
+    });
+    // A sweep per buffer: the view of each role reaching farthest so far; one that starts before the other
+    // role's reach overlaps it.
+    const Span* reach[2] = {nullptr, nullptr};
+    for (size_t i = 0; i < spans.size(); ++i) {
+        const Span& s = spans[i];
+        if (i > 0 && spans[i - 1].buffer != s.buffer) reach[0] = reach[1] = nullptr;
+        const int mine = s.role == kVertexData ? 0 : 1;
+        const Span* other = reach[1 - mine];
+        if (other && s.begin < other->end) {
+            const Span& vertex = mine == 0 ? s : *other;
+            const Span& index = mine == 0 ? *other : s;
+            fail(fmt::format("bufferView {} (vertex data, bytes {} to {}) and bufferView {} (indices, bytes {} to "
+                             "{}) overlap in buffer {}",
+                             vertex.view, vertex.begin, vertex.end, index.view, index.begin, index.end, s.buffer));
+        }
+        if (!reach[mine] || s.end > reach[mine]->end) reach[mine] = &s;
+    }
 }
 
 std::vector<uint32_t> Loader::indices_of(int accessor_index, const std::string& what) {
@@ -669,6 +800,8 @@ void Loader::decode_primitive(int n, int mesh_index, int prim_index, const glm::
     if (!prim.targets.empty()) ++morphed_primitives_;
 
     const auto pos_it = prim.attributes.find("POSITION");
+    note_view_role(pos_it->second, kVertexData);
+    if (prim.indices >= 0) note_view_role(prim.indices, kIndexData);
     const std::vector<glm::dvec3>& local = positions_of(pos_it->second, where + " POSITION");
     const size_t vertex_count = local.size();
     if (vertex_count >= kUnmapped) fail(fmt::format("{}: too many vertices ({})", where, vertex_count));
@@ -678,8 +811,8 @@ void Loader::decode_primitive(int n, int mesh_index, int prim_index, const glm::
         indices = indices_of(prim.indices, where + " indices");
         for (size_t i = 0; i < indices.size(); ++i) {
             if (indices[i] >= vertex_count) {
-                fail(fmt::format("{}: index {} = {} out of range ({} vertices)", where, i, indices[i],
-                                 vertex_count));
+                fail(fmt::format("{} indices (accessor {}): index {} = {} out of range ({} vertices)", where,
+                                 prim.indices, i, indices[i], vertex_count));
             }
         }
     } else if (prim.indices < -1) {
@@ -693,6 +826,10 @@ void Loader::decode_primitive(int n, int mesh_index, int prim_index, const glm::
     std::vector<Triangle> local_tris;
     const size_t count = indices.size();
     if (prim.mode == TINYGLTF_MODE_TRIANGLES) {
+        // The glTF-Validator's MESH_PRIMITIVE_INCOMPATIBLE_MODE is a warning: the rest are drawn, as GPUs do.
+        if (count % 3 != 0 && ragged_lists_++ == 0) {
+            ragged_example_ = fmt::format("{}: {} {}", where, count, prim.indices >= 0 ? "indices" : "vertices");
+        }
         local_tris.reserve(count / 3);
         for (size_t i = 0; i + 2 < count; i += 3) {
             local_tris.push_back({{indices[i], indices[i + 1], indices[i + 2]}});
@@ -920,6 +1057,11 @@ void Loader::report() {
         ctx_.warn(fmt::format("{}: {} pvs_* extras are not booleans and were ignored (first: {})", path_,
                               non_bool_extras_, non_bool_example_));
     }
+    if (ragged_lists_ > 0) {
+        ctx_.warn(fmt::format("{}: {} triangle list(s) whose count is not a multiple of 3 (first: {}); the last "
+                              "one or two vertices of each are ignored",
+                              path_, ragged_lists_, ragged_example_));
+    }
     if (world_.stats.degenerate_triangles_dropped > 0) {
         ctx_.info(fmt::format("{}: dropped {} degenerate triangle(s) (repeated vertices or zero area)", path_,
                               world_.stats.degenerate_triangles_dropped));
@@ -997,19 +1139,20 @@ void Loader::run() {
     }
 
     if (world_.triangles.empty()) fail("no triangles in the default scene");
+    check_view_overlaps();
     make_names_unique();
     report();
 }
 
 }  // namespace
 
-World load_world(Context& ctx, const std::string& path) {
-    ScopedTimer timer(ctx, "load_world");
-    const std::string bytes = read_input_file(path);
+namespace {
+
+World load_world_bytes(Context& ctx, const std::string& path, const std::string& bytes, bool files) {
     World world;
     world.source_path = path;
     try {
-        const tinygltf::Model model = parse_gltf(ctx, path, bytes);
+        const tinygltf::Model model = parse_gltf(ctx, path, bytes, files);
         Loader(ctx, path, model, world).run();
     } catch (const Error&) {
         throw;
@@ -1019,11 +1162,24 @@ World load_world(Context& ctx, const std::string& path) {
         throw internal_error(
             fmt::format("{}: unexpected failure while loading: {}", path, one_line(e.what())));
     }
+    return world;
+}
+
+}  // namespace
+
+World load_world(Context& ctx, const std::string& path) {
+    ScopedTimer timer(ctx, "load_world");
+    World world = load_world_bytes(ctx, path, read_input_file(path), true);
     ctx.info(
         fmt::format("{}: {} objects, {} triangles, {} vertices, {} view seeds, {} view volumes ({:.3f} s)",
                     path, world.objects.size(), world.triangles.size(), world.positions.size(),
                     world.view_seeds.size(), world.view_volume_boxes.size(), timer.seconds()));
     return world;
+}
+
+World load_world_from_memory(Context& ctx, const std::string& name, const std::string& bytes) {
+    ScopedTimer timer(ctx, "load_world");
+    return load_world_bytes(ctx, name, bytes, false);
 }
 
 }  // namespace pvs

@@ -15,7 +15,10 @@
 // - Degenerate triangles (zero area or repeated indices) are dropped and counted in World::stats.
 // Bad input throws pvs::Error (kBadInput) with a one-line message naming the file and what is wrong:
 // missing or unreadable file, not glTF, truncated or corrupt binary, missing external buffer,
-// out-of-range indices or accessors, NaN or infinite positions, a scene with no triangles.
+// out-of-range indices or accessors, NaN or infinite positions, POSITION data outside its accessor's
+// declared min/max (beyond float rounding), ids, counts and offsets that break the schema
+// (io/gltf_references.h), index and vertex data sharing bytes, a scene with no triangles. A triangle list
+// whose count is not a multiple of 3 is drawn without its last one or two vertices, with a warning.
 #pragma once
 
 #include "core/context.h"
@@ -26,5 +29,9 @@
 namespace pvs {
 
 World load_world(Context& ctx, const std::string& path);
+
+// The same from a file's bytes (a .glb, or a .gltf whose buffers are data: URIs): `name` stands for the path
+// in messages; external files are never read (a URI naming one is bad input).
+World load_world_from_memory(Context& ctx, const std::string& name, const std::string& bytes);
 
 }  // namespace pvs

@@ -394,13 +394,11 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
     WorkShare alone;
     WorkShare& deal = share ? *share : alone;
     const auto start = std::chrono::steady_clock::now();
-    // The voxels: the view volume's, or the world's at the default size when there is no view volume.
-    VoxelGrid grid = view.grid;
+    // The voxels: the view volume's; without a view volume, its grid of the world (build_view_volume).
+    const VoxelGrid& grid = view.grid;
     BitVolume touched_local;
     const BitVolume* touched = &view.touched;
     if (!view.voxelized) {
-        grid = make_voxel_grid(world.bounds,
-                               default_voxel_size(world.bounds, kDefaultVoxelSizeM, 200'000'000), 2);
         voxelize_opaque(ctx, world, grid, touched_local);
         touched = &touched_local;
     }

@@ -52,6 +52,19 @@ if [ ${#missing[@]} -gt 0 ]; then
   apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 fi
 
+# The Khronos glTF-Validator (npm's gltf-validator), which tests/gltf/lies.py sets beside the loader's own
+# checks: npm from Debian where the machine has none.
+GLTF_VALIDATOR_DIR=/opt/pvsbake-npm
+if [ "${PVSBAKE_TEST_TOOLS:-0}" = 1 ] && [ ! -f "$GLTF_VALIDATOR_DIR/node_modules/gltf-validator/package.json" ]; then
+  if ! command -v npm >/dev/null; then
+    export DEBIAN_FRONTEND=noninteractive
+    apt-get update -qq
+    apt-get install -y -qq --no-install-recommends npm >/dev/null
+  fi
+  echo "setup: installing gltf-validator into $GLTF_VALIDATOR_DIR"
+  npm install --prefix "$GLTF_VALIDATOR_DIR" --no-audit --no-fund --loglevel=error gltf-validator@2.0.0-dev.3.10 >/dev/null
+fi
+
 BUILD_DIR=${BUILD_DIR:-build}
 BUILD_TYPE=${BUILD_TYPE:-Release}
 PVSBAKE_MPI=${PVSBAKE_MPI:-ON}

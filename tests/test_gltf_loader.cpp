@@ -596,16 +596,16 @@ TEST(GltfLoaderBadInput, BrokenNodeGraph) {
     expect_bad_input(b.write_gltf(dir, "cycle"), "cycle");
     GltfBuilder c = one_triangle();
     c.json["nodes"][0]["children"] = {7};
-    expect_bad_input(c.write_gltf(dir, "child"), "child 7 out of range");
+    expect_bad_input(c.write_gltf(dir, "child"), "nodes[0].children[0] is 7, not an index of nodes");
     GltfBuilder d = one_triangle();
     d.json["nodes"][0]["mesh"] = 5;
-    expect_bad_input(d.write_gltf(dir, "mesh"), "mesh 5 out of range");
+    expect_bad_input(d.write_gltf(dir, "mesh"), "nodes[0].mesh is 5, not an index of meshes");
     GltfBuilder e = one_triangle();
     e.json["scenes"][0]["nodes"] = {0, 0};
     expect_bad_input(e.write_gltf(dir, "twice"), "reached twice");
     GltfBuilder f = one_triangle();
     f.json["meshes"][0]["primitives"][0]["material"] = 2;
-    expect_bad_input(f.write_gltf(dir, "material"), "material 2 out of range");
+    expect_bad_input(f.write_gltf(dir, "material"), "meshes[0].primitives[0].material is 2, not an index of materials");
     GltfBuilder g = one_triangle({{"matrix", {1, 0, 0}}});
     expect_bad_input(g.write_gltf(dir, "matrix"), "matrix");
 }

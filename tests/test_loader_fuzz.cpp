@@ -219,6 +219,7 @@ GltfBuilder varied_world() {
         {"count", 2},
         {"indices", {{"bufferView", iv}, {"componentType", test::kGlUnsignedShort}}},
         {"values", {{"bufferView", vv}}}};
+    b.json["accessors"][size_t(strip_pos)]["max"] = {2, 2, 3};  // the sparse values reach x = 2
     const int zeros = b.add_accessor(-1, test::kGlFloat, 3, "VEC3");
     b.json["accessors"][size_t(zeros)]["sparse"] = {
         {"count", 2},

@@ -36,11 +36,29 @@ VoxelGrid make_voxel_grid(const Aabb& bounds, double voxel_size_m, int pad_voxel
     return g;
 }
 
+double voxel_grid_count(const Aabb& bounds, double voxel_size_m, int pad_voxels) {
+    double total = 1.0;
+    for (int a = 0; a < 3; ++a)
+        total *= std::max(1.0, std::ceil(double(bounds.max[a] - bounds.min[a]) / voxel_size_m) + 2.0 * pad_voxels);
+    return total;
+}
+
+int void_pad_voxels(double voxel_size_m) {
+    return std::max(2, int(std::min(1e6, std::ceil(kVoidPadM / voxel_size_m))));
+}
+
 double default_voxel_size(const Aabb& bounds, double preferred_m, uint64_t max_voxels) {
+    const auto fits = [&](double size) {
+        return voxel_grid_count(bounds, size, void_pad_voxels(size)) <= double(max_voxels);
+    };
+    if (fits(preferred_m)) return preferred_m;
+    // The volume's estimate is a lower bound (padding and rounding only add voxels); then grow by 1% until
+    // the padded grid fits. The count falls as the size grows, so this ends: within a few hundred steps
+    // once the size passes the bounds' longest edge divided by the cap.
     const glm::dvec3 e = glm::dvec3(bounds.size()) + 4.0 * preferred_m;
-    const double voxels = e.x * e.y * e.z / (preferred_m * preferred_m * preferred_m);
-    if (voxels <= double(max_voxels)) return preferred_m;
-    return preferred_m * std::cbrt(voxels / double(max_voxels)) * 1.01;
+    double size = std::max(preferred_m, std::cbrt(e.x * e.y * e.z / double(max_voxels)));
+    while (!fits(size) && size < 1e12) size *= 1.01;
+    return size;
 }
 
 namespace {

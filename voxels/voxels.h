@@ -77,7 +77,16 @@ struct BitVolume {
 // naming --voxel-size when it would exceed kMaxVoxels.
 VoxelGrid make_voxel_grid(const Aabb& bounds, double voxel_size_m, int pad_voxels);
 
-// The default voxel size for a world: `preferred_m`, or coarser when the grid would pass `max_voxels`.
+// The voxels make_voxel_grid(bounds, voxel_size_m, pad_voxels) would make (saturating: never overflows).
+double voxel_grid_count(const Aabb& bounds, double voxel_size_m, int pad_voxels);
+
+// The padding of a world's voxel grid: kVoidPadM of empty space around the world, at least 2 voxels.
+constexpr double kVoidPadM = 1.0;  // [Units: m]
+int void_pad_voxels(double voxel_size_m);
+
+// The default voxel size for a world: `preferred_m`, or the least coarser size (within 1%) whose grid,
+// padded by void_pad_voxels(), holds at most `max_voxels`. Any shape: a world a thousand kilometres long
+// and a few metres wide gets voxels whose padded grid is within the cap.
 double default_voxel_size(const Aabb& bounds, double preferred_m, uint64_t max_voxels);
 
 // Does the triangle overlap the closed box (center, half size)? Exact separating-axis test (13 axes).

@@ -1,0 +1,35 @@
+// pvsbake cells: how far each object reaches from the rest of the world, to name the stray geometry that
+// makes a world's bounds huge (a vertex thrown a thousand kilometres away by a bad export or flipped bytes)
+// when those bounds would make the voxels too coarse or too many (docs/ALGORITHMS.md#world-extent).
+//
+// Conventions: glTF axes (right-handed, +Y up), metres, world space. "The rest" of an object is the bounds
+// of every other object's triangles, with the view seeds and view boxes of the world: where the level is.
+// An object's reach is the greatest distance from one of its vertices to the rest (0 inside it).
+#pragma once
+
+#include "core/world.h"
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace pvs {
+
+struct ObjectReach {
+    uint32_t object = 0;
+    double distance_m = 0.0;  // from its farthest vertex to the bounds of the rest
+    glm::vec3 vertex{0.0f};   // that vertex
+};
+
+// The `count` objects that reach farthest from the rest, farthest first; only those reaching out of it
+// (distance > 0) by at least a tenth of the farthest reach. With a single object and no view seeds or boxes there is no rest: none.
+std::vector<ObjectReach> farthest_objects(const World& world, size_t count);
+
+// "object 'crate' has a vertex 1048.6 km from the rest of the world (at 1048576.0, 0.5, 1.0)", one clause
+// per reach, joined by "; " ("" when there are none).
+std::string describe_reaches(const World& world, const std::vector<ObjectReach>& reaches);
+
+// A distance for people: "0.42 m", "312 m", "1048.6 km".
+std::string format_distance(double metres);
+
+}  // namespace pvs
