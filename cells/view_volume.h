@@ -55,16 +55,9 @@ struct ViewVolume {
 };
 
 // Throws pvs::Error (bad input) when there is no source and config.need_sources without eyes_anywhere, and
-// when the voxels break their caps (view_voxel_grid()).
+// when the voxels break their caps (view_voxel_grid(), cells/world_extent.h).
 ViewVolume build_view_volume(Context& ctx, const ViewVolumeConfig& config, const World& world);
 
-// The voxel grid of the world's bounds a view volume uses: config.voxel_size_m, or automatic
-// (`preferred_m`, coarser to stay within config.max_voxels: default_voxel_size()), padded by `pad_voxels`
-// (0 = void_pad_voxels()). Refuses (pvs::Error, bad input) an explicit size over max_voxels, and an
-// automatic size coarser than max_voxel_size_m or cell_edge_m unless allow_coarse_voxels; the message
-// names the objects that reach farthest from the rest (cells/world_extent.h) and the options that would
-// bake anyway (docs/ALGORITHMS.md#world-extent).
-VoxelGrid view_voxel_grid(const ViewVolumeConfig& config, const World& world, double preferred_m, int pad_voxels);
 
 // The leak path as a Wavefront OBJ polyline ("v x y z" lines and one "l 1 2 ..."), which VTK, Blender and
 // most viewers load over the world.

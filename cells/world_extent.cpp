@@ -1,10 +1,13 @@
-// How far each object reaches from the rest of the world (cells/world_extent.h).
+// The voxels a world's extent gets, and how far each object reaches from the rest (cells/world_extent.h).
 #include "cells/world_extent.h"
+
+#include "core/error.h"
 
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace pvs {
 
@@ -75,6 +78,39 @@ std::string describe_reaches(const World& world, const std::vector<ObjectReach>&
                            r.vertex.z);
     }
     return out;
+}
+
+VoxelGrid view_voxel_grid(const ViewVolumeConfig& config, const World& world, double preferred_m, int pad_voxels) {
+    const glm::vec3 e = world.bounds.size();
+    const auto outliers = [&] {
+        const std::string far = describe_reaches(world, farthest_objects(world, 3));
+        return far.empty() ? std::string("no object reaches far from the rest: the world is just large")
+                           : far;
+    };
+    const bool automatic = !(config.voxel_size_m > 0.0);
+    const uint64_t cap = std::min(config.max_voxels, kMaxVoxels);  // make_voxel_grid()'s own limit
+    const double size = automatic ? default_voxel_size(world.bounds, preferred_m, cap) : config.voxel_size_m;
+    const int pad = pad_voxels > 0 ? pad_voxels : void_pad_voxels(size);
+    const double count = voxel_grid_count(world.bounds, size, pad);
+    if (!automatic && count > double(cap)) {
+        throw bad_input(fmt::format(
+            "view volume: --voxel-size {} m over the world's bounds ({:.1f} x {:.1f} x {:.1f} m) makes {:.3g} "
+            "voxels, over --max-voxels {}: {}. Use a larger --voxel-size, or raise --max-voxels ({:.1f} GiB "
+            "of voxels at 2 bytes each)",
+            size, e.x, e.y, e.z, count, cap, outliers(), count * 2.0 / double(1 << 30)));
+    }
+    const double cells = config.cell_edge_m > 0.0 ? config.cell_edge_m : std::numeric_limits<double>::infinity();
+    const double limit = std::min(config.max_voxel_size_m, cells);
+    if (automatic && size > preferred_m && size > limit && !config.allow_coarse_voxels) {
+        const double wanted = voxel_grid_count(world.bounds, preferred_m, void_pad_voxels(preferred_m));
+        throw bad_input(fmt::format(
+            "view volume: the world's bounds ({:.1f} x {:.1f} x {:.1f} m) need {:.3g} m voxels to stay within "
+            "--max-voxels {}, coarser than {} {} m: {}. Remove the stray geometry, or raise --max-voxels "
+            "({} m voxels need {:.3g}, {:.1f} GiB), or pass --allow-coarse-voxels to bake anyway",
+            e.x, e.y, e.z, size, cap, limit < config.max_voxel_size_m ? "the cells'" : "--max-voxel-size",
+            limit, outliers(), preferred_m, wanted, wanted * 2.0 / double(1 << 30)));
+    }
+    return make_voxel_grid(world.bounds, size, pad);
 }
 
 }  // namespace pvs

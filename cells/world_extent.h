@@ -1,13 +1,16 @@
-// pvsbake cells: how far each object reaches from the rest of the world, to name the stray geometry that
-// makes a world's bounds huge (a vertex thrown a thousand kilometres away by a bad export or flipped bytes)
-// when those bounds would make the voxels too coarse or too many (docs/ALGORITHMS.md#world-extent).
+// pvsbake cells: the voxels a world's extent gets, within their caps, and how far each object reaches from
+// the rest of the world, to name the stray geometry that makes a world's bounds huge (a vertex thrown a
+// thousand kilometres away by a bad export or flipped bytes) when those bounds would make the voxels too
+// coarse or too many (docs/ALGORITHMS.md#world-extent).
 //
 // Conventions: glTF axes (right-handed, +Y up), metres, world space. "The rest" of an object is the bounds
 // of every other object's triangles, with the view seeds and view boxes of the world: where the level is.
 // An object's reach is the greatest distance from one of its vertices to the rest (0 inside it).
 #pragma once
 
+#include "core/config.h"
 #include "core/world.h"
+#include "voxels/voxels.h"
 
 #include <cstdint>
 #include <string>
@@ -31,5 +34,13 @@ std::string describe_reaches(const World& world, const std::vector<ObjectReach>&
 
 // A distance for people: "0.42 m", "312 m", "1048.6 km".
 std::string format_distance(double metres);
+
+// The voxel grid of the world's bounds a view volume uses: config.voxel_size_m, or automatic
+// (`preferred_m`, coarser to stay within config.max_voxels: default_voxel_size()), padded by `pad_voxels`
+// (0 = void_pad_voxels()). Refuses (pvs::Error, bad input) an explicit size over max_voxels, and an
+// automatic size coarser than max_voxel_size_m or cell_edge_m unless allow_coarse_voxels; the message
+// names the objects that reach farthest from the rest (cells/world_extent.h) and the options that would
+// bake anyway (docs/ALGORITHMS.md#world-extent).
+VoxelGrid view_voxel_grid(const ViewVolumeConfig& config, const World& world, double preferred_m, int pad_voxels);
 
 }  // namespace pvs

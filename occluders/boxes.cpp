@@ -620,4 +620,38 @@ Aabb box_bounds(const VoxelGrid& grid, const VoxelBox& box) {
     return Aabb::of(grid.voxel_box(box.lo).min, grid.voxel_box(box.hi).max);
 }
 
+TrimFigures trim_off_rejected(std::vector<VoxelBox>& boxes, std::vector<uint8_t>& rejected, uint64_t min_voxels) {
+    TrimFigures figures;
+    const auto overlap = [](const VoxelBox& a, const VoxelBox& b) {
+        return glm::all(glm::lessThanEqual(glm::max(a.lo, b.lo), glm::min(a.hi, b.hi)));
+    };
+    const std::vector<uint8_t> was_rejected = rejected;
+    for (size_t k = 0; k < boxes.size(); ++k) {
+        if (was_rejected[k]) continue;
+        VoxelBox& box = boxes[k];
+        bool cut = false;
+        for (size_t r = 0; r < boxes.size() && box.volume() > 0; ++r) {
+            if (!was_rejected[r] || !overlap(box, boxes[r])) continue;
+            VoxelBox best{{0, 0, 0}, {-1, -1, -1}};
+            for (int axis = 0; axis < 3; ++axis) {
+                VoxelBox below = box, above = box;
+                below.hi[axis] = boxes[r].lo[axis] - 1;
+                above.lo[axis] = boxes[r].hi[axis] + 1;
+                for (const VoxelBox& slab : {below, above})
+                    if (slab.volume() > best.volume()) best = slab;
+            }
+            box = best;
+            cut = true;
+        }
+        if (!cut) continue;
+        ++figures.trimmed;
+        if (box.volume() < std::max<uint64_t>(min_voxels, 1)) {
+            rejected[k] = 1;
+            ++figures.trimmed_away;
+        }
+    }
+    return figures;
+}
+
+
 }  // namespace pvs

@@ -82,4 +82,14 @@ std::vector<VoxelBox> grow_boxes_reference(const VoxelGrid& grid, const BitVolum
 // The box in metres: from voxel_box(lo).min to voxel_box(hi).max.
 Aabb box_bounds(const VoxelGrid& grid, const VoxelBox& box);
 
+// Cuts every kept box (rejected[k] == 0) off each rejected box it overlaps, so that the kept boxes lie in
+// the solid less the rejected boxes (the proven solid: docs/ALGORITHMS.md#proven-boxes): per overlap, the
+// largest of the six slabs of the kept box outside the rejected one. A kept box left with fewer than
+// `min_voxels` is marked rejected. Boxes only shrink; the rejected ones are not changed.
+struct TrimFigures {
+    uint32_t trimmed = 0;       // kept boxes that were cut
+    uint32_t trimmed_away = 0;  // of them, those left too small and rejected
+};
+TrimFigures trim_off_rejected(std::vector<VoxelBox>& boxes, std::vector<uint8_t>& rejected, uint64_t min_voxels);
+
 }  // namespace pvs

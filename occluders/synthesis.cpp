@@ -430,7 +430,7 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
 
     const BoxConfig bc = box_config(config);
     BoxStats stats;
-    const std::vector<VoxelBox> boxes = grow_boxes(ctx, grid, solid.solid, bc, &stats);
+    std::vector<VoxelBox> boxes = grow_boxes(ctx, grid, solid.solid, bc, &stats);
     figures.grown = stats.grown;
     figures.kept = uint32_t(boxes.size());
     const double voxel_m3 = double(grid.voxel_size_m) * grid.voxel_size_m * grid.voxel_size_m;
@@ -439,15 +439,21 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
     // The ray check: every box against sight lines from eyes spread over the eye space.
     const std::vector<glm::vec3> eyes =
         check_eyes(view.eyes, grid, *touched, config.check_eyes, config.check_seed);
-    const std::vector<uint8_t> rejected =
+    std::vector<uint8_t> rejected =
         check_boxes(ctx, config, bounds_of(grid, boxes), eyes, config.check_rays_per_eye, 0, scene,
                     figures.check_rays, deal, &view.eyes);
+    for (uint8_t r : rejected) figures.rejected_by_rays += r;
+    // The proven solid: the carved solid less every rejected box (its voxels as the ray check left them,
+    // before the kept boxes are trimmed off them).
+    BitVolume proven = solid.solid;
+    mark_boxes(grid, boxes, rejected, 1, false, proven);
+    const TrimFigures trim = trim_off_rejected(boxes, rejected, uint64_t(std::ceil(bc.min_box_volume_m3 / voxel_m3)));
+    figures.trimmed = trim.trimmed;
+    figures.trimmed_away = trim.trimmed_away;
 
     if (shrunk != nullptr) {
-        // The proven solid: the carved solid less every rejected box, then eroded per epsilon.
+        // The proven solid eroded per epsilon.
         ScopedTimer t(ctx, "shrink");
-        BitVolume proven = solid.solid;  // less every rejected box
-        mark_boxes(grid, boxes, rejected, 1, false, proven);
         *shrunk = ShrunkOccluders{};
         for (int level = 0; level <= levels; ++level)
             shrunk->epsilon_m.push_back(epsilon_m * std::ldexp(1.0, level));
@@ -477,7 +483,6 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
         o.box = box_bounds(grid, boxes[b]);
         o.voxel_size_m = grid.voxel_size_m;
         o.proven = !rejected[b];
-        figures.rejected_by_rays += rejected[b];
         Aabb grown = o.box;
         grown.min -= grid.voxel_size_m;
         grown.max += grid.voxel_size_m;
@@ -511,11 +516,13 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
     figures.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     ctx.info(fmt::format(
         "occluders: {} boxes cover {:.0f} of {:.0f} m3 of solid ({:.1f}%), {:.1f}% of the {:.0f} m3 "
-        "within {} m of the view region; the ray check ({:.1f} M rays) rejected {}; {:.2f} s",
+        "within {} m of the view region; the ray check ({:.1f} M rays) rejected {}, and {} kept boxes "
+        "were cut off them ({} too small then); {:.2f} s",
         figures.kept, figures.covered_m3, figures.solid_m3,
         figures.solid_m3 > 0 ? 100.0 * figures.covered_m3 / figures.solid_m3 : 0.0,
         figures.near_m3 > 0 ? 100.0 * figures.near_covered_m3 / figures.near_m3 : 0.0, figures.near_m3,
-        kNearViewM, double(figures.check_rays) * 1e-6, figures.rejected_by_rays, figures.seconds));
+        kNearViewM, double(figures.check_rays) * 1e-6, figures.rejected_by_rays, figures.trimmed,
+        figures.trimmed_away, figures.seconds));
     return out;
 }
 

@@ -36,6 +36,8 @@ struct OccluderFigures {
     uint32_t grown = 0;
     uint32_t kept = 0;
     uint32_t rejected_by_rays = 0;  // boxes a sight line reached
+    uint32_t trimmed = 0;           // kept boxes cut off the rejected boxes they overlapped
+    uint32_t trimmed_away = 0;      // kept boxes that overlapped rejected ones too much to keep a proven part
     uint64_t probe_rays = 0;
     uint64_t probe_rays_into_solid = 0;  // probe rays that passed a solid voxel (through a crack)
     uint64_t probe_rays_escaped = 0;     // probe rays no opaque triangle stopped

@@ -3,6 +3,7 @@
 #include "core/error.h"
 #include "driver/cli.h"
 #include "io/bake_file.h"
+#include "tests/gltf_fixtures.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
@@ -10,6 +11,7 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <sstream>
 #include <string>
@@ -182,6 +184,9 @@ TEST(Cli, BadInputGetsStatusTwoAClearMessageAndNoOutput) {
          "--verify-neighbour-share"},
         {{"bake", test::sample_world(), "-o", out, "--occluder-seal-reach", "0"}, "--occluder-seal-reach"},
         {{"bake", test::sample_world(), "-o", out, "--occluder-seal-rays", "-3"}, "--occluder-seal-rays"},
+        {{"bake", test::sample_world(), "-o", out, "--no-world-seeds"}, "--eyes-anywhere"},
+        {{"bake", test::sample_world(), "-o", out, "--voxel-size", "0.01"}, "--max-voxels"},
+        {{"bake", test::sample_world(), "-o", out, "--max-voxels", "1000"}, "--allow-coarse-voxels"},
         {{"occluders", dir.file("missing.glb"), "-o", dir.file("boxes.glb")}, "missing.glb"},
         {{"info", dir.file("notgltf.glb")}, "notgltf.glb"},
         {{"info", dir.file("missing.h5")}, "missing.h5"},
@@ -199,6 +204,49 @@ TEST(Cli, BadInputGetsStatusTwoAClearMessageAndNoOutput) {
         EXPECT_FALSE(std::filesystem::exists(out));
     }
     EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.path()), {}), 1);  // notgltf.glb only
+}
+
+// A closed 8 x 3 x 8 m room, a crate and a spawn point, as a .glb; the crate's vertex 7 moved to
+// z = 1000 km, either in its data alone (flipped bytes: the accessor's min/max still say the crate's box) or
+// honestly (min/max say so too).
+std::string stray_vertex_world(const test::TempDir& dir, const std::string& stem, bool lying) {
+    const auto box = [](glm::vec3 lo, glm::vec3 hi) {
+        std::vector<glm::vec3> v;
+        for (int k = 0; k < 8; ++k) v.emplace_back(k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z);
+        return v;
+    };
+    const std::vector<uint32_t> faces = {0, 2, 3, 0, 3, 1, 4, 5, 7, 4, 7, 6, 0, 4, 6, 0, 6, 2,
+                                         1, 3, 7, 1, 7, 5, 0, 1, 5, 0, 5, 4, 2, 6, 7, 2, 7, 3};
+    test::GltfBuilder b;
+    const int room = b.add_mesh({test::GltfBuilder::primitive(b.add_positions(box({-4, 0, -4}, {4, 3, 4})),
+                                                              b.add_indices(faces, test::kGlUnsignedShort))});
+    std::vector<glm::vec3> crate = box({1, 0, 1}, {2, 1, 2});
+    if (!lying) crate[7].z = 1.0e6f;
+    const int crate_positions = b.add_positions(crate);
+    if (lying) {
+        const size_t at = size_t(b.json["bufferViews"][size_t(crate_positions)]["byteOffset"]) + 7 * 12 + 8;
+        const float far = 1.0e6f;
+        std::memcpy(b.bin.data() + at, &far, 4);
+    }
+    const int crate_mesh = b.add_mesh({test::GltfBuilder::primitive(crate_positions, b.add_indices(faces))});
+    b.set_scene({b.add_node("room", room), b.add_node("crate", crate_mesh),
+                 b.add_node("spawn", -1, {{"translation", {-2, 1.5, -2}}, {"extras", {{"pvs_view_seed", true}}}})});
+    return b.write_glb(dir, stem);
+}
+
+// The two stray-vertex files: refused at once (before any voxel), naming what is wrong, with no output.
+TEST(Cli, StrayVertexFilesAreRefusedAtOnce) {
+    test::TempDir dir;
+    const std::string out = dir.file("out.h5");
+    const CliRun lying = run({"bake", stray_vertex_world(dir, "lying", true), "-o", out, "--threads", "1"});
+    EXPECT_EQ(lying.status, kExitBadInput) << lying.log;
+    for (const char* says : {"accessor 2", "vertex 7 = (2, 1, 1e+06)", "declared bounds"})
+        EXPECT_TRUE(contains(lying.log, says)) << says << " in: " << lying.log;
+    const CliRun honest = run({"bake", stray_vertex_world(dir, "honest", false), "-o", out, "--threads", "1"});
+    EXPECT_EQ(honest.status, kExitBadInput) << honest.log;
+    for (const char* says : {"object 'crate' has a vertex 1000.0 km", "--allow-coarse-voxels"})
+        EXPECT_TRUE(contains(honest.log, says)) << says << " in: " << honest.log;
+    EXPECT_FALSE(std::filesystem::exists(out));
 }
 
 // An output that cannot be written is bad input (status 2), found before the world is even loaded: the

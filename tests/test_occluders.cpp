@@ -4,6 +4,7 @@
 #include "cells/view_volume.h"
 #include "core/random.h"
 #include "io/gltf_loader.h"
+#include "occluders/boxes.h"
 #include "occluders/gap_probe.h"
 #include "occluders/panels.h"
 #include "occluders/seal_probe.h"
@@ -490,14 +491,38 @@ std::vector<glm::vec3> bsp_eyes(const std::string& vis_path, const Aabb& bounds,
 // The property on the real levels: no point inside a proven box is visible from any eye point of the
 // view volume (independent eyes and targets, not the ones synthesis used): eyes drawn from the view
 // volume, and eyes the map compiler's BSP calls playable.
+// Every voxel of every proven box is in the proven solid (docs/ALGORITHMS.md#proven-boxes); returns how many
+// proven boxes there are.
+size_t expect_proven_boxes_in_solid(const std::vector<Occluder>& boxes, const VoxelMask& solid) {
+    size_t proven = 0;
+    for (size_t b = 0; b < boxes.size(); ++b) {
+        if (!boxes[b].proven) continue;
+        ++proven;
+        const float v = solid.voxel_size_m;
+        const glm::ivec3 lo = glm::ivec3(glm::round((boxes[b].box.min - solid.origin) / v));
+        const glm::ivec3 hi = glm::ivec3(glm::round((boxes[b].box.max - solid.origin) / v)) - 1;
+        uint64_t outside = 0;
+        for (int z = lo.z; z <= hi.z; ++z)
+            for (int y = lo.y; y <= hi.y; ++y)
+                for (int x = lo.x; x <= hi.x; ++x)
+                    outside += !solid.get(uint64_t(x) + uint64_t(solid.dims.x) *
+                                                            (uint64_t(y) + uint64_t(solid.dims.y) * uint64_t(z)));
+        EXPECT_EQ(outside, 0u) << "proven box " << b << " has voxels outside the proven solid";
+    }
+    return proven;
+}
+
 void expect_boxes_unseen(const std::string& world_path, uint32_t eyes_n, uint32_t targets_per_box) {
     Context ctx = quiet_context();
     const World w = load_world(ctx, world_path);
     const ViewVolume view = build_view_volume(ctx, ViewVolumeConfig{}, w);
     RayScene scene(ctx, w);
     OccluderFigures f;
-    const std::vector<Occluder> boxes = synthesize_occluders(ctx, OccluderConfig{}, w, view, scene, f);
+    ShrunkOccluders shrunk;
+    const std::vector<Occluder> boxes =
+        synthesize_occluders(ctx, OccluderConfig{}, w, view, scene, f, 0.125, 0, &shrunk);
     ASSERT_FALSE(boxes.empty());
+    EXPECT_GT(expect_proven_boxes_in_solid(boxes, shrunk.solid), 0u);
     CellSet masks;
     masks.eyes = view.eyes;
     std::vector<glm::vec3> eyes;
@@ -514,6 +539,48 @@ void expect_boxes_unseen(const std::string& world_path, uint32_t eyes_n, uint32_
     const uint64_t seen = count_seen(scene, boxes, eyes, targets_per_box, rng, rays);
     EXPECT_EQ(seen, 0u) << "of " << rays << " rays into proven boxes";
     EXPECT_GT(rays, 100000u);
+}
+
+// Random overlapping boxes, some rejected: the kept ones only shrink, meet no rejected box, and cover all
+// they covered outside the rejected boxes along at least one axis' slab (a check against voxel sets).
+TEST(ProvenBoxes, KeptBoxesAreCutOffEveryRejectedBoxTheyOverlap) {
+    Rng rng(21, 3);
+    uint32_t trimmed = 0, away = 0;
+    for (int round = 0; round < 200; ++round) {
+        std::vector<VoxelBox> boxes;
+        std::vector<uint8_t> rejected;
+        for (int i = 0; i < 12; ++i) {
+            const glm::ivec3 lo(int(20 * rng.uniform()), int(20 * rng.uniform()), int(20 * rng.uniform()));
+            const glm::ivec3 size(1 + int(10 * rng.uniform()), 1 + int(10 * rng.uniform()), 1 + int(10 * rng.uniform()));
+            boxes.push_back({lo, lo + size - 1});
+            rejected.push_back(rng.uniform() < 0.3 ? 1 : 0);
+        }
+        const std::vector<VoxelBox> before = boxes;
+        const std::vector<uint8_t> was = rejected;
+        const TrimFigures t = trim_off_rejected(boxes, rejected, 4);
+        trimmed += t.trimmed;
+        away += t.trimmed_away;
+        for (size_t k = 0; k < boxes.size(); ++k) {
+            if (was[k]) {
+                EXPECT_EQ(boxes[k], before[k]) << "a rejected box changed";
+                EXPECT_TRUE(rejected[k]);
+                continue;
+            }
+            if (rejected[k]) continue;  // trimmed away: below 4 voxels
+            if (!(boxes[k] == before[k])) EXPECT_GE(boxes[k].volume(), 4u);
+            EXPECT_TRUE(glm::all(glm::greaterThanEqual(boxes[k].lo, before[k].lo)) &&
+                        glm::all(glm::lessThanEqual(boxes[k].hi, before[k].hi)))
+                << "a kept box grew";
+            for (size_t r = 0; r < boxes.size(); ++r) {
+                if (!was[r]) continue;
+                EXPECT_FALSE(glm::all(glm::lessThanEqual(glm::max(boxes[k].lo, boxes[r].lo),
+                                                         glm::min(boxes[k].hi, boxes[r].hi))))
+                    << "kept box " << k << " still meets rejected box " << r;
+            }
+        }
+    }
+    EXPECT_GT(trimmed, 100u);
+    EXPECT_GT(away, 0u);
 }
 
 TEST(OccludersProperty, NoProvenBoxIsSeenInTheRealLevels) {
@@ -586,8 +653,10 @@ TEST(OccludersProperty, RandomClosedMeshesHideNothingTheyShouldNot) {
         OccluderConfig oc;
         oc.min_occluder_volume_m3 = 0.01;
         OccluderFigures f;
-        const std::vector<Occluder> boxes = synthesize_occluders(ctx, oc, w, view, scene, f);
+        ShrunkOccluders shrunk;
+        const std::vector<Occluder> boxes = synthesize_occluders(ctx, oc, w, view, scene, f, 0.125, 0, &shrunk);
         ASSERT_FALSE(boxes.empty());
+        EXPECT_GT(expect_proven_boxes_in_solid(boxes, shrunk.solid), 0u);
         CellSet masks;
         masks.eyes = view.eyes;
         std::vector<glm::vec3> eyes;

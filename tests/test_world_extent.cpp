@@ -1,0 +1,118 @@
+// Worlds whose extent would break the voxel caps: the automatic voxel size fits any shape within
+// --max-voxels; a world that needs voxels coarser than --max-voxel-size or the cells is refused, naming the
+// object that reaches farthest from the rest; an explicit --voxel-size over the cap is refused.
+#include "cells/world_extent.h"
+#include "core/error.h"
+#include "tests/world_builder.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+namespace pvs {
+namespace {
+
+// A closed 8 x 3 x 8 m room, a crate and a spawn point; the crate has one more triangle reaching to
+// `stray` (the crate's own corner when stray is inside the room).
+World room_with_crate(glm::vec3 stray) {
+    World w;
+    test::add_box(w, "room", Aabb::of({-4, 0, -4}, {4, 3, 4}));
+    test::add_box(w, "crate", Aabb::of({1, 0, 1}, {2, 1, 2}));
+    const uint32_t first = uint32_t(w.positions.size());
+    w.positions.insert(w.positions.end(), {{1, 1, 1}, {2, 1, 1}, stray});
+    w.triangles.push_back({{first, first + 1, first + 2}});
+    w.triangle_opaque.push_back(1);
+    w.triangle_double_sided.push_back(0);
+    w.objects.back().triangle_count += 1;
+    w.objects.back().bounds.extend(stray);
+    w.bounds.extend(stray);
+    w.view_seeds.push_back({-2, 1.5f, -2});
+    return w;
+}
+
+TEST(WorldExtent, TheFarthestObjectIsTheOneWithTheStrayVertex) {
+    const World w = room_with_crate({2, 0.5f, 1.0e6f});
+    const std::vector<ObjectReach> far = farthest_objects(w, 3);
+    ASSERT_EQ(far.size(), 1u);  // the room reaches a few metres out of the crate and seed: not a tenth
+    EXPECT_EQ(w.objects[far[0].object].name, "crate");
+    EXPECT_NEAR(far[0].distance_m, 1.0e6 - 4.0, 1.0);
+    EXPECT_EQ(far[0].vertex.z, 1.0e6f);
+    EXPECT_NE(describe_reaches(w, far).find("object 'crate' has a vertex 1000.0 km from the rest"),
+              std::string::npos)
+        << describe_reaches(w, far);
+    // A world of one object without seeds has no rest to measure from.
+    World alone;
+    test::add_box(alone, "only", Aabb::of({0, 0, 0}, {1, 1, 1}));
+    EXPECT_TRUE(farthest_objects(alone, 3).empty());
+}
+
+// Padding (a metre, at least 2 voxels a side) and rounding included, whatever the shape: a needle a
+// thousand kilometres long, a sheet, a cube, a speck.
+TEST(WorldExtent, TheAutomaticVoxelSizeFitsAnyShapeWithinTheCap) {
+    std::mt19937_64 rng(17);
+    std::uniform_real_distribution<double> exponent(-3.0, 6.0);
+    for (int i = 0; i < 2000; ++i) {
+        const glm::vec3 e(std::pow(10.0, exponent(rng)), std::pow(10.0, exponent(rng)), std::pow(10.0, exponent(rng)));
+        const Aabb bounds = Aabb::of(glm::vec3(-0.5f) * e, glm::vec3(0.5f) * e);
+        const uint64_t cap = uint64_t(1000) << (i % 21);  // up to make_voxel_grid()'s 1 G
+        const double preferred = 0.0625;
+        const double size = default_voxel_size(bounds, preferred, cap);
+        SCOPED_TRACE(testing::Message() << e.x << " x " << e.y << " x " << e.z << " m, cap " << cap);
+        ASSERT_GE(size, preferred);
+        EXPECT_LE(voxel_grid_count(bounds, size, void_pad_voxels(size)), double(cap));
+        EXPECT_LE(double(make_voxel_grid(bounds, size, void_pad_voxels(size)).count()), double(cap));
+        // The least such size within 1%: 2% finer would not fit (unless it is the preferred size).
+        if (size > preferred * 1.02) {
+            EXPECT_GT(voxel_grid_count(bounds, size / 1.02, void_pad_voxels(size / 1.02)), double(cap));
+        }
+    }
+}
+
+TEST(WorldExtent, AStrayVertexIsRefusedNamingItsObjectUnlessCoarseVoxelsAreAllowed) {
+    const World w = room_with_crate({2, 0.5f, 1.0e6f});
+    ViewVolumeConfig config;
+    config.cell_edge_m = 2.0;
+    try {
+        (void)view_voxel_grid(config, w, 0.0625, 0);
+        FAIL() << "a world a thousand kilometres long was accepted";
+    } catch (const Error& e) {
+        EXPECT_EQ(e.kind(), ErrorKind::kBadInput);
+        const std::string m = e.what();
+        for (const char* says : {"object 'crate'", "1000.0 km", "--max-voxel-size 0.25", "--allow-coarse-voxels"})
+            EXPECT_NE(m.find(says), std::string::npos) << says << " in: " << m;
+    }
+    config.allow_coarse_voxels = true;
+    const VoxelGrid grid = view_voxel_grid(config, w, 0.0625, 0);
+    EXPECT_LE(grid.count(), config.max_voxels);
+    EXPECT_GT(grid.voxel_size_m, 0.25f);
+    // The same world without the stray vertex keeps its preferred voxels.
+    config.allow_coarse_voxels = false;
+    EXPECT_FLOAT_EQ(view_voxel_grid(config, room_with_crate({2, 1, 2}), 0.0625, 0).voxel_size_m, 0.0625f);
+}
+
+TEST(WorldExtent, VoxelsCoarserThanTheCellsAreRefusedAndAnExplicitSizeMustFitTheCap) {
+    const World w = room_with_crate({2, 1, 2});
+    ViewVolumeConfig config;
+    config.max_voxel_size_m = 100.0;
+    config.cell_edge_m = 0.5;
+    config.max_voxels = 1000;  // the room needs voxels of about 1.4 m
+    try {
+        (void)view_voxel_grid(config, w, 0.0625, 0);
+        FAIL() << "voxels coarser than the cells were accepted";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("the cells'"), std::string::npos) << e.what();
+    }
+    config.max_voxels = 200'000'000;
+    config.voxel_size_m = 0.001;
+    try {
+        (void)view_voxel_grid(config, w, 0.0625, 0);
+        FAIL() << "an explicit voxel size over --max-voxels was accepted";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("--max-voxels 200000000"), std::string::npos) << e.what();
+    }
+    config.voxel_size_m = 0.1;
+    EXPECT_FLOAT_EQ(view_voxel_grid(config, w, 0.0625, 0).voxel_size_m, 0.1f);
+}
+
+}  // namespace
+}  // namespace pvs
