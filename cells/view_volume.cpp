@@ -38,17 +38,41 @@ std::string leak_path_obj(const std::vector<glm::vec3>& path) {
     return out;
 }
 
+namespace {
+
+std::vector<Aabb> view_boxes(const ViewVolumeConfig& config, const World& world) {
+    std::vector<Aabb> boxes = config.boxes;
+    if (config.use_world_boxes)
+        boxes.insert(boxes.end(), world.view_volume_boxes.begin(), world.view_volume_boxes.end());
+    return boxes;
+}
+
+std::vector<glm::vec3> view_seeds(const ViewVolumeConfig& config, const World& world) {
+    std::vector<glm::vec3> seeds = config.seeds;
+    if (config.use_world_seeds) seeds.insert(seeds.end(), world.view_seeds.begin(), world.view_seeds.end());
+    return seeds;
+}
+
+bool has_sources(const ViewVolumeConfig& config, const World& world) {
+    return !view_boxes(config, world).empty() || !view_seeds(config, world).empty() || config.play_height_m > 0.0;
+}
+
+}  // namespace
+
+VoxelGrid planned_view_grid(const ViewVolumeConfig& config, const World& world) {
+    // Without a source, the grid occluder synthesis voxelizes the world on: the default size, 2 voxels of pad.
+    return has_sources(config, world) ? view_voxel_grid(config, world, config.auto_voxel_size_m, 0)
+                                      : view_voxel_grid(config, world, kDefaultVoxelSizeM, 2);
+}
+
 ViewVolume build_view_volume(Context& ctx, const ViewVolumeConfig& config, const World& world) {
     ScopedTimer timer(ctx, "view_volume");
     ViewVolume vv;
     vv.world_bounds_m3 = world.bounds.volume();
-    std::vector<Aabb> boxes = config.boxes;
-    if (config.use_world_boxes)
-        boxes.insert(boxes.end(), world.view_volume_boxes.begin(), world.view_volume_boxes.end());
-    std::vector<glm::vec3> seeds = config.seeds;
-    if (config.use_world_seeds) seeds.insert(seeds.end(), world.view_seeds.begin(), world.view_seeds.end());
+    const std::vector<Aabb> boxes = view_boxes(config, world);
+    const std::vector<glm::vec3> seeds = view_seeds(config, world);
     const bool play = config.play_height_m > 0.0;
-    if (boxes.empty() && seeds.empty() && !play) {
+    if (!has_sources(config, world)) {
         if (config.need_sources && !config.eyes_anywhere) {
             throw bad_input(
                 "view volume: a conservative bake needs to know where eyes can be, and there are no view "
@@ -67,8 +91,7 @@ ViewVolume build_view_volume(Context& ctx, const ViewVolumeConfig& config, const
         vv.sources = {"world_bounds"};
         vv.view_bounds = world.bounds;
         vv.eye_volume_m3 = vv.view_volume_m3 = vv.world_bounds_m3;
-        // The voxels occluder synthesis makes of the world, at the default size, within the same caps.
-        vv.grid = view_voxel_grid(config, world, kDefaultVoxelSizeM, 2);
+        vv.grid = planned_view_grid(config, world);
         return vv;
     }
     for (const Aabb& b : boxes) {
@@ -81,7 +104,7 @@ ViewVolume build_view_volume(Context& ctx, const ViewVolumeConfig& config, const
     // Pad by a metre (at least 2 voxels, void_pad_voxels()): around a sealed level the padding is solid the
     // flood never reaches, thick enough to stay an occluder after shrinking, so thin floors and walls of the
     // shell still occlude with the void behind them.
-    const VoxelGrid grid = view_voxel_grid(config, world, config.auto_voxel_size_m, 0);
+    const VoxelGrid grid = planned_view_grid(config, world);
     ctx.info(fmt::format("view volume: {} m voxels, {} x {} x {} = {:.1f} M voxels", grid.voxel_size_m,
                          grid.dims.x, grid.dims.y, grid.dims.z, double(grid.count()) * 1e-6));
     BitVolume touched, upward;

@@ -59,6 +59,11 @@ struct ViewVolume {
 ViewVolume build_view_volume(Context& ctx, const ViewVolumeConfig& config, const World& world);
 
 
+// The voxel grid build_view_volume() uses (view_voxel_grid(), cells/world_extent.h): config.auto_voxel_size_m
+// over the world's bounds when there is a source, else the default size (for occluder synthesis alone).
+// Throws as view_voxel_grid() does.
+VoxelGrid planned_view_grid(const ViewVolumeConfig& config, const World& world);
+
 // The leak path as a Wavefront OBJ polyline ("v x y z" lines and one "l 1 2 ..."), which VTK, Blender and
 // most viewers load over the world.
 std::string leak_path_obj(const std::vector<glm::vec3>& path);

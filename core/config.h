@@ -25,6 +25,8 @@ struct RunConfig {
     // [Limit: 0..1e6] [Units: s] seconds between checkpoint chunks within a pass of the conservative solver
     // (each pass's end writes one too); 0 = no checkpoint (docs/ALGORITHMS.md#resume)
     double checkpoint_interval_s = 300.0;
+    double max_memory_mib = 0.0;  // [Limit: >= 0] [Units: MiB] refuse a bake whose plan needs more
+                                  // (driver/memory_plan.h); 0 = the machine's memory less a tenth
 };
 
 // The gap tolerance: the conservative promise covers every object seen through an opening at least this
@@ -274,6 +276,11 @@ void visit_options(Config& c, Visitor&& v) {
                  "removed once OUT is written; a killed bake run again resumes from them); 0 = none",
                  0, 1e6},
       c.run.checkpoint_interval_s);
+    v(OptionSpec{OptionGroup::kGeneral, "--max-memory", "run.max_memory_mib", "MiB",
+                 "refuse a bake whose memory plan (printed before the flood and before the PVS) needs more; "
+                 "0 = the machine's memory less a tenth",
+                 0, 1e9},
+      c.run.max_memory_mib);
     v(OptionSpec{OptionGroup::kGeneral, "--gap-tolerance", "gap.tolerance_m", "m",
                  "the promise: every object seen through an opening at least this wide is listed (a tube of "
                  "this diameter around the sight line clear of opaque triangles, ends excepted); "

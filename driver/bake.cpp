@@ -5,7 +5,9 @@
 #include "cells/octree.h"
 #include "cells/view_volume.h"
 #include "core/error.h"
+#include "driver/memory_plan.h"
 #include "driver/report.h"
+#include "driver/verify_boxes.h"
 #include "occluders/cell_ranking.h"
 #include "occluders/synthesis.h"
 #include "rays/ray_sampler.h"
@@ -14,6 +16,7 @@
 #include "pvs/reuse.h"
 
 #include <fmt/format.h>
+#include <omp.h>
 
 #include <algorithm>
 #include <chrono>
@@ -68,6 +71,14 @@ void store_verification(const VerifyResult& result, BakeData& bake) {
     record.misses = result.misses;
 }
 
+void verify_ranked_boxes(Context& ctx, const RayScene& scene, uint64_t seed, BakeData& bake) {
+    if (bake.ranked.empty()) return;
+    const RankedBoxCheck check = check_ranked_boxes(ctx, scene, bake.cells, bake.occluders, bake.ranked, seed);
+    bake.verification.figures.emplace_back("ranked_boxes_checked", double(check.boxes));
+    bake.verification.figures.emplace_back("ranked_box_rays", double(check.rays));
+    bake.verification.figures.emplace_back("ranked_boxes_seen_into", double(check.seen_into));
+}
+
 std::vector<Occluder> solver_occluders(Context& ctx, const BakeConfig& config, const World& world,
                                        const ViewVolume& view, const RayScene& scene,
                                        OccluderFigures& figures, BlockFigures& blocks,
@@ -93,6 +104,19 @@ std::vector<Occluder> solver_occluders(Context& ctx, const BakeConfig& config, c
 
 namespace {
 
+int worker_threads(const BakeConfig& config) {
+    return config.run.threads > 0 ? config.run.threads : omp_get_max_threads();
+}
+
+// The most cells a partition of `bounds` can make: the grid's, or the octree's finest (capped by max_cells).
+uint64_t most_cells(const CellConfig& cells, const Aabb& bounds) {
+    const double edge = cells.kind == CellKind::kGrid ? cells.cell_size_m : cells.min_cell_size_m;
+    const glm::dvec3 n = glm::ceil(glm::dvec3(bounds.size()) / edge) + 1.0;
+    const double most = n.x * n.y * n.z;
+    if (cells.kind == CellKind::kOctree && cells.max_cells > 0) return std::min<uint64_t>(cells.max_cells, uint64_t(most));
+    return uint64_t(std::min(most, 1e18));
+}
+
 // The header of a bake: the tool, the world, the mode, the resolved parameters and the objects.
 BakeData bake_header(const BakeConfig& config, const World& world, const std::string& world_path,
                      const std::string& world_hash) {
@@ -114,6 +138,12 @@ void grid_cells_and_pvs(Context& ctx, const BakeConfig& config, const World& wor
                         StageFigures& figures, RowJournal* journal, WorkShare* share, const BakeData* reuse) {
     bake.cells = build_uniform_grid(ctx, config.cells, view.view_bounds);
     figures.cells_dropped = clip_grid_to_view(ctx, bake.cells, view.view, view.eyes);
+    {
+        const MemoryPlan plan =
+            plan_memory(config, world, view.grid.count(), bake.cells.size(), worker_threads(config));
+        ctx.info(fmt::format("memory plan: {}", describe(plan)));
+        check_memory(plan, max_memory_bytes(config.run), "the PVS");
+    }
     if (config.mode == BakeMode::kConservative) {
         std::optional<ReusePlan> plan;
         if (reuse) {
@@ -230,8 +260,19 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
     BakeData bake = bake_header(config, world, world_path, world_hash);
     StageFigures figures;
 
-    // 1. View volume: where eyes can be (docs/ALGORITHMS.md#view-volume).
-    const ViewVolume view = build_view_volume(ctx, view_volume_config(config), world);
+    // 1. View volume: where eyes can be (docs/ALGORITHMS.md#view-volume), once the memory plan of its voxels
+    //    (and of at most as many cells as the world's bounds hold) is within the limit.
+    const ViewVolumeConfig view_config = view_volume_config(config);
+    {
+        const VoxelGrid grid = planned_view_grid(view_config, world);
+        MemoryPlan plan = plan_memory(config, world, grid.count(), most_cells(config.cells, world.bounds),
+                                      worker_threads(config));
+        plan.cells_bound = true;
+        ctx.info(fmt::format("memory plan: {}; this bake may use {:.2f} GiB", describe(plan),
+                             max_memory_bytes(config.run) / double(uint64_t(1) << 30)));
+        check_memory(plan, max_memory_bytes(config.run), "the view volume and occluders");
+    }
+    const ViewVolume view = build_view_volume(ctx, view_config, world);
     bake.leak_path = view.leak_path;
 
     // 2. The world as a ray-tracing scene, for every stage that traces rays.
@@ -280,6 +321,7 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
         const VerifyResult result = verify_pvs(ctx, verify, world, scene, bake.cells, bake.pvs, share);
         log_verify_summary(ctx, result, world);
         store_verification(result, bake);
+        verify_ranked_boxes(ctx, scene, verify.rays.seed, bake);
     }
     // Every process holds the whole bake now; rank 0 alone writes it.
     if (share) share->close();

@@ -68,6 +68,10 @@ double gap_tolerance_of(const BakeData& bake);
 // timing into the bake's run record.
 void store_verification(const VerifyResult& result, BakeData& bake);
 
+// The ray check of the bake's ranked occluder boxes (driver/verify_boxes.h), its figures added to the
+// verification's: ranked_boxes_checked, ranked_box_rays, ranked_boxes_seen_into (a bug when not 0).
+void verify_ranked_boxes(Context& ctx, const RayScene& scene, uint64_t seed, BakeData& bake);
+
 // Checks that a bake was made from this world (same objects, in the same order). Throws pvs::Error
 // (bad input) naming the first difference. A different content hash only warns.
 void check_bake_matches_world(Context& ctx, const BakeData& bake, const World& world,

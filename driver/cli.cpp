@@ -431,7 +431,9 @@ int run_bake(Context& ctx, const BakeConfig& config, const std::string& world_pa
     // Misses through openings narrower than the gap tolerance are outside the promise (reported, no failure).
     const double wide =
         bake.verification.ran ? figure_or(bake.verification.figures, "wide_missed_pairs", 0.0) : 0.0;
-    return wide > 0.0 && bake.conservative ? kExitMisses : kExitOk;
+    const double seen_into =
+        bake.verification.ran ? figure_or(bake.verification.figures, "ranked_boxes_seen_into", 0.0) : 0.0;
+    return (wide > 0.0 || seen_into > 0.0) && bake.conservative ? kExitMisses : kExitOk;
 }
 
 // verify WORLD BAKE.h5
@@ -459,9 +461,11 @@ int run_verify(Context& ctx, BakeConfig config, const std::string& world_path, c
     }
     log_verify_summary(ctx, result, world);
     store_verification(result, bake);
+    verify_ranked_boxes(ctx, scene, config.verify.rays.seed, bake);
     if (write_back) write_bake_file(bake_path, bake);
     write_report(report_path, bake, ctx);
-    return result.wide_missed_pairs > 0 ? kExitMisses : kExitOk;
+    const bool seen_into = figure_or(bake.verification.figures, "ranked_boxes_seen_into", 0.0) > 0.0;
+    return result.wide_missed_pairs > 0 || seen_into ? kExitMisses : kExitOk;
 }
 
 // The ranked occluders of a bake in a few lines (format 1.2; older files and bakes without occluders have

@@ -187,6 +187,7 @@ TEST(Cli, BadInputGetsStatusTwoAClearMessageAndNoOutput) {
         {{"bake", test::sample_world(), "-o", out, "--no-world-seeds"}, "--eyes-anywhere"},
         {{"bake", test::sample_world(), "-o", out, "--voxel-size", "0.01"}, "--max-voxels"},
         {{"bake", test::sample_world(), "-o", out, "--max-voxels", "1000"}, "--allow-coarse-voxels"},
+        {{"bake", test::sample_world(), "-o", out, "--max-memory", "20"}, "memory plan"},
         {{"occluders", dir.file("missing.glb"), "-o", dir.file("boxes.glb")}, "missing.glb"},
         {{"info", dir.file("notgltf.glb")}, "notgltf.glb"},
         {{"info", dir.file("missing.h5")}, "missing.h5"},

@@ -4,6 +4,7 @@
 // force; the ranking in a small world (a big near wall outranks a small far box); the stage's output the
 // same for any thread count.
 #include "core/context.h"
+#include "driver/verify_boxes.h"
 #include "occluders/cell_ranking.h"
 #include "occluders/ranking.h"
 #include "tests/test_util.h"
@@ -302,6 +303,38 @@ TEST(Ranking, BigNearWallOutranksSmallFarBox) {
     EXPECT_EQ(rank_occluders(ctx, config, s.world, s.cells, s.occluders, f2).entries.size(), 1u);
     config.occluders_per_cell = 0;
     EXPECT_TRUE(rank_occluders(ctx, config, s.world, s.cells, s.occluders, f2).empty());
+}
+
+// Verification's check of the ranked boxes (driver/verify_boxes.h): boxes inside the wall are never seen
+// into from the cell's eyes; a box across a 2 m crack in the wall (its two halves apart) is.
+TEST(Ranking, VerificationFindsARankedBoxThatSpansACrack) {
+    Scene s = wall_and_small_box();
+    Context ctx = quiet_context();
+    RankingConfig config;
+    config.min_solid_angle_sr = 0.0005;
+    RankingFigures figures;
+    RankedOccluders r = rank_occluders(ctx, config, s.world, s.cells, s.occluders, figures);
+    {
+        RayScene scene(ctx, s.world);
+        const RankedBoxCheck sound = check_ranked_boxes(ctx, scene, s.cells, s.occluders, r, 5);
+        EXPECT_EQ(sound.boxes, 2u);
+        EXPECT_EQ(sound.rays, 2u * 16u * 8u);  // 16 eyes of the one cell, 8 points in each box
+        EXPECT_EQ(sound.seen_into, 0u) << sound.first;
+    }
+    // The same wall with a 2 m crack through its middle, and the box still across it.
+    Scene cracked = s;
+    cracked.world = World{};
+    test::add_box(cracked.world, "wall_left", Aabb::of({-6, -1, 3}, {0, 5, 3.5f}));
+    test::add_box(cracked.world, "wall_right", Aabb::of({2, -1, 3}, {8, 5, 3.5f}));
+    test::add_box(cracked.world, "small", Aabb::of({0.6f, 0.6f, 18}, {1.4f, 1.4f, 18.8f}));
+    RayScene scene(ctx, cracked.world);
+    const RankedBoxCheck bad = check_ranked_boxes(ctx, scene, cracked.cells, cracked.occluders, r, 5);
+    EXPECT_EQ(bad.seen_into, 1u) << bad.first;
+    EXPECT_NE(bad.first.find("ranked box 1"), std::string::npos) << bad.first;
+    // An unproven box that a ranking names is reported too.
+    r.entries[0].box = 2;
+    const RankedBoxCheck unproven = check_ranked_boxes(ctx, scene, s.cells, s.occluders, r, 5);
+    EXPECT_GE(unproven.seen_into, 1u);
 }
 
 // The score follows its documented definition.
