@@ -210,10 +210,10 @@ tinygltf::Model parse_gltf(Context& ctx, const std::string& path, const std::str
     // The numbers tinygltf reads as "absent" when they do not fit its ints (io/gltf_references.h).
     if (binary) {
         const size_t json_end = kGlbHeaderBytes + kGlbChunkHeaderBytes + read_u32(bytes, 12);
-        const int64_t bin = json_end < length ? int64_t(read_u32(bytes, json_end)) : -1;
+        const int64_t bin = json_end < length ? int64_t(read_u32(bytes, json_end)) : kNoBinChunk;
         check_gltf_references(path, bytes.substr(kGlbHeaderBytes + kGlbChunkHeaderBytes, read_u32(bytes, 12)), bin);
     } else {
-        check_gltf_references(path, bytes.substr(0, length), -1);
+        check_gltf_references(path, bytes.substr(0, length), kNotGlb);
     }
 
     tinygltf::TinyGLTF gltf;

@@ -157,11 +157,11 @@ void check_gltf_references(const std::string& path, const std::string& json_text
     // A .glb's buffer 0 without a uri is the BIN chunk: it must hold the buffer's byteLength (the chunk
     // may be up to 3 bytes longer, its padding).
     const Json* buffers = doc.contains("buffers") ? &doc["buffers"] : nullptr;
-    if (bin_bytes < -1 || !buffers || !buffers->is_array() || buffers->empty()) return;
+    if (bin_bytes == kNotGlb || !buffers || !buffers->is_array() || buffers->empty()) return;
     const Json& b = (*buffers)[0];
     if (!b.is_object() || b.contains("uri") || !b.contains("byteLength")) return;
     const double declared = b["byteLength"].get<double>();
-    if (bin_bytes < 0) {
+    if (bin_bytes == kNoBinChunk) {
         throw bad_input(fmt::format("{}: buffers[0] has no uri and the .glb has no BIN chunk to hold its {} bytes",
                                     path, declared));
     }

@@ -16,8 +16,10 @@ namespace pvs {
 // Throws pvs::Error (bad input) "PATH: meshes[0].primitives[0].indices is 1.8e+19, not an index of
 // accessors (4 of them)" on the first property that breaks its rule; nothing on a document that is not
 // JSON (the parser reports that). `json_text` is the whole JSON (the .gltf, or a .glb's JSON chunk);
-// `bin_bytes` the length of a .glb's BIN chunk (-1: none), which buffer 0 without a uri must fit
-// (BUFFER_BYTE_LENGTH_MISMATCH).
+// `bin_bytes` the length of a .glb's BIN chunk, which buffer 0 without a uri must fit
+// (BUFFER_BYTE_LENGTH_MISMATCH), or kNoBinChunk, or kNotGlb for a .gltf.
+constexpr int64_t kNoBinChunk = -1;
+constexpr int64_t kNotGlb = -2;
 void check_gltf_references(const std::string& path, const std::string& json_text, int64_t bin_bytes);
 
 }  // namespace pvs
