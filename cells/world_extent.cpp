@@ -95,9 +95,9 @@ VoxelGrid view_voxel_grid(const ViewVolumeConfig& config, const World& world, do
     if (!automatic && count > double(cap)) {
         throw bad_input(fmt::format(
             "view volume: --voxel-size {} m over the world's bounds ({:.1f} x {:.1f} x {:.1f} m) makes {:.3g} "
-            "voxels, over --max-voxels {}: {}. Use a larger --voxel-size, or raise --max-voxels ({:.1f} GiB "
-            "of voxels at 2 bytes each)",
-            size, e.x, e.y, e.z, count, cap, outliers(), count * 2.0 / double(1 << 30)));
+            "voxels, over --max-voxels {}: {}. Use a larger --voxel-size, or raise --max-voxels (the memory "
+            "plan then says what they cost)",
+            size, e.x, e.y, e.z, count, cap, outliers()));
     }
     const double cells = config.cell_edge_m > 0.0 ? config.cell_edge_m : std::numeric_limits<double>::infinity();
     const double limit = std::min(config.max_voxel_size_m, cells);
@@ -106,9 +106,9 @@ VoxelGrid view_voxel_grid(const ViewVolumeConfig& config, const World& world, do
         throw bad_input(fmt::format(
             "view volume: the world's bounds ({:.1f} x {:.1f} x {:.1f} m) need {:.3g} m voxels to stay within "
             "--max-voxels {}, coarser than {} {} m: {}. Remove the stray geometry, or raise --max-voxels "
-            "({} m voxels need {:.3g}, {:.1f} GiB), or pass --allow-coarse-voxels to bake anyway",
+            "({} m voxels need {:.3g}), or pass --allow-coarse-voxels to bake anyway",
             e.x, e.y, e.z, size, cap, limit < config.max_voxel_size_m ? "the cells'" : "--max-voxel-size",
-            limit, outliers(), preferred_m, wanted, wanted * 2.0 / double(1 << 30)));
+            limit, outliers(), preferred_m, wanted));
     }
     return make_voxel_grid(world.bounds, size, pad);
 }
