@@ -61,8 +61,9 @@ double largest_cell_edge_m(const CellConfig& config);
 struct ViewVolumeConfig {
     double voxel_size_m = 0.0;          // [Limit: >= 0] [Units: m] 0 = automatic (kDefaultVoxelSizeM, coarser
                                         // when the grid would pass max_voxels)
-    uint64_t max_voxels = 200'000'000;  // [Limit: >= 1000] voxels a bake may use (2 bytes each): the automatic
-                                        // size grows to stay within it; an explicit size over it is refused
+    uint64_t max_voxels = 200'000'000;  // [Limit: >= 1000] voxels a bake may use (their memory:
+                                        // driver/memory_plan.h): the automatic size grows to stay within it;
+                                        // an explicit size over it is refused
     double max_voxel_size_m = 0.25;     // [Limit: > 0] [Units: m] the automatic size grows at most to this
                                         // edge (and never past the cells'); a world that needs coarser voxels
                                         // is refused, naming its farthest-reaching objects
