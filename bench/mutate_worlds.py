@@ -420,11 +420,6 @@ def progress(done, count, m):
 
 
 def main():
-    argv = sys.argv[1:]
-    extra = []
-    if "--" in argv:
-        extra = argv[argv.index("--") + 1:]
-        argv = argv[:argv.index("--")]
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--pvsbake", default=os.path.join(REPO, "build", "bin", "pvsbake"))
     p.add_argument("--count", type=int, default=300, help="mutants")
@@ -435,8 +430,8 @@ def main():
     p.add_argument("--work", help="folder for the mutants and their bakes (default: a temporary one)")
     p.add_argument("--json", help="write the JSON here instead of stdout")
     p.add_argument("--keep-failures", help="copy failing mutants' .glb and stderr here")
-    a = p.parse_args(argv)
-    a.extra = extra
+    p.add_argument("extra", nargs="*", metavar="-- BAKE OPTION", help="more options for every bake, after --")
+    a = p.parse_args()
     a.work = os.path.abspath(a.work or tempfile.mkdtemp(prefix="pvsbake-mutate-"))
     os.makedirs(a.work, exist_ok=True)
     if a.keep_failures:
@@ -466,7 +461,7 @@ def main():
     result = {"bench": "mutate_worlds",
               "parameters": {"pvsbake": os.path.abspath(a.pvsbake), "count": a.count, "seed": a.seed,
                              "jobs": a.jobs, "time_limit_s": a.time_limit, "memory_limit_mib": a.memory_limit_mib,
-                             "work": a.work, "bake_options": ["--no-verify", "--threads", "1"] + extra},
+                             "work": a.work, "bake_options": ["--no-verify", "--threads", "1"] + a.extra},
               "unmutated": base, "by_kind": by_kind, "by_class": by_class, "failures": failures,
               "mutants": mutants}
     if a.json:

@@ -4,7 +4,7 @@
 //
 // Conventions: bytes. The figures are a model, not a measure: per voxel, per triangle, per PVS bit and per
 // thread, with constants taken from measured peaks (docs/RESULTS.md, "Memory plan"); they aim to be an
-// upper estimate of the peak resident memory within about 1.5x.
+// upper estimate of the peak resident memory (docs/ALGORITHMS.md#memory-plan).
 #pragma once
 
 #include "core/config.h"

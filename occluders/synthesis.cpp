@@ -443,10 +443,13 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
         check_boxes(ctx, config, bounds_of(grid, boxes), eyes, config.check_rays_per_eye, 0, scene,
                     figures.check_rays, deal, &view.eyes);
     for (uint8_t r : rejected) figures.rejected_by_rays += r;
-    // The proven solid: the carved solid less every rejected box (its voxels as the ray check left them,
-    // before the kept boxes are trimmed off them).
-    BitVolume proven = solid.solid;
-    mark_boxes(grid, boxes, rejected, 1, false, proven);
+    // The proven solid, for the solver: the carved solid less every rejected box (as the ray check left the
+    // boxes, before the kept ones are trimmed off them).
+    BitVolume proven;
+    if (shrunk != nullptr) {
+        proven = solid.solid;
+        mark_boxes(grid, boxes, rejected, 1, false, proven);
+    }
     const TrimFigures trim = trim_off_rejected(boxes, rejected, uint64_t(std::ceil(bc.min_box_volume_m3 / voxel_m3)));
     figures.trimmed = trim.trimmed;
     figures.trimmed_away = trim.trimmed_away;
