@@ -1,5 +1,5 @@
 // Flood of free voxels from seeds: on all threads for the reached set; breadth first on one thread when it
-// leaks, for the path from a seed to the first border voxel reached.
+// leaks, up to the first border voxel reached, for the path to it.
 #include "voxels/flood.h"
 
 #include <fmt/format.h>
@@ -134,35 +134,35 @@ FloodResult flood_free_space(Context& ctx, const VoxelGrid& grid, const BitVolum
         r.reached.set(uint64_t(i));
         frontier.push_back(uint64_t(i));
     }
-    // A sealed level (the usual case) needs only the reached set: on all threads. A leaking one is flooded
-    // again breadth first on one thread, for the leak path (the first border voxel in that order and the
-    // steps back to a seed), which then gives the same set.
+    // The reached set, on all threads. A leaking level is searched again breadth first on one thread, for
+    // the leak path (the first border voxel in that order and the steps back to a seed), up to that voxel.
     reach_in_parallel(grid, blocked, walk, frontier, r.reached);
     if (!reaches_border(grid, r.reached, walk != nullptr)) {
         r.reached_count = r.reached.count();
         ctx.debug(fmt::format("flood: {} seeds, {} voxels reached, sealed", r.seeds_used, r.reached_count));
         return r;
     }
-    r.reached.reset(grid.count());  // back to the seeds alone
-    for (const uint64_t i : frontier) r.reached.set(i);
     // came_from[i]: the step index that entered voxel i (0..5), kSeedMark for seeds; 0xff = not reached.
+    // The search stops at the first border voxel it takes: the reached set is the parallel flood's (the
+    // same set), and the path needs only the voxels taken before it.
     std::vector<uint8_t> came_from(grid.count(), 0xff);
     for (const uint64_t i : frontier) came_from[i] = kSeedMark;
     int64_t leak_voxel = -1;
-    while (!frontier.empty()) {
+    while (!frontier.empty() && leak_voxel < 0) {
         next.clear();
         for (uint64_t i : frontier) {
             const glm::ivec3 c = grid.coords(i);
             // (Walking, the band may reach the grid's top above the highest floor: that is no way out.)
-            if (leak_voxel < 0 && on_border(grid, c) && !(walk && c.y == grid.dims.y - 1))
+            if (on_border(grid, c) && !(walk && c.y == grid.dims.y - 1)) {
                 leak_voxel = int64_t(i);
+                break;
+            }
             for (int s = 0; s < 6; ++s) {
                 const glm::ivec3 n = c + kSteps[s];
                 if (!grid.inside(n)) continue;
                 const uint64_t j = grid.index(n.x, n.y, n.z);
                 if (came_from[j] != 0xff || blocked.get(j) || !may_step(walk, s, i, j)) continue;
                 came_from[j] = uint8_t(s);
-                r.reached.set(j);
                 next.push_back(j);
             }
         }

@@ -7,8 +7,8 @@
 // reaches is sealed off from every seed by opaque voxels. If it reaches the grid's border layer (the
 // grid is padded, so the border is outside the world's bounds) the level LEAKS: the result says so and
 // gives the leak path, voxel centres from a seed to the border, and the flood still covers all it reached.
-// A sealed level floods on all threads (OpenMP); a leaking one again on one thread, breadth first, for its
-// path (docs/ALGORITHMS.md#flood). The result does not depend on the thread count.
+// Every level floods on all threads (OpenMP); a leaking one is searched again on one thread, breadth first,
+// up to its first border voxel, for its path (docs/ALGORITHMS.md#flood). The result does not depend on the thread count.
 // Note: a voxel seal is not a visibility proof (a crack narrower than a voxel is sealed in voxels);
 // occluders built on "unreached" space must be checked against the triangles.
 #pragma once
