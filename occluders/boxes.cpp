@@ -8,7 +8,8 @@
 // solid. A larger box whose count is 0 modulo 2^16 is split in two along its longest axis and each half
 // checked again, so the answer is exact (no hashing, no probability). Seeds are found by a scan in
 // blocks of 64 voxels with stale upper bounds of the cube sizes they hold (two levels), so each seed size
-// costs a scan of one byte per 4096 voxels; the cube sizes of covered voxels are set to 0.
+// costs a scan of one byte per 4096 voxels; the cube sizes of covered voxels are set to 0. The scan, the
+// clearing and the cut run on all threads around the growth in seed order (docs/ALGORITHMS.md#boxes).
 #include "occluders/boxes.h"
 
 #include "core/error.h"
@@ -17,9 +18,12 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <memory>
+
+#include <omp.h>
 
 namespace pvs {
 
@@ -245,15 +249,20 @@ uint64_t count_bits(const BitVolume& bits, uint64_t lo, uint64_t hi) {
     return c;
 }
 
-void set_bits(BitVolume& bits, uint64_t lo, uint64_t hi) {
+// The end words of the range may hold bits of other rows (set by other threads at once): they are ORed
+// atomically; the words between hold this row's bits only.
+void set_bits_shared(BitVolume& bits, uint64_t lo, uint64_t hi) {
     const uint64_t w0 = lo >> 6, w1 = hi >> 6;
     const uint64_t m0 = ~uint64_t(0) << (lo & 63), m1 = ~uint64_t(0) >> (63 - (hi & 63));
+    const auto set = [&](uint64_t w, uint64_t m) {
+        std::atomic_ref<uint64_t>(bits.words[w]).fetch_or(m, std::memory_order_relaxed);
+    };
     if (w0 == w1) {
-        bits.words[w0] |= m0 & m1;
+        set(w0, m0 & m1);
         return;
     }
-    bits.words[w0] |= m0;
-    bits.words[w1] |= m1;
+    set(w0, m0);
+    set(w1, m1);
     for (uint64_t w = w0 + 1; w < w1; ++w) bits.words[w] = ~uint64_t(0);
 }
 
@@ -378,6 +387,89 @@ void clear_cubes(uint8_t* cube, uint8_t* l1, uint64_t lo, uint64_t hi) {
     }
 }
 
+// Groups of kBlock blocks per window of the seed scan: the seeds of one size in a window are found on all
+// threads at once (about 16.8 M voxels: few parallel regions, and a bounded list of seeds).
+constexpr uint64_t kWindowGroups = 4096;
+// Boxes grown before their voxels are cleared from the cubes, on all threads.
+constexpr size_t kBatchBoxes = 64;
+// A batch of fewer rows is cleared on one thread.
+constexpr uint64_t kParallelRows = 4096;
+
+// The voxels of groups g0..g1 (of kBlock blocks of kBlock voxels) whose cube size is s, in index order,
+// into `seeds`. Tightens the bounds of the blocks and groups it scans (a bound is of the cubes as they are
+// now, so it stays an upper bound).
+void collect_seeds(const uint8_t* cube, std::vector<uint8_t>& l1, std::vector<uint8_t>& l2, uint64_t n,
+                   uint8_t s, uint64_t g0, uint64_t g1, bool parallel, std::vector<uint64_t>& seeds) {
+    seeds.clear();
+    const uint64_t n1 = l1.size();
+    std::vector<std::vector<uint64_t>> found;
+#pragma omp parallel if (parallel)
+    {
+#pragma omp single
+        found.resize(size_t(omp_get_num_threads()));
+        std::vector<uint64_t>& mine = found[size_t(omp_get_thread_num())];
+        // Static: each thread one run of groups, in thread order, so the runs concatenate in index order.
+#pragma omp for schedule(static)
+        for (uint64_t g = g0; g < g1; ++g) {
+            if (l2[g] < s) continue;
+            const uint64_t b_end = std::min(n1, (g + 1) * kBlock);
+            for (uint64_t b = g * kBlock; b < b_end; ++b) {
+                if (l1[b] < s) continue;
+                const uint64_t i_end = std::min(n, (b + 1) * kBlock);
+                for (uint64_t i = b * kBlock; i < i_end; ++i)
+                    if (cube[i] == s) mine.push_back(i);
+                l1[b] = block_max(&cube[b * kBlock], i_end - b * kBlock);
+            }
+            l2[g] = block_max(&l1[g * kBlock], b_end - g * kBlock);
+        }
+    }
+    for (const std::vector<uint64_t>& f : found) seeds.insert(seeds.end(), f.begin(), f.end());
+    if (!std::is_sorted(seeds.begin(), seeds.end())) std::sort(seeds.begin(), seeds.end());
+}
+
+// Boxes grown but not yet cleared from the cubes: the parts of each to clear (box_minus), and the boxes to
+// test seeds against meanwhile.
+class ClearBatch {
+public:
+    bool covers(glm::ivec3 p) const {
+        for (const VoxelBox& b : boxes_)
+            if (glm::all(glm::greaterThanEqual(p, b.lo)) && glm::all(glm::lessThanEqual(p, b.hi)))
+                return true;
+        return false;
+    }
+    void add(const VoxelBox& box, const VoxelBox* parts, int count) {
+        boxes_.push_back(box);
+        for (int p = 0; p < count; ++p) {
+            parts_.push_back(parts[p]);
+            rows_ += rows_of(parts[p]);
+        }
+    }
+    bool full() const { return boxes_.size() >= kBatchBoxes; }
+
+    // Clears the parts from the cubes, a layer z per task: a row's clear writes the block bounds only of
+    // blocks inside the row, so tasks never write the same byte.
+    void clear(const VoxelGrid& grid, uint8_t* cube, uint8_t* l1, bool parallel) {
+        if (parts_.empty()) return;
+        int z_lo = parts_[0].lo.z, z_hi = parts_[0].hi.z;
+        for (const VoxelBox& b : parts_) z_lo = std::min(z_lo, b.lo.z), z_hi = std::max(z_hi, b.hi.z);
+#pragma omp parallel for schedule(dynamic, 1) if (parallel && rows_ >= kParallelRows)
+        for (int z = z_lo; z <= z_hi; ++z) {
+            for (const VoxelBox& b : parts_) {
+                if (z < b.lo.z || z > b.hi.z) continue;
+                for (int y = b.lo.y; y <= b.hi.y; ++y)
+                    clear_cubes(cube, l1, grid.index(b.lo.x, y, z), grid.index(b.hi.x, y, z));
+            }
+        }
+        boxes_.clear();
+        parts_.clear();
+        rows_ = 0;
+    }
+
+private:
+    std::vector<VoxelBox> boxes_, parts_;
+    uint64_t rows_ = 0;
+};
+
 }  // namespace
 
 std::vector<VoxelBox> grow_boxes(Context& ctx, const VoxelGrid& grid, const BitVolume& solid,
@@ -427,48 +519,45 @@ std::vector<VoxelBox> grow_boxes(Context& ctx, const VoxelGrid& grid, const BitV
                 l2[g] = block_max(&l1[g * kBlock], std::min(kBlock, n1 - g * kBlock));
         }
 
-        // 2. and 3. Growth from the seeds in order, until the stop rule.
+        // 2. and 3. Growth from the seeds in order, until the stop rule. For each seed size, a window of
+        // voxels at a time: its seeds are found on all threads, then taken in index order on one thread;
+        // the boxes grown are cleared from the cubes in batches on all threads, and until then a seed is
+        // tested against the batch (docs/ALGORITHMS.md#boxes). So every seed is taken or skipped as one
+        // thread taking them one by one and clearing each box at once would: the same boxes.
         const uint64_t cap = uint64_t(kGrowFactor) * config.max_boxes;
         bool stop = false;
         BoxBuckets covering(grid.dims);  // every box grown
+        ClearBatch batch;
+        std::vector<uint64_t> seeds;
         ctx.progress_begin("boxes", 0, "boxes");
         for (int s = kMaxSeedCube; s >= 1 && !stop; --s) {
             if (!sizes[size_t(s)]) continue;
-            for (uint64_t g = 0; g < n2 && !stop; ++g) {
-                if (l2[g] < s) continue;
-                const uint64_t b_end = std::min(n1, (g + 1) * kBlock);
-                for (uint64_t b = g * kBlock; b < b_end && !stop; ++b) {
-                    if (l1[b] < s) continue;
-                    const uint64_t i_end = std::min(n, (b + 1) * kBlock);
-                    for (uint64_t i = b * kBlock; i < i_end && !stop; ++i) {
-                        if (cube[i] != s) continue;
-                        const VoxelBox box = grow_from(sums, grid.coords(i), s);
-                        ++st.grown;
-                        // Cover: no voxel of the box seeds again. The box grown before that shares most
-                        // of it is clear already (growth goes through covered voxels), so only the rest
-                        // is cleared.
-                        uint64_t shared = 0;
-                        std::array<VoxelBox, 6> rest;
-                        const int parts = box_minus(box, covering.most_overlapping(box, shared), rest);
-                        for (int p = 0; p < parts; ++p) {
-                            const VoxelBox& b = rest[size_t(p)];
-                            for (int z = b.lo.z; z <= b.hi.z; ++z) {
-                                for (int y = b.lo.y; y <= b.hi.y; ++y) {
-                                    clear_cubes(cube.get(), l1.data(), grid.index(b.lo.x, y, z),
-                                                grid.index(b.hi.x, y, z));
-                                }
-                            }
-                        }
-                        covering.add(box);
-                        if (volume_m3(grid, box.volume()) >= config.min_box_volume_m3) {
-                            ctx.progress_advance(1);
-                            grown.push_back(box);
-                            stop = grown.size() >= cap;
-                        }
+            for (uint64_t g0 = 0; g0 < n2 && !stop; g0 += kWindowGroups) {
+                const uint64_t g1 = std::min(n2, g0 + kWindowGroups);
+                collect_seeds(cube.get(), l1, l2, n, uint8_t(s), g0, g1, parallel, seeds);
+                for (const uint64_t i : seeds) {
+                    if (cube[i] != s) continue;  // cleared by a box of an earlier batch
+                    const glm::ivec3 at = grid.coords(i);
+                    if (batch.covers(at)) continue;
+                    const VoxelBox box = grow_from(sums, at, s);
+                    ++st.grown;
+                    // Cover: no voxel of the box seeds again. The box grown before that shares most of it
+                    // is clear already, or is in the batch (growth goes through covered voxels), so only the
+                    // rest is cleared.
+                    uint64_t shared = 0;
+                    std::array<VoxelBox, 6> rest;
+                    const int parts = box_minus(box, covering.most_overlapping(box, shared), rest);
+                    batch.add(box, rest.data(), parts);
+                    covering.add(box);
+                    if (volume_m3(grid, box.volume()) >= config.min_box_volume_m3) {
+                        ctx.progress_advance(1);
+                        grown.push_back(box);
+                        stop = grown.size() >= cap;
+                        if (stop) break;
                     }
-                    l1[b] = block_max(&cube[b * kBlock], i_end - b * kBlock);
+                    if (batch.full()) batch.clear(grid, cube.get(), l1.data(), parallel);
                 }
-                l2[g] = block_max(&l1[g * kBlock], b_end - g * kBlock);
+                batch.clear(grid, cube.get(), l1.data(), parallel);
             }
         }
         ctx.progress_end();
@@ -490,24 +579,36 @@ std::vector<VoxelBox> grow_boxes(Context& ctx, const VoxelGrid& grid, const BitV
         std::array<VoxelBox, 6> rest;
         const int parts = box_minus(box, kept_boxes.most_overlapping(box, covered), rest);
         if (parts == 1 && rest[0] == box) covered = 0;  // not cut: the rows count the shared voxels too
+        // A big box's rows are counted and set on all threads, a layer z per task (a row's words are set
+        // whole only inside the row; the words it shares with other rows are set atomically).
+        uint64_t rows = 0;
+        int z_lo = rest[0].lo.z, z_hi = rest[0].hi.z;
         for (int p = 0; p < parts; ++p) {
-            const VoxelBox& b = rest[size_t(p)];
-            for (int z = b.lo.z; z <= b.hi.z; ++z) {
-                for (int y = b.lo.y; y <= b.hi.y; ++y) {
+            rows += rows_of(rest[size_t(p)]);
+            z_lo = std::min(z_lo, rest[size_t(p)].lo.z);
+            z_hi = std::max(z_hi, rest[size_t(p)].hi.z);
+        }
+        const bool parallel_rows = n >= kParallelVoxels && rows >= kParallelRows;
+#pragma omp parallel for schedule(dynamic, 1) reduction(+ : covered) if (parallel_rows)
+        for (int z = z_lo; z <= z_hi; ++z) {
+            for (int p = 0; p < parts; ++p) {
+                const VoxelBox& b = rest[size_t(p)];
+                if (z < b.lo.z || z > b.hi.z) continue;
+                for (int y = b.lo.y; y <= b.hi.y; ++y)
                     covered += count_bits(cover, grid.index(b.lo.x, y, z), grid.index(b.hi.x, y, z));
-                }
             }
         }
         if (!adds_enough(volume - covered, volume, config.min_added_share)) continue;
         kept.push_back(box);
         kept_boxes.add(box);
         st.covered_voxels += volume - covered;
-        for (int p = 0; p < parts; ++p) {
-            const VoxelBox& b = rest[size_t(p)];
-            for (int z = b.lo.z; z <= b.hi.z; ++z) {
-                for (int y = b.lo.y; y <= b.hi.y; ++y) {
-                    set_bits(cover, grid.index(b.lo.x, y, z), grid.index(b.hi.x, y, z));
-                }
+#pragma omp parallel for schedule(dynamic, 1) if (parallel_rows)
+        for (int z = z_lo; z <= z_hi; ++z) {
+            for (int p = 0; p < parts; ++p) {
+                const VoxelBox& b = rest[size_t(p)];
+                if (z < b.lo.z || z > b.hi.z) continue;
+                for (int y = b.lo.y; y <= b.hi.y; ++y)
+                    set_bits_shared(cover, grid.index(b.lo.x, y, z), grid.index(b.hi.x, y, z));
             }
         }
     }

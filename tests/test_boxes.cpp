@@ -370,6 +370,44 @@ TEST(GrowBoxes, SameBoxesTwiceAndForAnyThreadCount) {
     EXPECT_EQ(first, three);
 }
 
+// A big level of thick walls and floors with doors (over 2^21 voxels, walls of over 4,096 rows): the seed
+// scan, the batched clearing and the cut run on all threads, and must give the boxes of the plain
+// reference at any thread count.
+TEST(GrowBoxes, MatchesTheReferenceOnABigLevelAtAnyThreadCount) {
+    Context ctx = quiet_context();
+    const VoxelGrid level = grid_of({150, 110, 140});
+    BitVolume solid;
+    solid.reset(level.count());
+    Rng rng(5, 13);
+    for (int w = 0; w < 12; ++w) {
+        const int axis = w % 3, at = int(rng.below(uint64_t(level.dims[axis] - 6)));
+        glm::ivec3 lo(0), hi = level.dims - 1;
+        lo[axis] = at;
+        hi[axis] = at + 2 + int(rng.below(4));
+        fill(level, solid, lo, hi, true);
+        for (int d = 0; d < 3; ++d) {  // doors through it
+            glm::ivec3 dlo(int(rng.below(140)), int(rng.below(100)), int(rng.below(130)));
+            glm::ivec3 dhi =
+                dlo + glm::ivec3(2 + int(rng.below(8)), 2 + int(rng.below(8)), 2 + int(rng.below(8)));
+            dlo[axis] = lo[axis];
+            dhi[axis] = hi[axis];
+            fill(level, solid, dlo, glm::min(dhi, level.dims - 1), false);
+        }
+    }
+    BoxConfig config;
+    config.min_box_volume_m3 = 0.0;
+    const std::vector<VoxelBox> slow = grow_boxes_reference(level, solid, config);
+    const int threads = omp_get_max_threads();
+    for (const int t : {1, 2, 3}) {
+        omp_set_num_threads(t);
+        EXPECT_EQ(grow_boxes(ctx, level, solid, config), slow) << t << " threads";
+    }
+    omp_set_num_threads(threads);
+    EXPECT_GT(slow.size(), 20u);
+    const auto rows = [](const VoxelBox& b) { return (b.hi.y - b.lo.y + 1) * (b.hi.z - b.lo.z + 1); };
+    EXPECT_TRUE(std::any_of(slow.begin(), slow.end(), [&](const VoxelBox& b) { return rows(b) >= 4096; }));
+}
+
 TEST(GrowBoxes, RejectsAConfigOutsideItsLimits) {
     Context ctx = quiet_context();
     const VoxelGrid g = grid_of({4, 4, 4});
