@@ -77,21 +77,26 @@ uint64_t mask_bits(const VoxelMask& m, uint64_t start, uint32_t n) {
 // Adds each tile's voxels of `m` (on the eyes' grid, tiles of `t` voxels) to its hash.
 void add_mask(GeometryPrint& p, const VoxelMask& m, uint64_t which, uint32_t t) {
     std::vector<uint64_t> acc(p.tiles.size(), which);
-    for (int z = 0; z < m.dims.z; ++z)
-        for (int y = 0; y < m.dims.y; ++y) {
-            const uint64_t row = uint64_t(m.dims.x) * (uint64_t(y) + uint64_t(m.dims.y) * uint64_t(z));
-            const size_t tile_row =
-                size_t(p.dims.x) * (size_t(y / int(t)) + size_t(p.dims.y) * size_t(z / int(t)));
-            for (int tx = 0; tx < p.dims.x; ++tx) {
-                uint64_t& a = acc[tile_row + size_t(tx)];
-                for (uint32_t x = uint32_t(tx) * t; x < std::min(uint32_t(tx + 1) * t, uint32_t(m.dims.x));
-                     x += 64) {
-                    const uint32_t n = std::min({64u, uint32_t(m.dims.x) - x, uint32_t(tx + 1) * t - x});
-                    const uint64_t bits = mask_bits(m, row + x, n);
-                    a = XXH3_64bits_withSeed(&bits, sizeof bits, a);
+    // A layer of tiles per task: its rows feed only its tiles, each in the order z, y of one thread.
+#pragma omp parallel for schedule(dynamic, 1)
+    for (int tz = 0; tz < p.dims.z; ++tz) {
+        for (int z = tz * int(t); z < std::min(m.dims.z, (tz + 1) * int(t)); ++z) {
+            for (int y = 0; y < m.dims.y; ++y) {
+                const uint64_t row = uint64_t(m.dims.x) * (uint64_t(y) + uint64_t(m.dims.y) * uint64_t(z));
+                const size_t tile_row =
+                    size_t(p.dims.x) * (size_t(y / int(t)) + size_t(p.dims.y) * size_t(tz));
+                for (int tx = 0; tx < p.dims.x; ++tx) {
+                    uint64_t& a = acc[tile_row + size_t(tx)];
+                    const uint32_t x_end = std::min(uint32_t(tx + 1) * t, uint32_t(m.dims.x));
+                    for (uint32_t x = uint32_t(tx) * t; x < x_end; x += 64) {
+                        const uint32_t n = std::min(64u, x_end - x);
+                        const uint64_t bits = mask_bits(m, row + x, n);
+                        a = XXH3_64bits_withSeed(&bits, sizeof bits, a);
+                    }
                 }
             }
         }
+    }
     for (size_t i = 0; i < acc.size(); ++i) p.tiles[i] += Hasher(kMask).add(acc[i]).digest();
 }
 
