@@ -19,7 +19,7 @@ checkpoint mode (the default) bakes WORLD three ways with the same options:
   per rank it ran with, --ranks R --threads T), the time the same bake would take on each of --cores
   (default 2,16,64), nodes of --node-cores (default 16) each running one rank with a thread per core:
       sum over the stages before the PVS (each rank computes them) of  serial + parallel / t
-      +  PVS CPU-seconds / P  +  the same sum over ranking and writing
+      +  PVS CPU-seconds / P  +  the same sum over ranking, verification and writing
   with t = min(P, node cores). Only the outermost stages count (the inner ones, NESTED below, are parts
   of them). A stage's serial and parallel seconds come from its wall seconds W and CPU seconds C at T
   threads (run figures cpu_seconds_<stage> and threads, in reports since they were recorded): with
@@ -138,7 +138,7 @@ def project(a):
     if "conservative_pvs" not in stages:
         sys.exit(f"{a.project}: no conservative_pvs stage (a conservative bake's report is needed)")
     at = stages.index("conservative_pvs")
-    skip = NESTED | {"total", "verify", "conservative_pvs"}
+    skip = NESTED | {"total", "conservative_pvs"}
     threads = max(1, a.threads // max(1, a.ranks)) if a.ranks else a.threads
     parts = {}
     for s in stages:
