@@ -59,6 +59,27 @@ static uint32_t index_at(const pvsr_array* a, uint64_t i) {
     return a->item_bytes == 2 ? rd16(a->at + 2 * i) : rd32(a->at + 4 * i);
 }
 
+/* The largest item of an array of 1-, 2- or 4-byte unsigned integers (0 when empty): a range check of a
+ * big index array as one pass of a loop with no exit, which compilers vectorize. */
+static uint32_t max_item(const pvsr_array* a) {
+    uint64_t i;
+    uint32_t m = 0;
+    if (a->item_bytes == 1) {
+        for (i = 0; i < a->count; ++i) m = a->at[i] > m ? a->at[i] : m;
+    } else if (a->item_bytes == 2) {
+        for (i = 0; i < a->count; ++i) {
+            const uint32_t v = rd16(a->at + 2 * i);
+            m = v > m ? v : m;
+        }
+    } else {
+        for (i = 0; i < a->count; ++i) {
+            const uint32_t v = rd32(a->at + 4 * i);
+            m = v > m ? v : m;
+        }
+    }
+    return m;
+}
+
 /* Entry e of the ranked occluders: its box (1, 2 or 4 bytes an entry). */
 static uint32_t ranked_box(const pvsr_level* l, uint64_t e) {
     const pvsr_array* a = &l->ranked_boxes;
@@ -88,29 +109,59 @@ static uint64_t xxh_merge(uint64_t acc, uint64_t val) {
     return acc * P64_1 + P64_4;
 }
 
-uint64_t pvsr_xxh64(const void* data, size_t size, uint64_t seed) {
-    const uint8_t* p = (const uint8_t*)data;
-    const uint8_t* const end = p + size;
-    uint64_t h;
-    if (size >= 32) {
-        const uint8_t* const limit = end - 32;
-        uint64_t v1 = seed + P64_1 + P64_2, v2 = seed + P64_2, v3 = seed, v4 = seed - P64_1;
-        do {
-            v1 = xxh_round(v1, rd64(p));
-            v2 = xxh_round(v2, rd64(p + 8));
-            v3 = xxh_round(v3, rd64(p + 16));
-            v4 = xxh_round(v4, rd64(p + 24));
-            p += 32;
-        } while (p <= limit);
-        h = rotl64(v1, 1) + rotl64(v2, 7) + rotl64(v3, 12) + rotl64(v4, 18);
-        h = xxh_merge(h, v1);
-        h = xxh_merge(h, v2);
-        h = xxh_merge(h, v3);
-        h = xxh_merge(h, v4);
-    } else {
-        h = seed + P64_5;
+/* XXH64 of a buffer in steps: the stripes of 32 bytes up to a point, then the rest (so that a caller can
+ * check what was just hashed while it is in cache). */
+typedef struct xxh64_run {
+    const uint8_t *p, *begin, *end;
+    uint64_t v[4], seed;
+} xxh64_run;
+
+static void xxh_start(xxh64_run* r, const uint8_t* data, size_t size, uint64_t seed) {
+    r->p = r->begin = data;
+    r->end = data + size;
+    r->seed = seed;
+    r->v[0] = seed + P64_1 + P64_2;
+    r->v[1] = seed + P64_2;
+    r->v[2] = seed;
+    r->v[3] = seed - P64_1;
+}
+
+/* The whole stripes before `until` (clamped to the buffer). */
+static void xxh_stripes(xxh64_run* r, const uint8_t* until) {
+    const uint8_t* p = r->p;
+    uint64_t v1 = r->v[0], v2 = r->v[1], v3 = r->v[2], v4 = r->v[3];
+    if (until > r->end) until = r->end;
+    while (until - p >= 32) {
+        v1 = xxh_round(v1, rd64(p));
+        v2 = xxh_round(v2, rd64(p + 8));
+        v3 = xxh_round(v3, rd64(p + 16));
+        v4 = xxh_round(v4, rd64(p + 24));
+        p += 32;
     }
-    h += (uint64_t)size;
+    r->p = p;
+    r->v[0] = v1;
+    r->v[1] = v2;
+    r->v[2] = v3;
+    r->v[3] = v4;
+}
+
+static uint64_t xxh_finish(xxh64_run* r) {
+    const uint8_t* p;
+    const uint8_t* const end = r->end;
+    const uint64_t size = (uint64_t)(end - r->begin);
+    uint64_t h;
+    xxh_stripes(r, end);
+    p = r->p;
+    if (size >= 32) {
+        h = rotl64(r->v[0], 1) + rotl64(r->v[1], 7) + rotl64(r->v[2], 12) + rotl64(r->v[3], 18);
+        h = xxh_merge(h, r->v[0]);
+        h = xxh_merge(h, r->v[1]);
+        h = xxh_merge(h, r->v[2]);
+        h = xxh_merge(h, r->v[3]);
+    } else {
+        h = r->seed + P64_5;
+    }
+    h += size;
     while (end - p >= 8) {
         h ^= xxh_round(0, rd64(p));
         h = rotl64(h, 27) * P64_1 + P64_4;
@@ -132,6 +183,12 @@ uint64_t pvsr_xxh64(const void* data, size_t size, uint64_t seed) {
     h *= P64_3;
     h ^= h >> 32;
     return h;
+}
+
+uint64_t pvsr_xxh64(const void* data, size_t size, uint64_t seed) {
+    xxh64_run r;
+    xxh_start(&r, (const uint8_t*)data, size, seed);
+    return xxh_finish(&r);
 }
 
 /* ---- The PVS code (docs/FORMAT.md, "The PVS code"): a bounded reader of one row's Rice-coded gaps */
@@ -365,8 +422,8 @@ static const char* check_level(pvsr_level* l) {
                 (l->eye_tiles.at != NULL && rd32(l->eye_tiles.at + 4 * t) >= PVSR_FIRST_BRICK + l->mask_refs.count / 64))
                 return "a mask tile is out of range";
         }
-        for (t = 0; t < l->mask_refs.count; ++t)
-            if (index_at(&l->mask_refs, t) >= PVSR_FIRST_BRICK + l->mask_bits.count) return "a mask brick reference is out of range";
+        if (l->mask_refs.count > 0 && max_item(&l->mask_refs) >= PVSR_FIRST_BRICK + l->mask_bits.count)
+            return "a mask brick reference is out of range";
     } else if (l->mask_flags & PVSR_MASK_EYES) {
         return "an eye mask without a view mask";
     }
@@ -402,8 +459,7 @@ static const char* check_cells(pvsr_level* l) {
         bad = need(l, PVSR_TAG('C', 'G', 'R', 'D'), 4, c, 1, &l->cell_grid);
         if (bad) return bad;
         if (l->cell_kind != 0) return "an octree's cells given by grid positions";
-        for (i = 0; i < c; ++i)
-            if (rd32(l->cell_grid.at + 4 * i) >= l->grid_to_cell.count) return "a cell's grid position is out of range";
+        if (c > 0 && max_item(&l->cell_grid) >= l->grid_to_cell.count) return "a cell's grid position is out of range";
     } else {
         bad = need(l, PVSR_TAG('C', 'B', 'O', 'X'), 24, c, 1, &l->cell_boxes);
         if (bad) return bad;
@@ -413,10 +469,10 @@ static const char* check_cells(pvsr_level* l) {
     return NULL;
 }
 
-static const char* check_rows(pvsr_level* l) {
+/* The rows' sections and their sizes (the rows themselves: check_row). */
+static const char* check_row_sections(pvsr_level* l) {
     const uint32_t n = l->object_count;
-    const uint32_t max_chain = n <= PVSR_STACK_OBJECTS ? PVSR_MAX_CHAIN : 2;
-    uint64_t i, code_size, padding;
+    uint64_t code_size, padding;
     const char* bad = need(l, PVSR_TAG('C', 'R', 'O', 'W'), 0, l->cell_count, 1, &l->cell_row);
     if (!bad) bad = need(l, PVSR_TAG('R', 'O', 'F', 'F'), 0, UINT64_MAX, 1, &l->row_offsets);
     if (!bad) bad = need(l, PVSR_TAG('C', 'O', 'D', 'E'), 1, UINT64_MAX, 1, &l->code);
@@ -429,49 +485,69 @@ static const char* check_rows(pvsr_level* l) {
     padding = 4 * (uint64_t)n + 24;
     if (l->code.bytes < code_size + padding) return "the PVS code is not followed by its padding";
     if (l->row_count == 0 && l->cell_count > 0) return "cells but no PVS rows";
-    for (i = 0; i < l->cell_count; ++i)
-        if (index_at(&l->cell_row, i) >= l->row_count) return "a cell's row is out of range";
+    if (l->cell_count > 0 && max_item(&l->cell_row) >= l->row_count) return "a cell's row is out of range";
     if (index_at(&l->row_offsets, 0) != 0 || index_at(&l->row_offsets, l->row_count) != code_size)
         return "the row offsets do not start at 0 and end at the code's size";
-    for (i = 0; i < l->row_count; ++i) {
-        const uint64_t begin = index_at(&l->row_offsets, i), end = index_at(&l->row_offsets, i + 1);
-        const uint8_t* p = l->code.at + begin;
-        const uint8_t* const stop = l->code.at + end;
-        uint32_t fields[2];
-        int f;
-        if (end < begin + 2 || end > code_size) return "a PVS row's offsets decrease, pass the code or leave no room for it";
-        for (f = 0; f < 2; ++f) {
-            uint64_t v = 0;
-            int shift;
-            for (shift = 0;; shift += 7) {
-                uint8_t b;
-                if (p == stop || shift > 28) return "a PVS row's head is damaged";
-                b = *p++;
-                v |= (uint64_t)(b & 0x7f) << shift;
-                if ((b & 0x80) == 0) break;
-            }
-            if (v > 0xffffffffu) return "a PVS row's head is damaged";
-            fields[f] = (uint32_t)v;
-        }
-        if (fields[0] > i) return "a PVS row refers to a row after it";
-        if (fields[0] > 0) { /* the rows before it were checked: follow its chain to a key row */
-            uint64_t at = i - fields[0];
-            uint32_t length = 2;
-            for (;;) {
-                const uint8_t* q = l->code.at + index_at(&l->row_offsets, at);
-                const uint32_t ref = varint(&q);
-                if (ref == 0) break;
-                if (++length > max_chain) return "a PVS row's chain of references is too long";
-                at -= ref;
-            }
-        }
-        if ((fields[1] & 31) > 24) return "a PVS row's Rice parameter is above 24";
-        if ((fields[1] >> 5) > n) return "a PVS row has more indices than objects";
-        if ((uint64_t)(fields[1] >> 5) * (1 + (fields[1] & 31)) > (uint64_t)(stop - p) * 8)
-            return "a PVS row's code runs past the row";
-    }
     return NULL;
 }
+
+/* Rows whose chain lengths check_row keeps (a power of 2): a row coded against one of the rows just before
+ * it takes that row's length plus one instead of walking its chain. */
+#define PVSR_DEPTH_RING 4096
+
+/* Row i's head and chain, the rows before it checked in order with the same `depth` ring. */
+static const char* check_row(const pvsr_level* l, uint64_t i, uint8_t depth[PVSR_DEPTH_RING]) {
+    const uint32_t n = l->object_count;
+    const uint32_t max_chain = n <= PVSR_STACK_OBJECTS ? PVSR_MAX_CHAIN : 2;
+    const uint64_t code_size = l->code.count;
+    const uint64_t begin = index_at(&l->row_offsets, i), end = index_at(&l->row_offsets, i + 1);
+    const uint8_t* p = l->code.at + begin;
+    const uint8_t* const stop = l->code.at + end;
+    uint32_t fields[2];
+    int f;
+    if (end < begin + 2 || end > code_size) return "a PVS row's offsets decrease, pass the code or leave no room for it";
+    for (f = 0; f < 2; ++f) {
+        uint64_t v = 0;
+        int shift;
+        for (shift = 0;; shift += 7) {
+            uint8_t b;
+            if (p == stop || shift > 28) return "a PVS row's head is damaged";
+            b = *p++;
+            v |= (uint64_t)(b & 0x7f) << shift;
+            if ((b & 0x80) == 0) break;
+        }
+        if (v > 0xffffffffu) return "a PVS row's head is damaged";
+        fields[f] = (uint32_t)v;
+    }
+    if (fields[0] > i) return "a PVS row refers to a row after it";
+    if (fields[0] == 0) {
+        depth[i & (PVSR_DEPTH_RING - 1)] = 1;
+    } else if (fields[0] < PVSR_DEPTH_RING) {
+        const uint32_t length = depth[(i - fields[0]) & (PVSR_DEPTH_RING - 1)] + 1u;
+        if (length > max_chain) return "a PVS row's chain of references is too long";
+        depth[i & (PVSR_DEPTH_RING - 1)] = (uint8_t)length;
+    } else { /* the rows before it were checked: follow its chain to a key row */
+        uint64_t at = i - fields[0];
+        uint32_t length = 2;
+        for (;;) {
+            const uint8_t* q = l->code.at + index_at(&l->row_offsets, at);
+            const uint32_t ref = varint(&q);
+            if (ref == 0) break;
+            if (++length > max_chain) return "a PVS row's chain of references is too long";
+            at -= ref;
+        }
+        depth[i & (PVSR_DEPTH_RING - 1)] = (uint8_t)length;
+    }
+    if ((fields[1] & 31) > 24) return "a PVS row's Rice parameter is above 24";
+    if ((fields[1] >> 5) > n) return "a PVS row has more indices than objects";
+    if ((uint64_t)(fields[1] >> 5) * (1 + (fields[1] & 31)) > (uint64_t)(stop - p) * 8)
+        return "a PVS row's code runs past the row";
+    return NULL;
+}
+
+/* Bytes of the code hashed between checks of the rows they hold (so that a row's head is checked while the
+ * checksum has just brought it into the cache). */
+#define PVSR_CHECK_CHUNK 65536
 
 static const char* check_objects(pvsr_level* l) {
     const uint32_t n = l->object_count;
@@ -511,8 +587,8 @@ static const char* check_ranked(pvsr_level* l) {
     l->occluder_box_count = (uint32_t)l->occluder_boxes.count;
     for (e = 0; e < l->occluder_boxes.count; ++e)
         if (!finite_box(l->occluder_boxes.at + 24 * e)) return "an occluder box is not finite";
-    for (e = 0; e < l->ranked_boxes.count; ++e)
-        if (ranked_box(l, e) >= l->occluder_boxes.count) return "a ranked occluder names a box out of range";
+    if (l->ranked_boxes.count > 0 && max_item(&l->ranked_boxes) >= l->occluder_boxes.count)
+        return "a ranked occluder names a box out of range";
     if (rd32(l->ranked_offsets.at) != 0 || rd32(l->ranked_offsets.at + 4 * (uint64_t)l->cell_count) != l->ranked_boxes.count)
         return "the ranked offsets do not start at 0 and end at the entries' count";
     for (c = 0; c < l->cell_count; ++c) {
@@ -545,7 +621,10 @@ pvsr_status pvsr_open(pvsr_level* level, const void* data, size_t size, char* me
     static const uint8_t kMagic[8] = {'P', 'V', 'S', 'R', 0x0d, 0x0a, 0x1a, 0x0a};
     const uint8_t* b = (const uint8_t*)data;
     opening o;
-    const char* bad;
+    const char *bad, *table_bad, *rows_bad;
+    xxh64_run hash;
+    uint64_t rows = 0;
+    uint8_t depth[PVSR_DEPTH_RING]; /* the chain lengths of the rows just checked */
     const uint16_t probe = 1;
     if (level == NULL) return PVSR_INVALID_ARGUMENT;
     o.l = level;
@@ -566,17 +645,34 @@ pvsr_status pvsr_open(pvsr_level* level, const void* data, size_t size, char* me
     if (rd32(b + 12) != PVSR_HEADER_BYTES) return fail(&o, PVSR_CORRUPT, "the header's size is wrong");
     if (rd64(b + 16) != (uint64_t)size)
         return fail(&o, PVSR_CORRUPT, "the file's size is not the size its header says (truncated or padded)");
-    if (pvsr_xxh64(b + PVSR_CHECKSUMMED_FROM, size - PVSR_CHECKSUMMED_FROM, 0) != rd64(b + 24))
-        return fail(&o, PVSR_CORRUPT, "the bytes do not match the file's checksum (damaged)");
     level->flags = rd32(b + 36);
-    if (level->flags & ~PVSR_FLAG_CONSERVATIVE) return fail(&o, PVSR_CORRUPT, "unknown header flags");
     level->object_count = rd32(b + 40);
     level->cell_count = rd32(b + 44);
     level->cell_kind = rd32(b + 48);
-    bad = check_table(level);
+    /* The checksum, and the rows checked as it passes them (while they are in cache); a damaged file is
+     * refused for its checksum first, and then the checks' first failure is told in their usual order. */
+    xxh_start(&hash, b + PVSR_CHECKSUMMED_FROM, size - PVSR_CHECKSUMMED_FROM, 0);
+    table_bad = check_table(level);
+    rows_bad = table_bad ? NULL : check_row_sections(level);
+    if (!table_bad && !rows_bad) {
+        const uint8_t* const code = level->code.at;
+        const uint8_t* until = code;
+        xxh_stripes(&hash, code);
+        while (rows < level->row_count && !rows_bad && until < hash.end) {
+            until = hash.end - until > PVSR_CHECK_CHUNK ? until + PVSR_CHECK_CHUNK : hash.end;
+            xxh_stripes(&hash, until);
+            while (rows < level->row_count && !rows_bad && code + index_at(&level->row_offsets, rows + 1) <= hash.p)
+                rows_bad = check_row(level, rows++, depth);
+        }
+    }
+    if (xxh_finish(&hash) != rd64(b + 24))
+        return fail(&o, PVSR_CORRUPT, "the bytes do not match the file's checksum (damaged)");
+    if (level->flags & ~PVSR_FLAG_CONSERVATIVE) return fail(&o, PVSR_CORRUPT, "unknown header flags");
+    while (!table_bad && !rows_bad && rows < level->row_count) rows_bad = check_row(level, rows++, depth);
+    bad = table_bad;
     if (!bad) bad = check_level(level);
     if (!bad) bad = check_cells(level);
-    if (!bad) bad = check_rows(level);
+    if (!bad) bad = rows_bad;
     if (!bad) bad = check_objects(level);
     if (!bad) bad = check_ranked(level);
     if (!bad) bad = check_strings(level);
