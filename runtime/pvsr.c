@@ -436,9 +436,14 @@ static const char* check_cells(pvsr_level* l) {
     uint64_t i;
     const char* bad;
     if (c > (1u << 31) || l->node_count > (1u << 31)) return "too many cells or nodes";
-    for (i = 0; i < l->grid_to_cell.count; ++i) {
-        const int32_t v = rdi32(l->grid_to_cell.at + 4 * i);
-        if (v < -1 || v >= top) return "a grid position names a cell or node out of range";
+    {
+        int32_t lo = -1, hi = -1; /* one pass with no exit, which compilers vectorize */
+        for (i = 0; i < l->grid_to_cell.count; ++i) {
+            const int32_t v = rdi32(l->grid_to_cell.at + 4 * i);
+            lo = v < lo ? v : lo;
+            hi = v > hi ? v : hi;
+        }
+        if (lo < -1 || hi >= top) return "a grid position names a cell or node out of range";
     }
     if (l->cell_kind == 1) {
         bad = need(l, PVSR_TAG('N', 'O', 'D', 'E'), PVSR_NODE_BYTES, l->node_count, 1, &l->nodes);
@@ -591,10 +596,15 @@ static const char* check_ranked(pvsr_level* l) {
         return "a ranked occluder names a box out of range";
     if (rd32(l->ranked_offsets.at) != 0 || rd32(l->ranked_offsets.at + 4 * (uint64_t)l->cell_count) != l->ranked_boxes.count)
         return "the ranked offsets do not start at 0 and end at the entries' count";
-    for (c = 0; c < l->cell_count; ++c) {
+    {
+        uint32_t wrong = 0; /* one pass with no exit, which compilers vectorize */
+        for (c = 0; c < l->cell_count; ++c)
+            wrong |= rd32(l->ranked_offsets.at + 4 * c + 4) < rd32(l->ranked_offsets.at + 4 * c);
+        if (wrong) return "the ranked offsets decrease or pass the entries";
+    }
+    for (c = 0; c < l->cell_count && l->ranked_measures.at != NULL; ++c) {
         const uint32_t a = rd32(l->ranked_offsets.at + 4 * c), b = rd32(l->ranked_offsets.at + 4 * c + 4);
-        if (b < a || b > l->ranked_boxes.count) return "the ranked offsets decrease or pass the entries";
-        for (e = a; e < b && l->ranked_measures.at != NULL; ++e) {
+        for (e = a; e < b; ++e) {
             const uint8_t* r = l->ranked_measures.at + PVSR_MEASURE_BYTES * e;
             const float score = rdf(r), sa = rdf(r + 4), hidden = rdf(r + 8), share = rdf(r + 12);
             if (!(isfinite(score) && score >= 0.0f) || (e > a && score > rdf(r - PVSR_MEASURE_BYTES)))
