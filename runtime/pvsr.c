@@ -80,6 +80,45 @@ static uint32_t max_item(const pvsr_array* a) {
     return m;
 }
 
+/* The largest items of the big index arrays, found as the checksum passes them (while they are in cache). */
+#define PVSR_PRESCANS 4
+typedef struct prescan {
+    pvsr_array a[PVSR_PRESCANS]; /* at NULL: none */
+    uint64_t done[PVSR_PRESCANS]; /* items seen */
+    uint32_t max[PVSR_PRESCANS];
+} prescan;
+
+/* Takes in the items of each array that lie wholly before `hashed`. */
+static void prescan_upto(prescan* ps, const uint8_t* hashed) {
+    int k;
+    for (k = 0; k < PVSR_PRESCANS; ++k) {
+        const pvsr_array* a = &ps->a[k];
+        uint64_t n;
+        if (a->at == NULL || hashed <= a->at) continue;
+        n = (uint64_t)(hashed - a->at) / a->item_bytes;
+        if (n > a->count) n = a->count;
+        if (n > ps->done[k]) {
+            pvsr_array part = *a;
+            uint32_t m;
+            part.at = a->at + ps->done[k] * a->item_bytes;
+            part.count = n - ps->done[k];
+            m = max_item(&part);
+            ps->max[k] = m > ps->max[k] ? m : ps->max[k];
+            ps->done[k] = n;
+        }
+    }
+}
+
+/* max_item(a), from the prescan when it holds the array whole. */
+static uint32_t largest(const prescan* ps, const pvsr_array* a) {
+    int k;
+    for (k = 0; ps != NULL && k < PVSR_PRESCANS; ++k)
+        if (ps->a[k].at == a->at && ps->a[k].item_bytes == a->item_bytes && ps->a[k].count == a->count &&
+            ps->done[k] == a->count)
+            return ps->max[k];
+    return max_item(a);
+}
+
 /* Entry e of the ranked occluders: its box (1, 2 or 4 bytes an entry). */
 static uint32_t ranked_box(const pvsr_level* l, uint64_t e) {
     const pvsr_array* a = &l->ranked_boxes;
@@ -370,7 +409,7 @@ static const char* check_table(pvsr_level* l) {
     return NULL;
 }
 
-static const char* check_level(pvsr_level* l) {
+static const char* check_level(pvsr_level* l, const prescan* ps) {
     pvsr_array a;
     const uint8_t* p;
     uint64_t g;
@@ -422,7 +461,7 @@ static const char* check_level(pvsr_level* l) {
                 (l->eye_tiles.at != NULL && rd32(l->eye_tiles.at + 4 * t) >= PVSR_FIRST_BRICK + l->mask_refs.count / 64))
                 return "a mask tile is out of range";
         }
-        if (l->mask_refs.count > 0 && max_item(&l->mask_refs) >= PVSR_FIRST_BRICK + l->mask_bits.count)
+        if (l->mask_refs.count > 0 && largest(ps, &l->mask_refs) >= PVSR_FIRST_BRICK + l->mask_bits.count)
             return "a mask brick reference is out of range";
     } else if (l->mask_flags & PVSR_MASK_EYES) {
         return "an eye mask without a view mask";
@@ -430,7 +469,7 @@ static const char* check_level(pvsr_level* l) {
     return NULL;
 }
 
-static const char* check_cells(pvsr_level* l) {
+static const char* check_cells(pvsr_level* l, const prescan* ps) {
     const uint32_t c = l->cell_count;
     const int32_t top = (int32_t)(l->cell_kind == 0 ? c : l->node_count);
     uint64_t i;
@@ -464,7 +503,8 @@ static const char* check_cells(pvsr_level* l) {
         bad = need(l, PVSR_TAG('C', 'G', 'R', 'D'), 4, c, 1, &l->cell_grid);
         if (bad) return bad;
         if (l->cell_kind != 0) return "an octree's cells given by grid positions";
-        if (c > 0 && max_item(&l->cell_grid) >= l->grid_to_cell.count) return "a cell's grid position is out of range";
+        if (c > 0 && largest(ps, &l->cell_grid) >= l->grid_to_cell.count)
+            return "a cell's grid position is out of range";
     } else {
         bad = need(l, PVSR_TAG('C', 'B', 'O', 'X'), 24, c, 1, &l->cell_boxes);
         if (bad) return bad;
@@ -490,8 +530,13 @@ static const char* check_row_sections(pvsr_level* l) {
     padding = 4 * (uint64_t)n + 24;
     if (l->code.bytes < code_size + padding) return "the PVS code is not followed by its padding";
     if (l->row_count == 0 && l->cell_count > 0) return "cells but no PVS rows";
-    if (l->cell_count > 0 && max_item(&l->cell_row) >= l->row_count) return "a cell's row is out of range";
-    if (index_at(&l->row_offsets, 0) != 0 || index_at(&l->row_offsets, l->row_count) != code_size)
+    return NULL;
+}
+
+/* The cells' rows in range and the row offsets' ends (after check_row_sections, before the rows). */
+static const char* check_row_ends(const pvsr_level* l, const prescan* ps) {
+    if (l->cell_count > 0 && largest(ps, &l->cell_row) >= l->row_count) return "a cell's row is out of range";
+    if (index_at(&l->row_offsets, 0) != 0 || index_at(&l->row_offsets, l->row_count) != l->code.count)
         return "the row offsets do not start at 0 and end at the code's size";
     return NULL;
 }
@@ -576,7 +621,7 @@ static const char* check_objects(pvsr_level* l) {
     return NULL;
 }
 
-static const char* check_ranked(pvsr_level* l) {
+static const char* check_ranked(pvsr_level* l, const prescan* ps) {
     uint64_t c, e;
     const char* bad;
     if (!section(l, PVSR_TAG('R', 'O', 'F', 'S'), &l->ranked_offsets)) return NULL; /* no ranking */
@@ -592,7 +637,7 @@ static const char* check_ranked(pvsr_level* l) {
     l->occluder_box_count = (uint32_t)l->occluder_boxes.count;
     for (e = 0; e < l->occluder_boxes.count; ++e)
         if (!finite_box(l->occluder_boxes.at + 24 * e)) return "an occluder box is not finite";
-    if (l->ranked_boxes.count > 0 && max_item(&l->ranked_boxes) >= l->occluder_boxes.count)
+    if (l->ranked_boxes.count > 0 && largest(ps, &l->ranked_boxes) >= l->occluder_boxes.count)
         return "a ranked occluder names a box out of range";
     if (rd32(l->ranked_offsets.at) != 0 || rd32(l->ranked_offsets.at + 4 * (uint64_t)l->cell_count) != l->ranked_boxes.count)
         return "the ranked offsets do not start at 0 and end at the entries' count";
@@ -631,8 +676,9 @@ pvsr_status pvsr_open(pvsr_level* level, const void* data, size_t size, char* me
     static const uint8_t kMagic[8] = {'P', 'V', 'S', 'R', 0x0d, 0x0a, 0x1a, 0x0a};
     const uint8_t* b = (const uint8_t*)data;
     opening o;
-    const char *bad, *table_bad, *rows_bad;
+    const char *bad, *table_bad, *rows_bad, *row_bad = NULL;
     xxh64_run hash;
+    prescan ps;
     uint64_t rows = 0;
     uint8_t depth[PVSR_DEPTH_RING]; /* the chain lengths of the rows just checked */
     const uint16_t probe = 1;
@@ -659,32 +705,50 @@ pvsr_status pvsr_open(pvsr_level* level, const void* data, size_t size, char* me
     level->object_count = rd32(b + 40);
     level->cell_count = rd32(b + 44);
     level->cell_kind = rd32(b + 48);
-    /* The checksum, and the rows checked as it passes them (while they are in cache); a damaged file is
-     * refused for its checksum first, and then the checks' first failure is told in their usual order. */
+    /* The checksum, and the rows and big index arrays checked as it passes them (while they are in cache); a
+     * damaged file is refused for its checksum first, and then the checks' first failure is told in their
+     * usual order. */
     xxh_start(&hash, b + PVSR_CHECKSUMMED_FROM, size - PVSR_CHECKSUMMED_FROM, 0);
+    memset(&ps, 0, sizeof ps);
     table_bad = check_table(level);
     rows_bad = table_bad ? NULL : check_row_sections(level);
-    if (!table_bad && !rows_bad) {
-        const uint8_t* const code = level->code.at;
-        const uint8_t* until = code;
-        xxh_stripes(&hash, code);
-        while (rows < level->row_count && !rows_bad && until < hash.end) {
+    if (!table_bad) {
+        static const uint32_t kTags[PVSR_PRESCANS] = {PVSR_TAG('C', 'R', 'O', 'W'), PVSR_TAG('M', 'R', 'E', 'F'),
+                                                      PVSR_TAG('C', 'G', 'R', 'D'), PVSR_TAG('R', 'L', 'S', 'T')};
+        int k;
+        for (k = 0; k < PVSR_PRESCANS; ++k)
+            if (!section(level, kTags[k], &ps.a[k]) ||
+                (ps.a[k].item_bytes != 1 && ps.a[k].item_bytes != 2 && ps.a[k].item_bytes != 4))
+                memset(&ps.a[k], 0, sizeof ps.a[k]);
+    }
+    {
+        const uint8_t* const code = !table_bad && !rows_bad ? level->code.at : NULL;
+        const uint8_t* until = hash.p;
+        while (until < hash.end) {
             until = hash.end - until > PVSR_CHECK_CHUNK ? until + PVSR_CHECK_CHUNK : hash.end;
             xxh_stripes(&hash, until);
-            while (rows < level->row_count && !rows_bad && code + index_at(&level->row_offsets, rows + 1) <= hash.p)
-                rows_bad = check_row(level, rows++, depth);
+            if (table_bad) continue;
+            prescan_upto(&ps, hash.p);
+            while (code != NULL && hash.p >= code && rows < level->row_count && !row_bad &&
+                   index_at(&level->row_offsets, rows + 1) <= (uint64_t)(hash.p - code))
+                row_bad = check_row(level, rows++, depth);
         }
     }
     if (xxh_finish(&hash) != rd64(b + 24))
         return fail(&o, PVSR_CORRUPT, "the bytes do not match the file's checksum (damaged)");
     if (level->flags & ~PVSR_FLAG_CONSERVATIVE) return fail(&o, PVSR_CORRUPT, "unknown header flags");
-    while (!table_bad && !rows_bad && rows < level->row_count) rows_bad = check_row(level, rows++, depth);
+    if (!table_bad) prescan_upto(&ps, hash.end);
+    if (!table_bad && !rows_bad) {
+        rows_bad = check_row_ends(level, &ps);
+        while (!rows_bad && !row_bad && rows < level->row_count) row_bad = check_row(level, rows++, depth);
+        if (!rows_bad) rows_bad = row_bad;
+    }
     bad = table_bad;
-    if (!bad) bad = check_level(level);
-    if (!bad) bad = check_cells(level);
+    if (!bad) bad = check_level(level, &ps);
+    if (!bad) bad = check_cells(level, &ps);
     if (!bad) bad = rows_bad;
     if (!bad) bad = check_objects(level);
-    if (!bad) bad = check_ranked(level);
+    if (!bad) bad = check_ranked(level, &ps);
     if (!bad) bad = check_strings(level);
     if (bad) return fail(&o, PVSR_CORRUPT, bad);
     if (message != NULL && message_size > 0) message[0] = '\0';
