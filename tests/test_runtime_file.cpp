@@ -160,6 +160,31 @@ TEST_F(RuntimeFileDamage, EachDamageIsRefusedWithItsReason) {
         rechecksum(b);
         EXPECT_NE(opened_message(b, &s).find("a cell's row is out of range"), std::string::npos);
         EXPECT_EQ(s, PVSR_CORRUPT);
+        // Also the last row's head damaged (checked as the checksum passes it, before the cells' rows):
+        // the refusal is still the first failing check in the documented order.
+        const size_t last = size_t(l.code.at - static_cast<const uint8_t*>(b.data())) +
+                            (l.row_offsets.item_bytes == 2
+                                 ? size_t(reinterpret_cast<const uint16_t*>(l.row_offsets.at)[l.row_count - 1])
+                                 : size_t(reinterpret_cast<const uint32_t*>(l.row_offsets.at)[l.row_count - 1]));
+        ASSERT_LT(l.row_count, 128u);
+        b.bytes()[last] = 0x7f;  // a reference 127 rows back, before the first row
+        rechecksum(b);
+        EXPECT_NE(opened_message(b, &s).find("a cell's row is out of range"), std::string::npos);
+        Bytes only_row(file_);
+        only_row.bytes()[last] = 0x7f;
+        rechecksum(only_row);
+        EXPECT_NE(opened_message(only_row, &s).find("a PVS row refers to a row after it"), std::string::npos);
+    }
+    {
+        // A file whose checksummed bytes end in less than one 32-byte stripe past the last section: the
+        // checks beside the checksum must still end.
+        std::string longer = file_ + std::string(3, '\0');
+        const uint64_t size = longer.size();
+        std::memcpy(&longer[16], &size, 8);
+        Bytes b(longer);
+        rechecksum(b);
+        opened_message(b, &s);
+        EXPECT_TRUE(s == PVSR_OK || s == PVSR_CORRUPT);
     }
     pvsr_level l;
     EXPECT_EQ(pvsr_open(nullptr, file_.data(), file_.size(), nullptr, 0), PVSR_INVALID_ARGUMENT);
