@@ -214,22 +214,79 @@ std::unique_ptr<uint8_t[]> build_seed_cubes(const VoxelGrid& grid, const BitVolu
 }
 
 // Grows the box from the cube of edge `edge` at `seed`: one layer at a time, round-robin over
-// +x, -x, +y, -y, +z, -z, while the layer is inside the grid and all solid.
+// +x, -x, +y, -y, +z, -z, while the layer is inside the grid and all solid. The same box, faster
+// (docs/ALGORITHMS.md#boxes): a direction that fails once fails for good (its next layer only ever widens),
+// so it is not tried again; and once every direction left lies on one axis, the two no longer change each
+// other's layers, so each grows to its end at once (by doubling, then halving, the slab it adds).
 VoxelBox grow_from(const EmptySums& sums, glm::ivec3 seed, int edge) {
     VoxelBox b{seed, seed + (edge - 1)};
+    bool alive[6] = {true, true, true, true, true, true};
+    // The slab of `n` layers beyond the box's face in direction `dir` (inside the grid: checked by callers).
+    const auto slab = [&](int dir, int from, int n, glm::ivec3& lo, glm::ivec3& hi) {
+        const int axis = dir / 2;
+        lo = b.lo;
+        hi = b.hi;
+        if (dir % 2 == 0) {
+            lo[axis] = b.hi[axis] + 1 + from;
+            hi[axis] = b.hi[axis] + from + n;
+        } else {
+            hi[axis] = b.lo[axis] - 1 - from;
+            lo[axis] = b.lo[axis] - from - n;
+        }
+    };
+    // Layers left in the grid beyond the face in direction `dir`.
+    const auto room = [&](int dir) {
+        const int axis = dir / 2;
+        return dir % 2 == 0 ? sums.dims[axis] - 1 - b.hi[axis] : b.lo[axis];
+    };
     for (bool grew = true; grew;) {
         grew = false;
-        for (int dir = 0; dir < 6; ++dir) {
-            const int axis = dir / 2;
-            glm::ivec3 lo = b.lo, hi = b.hi;
-            if (dir % 2 == 0) {
-                if (b.hi[axis] + 1 >= sums.dims[axis]) continue;
-                lo[axis] = hi[axis] = b.hi[axis] + 1;
-            } else {
-                if (b.lo[axis] == 0) continue;
-                lo[axis] = hi[axis] = b.lo[axis] - 1;
+        int axes = 0, last_axis = 0;
+        for (int a = 0; a < 3; ++a)
+            if (alive[2 * a] || alive[2 * a + 1]) ++axes, last_axis = a;
+        if (axes == 1) {
+            for (int dir = 2 * last_axis; dir < 2 * last_axis + 2; ++dir) {
+                if (!alive[dir]) continue;
+                // Layers [0, done) beyond the face are solid; find how many more are.
+                int done = 0, step = 1;
+                bool halving = false;  // a slab failed: the end lies within the next `2 step` layers
+                glm::ivec3 lo, hi;
+                while (step > 0) {
+                    const int n = std::min(step, room(dir) - done);
+                    bool solid = false;
+                    if (n > 0) {
+                        slab(dir, done, n, lo, hi);
+                        solid = sums.all_solid(lo, hi);
+                    }
+                    if (solid) {
+                        done += n;
+                        if (n < step) break;  // the grid's edge
+                        step = halving ? step / 2 : step * 2;
+                    } else {
+                        halving = true;
+                        step /= 2;
+                    }
+                }
+                if (done > 0) {
+                    slab(dir, 0, done, lo, hi);
+                    b.lo = glm::min(b.lo, lo);
+                    b.hi = glm::max(b.hi, hi);
+                }
             }
-            if (!sums.all_solid(lo, hi)) continue;
+            break;
+        }
+        for (int dir = 0; dir < 6; ++dir) {
+            if (!alive[dir]) continue;
+            glm::ivec3 lo, hi;
+            if (room(dir) == 0) {
+                alive[dir] = false;
+                continue;
+            }
+            slab(dir, 0, 1, lo, hi);
+            if (!sums.all_solid(lo, hi)) {
+                alive[dir] = false;
+                continue;
+            }
             b.lo = glm::min(b.lo, lo);
             b.hi = glm::max(b.hi, hi);
             grew = true;
