@@ -445,8 +445,8 @@ void clear_cubes(uint8_t* cube, uint8_t* l1, uint64_t lo, uint64_t hi) {
 }
 
 // Groups of kBlock blocks per window of the seed scan: the seeds of one size in a window are found on all
-// threads at once (about 16.8 M voxels: few parallel regions, and a bounded list of seeds).
-constexpr uint64_t kWindowGroups = 4096;
+// threads at once (about 4.2 M voxels: few parallel regions, and a list of at most 32 MiB of seeds).
+constexpr uint64_t kWindowGroups = 1024;
 // Boxes grown before their voxels are cleared from the cubes, on all threads.
 constexpr size_t kBatchBoxes = 64;
 // A batch of fewer rows is cleared on one thread.
