@@ -445,7 +445,7 @@ void clear_cubes(uint8_t* cube, uint8_t* l1, uint64_t lo, uint64_t hi) {
 }
 
 // Groups of kBlock blocks per window of the seed scan: the seeds of one size in a window are found on all
-// threads at once (about 4.2 M voxels: few parallel regions, and a list of at most 32 MiB of seeds).
+// threads at once (about 4.2 M voxels: few parallel regions, and at most 4.2 M seeds held at once).
 constexpr uint64_t kWindowGroups = 1024;
 // Boxes grown before their voxels are cleared from the cubes, on all threads.
 constexpr size_t kBatchBoxes = 64;

@@ -69,9 +69,9 @@ struct BoxStats {
 
 // Greedy growth, then sort and cut (see above). `solid` holds grid.count() bits. Throws pvs::Error
 // (bad input) naming the option when the config is outside its limits. Memory: about 3.2 bytes a voxel
-// (seed cubes 1, a summed-area table of 16-bit sums 2, a bit of cover) and at most 32 MiB of seeds found
-// at once; time roughly linear in voxels plus the volume of the grown boxes. Boxes come sorted by
-// decreasing volume.
+// (seed cubes 1, a summed-area table of 16-bit sums 2, a bit of cover), and 8 bytes a seed for the seeds of
+// one window of 4.2 M voxels at a time; time roughly linear in voxels plus the volume of the grown boxes.
+// Boxes come sorted by decreasing volume.
 std::vector<VoxelBox> grow_boxes(Context& ctx, const VoxelGrid& grid, const BitVolume& solid,
                                  const BoxConfig& config, BoxStats* stats = nullptr);
 
