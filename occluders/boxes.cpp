@@ -84,7 +84,7 @@ uint64_t solid_count(const VoxelGrid& grid, const BitVolume& solid) {
 // count the non-solid voxels of [0, x) x [0, y) x [0, z).
 struct EmptySums {
     glm::ivec3 dims{0};
-    uint64_t sx = 0, sxy = 0;  // strides of y and z
+    uint64_t sx = 0, sxy = 0;          // strides of y and z
     std::unique_ptr<uint16_t[]> sums;  // (dims.x + 1) * (dims.y + 1) * (dims.z + 1)
 
     uint32_t at(int x, int y, int z) const {
@@ -130,28 +130,27 @@ EmptySums build_empty_sums(const VoxelGrid& grid, const BitVolume& solid) {
         for (int z = 1; z <= nz; ++z) std::memset(s + sxy * uint64_t(z), 0, sx * sizeof(uint16_t));
 #pragma omp single nowait
         std::memset(s, 0, sxy * sizeof(uint16_t));
-        // Along x: running counts of each row. Rows are independent.
+        // Along x and y at once, a slice z per task: each row's running counts plus the row before it.
 #pragma omp for schedule(static)
-        for (int64_t r = 0; r < int64_t(ny) * nz; ++r) {
-            const int y = int(r % ny), z = int(r / ny);
-            const uint64_t src = grid.index(0, y, z);
-            uint16_t* row = s + sx * uint64_t(y + 1) + sxy * uint64_t(z + 1);
-            uint16_t run = 0;
-            row[0] = 0;
-            for (int x = 0; x < nx; ++x) {
-                run = uint16_t(run + (solid.get(src + uint64_t(x)) ? 0 : 1));
-                row[x + 1] = run;
+        for (int z = 0; z < nz; ++z) {
+            for (int y = 0; y < ny; ++y) {
+                const uint64_t src = grid.index(0, y, z);
+                uint16_t* row = s + sx * uint64_t(y + 1) + sxy * uint64_t(z + 1);
+                const uint16_t* prev = row - sx;  // the row before, this task's (y = 0: no row, below)
+                uint16_t run = 0;
+                row[0] = 0;
+                if (y == 0) {
+                    for (int x = 0; x < nx; ++x)
+                        row[x + 1] = run = uint16_t(run + (solid.get(src + uint64_t(x)) ? 0 : 1));
+                    continue;
+                }
+                for (int x = 0; x < nx; ++x) {
+                    run = uint16_t(run + (solid.get(src + uint64_t(x)) ? 0 : 1));
+                    row[x + 1] = uint16_t(run + prev[x + 1]);
+                }
             }
         }
-        // Along y, then along z: add the previous row (slice) to each row (slice).
-#pragma omp for schedule(static)
-        for (int z = 1; z <= nz; ++z) {
-            for (int y = 2; y <= ny; ++y) {
-                uint16_t* row = s + sx * uint64_t(y) + sxy * uint64_t(z);
-                const uint16_t* prev = row - sx;
-                for (uint64_t x = 0; x < sx; ++x) row[x] = uint16_t(row[x] + prev[x]);
-            }
-        }
+        // Along z: add the previous slice to each slice.
 #pragma omp for schedule(static)
         for (int y = 1; y <= ny; ++y) {
             for (int z = 2; z <= nz; ++z) {
@@ -372,7 +371,8 @@ private:
         for (int z = lo.z; z <= hi.z; ++z)
             for (int y = lo.y; y <= hi.y; ++y)
                 for (int x = lo.x; x <= hi.x; ++x)
-                    f(cells_[size_t(x) + size_t(kBucketsPerAxis) * (size_t(y) + size_t(kBucketsPerAxis) * z)]);
+                    f(cells_[size_t(x) +
+                             size_t(kBucketsPerAxis) * (size_t(y) + size_t(kBucketsPerAxis) * z)]);
     }
 
     glm::ivec3 size_;
@@ -452,22 +452,27 @@ constexpr size_t kBatchBoxes = 64;
 // A batch of fewer rows is cleared on one thread.
 constexpr uint64_t kParallelRows = 4096;
 
-// The voxels of groups g0..g1 (of kBlock blocks of kBlock voxels) whose cube size is s, in index order,
-// into `seeds`. Tightens the bounds of the blocks and groups it scans (a bound is of the cubes as they are
+// Groups of kBlock blocks per chunk of a window: threads take chunks as they finish (seeds cluster, so even
+// runs of groups would leave threads idle), each into its own list.
+constexpr uint64_t kChunkGroups = 16;
+
+// The voxels of groups g0..g1 (of kBlock blocks of kBlock voxels) whose cube size is s: chunk c's list holds
+// those of groups g0 + c kChunkGroups onwards, in index order, so the lists in chunk order are the seeds in
+// index order. Tightens the bounds of the blocks and groups it scans (a bound is of the cubes as they are
 // now, so it stays an upper bound).
 void collect_seeds(const uint8_t* cube, std::vector<uint8_t>& l1, std::vector<uint8_t>& l2, uint64_t n,
-                   uint8_t s, uint64_t g0, uint64_t g1, bool parallel, std::vector<uint64_t>& seeds) {
-    seeds.clear();
+                   uint8_t s, uint64_t g0, uint64_t g1, bool parallel,
+                   std::vector<std::vector<uint64_t>>& chunks) {
     const uint64_t n1 = l1.size();
-    std::vector<std::vector<uint64_t>> found;
-#pragma omp parallel if (parallel)
-    {
-#pragma omp single
-        found.resize(size_t(omp_get_num_threads()));
-        std::vector<uint64_t>& mine = found[size_t(omp_get_thread_num())];
-        // Static: each thread one run of groups, in thread order, so the runs concatenate in index order.
-#pragma omp for schedule(static)
-        for (uint64_t g = g0; g < g1; ++g) {
+    const int64_t n_chunks = int64_t((g1 - g0 + kChunkGroups - 1) / kChunkGroups);
+    if (chunks.size() < size_t(n_chunks)) chunks.resize(size_t(n_chunks));
+    for (std::vector<uint64_t>& c : chunks) c.clear();
+    if (block_max(&l2[g0], g1 - g0) < s) return;  // no seed of this size in the window
+#pragma omp parallel for schedule(dynamic, 1) if (parallel)
+    for (int64_t c = 0; c < n_chunks; ++c) {
+        std::vector<uint64_t>& mine = chunks[size_t(c)];
+        const uint64_t c_end = std::min(g1, g0 + uint64_t(c + 1) * kChunkGroups);
+        for (uint64_t g = g0 + uint64_t(c) * kChunkGroups; g < c_end; ++g) {
             if (l2[g] < s) continue;
             const uint64_t b_end = std::min(n1, (g + 1) * kBlock);
             for (uint64_t b = g * kBlock; b < b_end; ++b) {
@@ -480,8 +485,6 @@ void collect_seeds(const uint8_t* cube, std::vector<uint8_t>& l1, std::vector<ui
             l2[g] = block_max(&l1[g * kBlock], b_end - g * kBlock);
         }
     }
-    for (const std::vector<uint64_t>& f : found) seeds.insert(seeds.end(), f.begin(), f.end());
-    if (!std::is_sorted(seeds.begin(), seeds.end())) std::sort(seeds.begin(), seeds.end());
 }
 
 // Boxes grown but not yet cleared from the cubes: the parts of each to clear (box_minus), and the boxes to
@@ -585,34 +588,37 @@ std::vector<VoxelBox> grow_boxes(Context& ctx, const VoxelGrid& grid, const BitV
         bool stop = false;
         BoxBuckets covering(grid.dims);  // every box grown
         ClearBatch batch;
-        std::vector<uint64_t> seeds;
+        std::vector<std::vector<uint64_t>> chunks;  // a window's seeds of one size (collect_seeds)
         ctx.progress_begin("boxes", 0, "boxes");
         for (int s = kMaxSeedCube; s >= 1 && !stop; --s) {
             if (!sizes[size_t(s)]) continue;
             for (uint64_t g0 = 0; g0 < n2 && !stop; g0 += kWindowGroups) {
                 const uint64_t g1 = std::min(n2, g0 + kWindowGroups);
-                collect_seeds(cube.get(), l1, l2, n, uint8_t(s), g0, g1, parallel, seeds);
-                for (const uint64_t i : seeds) {
-                    if (cube[i] != s) continue;  // cleared by a box of an earlier batch
-                    const glm::ivec3 at = grid.coords(i);
-                    if (batch.covers(at)) continue;
-                    const VoxelBox box = grow_from(sums, at, s);
-                    ++st.grown;
-                    // Cover: no voxel of the box seeds again. The box grown before that shares most of it
-                    // is clear already, or is in the batch (growth goes through covered voxels), so only the
-                    // rest is cleared.
-                    uint64_t shared = 0;
-                    std::array<VoxelBox, 6> rest;
-                    const int parts = box_minus(box, covering.most_overlapping(box, shared), rest);
-                    batch.add(box, rest.data(), parts);
-                    covering.add(box);
-                    if (volume_m3(grid, box.volume()) >= config.min_box_volume_m3) {
-                        ctx.progress_advance(1);
-                        grown.push_back(box);
-                        stop = grown.size() >= cap;
-                        if (stop) break;
+                collect_seeds(cube.get(), l1, l2, n, uint8_t(s), g0, g1, parallel, chunks);
+                for (const std::vector<uint64_t>& seeds : chunks) {
+                    for (const uint64_t i : seeds) {
+                        if (cube[i] != s) continue;  // cleared by a box of an earlier batch
+                        const glm::ivec3 at = grid.coords(i);
+                        if (batch.covers(at)) continue;
+                        const VoxelBox box = grow_from(sums, at, s);
+                        ++st.grown;
+                        // Cover: no voxel of the box seeds again. The box grown before that shares most of it
+                        // is clear already, or is in the batch (growth goes through covered voxels), so only
+                        // the rest is cleared.
+                        uint64_t shared = 0;
+                        std::array<VoxelBox, 6> rest;
+                        const int parts = box_minus(box, covering.most_overlapping(box, shared), rest);
+                        batch.add(box, rest.data(), parts);
+                        covering.add(box);
+                        if (volume_m3(grid, box.volume()) >= config.min_box_volume_m3) {
+                            ctx.progress_advance(1);
+                            grown.push_back(box);
+                            stop = grown.size() >= cap;
+                            if (stop) break;
+                        }
+                        if (batch.full()) batch.clear(grid, cube.get(), l1.data(), parallel);
                     }
-                    if (batch.full()) batch.clear(grid, cube.get(), l1.data(), parallel);
+                    if (stop) break;
                 }
                 batch.clear(grid, cube.get(), l1.data(), parallel);
             }
@@ -778,7 +784,8 @@ Aabb box_bounds(const VoxelGrid& grid, const VoxelBox& box) {
     return Aabb::of(grid.voxel_box(box.lo).min, grid.voxel_box(box.hi).max);
 }
 
-TrimFigures trim_off_rejected(std::vector<VoxelBox>& boxes, std::vector<uint8_t>& rejected, uint64_t min_voxels) {
+TrimFigures trim_off_rejected(std::vector<VoxelBox>& boxes, std::vector<uint8_t>& rejected,
+                              uint64_t min_voxels) {
     TrimFigures figures;
     const auto overlap = [](const VoxelBox& a, const VoxelBox& b) {
         return glm::all(glm::lessThanEqual(glm::max(a.lo, b.lo), glm::min(a.hi, b.hi)));
@@ -810,6 +817,5 @@ TrimFigures trim_off_rejected(std::vector<VoxelBox>& boxes, std::vector<uint8_t>
     }
     return figures;
 }
-
 
 }  // namespace pvs
