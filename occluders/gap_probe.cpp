@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -138,17 +139,19 @@ GapProbeFigures probe_gaps(Context& ctx, const BitVolume& touched, const VoxelMa
     // ... gathered into blocks of kBlockVoxels^3 voxels, each searched as one.
     const glm::ivec3 block_dims = (grid.dims + kBlockVoxels - 1) / kBlockVoxels;
     std::vector<uint8_t> block_used(size_t(block_dims.x) * size_t(block_dims.y) * size_t(block_dims.z), 0);
-    for (size_t w = 0; w < near_solid.words.size(); ++w) {
-        uint64_t bits = near_solid.words[w] & near_touched.words[w];
-        while (bits) {
+    // (Words of one block run may mark the same block: an atomic store of the same value.)
+    figures.voxels = sum_words(near_solid.words.size(), [&](size_t w) {
+        const uint64_t word = near_solid.words[w] & near_touched.words[w];
+        for (uint64_t bits = word; bits; bits &= bits - 1) {
             const glm::ivec3 c =
                 grid.coords(uint64_t(w) * 64 + uint64_t(__builtin_ctzll(bits))) / kBlockVoxels;
-            block_used[size_t(c.x) +
-                       size_t(block_dims.x) * (size_t(c.y) + size_t(block_dims.y) * size_t(c.z))] = 1;
-            ++figures.voxels;
-            bits &= bits - 1;
+            std::atomic_ref<uint8_t>(
+                block_used[size_t(c.x) +
+                           size_t(block_dims.x) * (size_t(c.y) + size_t(block_dims.y) * size_t(c.z))])
+                .store(1, std::memory_order_relaxed);
         }
-    }
+        return uint64_t(__builtin_popcountll(word));
+    });
     std::vector<glm::ivec3> blocks;
     for (int z = 0; z < block_dims.z; ++z)
         for (int y = 0; y < block_dims.y; ++y)

@@ -32,28 +32,26 @@ constexpr uint32_t kHotRaysFactor = 4;
 constexpr int kTouchedDepth = 8;
 
 // Solid voxels next to an OPEN voxel (neither solid nor touched), or to a touched voxel joined to an open
-// one by at most kTouchedDepth steps through touched voxels; less those already probed.
-std::vector<uint64_t> frontier_of(const Solid& solid, const BitVolume& touched, const BitVolume& probed) {
+// one by at most kTouchedDepth steps through touched voxels; less those already probed, which they join.
+std::vector<uint64_t> frontier_of(const Solid& solid, const BitVolume& touched, BitVolume& probed) {
     const VoxelGrid& grid = solid.grid;
     BitVolume open;
     open.words.resize(solid.solid.words.size());
-    for (size_t w = 0; w < open.words.size(); ++w) open.words[w] = ~(solid.solid.words[w] | touched.words[w]);
+    for_each_word(open.words.size(),
+                  [&](size_t w) { open.words[w] = ~(solid.solid.words[w] | touched.words[w]); });
     const uint64_t tail = grid.count() % 64;
     if (tail) open.words.back() &= (uint64_t(1) << tail) - 1;
     BitVolume near = open;  // grown through touched voxels only
     for (int k = 0; k < kTouchedDepth; ++k) {
         near = dilate(grid, near, 1);
-        for (size_t w = 0; w < near.words.size(); ++w) near.words[w] &= open.words[w] | touched.words[w];
+        for_each_word(near.words.size(),
+                      [&](size_t w) { near.words[w] &= open.words[w] | touched.words[w]; });
     }
     near = dilate(grid, near, 1);
-    std::vector<uint64_t> out;
-    for (size_t w = 0; w < open.words.size(); ++w) {
-        uint64_t bits = solid.solid.words[w] & near.words[w] & ~probed.words[w];
-        while (bits) {
-            out.push_back(uint64_t(w) * 64 + uint64_t(__builtin_ctzll(bits)));
-            bits &= bits - 1;
-        }
-    }
+    const auto frontier = [&](size_t w) { return solid.solid.words[w] & near.words[w] & ~probed.words[w]; };
+    std::vector<uint64_t> out = set_bit_indices(open.words.size(), frontier);
+    for_each_word(probed.words.size(),
+                  [&](size_t w) { probed.words[w] |= near.words[w] & solid.solid.words[w]; });
     return out;
 }
 
@@ -95,7 +93,6 @@ SealProbeFigures probe_seals(Context& ctx, const BitVolume& touched, const Voxel
         const uint64_t round_seed = seed + uint64_t(round) * 0x9e3779b97f4a7c15ULL;
         if (frontier.empty()) break;
         ++figures.rounds;
-        for (uint64_t i : frontier) probed.set(i);
         figures.frontier_voxels += frontier.size();
         uint64_t walked = 0, segments = 0, leaks = 0, narrow = 0;
         BitVolume seen;  // written by every thread (an atomic OR), read only after the loop
@@ -183,9 +180,9 @@ SealProbeFigures probe_seals(Context& ctx, const BitVolume& touched, const Voxel
         figures.removed_voxels += open_seen_and_leaky(touched, seen, leaky, sources, solid);
         // A crack runs on: the frontier voxels near what this round found are probed again.
         BitVolume found = seen;
-        for (size_t w = 0; w < found.words.size(); ++w) found.words[w] |= leaky.words[w];
+        for_each_word(found.words.size(), [&](size_t w) { found.words[w] |= leaky.words[w]; });
         const BitVolume hot = dilate(grid, found, kHotRadius);
-        for (size_t w = 0; w < probed.words.size(); ++w) probed.words[w] &= ~hot.words[w];
+        for_each_word(probed.words.size(), [&](size_t w) { probed.words[w] &= ~hot.words[w]; });
     }
     figures.leaky_voxels = leaky.count();
     figures.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -22,8 +22,8 @@ Solid classify_solid(Context& ctx, const VoxelGrid& grid, const BitVolume& touch
     const BitVolume sources = sight_sources(grid, eyes);
     const BitVolume reached = sight_reach(grid, touched, sources);
     out.solid.reset(grid.count());
-    for (size_t w = 0; w < out.solid.words.size(); ++w)
-        out.solid.words[w] = ~(reached.words[w] | touched.words[w]);
+    for_each_word(out.solid.words.size(),
+                  [&](size_t w) { out.solid.words[w] = ~(reached.words[w] | touched.words[w]); });
     const uint64_t tail = grid.count() % 64;
     if (tail) out.solid.words.back() &= (uint64_t(1) << tail) - 1;
     out.solid_voxels = out.solid.count();
@@ -58,14 +58,14 @@ uint64_t reopen_leaks(const BitVolume& touched, const BitVolume& leaky, const Bi
                       Solid& solid) {
     BitVolume blocked;
     blocked.words.resize(touched.words.size());
-    for (size_t w = 0; w < blocked.words.size(); ++w) blocked.words[w] = touched.words[w] & ~leaky.words[w];
+    for_each_word(blocked.words.size(),
+                  [&](size_t w) { blocked.words[w] = touched.words[w] & ~leaky.words[w]; });
     const BitVolume reached = sight_reach(solid.grid, blocked, sources);
-    uint64_t removed = 0;
-    for (size_t w = 0; w < solid.solid.words.size(); ++w) {
+    const uint64_t removed = sum_words(solid.solid.words.size(), [&](size_t w) {
         const uint64_t gone = solid.solid.words[w] & (reached.words[w] | leaky.words[w]);
-        removed += uint64_t(__builtin_popcountll(gone));
         solid.solid.words[w] &= ~gone;
-    }
+        return uint64_t(__builtin_popcountll(gone));
+    });
     solid.solid_voxels -= removed;
     const double v = solid.grid.voxel_size_m;
     solid.solid_m3 = double(solid.solid_voxels) * v * v * v;
@@ -74,12 +74,11 @@ uint64_t reopen_leaks(const BitVolume& touched, const BitVolume& leaky, const Bi
 
 uint64_t open_seen_and_leaky(const BitVolume& touched, const BitVolume& seen, const BitVolume& leaky,
                              const BitVolume& sources, Solid& solid) {
-    uint64_t seen_removed = 0;
-    for (size_t w = 0; w < seen.words.size(); ++w) {
+    const uint64_t seen_removed = sum_words(seen.words.size(), [&](size_t w) {
         const uint64_t gone = solid.solid.words[w] & seen.words[w];
-        seen_removed += uint64_t(__builtin_popcountll(gone));
         solid.solid.words[w] &= ~gone;
-    }
+        return uint64_t(__builtin_popcountll(gone));
+    });
     solid.solid_voxels -= seen_removed;
     return seen_removed + reopen_leaks(touched, leaky, sources, solid);
 }

@@ -254,7 +254,9 @@ std::vector<Aabb> bounds_of(const VoxelGrid& grid, const std::vector<VoxelBox>& 
 // each box at a time, whole words between its ends.
 void mark_boxes(const VoxelGrid& grid, const std::vector<VoxelBox>& boxes,
                 const std::vector<uint8_t>& rejected, uint8_t which, bool value, BitVolume& out) {
-    const auto mark = [&](uint64_t w, uint64_t mask) { value ? out.words[w] |= mask : out.words[w] &= ~mask; };
+    const auto mark = [&](uint64_t w, uint64_t mask) {
+        value ? out.words[w] |= mask : out.words[w] &= ~mask;
+    };
     for (size_t b = 0; b < boxes.size(); ++b) {
         if (rejected[b] != which) continue;
         const VoxelBox& vb = boxes[b];
@@ -409,8 +411,8 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
         carve_seen_solid(ctx, config, config.probe_eyes, grid, *touched, view.eyes, scene, solid, figures,
                          deal);
     if (config.gap_lines > 0) {
-        const GapProbeFigures gf =
-            probe_gaps(ctx, *touched, view.eyes, scene, config.gap_tolerance_m, config.gap_lines, solid, share);
+        const GapProbeFigures gf = probe_gaps(ctx, *touched, view.eyes, scene, config.gap_tolerance_m,
+                                              config.gap_lines, solid, share);
         figures.gap_voxels = gf.voxels;
         figures.gap_gaps = gf.gaps;
         figures.gap_lines = gf.lines;
@@ -450,7 +452,8 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
         proven = solid.solid;
         mark_boxes(grid, boxes, rejected, 1, false, proven);
     }
-    const TrimFigures trim = trim_off_rejected(boxes, rejected, uint64_t(std::ceil(bc.min_box_volume_m3 / voxel_m3)));
+    const TrimFigures trim =
+        trim_off_rejected(boxes, rejected, uint64_t(std::ceil(bc.min_box_volume_m3 / voxel_m3)));
     figures.trimmed = trim.trimmed;
     figures.trimmed_away = trim.trimmed_away;
 
@@ -474,8 +477,8 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
             sf.slanted_triangles, sf.slanted_area_m2, sf.panels, kSlantedMinAreaM2, sf.panel_area_m2));
         shrunk->boxes = shrunk_boxes(ctx, grid, proven, bc, shrunk->epsilon_m, deal);
         std::vector<uint64_t> free_bits(proven.words.size());
-        for (size_t w = 0; w < proven.words.size(); ++w)
-            free_bits[w] = ~(proven.words[w] | touched->words[w]);
+        for_each_word(free_bits.size(),
+                      [&](size_t w) { free_bits[w] = ~(proven.words[w] | touched->words[w]); });
         shrunk->free = mask_of(grid, std::move(free_bits));
         shrunk->solid = mask_of(grid, std::move(proven.words));
     }
@@ -506,13 +509,14 @@ std::vector<Occluder> synthesize_occluders(Context& ctx, const OccluderConfig& c
             region.words = view.view.bits;
             near = dilate(grid, region, int(std::ceil(kNearViewM / grid.voxel_size_m)));
         }
-        uint64_t n = 0, c = 0;
-        for (size_t w = 0; w < solid.solid.words.size(); ++w) {
-            const uint64_t s_near =
-                solid.solid.words[w] & (near.words.empty() ? ~uint64_t(0) : near.words[w]);
-            n += uint64_t(__builtin_popcountll(s_near));
-            c += uint64_t(__builtin_popcountll(s_near & covered.words[w]));
-        }
+        const auto s_near = [&](size_t w) {
+            return solid.solid.words[w] & (near.words.empty() ? ~uint64_t(0) : near.words[w]);
+        };
+        const uint64_t n = sum_words(solid.solid.words.size(),
+                                     [&](size_t w) { return uint64_t(__builtin_popcountll(s_near(w))); });
+        const uint64_t c = sum_words(solid.solid.words.size(), [&](size_t w) {
+            return uint64_t(__builtin_popcountll(s_near(w) & covered.words[w]));
+        });
         figures.near_m3 = double(n) * voxel_m3;
         figures.near_covered_m3 = double(c) * voxel_m3;
     }

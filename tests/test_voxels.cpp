@@ -332,6 +332,39 @@ TEST(Dilate, MatchesTheDefinitionOnRandomSets) {
     }
 }
 
+// The word-wise passes against plain loops, on a volume big enough for several threads and runs, with a
+// partial last run: the same sums and the same indices, ascending, at 1 and 3 threads.
+TEST(WordPasses, MatchPlainLoopsAtAnyThreadCount) {
+    const size_t n = 3 * kParallelWords + 4097;
+    std::vector<uint64_t> a(n), b(n);
+    Rng rng(11, 2);
+    for (size_t w = 0; w < n; ++w) {
+        a[w] = (uint64_t(rng.below(1u << 30)) << 34) ^ rng.below(1u << 30);
+        b[w] = w % 7 == 0 ? ~uint64_t(0) : (uint64_t(rng.below(1u << 30)) << 3);
+    }
+    a[n - 1] |= uint64_t(1) << 63;
+    const auto word = [&](size_t w) { return a[w] & ~b[w]; };
+    uint64_t want_sum = 0;
+    std::vector<uint64_t> want_bits;
+    for (size_t w = 0; w < n; ++w) {
+        want_sum += uint64_t(__builtin_popcountll(word(w)));
+        for (int k = 0; k < 64; ++k)
+            if ((word(w) >> k) & 1u) want_bits.push_back(uint64_t(w) * 64 + uint64_t(k));
+    }
+    const int threads = omp_get_max_threads();
+    for (const int t : {1, 3}) {
+        omp_set_num_threads(t);
+        EXPECT_EQ(sum_words(n, [&](size_t w) { return uint64_t(__builtin_popcountll(word(w))); }), want_sum)
+            << t << " threads";
+        EXPECT_TRUE(set_bit_indices(n, word) == want_bits) << t << " threads";
+        std::vector<uint64_t> c(n);
+        for_each_word(n, [&](size_t w) { c[w] = word(w); });
+        for (size_t w = 0; w < n; ++w) ASSERT_EQ(c[w], word(w)) << t << " threads, word " << w;
+    }
+    omp_set_num_threads(threads);
+    EXPECT_TRUE(set_bit_indices(0, word).empty());
+}
+
 // On a grid big enough for the word loops to run on several threads (rows of 131 voxels, so the rows and
 // planes start at every offset in a word): the same bits at 1 and 3 threads, and those of a reference that
 // sets the (2r + 1)^3 cube around each set voxel of a sparse set.

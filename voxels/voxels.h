@@ -16,6 +16,7 @@
 #include "core/math.h"
 #include "core/world.h"
 
+#include <algorithm>
 #include <atomic>
 #include <cstdint>
 #include <vector>
@@ -53,6 +54,53 @@ struct VoxelGrid {
     Aabb bounds() const { return Aabb::of(origin, origin + glm::vec3(dims) * voxel_size_m); }
 };
 
+// Word-wise passes over bit volumes (64 voxels a word), on all threads for volumes of at least
+// kParallelWords words. Each word's result depends on that word alone, so the results do not depend on
+// the thread count.
+constexpr size_t kParallelWords = size_t(1) << 14;
+
+// f(w) for every word index w < n; f may write word w of its volumes only.
+template <class F>
+void for_each_word(size_t n, F&& f) {
+#pragma omp parallel for schedule(static) if (n >= kParallelWords)
+    for (int64_t w = 0; w < int64_t(n); ++w) f(size_t(w));
+}
+
+// The sum of f(w) over the word indices w < n.
+template <class F>
+uint64_t sum_words(size_t n, F&& f) {
+    uint64_t sum = 0;
+#pragma omp parallel for schedule(static) reduction(+ : sum) if (n >= kParallelWords)
+    for (int64_t w = 0; w < int64_t(n); ++w) sum += f(size_t(w));
+    return sum;
+}
+
+// The voxel indices (64 w + bit) of the bits set in f(w) over w < n, ascending. f is called twice a word
+// (a count, then the fill) and must give the same word both times.
+template <class F>
+std::vector<uint64_t> set_bit_indices(size_t n, F&& f) {
+    constexpr size_t kRun = 4096;  // words per run: each run's count, then its indices at its offset
+    const size_t runs = (n + kRun - 1) / kRun;
+    std::vector<uint64_t> offset(runs + 1, 0);
+#pragma omp parallel for schedule(static) if (n >= kParallelWords)
+    for (int64_t r = 0; r < int64_t(runs); ++r) {
+        uint64_t c = 0;
+        for (size_t w = size_t(r) * kRun, end = std::min(n, w + kRun); w < end; ++w)
+            c += uint64_t(__builtin_popcountll(f(w)));
+        offset[size_t(r) + 1] = c;
+    }
+    for (size_t r = 0; r < runs; ++r) offset[r + 1] += offset[r];
+    std::vector<uint64_t> out(offset[runs]);
+#pragma omp parallel for schedule(static) if (n >= kParallelWords)
+    for (int64_t r = 0; r < int64_t(runs); ++r) {
+        uint64_t* o = out.data() + offset[size_t(r)];
+        for (size_t w = size_t(r) * kRun, end = std::min(n, w + kRun); w < end; ++w)
+            for (uint64_t bits = f(w); bits; bits &= bits - 1)
+                *o++ = uint64_t(w) * 64 + uint64_t(__builtin_ctzll(bits));
+    }
+    return out;
+}
+
 // One bit per voxel.
 struct BitVolume {
     std::vector<uint64_t> words;
@@ -66,9 +114,7 @@ struct BitVolume {
     }
     void clear(uint64_t i) { words[i >> 6] &= ~(uint64_t(1) << (i & 63)); }
     uint64_t count() const {
-        uint64_t n = 0;
-        for (uint64_t w : words) n += uint64_t(__builtin_popcountll(w));
-        return n;
+        return sum_words(words.size(), [&](size_t w) { return uint64_t(__builtin_popcountll(words[w])); });
     }
 };
 
