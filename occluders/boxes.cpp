@@ -23,8 +23,6 @@
 #include <cstring>
 #include <memory>
 
-#include <omp.h>
-
 namespace pvs {
 
 namespace {

@@ -139,7 +139,7 @@ GapProbeFigures probe_gaps(Context& ctx, const BitVolume& touched, const VoxelMa
     // ... gathered into blocks of kBlockVoxels^3 voxels, each searched as one.
     const glm::ivec3 block_dims = (grid.dims + kBlockVoxels - 1) / kBlockVoxels;
     std::vector<uint8_t> block_used(size_t(block_dims.x) * size_t(block_dims.y) * size_t(block_dims.z), 0);
-    // (Words of one block run may mark the same block: an atomic store of the same value.)
+    // (Threads may mark one block from different words: each an atomic store of the same value.)
     figures.voxels = sum_words(near_solid.words.size(), [&](size_t w) {
         const uint64_t word = near_solid.words[w] & near_touched.words[w];
         for (uint64_t bits = word; bits; bits &= bits - 1) {

@@ -284,12 +284,9 @@ std::vector<std::vector<Aabb>> shrunk_boxes(Context& ctx, const VoxelGrid& grid,
                                             const BoxConfig& bc, const std::vector<double>& epsilon_m,
                                             WorkShare& share) {
     const double voxel_m3 = double(grid.voxel_size_m) * grid.voxel_size_m * grid.voxel_size_m;
-    const int64_t words = int64_t(proven.words.size());
-    const bool parallel = words >= (int64_t(1) << 14);
     BitVolume not_proven;
     not_proven.words.resize(proven.words.size());
-#pragma omp parallel for schedule(static) if (parallel)
-    for (int64_t w = 0; w < words; ++w) not_proven.words[size_t(w)] = ~proven.words[size_t(w)];
+    for_each_word(not_proven.words.size(), [&](size_t w) { not_proven.words[w] = ~proven.words[w]; });
     BoxConfig sc = bc;
     sc.min_box_volume_m3 = 0.0;  // every shrunk box helps fusion
     sc.max_boxes = std::max<uint32_t>(bc.max_boxes, 1024);
@@ -307,9 +304,8 @@ std::vector<std::vector<Aabb>> shrunk_boxes(Context& ctx, const VoxelGrid& grid,
         if (owner(level) != share.rank()) continue;
         const int k = k_of(level);
         BitVolume eroded = dilate(grid, not_proven, k);
-#pragma omp parallel for schedule(static) if (parallel)
-        for (int64_t w = 0; w < words; ++w)
-            eroded.words[size_t(w)] = proven.words[size_t(w)] & ~eroded.words[size_t(w)];
+        for_each_word(eroded.words.size(),
+                      [&](size_t w) { eroded.words[w] = proven.words[w] & ~eroded.words[w]; });
         clear_border(grid, eroded, k);
         for (const VoxelBox& vb : grow_boxes(quiet, grid, eroded, sc, nullptr))
             out[level].push_back(box_bounds(grid, vb));

@@ -39,7 +39,8 @@ VoxelGrid make_voxel_grid(const Aabb& bounds, double voxel_size_m, int pad_voxel
 double voxel_grid_count(const Aabb& bounds, double voxel_size_m, int pad_voxels) {
     double total = 1.0;
     for (int a = 0; a < 3; ++a)
-        total *= std::max(1.0, std::ceil(double(bounds.max[a] - bounds.min[a]) / voxel_size_m) + 2.0 * pad_voxels);
+        total *=
+            std::max(1.0, std::ceil(double(bounds.max[a] - bounds.min[a]) / voxel_size_m) + 2.0 * pad_voxels);
     return total;
 }
 
@@ -185,12 +186,11 @@ BitVolume dilate(const VoxelGrid& g, const BitVolume& in, int radius) {
                 const int64_t by = dir * step * stride[axis];
                 const uint64_t* src = a.words.data();
                 uint64_t* dst = b.words.data();
-#pragma omp parallel for schedule(static) if (words >= (int64_t(1) << 14))
-                for (int64_t w = 0; w < words; ++w) {
-                    uint64_t moved = shifted_word(src, words, w, by);
+                for_each_word(size_t(words), [&](size_t w) {
+                    uint64_t moved = shifted_word(src, words, int64_t(w), by);
                     if (axis < 2) moved &= periodic_mask(uint64_t(w), period, lo, hi);
                     dst[w] = src[w] | moved;
-                }
+                });
                 std::swap(a.words, b.words);
             }
             reach += step;
@@ -212,13 +212,12 @@ void clear_border(const VoxelGrid& g, BitVolume& v, int k) {
         hi[axis] = std::max(lo[axis], stride * uint64_t(std::max<int64_t>(0, n - k)));
         stride = period[axis];
     }
-    const int64_t words = int64_t(v.words.size());
-#pragma omp parallel for schedule(static) if (words >= (int64_t(1) << 14))
-    for (int64_t w = 0; w < words; ++w) {
+    for_each_word(v.words.size(), [&](size_t w) {
         uint64_t keep = ~uint64_t(0);
-        for (int axis = 0; axis < 3; ++axis) keep &= periodic_mask(uint64_t(w), period[axis], lo[axis], hi[axis]);
-        v.words[size_t(w)] &= keep;
-    }
+        for (int axis = 0; axis < 3; ++axis)
+            keep &= periodic_mask(uint64_t(w), period[axis], lo[axis], hi[axis]);
+        v.words[w] &= keep;
+    });
 }
 
 void voxelize_opaque(Context& ctx, const World& world, const VoxelGrid& grid, BitVolume& touched,
