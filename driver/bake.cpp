@@ -153,12 +153,13 @@ void grid_cells_and_pvs(Context& ctx, const BakeConfig& config, const World& wor
             for (const auto& [name, value] : reuse->figures)
                 if (name == "conservative_shaft_skipped_candidates") skipped = value;
             const bool ran = config.conservative.shaft_budget > 0 && skipped == 0.0;
-            const bool runs = shaft_pass_runs(config.conservative, world, bake.cells.size());
+            const uint64_t regions = grid_shaft_regions(config.conservative, bake.cells);
+            const bool runs = shaft_pass_runs(config.conservative, world, regions);
             if (ran != runs) {
                 throw bad_input(fmt::format(
-                    "--reuse: the old bake {} the shaft pass and this one would {}: {} cells x the objects "
+                    "--reuse: the old bake {} the shaft pass and this one would {}: {} cells (blocks) x the objects "
                     "{} --shaft-max-pairs {} now; bake without --reuse",
-                    ran ? "ran" : "did not run", runs ? "run it" : "not", bake.cells.size(),
+                    ran ? "ran" : "did not run", runs ? "run it" : "not", regions,
                     runs ? "are within" : "are over", config.conservative.shaft_max_pairs));
             }
             ScopedTimer t(ctx, "reuse_plan");

@@ -667,6 +667,32 @@ uint64_t octree_shaft_regions(const std::vector<Aabb>& boxes, double min_cell_m)
     return regions;
 }
 
+uint64_t grid_shaft_regions(const ConservativeConfig& config, const CellSet& cells) {
+    return config.shaft_block <= 1 ? cells.size() : grid_shaft_blocks(cells, config.shaft_block).size();
+}
+
+std::vector<std::vector<uint32_t>> grid_shaft_blocks(const CellSet& cells, int k) {
+    k = std::max(k, 1);
+    const glm::ivec3 nb = (cells.dims + glm::ivec3(k - 1)) / k;
+    std::vector<int64_t> first(size_t(nb.x) * size_t(nb.y) * size_t(nb.z), -1);
+    std::vector<std::vector<uint32_t>> blocks;
+    for (uint32_t c = 0; c < cells.size(); ++c) {
+        glm::ivec3 g;
+        for (int a = 0; a < 3; ++a) {
+            const double at = (double(cells.cells[c].bounds.center()[a]) - double(cells.origin[a])) /
+                              double(cells.cell_size_m);
+            g[a] = std::clamp(int(std::floor(at)), 0, cells.dims[a] - 1) / k;
+        }
+        int64_t& b = first[size_t(g.x) + size_t(nb.x) * (size_t(g.y) + size_t(nb.y) * size_t(g.z))];
+        if (b < 0) {
+            b = int64_t(blocks.size());
+            blocks.emplace_back();
+        }
+        blocks[size_t(b)].push_back(c);
+    }
+    return blocks;
+}
+
 namespace {
 
 // The pass cap's note: what was skipped, and how to run it.
@@ -679,22 +705,26 @@ void note_shaft_skipped(Context& ctx, const ConservativeConfig& config, uint64_t
                          regions, leavable, regions * leavable, config.shaft_max_pairs));
 }
 
-// The shaft pass over one region's row (pvs/shaft_hiding.h, docs/ALGORITHMS.md#shaft-pass): every object
-// of `candidates` the row lists whose bounds do not meet the region and that no sight ray saw (`seen`, or
-// null) is tried once more against the whole region; proven hidden from every eye of it, it leaves the row.
-void shaft_row(const ShaftProver& prover, const World& world, const VoxelMask& eyes, const Aabb& region,
-               const std::vector<uint32_t>& candidates, int budget, uint64_t* row, const uint64_t* seen,
-               ShaftFigures& figures) {
+// The shaft pass over the rows of the cells of one region (one cell, or a block of cells whose eye regions
+// it bounds: docs/ALGORITHMS.md#shaft-blocks): every object of `candidates` that some row lists, whose
+// bounds do not meet the region and that no sight ray saw from any of the cells (`seen`, null entries for
+// none) is tried once more against the whole region; proven hidden from every eye of it, it leaves every
+// row. So a block's rows depend on the block, not on the order its cells are taken in.
+void shaft_rows(const ShaftProver& prover, const World& world, const VoxelMask& eyes, const Aabb& region,
+                const std::vector<uint32_t>& candidates, int budget, const std::vector<uint64_t*>& rows,
+                const std::vector<const uint64_t*>& seen, ShaftFigures& figures) {
     const ShaftRegion shaft = shaft_region(eyes, region);
     for (uint32_t o : candidates) {
-        if (!row_lists(row, o) || (seen && row_lists(seen, o)) || world.objects[o].bounds.overlaps(region))
-            continue;
+        bool listed = false, saw = false;
+        for (const uint64_t* row : rows) listed = listed || row_lists(row, o);
+        for (const uint64_t* s : seen) saw = saw || (s && row_lists(s, o));
+        if (!listed || saw || world.objects[o].bounds.overlaps(region)) continue;
         const ShaftFigures before = figures;
         const auto start = std::chrono::steady_clock::now();
         const bool hidden = prover.hides(world, eyes, shaft, o, budget, figures);
         const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         if (hidden) {
-            row[o >> 6] &= ~(uint64_t(1) << (o & 63));
+            for (uint64_t* row : rows) row[o >> 6] &= ~(uint64_t(1) << (o & 63));
             figures.seconds_hidden += s;
         } else if (figures.certain > before.certain) {
             figures.seconds_certain += s;
@@ -704,6 +734,12 @@ void shaft_row(const ShaftProver& prover, const World& world, const VoxelMask& e
             figures.seconds_stuck += s;
         }
     }
+}
+
+void shaft_row(const ShaftProver& prover, const World& world, const VoxelMask& eyes, const Aabb& region,
+               const std::vector<uint32_t>& candidates, int budget, uint64_t* row, const uint64_t* seen,
+               ShaftFigures& figures) {
+    shaft_rows(prover, world, eyes, region, candidates, budget, {row}, {seen}, figures);
 }
 
 PatchSolver::Sides with_seen(PatchSolver::Sides sides, uint64_t* seen_lo, uint64_t* seen_hi) {
@@ -964,7 +1000,7 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
     PvsSet face_rows = PvsSet::make(uint32_t(2 * faces.size()), n_objects);  // face * 2 + side
     // What sight rays saw, per cell, for the shaft pass: a cell has at most one face in a phase, so each row
     // is written by one thread at a time.
-    const bool shaft_runs = shaft_pass_runs(config, world, cells.size());
+    const bool shaft_runs = shaft_pass_runs(config, world, grid_shaft_regions(config, cells));
     PvsSet seen = PvsSet::make(shaft_runs ? uint32_t(cells.size()) : 0, n_objects);
     const auto seen_row = [&](int32_t cell) -> uint64_t* {
         return shaft_runs && cell >= 0 ? seen.row(uint32_t(cell)) : nullptr;
@@ -1072,35 +1108,76 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
     }
     ctx.progress_end();
     // The shaft pass (docs/ALGORITHMS.md#shaft-pass), on the cells' finished rows, when the cap allows it
-    // (docs/ALGORITHMS.md#shaft-cap).
+    // (docs/ALGORITHMS.md#shaft-cap), once per block of cells (docs/ALGORITHMS.md#shaft-blocks).
+    const std::vector<std::vector<uint32_t>> blocks =
+        shaft_runs || config.shaft_budget > 0 ? grid_shaft_blocks(cells, config.shaft_block)
+                                              : std::vector<std::vector<uint32_t>>{};
     if (config.shaft_budget > 0 && !shaft_runs) {
         ShaftFigures shaft;
-        note_shaft_skipped(ctx, config, cells.size(), leavable.size(), shaft);
+        note_shaft_skipped(ctx, config, blocks.size(), leavable.size(), shaft);
         figures.shaft += shaft;
     } else if (shaft_runs) {
         const auto pass_start = std::chrono::steady_clock::now();
         const ShaftProvers provers(ctx, occluders, config.shaft_fusion, config.shaft_caps);
         ShaftFigures shaft;
-        ctx.progress_begin("shaft pass", cells.size(), "cells");
+        ctx.progress_begin("shaft pass", blocks.size(), "blocks");
         // The seen rows of faces other processes solved; then each row of the pass comes from the process
-        // it was dealt to (the others zero theirs).
+        // its block was dealt to (the others zero theirs).
         share.unite(seen.words.data(), seen.words.size());
         std::vector<uint8_t> mine(share.processes() > 1 ? cells.size() : 0, 0);
-        share.begin(cells.size());
+        share.begin(blocks.size());
 #pragma omp parallel
         {
             ShaftFigures local;
-            std::vector<uint32_t> scratch;
-            for_each_dealt(share, ctx, 1, [&](uint64_t c) {
-                const Aabb& region = regions[size_t(c)];
-                uint64_t* row = pvs.row(uint32_t(c));
-                if (!mine.empty()) mine[size_t(c)] = 1;
-                if (!region.is_empty() && !(journal && journal->find("shaft", c, row, pvs.words_per_row))) {
-                    shaft_row(provers.of(occluders.set_for(region)), world, cells.eyes, region,
-                              unsettled(uint32_t(c), leavable, scratch), config.shaft_budget, row,
-                              seen.row(uint32_t(c)), local);
-                    if (journal) journal->record("shaft", c, row, pvs.words_per_row);
+            std::vector<uint32_t> scratch, candidates;
+            std::vector<uint64_t> replayed;
+            std::vector<uint64_t*> rows;
+            std::vector<const uint64_t*> seens;
+            for_each_dealt(share, ctx, 1, [&](uint64_t b) {
+                const std::vector<uint32_t>& block = blocks[size_t(b)];
+                for (uint32_t c : block)
+                    if (!mine.empty()) mine[c] = 1;
+                // A block is taken from the journal when it holds every one of its rows.
+                if (journal) {
+                    replayed.resize(block.size() * pvs.words_per_row);
+                    bool all = true;
+                    for (size_t i = 0; i < block.size() && all; ++i)
+                        all = journal->find("shaft", block[i], replayed.data() + i * pvs.words_per_row,
+                                            pvs.words_per_row);
+                    if (all) {
+                        for (size_t i = 0; i < block.size(); ++i)
+                            std::copy_n(replayed.data() + i * pvs.words_per_row, pvs.words_per_row,
+                                        pvs.row(block[i]));
+                        return;
+                    }
                 }
+                Aabb region;
+                rows.clear();
+                seens.clear();
+                for (uint32_t c : block) {
+                    if (regions[c].is_empty()) continue;
+                    region.extend(regions[c]);
+                    rows.push_back(pvs.row(c));
+                    seens.push_back(seen.row(c));
+                }
+                if (!rows.empty()) {
+                    // The objects no cell of the block has settled by a reuse (docs/ALGORITHMS.md#reuse:
+                    // a plan settles a block's cells alike).
+                    const std::vector<uint32_t>* tried = &leavable;
+                    if (reuse) {
+                        candidates.clear();
+                        for (uint32_t o : unsettled(block[0], leavable, scratch)) {
+                            bool open = true;
+                            for (uint32_t c : block) open = open && !reuse->settled.test(c, o);
+                            if (open) candidates.push_back(o);
+                        }
+                        tried = &candidates;
+                    }
+                    shaft_rows(provers.of(occluders.set_for(region)), world, cells.eyes, region, *tried,
+                               config.shaft_budget, rows, seens, local);
+                }
+                if (journal)
+                    for (uint32_t c : block) journal->record("shaft", c, pvs.row(c), pvs.words_per_row);
             });
 #pragma omp critical
             shaft += local;

@@ -86,6 +86,13 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
                            const ShaftProvers* provers = nullptr, RowJournal* journal = nullptr,
                            const std::vector<uint64_t>* keys = nullptr, WorkShare* share = nullptr);
 
+// The blocks of the shaft pass over a grid (docs/ALGORITHMS.md#shaft-blocks): the cells in each block of
+// k x k x k grid positions, in cell order; the blocks in the order of their first cell. k = 1: each cell
+// alone.
+std::vector<std::vector<uint32_t>> grid_shaft_blocks(const CellSet& cells, int k);
+// The regions the shaft pass tries over a grid with `config`: its blocks (grid_shaft_blocks()).
+uint64_t grid_shaft_regions(const ConservativeConfig& config, const CellSet& cells);
+
 // Whether the shaft pass runs over `regions` cells or boxes of `world` (docs/ALGORITHMS.md#shaft-cap): its
 // budget is on and regions x the objects a pass may leave out is at most config.shaft_max_pairs (0: no
 // limit). A function of the config, the world and the count alone, so a bake decides it alike on every

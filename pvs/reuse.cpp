@@ -2,6 +2,7 @@
 // (docs/ALGORITHMS.md#reuse).
 #include "pvs/reuse.h"
 
+#include "pvs/conservative.h"
 #include "pvs/convex_cap.h"
 
 #include <fmt/format.h>
@@ -335,16 +336,45 @@ ReusePlan plan_reuse(Context& ctx, const ConservativeConfig& config, const World
                                  now.origin + glm::vec3(b.hi + 1) * now.tile_m + margin));
     f.changed_boxes = zones.size();
 
+    const auto old_cell = [&](uint32_t c) {
+        const Aabb& cell = cells.cells[c].bounds;
+        const auto it =
+            old_cell_of.find({cell.min.x, cell.min.y, cell.min.z, cell.max.x, cell.max.y, cell.max.z});
+        return it == old_cell_of.end() ? int64_t(-1) : int64_t(it->second);
+    };
+    // With shaft blocks (docs/ALGORITHMS.md#shaft-blocks) a cell's bit for an object also depends on the
+    // other cells of its block: a pair is kept only when every cell of the block is found, and the box it
+    // must keep clear of the edit spans the block's grid positions, so a block's cells are settled alike.
+    std::vector<Aabb> reach_of(cells.size());
+    std::vector<uint8_t> block_found(cells.size(), 1);
+    for (uint32_t c = 0; c < cells.size(); ++c) reach_of[c] = cells.cells[c].bounds;
+    const int k = config.shaft_budget > 0 ? config.shaft_block : 1;
+    if (k > 1 && cells.kind == CellSet::Kind::kGrid) {
+        for (const std::vector<uint32_t>& block : grid_shaft_blocks(cells, k)) {
+            const glm::vec3 lo =
+                cells.origin +
+                glm::floor((cells.cells[block[0]].bounds.center() - cells.origin) / (cells.cell_size_m * float(k))) *
+                    (cells.cell_size_m * float(k));
+            const Aabb box = Aabb::of(lo, lo + glm::vec3(cells.cell_size_m * float(k)));
+            bool found = true;
+            for (uint32_t c : block) found = found && old_cell(c) >= 0;
+            for (uint32_t c : block) {
+                reach_of[c].extend(box);
+                block_found[c] = found ? 1 : 0;
+            }
+        }
+    }
+
     uint64_t kept = 0, matched = 0, whole = 0;
 #pragma omp parallel for schedule(dynamic, 16) reduction(+ : kept, matched, whole)
     for (int64_t ci = 0; ci < int64_t(cells.size()); ++ci) {
         const uint32_t c = uint32_t(ci);
-        const Aabb& cell = cells.cells[c].bounds;
-        const auto it =
-            old_cell_of.find({cell.min.x, cell.min.y, cell.min.z, cell.max.x, cell.max.y, cell.max.z});
-        if (it == old_cell_of.end()) continue;
+        const int64_t oc = old_cell(c);
+        if (oc < 0) continue;
         ++matched;
-        const uint64_t* old_row = old.pvs.row(it->second);
+        if (!block_found[c]) continue;
+        const Aabb& cell = reach_of[c];
+        const uint64_t* old_row = old.pvs.row(uint32_t(oc));
         uint64_t* settled = plan.settled.row(c);
         uint64_t* listed = plan.listed.row(c);
         uint32_t n_kept = 0;
