@@ -162,9 +162,10 @@ struct ConservativeConfig {
     uint64_t shaft_max_pairs = 4'000'000;  // [Limit: >= 0] the shaft pass runs over a grid's cells (an octree
                                            // level's boxes) only when cells x leavable objects is at most
                                            // this (docs/ALGORITHMS.md#shaft-cap); 0 = no limit
-    int shaft_block = 1;  // [Limit: 1..8] the shaft pass over a grid tries each object once per block of this
-                          // many cells along each axis, against the block's whole eye region; what it proves
-                          // leaves every cell of the block (docs/ALGORITHMS.md#shaft-blocks); 1 = per cell
+    int shaft_block = 1;  // [Limit: 1..8] the shaft pass over a grid walks blocks of this many cells along
+                          // each axis: per object, the block's cells in order until one cannot prove it
+                          // hidden; the rest keep it listed (docs/ALGORITHMS.md#shaft-blocks); the cap counts
+                          // blocks; 1 = every cell tries
     bool shaft_fusion = true;  // the shaft pass's plane covers take in the umbrae of occluders in other
                                // planes (docs/ALGORITHMS.md#cross-plane-fusion); false for measurement
     bool shaft_caps = true;  // the shaft pass also covers piece pairs with the convex caps of panels meeting
@@ -437,9 +438,10 @@ void visit_options(Config& c, Visitor&& v) {
                  0, 1e15},
       c.conservative.shaft_max_pairs);
     v(OptionSpec{OptionGroup::kConservative, "--shaft-block", "conservative.shaft_block", "cells",
-                 "the shaft pass over a grid tries each object once per block of this many cells along each "
-                 "axis, against the block's whole eye region, so a level of many cells can afford it: what it "
-                 "proves hidden from the block is hidden from each of its cells; 1 = once per cell",
+                 "the shaft pass over a grid walks blocks of this many cells along each axis: per object, the "
+                 "block's cells in order, each against its own region, until one cannot prove it hidden (the "
+                 "rest keep it listed), so a level of many cells can afford the pass at a looser PVS; the cap "
+                 "counts blocks; 1 = every cell tries",
                  1, 8},
       c.conservative.shaft_block);
     v(

@@ -701,45 +701,43 @@ void note_shaft_skipped(Context& ctx, const ConservativeConfig& config, uint64_t
     shaft.skipped_candidates += regions * leavable;
     ctx.info(fmt::format("shaft pass: not run: {} regions x {} objects = {} candidate pairs, over "
                          "--shaft-max-pairs {} (raise it to run the pass, at about a thread-millisecond a pair "
-                         "it tries)",
+                         "it tries; on a grid, --shaft-block K walks blocks of K x K x K cells, for less)",
                          regions, leavable, regions * leavable, config.shaft_max_pairs));
 }
 
-// The shaft pass over the rows of the cells of one region (one cell, or a block of cells whose eye regions
-// it bounds: docs/ALGORITHMS.md#shaft-blocks): every object of `candidates` that some row lists, whose
-// bounds do not meet the region and that no sight ray saw from any of the cells (`seen`, null entries for
-// none) is tried once more against the whole region; proven hidden from every eye of it, it leaves every
-// row. So a block's rows depend on the block, not on the order its cells are taken in.
-void shaft_rows(const ShaftProver& prover, const World& world, const VoxelMask& eyes, const Aabb& region,
-                const std::vector<uint32_t>& candidates, int budget, const std::vector<uint64_t*>& rows,
-                const std::vector<const uint64_t*>& seen, ShaftFigures& figures) {
-    const ShaftRegion shaft = shaft_region(eyes, region);
-    for (uint32_t o : candidates) {
-        bool listed = false, saw = false;
-        for (const uint64_t* row : rows) listed = listed || row_lists(row, o);
-        for (const uint64_t* s : seen) saw = saw || (s && row_lists(s, o));
-        if (!listed || saw || world.objects[o].bounds.overlaps(region)) continue;
-        const ShaftFigures before = figures;
-        const auto start = std::chrono::steady_clock::now();
-        const bool hidden = prover.hides(world, eyes, shaft, o, budget, figures);
-        const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        if (hidden) {
-            for (uint64_t* row : rows) row[o >> 6] &= ~(uint64_t(1) << (o & 63));
-            figures.seconds_hidden += s;
-        } else if (figures.certain > before.certain) {
-            figures.seconds_certain += s;
-        } else if (figures.out_of_budget > before.out_of_budget) {
-            figures.seconds_out_of_budget += s;
-        } else {
-            figures.seconds_stuck += s;
-        }
+// Tries object o once more against a region (pvs/shaft_hiding.h); proven hidden, it leaves `row`. Counts
+// the time by how the try ended.
+bool shaft_try(const ShaftProver& prover, const World& world, const VoxelMask& eyes, const ShaftRegion& region,
+               uint32_t o, int budget, uint64_t* row, ShaftFigures& figures) {
+    const ShaftFigures before = figures;
+    const auto start = std::chrono::steady_clock::now();
+    const bool hidden = prover.hides(world, eyes, region, o, budget, figures);
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (hidden) {
+        row[o >> 6] &= ~(uint64_t(1) << (o & 63));
+        figures.seconds_hidden += s;
+    } else if (figures.certain > before.certain) {
+        figures.seconds_certain += s;
+    } else if (figures.out_of_budget > before.out_of_budget) {
+        figures.seconds_out_of_budget += s;
+    } else {
+        figures.seconds_stuck += s;
     }
+    return hidden;
 }
 
+// The shaft pass over one region's row (pvs/shaft_hiding.h, docs/ALGORITHMS.md#shaft-pass): every object
+// of `candidates` the row lists whose bounds do not meet the region and that no sight ray saw (`seen`, or
+// null) is tried once more against the whole region; proven hidden from every eye of it, it leaves the row.
 void shaft_row(const ShaftProver& prover, const World& world, const VoxelMask& eyes, const Aabb& region,
                const std::vector<uint32_t>& candidates, int budget, uint64_t* row, const uint64_t* seen,
                ShaftFigures& figures) {
-    shaft_rows(prover, world, eyes, region, candidates, budget, {row}, {seen}, figures);
+    const ShaftRegion shaft = shaft_region(eyes, region);
+    for (uint32_t o : candidates) {
+        if (!row_lists(row, o) || (seen && row_lists(seen, o)) || world.objects[o].bounds.overlaps(region))
+            continue;
+        shaft_try(prover, world, eyes, shaft, o, budget, row, figures);
+    }
 }
 
 PatchSolver::Sides with_seen(PatchSolver::Sides sides, uint64_t* seen_lo, uint64_t* seen_hi) {
@@ -1129,10 +1127,9 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
 #pragma omp parallel
         {
             ShaftFigures local;
-            std::vector<uint32_t> scratch, candidates;
+            std::vector<uint32_t> candidates, live;
             std::vector<uint64_t> replayed;
-            std::vector<uint64_t*> rows;
-            std::vector<const uint64_t*> seens;
+            std::vector<ShaftRegion> shafts;
             for_each_dealt(share, ctx, 1, [&](uint64_t b) {
                 const std::vector<uint32_t>& block = blocks[size_t(b)];
                 for (uint32_t c : block)
@@ -1151,30 +1148,37 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
                         return;
                     }
                 }
-                Aabb region;
-                rows.clear();
-                seens.clear();
-                for (uint32_t c : block) {
-                    if (regions[c].is_empty()) continue;
-                    region.extend(regions[c]);
-                    rows.push_back(pvs.row(c));
-                    seens.push_back(seen.row(c));
-                }
-                if (!rows.empty()) {
-                    // The objects no cell of the block has settled by a reuse (docs/ALGORITHMS.md#reuse:
-                    // a plan settles a block's cells alike).
-                    const std::vector<uint32_t>* tried = &leavable;
-                    if (reuse) {
-                        candidates.clear();
-                        for (uint32_t o : unsettled(block[0], leavable, scratch)) {
-                            bool open = true;
-                            for (uint32_t c : block) open = open && !reuse->settled.test(c, o);
-                            if (open) candidates.push_back(o);
-                        }
-                        tried = &candidates;
+                // The walk (docs/ALGORITHMS.md#shaft-blocks): per object, the block's cells in cell order,
+                // until one cannot prove it hidden or saw it; the cells after that one keep it listed.
+                live.clear();
+                shafts.clear();
+                for (uint32_t c : block)
+                    if (!regions[c].is_empty()) {
+                        live.push_back(c);
+                        shafts.push_back(shaft_region(cells.eyes, regions[c]));
                     }
-                    shaft_rows(provers.of(occluders.set_for(region)), world, cells.eyes, region, *tried,
-                               config.shaft_budget, rows, seens, local);
+                // The objects no cell of the block has settled by a reuse (docs/ALGORITHMS.md#reuse: a
+                // plan settles a block's cells alike).
+                const std::vector<uint32_t>* tried = &leavable;
+                if (reuse) {
+                    candidates.clear();
+                    for (uint32_t o : leavable) {
+                        bool open = true;
+                        for (uint32_t c : block) open = open && !reuse->settled.test(c, o);
+                        if (open) candidates.push_back(o);
+                    }
+                    tried = &candidates;
+                }
+                for (uint32_t o : *tried) {
+                    for (size_t i = 0; i < live.size(); ++i) {
+                        const uint32_t c = live[i];
+                        uint64_t* row = pvs.row(c);
+                        if (!row_lists(row, o) || world.objects[o].bounds.overlaps(regions[c])) continue;
+                        if (row_lists(seen.row(c), o)) break;
+                        if (!shaft_try(provers.of(occluders.set_for(regions[c])), world, cells.eyes, shafts[i], o,
+                                       config.shaft_budget, row, local))
+                            break;
+                    }
                 }
                 if (journal)
                     for (uint32_t c : block) journal->record("shaft", c, pvs.row(c), pvs.words_per_row);

@@ -351,11 +351,11 @@ ReusePlan plan_reuse(Context& ctx, const ConservativeConfig& config, const World
     const int k = config.shaft_budget > 0 ? config.shaft_block : 1;
     if (k > 1 && cells.kind == CellSet::Kind::kGrid) {
         for (const std::vector<uint32_t>& block : grid_shaft_blocks(cells, k)) {
+            const float edge = cells.cell_size_m * float(k);
             const glm::vec3 lo =
-                cells.origin +
-                glm::floor((cells.cells[block[0]].bounds.center() - cells.origin) / (cells.cell_size_m * float(k))) *
-                    (cells.cell_size_m * float(k));
-            const Aabb box = Aabb::of(lo, lo + glm::vec3(cells.cell_size_m * float(k)));
+                cells.origin + glm::floor((cells.cells[block[0]].bounds.center() - cells.origin) / edge) * edge;
+            // Grown by a millimetre against the rounding of lo: a bigger box only keeps fewer pairs.
+            const Aabb box = Aabb::of(lo - 1e-3f, lo + edge + 1e-3f);
             bool found = true;
             for (uint32_t c : block) found = found && old_cell(c) >= 0;
             for (uint32_t c : block) {
