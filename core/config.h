@@ -437,13 +437,15 @@ void visit_options(Config& c, Visitor&& v) {
                  "about a thread-millisecond a pair it tries); 0 = no limit",
                  0, 1e15},
       c.conservative.shaft_max_pairs);
-    v(OptionSpec{OptionGroup::kConservative, "--shaft-block", "conservative.shaft_block", "cells",
-                 "the shaft pass over a grid walks blocks of this many cells along each axis: per object, the "
-                 "block's cells in order, each against its own region, until one cannot prove it hidden (the "
-                 "rest keep it listed), so a level of many cells can afford the pass at a looser PVS; the cap "
-                 "counts blocks; 1 = every cell tries",
-                 1, 8},
-      c.conservative.shaft_block);
+    v(
+        OptionSpec{
+            OptionGroup::kConservative, "--shaft-block", "conservative.shaft_block", "cells",
+            "the shaft pass over a grid walks blocks of this many cells along each axis: per object, the "
+            "block's cells in order, each against its own region, until one cannot prove it hidden (the "
+            "rest keep it listed), so a level of many cells can afford the pass at a looser PVS; the cap "
+            "counts blocks; 1 = every cell tries",
+            1, 8},
+        c.conservative.shaft_block);
     v(
         OptionSpec{
             OptionGroup::kExperimental, "--shaft-fusion", "conservative.shaft_fusion", "",

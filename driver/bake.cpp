@@ -156,11 +156,11 @@ void grid_cells_and_pvs(Context& ctx, const BakeConfig& config, const World& wor
             const uint64_t regions = grid_shaft_regions(config.conservative, bake.cells);
             const bool runs = shaft_pass_runs(config.conservative, world, regions);
             if (ran != runs) {
-                throw bad_input(fmt::format(
-                    "--reuse: the old bake {} the shaft pass and this one would {}: {} cells (blocks) x the objects "
-                    "{} --shaft-max-pairs {} now; bake without --reuse",
-                    ran ? "ran" : "did not run", runs ? "run it" : "not", regions,
-                    runs ? "are within" : "are over", config.conservative.shaft_max_pairs));
+                throw bad_input(
+                    fmt::format("--reuse: the old bake {} the shaft pass and this one would {}: {} cells "
+                                "(blocks) x the objects {} --shaft-max-pairs {} now; bake without --reuse",
+                                ran ? "ran" : "did not run", runs ? "run it" : "not", regions,
+                                runs ? "are within" : "are over", config.conservative.shaft_max_pairs));
             }
             ScopedTimer t(ctx, "reuse_plan");
             plan = plan_reuse(ctx, config.conservative, world, bake.cells, bake.print,

@@ -699,16 +699,17 @@ namespace {
 void note_shaft_skipped(Context& ctx, const ConservativeConfig& config, uint64_t regions, uint64_t leavable,
                         ShaftFigures& shaft) {
     shaft.skipped_candidates += regions * leavable;
-    ctx.info(fmt::format("shaft pass: not run: {} regions x {} objects = {} candidate pairs, over "
-                         "--shaft-max-pairs {} (raise it to run the pass, at about a thread-millisecond a pair "
-                         "it tries; on a grid, --shaft-block K walks blocks of K x K x K cells, for less)",
-                         regions, leavable, regions * leavable, config.shaft_max_pairs));
+    ctx.info(
+        fmt::format("shaft pass: not run: {} regions x {} objects = {} candidate pairs, over "
+                    "--shaft-max-pairs {} (raise it to run the pass, at about a thread-millisecond a pair "
+                    "it tries; on a grid, --shaft-block K walks blocks of K x K x K cells, for less)",
+                    regions, leavable, regions * leavable, config.shaft_max_pairs));
 }
 
 // Tries object o once more against a region (pvs/shaft_hiding.h); proven hidden, it leaves `row`. Counts
 // the time by how the try ended.
-bool shaft_try(const ShaftProver& prover, const World& world, const VoxelMask& eyes, const ShaftRegion& region,
-               uint32_t o, int budget, uint64_t* row, ShaftFigures& figures) {
+bool shaft_try(const ShaftProver& prover, const World& world, const VoxelMask& eyes,
+               const ShaftRegion& region, uint32_t o, int budget, uint64_t* row, ShaftFigures& figures) {
     const ShaftFigures before = figures;
     const auto start = std::chrono::steady_clock::now();
     const bool hidden = prover.hides(world, eyes, region, o, budget, figures);
@@ -1107,9 +1108,9 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
     ctx.progress_end();
     // The shaft pass (docs/ALGORITHMS.md#shaft-pass), on the cells' finished rows, when the cap allows it
     // (docs/ALGORITHMS.md#shaft-cap), once per block of cells (docs/ALGORITHMS.md#shaft-blocks).
-    const std::vector<std::vector<uint32_t>> blocks =
-        shaft_runs || config.shaft_budget > 0 ? grid_shaft_blocks(cells, config.shaft_block)
-                                              : std::vector<std::vector<uint32_t>>{};
+    const std::vector<std::vector<uint32_t>> blocks = shaft_runs || config.shaft_budget > 0
+                                                          ? grid_shaft_blocks(cells, config.shaft_block)
+                                                          : std::vector<std::vector<uint32_t>>{};
     if (config.shaft_budget > 0 && !shaft_runs) {
         ShaftFigures shaft;
         note_shaft_skipped(ctx, config, blocks.size(), leavable.size(), shaft);
@@ -1175,8 +1176,8 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
                         uint64_t* row = pvs.row(c);
                         if (!row_lists(row, o) || world.objects[o].bounds.overlaps(regions[c])) continue;
                         if (row_lists(seen.row(c), o)) break;
-                        if (!shaft_try(provers.of(occluders.set_for(regions[c])), world, cells.eyes, shafts[i], o,
-                                       config.shaft_budget, row, local))
+                        if (!shaft_try(provers.of(occluders.set_for(regions[c])), world, cells.eyes,
+                                       shafts[i], o, config.shaft_budget, row, local))
                             break;
                     }
                 }

@@ -353,7 +353,8 @@ ReusePlan plan_reuse(Context& ctx, const ConservativeConfig& config, const World
         for (const std::vector<uint32_t>& block : grid_shaft_blocks(cells, k)) {
             const float edge = cells.cell_size_m * float(k);
             const glm::vec3 lo =
-                cells.origin + glm::floor((cells.cells[block[0]].bounds.center() - cells.origin) / edge) * edge;
+                cells.origin +
+                glm::floor((cells.cells[block[0]].bounds.center() - cells.origin) / edge) * edge;
             // Grown by a millimetre against the rounding of lo: a bigger box only keeps fewer pairs.
             const Aabb box = Aabb::of(lo - 1e-3f, lo + edge + 1e-3f);
             bool found = true;

@@ -547,12 +547,13 @@ TEST(Conservative, TheShaftPassWalkingBlocksListsBetweenThePerCellPassAndNone) {
             EXPECT_FALSE(walked.pvs.test(cell, o) && !off.pvs.test(cell, o))
                 << "cell " << cell << " lists object " << o << " only with the pass";
             EXPECT_FALSE(per_cell.pvs.test(cell, o) && !walked.pvs.test(cell, o))
-                << "cell " << cell << ": the walk proved object " << o << " hidden, the per-cell pass did not";
+                << "cell " << cell << ": the walk proved object " << o
+                << " hidden, the per-cell pass did not";
             only_per_cell += per_cell.pvs.test(cell, o) != walked.pvs.test(cell, o) ? 1 : 0;
         }
     uint32_t hidden_near_eye = 0;
-    for (const glm::vec3 eye : {glm::vec3(2.5f, 1.5f, 3.5f), glm::vec3(3.5f, 1.5f, 3.5f), glm::vec3(2.5f, 1.5f, 2.5f),
-                                glm::vec3(3.5f, 1.5f, 2.5f)}) {
+    for (const glm::vec3 eye : {glm::vec3(2.5f, 1.5f, 3.5f), glm::vec3(3.5f, 1.5f, 3.5f),
+                                glm::vec3(2.5f, 1.5f, 2.5f), glm::vec3(3.5f, 1.5f, 2.5f)}) {
         const int32_t cell = walked.cells.find(eye);
         ASSERT_GE(cell, 0);
         hidden_near_eye += off.pvs.test(uint32_t(cell), target) && !walked.pvs.test(uint32_t(cell), target);
@@ -560,7 +561,8 @@ TEST(Conservative, TheShaftPassWalkingBlocksListsBetweenThePerCellPassAndNone) {
     EXPECT_GE(hidden_near_eye, 1u) << "the walk proved the target hidden from no cell the cubes left it in";
     EXPECT_GT(figure(walked, "conservative_shaft_hidden"), 0.0);
     EXPECT_LT(figure(walked, "conservative_shaft_pairs"), figure(per_cell, "conservative_shaft_pairs"));
-    EXPECT_GT(only_per_cell, 0u) << "the walk skipped nothing the per-cell pass proves: the scene is not telling";
+    EXPECT_GT(only_per_cell, 0u)
+        << "the walk skipped nothing the per-cell pass proves: the scene is not telling";
 }
 
 // CROSS-PLANE FUSION (docs/ALGORITHMS.md#cross-plane-fusion). A closed room 14 x 3 x 8 m; two full-height

@@ -5,8 +5,9 @@
 #include "core/error.h"
 #include "io/gltf_loader.h"
 #include "io/gltf_writer.h"
-#include "samples/world_edit.h"
+#include "pvs/conservative.h"
 #include "pvs/reuse.h"
+#include "samples/world_edit.h"
 #include "tests/test_util.h"
 #include "tests/world_builder.h"
 
@@ -235,15 +236,14 @@ TEST_P(ReuseEdit, TheReBakeFromTheOldBakeIsTheFullBakeOfTheEditedWorld) {
     }
 }
 
-INSTANTIATE_TEST_SUITE_P(Edits, ReuseEdit,
-                         ::testing::Values(EditCase{"MovedCrateAndRemovedWall", moved_crate_and_removed_wall},
-                                           EditCase{"DoorCutAndCrateAdded", door_and_new_crate},
-                                           EditCase{"NoEdit", no_edit},
-                                           // The shaft pass by blocks of 2 x 2 x 2 cells: a pair is kept
-                                           // only when the edit misses the block's box and the object.
-                                           EditCase{"DoorCutAndCrateAddedShaftBlocks", door_and_new_crate,
-                                                    " --shaft-block 2"}),
-                         [](const auto& info) { return std::string(info.param.name); });
+INSTANTIATE_TEST_SUITE_P(
+    Edits, ReuseEdit,
+    ::testing::Values(EditCase{"MovedCrateAndRemovedWall", moved_crate_and_removed_wall},
+                      EditCase{"DoorCutAndCrateAdded", door_and_new_crate}, EditCase{"NoEdit", no_edit},
+                      // The shaft pass by blocks of 2 x 2 x 2 cells: a pair is kept
+                      // only when the edit misses the block's box and the object.
+                      EditCase{"DoorCutAndCrateAddedShaftBlocks", door_and_new_crate, " --shaft-block 2"}),
+    [](const auto& info) { return std::string(info.param.name); });
 
 TEST(Reuse, AnOldBakeOfOtherParametersOrNoneIsRefusedBeforeAnyStage) {
     test::TempDir dir;
@@ -321,6 +321,61 @@ TEST(GeometryPrint, AMovedBoxChangesOnlyTheTilesItMeets) {
         EXPECT_TRUE(tile.overlaps(before) || tile.overlaps(after)) << "tile " << t << " changed";
     }
     EXPECT_GE(changed, 2u);
+}
+
+// With the shaft pass walking blocks (docs/ALGORITHMS.md#shaft-blocks), a cell's bit for an object depends on
+// the cells before it in its block: a plan must settle a block's cells alike, and keep a pair only when the
+// edit misses the box around the whole block and the object. A 16 m cube of eye voxels in 2 m cells; a crate
+// moves near one corner. Per cell, pairs of cells beside the crate's block are kept where the box around the
+// cell and the object misses the edit; with blocks of 2, the plan keeps a subset of those, alike in every
+// cell of a block, and leaves out some that per cell are kept.
+TEST(ReusePlan, WithShaftBlocksABlocksCellsAreSettledAlike) {
+    VoxelMask eyes;
+    eyes.origin = glm::vec3(0.0f);
+    eyes.voxel_size_m = 0.25f;
+    eyes.dims = glm::ivec3(64);
+    eyes.bits.assign(size_t(eyes.count() + 63) / 64, ~uint64_t(0));
+    World a, b;
+    for (World* w : {&a, &b}) {
+        test::add_box(*w, "wall", Aabb::of({0.1f, 0.1f, 12.1f}, {15.9f, 3.0f, 12.4f}));
+        test::add_box(*w, "lamp", Aabb::of({14.1f, 14.1f, 14.1f}, {14.9f, 14.9f, 14.9f}));
+    }
+    test::add_box(a, "crate", Aabb::of({2.1f, 0.1f, 2.1f}, {2.9f, 0.9f, 2.9f}));
+    test::add_box(b, "crate", Aabb::of({2.6f, 0.1f, 2.1f}, {3.4f, 0.9f, 2.9f}));
+    CellSet cells;
+    cells.kind = CellSet::Kind::kGrid;
+    cells.cell_size_m = 2.0f;
+    cells.dims = glm::ivec3(8);
+    cells.eyes = eyes;
+    for (int z = 0; z < 8; ++z)
+        for (int y = 0; y < 8; ++y)
+            for (int x = 0; x < 8; ++x) {
+                cells.grid_to_cell.push_back(int32_t(cells.cells.size()));
+                const glm::vec3 lo = glm::vec3(x, y, z) * 2.0f;
+                cells.cells.push_back(Cell{Aabb::of(lo, lo + 2.0f)});
+            }
+    ConservativeConfig config;
+    const ShrunkOccluders none;
+    const GeometryPrint old_print = geometry_print(config, a, none, eyes);
+    const GeometryPrint now = geometry_print(config, b, none, eyes);
+    PvsSet old_rows = PvsSet::make(uint32_t(cells.size()), uint32_t(a.objects.size()));
+    std::fill(old_rows.words.begin(), old_rows.words.end(), ~uint64_t(0));
+    Context ctx(Context::Options{LogLevel::kWarning, true, nullptr});
+    const ReusePlan per_cell =
+        plan_reuse(ctx, config, b, cells, now, ReuseSource{cells, old_rows, old_print});
+    config.shaft_block = 2;
+    const ReusePlan blocks = plan_reuse(ctx, config, b, cells, now, ReuseSource{cells, old_rows, old_print});
+    ASSERT_TRUE(per_cell.whole.empty()) << per_cell.whole;
+    EXPECT_GT(blocks.figures.kept, 0u);
+    EXPECT_LT(blocks.figures.kept, per_cell.figures.kept);
+    for (const std::vector<uint32_t>& block : grid_shaft_blocks(cells, 2))
+        for (uint32_t o = 0; o < b.objects.size(); ++o)
+            for (uint32_t c : block) {
+                EXPECT_EQ(blocks.settled.test(c, o), blocks.settled.test(block[0], o))
+                    << "cells " << block[0] << " and " << c << " of a block, object " << o;
+                EXPECT_FALSE(blocks.settled.test(c, o) && !per_cell.settled.test(c, o))
+                    << "cell " << c << ", object " << o << ": kept with blocks only";
+            }
 }
 
 // With the shaft pass, a convex cap (pvs/convex_cap.h) is tried wherever a line meets its first polygon, but
