@@ -1107,7 +1107,7 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
     }
     ctx.progress_end();
     // The shaft pass (docs/ALGORITHMS.md#shaft-pass), on the cells' finished rows, when the cap allows it
-    // (docs/ALGORITHMS.md#shaft-cap), once per block of cells (docs/ALGORITHMS.md#shaft-blocks).
+    // (docs/ALGORITHMS.md#shaft-cap), walking blocks of cells (docs/ALGORITHMS.md#shaft-blocks).
     const std::vector<std::vector<uint32_t>> blocks = shaft_runs || config.shaft_budget > 0
                                                           ? grid_shaft_blocks(cells, config.shaft_block)
                                                           : std::vector<std::vector<uint32_t>>{};
