@@ -997,9 +997,13 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
         return config.single_occluder_pass ? hidden.row(uint32_t(cell)) : nullptr;
     };
     PvsSet face_rows = PvsSet::make(uint32_t(2 * faces.size()), n_objects);  // face * 2 + side
+    // The blocks the shaft pass walks (docs/ALGORITHMS.md#shaft-blocks); the cap counts them.
+    const std::vector<std::vector<uint32_t>> blocks = config.shaft_budget > 0
+                                                          ? grid_shaft_blocks(cells, config.shaft_block)
+                                                          : std::vector<std::vector<uint32_t>>{};
+    const bool shaft_runs = shaft_pass_runs(config, world, blocks.size());
     // What sight rays saw, per cell, for the shaft pass: a cell has at most one face in a phase, so each row
     // is written by one thread at a time.
-    const bool shaft_runs = shaft_pass_runs(config, world, grid_shaft_regions(config, cells));
     PvsSet seen = PvsSet::make(shaft_runs ? uint32_t(cells.size()) : 0, n_objects);
     const auto seen_row = [&](int32_t cell) -> uint64_t* {
         return shaft_runs && cell >= 0 ? seen.row(uint32_t(cell)) : nullptr;
@@ -1108,9 +1112,6 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
     ctx.progress_end();
     // The shaft pass (docs/ALGORITHMS.md#shaft-pass), on the cells' finished rows, when the cap allows it
     // (docs/ALGORITHMS.md#shaft-cap), walking blocks of cells (docs/ALGORITHMS.md#shaft-blocks).
-    const std::vector<std::vector<uint32_t>> blocks = shaft_runs || config.shaft_budget > 0
-                                                          ? grid_shaft_blocks(cells, config.shaft_block)
-                                                          : std::vector<std::vector<uint32_t>>{};
     if (config.shaft_budget > 0 && !shaft_runs) {
         ShaftFigures shaft;
         note_shaft_skipped(ctx, config, blocks.size(), leavable.size(), shaft);

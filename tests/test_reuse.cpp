@@ -294,14 +294,20 @@ TEST(Reuse, AnOldBakeWhosePassTheShaftCapNowSkipsIsRefused) {
     EXPECT_FALSE(std::filesystem::exists(dir.file("new.h5"))) << "a refused bake writes nothing";
 }
 
-// A print over a 16 m cube of eye voxels: a box moved changes the tiles its old and new bounds meet, and no
-// other; the same world prints the same.
-TEST(GeometryPrint, AMovedBoxChangesOnlyTheTilesItMeets) {
+// A 16 m cube of eye voxels of 0.25 m from the origin, every voxel an eye: the print tests' eye space.
+VoxelMask eye_cube() {
     VoxelMask eyes;
     eyes.origin = glm::vec3(0.0f);
     eyes.voxel_size_m = 0.25f;
     eyes.dims = glm::ivec3(64);
     eyes.bits.assign(size_t(eyes.count() + 63) / 64, ~uint64_t(0));
+    return eyes;
+}
+
+// A print over a 16 m cube of eye voxels: a box moved changes the tiles its old and new bounds meet, and no
+// other; the same world prints the same.
+TEST(GeometryPrint, AMovedBoxChangesOnlyTheTilesItMeets) {
+    const VoxelMask eyes = eye_cube();
     const ConservativeConfig config;
     const ShrunkOccluders none;
     const Aabb before = Aabb::of({2.1f, 0.1f, 2.1f}, {2.9f, 0.9f, 2.9f});
@@ -334,11 +340,7 @@ TEST(GeometryPrint, AMovedBoxChangesOnlyTheTilesItMeets) {
 // cell and the object misses the edit; with blocks of 2, the plan keeps a subset of those, alike in every
 // cell of a block, and leaves out some that per cell are kept.
 TEST(ReusePlan, WithShaftBlocksABlocksCellsAreSettledAlike) {
-    VoxelMask eyes;
-    eyes.origin = glm::vec3(0.0f);
-    eyes.voxel_size_m = 0.25f;
-    eyes.dims = glm::ivec3(64);
-    eyes.bits.assign(size_t(eyes.count() + 63) / 64, ~uint64_t(0));
+    const VoxelMask eyes = eye_cube();
     World a, b;
     for (World* w : {&a, &b}) {
         test::add_box(*w, "wall", Aabb::of({0.1f, 0.1f, 12.1f}, {15.9f, 3.0f, 12.4f}));
@@ -388,11 +390,7 @@ TEST(ReusePlan, WithShaftBlocksABlocksCellsAreSettledAlike) {
 // 14) meets a short one B (z = 1) at a corner; B grows from x = 6 to 7. The tile around A's far end, which B
 // never meets, changes with the caps and not without.
 TEST(GeometryPrint, AChangedNeighbourOfAConvexCapChangesThePrintAlongItsPolygon) {
-    VoxelMask eyes;
-    eyes.origin = glm::vec3(0.0f);
-    eyes.voxel_size_m = 0.25f;
-    eyes.dims = glm::ivec3(64);
-    eyes.bits.assign(size_t(eyes.count() + 63) / 64, ~uint64_t(0));
+    const VoxelMask eyes = eye_cube();
     const World w;
     ShrunkOccluders a, b;
     for (ShrunkOccluders* o : {&a, &b}) o->panels.push_back(Aabb::of({2.0f, 0.0f, 1.0f}, {2.0f, 3.0f, 14.0f}));
