@@ -170,6 +170,9 @@ struct ConservativeConfig {
                                // planes (docs/ALGORITHMS.md#cross-plane-fusion); false for measurement
     bool shaft_caps = true;  // the shaft pass also covers piece pairs with the convex caps of panels meeting
                              // at edges (docs/ALGORITHMS.md#convex-caps); false for measurement
+    bool shaft_cups = true;  // the shaft pass also covers piece pairs with cups, boxes around one piece whose
+                             // faces are covered where sight leaves them (docs/ALGORITHMS.md#cups); false
+                             // for measurement
     bool single_occluder_pass = true;  // first, what ONE occluder hides from a cell's whole eye region is
                                        // proven exactly (pvs/region_hiding.h); the faces skip it
     int refine_levels = 4;  // [Limit: 0..8] adaptive refinement: patches of a face are first tested
@@ -458,6 +461,11 @@ void visit_options(Config& c, Visitor&& v) {
                  "its neighbours across edges that bend away, a ridge or an outer corner), to measure what "
                  "they give: the same safety, a looser PVS"},
       c.conservative.shaft_caps);
+    v(OptionSpec{OptionGroup::kExperimental, "--shaft-cups", "conservative.shaft_cups", "",
+                 "FOR MEASUREMENT ONLY: false leaves out the shaft pass's cups (a box around one piece whose "
+                 "faces, where sight leaves it, are covered: a room's corner, a floor meeting walls), to "
+                 "measure what they give: the same safety, a looser PVS"},
+      c.conservative.shaft_cups);
     v(OptionSpec{OptionGroup::kConservative, "--panel-refine-levels", "conservative.panel_refine_levels",
                  "levels",
                  "floor patches are halved this many more times for the objects only the "

@@ -119,6 +119,7 @@ NamedValues run_figures(const BakeData& bake, const StageFigures& stages) {
         {"conservative_shaft_stuck_seconds", cons.shaft.seconds_stuck},
         {"conservative_shaft_umbrae", double(cons.shaft.umbrae)},
         {"conservative_shaft_capped", double(cons.shaft.capped)},
+        {"conservative_shaft_cupped", double(cons.shaft.cupped)},
         {"conservative_shaft_seconds", cons.shaft.seconds},
         {"conservative_seconds", cons.seconds},
         {"reuse_pairs", double(stages.reuse.pairs)},

@@ -803,7 +803,9 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
     if (!config.single_occluder_pass) hiders = nullptr;
     const bool shaft_runs = shaft_pass_runs(config, world, boxes.size());
     std::optional<ShaftProvers> own_provers;
-    if (shaft_runs && !provers) provers = &own_provers.emplace(ctx, occluders, config.shaft_fusion, config.shaft_caps);
+    if (shaft_runs && !provers)
+        provers =
+            &own_provers.emplace(ctx, occluders, config.shaft_fusion, config.shaft_caps, config.shaft_cups);
     if (!shaft_runs) provers = nullptr;
     Counts total;
     ShaftFigures shaft;
@@ -1118,7 +1120,7 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
         figures.shaft += shaft;
     } else if (shaft_runs) {
         const auto pass_start = std::chrono::steady_clock::now();
-        const ShaftProvers provers(ctx, occluders, config.shaft_fusion, config.shaft_caps);
+        const ShaftProvers provers(ctx, occluders, config.shaft_fusion, config.shaft_caps, config.shaft_cups);
         ShaftFigures shaft;
         ctx.progress_begin("shaft pass", blocks.size(), "blocks");
         // The seen rows of faces other processes solved; then each row of the pass comes from the process

@@ -11,9 +11,11 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <bit>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 
 namespace pvs {
 
@@ -143,6 +145,16 @@ constexpr size_t kUmbraProbes = 2;
 // Pieces narrower than this (metres) count as covered: the rounding of double computations where two
 // covers meet along one line (docs/ALGORITHMS.md#cross-plane-fusion).
 constexpr double kSliverM = 1e-9;
+// A cup's piece lies this many tolerances inside each face (so the hull of a face's corner crossings holds
+// every crossing, docs/ALGORITHMS.md#cups); the outer piece as far outside the cup.
+constexpr double kCupMarginTolerances = 4.0;
+// Lines to find a cup's faces run to the corners of the other piece pulled this share towards its centre.
+constexpr float kCupCornerPull = 0.01f;
+// Rounds of a cup search: each moves every face left open to the next plane out.
+constexpr int kCupRounds = 4;
+// A piece pair tries a cup when it has been halved a multiple of this many times: most of what cups at
+// every depth prove, for a fraction of their cost (docs/RESULTS.md, "Tightness levers").
+constexpr int kCupDepthStep = 4;
 
 // How wide convex `p` is: the least, over its sides, of its farthest corner's distance from the side's line.
 double width(const Poly& p) {
@@ -403,10 +415,12 @@ struct ShaftProver::Scratch {
     std::vector<glm::dvec3> poly, tmp;
     std::vector<RayTouch> touches;
     std::vector<glm::ivec3> run;
+    // Per side (region, object), axis and direction, the planes of a cup's candidate faces.
+    std::array<std::array<std::vector<float>, 6>, 2> cup_faces;
 };
 
-ShaftProver::ShaftProver(Context& ctx, const ShrunkOccluders& set, bool fusion, bool caps)
-    : panels_(set.panels), slanted_(set.slanted), solid_(set.solid), fusion_(fusion) {
+ShaftProver::ShaftProver(Context& ctx, const ShrunkOccluders& set, bool fusion, bool caps, bool cups)
+    : panels_(set.panels), slanted_(set.slanted), solid_(set.solid), fusion_(fusion), cups_(cups) {
     std::array<std::vector<std::pair<float, uint32_t>>, 3> by_plane;
     for (uint32_t i = 0; i < panels_.size(); ++i) {
         const int a = panel_axis(panels_[i]);
@@ -508,11 +522,16 @@ bool ShaftProver::plane_covers(const Aabb& region, const Aabb& target, int axis,
 }
 
 bool ShaftProver::cover(const Aabb& region, const Aabb& target, int axis, float c, bool fuse, PlaneMiss* miss,
-                        uint64_t* umbrae) const {
+                        uint64_t* umbrae, const Window* window) const {
     const int a = axis, u = (a + 1) % 3, v = (a + 2) % 3;
     const double cd = c, tol = kHideToleranceM;
-    const bool below = double(region.max[a])<cd - tol&& double(target.min[a])> cd + tol;
-    const bool above = double(region.min[a]) > cd + tol && double(target.max[a]) < cd - tol;
+    // In a window (a face of a cup), the target may reach the plane: the region lies farther from it, so the
+    // hull of the corner crossings still holds every crossing (docs/ALGORITHMS.md#cups).
+    const double near = window ? kCupMarginTolerances * tol : tol, far = window ? 0.0 : tol;
+    const bool below = double(region.max[a]) < cd - near && double(target.min[a]) >= cd + far &&
+                       (window || double(target.min[a]) > cd + far);
+    const bool above = double(region.min[a]) > cd + near && double(target.max[a]) <= cd - far &&
+                       (window || double(target.max[a]) < cd - far);
     if (!below && !above) return false;
     // Where the 64 corner segments of the boxes grown by tol cross the plane: their hull holds where every
     // segment from region to target crosses it (docs/ALGORITHMS.md#single-occluder) grown by tol on both
@@ -539,6 +558,16 @@ bool ShaftProver::cover(const Aabb& region, const Aabb& target, int axis, float 
     for (size_t i = 1; i < n_pts; ++i) {
         lo = glm::min(lo, pts[i]);
         hi = glm::max(hi, pts[i]);
+    }
+    // Only the crossings inside the window count; none there: no segment leaves the cup by this face.
+    const auto in_window = [&](glm::dvec2 p) {
+        return !window ||
+               (p.x >= window->lo.x && p.y >= window->lo.y && p.x <= window->hi.x && p.y <= window->hi.y);
+    };
+    if (window) {
+        lo = glm::max(lo, window->lo);
+        hi = glm::min(hi, window->hi);
+        if (!(lo.x < hi.x && lo.y < hi.y)) return true;
     }
     // The voxel layers holding the plane (both, on a voxel side), or none outside the grid.
     int l0 = -1, l1 = -2;
@@ -590,8 +619,9 @@ bool ShaftProver::cover(const Aabb& region, const Aabb& target, int axis, float 
         glm::dvec2 open_lo(INFINITY), open_hi(-INFINITY);
         for (size_t i = 0; i < n_pts; ++i) {
             const glm::dvec2 p = pts[i];
-            bool in = false;
+            bool in = !in_window(p);
             for (uint32_t r : ps.near_rects) {
+                if (in) break;
                 const Rect& rect = rects_[r];
                 if (p.x >= rect.u0 && p.x <= rect.u1 && p.y >= rect.v0 && p.y <= rect.v1) {
                     in = true;
@@ -656,6 +686,14 @@ bool ShaftProver::cover(const Aabb& region, const Aabb& target, int axis, float 
     convex_hull(pts.data(), n_pts, ps.pieces[0]);
     // Pieces without area are dropped as covered below (6.11.1): that needs a crossing with area.
     if (ps.pieces[0].size() < 3) return false;
+    if (window) {
+        // The crossing less what lies outside the window; a window with no area of it is not crossed.
+        for (int k = 0; k < 2; ++k) {
+            clip(ps.pieces[0], k, window->lo[k], false, ps.part);
+            clip(ps.part, k, window->hi[k], true, ps.pieces[0]);
+        }
+        if (degenerate(ps.pieces[0])) return true;
+    }
     size_t n_pieces = 1;
     // Less the panels of the plane.
     if (has_panels) {
@@ -874,6 +912,141 @@ bool ShaftProver::try_pair(const Pair& pair, glm::vec3 from, glm::vec3 to, bool&
         for (size_t i = 0; i < std::min(n_tried, kFusedPlanes); ++i)
             if (cover(pair.region, pair.target, tried[i].first, tried[i].second, true, nullptr, &figures.umbrae))
                 return true;
+    return false;
+}
+
+bool ShaftProver::cup_covers(const Pair& pair, Scratch& sc, ShaftFigures& figures) const {
+    const double tol = kHideToleranceM, margin = kCupMarginTolerances * tol;
+    // The candidate faces of a cup around each piece (side 0: the region piece, 1: the object piece): the
+    // first occluder each of a few lines between the pieces meets from that piece's end, by axis and
+    // direction (the side of the piece the face bounds).
+    std::array<std::array<std::vector<float>, 6>, 2>& faces = sc.cup_faces;
+    for (auto& side_faces : faces)
+        for (auto& f : side_faces) f.clear();
+    const auto add_face = [&](int side, int a, float c) {
+        const Aabb& inner = side == 0 ? pair.region : pair.target;
+        const double cd = c;
+        int dir;
+        if (double(inner.max[a]) < cd - margin) {
+            dir = 1;
+        } else if (double(inner.min[a]) > cd + margin) {
+            dir = 0;
+        } else {
+            return;
+        }
+        std::vector<float>& f = faces[size_t(side)][size_t(2 * a + dir)];
+        if (std::find(f.begin(), f.end(), c) == f.end()) f.push_back(c);
+    };
+    const double h = solid_.voxel_size_m;
+    const glm::dvec3 o(solid_.origin);
+    // The first run of proven solid from `from` towards `to`, within `reach` metres: a plane across the
+    // middle of its first voxel, on the axis the line entered it by.
+    const auto first_solid = [&](int side, glm::vec3 from, glm::vec3 to, float reach) {
+        const float len = glm::length(to - from);
+        if (!(len > 0.0f)) return;
+        const glm::vec3 end = reach < len ? from + (to - from) * (reach / len) : to;
+        glm::ivec3 prev(0);
+        bool have_prev = false;
+        walk_voxels(solid_, from, end, [&](const glm::ivec3& cell, bool in_solid) {
+            if (in_solid) {
+                if (have_prev)
+                    for (int a = 0; a < 3; ++a)
+                        if (cell[a] != prev[a]) add_face(side, a, float(o[a] + (double(cell[a]) + 0.5) * h));
+                return true;
+            }
+            prev = cell;
+            have_prev = true;
+            return false;
+        });
+    };
+    // Each line from a point of the region piece to a point of the object piece: its first axis panel from
+    // either end, and the first solid from either end, looked for no farther than that panel and two voxels.
+    const auto line = [&](glm::vec3 from, glm::vec3 to) {
+        const glm::vec3 d = to - from;
+        const float len = glm::length(d);
+        if (!(len > 0.0f)) return;
+        const glm::vec3 dir = d / len;
+        sc.touches.clear();
+        scene_->trace_until(from, &dir, &len, 1, sc.touches);
+        const RayTouch *first = nullptr, *last = nullptr;
+        for (const RayTouch& t : sc.touches)
+            if (t.object < panels_.size() && panel_axis_[t.object] >= 0) {
+                if (!first || t.t < first->t) first = &t;
+                if (!last || t.t > last->t) last = &t;
+            }
+        const float slack = float(2.0 * h);
+        if (first)
+            add_face(0, panel_axis_[first->object], panels_[first->object].min[panel_axis_[first->object]]);
+        if (last)
+            add_face(1, panel_axis_[last->object], panels_[last->object].min[panel_axis_[last->object]]);
+        first_solid(0, from, to, first ? first->t + slack : len);
+        first_solid(1, to, from, last ? len - last->t + slack : len);
+    };
+    line(pair.from, pair.point);
+    for (const glm::dvec3& x : box_corners(pair.target, 0.0))
+        line(pair.from, glm::mix(glm::vec3(x), pair.target.center(), kCupCornerPull));
+    for (const glm::dvec3& q : box_corners(pair.region, 0.0))
+        line(glm::mix(glm::vec3(q), pair.region.center(), kCupCornerPull), pair.point);
+
+    for (int side = 0; side < 2; ++side) {
+        // The cup holds `inner`; the segments leave it towards `outer`.
+        const Aabb& inner = side == 0 ? pair.region : pair.target;
+        const Aabb& outer = side == 0 ? pair.target : pair.region;
+        std::array<std::vector<float>, 6>& cand = faces[size_t(side)];
+        for (int g = 0; g < 6; ++g) {
+            const double base = g % 2 ? double(inner.max[g / 2]) : double(inner.min[g / 2]);
+            std::sort(cand[size_t(g)].begin(), cand[size_t(g)].end(),
+                      [&](float x, float y) { return std::abs(x - base) < std::abs(y - base); });
+        }
+        // Nearest faces first; the first face whose window is not covered gives way to the next one out (an
+        // occluder in front of a wall), or to none.
+        std::array<size_t, 6> choice{};
+        for (int round = 0; round < kCupRounds; ++round) {
+            glm::dvec3 lo(-INFINITY), hi(INFINITY);
+            for (int g = 0; g < 6; ++g)
+                if (choice[size_t(g)] < cand[size_t(g)].size()) {
+                    const double c = cand[size_t(g)][choice[size_t(g)]];
+                    (g % 2 ? hi : lo)[g / 2] = c;
+                }
+            // The outer piece must lie outside the cup, clear of it.
+            bool outside = false;
+            for (int a = 0; a < 3; ++a)
+                outside =
+                    outside || double(outer.max[a]) < lo[a] - margin || double(outer.min[a]) > hi[a] + margin;
+            if (!outside) break;
+            // Each face the outer piece reaches beyond: the plane's own covers first (cheap), then with the
+            // umbrae of other planes' occluders where those fall short.
+            bool all = true;
+            std::array<bool, 6> open{};
+            for (int fuse = 0; fuse < (fusion_ ? 2 : 1); ++fuse)
+                for (int g = 0; g < 6; ++g) {
+                    if (choice[size_t(g)] >= cand[size_t(g)].size() || (fuse == 1 && !open[size_t(g)]))
+                        continue;
+                    const int a = g / 2, u = (a + 1) % 3, v = (a + 2) % 3;
+                    const float c = cand[size_t(g)][choice[size_t(g)]];
+                    // The segments leaving by this face end in the part of the outer piece beyond its plane.
+                    Aabb beyond = outer;
+                    if (g % 2) {
+                        if (double(outer.max[a]) < double(c)) continue;
+                        beyond.min[a] = std::max(beyond.min[a], c);
+                    } else {
+                        if (double(outer.min[a]) > double(c)) continue;
+                        beyond.max[a] = std::min(beyond.max[a], c);
+                    }
+                    const Window w{glm::dvec2(lo[u], lo[v]), glm::dvec2(hi[u], hi[v])};
+                    open[size_t(g)] = !cover(inner, beyond, a, c, fuse == 1, nullptr, &figures.umbrae, &w);
+                }
+            bool moved = false;
+            for (int g = 0; g < 6; ++g)
+                if (open[size_t(g)]) {
+                    all = false;
+                    ++choice[size_t(g)];
+                    moved = true;
+                }
+            if (all) return true;
+            if (!moved) break;
+        }
+    }
     return false;
 }
 
@@ -1114,6 +1287,11 @@ bool ShaftProver::hides(const World& world, const VoxelMask& eyes, const ShaftRe
         bool blocked = false;
         PlaneMiss miss;
         if (try_pair(pair, pair.from, pair.point, blocked, miss, sc, figures)) continue;
+        // A cup, on pieces halved a multiple of kCupDepthStep times.
+        if (blocked && cups_ && pair.depth % kCupDepthStep == 0 && cup_covers(pair, sc, figures)) {
+            ++figures.cupped;
+            continue;
+        }
         // A line from an eye to a point of the object that meets no occluder: every cover has a piece pair
         // holding it, and no plane covers that pair.
         if (!blocked) {
@@ -1185,11 +1363,12 @@ bool ShaftProver::hides(const World& world, const VoxelMask& eyes, const ShaftRe
     return true;
 }
 
-ShaftProvers::ShaftProvers(Context& ctx, const ShrunkOccluders& occluders, bool fusion, bool caps) {
+ShaftProvers::ShaftProvers(Context& ctx, const ShrunkOccluders& occluders, bool fusion, bool caps,
+                           bool cups) {
     ScopedTimer timer(ctx, "shaft_provers");
-    provers_.push_back(std::make_unique<ShaftProver>(ctx, occluders, fusion, caps));
+    provers_.push_back(std::make_unique<ShaftProver>(ctx, occluders, fusion, caps, cups));
     for (const ShrunkOccluders& set : occluders.block_sets)
-        provers_.push_back(std::make_unique<ShaftProver>(ctx, set, fusion, caps));
+        provers_.push_back(std::make_unique<ShaftProver>(ctx, set, fusion, caps, cups));
 }
 
 }  // namespace pvs

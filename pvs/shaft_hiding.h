@@ -39,6 +39,7 @@ struct ShaftFigures {
     uint64_t stuck_depth = 0;  // on pieces halved kBaseHalvings + log2(budget) times
     uint64_t umbrae = 0;  // umbrae of occluders in other planes computed (cross-plane fusion)
     uint64_t capped = 0;  // piece pairs a convex cap covered (pvs/convex_cap.h)
+    uint64_t cupped = 0;  // piece pairs a cup covered (docs/ALGORITHMS.md#cups)
     uint64_t skipped_candidates = 0;  // regions x objects of the passes not run for the pair cap
     double seconds = 0.0;
     // Where the time went, by how each pair ended (shaft_row() times each pair).
@@ -55,6 +56,7 @@ struct ShaftFigures {
         stuck_depth += o.stuck_depth;
         umbrae += o.umbrae;
         capped += o.capped;
+        cupped += o.cupped;
         skipped_candidates += o.skipped_candidates;
         seconds += o.seconds;
         seconds_hidden += o.seconds_hidden;
@@ -96,10 +98,12 @@ bool umbra_on_plane(const std::array<glm::dvec3, 8>& eyes, const glm::dvec3* cor
 // The occluders of one set (ShrunkOccluders: its panels, slanted panels and proven solid), indexed by plane.
 // With `fusion`, a plane's cover also takes in the umbrae of occluders in other planes, seen from either
 // piece (docs/ALGORITHMS.md#cross-plane-fusion). With `caps`, a piece pair is also covered by the convex cap
-// of a panel the line meets and its neighbours across edges (pvs/convex_cap.h).
+// of a panel the line meets and its neighbours across edges (pvs/convex_cap.h). With `cups`, a piece pair is
+// also covered by a cup (docs/ALGORITHMS.md#cups).
 class ShaftProver {
 public:
-    ShaftProver(Context& ctx, const ShrunkOccluders& set, bool fusion = true, bool caps = true);
+    ShaftProver(Context& ctx, const ShrunkOccluders& set, bool fusion = true, bool caps = true,
+                bool cups = true);
     ~ShaftProver();
     ShaftProver(const ShaftProver&) = delete;
     ShaftProver& operator=(const ShaftProver&) = delete;
@@ -145,9 +149,18 @@ private:
     // its neighbours, seen from one of the pieces, cover the pair?
     bool cap_covers(uint32_t polygon, const Aabb& region, const Aabb& target) const;
     struct PlaneScratch;
-    // plane_covers() with or without the umbrae of other planes' occluders.
+    // A rectangle of a plane in its coordinates (axis + 1, axis + 2): the face of a cup.
+    struct Window {
+        glm::dvec2 lo, hi;
+    };
+    // plane_covers() with or without the umbrae of other planes' occluders. With a window, only the
+    // crossings inside it need a cover (true when none lies there), and the target may reach the plane from
+    // its side while the region lies kCupMarginTolerances tolerances from it (docs/ALGORITHMS.md#cups).
     bool cover(const Aabb& region, const Aabb& target, int axis, float c, bool fuse, PlaneMiss* miss,
-               uint64_t* umbrae = nullptr) const;
+               uint64_t* umbrae = nullptr, const Window* window = nullptr) const;
+    // Is every segment between the pieces stopped by the faces of a cup, a box holding one piece and not the
+    // other whose faces the segments leave it by are covered (docs/ALGORITHMS.md#cups)?
+    bool cup_covers(const Pair& pair, Scratch& sc, ShaftFigures& figures) const;
     // Adds to the scratch the umbrae on the plane (axis, c) of the occluders that the lines from the centre
     // of each box through the plane's point y (in the plane's coordinates) meet, each occluder once.
     void add_umbrae(const Aabb& region, const Aabb& target, int axis, double c, glm::dvec2 y,
@@ -173,12 +186,14 @@ private:
     std::unique_ptr<RayScene> umbra_scene_;  // boxes_, panels_, then slanted_, every triangle see-through
     std::vector<CapPolygon> cap_polygons_;   // panels_, then slanted_ (none for a slab with thickness)
     std::vector<ConvexCap> caps_;            // build_caps(cap_polygons_); empty without caps
+    bool cups_ = false;
 };
 
 // A ShaftProver for every set of a ShrunkOccluders (the global one and each block's), built once.
 class ShaftProvers {
 public:
-    ShaftProvers(Context& ctx, const ShrunkOccluders& occluders, bool fusion = true, bool caps = true);
+    ShaftProvers(Context& ctx, const ShrunkOccluders& occluders, bool fusion = true, bool caps = true,
+                 bool cups = true);
     const ShaftProver& of(int32_t i) const { return *provers_[size_t(i + 1)]; }
 
 private:

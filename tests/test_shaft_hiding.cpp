@@ -381,15 +381,23 @@ TEST(ShaftHiding, TwoWallsAtARightAngleHideWhatNeitherHidesAlone) {
         RegionHider one(ctx, occ);
         uint64_t hidden_one = 0;
         EXPECT_EQ(one.hide(w, cell, {object}, &hidden_one), 0u) << "one wall alone hides it";
-        ShaftFigures fig_on, fig_off, fig_cap;
-        const bool fused = ShaftProver(ctx, occ, true, false).hides(w, no_eyes, shaft, object, 256, fig_on);
-        const bool alone = ShaftProver(ctx, occ, false, false).hides(w, no_eyes, shaft, object, 256, fig_off);
+        ShaftFigures fig_on, fig_off, fig_cap, fig_cup;
+        const bool fused =
+            ShaftProver(ctx, occ, true, false, false).hides(w, no_eyes, shaft, object, 256, fig_on);
+        const bool alone =
+            ShaftProver(ctx, occ, false, false, false).hides(w, no_eyes, shaft, object, 256, fig_off);
         // The outer corner of the L is also a convex cap (pvs/convex_cap.h): it proves the pair alone.
-        const bool capped = ShaftProver(ctx, occ, false, true).hides(w, no_eyes, shaft, object, 256, fig_cap);
+        const bool capped =
+            ShaftProver(ctx, occ, false, true, false).hides(w, no_eyes, shaft, object, 256, fig_cap);
+        // And seen from the object, the L is the inner corner of a cup (docs/ALGORITHMS.md#cups).
+        const bool cupped =
+            ShaftProver(ctx, occ, false, false, true).hides(w, no_eyes, shaft, object, 256, fig_cup);
         EXPECT_EQ(fused, gap == 0.0f) << "gap " << gap << ": " << fig_on.tests << " piece pairs";
         EXPECT_FALSE(alone) << "one plane's cover proved the corner alone";
         EXPECT_EQ(capped, gap == 0.0f) << "gap " << gap << ": " << fig_cap.tests << " piece pairs";
         EXPECT_EQ(fig_cap.capped > 0, gap == 0.0f);
+        EXPECT_EQ(cupped, gap == 0.0f) << "gap " << gap << ": " << fig_cup.tests << " piece pairs";
+        EXPECT_EQ(fig_cup.cupped > 0, gap == 0.0f);
     }
 }
 
@@ -592,6 +600,81 @@ TEST(ShaftHiding, AStaircaseHidesWhatNoSingleStepHides) {
         ShaftFigures figures;
         EXPECT_EQ(ShaftProver(ctx, occ).hides(w, no_eyes, shaft, object, 1 << 16, figures), slit == 0.0f)
             << "slit " << slit << ": " << figures.tests << " piece pairs";
+    }
+}
+
+// Cups (docs/ALGORITHMS.md#cups): a room of panels, each of its six walls cut into a few panels that meet
+// exactly, around a cell; objects outside it. Closed, the room is one cup: every object is proven hidden,
+// with no fusion and no caps, and the planes alone (no cups) prove none of those beyond an edge or a
+// corner of the room. With a hole of 5 cm in one wall, every object proven hidden is checked against dense
+// segments, and some objects are seen through the hole and stay listed.
+TEST(ShaftHiding, ARoomOfPanelsIsOneCup) {
+    Context ctx = quiet_context();
+    const float lo = 0.0f, hi = 4.0f;
+    Rng rng(41, 3);
+    for (const bool hole : {false, true}) {
+        ShrunkOccluders occ;
+        occ.epsilon_m = {0.1};
+        occ.boxes = {{}};
+        for (int a = 0; a < 3; ++a)
+            for (const float c : {lo, hi}) {
+                // The wall x[a] = c, cut at a random line across it into two panels meeting exactly, the
+                // hole (on the wall x = hi) cut out of the second.
+                const int u = (a + 1) % 3, v = (a + 2) % 3;
+                const float cut = 1.0f + 2.0f * rng.uniform();
+                const auto panel = [&](float u0, float u1, float v0, float v1) {
+                    glm::vec3 p0, p1;
+                    p0[a] = p1[a] = c;
+                    p0[u] = u0, p1[u] = u1, p0[v] = v0, p1[v] = v1;
+                    occ.panels.push_back(Aabb::of(p0, p1));
+                };
+                panel(lo, cut, lo, hi);
+                if (hole && a == 0 && c == hi) {
+                    const float h0 = 2.0f, h1 = 2.05f;
+                    panel(cut, hi, lo, h0);
+                    panel(cut, hi, h1, hi);
+                    panel(cut, h0, h0, h1);
+                    panel(h1, hi, h0, h1);
+                } else {
+                    panel(cut, hi, lo, hi);
+                }
+            }
+        World w;
+        std::vector<uint32_t> objects;
+        for (int i = 0; i < 24; ++i) {
+            glm::vec3 c;
+            for (int k = 0; k < 3; ++k) {
+                // Outside the room on one to three axes: beyond a wall, an edge or a corner.
+                const int where = i % 3 >= k ? int(rng.below(2)) * 2 - 1 : 0;
+                c[k] = where == 0 ? 1.0f + 2.0f * rng.uniform() : (where < 0 ? -1.5f : 5.5f);
+            }
+            objects.push_back(test::add_box(w, "o" + std::to_string(i), box_around(c, glm::vec3(0.4f))));
+        }
+        const Aabb cell = Aabb::of({1.2f, 1.5f, 1.3f}, {2.8f, 2.5f, 2.6f});
+        const VoxelMask no_eyes;
+        const ShaftRegion shaft = shaft_region(no_eyes, cell);
+        int cupped = 0, planes = 0, seen = 0;
+        for (const uint32_t o : objects) {
+            ShaftFigures fig, fig_planes;
+            const bool hidden =
+                ShaftProver(ctx, occ, false, false, true).hides(w, no_eyes, shaft, o, 256, fig);
+            const bool by_planes =
+                ShaftProver(ctx, occ, false, false, false).hides(w, no_eyes, shaft, o, 256, fig_planes);
+            const bool blocked = dense_segments_blocked(occ, cell, w.objects[o].bounds, Rng(43, o), 20000);
+            if (hidden) {
+                EXPECT_TRUE(blocked) << "object " << o << ": proven hidden, and a segment passes";
+            }
+            if (!hole) {
+                EXPECT_TRUE(hidden) << "object " << o << ": the closed room did not hide it";
+            }
+            cupped += hidden ? 1 : 0;
+            planes += by_planes ? 1 : 0;
+            seen += blocked ? 0 : 1;
+        }
+        EXPECT_LT(planes, cupped) << "the planes alone prove as much: the test does not need cups";
+        if (hole) {
+            EXPECT_GT(seen, 0) << "nothing is seen through the hole: the scene is not telling";
+        }
     }
 }
 
