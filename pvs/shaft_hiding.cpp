@@ -11,11 +11,9 @@
 
 #include <algorithm>
 #include <array>
-#include <atomic>
 #include <bit>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 
 namespace pvs {
 

@@ -11,8 +11,11 @@
 // every point of `target` do (a back umbra; the occluder misses `target`). A segment crossing a panel meets
 // an opaque triangle; one reaching the interior of the proven solid is stopped by S; one through an umbra
 // meets its occluder before its end. hides() is true only if every piece pair of a cover of the region's
-// eyes and of the object's triangles passes plane_covers() or slanted_hides(). So what it proves is hidden
-// from every eye of the region. The argument: docs/ALGORITHMS.md#shaft-pass and #cross-plane-fusion.
+// eyes and of the object's triangles passes plane_covers(), slanted_hides(), a convex cap (cap_hides) or a
+// cup: a box holding one piece and not the other, each of whose faces covers, as plane_covers() does, the
+// crossings inside its window of the segments that leave the box through it. So what it proves is hidden
+// from every eye of the region. The argument: docs/ALGORITHMS.md#shaft-pass, #cross-plane-fusion,
+// #convex-caps and #cups.
 #pragma once
 
 #include "core/cell_set.h"
