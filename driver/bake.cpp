@@ -4,6 +4,7 @@
 #include "cells/grid.h"
 #include "cells/octree.h"
 #include "cells/view_volume.h"
+#include "cells/world_extent.h"
 #include "core/error.h"
 #include "driver/memory_plan.h"
 #include "driver/report.h"
@@ -271,7 +272,9 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
         plan.cells_bound = true;
         ctx.info(fmt::format("memory plan: {}; this bake may use {:.2f} GiB", describe(plan),
                              max_memory_bytes(config.run) / double(uint64_t(1) << 30)));
-        check_memory(plan, max_memory_bytes(config.run), "the view volume and occluders");
+        const std::string strays = describe_reaches(world, stray_objects(world, 3));
+        check_memory(plan, max_memory_bytes(config.run), "the view volume and occluders",
+                     strays.empty() ? "" : "the world's bounds are that large because " + strays);
     }
     const ViewVolume view = build_view_volume(ctx, view_config, world);
     bake.leak_path = view.leak_path;

@@ -23,8 +23,10 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstring>
 #include <filesystem>
 #include <functional>
@@ -32,6 +34,8 @@
 #include <optional>
 #include <string_view>
 #include <type_traits>
+
+#include <unistd.h>
 
 namespace pvs {
 
@@ -175,7 +179,7 @@ void add_cpu_figures(const Context& ctx, RunRecord& run) {
 
 void write_report(const std::string& path, const BakeData& bake, const Context& ctx) {
     if (path.empty()) return;
-    write_file_atomically(path, bake_report_json(bake, ctx.warnings()));
+    write_file_atomically(path, bake_report_json(bake, ctx.warnings()), "the report");
 }
 
 // occluders WORLD -o boxes.glb
@@ -202,7 +206,7 @@ int run_occluders(Context& ctx, const BakeConfig& config, const std::string& wor
         ++written;
     }
     if (!view.leak_path.empty()) {
-        write_file_atomically(out_path + ".leak.obj", leak_path_obj(view.leak_path));
+        write_file_atomically(out_path + ".leak.obj", leak_path_obj(view.leak_path), "the leak path");
     }
     if (glb.nodes.empty()) {
         ctx.warn("occluders: no box passed; writing an empty scene");
@@ -258,7 +262,7 @@ int run_occluders(Context& ctx, const BakeConfig& config, const std::string& wor
         }
         j["boxes"] = arr;
         j["warnings"] = ctx.warnings();
-        write_file_atomically(report_path, j.dump(2) + "\n");
+        write_file_atomically(report_path, j.dump(2) + "\n", "the report");
     }
     ctx.info(fmt::format("wrote {} ({} boxes)", out_path, written));
     return kExitOk;
@@ -279,7 +283,7 @@ enum class ResumeMode {
 
 // What writing the checkpoint cost a run (its run figures checkpoint_*).
 struct CheckpointCost {
-    uint64_t chunks = 0, rows = 0;
+    uint64_t chunks = 0, rows = 0, failures = 0;
     double seconds = 0.0;
 };
 
@@ -311,14 +315,19 @@ std::unique_ptr<RowJournal> open_journal(Context& ctx, const BakeConfig& config,
     try {
         checkpoint = read_checkpoint(folder, id);
     } catch (const Error& e) {
-        throw bad_input(
-            fmt::format("{}\nthe checkpoint {} is not this bake's: remove it, or bake with "
-                        "--restart to start again from zero",
-                        e.what(), folder));
+        if (e.kind() == ErrorKind::kIo)
+            throw io_error(fmt::format("{}; the checkpoint {} cannot be read: let this process read it, or bake "
+                                       "with --restart to start again from zero",
+                                       e.what(), folder));
+        throw bad_input(fmt::format("{}; the checkpoint {} is not this bake's or is damaged: remove it, or bake "
+                                    "with --restart to start again from zero",
+                                    e.what(), folder));
     }
     if (resume == ResumeMode::kResume && checkpoint.chunks.empty())
         throw bad_input(fmt::format("--resume: there is no checkpoint at {}", folder));
-    // The sink runs under the journal's lock, so the chunk numbers follow the chunks.
+    // The sink runs under the journal's lock, so the chunk numbers follow the chunks. A chunk that cannot be
+    // written is no reason to lose the bake: the rows wait for the next chunk, and the first failure alone is
+    // said (a full disk would otherwise repeat it at every chunk).
     auto sink = [&ctx, &cost, folder, id, rank, next = checkpoint.next_index](const RowChunk& chunk) mutable {
         const auto start = std::chrono::steady_clock::now();
         try {
@@ -329,8 +338,12 @@ std::unique_ptr<RowJournal> open_journal(Context& ctx, const BakeConfig& config,
             cost.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
             return true;
         } catch (const Error& e) {
-            ctx.warn(
-                fmt::format("checkpoint: {} (the bake goes on; the rows wait for the next chunk)", e.what()));
+            if (cost.failures++ == 0)
+                ctx.warn(fmt::format("{}; the bake goes on, and its rows wait for the next chunk", e.what()));
+            return false;
+        } catch (const std::bad_alloc&) {
+            if (cost.failures++ == 0)
+                ctx.warn(fmt::format("{}: out of memory while writing the checkpoint; the bake goes on", folder));
             return false;
         }
     };
@@ -342,6 +355,41 @@ std::unique_ptr<RowJournal> open_journal(Context& ctx, const BakeConfig& config,
     }
     return journal;
 }
+
+// While alive, a bake stopped by SIGTERM, SIGINT or SIGHUP (a scheduler's time limit, Ctrl-C, mpirun ending
+// the job because one of its ranks died) says in one line where its finished rows are before it ends; the
+// signal then ends the process as it would have (docs/ALGORITHMS.md#faults). A signal handler can reach only
+// what is set before it runs: the line lives in a static buffer, written with write(2) alone.
+class StopNotice {
+public:
+    explicit StopNotice(const std::string& folder) {
+        const std::string line = fmt::format(
+            "error: the bake was stopped by a signal; the finished rows are kept in {}/: run the same command "
+            "again to resume\n",
+            folder);
+        length_ = std::min(line.size(), sizeof(line_));
+        std::memcpy(line_, line.data(), length_);
+        for (const int sig : kSignals) previous_[index(sig)] = std::signal(sig, &StopNotice::on_signal);
+    }
+    ~StopNotice() {
+        for (const int sig : kSignals) std::signal(sig, previous_[index(sig)]);
+    }
+    StopNotice(const StopNotice&) = delete;
+    StopNotice& operator=(const StopNotice&) = delete;
+
+private:
+    static constexpr int kSignals[3] = {SIGTERM, SIGINT, SIGHUP};
+    static size_t index(int sig) { return sig == SIGTERM ? 0 : sig == SIGINT ? 1 : 2; }
+    static void on_signal(int sig) {
+        [[maybe_unused]] const ssize_t n = ::write(2, line_, length_);
+        std::signal(sig, SIG_DFL);
+        std::raise(sig);
+    }
+    static inline char line_[1024];
+    static inline size_t length_ = 0;
+    using Handler = void (*)(int);
+    Handler previous_[3] = {};
+};
 
 // The runtime file of the bake at bake_path (io/runtime_file.h), and a line saying what it holds.
 void write_runtime_file(Context& ctx, const std::string& bake_path, const std::string& runtime_path,
@@ -391,6 +439,8 @@ int run_bake(Context& ctx, const BakeConfig& config, const std::string& world_pa
     CheckpointCost cost;
     std::unique_ptr<RowJournal> journal = open_journal(ctx, config, folder, id, resume, cost, share.get());
     const size_t resumed_rows = journal ? journal->loaded_rows() : 0;
+    std::optional<StopNotice> stop_notice;
+    if (journal && (!share || share->rank() == 0)) stop_notice.emplace(folder);
     const World world = load_world(ctx, world_path);
     BakeData bake = bake_world(ctx, config, world, world_path, hash, journal.get(), share.get(),
                                reuse ? &*reuse : nullptr);
@@ -404,30 +454,38 @@ int run_bake(Context& ctx, const BakeConfig& config, const std::string& world_pa
         bake.run.figures.emplace_back("checkpoint_chunks", double(cost.chunks));
         bake.run.figures.emplace_back("checkpoint_rows", double(cost.rows));
         bake.run.figures.emplace_back("checkpoint_seconds", cost.seconds);
+        bake.run.figures.emplace_back("checkpoint_failures", double(cost.failures));
         bake.run.figures.emplace_back("resumed_rows", double(resumed_rows));
     }
+    // Every output before the checkpoint goes: a failure of any of them keeps the rows for the next run.
     try {
-        ScopedTimer t(ctx, "write");
-        write_bake_file(out_path, bake);
+        {
+            ScopedTimer t(ctx, "write");
+            write_bake_file(out_path, bake);
+        }
+        if (!bake.leak_path.empty()) {
+            const std::string leak_file = out_path + ".leak.obj";
+            write_file_atomically(leak_file, leak_path_obj(bake.leak_path), "the leak path");
+            ctx.warn(fmt::format("the leak path is in {} (load it over the world in a viewer)", leak_file));
+        }
+        write_report(report_path, bake, ctx);
+        ctx.info(fmt::format("wrote {} ({}, {} cells, mean PVS {:.1f} of {} objects)", out_path, pvs_kind(bake),
+                             bake.cells.size(), figure_or(bake.figures, "pvs_objects_mean", 0.0),
+                             bake.objects.size()));
+        if (!runtime_path.empty()) write_runtime_file(ctx, out_path, runtime_path);
     } catch (const Error& e) {
-        if (!journal || !checkpoint_exists(folder)) throw;
-        throw Error(e.kind(), fmt::format("{}\nthe finished rows are kept in {}: run the same command again "
-                                          "once the output can be written, and it resumes from them",
+        if (!journal) throw;
+        if (!checkpoint_exists(folder)) {
+            remove_checkpoint(folder);  // a folder no chunk could be written to
+            throw;
+        }
+        throw Error(e.kind(), fmt::format("{}; the finished rows are kept in {}/: run the same command again to "
+                                          "resume",
                                           e.what(), folder));
     }
     if (journal && !remove_checkpoint(folder))
         ctx.warn(
             fmt::format("cannot remove the checkpoint {} (the bake is written; remove it by hand)", folder));
-    if (!bake.leak_path.empty()) {
-        const std::string leak_file = out_path + ".leak.obj";
-        write_file_atomically(leak_file, leak_path_obj(bake.leak_path));
-        ctx.warn(fmt::format("the leak path is in {} (load it over the world in a viewer)", leak_file));
-    }
-    write_report(report_path, bake, ctx);
-    ctx.info(fmt::format("wrote {} ({}, {} cells, mean PVS {:.1f} of {} objects)", out_path, pvs_kind(bake),
-                         bake.cells.size(), figure_or(bake.figures, "pvs_objects_mean", 0.0),
-                         bake.objects.size()));
-    if (!runtime_path.empty()) write_runtime_file(ctx, out_path, runtime_path);
     // Misses through openings narrower than the gap tolerance are outside the promise (reported, no failure).
     const double wide =
         bake.verification.ran ? figure_or(bake.verification.figures, "wide_missed_pairs", 0.0) : 0.0;

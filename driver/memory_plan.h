@@ -25,7 +25,9 @@ struct MemoryPlan {
     int threads = 1;
     bool cells_bound = false;  // `cells` is the most the view bounds can hold (before the flood)
 
-    double total() const { return world_bytes + voxel_bytes + pvs_bytes + double(threads) * per_thread_bytes; }
+    double total() const {
+        return world_bytes + voxel_bytes + pvs_bytes + double(threads) * per_thread_bytes;
+    }
 };
 
 // The plan of a bake of `world` over `voxels` voxels and `cells` cells with `threads` workers.
@@ -40,7 +42,9 @@ double max_memory_bytes(const RunConfig& config);
 std::string describe(const MemoryPlan& plan);
 
 // Throws pvs::Error (bad input) naming the stage, the plan, the limit and what would shrink it when the
-// plan's total passes `limit_bytes` (without its PVS when `cells` is only a bound).
-void check_memory(const MemoryPlan& plan, double limit_bytes, const std::string& stage);
+// plan's total passes `limit_bytes` (without its PVS when `cells` is only a bound). `note`, when not empty,
+// ends the message (the objects that stand apart from the world, cells/world_extent.h).
+void check_memory(const MemoryPlan& plan, double limit_bytes, const std::string& stage,
+                  const std::string& note = "");
 
 }  // namespace pvs

@@ -1,6 +1,6 @@
 // pvsbake io: writes and reads the HDF5 bake file, format 1.2 (layout in docs/FORMAT.md), with the HDF5 C
-// API only (the runtime loader must depend on libhdf5 alone). The writer dedupes PVS rows, writes to an
-// AtomicOutput temporary file and commits it once the file is fully closed. The reader is the loader
+// API only (the runtime loader must depend on libhdf5 alone). The writer dedupes PVS rows, builds the file in
+// memory and writes it whole through write_file_atomically() (io/atomic_file.h). The reader is the loader
 // library's (io/loader/bake_reader.h: one validating reader of the format, shared with the runtime); this
 // file turns its sections into a BakeData and its failures into a pvs::Error naming the file.
 #include "io/bake_file.h"
@@ -18,6 +18,7 @@
 #include <hdf5.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstddef>
 #include <cstring>
@@ -756,14 +757,14 @@ void write_bake_file(const std::string& path, const BakeData& bake) {
     const std::filesystem::path folder = std::filesystem::path(path).parent_path();
     std::error_code ec;
     if (!folder.empty() && !std::filesystem::is_directory(folder, ec)) {
-        throw io_error(fmt::format("{}: cannot write: folder {} does not exist", path, folder.string()));
+        throw write_error(path, ENOENT, "the bake file");
     }
 
     QuietHdf5 quiet;
-    AtomicOutput out(path);
+    std::string bytes;
     {
         const Site site(path, ErrorKind::kIo, "cannot write the bake file: ");
-        Handle file = create_file(site, out.temp_path());
+        Handle file = create_memory_file(site);
         {
             Writer w(site);
             Handle root = site.handle(H5Gopen2(file.get(), "/", H5P_DEFAULT), H5Gclose, "cannot open /");
@@ -779,9 +780,9 @@ void write_bake_file(const std::string& path, const BakeData& bake) {
             write_print(w, root.get(), bake.print);
             write_run(w, root.get(), bake.run);
         }
-        site.check(file.close(), "cannot finish writing " + out.temp_path());
+        bytes = take_file_image(site, file);
     }
-    out.commit();
+    write_file_atomically(path, bytes, "the bake file");
 }
 
 BakeData read_bake_file(const std::string& path) {

@@ -144,13 +144,13 @@ void write_checkpoint_chunk(const std::string& folder, uint32_t index, const Che
                             const RowChunk& chunk, int rank) {
     std::error_code ec;
     fs::create_directories(folder, ec);
-    if (ec) throw io_error(fmt::format("cannot create the checkpoint folder {}: {}", folder, ec.message()));
+    if (ec) throw write_error(folder, ec.value(), "the checkpoint", "creating the folder of");
     const std::string path = (fs::path(folder) / chunk_name(index, rank)).string();
     QuietHdf5 quiet;
-    AtomicOutput out(path);
+    std::string bytes;
     {
         const h5::Site site(path, ErrorKind::kIo, "cannot write the checkpoint: ");
-        Handle file = h5::create_file(site, out.temp_path());
+        Handle file = h5::create_memory_file(site);
         {
             h5::Writer w(site);
             Handle root = site.handle(H5Gopen2(file.get(), "/", H5P_DEFAULT), H5Gclose, "cannot open /");
@@ -173,9 +173,9 @@ void write_checkpoint_chunk(const std::string& folder, uint32_t index, const Che
                           {t.keys.size(), t.words_per_row}, t.words.data(), true);
             }
         }
-        site.check(file.close(), "cannot finish writing " + out.temp_path());
+        bytes = h5::take_file_image(site, file);
     }
-    out.commit();
+    write_file_atomically(path, bytes, "the checkpoint");
 }
 
 bool remove_checkpoint(const std::string& folder) {

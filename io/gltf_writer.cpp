@@ -224,7 +224,7 @@ void write_glb(const SceneDesc& scene, const std::string& path) {
         out += bin;
     }
     if (out.size() != total) throw internal_error(fmt::format("write_glb: {}: size mismatch", path));
-    write_file_atomically(path, out);
+    write_file_atomically(path, out, "the glTF file");
 }
 
 }  // namespace pvs

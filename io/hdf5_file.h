@@ -204,16 +204,36 @@ private:
     const Site& site_;
 };
 
-// Creates (truncates) the HDF5 file at `path` for writing, with the lists above.
-inline Handle create_file(const Site& site, const std::string& path) {
+// An HDF5 file built in memory (the core driver, no backing store), with the lists above. The writers build
+// their files whole in memory and hand the bytes to write_file_atomically() (io/atomic_file.h): HDF5 itself
+// never touches the disk, so a full disk or a failing write is met by our own checked calls, with its errno,
+// and never leaves the library's state half-flushed (docs/ALGORITHMS.md#faults).
+inline Handle create_memory_file(const Site& site) {
     Handle fapl = file_access_list(site);
+    // Grows by 1 MiB steps; the image taken at the end is as long as the file, not its steps.
+    site.check(H5Pset_fapl_core(fapl.get(), size_t(1) << 20, false), "cannot set the in-memory file driver");
     Handle fcpl = site.handle(H5Pcreate(H5P_FILE_CREATE), H5Pclose, "cannot create a file creation list");
     const unsigned order = H5P_CRT_ORDER_TRACKED | H5P_CRT_ORDER_INDEXED;
     site.check(H5Pset_link_creation_order(fcpl.get(), order), "cannot track link order");
     site.check(H5Pset_attr_creation_order(fcpl.get(), order), "cannot track attribute order");
     site.check(H5Pset_obj_track_times(fcpl.get(), false), "cannot turn off object times");
-    return site.handle(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, fcpl.get(), fapl.get()), H5Fclose,
-                       "cannot create " + path);
+    // The name is only the in-memory file's: nothing is created under it.
+    return site.handle(H5Fcreate("pvsbake-in-memory.h5", H5F_ACC_TRUNC, fcpl.get(), fapl.get()), H5Fclose,
+                       "cannot create the file in memory");
+}
+
+// The bytes of a file create_memory_file() made (every object in it closed but the file), then closes it.
+inline std::string take_file_image(const Site& site, Handle& file) {
+    // HDF5 1.10.8's H5Fget_file_image does not flush the metadata cache first: without this flush the image
+    // lacks the root group's object header.
+    site.check(H5Fflush(file.get(), H5F_SCOPE_GLOBAL), "cannot flush the file in memory");
+    const ssize_t size = H5Fget_file_image(file.get(), nullptr, 0);
+    if (size < 0) site.fail_hdf5("cannot take the file's bytes from memory");
+    std::string bytes(size_t(size), '\0');
+    if (size > 0 && H5Fget_file_image(file.get(), bytes.data(), bytes.size()) != size)
+        site.fail_hdf5("cannot take the file's bytes from memory");
+    site.check(file.close(), "cannot close the file in memory");
+    return bytes;
 }
 
 // A group of (key, value) text pairs: one attribute per key, and the datasets keys and values.

@@ -447,7 +447,7 @@ RuntimeFileFigures export_runtime_file(const std::string& bake_path, const std::
                                        const RuntimeFileOptions& options) {
     RuntimeFileFigures figures;
     const std::string bytes = runtime_file_bytes(bake_path, options, &figures);
-    write_file_atomically(out_path, bytes);
+    write_file_atomically(out_path, bytes, "the runtime file");
     return figures;
 }
 

@@ -285,12 +285,12 @@ public:
         grab->SetInputBufferTypeToRGB();
         grab->ReadFrontBufferOff();
         grab->Update();
-        AtomicOutput out(path);
+        AtomicOutput out(path, "the screenshot");
         vtkNew<vtkPNGWriter> writer;
         writer->SetInputConnection(grab->GetOutputPort());
         writer->SetFileName(out.temp_path().c_str());
         writer->Write();
-        if (writer->GetErrorCode() != 0) throw io_error(path + ": could not write the PNG");
+        if (writer->GetErrorCode() != 0) throw io_error(path + ": cannot write the screenshot (VTK's PNG writer failed)");
         out.commit();
     }
 

@@ -6,6 +6,7 @@
 
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 
 #include <fcntl.h>
@@ -144,8 +145,20 @@ Handle open_bake_file(const std::string& path, uint64_t& file_bytes) {
         site.fail("not an HDF5 file", Status::kNotBakeFile);
     }
     Handle fapl = site.handle(file_access_list(), H5Pclose, "cannot create a file access list");
-    return site.handle(H5Fopen(path.c_str(), H5F_ACC_RDONLY, fapl.get()), H5Fclose,
-                       "cannot open the HDF5 file (truncated or damaged?)");
+    const hid_t file = H5Fopen(path.c_str(), H5F_ACC_RDONLY, fapl.get());
+    if (file < 0) {
+        // HDF5 says "truncated file: eof = A, sblock->base_addr = B, stored_eof = C": said in plain words.
+        const std::string detail = hdf5_detail();
+        unsigned long long eof = 0, base = 0, stored = 0;
+        if (std::sscanf(detail.c_str(), "truncated file: eof = %llu, sblock->base_addr = %llu, stored_eof = %llu",
+                        &eof, &base, &stored) == 3) {
+            site.fail(cat("truncated: it holds ", eof, " of the ", stored,
+                          " bytes it was written with (an interrupted copy?)"));
+        }
+        site.fail(detail.empty() ? "cannot open the HDF5 file (damaged?)"
+                                 : cat("cannot open the HDF5 file (damaged?): ", detail));
+    }
+    return Handle(file, H5Fclose);
 }
 
 BakeInfo read_header(const Reader& r, hid_t root) {

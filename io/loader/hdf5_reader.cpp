@@ -7,8 +7,13 @@
 namespace pvsbake::detail {
 namespace {
 
-herr_t innermost_error(unsigned n, const H5E_error2_t* err, void* out) {
-    if (n == 0 && err->desc != nullptr) *static_cast<std::string*>(out) = err->desc;
+// Called by HDF5's C code: nothing may be thrown through it (an allocation that fails leaves the detail out).
+herr_t innermost_error(unsigned n, const H5E_error2_t* err, void* out) noexcept {
+    try {
+        if (n == 0 && err->desc != nullptr) *static_cast<std::string*>(out) = err->desc;
+    } catch (...) {
+        return -1;
+    }
     return 0;
 }
 
