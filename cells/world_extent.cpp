@@ -14,14 +14,13 @@ namespace pvs {
 namespace {
 
 double distance_to_box(const Aabb& box, glm::vec3 p) {
-    const glm::dvec3 d = glm::max(glm::max(glm::dvec3(box.min) - glm::dvec3(p), glm::dvec3(p) - glm::dvec3(box.max)),
-                                  glm::dvec3(0.0));
+    const glm::dvec3 d = glm::max(
+        glm::max(glm::dvec3(box.min) - glm::dvec3(p), glm::dvec3(p) - glm::dvec3(box.max)), glm::dvec3(0.0));
     return std::sqrt(glm::dot(d, d));
 }
 
-}  // namespace
-
-std::vector<ObjectReach> farthest_objects(const World& world, size_t count) {
+// Every object that reaches out of the rest, with the longest edge of that rest, in object order.
+std::vector<std::pair<ObjectReach, double>> reaches(const World& world) {
     const size_t n = world.objects.size();
     // What every object is measured against besides the other objects: the view seeds and boxes.
     Aabb markers;
@@ -38,7 +37,7 @@ std::vector<ObjectReach> farthest_objects(const World& world, size_t count) {
         after[i] = after[i + 1];
         if (world.objects[i].triangle_count) after[i].extend(world.objects[i].bounds);
     }
-    std::vector<ObjectReach> out;
+    std::vector<std::pair<ObjectReach, double>> out;
     for (size_t i = 0; i < n; ++i) {
         Aabb rest = markers;
         if (!before[i].is_empty()) rest.extend(before[i]);
@@ -51,16 +50,33 @@ std::vector<ObjectReach> farthest_objects(const World& world, size_t count) {
                 const double d = distance_to_box(rest, world.positions[v]);
                 if (d > r.distance_m) r = {uint32_t(i), d, world.positions[v]};
             }
-        if (r.distance_m > 0.0) out.push_back(r);
+        const glm::dvec3 e = glm::dvec3(rest.size());
+        if (r.distance_m > 0.0) out.emplace_back(r, std::max({e.x, e.y, e.z}));
     }
+    return out;
+}
+
+std::vector<ObjectReach> farthest_first(std::vector<ObjectReach> out, size_t count) {
     std::sort(out.begin(), out.end(), [](const ObjectReach& a, const ObjectReach& b) {
         return a.distance_m != b.distance_m ? a.distance_m > b.distance_m : a.object < b.object;
     });
-    // Only those that stand out: within a tenth of the farthest reach.
-    const double floor_m = out.empty() ? 0.0 : 0.1 * out.front().distance_m;
-    std::erase_if(out, [&](const ObjectReach& r) { return r.distance_m < floor_m; });
     if (out.size() > count) out.resize(count);
     return out;
+}
+
+}  // namespace
+
+std::vector<ObjectReach> farthest_objects(const World& world, size_t count) {
+    std::vector<ObjectReach> out;
+    for (const auto& [r, rest_edge] : reaches(world)) out.push_back(r);
+    return farthest_first(std::move(out), count);
+}
+
+std::vector<ObjectReach> stray_objects(const World& world, size_t count) {
+    std::vector<ObjectReach> out;
+    for (const auto& [r, rest_edge] : reaches(world))
+        if (r.distance_m >= std::max(rest_edge, kStrayMinReachM)) out.push_back(r);
+    return farthest_first(std::move(out), count);
 }
 
 std::string format_distance(double metres) {
@@ -73,44 +89,67 @@ std::string describe_reaches(const World& world, const std::vector<ObjectReach>&
     std::string out;
     for (const ObjectReach& r : reaches) {
         if (!out.empty()) out += "; ";
-        out += fmt::format("object '{}' has a vertex {} from the rest of the world (at {:.1f}, {:.1f}, {:.1f})",
-                           world.objects[r.object].name, format_distance(r.distance_m), r.vertex.x, r.vertex.y,
-                           r.vertex.z);
+        out += fmt::format(
+            "object '{}' has a vertex {} from the rest of the world (at {:.1f}, {:.1f}, {:.1f})",
+            world.objects[r.object].name, format_distance(r.distance_m), r.vertex.x, r.vertex.y, r.vertex.z);
     }
     return out;
 }
 
-VoxelGrid view_voxel_grid(const ViewVolumeConfig& config, const World& world, double preferred_m, int pad_voxels) {
+VoxelGrid view_voxel_grid(const ViewVolumeConfig& config, const World& world, double preferred_m,
+                          int pad_voxels) {
     const glm::vec3 e = world.bounds.size();
-    const auto outliers = [&] {
-        const std::string far = describe_reaches(world, farthest_objects(world, 3));
-        return far.empty() ? std::string("no object reaches far from the rest: the world is just large")
-                           : far;
-    };
     const bool automatic = !(config.voxel_size_m > 0.0);
-    const uint64_t cap = std::min(config.max_voxels, kMaxVoxels);  // make_voxel_grid()'s own limit
-    const double size = automatic ? default_voxel_size(world.bounds, preferred_m, cap) : config.voxel_size_m;
-    const int pad = pad_voxels > 0 ? pad_voxels : void_pad_voxels(size);
-    const double count = voxel_grid_count(world.bounds, size, pad);
-    if (!automatic && count > double(cap)) {
-        throw bad_input(fmt::format(
-            "view volume: --voxel-size {} m over the world's bounds ({:.1f} x {:.1f} x {:.1f} m) makes {:.3g} "
-            "voxels, over --max-voxels {}: {}. Use a larger --voxel-size, or raise --max-voxels (the memory "
-            "plan then says what they cost)",
-            size, e.x, e.y, e.z, count, cap, outliers()));
+    const auto grid_of = [&](double size) {
+        return make_voxel_grid(world.bounds, size, pad_voxels > 0 ? pad_voxels : void_pad_voxels(size));
+    };
+    const auto count_of = [&](double size) {
+        return voxel_grid_count(world.bounds, size, pad_voxels > 0 ? pad_voxels : void_pad_voxels(size));
+    };
+    if (!automatic) {
+        // An explicit size: the grid's own limit only; the memory plan says whether it fits the machine.
+        if (count_of(config.voxel_size_m) > double(kMaxVoxels)) {
+            const std::string strays = describe_reaches(world, stray_objects(world, 3));
+            throw bad_input(
+                fmt::format("view volume: --voxel-size {} m over the world's bounds ({:.1f} x {:.1f} x "
+                            "{:.1f} m) makes {:.3g} "
+                            "voxels, more than a voxel grid can hold ({:.3g}){}{}. Use a larger --voxel-size",
+                            config.voxel_size_m, e.x, e.y, e.z, count_of(config.voxel_size_m),
+                            double(kMaxVoxels), strays.empty() ? "" : ": ", strays));
+        }
+        return grid_of(config.voxel_size_m);
     }
-    const double cells = config.cell_edge_m > 0.0 ? config.cell_edge_m : std::numeric_limits<double>::infinity();
-    const double limit = std::min(config.max_voxel_size_m, cells);
-    if (automatic && size > preferred_m && size > limit && !config.allow_coarse_voxels) {
-        const double wanted = voxel_grid_count(world.bounds, preferred_m, void_pad_voxels(preferred_m));
+    // Automatic: the preferred size, coarser to stay within --max-voxels, but never coarser than
+    // --max-voxel-size or the cells (docs/ALGORITHMS.md#world-extent).
+    const uint64_t target = config.max_voxels > 0 ? std::min(config.max_voxels, kMaxVoxels) : kMaxVoxels;
+    const double fit = default_voxel_size(world.bounds, preferred_m, target);
+    const double cells =
+        config.cell_edge_m > 0.0 ? config.cell_edge_m : std::numeric_limits<double>::infinity();
+    const double limit = std::max(preferred_m, std::min(config.max_voxel_size_m, cells));
+    if (fit <= limit) return grid_of(fit);
+    const char* limit_name = limit < config.max_voxel_size_m ? "the cells'" : "--max-voxel-size";
+    if (config.allow_coarse_voxels) return grid_of(fit);
+    // Past the target: a world whose bounds an object stands apart from is almost always a broken file;
+    // one that is just large keeps voxels of the limit, and the memory plan decides whether it fits.
+    const std::vector<ObjectReach> strays = stray_objects(world, 3);
+    if (!strays.empty()) {
         throw bad_input(fmt::format(
-            "view volume: the world's bounds ({:.1f} x {:.1f} x {:.1f} m) need {:.3g} m voxels to stay within "
-            "--max-voxels {}, coarser than {} {} m: {}. Remove the stray geometry, or raise --max-voxels "
-            "({} m voxels need {:.3g}), or pass --allow-coarse-voxels to bake anyway",
-            e.x, e.y, e.z, size, cap, limit < config.max_voxel_size_m ? "the cells'" : "--max-voxel-size",
-            limit, outliers(), preferred_m, wanted));
+            "view volume: the world's bounds ({:.1f} x {:.1f} x {:.1f} m) need {:.3g} m voxels to stay "
+            "within "
+            "--max-voxels {}, coarser than {} {} m, because {}. Remove the stray geometry, or pass "
+            "--allow-coarse-voxels to bake anyway",
+            e.x, e.y, e.z, fit, target, limit_name, limit, describe_reaches(world, strays)));
     }
-    return make_voxel_grid(world.bounds, size, pad);
+    if (count_of(limit) > double(kMaxVoxels)) {
+        throw bad_input(
+            fmt::format("view volume: the world's bounds ({:.1f} x {:.1f} x {:.1f} m) make {:.3g} voxels of "
+                        "{} {} m, more "
+                        "than a voxel grid can hold ({:.3g}); no object stands apart from the rest: the "
+                        "world is just large. "
+                        "Raise --max-voxel-size, or pass --allow-coarse-voxels to bake with coarser voxels",
+                        e.x, e.y, e.z, count_of(limit), limit_name, limit, double(kMaxVoxels)));
+    }
+    return grid_of(limit);
 }
 
 }  // namespace pvs

@@ -25,8 +25,16 @@ struct ObjectReach {
 };
 
 // The `count` objects that reach farthest from the rest, farthest first; only those reaching out of it
-// (distance > 0) by at least a tenth of the farthest reach. With a single object and no view seeds or boxes there is no rest: none.
+// (distance > 0). With a single object and no view seeds or boxes there is no rest: none.
 std::vector<ObjectReach> farthest_objects(const World& world, size_t count);
+
+// An object stands apart when it reaches from the rest at least as far as the rest's longest edge (and at
+// least kStrayMinReachM): the ground of a big level reaches a little past its buildings, a vertex thrown
+// by a bad export reaches far past the whole level.
+constexpr double kStrayMinReachM = 10.0;  // [Units: m]
+
+// The `count` objects that stand apart from the rest, farthest first (farthest_objects()).
+std::vector<ObjectReach> stray_objects(const World& world, size_t count);
 
 // "object 'crate' has a vertex 1048.6 km from the rest of the world (at 1048576.0, 0.5, 1.0)", one clause
 // per reach, joined by "; " ("" when there are none).
@@ -35,12 +43,18 @@ std::string describe_reaches(const World& world, const std::vector<ObjectReach>&
 // A distance for people: "0.42 m", "312 m", "1048.6 km".
 std::string format_distance(double metres);
 
-// The voxel grid of the world's bounds a view volume uses: config.voxel_size_m, or automatic
-// (`preferred_m`, coarser to stay within config.max_voxels: default_voxel_size()), padded by `pad_voxels`
-// (0 = void_pad_voxels()). Refuses (pvs::Error, bad input) an explicit size over max_voxels, and an
-// automatic size coarser than max_voxel_size_m or cell_edge_m unless allow_coarse_voxels; the message
-// names the objects that reach farthest from the rest (cells/world_extent.h) and the options that would
-// bake anyway (docs/ALGORITHMS.md#world-extent).
-VoxelGrid view_voxel_grid(const ViewVolumeConfig& config, const World& world, double preferred_m, int pad_voxels);
+// The voxel grid of the world's bounds a view volume uses (docs/ALGORITHMS.md#world-extent), padded by
+// `pad_voxels` (0 = void_pad_voxels()):
+// - config.voxel_size_m when given, refused (pvs::Error, bad input) only past the grid's own limit
+//   (kMaxVoxels);
+// - automatic: `preferred_m`, coarser to stay within config.max_voxels (default_voxel_size()) up to the
+//   limit max_voxel_size_m (or the cells' edge, when smaller). A world that needs coarser voxels than the
+//   limit to stay within max_voxels keeps voxels of the limit and more of them, up to kMaxVoxels (the memory
+//   plan then says whether they fit the machine), unless an object stands apart from the rest
+//   (stray_objects()): then it is refused, naming those objects. allow_coarse_voxels bakes anyway with the
+//   voxels that fit max_voxels.
+// The size never depends on the machine: the same world and options give the same grid everywhere.
+VoxelGrid view_voxel_grid(const ViewVolumeConfig& config, const World& world, double preferred_m,
+                          int pad_voxels);
 
 }  // namespace pvs

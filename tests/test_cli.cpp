@@ -3,6 +3,9 @@
 #include "core/error.h"
 #include "driver/cli.h"
 #include "io/bake_file.h"
+#include "io/gltf_writer.h"
+#include "samples/town_world.h"
+#include "samples/world_edit.h"
 #include "tests/gltf_fixtures.h"
 #include "tests/test_util.h"
 
@@ -185,8 +188,7 @@ TEST(Cli, BadInputGetsStatusTwoAClearMessageAndNoOutput) {
         {{"bake", test::sample_world(), "-o", out, "--occluder-seal-reach", "0"}, "--occluder-seal-reach"},
         {{"bake", test::sample_world(), "-o", out, "--occluder-seal-rays", "-3"}, "--occluder-seal-rays"},
         {{"bake", test::sample_world(), "-o", out, "--no-world-seeds"}, "--eyes-anywhere"},
-        {{"bake", test::sample_world(), "-o", out, "--voxel-size", "0.01"}, "--max-voxels"},
-        {{"bake", test::sample_world(), "-o", out, "--max-voxels", "1000"}, "--allow-coarse-voxels"},
+        {{"bake", test::sample_world(), "-o", out, "--voxel-size", "0.001"}, "more than a voxel grid can hold"},
         {{"bake", test::sample_world(), "-o", out, "--max-memory", "20"}, "memory plan"},
         {{"occluders", dir.file("missing.glb"), "-o", dir.file("boxes.glb")}, "missing.glb"},
         {{"info", dir.file("notgltf.glb")}, "notgltf.glb"},
@@ -248,6 +250,23 @@ TEST(Cli, StrayVertexFilesAreRefusedAtOnce) {
     for (const char* says : {"object 'crate' has a vertex 1000.0 km", "--allow-coarse-voxels"})
         EXPECT_TRUE(contains(honest.log, says)) << says << " in: " << honest.log;
     EXPECT_FALSE(std::filesystem::exists(out));
+}
+
+// A big level is not a fault: a small town baked with --max-voxels far below what it needs keeps voxels of
+// --max-voxel-size (0.25 m), more of them, and bakes; the memory plan alone could refuse it.
+TEST(Cli, AWorldPastMaxVoxelsKeepsVoxelsOfTheLimitAndBakes) {
+    test::TempDir dir;
+    TownParams town;
+    town.size_m = 60.0f;
+    town.max_height_m = 12.0f;
+    const std::string world = dir.file("town.glb"), out = dir.file("town.h5");
+    write_glb(edited_world(make_town_world(town), {}), world);
+    const CliRun r = run({"bake", world, "-o", out, "--play-height", "3", "--max-voxels", "100000", "--no-verify",
+                          "--occluder-probe-eyes", "64", "--occluder-gap-lines", "0", "--occluder-seal-rays", "0",
+                          "--eyes", "2", "--rays", "64"});
+    EXPECT_EQ(r.status, 0) << r.log;
+    EXPECT_TRUE(contains(r.log, "view volume: 0.25 m voxels")) << r.log;
+    EXPECT_TRUE(std::filesystem::exists(out));
 }
 
 // An output that cannot be written is bad input (status 2), found before the world is even loaded: the

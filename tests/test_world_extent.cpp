@@ -1,8 +1,11 @@
 // Worlds whose extent would break the voxel caps: the automatic voxel size fits any shape within
-// --max-voxels; a world that needs voxels coarser than --max-voxel-size or the cells is refused, naming the
-// object that reaches farthest from the rest; an explicit --voxel-size over the cap is refused.
+// --max-voxels; a world that needs voxels coarser than --max-voxel-size or the cells to do so keeps voxels of
+// that limit when it is just large (a town), and is refused, naming the objects that stand apart, when a
+// stray vertex makes it large; an explicit --voxel-size is refused only past the grid's own limit.
 #include "cells/world_extent.h"
 #include "core/error.h"
+#include "driver/memory_plan.h"
+#include "samples/town_world.h"
 #include "tests/world_builder.h"
 
 #include <gtest/gtest.h>
@@ -33,8 +36,14 @@ World room_with_crate(glm::vec3 stray) {
 TEST(WorldExtent, TheFarthestObjectIsTheOneWithTheStrayVertex) {
     const World w = room_with_crate({2, 0.5f, 1.0e6f});
     const std::vector<ObjectReach> far = farthest_objects(w, 3);
-    ASSERT_EQ(far.size(), 1u);  // the room reaches a few metres out of the crate and seed: not a tenth
+    ASSERT_EQ(far.size(), 2u);  // the room reaches a few metres out of the crate and the seed too
     EXPECT_EQ(w.objects[far[0].object].name, "crate");
+    EXPECT_EQ(w.objects[far[1].object].name, "room");
+    EXPECT_LT(far[1].distance_m, 10.0);
+    // Only the crate stands apart: the room reaches less far than the rest (crate and seed) is long.
+    const std::vector<ObjectReach> strays = stray_objects(w, 3);
+    ASSERT_EQ(strays.size(), 1u);
+    EXPECT_EQ(w.objects[strays[0].object].name, "crate");
     EXPECT_NEAR(far[0].distance_m, 1.0e6 - 4.0, 1.0);
     EXPECT_EQ(far[0].vertex.z, 1.0e6f);
     EXPECT_NE(describe_reaches(w, far).find("object 'crate' has a vertex 1000.0 km from the rest"),
@@ -44,6 +53,7 @@ TEST(WorldExtent, TheFarthestObjectIsTheOneWithTheStrayVertex) {
     World alone;
     test::add_box(alone, "only", Aabb::of({0, 0, 0}, {1, 1, 1}));
     EXPECT_TRUE(farthest_objects(alone, 3).empty());
+    EXPECT_TRUE(stray_objects(alone, 3).empty());
 }
 
 // Padding (a metre, at least 2 voxels a side) and rounding included, whatever the shape: a needle a
@@ -90,28 +100,73 @@ TEST(WorldExtent, AStrayVertexIsRefusedNamingItsObjectUnlessCoarseVoxelsAreAllow
     EXPECT_FLOAT_EQ(view_voxel_grid(config, room_with_crate({2, 1, 2}), 0.0625, 0).voxel_size_m, 0.0625f);
 }
 
-TEST(WorldExtent, VoxelsCoarserThanTheCellsAreRefusedAndAnExplicitSizeMustFitTheCap) {
+TEST(WorldExtent, AWorldThatIsJustLargeKeepsVoxelsOfTheLimitAndAnExplicitSizeOnlyMeetsTheGridsLimit) {
     const World w = room_with_crate({2, 1, 2});
     ViewVolumeConfig config;
     config.max_voxel_size_m = 100.0;
     config.cell_edge_m = 0.5;
-    config.max_voxels = 1000;  // the room needs voxels of about 1.4 m
+    config.max_voxels = 1000;  // the room would need voxels of about 1.4 m: coarser than the cells
+    const VoxelGrid grid = view_voxel_grid(config, w, 0.0625, 0);
+    EXPECT_FLOAT_EQ(grid.voxel_size_m, 0.5f) << "the voxels stay at the cells' edge";
+    EXPECT_GT(grid.count(), config.max_voxels);
+    config.allow_coarse_voxels = true;  // asked for: coarser, within the target
+    EXPECT_GT(view_voxel_grid(config, w, 0.0625, 0).voxel_size_m, 1.0f);
+    EXPECT_LE(view_voxel_grid(config, w, 0.0625, 0).count(), config.max_voxels);
+
+    config = ViewVolumeConfig{};
+    config.max_voxels = 1000;
+    config.voxel_size_m = 0.05;  // 3.7 M voxels: over the target, within the grid's limit
+    EXPECT_FLOAT_EQ(view_voxel_grid(config, w, 0.0625, 0).voxel_size_m, 0.05f);
+    config.voxel_size_m = 0.0005;
     try {
         (void)view_voxel_grid(config, w, 0.0625, 0);
-        FAIL() << "voxels coarser than the cells were accepted";
+        FAIL() << "an explicit voxel size past the grid's limit was accepted";
     } catch (const Error& e) {
-        EXPECT_NE(std::string(e.what()).find("the cells'"), std::string::npos) << e.what();
+        EXPECT_EQ(e.kind(), ErrorKind::kBadInput);
+        EXPECT_NE(std::string(e.what()).find("more than a voxel grid can hold"), std::string::npos) << e.what();
     }
-    config.max_voxels = 200'000'000;
-    config.voxel_size_m = 0.001;
+}
+
+// A big open level is not a fault: a town of 330 x 330 m, 46 m high, keeps 0.25 m voxels (346 M, past the
+// 200 M target), names no object as stray (the ground reaches a little past the buildings), and its memory
+// plan is about 3 GiB. The same town with one vertex thrown a thousand kilometres is still refused, naming it.
+TEST(WorldExtent, ABigTownBakesAtItsVoxelsAndAStrayVertexInItIsStillRefused) {
+    World town = make_town_world(TownParams{});
+    EXPECT_NEAR(town.bounds.size().x, 330.0f, 0.01f);
+    EXPECT_NEAR(town.bounds.size().y, 47.0f, 0.01f);  // the 1 m ground slab and the 46 m tower
+    EXPECT_TRUE(stray_objects(town, 3).empty()) << describe_reaches(town, stray_objects(town, 3));
+    ViewVolumeConfig config;
+    config.cell_edge_m = 2.0;
+    const VoxelGrid grid = view_voxel_grid(config, town, 0.0625, 0);
+    EXPECT_FLOAT_EQ(grid.voxel_size_m, 0.25f);
+    EXPECT_GT(grid.count(), config.max_voxels);
+    BakeConfig bake;
+    const MemoryPlan plan = plan_memory(bake, town, grid.count(), 0, 2);
+    EXPECT_LT(plan.total(), 4.0 * double(uint64_t(1) << 30)) << describe(plan);
+    EXPECT_NO_THROW(check_memory(plan, 8.0 * double(uint64_t(1) << 30), "the view volume and occluders"));
     try {
-        (void)view_voxel_grid(config, w, 0.0625, 0);
-        FAIL() << "an explicit voxel size over --max-voxels was accepted";
+        check_memory(plan, 1.0 * double(uint64_t(1) << 30), "the view volume and occluders");
+        FAIL() << "a plan of " << describe(plan) << " fitted 1 GiB";
     } catch (const Error& e) {
-        EXPECT_NE(std::string(e.what()).find("--max-voxels 200000000"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("--max-memory"), std::string::npos) << e.what();
     }
-    config.voxel_size_m = 0.1;
-    EXPECT_FLOAT_EQ(view_voxel_grid(config, w, 0.0625, 0).voxel_size_m, 0.1f);
+
+    // One vertex of one building thrown far away.
+    const uint32_t b = 17;
+    const uint32_t v = town.triangles[town.objects[b].first_triangle].v[0];
+    town.positions[v] = {10.0f, 1.0e6f, 10.0f};
+    town.objects[b].bounds.extend(town.positions[v]);
+    town.bounds.extend(town.positions[v]);
+    const std::vector<ObjectReach> strays = stray_objects(town, 3);
+    ASSERT_EQ(strays.size(), 1u);
+    EXPECT_EQ(strays[0].object, b);
+    try {
+        (void)view_voxel_grid(config, town, 0.0625, 0);
+        FAIL() << "a town a thousand kilometres high was accepted";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("object '" + town.objects[b].name + "'"), std::string::npos)
+            << e.what();
+    }
 }
 
 }  // namespace

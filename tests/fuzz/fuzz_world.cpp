@@ -46,7 +46,7 @@ void check_voxels(const pvs::World& w) {
     config.cell_edge_m = 2.0;
     try {
         const pvs::VoxelGrid grid = pvs::view_voxel_grid(config, w, 0.0625, 0);
-        if (grid.count() > config.max_voxels) finding("a voxel grid over max_voxels was accepted");
+        if (grid.count() > pvs::kMaxVoxels) finding("a voxel grid past the grid's own limit was accepted");
     } catch (const pvs::Error& e) {
         if (e.kind() != pvs::ErrorKind::kBadInput) finding("the voxel grid failed with an error other than bad input");
     }
