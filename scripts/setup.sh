@@ -30,6 +30,7 @@ PACKAGES=(
 TEST_PACKAGES=(
   clang libclang-rt-14-dev  # Clang: the runtime built as C99 and C++17 by a second compiler; libFuzzer
   gcc-multilib g++-multilib # the runtime for 32-bit x86 (gcc -m32), as C and as C++
+  qemu-user                 # qemu-i386: runs that 32-bit test where the kernel's 32-bit emulation is off
   gcc-mingw-w64-x86-64 wine wine64  # the runtime for Windows, its test run under Wine
   emscripten nodejs         # the runtime for WebAssembly, its test run under Node
 )
