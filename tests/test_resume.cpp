@@ -6,6 +6,8 @@
 #include "io/checkpoint.h"
 #include "io/gltf_writer.h"
 #include "samples/crack_set.h"
+#include "samples/random_world.h"
+#include "samples/world_edit.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
@@ -298,6 +300,55 @@ TEST(Resume, AnOctreeBakeKilledAtRandomPointsAndResumedWritesTheSameFile) {
     kill_and_resume({"--cells", "octree"}, 2);
 }
 
+// A node killed at any moment, twenty times (docs/RESULTS.md, "Faults"): each run of the same command is
+// killed with SIGKILL after a random time (drawn over the whole of an undisturbed bake, so that kills land
+// in the stages before the PVS, in the PVS and in the writes), and every run that finishes before its kill
+// must write the undisturbed bake's file; so must the run after the last kill. A random test world (a bake
+// of a second or two) keeps twenty kills within the test command's time.
+TEST(Resume, ABakeKilledTwentyTimesAtRandomMomentsAndRunAgainWritesTheSameFile) {
+    test::TempDir dir;
+    const std::string world = dir.file("world.glb"), reference = dir.file("reference.h5"),
+                      out = dir.file("out.h5"), log = dir.file("log.txt");
+    write_glb(edited_world(make_random_world(3, 0).world, {}), world);
+    const auto args = [&](const std::string& file) {
+        std::vector<std::string> a = bake_args(file, {"--checkpoint-interval", "0.02"});
+        a[1] = world;
+        return a;
+    };
+    const auto start = std::chrono::steady_clock::now();
+    ASSERT_EQ(wait_for(spawn(args(reference), log)), 0) << test::read_file(log);
+    const double whole_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    std::mt19937 rng(63);
+    std::uniform_real_distribution<double> moment(0.0, whole_s);
+    int kills = 0, finished = 0;
+    for (int run = 0; kills < 20 && run < 60; ++run) {
+        const pid_t pid = spawn(args(out), log);
+        const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(moment(rng));
+        int status = -1;
+        bool ended = false;
+        while (!(ended = exited(pid, status)) && std::chrono::steady_clock::now() < deadline)
+            std::this_thread::sleep_for(std::chrono::milliseconds(1));
+        if (!ended) {
+            ::kill(-pid, SIGKILL);
+            wait_for(pid);
+            ++kills;
+            continue;
+        }
+        ASSERT_EQ(status, 0) << test::read_file(log);
+        ++finished;
+        const std::string diff = dir.file("h5diff.txt");
+        ASSERT_EQ(test::h5diff_outside_run(reference, out, diff), 0) << test::read_file(diff);
+        fs::remove(out);
+    }
+    ASSERT_EQ(kills, 20) << finished << " runs finished first";
+    ASSERT_EQ(wait_for(spawn(args(out), log)), 0) << test::read_file(log);
+    const std::string diff = dir.file("h5diff.txt");
+    EXPECT_EQ(test::h5diff_outside_run(reference, out, diff), 0) << test::read_file(diff);
+    EXPECT_FALSE(fs::exists(out + ".checkpoint"));
+    for (const auto& e : fs::directory_iterator(dir.path()))
+        EXPECT_EQ(e.path().filename().string().find(".tmp-"), std::string::npos) << e.path();
+}
+
 TEST(Resume, ACheckpointOfOtherParametersIsRefusedAndRestartStartsOver) {
     test::TempDir dir;
     const std::string out = dir.file("x.h5"), folder = out + ".checkpoint", log = dir.file("log.txt");
@@ -460,6 +511,71 @@ TEST(Processes, TwoRanksBakeTheOctreeOneProcessBakes) {
 
 TEST(Processes, TwoRanksKilledTogetherAndRunAgainWriteTheSameFile) {
     kill_and_resume({"--threads", "1"}, 4, mpirun(2));
+}
+
+// The pid of the rank `rank` among the children of `parent` (mpirun starts its ranks itself), or -1.
+pid_t rank_pid(pid_t parent, int rank) {
+    const std::string wanted = "OMPI_COMM_WORLD_RANK=" + std::to_string(rank);
+    for (const auto& e : fs::directory_iterator("/proc")) {
+        const std::string name = e.path().filename().string();
+        if (name.find_first_not_of("0123456789") != std::string::npos) continue;
+        std::string stat, env;
+        try {
+            stat = test::read_file(e.path().string() + "/stat");
+            env = test::read_file(e.path().string() + "/environ");
+        } catch (const std::runtime_error&) {
+            continue;  // ended meanwhile
+        }
+        // "pid (comm) state ppid ...": the comm may hold spaces, so read after its closing parenthesis.
+        const size_t close = stat.rfind(')');
+        if (close == std::string::npos) continue;
+        char state = 0;
+        int ppid = 0;
+        if (std::sscanf(stat.c_str() + close + 1, " %c %d", &state, &ppid) != 2 || ppid != parent) continue;
+        size_t at = 0;
+        for (size_t end; (end = env.find('\0', at)) != std::string::npos; at = end + 1)
+            if (env.compare(at, end - at, wanted) == 0) return pid_t(std::stol(name));
+    }
+    return -1;
+}
+
+// One rank of three killed in the middle of the PVS: the job ends (no rank waits for it for ever) with a
+// message naming the dead rank, and the same job run again resumes from the rows every rank had
+// checkpointed and writes the file one process writes.
+TEST(Processes, ARankKilledMidPvsEndsTheJobAndTheJobRunAgainResumes) {
+    test::TempDir dir;
+    const std::string reference = dir.file("reference.h5"), out = dir.file("out.h5"), log = dir.file("log.txt");
+    const std::string folder = out + ".checkpoint";
+    ASSERT_EQ(wait_for(spawn(bake_args(reference, {"--checkpoint-interval", "0"}), log)), 0)
+        << test::read_file(log);
+    const std::vector<std::string> extra = {"--threads", "1", "--checkpoint-interval", "0.05"};
+    const pid_t pid = spawn(bake_args(out, extra), log, mpirun(3));
+    int status = -1;
+    ASSERT_TRUE(wait_for_chunks(pid, folder, 6, status)) << test::read_file(log);
+    const pid_t victim = rank_pid(pid, 1);
+    ASSERT_GT(victim, 0) << "rank 1 not found";
+    ::kill(victim, SIGKILL);
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::minutes(2);
+    bool ended = false;
+    while (!(ended = exited(pid, status)) && std::chrono::steady_clock::now() < deadline)
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    if (!ended) {
+        ::kill(-pid, SIGKILL);
+        wait_for(pid);
+        FAIL() << "the job hung for two minutes after a rank died\n" << test::read_file(log);
+    }
+    EXPECT_NE(status, 0);
+    EXPECT_TRUE(log_has(log, "rank 1")) << test::read_file(log);
+    EXPECT_FALSE(fs::exists(out));
+    ASSERT_TRUE(checkpoint_exists(folder));
+
+    const std::string again = dir.file("again.txt");
+    std::vector<std::string> args = bake_args(out, extra);
+    args.erase(std::find(args.begin(), args.end(), "-q"));
+    ASSERT_EQ(wait_for(spawn(args, again, mpirun(3))), 0) << test::read_file(again);
+    EXPECT_TRUE(log_has(again, "resuming from the checkpoint")) << test::read_file(again);
+    const std::string diff = dir.file("h5diff.txt");
+    EXPECT_EQ(test::h5diff_outside_run(reference, out, diff), 0) << test::read_file(diff);
 }
 
 TEST(Processes, AMissingWorldEndsEveryRankWithAMessage) {
