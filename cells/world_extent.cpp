@@ -50,8 +50,12 @@ std::vector<std::pair<ObjectReach, double>> reaches(const World& world) {
                 const double d = distance_to_box(rest, world.positions[v]);
                 if (d > r.distance_m) r = {uint32_t(i), d, world.positions[v]};
             }
+        // A rest of view seeds and boxes alone (a level exported as one mesh) has no extent to stand apart
+        // from: such an object is never called stray.
+        const bool others = !before[i].is_empty() || !after[i + 1].is_empty();
         const glm::dvec3 e = glm::dvec3(rest.size());
-        if (r.distance_m > 0.0) out.emplace_back(r, std::max({e.x, e.y, e.z}));
+        const double rest_edge = others ? std::max({e.x, e.y, e.z}) : std::numeric_limits<double>::infinity();
+        if (r.distance_m > 0.0) out.emplace_back(r, rest_edge);
     }
     return out;
 }

@@ -29,8 +29,8 @@ struct ObjectReach {
 std::vector<ObjectReach> farthest_objects(const World& world, size_t count);
 
 // An object stands apart when it reaches from the rest at least as far as the rest's longest edge (and at
-// least kStrayMinReachM): the ground of a big level reaches a little past its buildings, a vertex thrown
-// by a bad export reaches far past the whole level.
+// least kStrayMinReachM), the rest holding another object: the ground of a big level reaches a little past
+// its buildings, a vertex thrown by a bad export reaches far past the whole level.
 constexpr double kStrayMinReachM = 10.0;  // [Units: m]
 
 // The `count` objects that stand apart from the rest, farthest first (farthest_objects()).

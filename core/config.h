@@ -61,14 +61,17 @@ double largest_cell_edge_m(const CellConfig& config);
 struct ViewVolumeConfig {
     double voxel_size_m = 0.0;          // [Limit: >= 0] [Units: m] 0 = automatic (kDefaultVoxelSizeM, coarser
                                         // when the grid would pass max_voxels)
-    uint64_t max_voxels = 200'000'000;  // [Limit: >= 1000] voxels a bake may use (their memory:
-                                        // driver/memory_plan.h): the automatic size grows to stay within it;
-                                        // an explicit size over it is refused
+    uint64_t max_voxels = 200'000'000;  // [Limit: >= 1000] the voxels the automatic size aims at: it grows to
+                                        // stay within them up to max_voxel_size_m; past that the grid keeps
+                                        // voxels of that edge, more of them (up to kMaxVoxels), and the memory
+                                        // plan (driver/memory_plan.h) decides whether they fit
     double max_voxel_size_m = 0.25;     // [Limit: > 0] [Units: m] the automatic size grows at most to this
-                                        // edge (and never past the cells'); a world that needs coarser voxels
-                                        // is refused, naming its farthest-reaching objects
-                                        // (cells/world_extent.h)
-    bool allow_coarse_voxels = false;   // bake anyway when the automatic size passes max_voxel_size_m
+                                        // edge (and never past the cells'); a world that would need coarser
+                                        // voxels to stay within max_voxels is refused when an object stands
+                                        // apart from the rest, naming it (cells/world_extent.h)
+    bool allow_coarse_voxels = false;   // past max_voxel_size_m, take the coarser voxels that fit max_voxels
+                                        // instead (a world with an object standing apart, or one too large
+                                        // for the grid at max_voxel_size_m, then bakes)
     bool eyes_anywhere = false;         // with no seeds, boxes or play height: eyes anywhere in the world's
                                         // bounds (the conservative mode refuses such a bake otherwise)
     double play_height_m = 0.0;         // [Limit: >= 0] [Units: m] keep only space up to this height above
@@ -302,18 +305,20 @@ void visit_options(Config& c, Visitor&& v) {
                  0, 100},
       c.view.voxel_size_m);
     v(OptionSpec{OptionGroup::kViewVolume, "--max-voxels", "view.max_voxels", "voxels",
-                 "voxels a bake may use: the automatic voxel size grows to stay within it, an explicit "
-                 "--voxel-size over it is refused",
+                 "the voxels the automatic size aims at: it grows to stay within them up to --max-voxel-size; "
+                 "past that a big level keeps voxels of --max-voxel-size, more of them, and the memory plan "
+                 "decides",
                  1000, 1e10},
       c.view.max_voxels);
     v(OptionSpec{OptionGroup::kViewVolume, "--max-voxel-size", "view.max_voxel_size_m", "m",
-                 "the automatic voxel size grows to fit --max-voxels at most to this edge (and never past the "
-                 "cells' edge): a world that needs coarser voxels is refused, naming the objects that reach "
-                 "farthest from the rest (a stray vertex?)",
+                 "the automatic voxel size grows at most to this edge (and never past the cells' edge): a world "
+                 "that would need coarser voxels to stay within --max-voxels is refused when an object stands "
+                 "apart from the rest (a stray vertex?), naming it",
                  1e-4, 100},
       c.view.max_voxel_size_m);
     v(OptionSpec{OptionGroup::kViewVolume, "--allow-coarse-voxels", "view.allow_coarse_voxels", "",
-                 "bake anyway when the world needs voxels coarser than --max-voxel-size or the cells"},
+                 "past --max-voxel-size, take the coarser voxels that fit --max-voxels instead (a world with an "
+                 "object standing apart, or one too large for the grid, then bakes)"},
       c.view.allow_coarse_voxels);
     v(OptionSpec{OptionGroup::kViewVolume, "--eyes-anywhere", "view.eyes_anywhere", "",
                  "with no view seeds, view boxes or play height, eyes may be anywhere in the world's bounds "

@@ -272,9 +272,13 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
         plan.cells_bound = true;
         ctx.info(fmt::format("memory plan: {}; this bake may use {:.2f} GiB", describe(plan),
                              max_memory_bytes(config.run) / double(uint64_t(1) << 30)));
-        const std::string strays = describe_reaches(world, stray_objects(world, 3));
-        check_memory(plan, max_memory_bytes(config.run), "the view volume and occluders",
-                     strays.empty() ? "" : "the world's bounds are that large because " + strays);
+        try {
+            check_memory(plan, max_memory_bytes(config.run), "the view volume and occluders");
+        } catch (const Error& e) {
+            const std::string strays = describe_reaches(world, stray_objects(world, 3));
+            if (strays.empty()) throw;
+            throw Error(e.kind(), fmt::format("{}; the world's bounds are that large because {}", e.what(), strays));
+        }
     }
     const ViewVolume view = build_view_volume(ctx, view_config, world);
     bake.leak_path = view.leak_path;

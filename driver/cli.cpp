@@ -24,6 +24,8 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <array>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <csignal>
@@ -357,38 +359,51 @@ std::unique_ptr<RowJournal> open_journal(Context& ctx, const BakeConfig& config,
 }
 
 // While alive, a bake stopped by SIGTERM, SIGINT or SIGHUP (a scheduler's time limit, Ctrl-C, mpirun ending
-// the job because one of its ranks died) says in one line where its finished rows are before it ends; the
-// signal then ends the process as it would have (docs/ALGORITHMS.md#faults). A signal handler can reach only
-// what is set before it runs: the line lives in a static buffer, written with write(2) alone.
+// the job because one of its ranks died) says in one line where its checkpoint is before it ends; the
+// signal then ends the process as it would have (docs/ALGORITHMS.md#faults). A signal the process ignored
+// when it started (nohup, a background job) stays ignored. A signal handler can reach only what is set
+// before it runs: the line lives in a static buffer, written with write(2) alone.
 class StopNotice {
 public:
     explicit StopNotice(const std::string& folder) {
-        const std::string line = fmt::format(
-            "error: the bake was stopped by a signal; the finished rows are kept in {}/: run the same command "
-            "again to resume\n",
+        std::string line = fmt::format(
+            "error: the bake was stopped by a signal; run the same command again to resume from the rows "
+            "checkpointed in {}/",
             folder);
-        length_ = std::min(line.size(), sizeof(line_));
+        line = line.substr(0, sizeof(line_) - 1) + "\n";
+        length_ = line.size();
         std::memcpy(line_, line.data(), length_);
-        for (const int sig : kSignals) previous_[index(sig)] = std::signal(sig, &StopNotice::on_signal);
+        struct sigaction action {};
+        action.sa_handler = &StopNotice::on_signal;
+        sigemptyset(&action.sa_mask);
+        for (size_t i = 0; i < kSignals.size(); ++i) {
+            struct sigaction before {};
+            if (::sigaction(kSignals[i], nullptr, &before) != 0 || before.sa_handler == SIG_IGN) continue;
+            installed_[i] = ::sigaction(kSignals[i], &action, &previous_[i]) == 0;
+        }
     }
     ~StopNotice() {
-        for (const int sig : kSignals) std::signal(sig, previous_[index(sig)]);
+        for (size_t i = 0; i < kSignals.size(); ++i)
+            if (installed_[i]) ::sigaction(kSignals[i], &previous_[i], nullptr);
     }
     StopNotice(const StopNotice&) = delete;
     StopNotice& operator=(const StopNotice&) = delete;
 
 private:
-    static constexpr int kSignals[3] = {SIGTERM, SIGINT, SIGHUP};
-    static size_t index(int sig) { return sig == SIGTERM ? 0 : sig == SIGINT ? 1 : 2; }
+    static constexpr std::array<int, 3> kSignals = {SIGTERM, SIGINT, SIGHUP};
     static void on_signal(int sig) {
-        [[maybe_unused]] const ssize_t n = ::write(2, line_, length_);
-        std::signal(sig, SIG_DFL);
-        std::raise(sig);
+        // One line even when two signals come at once: the first takes the line.
+        if (!said_.test_and_set()) {
+            [[maybe_unused]] const ssize_t n = ::write(2, line_, length_);
+        }
+        ::signal(sig, SIG_DFL);
+        ::raise(sig);
     }
     static inline char line_[1024];
     static inline size_t length_ = 0;
-    using Handler = void (*)(int);
-    Handler previous_[3] = {};
+    static inline std::atomic_flag said_ = ATOMIC_FLAG_INIT;
+    std::array<struct sigaction, 3> previous_{};
+    std::array<bool, 3> installed_{};
 };
 
 // The runtime file of the bake at bake_path (io/runtime_file.h), and a line saying what it holds.
@@ -418,6 +433,7 @@ int run_bake(Context& ctx, const BakeConfig& config, const std::string& world_pa
     check_output_writable(out_path, "the output");
     if (!runtime_path.empty()) check_output_writable(runtime_path, "the runtime file");
     if (!report_path.empty()) check_output_writable(report_path, "the report");
+    remove_stale_temporaries(out_path + ".leak.obj");
     set_threads(config.run.threads);
     const std::string hash = hash_file_hex(world_path);
     CheckpointIdentity id{tool_version(), hash, {}};
@@ -482,7 +498,13 @@ int run_bake(Context& ctx, const BakeConfig& config, const std::string& world_pa
         throw Error(e.kind(), fmt::format("{}; the finished rows are kept in {}/: run the same command again to "
                                           "resume",
                                           e.what(), folder));
+    } catch (const std::bad_alloc&) {
+        if (!journal || !checkpoint_exists(folder)) throw;
+        throw io_error(fmt::format("out of memory while writing the outputs; the finished rows are kept in {}/: "
+                                   "run the same command again to resume",
+                                   folder));
     }
+    stop_notice.reset();
     if (journal && !remove_checkpoint(folder))
         ctx.warn(
             fmt::format("cannot remove the checkpoint {} (the bake is written; remove it by hand)", folder));

@@ -61,15 +61,13 @@ std::string describe(const MemoryPlan& p) {
         gib(p.per_thread_bytes));
 }
 
-void check_memory(const MemoryPlan& plan, double limit_bytes, const std::string& stage,
-                  const std::string& note) {
+void check_memory(const MemoryPlan& plan, double limit_bytes, const std::string& stage) {
     if (plan.total() - (plan.cells_bound ? plan.pvs_bytes : 0.0) <= limit_bytes) return;
     throw bad_input(fmt::format(
-        "memory plan: {} expects {}, over the {:.2f} GiB this bake may use (--max-memory, default the "
-        "machine's "
+        "memory plan: {} expects {}, over the {:.2f} GiB this bake may use (--max-memory, default the machine's "
         "memory less a tenth): use coarser voxels (--voxel-size, --max-voxel-size), larger cells, fewer "
-        "--threads, or raise --max-memory{}{}",
-        stage, describe(plan), gib(limit_bytes), note.empty() ? "" : "; ", note));
+        "--threads, or raise --max-memory",
+        stage, describe(plan), gib(limit_bytes)));
 }
 
 }  // namespace pvs

@@ -42,9 +42,7 @@ double max_memory_bytes(const RunConfig& config);
 std::string describe(const MemoryPlan& plan);
 
 // Throws pvs::Error (bad input) naming the stage, the plan, the limit and what would shrink it when the
-// plan's total passes `limit_bytes` (without its PVS when `cells` is only a bound). `note`, when not empty,
-// ends the message (the objects that stand apart from the world, cells/world_extent.h).
-void check_memory(const MemoryPlan& plan, double limit_bytes, const std::string& stage,
-                  const std::string& note = "");
+// plan's total passes `limit_bytes` (without its PVS when `cells` is only a bound).
+void check_memory(const MemoryPlan& plan, double limit_bytes, const std::string& stage);
 
 }  // namespace pvs

@@ -11,6 +11,7 @@
 #include <cctype>
 #include <cerrno>
 #include <cstdint>
+#include <csignal>
 #include <cstring>
 #include <filesystem>
 #include <system_error>
@@ -83,6 +84,32 @@ Error write_error(const std::string& path, int err, const std::string& what, con
     return io_error(fmt::format("{}: {} while {} {}", path, describe_errno(err), doing, what));
 }
 
+void remove_stale_temporaries(const std::string& final_path) noexcept {
+    try {
+        namespace fs = std::filesystem;
+        const fs::path p(final_path);
+        fs::path folder = p.parent_path();
+        if (folder.empty()) folder = ".";
+        const std::string prefix = p.filename().string() + ".tmp-";
+        std::error_code ec;
+        for (const fs::directory_entry& e : fs::directory_iterator(folder, ec)) {
+            const std::string name = e.path().filename().string();
+            if (name.rfind(prefix, 0) != 0) continue;
+            // "<final>.tmp-<pid>-<counter>": the writer's pid.
+            const std::string rest = name.substr(prefix.size());
+            const size_t dash = rest.find('-');
+            if (dash == 0 || dash == std::string::npos ||
+                rest.find_first_not_of("0123456789") != dash)
+                continue;
+            const long pid = std::stol(rest.substr(0, dash));
+            if (pid == long(::getpid()) || ::kill(pid_t(pid), 0) == 0 || errno != ESRCH) continue;
+            std::error_code rm;
+            fs::remove(e.path(), rm);
+        }
+    } catch (...) {
+    }
+}
+
 void check_output_writable(const std::string& path, const std::string& what) {
     namespace fs = std::filesystem;
     const fs::path p(path);
@@ -95,8 +122,9 @@ void check_output_writable(const std::string& path, const std::string& what) {
     if (!fs::is_directory(folder, ec)) {
         throw bad_input(fmt::format("{} {}: the folder {} does not exist", what, path, folder.string()));
     }
+    remove_stale_temporaries(path);
     const std::string probe = make_temp_path(path);
-    const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+    const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
     if (fd < 0) {
         const int err = errno;
         const std::string message = fmt::format("{} {}: cannot write in the folder {}: {}", what, path,
@@ -129,7 +157,7 @@ void AtomicOutput::commit() {
 
 void write_file_atomically(const std::string& path, const std::string& bytes, const std::string& what) {
     AtomicOutput out(path, what);
-    const int fd = ::open(out.temp_path().c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    const int fd = ::open(out.temp_path().c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
     if (fd < 0) throw write_error(path, errno, what);
     int err = 0;
     for (size_t done = 0; done < bytes.size();) {

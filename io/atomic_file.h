@@ -41,10 +41,15 @@ void write_file_atomically(const std::string& path, const std::string& bytes, co
 
 // Checks, before any work, that an output can be written at `path` as AtomicOutput writes it: its folder
 // exists, `path` is not a folder, and a temporary file can be created in that folder (permissions, a
-// read-only file system); the probe file is removed. Throws pvs::Error naming `what` and the path otherwise:
+// read-only file system); the probe file is removed, and so are the temporary files of earlier writers of
+// `path` that were killed (remove_stale_temporaries()). Throws pvs::Error naming `what` and the path otherwise:
 // bad input for a wrong place (a missing folder, permissions, a read-only file system), kIo when the disk
 // itself fails (full, quota, I/O error). A disk that fills up later is not foreseen.
 void check_output_writable(const std::string& path, const std::string& what);
+
+// Removes the temporary files "<final_path>.tmp-<pid>-<n>" that writers killed before their rename left
+// (their process is gone from this machine). check_output_writable() calls it. Never throws.
+void remove_stale_temporaries(const std::string& final_path) noexcept;
 
 // An errno in plain words, as a clause: "no space left on device".
 std::string describe_errno(int err);

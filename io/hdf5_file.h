@@ -13,6 +13,7 @@
 #include <hdf5.h>
 
 #include <algorithm>
+#include <atomic>
 #include <new>
 #include <stdexcept>
 #include <string>
@@ -217,8 +218,11 @@ inline Handle create_memory_file(const Site& site) {
     site.check(H5Pset_link_creation_order(fcpl.get(), order), "cannot track link order");
     site.check(H5Pset_attr_creation_order(fcpl.get(), order), "cannot track attribute order");
     site.check(H5Pset_obj_track_times(fcpl.get(), false), "cannot turn off object times");
-    // The name is only the in-memory file's: nothing is created under it.
-    return site.handle(H5Fcreate("pvsbake-in-memory.h5", H5F_ACC_TRUNC, fcpl.get(), fapl.get()), H5Fclose,
+    // The name is only the in-memory file's: nothing is created under it. Unique, so that two such files may
+    // be open at once (the core driver tells files apart by name).
+    static std::atomic<uint64_t> counter{0};
+    const std::string name = fmt::format("pvsbake-in-memory-{}.h5", counter.fetch_add(1));
+    return site.handle(H5Fcreate(name.c_str(), H5F_ACC_TRUNC, fcpl.get(), fapl.get()), H5Fclose,
                        "cannot create the file in memory");
 }
 

@@ -54,6 +54,14 @@ TEST(WorldExtent, TheFarthestObjectIsTheOneWithTheStrayVertex) {
     test::add_box(alone, "only", Aabb::of({0, 0, 0}, {1, 1, 1}));
     EXPECT_TRUE(farthest_objects(alone, 3).empty());
     EXPECT_TRUE(stray_objects(alone, 3).empty());
+    // A big level exported as one mesh, with a view seed: it reaches far from the seed, but stands apart from
+    // nothing.
+    World merged = make_town_world(TownParams{});
+    merged.objects.resize(1);
+    merged.objects[0].triangle_count = uint32_t(merged.triangles.size());
+    merged.objects[0].bounds = merged.bounds;
+    EXPECT_FALSE(farthest_objects(merged, 3).empty());
+    EXPECT_TRUE(stray_objects(merged, 3).empty());
 }
 
 // Padding (a metre, at least 2 voxels a side) and rounding included, whatever the shape: a needle a

@@ -109,6 +109,7 @@ TEST(WriteFaults, EveryAllocationOfABakeFileWriteFailsCleanly) {
     const int failures =
         fail_each_allocation(dir.path(), "b.h5", expected, [&] { write_bake_file(dir.file("b.h5"), bake); });
     EXPECT_GT(failures, 50) << "the write allocates less than expected: is the counter armed?";
+    testing::Test::RecordProperty("failed_allocations", failures);
     EXPECT_EQ(read_bake_file(dir.file("b.h5")).pvs.words, bake.pvs.words);
 }
 
@@ -125,6 +126,7 @@ TEST(WriteFaults, EveryAllocationOfACheckpointChunkFailsCleanly) {
     const int failures = fail_each_allocation(folder, "rows-000001.h5", expected,
                                               [&] { write_checkpoint_chunk(folder, 1, id, chunk, 0); });
     EXPECT_GT(failures, 20);
+    testing::Test::RecordProperty("failed_allocations", failures);
     EXPECT_EQ(read_checkpoint(folder, id).chunks.size(), 1u);
 }
 
@@ -140,6 +142,7 @@ TEST(WriteFaults, EveryAllocationOfARuntimeFileExportFailsCleanly) {
     const int failures = fail_each_allocation(out, "l.pvsr", expected,
                                               [&] { export_runtime_file(bake_path, out + "/l.pvsr"); });
     EXPECT_GT(failures, 20);
+    testing::Test::RecordProperty("failed_allocations", failures);
 }
 
 }  // namespace
