@@ -197,6 +197,15 @@ bool exited(pid_t pid, int& status) {
     return true;
 }
 
+// Waits until the process ends (true, its status in `status`) or the deadline passes (false).
+bool exited_by(pid_t pid, std::chrono::steady_clock::time_point deadline, int& status) {
+    while (!exited(pid, status)) {
+        if (std::chrono::steady_clock::now() >= deadline) return false;
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    return true;
+}
+
 size_t chunk_files(const std::string& folder) {
     std::error_code ec;
     size_t n = 0;
@@ -323,12 +332,11 @@ TEST(Resume, ABakeKilledTwentyTimesAtRandomMomentsAndRunAgainWritesTheSameFile) 
     int kills = 0, finished = 0;
     for (int run = 0; kills < 20 && run < 60; ++run) {
         const pid_t pid = spawn(args(out), log);
-        const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(moment(rng));
+        const auto deadline = std::chrono::steady_clock::now() +
+                              std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                  std::chrono::duration<double>(moment(rng)));
         int status = -1;
-        bool ended = false;
-        while (!(ended = exited(pid, status)) && std::chrono::steady_clock::now() < deadline)
-            std::this_thread::sleep_for(std::chrono::milliseconds(1));
-        if (!ended) {
+        if (!exited_by(pid, deadline, status)) {
             ::kill(-pid, SIGKILL);
             wait_for(pid);
             ++kills;
@@ -555,11 +563,7 @@ TEST(Processes, ARankKilledMidPvsEndsTheJobAndTheJobRunAgainResumes) {
     const pid_t victim = rank_pid(pid, 1);
     ASSERT_GT(victim, 0) << "rank 1 not found";
     ::kill(victim, SIGKILL);
-    const auto deadline = std::chrono::steady_clock::now() + std::chrono::minutes(2);
-    bool ended = false;
-    while (!(ended = exited(pid, status)) && std::chrono::steady_clock::now() < deadline)
-        std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    if (!ended) {
+    if (!exited_by(pid, std::chrono::steady_clock::now() + std::chrono::minutes(2), status)) {
         ::kill(-pid, SIGKILL);
         wait_for(pid);
         FAIL() << "the job hung for two minutes after a rank died\n" << test::read_file(log);

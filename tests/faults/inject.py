@@ -32,24 +32,10 @@ import time
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "samples"))
 import tiny_world  # noqa: E402
+from fault_runs import FAST, run  # noqa: E402
 
-# Cheap occluders, few verification rays: a bake of the tiny world in well under a second.
-FAST = ["-q", "--occluder-probe-eyes", "64", "--occluder-gap-lines", "0", "--occluder-seal-rays", "0",
-        "--eyes", "2", "--rays", "64", "--threads", "2"]
-TIMEOUT_S = 120
 REASONS = {"ENOSPC": "no space left on device", "EIO": "the device reported an I/O error"}
 
-
-def run(cmd, cwd, env_extra=None):
-    env = dict(os.environ)
-    env.pop("LD_PRELOAD", None)
-    if env_extra:
-        env.update(env_extra)
-    try:
-        p = subprocess.run(cmd, cwd=cwd, env=env, capture_output=True, text=True, timeout=TIMEOUT_S)
-    except subprocess.TimeoutExpired:
-        return None, "", "timed out (a hang)"
-    return p.returncode, p.stdout, p.stderr
 
 
 def h5_same(a, b, h5diff, scratch):

@@ -15,26 +15,26 @@ import argparse
 import json
 import os
 import shutil
-import subprocess
 import sys
 import tempfile
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "samples"))
 import tiny_world  # noqa: E402
-
-FAST = ["-q", "--occluder-probe-eyes", "64", "--occluder-gap-lines", "0", "--occluder-seal-rays", "0",
-        "--eyes", "2", "--rays", "64", "--threads", "2"]
+from fault_runs import FAST, run  # noqa: E402
 
 
-def run(cmd, cwd, env_extra=None):
-    env = dict(os.environ)
-    env.pop("LD_PRELOAD", None)
-    env.update(env_extra or {})
-    try:
-        p = subprocess.run(cmd, cwd=cwd, env=env, capture_output=True, text=True, timeout=120)
-    except subprocess.TimeoutExpired:
-        return None, "", ""
-    return p.returncode, p.stdout, p.stderr
+
+def check_refused(label, rc, err, name, failures):
+    """A refused read: status 1 or 2 (no crash, no hang) and exactly one error line naming `name`. Appends what
+    is wrong to failures; returns the lines printed."""
+    lines = [l for l in err.splitlines() if l.strip()]
+    if rc is None:
+        failures.append(f"{label}: hung")
+    elif rc not in (1, 2):
+        failures.append(f"{label}: exit status {rc}{' (a crash)' if rc < 0 else ''}\n{err}")
+    elif len(lines) != 1 or not lines[0].startswith("error: ") or name not in lines[0]:
+        failures.append(f"{label}: not one error line naming {name}:\n{err}")
+    return lines
 
 
 def main():
@@ -92,14 +92,8 @@ def main():
                 make(os.path.join(d, "in.h5"))
             rc, out, err = run([pvsbake] + args, d, env)
             cases += 1
-            lines = [l for l in err.splitlines() if l.strip()]
             label = f"{rname} of a bake file {dname}"
-            if rc is None:
-                failures.append(f"{label}: hung")
-            elif rc not in (1, 2):
-                failures.append(f"{label}: exit status {rc}{' (a crash)' if rc < 0 else ''}\n{err}")
-            elif len(lines) != 1 or not lines[0].startswith("error: ") or "in.h5" not in lines[0]:
-                failures.append(f"{label}: not one error line naming in.h5:\n{err}")
+            lines = check_refused(label, rc, err, "in.h5", failures)
             for o in outputs:
                 if os.path.exists(os.path.join(d, o)):
                     failures.append(f"{label}: {o} was written")
@@ -150,14 +144,8 @@ def main():
             make(d)
             rc, _, err = run([pvsbake, "bake", world, "-o", "out.h5"] + resume + FAST, d, env)
             cases += 1
-            lines = [l for l in err.splitlines() if l.strip()]
             label = f"a bake{' --resume' if resume else ''} with {cname}"
-            if rc is None:
-                failures.append(f"{label}: hung")
-            elif rc not in (1, 2):
-                failures.append(f"{label}: exit status {rc}\n{err}")
-            elif len(lines) != 1 or not lines[0].startswith("error: ") or "out.h5.checkpoint" not in lines[0]:
-                failures.append(f"{label}: not one error line naming the checkpoint:\n{err}")
+            lines = check_refused(label, rc, err, "out.h5.checkpoint", failures)
             if os.path.exists(os.path.join(d, "out.h5")):
                 failures.append(f"{label}: out.h5 was written")
             print(f"{label}: {rc} {lines[0] if lines else ''}", flush=True)
