@@ -26,7 +26,8 @@ PACKAGES=(
   python3             # the loader's install tests: a ctypes game, the exported-symbol check
 )
 
-# Only the tests use these: the runtime (runtime/pvsr.h) built and run on other machines, and fuzzed.
+# Only the tests use these (why each: CONTRIBUTING.md, "Test dependencies"): the runtime (runtime/pvsr.h) built
+# and run on other machines, and fuzzed.
 TEST_PACKAGES=(
   clang libclang-rt-14-dev  # Clang: the runtime built as C99 and C++17 by a second compiler; libFuzzer
   gcc-multilib g++-multilib # the runtime for 32-bit x86 (gcc -m32), as C and as C++
