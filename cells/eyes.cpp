@@ -59,32 +59,32 @@ Aabb eye_region(const VoxelMask& eyes, const Aabb& box) {
     return region;
 }
 
-std::vector<uint64_t> eye_voxels_in(const CellSet& cells, const Aabb& region) {
+std::vector<uint64_t> eye_voxels_in(const VoxelMask& eyes, const Aabb& region) {
     std::vector<uint64_t> voxels;
-    if (cells.eyes.empty()) return voxels;
-    visit_set_voxels_in(cells.eyes, region, [&](uint64_t i) {
+    if (eyes.empty()) return voxels;
+    visit_set_voxels_in(eyes, region, [&](uint64_t i) {
         voxels.push_back(i);
         return false;
     });
     return voxels;
 }
 
-void sample_eye_points_in(const CellSet& cells, const Aabb& region, uint64_t stream, uint32_t count,
+void sample_eye_points_in(const VoxelMask& eyes, const Aabb& region, uint64_t stream, uint32_t count,
                           uint64_t seed, std::vector<glm::vec3>& out) {
     if (count == 0) return;
-    sample_eye_points_from(cells, region, cells.eyes.empty() ? std::vector<uint64_t>() : eye_voxels_in(cells, region),
+    sample_eye_points_from(eyes, region, eyes.empty() ? std::vector<uint64_t>() : eye_voxels_in(eyes, region),
                            stream, count, seed, out);
 }
 
-void sample_eye_points_from(const CellSet& cells, const Aabb& region, const std::vector<uint64_t>& voxels,
+void sample_eye_points_from(const VoxelMask& eyes, const Aabb& region, const std::vector<uint64_t>& voxels,
                             uint64_t stream, uint32_t count, uint64_t seed, std::vector<glm::vec3>& out) {
     if (count == 0) return;
     Rng rng(seed, 0x4559450000000000ULL ^ stream);
-    if (!cells.eyes.empty()) {
+    if (!eyes.empty()) {
         // Eyes only in the eye space: uniform points of (eye voxel ∩ box), the box's eye voxels split into
         // `count` runs in index order with one random voxel per run. No eye voxel meets the box: no eyes
         // (never a point that might be inside solid).
-        const VoxelMask& m = cells.eyes;
+        const VoxelMask& m = eyes;
         const uint64_t n = voxels.size();
         for (uint32_t k = 0; k < count && n > 0; ++k) {
             const uint64_t a = uint64_t(k) * n / count, b = std::max(a + 1, uint64_t(k + 1) * n / count);

@@ -19,17 +19,29 @@
 namespace pvs {
 
 // Appends `count` stratified random eye points of `box` (a cell, or an octree node being considered)
-// under the view volume masks of `cells`; `stream` is a number unique to the box.
-void sample_eye_points_in(const CellSet& cells, const Aabb& box, uint64_t stream, uint32_t count,
+// under the view volume's eye mask `eyes` (anywhere in the box when it is empty); `stream` is a number
+// unique to the box.
+void sample_eye_points_in(const VoxelMask& eyes, const Aabb& box, uint64_t stream, uint32_t count,
                           uint64_t seed, std::vector<glm::vec3>& out);
+inline void sample_eye_points_in(const CellSet& cells, const Aabb& box, uint64_t stream, uint32_t count,
+                                 uint64_t seed, std::vector<glm::vec3>& out) {
+    sample_eye_points_in(cells.eyes, box, stream, count, seed, out);
+}
 
-// The eye voxels of `cells` meeting `box`, in index order (none without an eye mask): what
+// The voxels of `eyes` meeting `box`, in index order (none without an eye mask): what
 // sample_eye_points_in() draws from.
-std::vector<uint64_t> eye_voxels_in(const CellSet& cells, const Aabb& box);
+std::vector<uint64_t> eye_voxels_in(const VoxelMask& eyes, const Aabb& box);
+inline std::vector<uint64_t> eye_voxels_in(const CellSet& cells, const Aabb& box) {
+    return eye_voxels_in(cells.eyes, box);
+}
 // sample_eye_points_in() with the box's eye voxels given (eye_voxels_in()): the same points, without walking
 // the mask again, for callers that draw many times from one box.
-void sample_eye_points_from(const CellSet& cells, const Aabb& box, const std::vector<uint64_t>& voxels,
+void sample_eye_points_from(const VoxelMask& eyes, const Aabb& box, const std::vector<uint64_t>& voxels,
                             uint64_t stream, uint32_t count, uint64_t seed, std::vector<glm::vec3>& out);
+inline void sample_eye_points_from(const CellSet& cells, const Aabb& box, const std::vector<uint64_t>& voxels,
+                                   uint64_t stream, uint32_t count, uint64_t seed, std::vector<glm::vec3>& out) {
+    sample_eye_points_from(cells.eyes, box, voxels, stream, count, seed, out);
+}
 
 // Appends `count` stratified random eye points of the cell to `out`.
 inline void sample_eye_points(const CellSet& cells, uint32_t cell, uint32_t count, uint64_t seed,

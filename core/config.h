@@ -165,10 +165,14 @@ struct ConservativeConfig {
     uint64_t shaft_max_pairs = 4'000'000;  // [Limit: >= 0] the shaft pass runs over a grid's cells (an octree
                                            // level's boxes) only when cells x leavable objects is at most
                                            // this (docs/ALGORITHMS.md#shaft-cap); 0 = no limit
-    int shaft_block = 1;  // [Limit: 1..8] the shaft pass over a grid walks blocks of this many cells along
-                          // each axis: per object, the block's cells in order until one cannot prove it
-                          // hidden; the rest keep it listed (docs/ALGORITHMS.md#shaft-blocks); the cap counts
-                          // blocks; 1 = every cell tries
+    int shaft_block = 1;  // [Limit: 1..16] the shaft pass over a grid proves over blocks of this many cells
+                          // along each axis and their halves down to single cells: what a node is proven
+                          // hidden from, every cell of it leaves out (docs/ALGORITHMS.md#shaft-hierarchy);
+                          // the cap counts blocks; 1 = every cell alone
+    int shaft_probe_rays = 64;  // [Limit: 0..4096] before the shaft pass proves a (cell, object) pair, rays from
+                                // this many seeded eye points of the cell, one at a random point of each
+                                // object it would try, settle what they reach as visible
+                                // (docs/ALGORITHMS.md#shaft-probe); 0 = off
     bool shaft_fusion = true;  // the shaft pass's plane covers take in the umbrae of occluders in other
                                // planes (docs/ALGORITHMS.md#cross-plane-fusion); false for measurement
     bool shaft_caps = true;  // the shaft pass also covers piece pairs with the convex caps of panels meeting
@@ -448,12 +452,18 @@ void visit_options(Config& c, Visitor&& v) {
     v(
         OptionSpec{
             OptionGroup::kConservative, "--shaft-block", "conservative.shaft_block", "cells",
-            "the shaft pass over a grid walks blocks of this many cells along each axis: per object, the "
-            "block's cells in order, each against its own region, until one cannot prove it hidden (the "
-            "rest keep it listed), so a level of many cells can afford the pass at a looser PVS; the cap "
-            "counts blocks; 1 = every cell tries",
-            1, 8},
+            "the shaft pass over a grid proves over blocks of this many cells along each axis, halved down "
+            "to single cells: an object proven hidden from a node's whole eye region leaves every cell of "
+            "it, and only what a node cannot prove, or a sight ray from one of its cells saw, goes to its "
+            "halves; the cap counts blocks; 1 = every cell alone",
+            1, 16},
         c.conservative.shaft_block);
+    v(OptionSpec{OptionGroup::kConservative, "--shaft-probe-rays", "conservative.shaft_probe_rays", "rays",
+                 "before the shaft pass proves an object hidden from a cell, rays from this many seeded eye "
+                 "points of the cell, one at a random point of each object it would try, settle what they "
+                 "reach as visible (a proof of it could only fail); 0 = off",
+                 0, 4096},
+      c.conservative.shaft_probe_rays);
     v(
         OptionSpec{
             OptionGroup::kExperimental, "--shaft-fusion", "conservative.shaft_fusion", "",

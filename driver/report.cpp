@@ -3,6 +3,7 @@
 
 #include "driver/bake.h"
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -88,7 +89,7 @@ NamedValues bake_figures(const BakeConfig& config, const World& world, const Vie
 
 NamedValues run_figures(const BakeData& bake, const StageFigures& stages) {
     const ConservativeFigures& cons = stages.conservative;
-    return {
+    NamedValues figures = {
         {"octree_boxes_evaluated", double(stages.octree.evaluated)},
         {"octree_merged_back", double(stages.octree.merged)},
         {"occluder_seconds", stages.occluders.seconds},
@@ -120,6 +121,8 @@ NamedValues run_figures(const BakeData& bake, const StageFigures& stages) {
         {"conservative_shaft_umbrae", double(cons.shaft.umbrae)},
         {"conservative_shaft_capped", double(cons.shaft.capped)},
         {"conservative_shaft_cupped", double(cons.shaft.cupped)},
+        {"conservative_shaft_probe_rays", double(cons.shaft.probe_rays)},
+        {"conservative_shaft_probe_seen", double(cons.shaft.probe_seen)},
         {"conservative_shaft_seconds", cons.shaft.seconds},
         {"conservative_seconds", cons.seconds},
         {"reuse_pairs", double(stages.reuse.pairs)},
@@ -138,6 +141,17 @@ NamedValues run_figures(const BakeData& bake, const StageFigures& stages) {
          stages.sampled.seconds > 0 ? double(stages.sampled.rays) / stages.sampled.seconds : 0.0},
         {"sampled_guard_band_added", double(stages.sampled.guard_band_added)},
     };
+    // The shaft pass by level of its hierarchy (docs/ALGORITHMS.md#shaft-hierarchy): 0 is a cell.
+    for (int l = 0; l < kShaftLevels; ++l) {
+        const ShaftLevel& level = cons.shaft.levels[size_t(l)];
+        const std::string at = fmt::format("conservative_shaft_level{}_", l);
+        figures.push_back({at + "tried", double(level.tried)});
+        figures.push_back({at + "proven", double(level.proven)});
+        figures.push_back({at + "settled", double(level.settled)});
+        figures.push_back({at + "seen", double(level.seen)});
+        figures.push_back({at + "seconds", level.seconds});
+    }
+    return figures;
 }
 
 std::string pvs_kind(const BakeData& bake) {

@@ -7,6 +7,7 @@
 #include "core/box_tree.h"
 #include "occluders/panels.h"
 #include "rays/ray_sampler.h"
+#include "rays/surface_points.h"
 #include "pvs/depth_cube.h"
 #include "pvs/region_hiding.h"
 #include "pvs/shaft_hiding.h"
@@ -15,9 +16,11 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <map>
+#include <limits>
 #include <optional>
 
 namespace pvs {
@@ -671,18 +674,28 @@ uint64_t grid_shaft_regions(const ConservativeConfig& config, const CellSet& cel
     return config.shaft_block <= 1 ? cells.size() : grid_shaft_blocks(cells, config.shaft_block).size();
 }
 
+namespace {
+
+// A grid cell's position in the grid.
+glm::ivec3 grid_position(const CellSet& cells, uint32_t c) {
+    glm::ivec3 g;
+    for (int a = 0; a < 3; ++a) {
+        const double at =
+            (double(cells.cells[c].bounds.center()[a]) - double(cells.origin[a])) / double(cells.cell_size_m);
+        g[a] = std::clamp(int(std::floor(at)), 0, cells.dims[a] - 1);
+    }
+    return g;
+}
+
+}  // namespace
+
 std::vector<std::vector<uint32_t>> grid_shaft_blocks(const CellSet& cells, int k) {
     k = std::max(k, 1);
     const glm::ivec3 nb = (cells.dims + glm::ivec3(k - 1)) / k;
     std::vector<int64_t> first(size_t(nb.x) * size_t(nb.y) * size_t(nb.z), -1);
     std::vector<std::vector<uint32_t>> blocks;
     for (uint32_t c = 0; c < cells.size(); ++c) {
-        glm::ivec3 g;
-        for (int a = 0; a < 3; ++a) {
-            const double at = (double(cells.cells[c].bounds.center()[a]) - double(cells.origin[a])) /
-                              double(cells.cell_size_m);
-            g[a] = std::clamp(int(std::floor(at)), 0, cells.dims[a] - 1) / k;
-        }
+        const glm::ivec3 g = grid_position(cells, c) / k;
         int64_t& b = first[size_t(g.x) + size_t(nb.x) * (size_t(g.y) + size_t(nb.y) * size_t(g.z))];
         if (b < 0) {
             b = int64_t(blocks.size());
@@ -702,27 +715,43 @@ void note_shaft_skipped(Context& ctx, const ConservativeConfig& config, uint64_t
     ctx.info(
         fmt::format("shaft pass: not run: {} regions x {} objects = {} candidate pairs, over "
                     "--shaft-max-pairs {} (raise it to run the pass, at about a thread-millisecond a pair "
-                    "it tries; on a grid, --shaft-block K walks blocks of K x K x K cells, for less)",
+                    "it tries; on a grid, --shaft-block K proves over blocks of K x K x K cells, for less)",
                     regions, leavable, regions * leavable, config.shaft_max_pairs));
 }
 
 // Tries object o once more against a region (pvs/shaft_hiding.h); proven hidden, it leaves `row`. Counts
 // the time by how the try ended.
+double seconds_since(std::chrono::steady_clock::time_point start) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// Counts a try's time by how it ended: `before` is the figures as it started.
+void note_shaft_end(const ShaftFigures& before, bool hidden, std::chrono::steady_clock::time_point start,
+                    ShaftFigures& figures) {
+    const double s = seconds_since(start);
+    if (hidden)
+        figures.seconds_hidden += s;
+    else if (figures.certain > before.certain)
+        figures.seconds_certain += s;
+    else if (figures.out_of_budget > before.out_of_budget)
+        figures.seconds_out_of_budget += s;
+    else
+        figures.seconds_stuck += s;
+}
+
 bool shaft_try(const ShaftProver& prover, const World& world, const VoxelMask& eyes,
                const ShaftRegion& region, uint32_t o, int budget, uint64_t* row, ShaftFigures& figures) {
     const ShaftFigures before = figures;
     const auto start = std::chrono::steady_clock::now();
     const bool hidden = prover.hides(world, eyes, region, o, budget, figures);
-    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    note_shaft_end(before, hidden, start, figures);
+    ShaftLevel& level = figures.levels[0];
+    ++level.tried;
+    level.seconds += seconds_since(start);
     if (hidden) {
         row[o >> 6] &= ~(uint64_t(1) << (o & 63));
-        figures.seconds_hidden += s;
-    } else if (figures.certain > before.certain) {
-        figures.seconds_certain += s;
-    } else if (figures.out_of_budget > before.out_of_budget) {
-        figures.seconds_out_of_budget += s;
-    } else {
-        figures.seconds_stuck += s;
+        ++level.proven;
+        ++level.settled;
     }
     return hidden;
 }
@@ -735,9 +764,168 @@ void shaft_row(const ShaftProver& prover, const World& world, const VoxelMask& e
                ShaftFigures& figures) {
     const ShaftRegion shaft = shaft_region(eyes, region);
     for (uint32_t o : candidates) {
-        if (!row_lists(row, o) || (seen && row_lists(seen, o)) || world.objects[o].bounds.overlaps(region))
+        if (!row_lists(row, o) || world.objects[o].bounds.overlaps(region)) continue;
+        if (seen && row_lists(seen, o)) {
+            ++figures.levels[0].seen;
             continue;
+        }
         shaft_try(prover, world, eyes, shaft, o, budget, row, figures);
+    }
+}
+
+// The hierarchy of one block of grid cells for the shaft pass (docs/ALGORITHMS.md#shaft-hierarchy): the
+// root holds the block's cells with an eye region; a node's box of grid positions is halved along every
+// axis longer than one position, and each half holding cells is a child; a node of one cell is a leaf.
+// Built and walked in a fixed order, so what it proves depends only on the rows it starts from.
+class ShaftHierarchy {
+public:
+    struct Node {
+        Aabb box;                        // the bounds of its cells' eye regions
+        int level = 0;                   // 0 for one cell; else ceil(log2(its longest side in positions))
+        uint32_t first = 0, count = 0;   // its cells: cells_[first, first + count)
+        std::vector<uint32_t> children;  // indexes into nodes_
+    };
+
+    // `block`: the block's cells; those with an empty region are left out.
+    void build(const CellSet& cells, const std::vector<Aabb>& regions, const std::vector<uint32_t>& block) {
+        nodes_.clear();
+        cells_.clear();
+        shafts_.clear();
+        members_.clear();
+        glm::ivec3 lo(std::numeric_limits<int>::max()), hi(std::numeric_limits<int>::min());
+        for (uint32_t c : block) {
+            if (regions[c].is_empty()) continue;
+            const glm::ivec3 g = grid_position(cells, c);
+            members_.push_back({g, c});
+            lo = glm::min(lo, g);
+            hi = glm::max(hi, g + 1);
+        }
+        if (members_.empty()) return;
+        add(regions, 0, uint32_t(members_.size()), lo, hi);
+        for (const auto& m : members_) cells_.push_back(m.cell);
+        shafts_.resize(nodes_.size());
+    }
+    const std::vector<Node>& nodes() const { return nodes_; }
+    uint32_t cell(uint32_t i) const { return cells_[i]; }
+    // The node's region for the prover, built at its first use.
+    const ShaftRegion& shaft(const VoxelMask& eyes, uint32_t n) {
+        if (!shafts_[n]) shafts_[n].emplace(shaft_region(eyes, nodes_[n].box));
+        return *shafts_[n];
+    }
+
+private:
+    struct Member {
+        glm::ivec3 g;
+        uint32_t cell;
+    };
+    // Adds the node of members_[first, first + count), within grid positions [lo, hi), and its subtree.
+    uint32_t add(const std::vector<Aabb>& regions, uint32_t first, uint32_t count, glm::ivec3 lo,
+                 glm::ivec3 hi) {
+        const uint32_t n = uint32_t(nodes_.size());
+        nodes_.emplace_back();
+        Aabb box;
+        for (uint32_t i = first; i < first + count; ++i) box.extend(regions[members_[i].cell]);
+        nodes_[n].box = box;
+        nodes_[n].first = first;
+        nodes_[n].count = count;
+        if (count == 1) return n;
+        const glm::ivec3 extent = hi - lo;
+        const int longest = std::max({extent.x, extent.y, extent.z});
+        int level = 0;
+        while ((1 << level) < longest) ++level;
+        nodes_[n].level = std::max(level, 1);
+        const glm::ivec3 mid = lo + (extent + 1) / 2;
+        const auto octant = [&](const Member& m) {
+            int k = 0;
+            for (int a = 0; a < 3; ++a)
+                if (extent[a] > 1 && m.g[a] >= mid[a]) k |= 1 << a;
+            return k;
+        };
+        // Cells by octant, in cell order within each (a fixed order).
+        std::stable_sort(members_.begin() + first, members_.begin() + first + count,
+                         [&](const Member& a, const Member& b) {
+                             return octant(a) != octant(b) ? octant(a) < octant(b) : a.cell < b.cell;
+                         });
+        std::vector<uint32_t> children;
+        for (uint32_t i = first; i < first + count;) {
+            const int k = octant(members_[i]);
+            uint32_t j = i;
+            while (j < first + count && octant(members_[j]) == k) ++j;
+            glm::ivec3 clo = lo, chi = hi;
+            for (int a = 0; a < 3; ++a)
+                if (extent[a] > 1) (k >> a & 1 ? clo[a] : chi[a]) = mid[a];
+            children.push_back(add(regions, i, j - i, clo, chi));
+            i = j;
+        }
+        nodes_[n].children = std::move(children);
+        return n;
+    }
+
+    std::vector<Node> nodes_;
+    std::vector<Member> members_;
+    std::vector<uint32_t> cells_;  // the cells, by node (members_' order)
+    std::vector<std::optional<ShaftRegion>> shafts_;
+};
+
+// The probe before the shaft pass's proofs (docs/ALGORITHMS.md#shaft-probe): eye points of a cell aim one
+// ray each at a random point of every object the pass would try for it; an object its own ray touches is
+// seen from an eye of the cell, so no proof of it can hold. The eyes are seeded by the cell, each ray by
+// the cell, the eye and the object, so what the probe finds for a pair depends on that pair alone, not on
+// threads, processes or the other objects.
+constexpr uint64_t kProbeEyeStream = uint64_t(0x50524f) << 40;    // ^ the region's key
+constexpr uint64_t kProbePointStream = uint64_t(0x505054) << 40;  // ^ mix64(key ^ object) ^ eye
+constexpr uint64_t kProbeSeed = 0x7368616674ULL;
+constexpr float kProbeMinDistanceM = 1e-4f;  // closer targets give no direction
+
+struct ShaftProbe {
+    std::vector<glm::vec3> eyes, directions;
+    std::vector<uint32_t> targets, aimed;
+    std::vector<RayTouch> touches;
+    std::vector<uint8_t> seen;  // per target
+};
+
+// Marks in `seen` what the probe's rays from `region` (a cell's or box's eye region) find among `p.targets`
+// (objects of its row that the pass would try).
+void probe_region(const RayScene& scene, const World& world, const std::vector<double>& cum_area,
+                  const VoxelMask& eyes, const Aabb& region, int rays, ShaftProbe& p, uint64_t* seen,
+                  ShaftFigures& figures) {
+    if (p.targets.empty() || rays <= 0) return;
+    // The region's key: its corners' bits, so that a region gets the same rays whatever its index.
+    uint64_t c = 0;
+    for (const glm::vec3 corner : {region.min, region.max})
+        for (int a = 0; a < 3; ++a) c = mix64(c ^ std::bit_cast<uint32_t>(corner[a]));
+    p.eyes.clear();
+    sample_eye_points_in(eyes, region, kProbeEyeStream ^ c, uint32_t(rays), kProbeSeed, p.eyes);
+    for (uint32_t e = 0; e < p.eyes.size() && !p.targets.empty(); ++e) {
+        p.directions.clear();
+        p.aimed.clear();
+        for (uint32_t i = 0; i < p.targets.size(); ++i) {
+            const uint32_t o = p.targets[i];
+            Rng rng(kProbeSeed, kProbePointStream ^ mix64(c ^ o) ^ e);
+            const glm::vec3 d = random_point_on(world, cum_area, o, rng) - p.eyes[e];
+            const float len = glm::length(d);
+            if (len < kProbeMinDistanceM) continue;
+            p.directions.push_back(d / len);
+            p.aimed.push_back(i);
+        }
+        p.touches.clear();
+        scene.trace(p.eyes[e], p.directions.data(), uint32_t(p.directions.size()), p.touches);
+        figures.probe_rays += p.directions.size();
+        p.seen.assign(p.targets.size(), 0);
+        bool any = false;
+        for (const RayTouch& t : p.touches) {
+            const uint32_t i = p.aimed[t.ray];
+            if (t.object != p.targets[i] || p.seen[i]) continue;
+            p.seen[i] = 1;
+            seen[t.object >> 6] |= uint64_t(1) << (t.object & 63);
+            ++figures.probe_seen;
+            any = true;
+        }
+        if (!any) continue;
+        uint32_t kept = 0;
+        for (uint32_t i = 0; i < p.targets.size(); ++i)
+            if (!p.seen[i]) p.targets[kept++] = p.targets[i];
+        p.targets.resize(kept);
     }
 }
 
@@ -807,6 +995,7 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
         provers =
             &own_provers.emplace(ctx, occluders, config.shaft_fusion, config.shaft_caps, config.shaft_cups);
     if (!shaft_runs) provers = nullptr;
+    const std::vector<double> cum_area = shaft_runs ? cumulative_areas(world) : std::vector<double>();
     Counts total;
     ShaftFigures shaft;
     if (config.shaft_budget > 0 && !shaft_runs) note_shaft_skipped(ctx, config, boxes.size(), leavable.size(), shaft);
@@ -820,6 +1009,7 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
         std::vector<uint32_t> open, candidates;
         std::vector<uint64_t> hidden(pvs.words_per_row), seen(pvs.words_per_row);
         ShaftFigures local_shaft;
+        ShaftProbe probe;
         for_each_dealt(share, ctx, 1, [&](uint64_t ci) {
             const Aabb box = eye_region(eyes, boxes[size_t(ci)]);
             uint64_t* row = pvs.row(uint32_t(ci));
@@ -857,6 +1047,13 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
                                       side ? nullptr : seen.data(), side ? seen.data() : nullptr));
                 if (provers) {
                     const auto shaft_start = std::chrono::steady_clock::now();
+                    // The probe (docs/ALGORITHMS.md#shaft-probe).
+                    probe.targets.clear();
+                    for (uint32_t o : candidates)
+                        if (row_lists(row, o) && !row_lists(seen.data(), o) && !world.objects[o].bounds.overlaps(box))
+                            probe.targets.push_back(o);
+                    probe_region(scene, world, cum_area, eyes, box, config.shaft_probe_rays, probe, seen.data(),
+                                 local_shaft);
                     shaft_row(provers->of(set), world, eyes, box, candidates, config.shaft_budget, row,
                               seen.data(), local_shaft);
                     local_shaft.seconds +=
@@ -999,7 +1196,7 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
         return config.single_occluder_pass ? hidden.row(uint32_t(cell)) : nullptr;
     };
     PvsSet face_rows = PvsSet::make(uint32_t(2 * faces.size()), n_objects);  // face * 2 + side
-    // The blocks the shaft pass walks (docs/ALGORITHMS.md#shaft-blocks); the cap counts them.
+    // The blocks the shaft pass proves over (docs/ALGORITHMS.md#shaft-hierarchy); the cap counts them.
     const std::vector<std::vector<uint32_t>> blocks = config.shaft_budget > 0
                                                           ? grid_shaft_blocks(cells, config.shaft_block)
                                                           : std::vector<std::vector<uint32_t>>{};
@@ -1113,7 +1310,7 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
     }
     ctx.progress_end();
     // The shaft pass (docs/ALGORITHMS.md#shaft-pass), on the cells' finished rows, when the cap allows it
-    // (docs/ALGORITHMS.md#shaft-cap), walking blocks of cells (docs/ALGORITHMS.md#shaft-blocks).
+    // (docs/ALGORITHMS.md#shaft-cap), over blocks of cells (docs/ALGORITHMS.md#shaft-hierarchy).
     if (config.shaft_budget > 0 && !shaft_runs) {
         ShaftFigures shaft;
         note_shaft_skipped(ctx, config, blocks.size(), leavable.size(), shaft);
@@ -1121,6 +1318,7 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
     } else if (shaft_runs) {
         const auto pass_start = std::chrono::steady_clock::now();
         const ShaftProvers provers(ctx, occluders, config.shaft_fusion, config.shaft_caps, config.shaft_cups);
+        const std::vector<double> cum_area = cumulative_areas(world);
         ShaftFigures shaft;
         ctx.progress_begin("shaft pass", blocks.size(), "blocks");
         // The seen rows of faces other processes solved; then each row of the pass comes from the process
@@ -1131,9 +1329,10 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
 #pragma omp parallel
         {
             ShaftFigures local;
-            std::vector<uint32_t> candidates, live;
+            std::vector<uint32_t> candidates, stack;
             std::vector<uint64_t> replayed;
-            std::vector<ShaftRegion> shafts;
+            ShaftHierarchy tree;
+            ShaftProbe probe;
             for_each_dealt(share, ctx, 1, [&](uint64_t b) {
                 const std::vector<uint32_t>& block = blocks[size_t(b)];
                 for (uint32_t c : block)
@@ -1152,15 +1351,10 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
                         return;
                     }
                 }
-                // The walk (docs/ALGORITHMS.md#shaft-blocks): per object, the block's cells in cell order,
-                // until one cannot prove it hidden or saw it; the cells after that one keep it listed.
-                live.clear();
-                shafts.clear();
-                for (uint32_t c : block)
-                    if (!regions[c].is_empty()) {
-                        live.push_back(c);
-                        shafts.push_back(shaft_region(cells.eyes, regions[c]));
-                    }
+                // The hierarchy (docs/ALGORITHMS.md#shaft-hierarchy): per object, a node's proof settles
+                // every cell of it; what a node cannot prove, or a cell of it saw, goes to its children.
+                tree.build(cells, regions, block);
+                if (tree.nodes().empty()) return;
                 // The objects no cell of the block has settled by a reuse (docs/ALGORITHMS.md#reuse: a
                 // plan settles a block's cells alike).
                 const std::vector<uint32_t>* tried = &leavable;
@@ -1173,15 +1367,79 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
                     }
                     tried = &candidates;
                 }
+                // The probe (docs/ALGORITHMS.md#shaft-probe): what rays from a cell reach needs no proof.
+                if (config.shaft_probe_rays > 0)
+                    for (uint32_t c : block) {
+                        if (regions[c].is_empty()) continue;
+                        probe.targets.clear();
+                        for (uint32_t o : *tried)
+                            if (row_lists(pvs.row(c), o) && !row_lists(seen.row(c), o) &&
+                                !world.objects[o].bounds.overlaps(regions[c]))
+                                probe.targets.push_back(o);
+                        probe_region(scene, world, cum_area, cells.eyes, regions[c], config.shaft_probe_rays,
+                                     probe, seen.row(c), local);
+                    }
                 for (uint32_t o : *tried) {
-                    for (size_t i = 0; i < live.size(); ++i) {
-                        const uint32_t c = live[i];
-                        uint64_t* row = pvs.row(c);
-                        if (!row_lists(row, o) || world.objects[o].bounds.overlaps(regions[c])) continue;
-                        if (row_lists(seen.row(c), o)) break;
-                        if (!shaft_try(provers.of(occluders.set_for(regions[c])), world, cells.eyes,
-                                       shafts[i], o, config.shaft_budget, row, local))
-                            break;
+                    const Aabb& bounds = world.objects[o].bounds;
+                    stack.assign(1, 0);
+                    while (!stack.empty()) {
+                        const uint32_t n = stack.back();
+                        stack.pop_back();
+                        const ShaftHierarchy::Node& node = tree.nodes()[n];
+                        ShaftLevel& level = local.levels[size_t(std::min(node.level, kShaftLevels - 1))];
+                        // The node's cells that list o and whose regions it does not meet, and in how many
+                        // children they lie.
+                        uint32_t listing = 0, parts = 0;
+                        bool saw = false;
+                        const auto lists = [&](uint32_t c) {
+                            return row_lists(pvs.row(c), o) && !bounds.overlaps(regions[c]);
+                        };
+                        if (node.children.empty()) {
+                            listing = lists(tree.cell(node.first)) ? 1 : 0;
+                            saw = listing && row_lists(seen.row(tree.cell(node.first)), o);
+                        } else {
+                            for (uint32_t ch : node.children) {
+                                const ShaftHierarchy::Node& child = tree.nodes()[ch];
+                                bool any = false;
+                                for (uint32_t i = child.first; i < child.first + child.count; ++i) {
+                                    const uint32_t c = tree.cell(i);
+                                    if (!lists(c)) continue;
+                                    any = true;
+                                    ++listing;
+                                    saw = saw || row_lists(seen.row(c), o);
+                                }
+                                parts += any ? 1 : 0;
+                            }
+                        }
+                        if (listing == 0) continue;
+                        // A sight ray from a cell of the node saw o: no proof over the node can hold.
+                        if (saw) ++level.seen;
+                        // A node tries o when its listing cells lie in two children or more (else the one
+                        // child's proof is over a smaller region) and o does not meet its box.
+                        if (!saw && (node.children.empty() || (parts >= 2 && !bounds.overlaps(node.box)))) {
+                            const auto t0 = std::chrono::steady_clock::now();
+                            const ShaftFigures before = local;
+                            const bool hidden =
+                                provers.of(occluders.set_for(node.box))
+                                    .hides(world, cells.eyes, tree.shaft(cells.eyes, n), o, config.shaft_budget,
+                                           local);
+                            note_shaft_end(before, hidden, t0, local);
+                            ++level.tried;
+                            level.seconds += seconds_since(t0);
+                            if (hidden) {
+                                ++level.proven;
+                                for (uint32_t i = node.first; i < node.first + node.count; ++i) {
+                                    const uint32_t c = tree.cell(i);
+                                    if (!lists(c)) continue;
+                                    uint64_t* row = pvs.row(c);
+                                    row[o >> 6] &= ~(uint64_t(1) << (o & 63));
+                                    ++level.settled;
+                                }
+                                continue;
+                            }
+                        }
+                        for (auto ch = node.children.rbegin(); ch != node.children.rend(); ++ch)
+                            stack.push_back(*ch);
                     }
                 }
                 if (journal)
@@ -1237,6 +1495,14 @@ PvsSet bake_conservative_pvs(Context& ctx, const ConservativeConfig& config, con
             double(figures.shaft.stuck - figures.shaft.stuck_meet - figures.shaft.stuck_depth) * 1e-6,
             double(figures.shaft.tests) * 1e-6, figures.shaft.seconds, figures.shaft.seconds_hidden,
             figures.shaft.seconds_certain, figures.shaft.seconds_out_of_budget, figures.shaft.seconds_stuck));
+        for (int l = kShaftLevels - 1; l >= 0; --l) {
+            const ShaftLevel& level = figures.shaft.levels[size_t(l)];
+            if (level.tried == 0 && level.seen == 0) continue;
+            ctx.info(fmt::format("shaft pass, {}: {} proofs tried, {} proven ({} (cell, object) pairs left out), "
+                                 "{} not tried for a sight ray's hit, {:.1f} thread seconds",
+                                 l == 0 ? std::string("cells") : fmt::format("nodes of up to {0}x{0}x{0} cells", 1 << l),
+                                 level.tried, level.proven, level.settled, level.seen, level.seconds));
+        }
     }
     ctx.info(fmt::format(
         "conservative PVS: one occluder hides {:.2f} M (cell, object) pairs from the whole region ({:.1f} s) "

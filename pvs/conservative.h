@@ -25,8 +25,9 @@
 //   out first, proven exactly (pvs/region_hiding.h, docs/ALGORITHMS.md#single-occluder);
 // - with --shaft-budget, what the faces listed and no sight ray saw is tried once more against the whole
 //   region, in piece pairs each covered in one plane by panels and the proven solid (pvs/shaft_hiding.h,
-//   docs/ALGORITHMS.md#shaft-pass); with --shaft-block on a grid, a cell tries an object only while the
-//   cells before it in its block proved it hidden (docs/ALGORITHMS.md#shaft-blocks);
+//   docs/ALGORITHMS.md#shaft-pass), after rays from eye points of the cell settle what they reach
+//   (docs/ALGORITHMS.md#shaft-probe); with --shaft-block on a grid, blocks of cells and their halves
+//   share proofs, down to single cells (docs/ALGORITHMS.md#shaft-hierarchy);
 // - a region whose eyes lie in one block uses that block's occluders, ShrunkOccluders::set_for (opt-in
 //   --occluder-block, unproven: docs/ALGORITHMS.md#block-occluders);
 // - an octree box tests only what its parent's row lists (docs/ALGORITHMS.md#octree-parent-bound).
@@ -87,7 +88,7 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
                            const ShaftProvers* provers = nullptr, RowJournal* journal = nullptr,
                            const std::vector<uint64_t>* keys = nullptr, WorkShare* share = nullptr);
 
-// The blocks the shaft pass walks over a grid (docs/ALGORITHMS.md#shaft-blocks): the cells in each block of
+// The blocks the shaft pass proves over on a grid (docs/ALGORITHMS.md#shaft-hierarchy): the cells in each block of
 // k x k x k grid positions, in cell order; the blocks in the order of their first cell. k = 1: each cell
 // alone.
 std::vector<std::vector<uint32_t>> grid_shaft_blocks(const CellSet& cells, int k);

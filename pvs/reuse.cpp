@@ -342,7 +342,7 @@ ReusePlan plan_reuse(Context& ctx, const ConservativeConfig& config, const World
             old_cell_of.find({cell.min.x, cell.min.y, cell.min.z, cell.max.x, cell.max.y, cell.max.z});
         return it == old_cell_of.end() ? int64_t(-1) : int64_t(it->second);
     };
-    // With shaft blocks (docs/ALGORITHMS.md#shaft-blocks) a cell's bit for an object also depends on the
+    // With shaft blocks (docs/ALGORITHMS.md#shaft-hierarchy) a cell's bit for an object also depends on the
     // other cells of its block: a pair is kept only when every cell of the block is found, and the box it
     // must keep clear of the edit spans the block's grid positions, so a block's cells are settled alike.
     std::vector<Aabb> reach_of(cells.size());

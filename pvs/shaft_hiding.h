@@ -31,8 +31,28 @@
 
 namespace pvs {
 
+// One level of the hierarchy of cells the shaft pass proves over (docs/ALGORITHMS.md#shaft-hierarchy):
+// level 0 is a cell alone, level L a node of at most 2^L x 2^L x 2^L grid positions.
+struct ShaftLevel {
+    uint64_t tried = 0;    // (node, object) proofs tried
+    uint64_t proven = 0;   // of them, proven hidden from the whole node
+    uint64_t settled = 0;  // (cell, object) pairs those proofs left out of rows
+    uint64_t seen = 0;     // (node, object) pairs not tried: a sight ray from a cell of the node saw it
+    double seconds = 0.0;  // thread seconds of its tries
+
+    ShaftLevel& operator+=(const ShaftLevel& o) {
+        tried += o.tried;
+        proven += o.proven;
+        settled += o.settled;
+        seen += o.seen;
+        seconds += o.seconds;
+        return *this;
+    }
+};
+constexpr int kShaftLevels = 5;  // cells, and nodes of up to 16 x 16 x 16 of them
+
 struct ShaftFigures {
-    uint64_t pairs = 0;          // (cell, object) pairs tried
+    uint64_t pairs = 0;          // (region, object) pairs tried
     uint64_t hidden = 0;         // of them, proven hidden
     uint64_t tests = 0;          // piece pairs tested
     uint64_t certain = 0;        // pairs given up at once: a line from an eye to the object meets no occluder
@@ -44,11 +64,15 @@ struct ShaftFigures {
     uint64_t capped = 0;  // piece pairs a convex cap covered (pvs/convex_cap.h)
     uint64_t cupped = 0;  // piece pairs a cup covered (docs/ALGORITHMS.md#cups)
     uint64_t skipped_candidates = 0;  // regions x objects of the passes not run for the pair cap
+    uint64_t probe_rays = 0;  // rays of the probe before the proofs (docs/ALGORITHMS.md#shaft-probe)
+    uint64_t probe_seen = 0;  // (cell, object) pairs they settled as visible
     double seconds = 0.0;
     // Where the time went, by how each pair ended (shaft_row() times each pair).
     double seconds_hidden = 0.0, seconds_certain = 0.0, seconds_out_of_budget = 0.0, seconds_stuck = 0.0;
+    std::array<ShaftLevel, kShaftLevels> levels{};  // by level of the hierarchy (grids; octrees: level 0)
 
     ShaftFigures& operator+=(const ShaftFigures& o) {
+        for (size_t l = 0; l < levels.size(); ++l) levels[l] += o.levels[l];
         pairs += o.pairs;
         hidden += o.hidden;
         tests += o.tests;
@@ -61,6 +85,8 @@ struct ShaftFigures {
         capped += o.capped;
         cupped += o.cupped;
         skipped_candidates += o.skipped_candidates;
+        probe_rays += o.probe_rays;
+        probe_seen += o.probe_seen;
         seconds += o.seconds;
         seconds_hidden += o.seconds_hidden;
         seconds_certain += o.seconds_certain;

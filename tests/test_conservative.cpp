@@ -12,6 +12,7 @@
 #include "tests/test_util.h"
 #include "tests/world_builder.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <omp.h>
 
@@ -523,46 +524,79 @@ TEST(Conservative, TheShaftPassRunsWithinItsCapAndIsSkippedOverIt) {
     }
 }
 
-// THE SHAFT PASS BY BLOCKS (docs/ALGORITHMS.md#shaft-blocks): the scene above on 1 m cells, the pass walking
-// blocks of 2 x 2 x 2 cells. A cell tries an object only while the cells before it in its block proved it
-// hidden, each against its own region with the same prover, so every row lies between the per-cell pass's
-// row and the row without the pass; the walk still proves the target hidden from cells of the block around
-// the eye, tries fewer pairs than the per-cell pass, and dense rays find no miss.
-TEST(Conservative, TheShaftPassWalkingBlocksListsBetweenThePerCellPassAndNone) {
+// THE SHAFT PASS'S HIERARCHY (docs/ALGORITHMS.md#shaft-hierarchy): the scene above on 1 m cells, the pass
+// over blocks of 4 x 4 x 4 cells halved down to cells. A node's proof holds for every cell of it, and a
+// node that cannot prove an object hands it to its halves, down to the cells, which try it exactly as the
+// per-cell pass does; so every row lists at most what the per-cell pass lists, and at most what the bake
+// without the pass lists. The target is proven hidden from several cells by one node's proof (more cells
+// settled than proofs), a failed node's other halves still prove, fewer cells try alone, and dense rays
+// find no miss.
+TEST(Conservative, TheShaftHierarchyProvesWhatThePerCellPassProvesAndNodesSettleTheirCells) {
     uint32_t target = 0;
     const World w = two_walls_at_different_depths(target);
     BakeConfig c = conservative_config();
     c.conservative.shaft_budget = 1024;
     const BakeData per_cell = bake_without_misses(c, w);
-    c.conservative.shaft_block = 2;
-    const BakeData walked = bake_without_misses(c, w);
+    c.conservative.shaft_block = 4;
+    const BakeData tree = bake_without_misses(c, w);
     c.conservative.shaft_budget = 0;
     const BakeData off = bake_without_misses(c, w);
-    ASSERT_EQ(walked.cells.size(), off.cells.size());
+    ASSERT_EQ(tree.cells.size(), off.cells.size());
     ASSERT_EQ(per_cell.cells.size(), off.cells.size());
-    EXPECT_LT(grid_shaft_blocks(walked.cells, 2).size(), walked.cells.size());
-    uint64_t only_per_cell = 0;
+    EXPECT_LT(grid_shaft_blocks(tree.cells, 4).size(), tree.cells.size());
     for (uint32_t cell = 0; cell < off.cells.size(); ++cell)
         for (uint32_t o = 0; o < w.objects.size(); ++o) {
-            EXPECT_FALSE(walked.pvs.test(cell, o) && !off.pvs.test(cell, o))
+            EXPECT_FALSE(per_cell.pvs.test(cell, o) && !off.pvs.test(cell, o))
                 << "cell " << cell << " lists object " << o << " only with the pass";
-            EXPECT_FALSE(per_cell.pvs.test(cell, o) && !walked.pvs.test(cell, o))
-                << "cell " << cell << ": the walk proved object " << o
-                << " hidden, the per-cell pass did not";
-            only_per_cell += per_cell.pvs.test(cell, o) != walked.pvs.test(cell, o) ? 1 : 0;
+            EXPECT_FALSE(tree.pvs.test(cell, o) && !per_cell.pvs.test(cell, o))
+                << "cell " << cell << ": the per-cell pass proved object " << o
+                << " hidden, the hierarchy did not";
         }
+    uint64_t node_proofs = 0, node_settled = 0, node_failed = 0;
+    for (int l = 1; l < kShaftLevels; ++l) {
+        const std::string at = "conservative_shaft_level" + std::to_string(l) + "_";
+        node_proofs += uint64_t(figure(tree, at + "proven"));
+        node_settled += uint64_t(figure(tree, at + "settled"));
+        node_failed += uint64_t(figure(tree, at + "tried") - figure(tree, at + "proven"));
+    }
+    EXPECT_GT(node_proofs, 0u) << "no node proved anything";
+    EXPECT_GT(node_settled, node_proofs) << "no node proof settled more than one cell";
+    EXPECT_GT(node_failed, 0u) << "every node proof held: the scene is not telling";
+    EXPECT_GT(figure(tree, "conservative_shaft_level0_proven"), 0.0) << "no cell of a failed node proved";
+    EXPECT_LT(figure(tree, "conservative_shaft_level0_tried"), figure(per_cell, "conservative_shaft_level0_tried"));
     uint32_t hidden_near_eye = 0;
     for (const glm::vec3 eye : {glm::vec3(2.5f, 1.5f, 3.5f), glm::vec3(3.5f, 1.5f, 3.5f),
                                 glm::vec3(2.5f, 1.5f, 2.5f), glm::vec3(3.5f, 1.5f, 2.5f)}) {
-        const int32_t cell = walked.cells.find(eye);
+        const int32_t cell = tree.cells.find(eye);
         ASSERT_GE(cell, 0);
-        hidden_near_eye += off.pvs.test(uint32_t(cell), target) && !walked.pvs.test(uint32_t(cell), target);
+        hidden_near_eye += off.pvs.test(uint32_t(cell), target) && !tree.pvs.test(uint32_t(cell), target);
     }
-    EXPECT_GE(hidden_near_eye, 1u) << "the walk proved the target hidden from no cell the cubes left it in";
-    EXPECT_GT(figure(walked, "conservative_shaft_hidden"), 0.0);
-    EXPECT_LT(figure(walked, "conservative_shaft_pairs"), figure(per_cell, "conservative_shaft_pairs"));
-    EXPECT_GT(only_per_cell, 0u)
-        << "the walk skipped nothing the per-cell pass proves: the scene is not telling";
+    EXPECT_GE(hidden_near_eye, 1u) << "the hierarchy proved the target hidden from no cell the cubes left it in";
+}
+
+// THE PROBE (docs/ALGORITHMS.md#shaft-probe): rays from eye points of a cell settle what they reach as
+// visible before the shaft pass tries a proof. A proof only holds for what no eye sees, so the rows are
+// those of the pass without the probe, on the scene above and on a random world, per cell and by blocks;
+// the probe settles pairs, and the pass tries fewer.
+TEST(Conservative, TheShaftProbeSettlesVisiblePairsAndChangesNoRow) {
+    uint32_t target = 0;
+    const World scene = two_walls_at_different_depths(target);
+    const World random = make_random_world(4, 0).world;
+    for (const auto& [w, block] : {std::pair{&scene, 1}, std::pair{&scene, 4}, std::pair{&random, 2}}) {
+        {
+            SCOPED_TRACE(fmt::format("{} world, blocks of {}", w == &scene ? "scene" : "random", block));
+            BakeConfig c = conservative_config();
+            c.conservative.shaft_budget = 256;
+            c.conservative.shaft_block = block;
+            c.conservative.shaft_probe_rays = 0;
+            const BakeData without = bake_without_misses(c, *w);
+            c.conservative.shaft_probe_rays = 64;
+            const BakeData with = bake_without_misses(c, *w);
+            EXPECT_EQ(with.pvs.words, without.pvs.words);
+            EXPECT_GT(figure(with, "conservative_shaft_probe_seen"), 0.0);
+            EXPECT_LT(figure(with, "conservative_shaft_pairs"), figure(without, "conservative_shaft_pairs"));
+            EXPECT_EQ(figure(without, "conservative_shaft_probe_rays"), 0.0);
+        }
 }
 
 // CROSS-PLANE FUSION (docs/ALGORITHMS.md#cross-plane-fusion). A closed room 14 x 3 x 8 m; two full-height
@@ -813,8 +847,8 @@ BakeConfig property_config(uint64_t seed) {
     if (seed == 2) c.conservative.panel_refine_levels = 1;
     // The third draws the slanted panels on the depth cubes (--slanted-cubes).
     if (seed == 3) c.conservative.slanted_cubes = true;
-    // The fourth to sixth take the shaft pass on what the faces listed (--shaft-budget), the sixth by blocks
-    // of 2 x 2 x 2 cells (--shaft-block).
+    // The fourth to sixth take the shaft pass on what the faces listed (--shaft-budget), the sixth over the
+    // hierarchy of blocks of 2 x 2 x 2 cells (--shaft-block).
     if (seed >= 4 && seed <= 6) c.conservative.shaft_budget = 256;
     if (seed == 6) c.conservative.shaft_block = 2;
     return c;

@@ -333,8 +333,8 @@ TEST(GeometryPrint, AMovedBoxChangesOnlyTheTilesItMeets) {
     EXPECT_GE(changed, 2u);
 }
 
-// With the shaft pass walking blocks (docs/ALGORITHMS.md#shaft-blocks), a cell's bit for an object depends on
-// the cells before it in its block: a plan must settle a block's cells alike, and keep a pair only when the
+// With the shaft pass over blocks (docs/ALGORITHMS.md#shaft-hierarchy), a cell's bit for an object depends on
+// the other cells of its block: a plan must settle a block's cells alike, and keep a pair only when the
 // edit misses the box around the whole block and the object. A 16 m cube of eye voxels in 2 m cells; a crate
 // moves near one corner. Per cell, pairs of cells beside the crate's block are kept where the box around the
 // cell and the object misses the edit; with blocks of 2, the plan keeps a subset of those, alike in every
