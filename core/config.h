@@ -168,8 +168,8 @@ struct ConservativeConfig {
     int shaft_block = 1;  // [Limit: 1..16] the shaft pass over a grid proves over blocks of this many cells
                           // along each axis and their halves down to single cells: what a node is proven
                           // hidden from, every cell of it leaves out (docs/ALGORITHMS.md#shaft-hierarchy);
-                          // the cap counts blocks; 1 = every cell alone
-    int shaft_probe_rays = 64;  // [Limit: 0..4096] before the shaft pass proves a (cell, object) pair, rays from
+                          // 1 = every cell alone
+    int shaft_probe_rays = 256;  // [Limit: 0..4096] before the shaft pass proves a (cell, object) pair, rays from
                                 // this many seeded eye points of the cell, one at a random point of each
                                 // object it would try, settle what they reach as visible
                                 // (docs/ALGORITHMS.md#shaft-probe); 0 = off
@@ -455,7 +455,7 @@ void visit_options(Config& c, Visitor&& v) {
             "the shaft pass over a grid proves over blocks of this many cells along each axis, halved down "
             "to single cells: an object proven hidden from a node's whole eye region leaves every cell of "
             "it, and only what a node cannot prove, or a sight ray from one of its cells saw, goes to its "
-            "halves; the cap counts blocks; 1 = every cell alone",
+            "halves; never looser than every cell alone (1)",
             1, 16},
         c.conservative.shaft_block);
     v(OptionSpec{OptionGroup::kConservative, "--shaft-probe-rays", "conservative.shaft_probe_rays", "rays",

@@ -159,7 +159,7 @@ void grid_cells_and_pvs(Context& ctx, const BakeConfig& config, const World& wor
             if (ran != runs) {
                 throw bad_input(
                     fmt::format("--reuse: the old bake {} the shaft pass and this one would {}: {} cells "
-                                "(blocks) x the objects {} --shaft-max-pairs {} now; bake without --reuse",
+                                "x the objects {} --shaft-max-pairs {} now; bake without --reuse",
                                 ran ? "ran" : "did not run", runs ? "run it" : "not", regions,
                                 runs ? "are within" : "are over", config.conservative.shaft_max_pairs));
             }

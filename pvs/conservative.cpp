@@ -670,9 +670,7 @@ uint64_t octree_shaft_regions(const std::vector<Aabb>& boxes, double min_cell_m)
     return regions;
 }
 
-uint64_t grid_shaft_regions(const ConservativeConfig& config, const CellSet& cells) {
-    return config.shaft_block <= 1 ? cells.size() : grid_shaft_blocks(cells, config.shaft_block).size();
-}
+uint64_t grid_shaft_regions(const ConservativeConfig&, const CellSet& cells) { return cells.size(); }
 
 namespace {
 
@@ -715,7 +713,7 @@ void note_shaft_skipped(Context& ctx, const ConservativeConfig& config, uint64_t
     ctx.info(
         fmt::format("shaft pass: not run: {} regions x {} objects = {} candidate pairs, over "
                     "--shaft-max-pairs {} (raise it to run the pass, at about a thread-millisecond a pair "
-                    "it tries; on a grid, --shaft-block K proves over blocks of K x K x K cells, for less)",
+                    "it tries)",
                     regions, leavable, regions * leavable, config.shaft_max_pairs));
 }
 
@@ -790,6 +788,7 @@ public:
     void build(const CellSet& cells, const std::vector<Aabb>& regions, const std::vector<uint32_t>& block) {
         nodes_.clear();
         cells_.clear();
+        leaves_.clear();
         shafts_.clear();
         members_.clear();
         glm::ivec3 lo(std::numeric_limits<int>::max()), hi(std::numeric_limits<int>::min());
@@ -803,10 +802,15 @@ public:
         if (members_.empty()) return;
         add(regions, 0, uint32_t(members_.size()), lo, hi);
         for (const auto& m : members_) cells_.push_back(m.cell);
+        leaves_.assign(cells_.size(), 0);
+        for (uint32_t n = 0; n < nodes_.size(); ++n)
+            if (nodes_[n].children.empty()) leaves_[nodes_[n].first] = n;
         shafts_.resize(nodes_.size());
     }
     const std::vector<Node>& nodes() const { return nodes_; }
+    // The cell of position i (of the root's cells), and its leaf.
     uint32_t cell(uint32_t i) const { return cells_[i]; }
+    uint32_t leaf(uint32_t i) const { return leaves_[i]; }
     // The node's region for the prover, built at its first use.
     const ShaftRegion& shaft(const VoxelMask& eyes, uint32_t n) {
         if (!shafts_[n]) shafts_[n].emplace(shaft_region(eyes, nodes_[n].box));
@@ -863,7 +867,8 @@ private:
 
     std::vector<Node> nodes_;
     std::vector<Member> members_;
-    std::vector<uint32_t> cells_;  // the cells, by node (members_' order)
+    std::vector<uint32_t> cells_;   // the cells, by node (members_' order)
+    std::vector<uint32_t> leaves_;  // the leaf of each of them
     std::vector<std::optional<ShaftRegion>> shafts_;
 };
 
@@ -1200,7 +1205,7 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
     const std::vector<std::vector<uint32_t>> blocks = config.shaft_budget > 0
                                                           ? grid_shaft_blocks(cells, config.shaft_block)
                                                           : std::vector<std::vector<uint32_t>>{};
-    const bool shaft_runs = shaft_pass_runs(config, world, blocks.size());
+    const bool shaft_runs = shaft_pass_runs(config, world, grid_shaft_regions(config, cells));
     // What sight rays saw, per cell, for the shaft pass: a cell has at most one face in a phase, so each row
     // is written by one thread at a time.
     PvsSet seen = PvsSet::make(shaft_runs ? uint32_t(cells.size()) : 0, n_objects);
@@ -1313,7 +1318,7 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
     // (docs/ALGORITHMS.md#shaft-cap), over blocks of cells (docs/ALGORITHMS.md#shaft-hierarchy).
     if (config.shaft_budget > 0 && !shaft_runs) {
         ShaftFigures shaft;
-        note_shaft_skipped(ctx, config, blocks.size(), leavable.size(), shaft);
+        note_shaft_skipped(ctx, config, grid_shaft_regions(config, cells), leavable.size(), shaft);
         figures.shaft += shaft;
     } else if (shaft_runs) {
         const auto pass_start = std::chrono::steady_clock::now();
@@ -1333,6 +1338,7 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
             std::vector<uint64_t> replayed;
             ShaftHierarchy tree;
             ShaftProbe probe;
+            std::vector<uint8_t> failed;
             for_each_dealt(share, ctx, 1, [&](uint64_t b) {
                 const std::vector<uint32_t>& block = blocks[size_t(b)];
                 for (uint32_t c : block)
@@ -1381,62 +1387,81 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
                     }
                 for (uint32_t o : *tried) {
                     const Aabb& bounds = world.objects[o].bounds;
+                    const auto lists = [&](uint32_t i) {
+                        const uint32_t c = tree.cell(i);
+                        return row_lists(pvs.row(c), o) && !bounds.overlaps(regions[c]);
+                    };
+                    // One proof over node n (a leaf: its cell's), with the counts of its level; proven, o
+                    // leaves the row of every cell of n that lists it.
+                    const auto prove = [&](uint32_t n) {
+                        const ShaftHierarchy::Node& node = tree.nodes()[n];
+                        ShaftLevel& level = local.levels[size_t(std::min(node.level, kShaftLevels - 1))];
+                        const auto t0 = std::chrono::steady_clock::now();
+                        const ShaftFigures before = local;
+                        const bool hidden =
+                            provers.of(occluders.set_for(node.box))
+                                .hides(world, cells.eyes, tree.shaft(cells.eyes, n), o, config.shaft_budget, local);
+                        note_shaft_end(before, hidden, t0, local);
+                        ++level.tried;
+                        level.seconds += seconds_since(t0);
+                        if (!hidden) return false;
+                        ++level.proven;
+                        for (uint32_t i = node.first; i < node.first + node.count; ++i) {
+                            if (!lists(i)) continue;
+                            uint64_t* row = pvs.row(tree.cell(i));
+                            row[o >> 6] &= ~(uint64_t(1) << (o & 63));
+                            ++level.settled;
+                        }
+                        return true;
+                    };
+                    // A cell's own proof, tried at most once: failed[i] once it could not prove o.
+                    failed.assign(tree.nodes()[0].count, 0);
+                    const auto prove_cell = [&](uint32_t i) {
+                        if (!lists(i) || failed[i]) return !failed[i];
+                        failed[i] = prove(tree.leaf(i)) ? 0 : 1;
+                        return !failed[i];
+                    };
                     stack.assign(1, 0);
                     while (!stack.empty()) {
                         const uint32_t n = stack.back();
                         stack.pop_back();
                         const ShaftHierarchy::Node& node = tree.nodes()[n];
-                        ShaftLevel& level = local.levels[size_t(std::min(node.level, kShaftLevels - 1))];
-                        // The node's cells that list o and whose regions it does not meet, and in how many
-                        // children they lie.
-                        uint32_t listing = 0, parts = 0;
+                        // The node's listing cells: those that list o and whose regions it does not meet.
+                        uint32_t listing = 0, parts = 0, first = 0, last = 0;
                         bool saw = false;
-                        const auto lists = [&](uint32_t c) {
-                            return row_lists(pvs.row(c), o) && !bounds.overlaps(regions[c]);
-                        };
-                        if (node.children.empty()) {
-                            listing = lists(tree.cell(node.first)) ? 1 : 0;
-                            saw = listing && row_lists(seen.row(tree.cell(node.first)), o);
-                        } else {
-                            for (uint32_t ch : node.children) {
-                                const ShaftHierarchy::Node& child = tree.nodes()[ch];
-                                bool any = false;
-                                for (uint32_t i = child.first; i < child.first + child.count; ++i) {
-                                    const uint32_t c = tree.cell(i);
-                                    if (!lists(c)) continue;
-                                    any = true;
-                                    ++listing;
-                                    saw = saw || row_lists(seen.row(c), o);
-                                }
-                                parts += any ? 1 : 0;
+                        for (uint32_t ch : node.children.empty() ? std::vector<uint32_t>{n} : node.children) {
+                            const ShaftHierarchy::Node& child = tree.nodes()[ch];
+                            bool any = false;
+                            for (uint32_t i = child.first; i < child.first + child.count; ++i) {
+                                if (!lists(i)) continue;
+                                if (!listing) first = i;
+                                last = i;
+                                any = true;
+                                ++listing;
+                                saw = saw || row_lists(seen.row(tree.cell(i)), o);
                             }
+                            parts += any ? 1 : 0;
                         }
                         if (listing == 0) continue;
-                        // A sight ray from a cell of the node saw o: no proof over the node can hold.
-                        if (saw) ++level.seen;
-                        // A node tries o when its listing cells lie in two children or more (else the one
-                        // child's proof is over a smaller region) and o does not meet its box.
-                        if (!saw && (node.children.empty() || (parts >= 2 && !bounds.overlaps(node.box)))) {
-                            const auto t0 = std::chrono::steady_clock::now();
-                            const ShaftFigures before = local;
-                            const bool hidden =
-                                provers.of(occluders.set_for(node.box))
-                                    .hides(world, cells.eyes, tree.shaft(cells.eyes, n), o, config.shaft_budget,
-                                           local);
-                            note_shaft_end(before, hidden, t0, local);
-                            ++level.tried;
-                            level.seconds += seconds_since(t0);
-                            if (hidden) {
-                                ++level.proven;
-                                for (uint32_t i = node.first; i < node.first + node.count; ++i) {
-                                    const uint32_t c = tree.cell(i);
-                                    if (!lists(c)) continue;
-                                    uint64_t* row = pvs.row(c);
-                                    row[o >> 6] &= ~(uint64_t(1) << (o & 63));
-                                    ++level.settled;
-                                }
-                                continue;
-                            }
+                        if (node.children.empty()) {
+                            if (saw)
+                                ++local.levels[0].seen;
+                            else
+                                prove_cell(node.first);
+                            continue;
+                        }
+                        // A sight ray or the probe saw o from a cell of the node: no proof over it can hold.
+                        // Else the node tries o when its listing cells lie in two children or more, o does
+                        // not meet its box, and the first and last of those cells prove it hidden on their
+                        // own (a cell that cannot would most likely fail the node's proof too: the witnesses,
+                        // docs/ALGORITHMS.md#shaft-hierarchy); what it cannot prove goes to the children.
+                        if (saw) {
+                            ++local.levels[size_t(std::min(node.level, kShaftLevels - 1))].seen;
+                        } else if (parts >= 2 && !bounds.overlaps(node.box) && prove_cell(first) &&
+                                   prove_cell(last)) {
+                            uint32_t left = 0;
+                            for (uint32_t i = node.first; i < node.first + node.count; ++i) left += lists(i);
+                            if (left == 0 || (left >= 2 && prove(n))) continue;
                         }
                         for (auto ch = node.children.rbegin(); ch != node.children.rend(); ++ch)
                             stack.push_back(*ch);

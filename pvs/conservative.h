@@ -92,7 +92,8 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
 // k x k x k grid positions, in cell order; the blocks in the order of their first cell. k = 1: each cell
 // alone.
 std::vector<std::vector<uint32_t>> grid_shaft_blocks(const CellSet& cells, int k);
-// The regions the shaft pass tries over a grid with `config`: its blocks (grid_shaft_blocks()).
+// The regions the shaft pass's cap counts over a grid (docs/ALGORITHMS.md#shaft-cap): its cells, with or
+// without blocks (a block's proofs save tries, but what the pass costs still grows with its cells).
 uint64_t grid_shaft_regions(const ConservativeConfig& config, const CellSet& cells);
 
 // Whether the shaft pass runs over `regions` cells or boxes of `world` (docs/ALGORITHMS.md#shaft-cap): its
