@@ -1429,8 +1429,10 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
                         // The node's listing cells: those that list o and whose regions it does not meet.
                         uint32_t listing = 0, parts = 0, first = 0, last = 0;
                         bool saw = false;
-                        for (uint32_t ch : node.children.empty() ? std::vector<uint32_t>{n} : node.children) {
-                            const ShaftHierarchy::Node& child = tree.nodes()[ch];
+                        const uint32_t* parts_of = node.children.empty() ? &n : node.children.data();
+                        const size_t n_parts = node.children.empty() ? 1 : node.children.size();
+                        for (size_t k = 0; k < n_parts; ++k) {
+                            const ShaftHierarchy::Node& child = tree.nodes()[parts_of[k]];
                             bool any = false;
                             for (uint32_t i = child.first; i < child.first + child.count; ++i) {
                                 if (!lists(i)) continue;
