@@ -717,15 +717,18 @@ void note_shaft_skipped(Context& ctx, const ConservativeConfig& config, uint64_t
                     regions, leavable, regions * leavable, config.shaft_max_pairs));
 }
 
-// Tries object o once more against a region (pvs/shaft_hiding.h); proven hidden, it leaves `row`. Counts
-// the time by how the try ended.
 double seconds_since(std::chrono::steady_clock::time_point start) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-// Counts a try's time by how it ended: `before` is the figures as it started.
-void note_shaft_end(const ShaftFigures& before, bool hidden, std::chrono::steady_clock::time_point start,
-                    ShaftFigures& figures) {
+// One proof of the shaft pass (pvs/shaft_hiding.h): is object o hidden from every eye of `region`? Counts
+// the try in `level` (its level of the hierarchy, docs/ALGORITHMS.md#shaft-hierarchy) and its time by how
+// it ended; the caller counts the cells it settles.
+bool shaft_prove(const ShaftProver& prover, const World& world, const VoxelMask& eyes,
+                 const ShaftRegion& region, uint32_t o, int budget, ShaftLevel& level, ShaftFigures& figures) {
+    const ShaftFigures before = figures;
+    const auto start = std::chrono::steady_clock::now();
+    const bool hidden = prover.hides(world, eyes, region, o, budget, figures);
     const double s = seconds_since(start);
     if (hidden)
         figures.seconds_hidden += s;
@@ -735,21 +738,19 @@ void note_shaft_end(const ShaftFigures& before, bool hidden, std::chrono::steady
         figures.seconds_out_of_budget += s;
     else
         figures.seconds_stuck += s;
+    ++level.tried;
+    level.seconds += s;
+    level.proven += hidden ? 1 : 0;
+    return hidden;
 }
 
+// Tries object o once more against a cell's or box's region; proven hidden, it leaves `row`.
 bool shaft_try(const ShaftProver& prover, const World& world, const VoxelMask& eyes,
                const ShaftRegion& region, uint32_t o, int budget, uint64_t* row, ShaftFigures& figures) {
-    const ShaftFigures before = figures;
-    const auto start = std::chrono::steady_clock::now();
-    const bool hidden = prover.hides(world, eyes, region, o, budget, figures);
-    note_shaft_end(before, hidden, start, figures);
-    ShaftLevel& level = figures.levels[0];
-    ++level.tried;
-    level.seconds += seconds_since(start);
+    const bool hidden = shaft_prove(prover, world, eyes, region, o, budget, figures.levels[0], figures);
     if (hidden) {
         row[o >> 6] &= ~(uint64_t(1) << (o & 63));
-        ++level.proven;
-        ++level.settled;
+        ++figures.levels[0].settled;
     }
     return hidden;
 }
@@ -874,9 +875,9 @@ private:
 
 // The probe before the shaft pass's proofs (docs/ALGORITHMS.md#shaft-probe): eye points of a cell aim one
 // ray each at a random point of every object the pass would try for it; an object its own ray touches is
-// seen from an eye of the cell, so no proof of it can hold. The eyes are seeded by the cell, each ray by
-// the cell, the eye and the object, so what the probe finds for a pair depends on that pair alone, not on
-// threads, processes or the other objects.
+// seen from an eye of the cell, so no proof of it can hold. The eyes are seeded by the region's box, each
+// ray by that box, the eye and the object, so what the probe finds for a pair depends on that pair alone,
+// not on threads, processes or the other objects.
 constexpr uint64_t kProbeEyeStream = uint64_t(0x50524f) << 40;    // ^ the region's key
 constexpr uint64_t kProbePointStream = uint64_t(0x505054) << 40;  // ^ mix64(key ^ object) ^ eye
 constexpr uint64_t kProbeSeed = 0x7368616674ULL;
@@ -889,12 +890,18 @@ struct ShaftProbe {
     std::vector<uint8_t> seen;  // per target
 };
 
-// Marks in `seen` what the probe's rays from `region` (a cell's or box's eye region) find among `p.targets`
-// (objects of its row that the pass would try).
+// Marks in `seen` what the probe's rays from `region` (a cell's or box's eye region) find among the objects
+// the pass would try for it: those of `candidates` that `row` lists, `seen` does not, and whose bounds miss
+// the region.
 void probe_region(const RayScene& scene, const World& world, const std::vector<double>& cum_area,
-                  const VoxelMask& eyes, const Aabb& region, int rays, ShaftProbe& p, uint64_t* seen,
-                  ShaftFigures& figures) {
-    if (p.targets.empty() || rays <= 0) return;
+                  const VoxelMask& eyes, const Aabb& region, const std::vector<uint32_t>& candidates,
+                  const uint64_t* row, int rays, ShaftProbe& p, uint64_t* seen, ShaftFigures& figures) {
+    if (rays <= 0) return;
+    p.targets.clear();
+    for (uint32_t o : candidates)
+        if (row_lists(row, o) && !row_lists(seen, o) && !world.objects[o].bounds.overlaps(region))
+            p.targets.push_back(o);
+    if (p.targets.empty()) return;
     // The region's key: its corners' bits, so that a region gets the same rays whatever its index.
     uint64_t c = 0;
     for (const glm::vec3 corner : {region.min, region.max})
@@ -1053,12 +1060,8 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
                 if (provers) {
                     const auto shaft_start = std::chrono::steady_clock::now();
                     // The probe (docs/ALGORITHMS.md#shaft-probe).
-                    probe.targets.clear();
-                    for (uint32_t o : candidates)
-                        if (row_lists(row, o) && !row_lists(seen.data(), o) && !world.objects[o].bounds.overlaps(box))
-                            probe.targets.push_back(o);
-                    probe_region(scene, world, cum_area, eyes, box, config.shaft_probe_rays, probe, seen.data(),
-                                 local_shaft);
+                    probe_region(scene, world, cum_area, eyes, box, candidates, row, config.shaft_probe_rays, probe,
+                                 seen.data(), local_shaft);
                     shaft_row(provers->of(set), world, eyes, box, candidates, config.shaft_budget, row,
                               seen.data(), local_shaft);
                     local_shaft.seconds +=
@@ -1201,7 +1204,7 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
         return config.single_occluder_pass ? hidden.row(uint32_t(cell)) : nullptr;
     };
     PvsSet face_rows = PvsSet::make(uint32_t(2 * faces.size()), n_objects);  // face * 2 + side
-    // The blocks the shaft pass proves over (docs/ALGORITHMS.md#shaft-hierarchy); the cap counts them.
+    // The blocks the shaft pass proves over (docs/ALGORITHMS.md#shaft-hierarchy); the cap counts cells.
     const std::vector<std::vector<uint32_t>> blocks = config.shaft_budget > 0
                                                           ? grid_shaft_blocks(cells, config.shaft_block)
                                                           : std::vector<std::vector<uint32_t>>{};
@@ -1339,6 +1342,7 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
             ShaftHierarchy tree;
             ShaftProbe probe;
             std::vector<uint8_t> failed;
+            const std::vector<uint32_t> none;
             for_each_dealt(share, ctx, 1, [&](uint64_t b) {
                 const std::vector<uint32_t>& block = blocks[size_t(b)];
                 for (uint32_t c : block)
@@ -1360,7 +1364,6 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
                 // The hierarchy (docs/ALGORITHMS.md#shaft-hierarchy): per object, a node's proof settles
                 // every cell of it; what a node cannot prove, or a cell of it saw, goes to its children.
                 tree.build(cells, regions, block);
-                if (tree.nodes().empty()) return;
                 // The objects no cell of the block has settled by a reuse (docs/ALGORITHMS.md#reuse: a
                 // plan settles a block's cells alike).
                 const std::vector<uint32_t>* tried = &leavable;
@@ -1374,17 +1377,12 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
                     tried = &candidates;
                 }
                 // The probe (docs/ALGORITHMS.md#shaft-probe): what rays from a cell reach needs no proof.
-                if (config.shaft_probe_rays > 0)
-                    for (uint32_t c : block) {
-                        if (regions[c].is_empty()) continue;
-                        probe.targets.clear();
-                        for (uint32_t o : *tried)
-                            if (row_lists(pvs.row(c), o) && !row_lists(seen.row(c), o) &&
-                                !world.objects[o].bounds.overlaps(regions[c]))
-                                probe.targets.push_back(o);
-                        probe_region(scene, world, cum_area, cells.eyes, regions[c], config.shaft_probe_rays,
-                                     probe, seen.row(c), local);
-                    }
+                for (uint32_t c : block)
+                    if (!regions[c].is_empty())
+                        probe_region(scene, world, cum_area, cells.eyes, regions[c], *tried, pvs.row(c),
+                                     config.shaft_probe_rays, probe, seen.row(c), local);
+                // A block without a cell with eyes has nothing to try.
+                if (tree.nodes().empty()) tried = &none;
                 for (uint32_t o : *tried) {
                     const Aabb& bounds = world.objects[o].bounds;
                     const auto lists = [&](uint32_t i) {
@@ -1396,16 +1394,9 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
                     const auto prove = [&](uint32_t n) {
                         const ShaftHierarchy::Node& node = tree.nodes()[n];
                         ShaftLevel& level = local.levels[size_t(std::min(node.level, kShaftLevels - 1))];
-                        const auto t0 = std::chrono::steady_clock::now();
-                        const ShaftFigures before = local;
-                        const bool hidden =
-                            provers.of(occluders.set_for(node.box))
-                                .hides(world, cells.eyes, tree.shaft(cells.eyes, n), o, config.shaft_budget, local);
-                        note_shaft_end(before, hidden, t0, local);
-                        ++level.tried;
-                        level.seconds += seconds_since(t0);
-                        if (!hidden) return false;
-                        ++level.proven;
+                        if (!shaft_prove(provers.of(occluders.set_for(node.box)), world, cells.eyes,
+                                         tree.shaft(cells.eyes, n), o, config.shaft_budget, level, local))
+                            return false;
                         for (uint32_t i = node.first; i < node.first + node.count; ++i) {
                             if (!lists(i)) continue;
                             uint64_t* row = pvs.row(tree.cell(i));
