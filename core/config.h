@@ -169,6 +169,13 @@ struct ConservativeConfig {
                           // along each axis and their halves down to single cells: what a node is proven
                           // hidden from, every cell of it leaves out (docs/ALGORITHMS.md#shaft-hierarchy);
                           // 1 = every cell alone
+    bool shaft_early = false;  // with shaft_block > 1, before the faces each block's whole eye region tries
+                               // every object no ray from it reaches: proven, no face of its cells tests
+                               // it (docs/ALGORITHMS.md#shaft-early)
+    int shaft_give_up = 0;  // [Limit: 0..4] a node of the shaft hierarchy of this level or higher whose two
+                            // witnesses both fail to prove an object gives it up for all its cells (they
+                            // keep it listed, untried): fewer failing tries, rows never below the per-cell
+                            // pass's (docs/ALGORITHMS.md#shaft-give-up); 0 = never
     int shaft_probe_rays = 256;  // [Limit: 0..4096] before the shaft pass proves a (cell, object) pair, rays from
                                 // this many seeded eye points of the cell, one at a random point of each
                                 // object it would try, settle what they reach as visible
@@ -458,6 +465,18 @@ void visit_options(Config& c, Visitor&& v) {
             "halves; never looser than every cell alone (1)",
             1, 16},
         c.conservative.shaft_block);
+    v(OptionSpec{OptionGroup::kConservative, "--shaft-early", "conservative.shaft_early", "",
+                 "with --shaft-block, before the faces each block of cells tries once to prove hidden from its "
+                 "whole eye region every object that no probe ray from it reaches: what it proves, no face of "
+                 "its cells tests (the faces spend most of their time on what the shaft pass proves)"},
+      c.conservative.shaft_early);
+    v(OptionSpec{OptionGroup::kConservative, "--shaft-give-up", "conservative.shaft_give_up", "level",
+                 "with --shaft-block, a node of the shaft hierarchy of this level or higher (1: 2 x 2 x 2 "
+                 "cells) whose first and last listing cells both fail to prove an object gives it up for "
+                 "all its cells: they keep it listed without a try of their own (most failing tries are "
+                 "spent on objects no cell near them can prove); 0 = never",
+                 0, 4},
+      c.conservative.shaft_give_up);
     v(OptionSpec{OptionGroup::kConservative, "--shaft-probe-rays", "conservative.shaft_probe_rays", "rays",
                  "before the shaft pass proves an object hidden from a cell, rays from this many seeded eye "
                  "points of the cell, one at a random point of each object it would try, settle what they "

@@ -141,14 +141,17 @@ NamedValues run_figures(const BakeData& bake, const StageFigures& stages) {
          stages.sampled.seconds > 0 ? double(stages.sampled.rays) / stages.sampled.seconds : 0.0},
         {"sampled_guard_band_added", double(stages.sampled.guard_band_added)},
     };
-    // The shaft pass by level of its hierarchy (docs/ALGORITHMS.md#shaft-hierarchy): 0 is a cell.
-    for (int l = 0; l < kShaftLevels; ++l) {
-        const ShaftLevel& level = cons.shaft.levels[size_t(l)];
-        const std::string at = fmt::format("conservative_shaft_level{}_", l);
+    // The shaft pass by level of its hierarchy (docs/ALGORITHMS.md#shaft-hierarchy): 0 is a cell; and the
+    // blocks' proofs before the faces (docs/ALGORITHMS.md#shaft-early).
+    for (int l = 0; l <= kShaftLevels; ++l) {
+        const ShaftLevel& level = l < kShaftLevels ? cons.shaft.levels[size_t(l)] : cons.shaft.early;
+        const std::string at =
+            l < kShaftLevels ? fmt::format("conservative_shaft_level{}_", l) : "conservative_shaft_early_";
         figures.push_back({at + "tried", double(level.tried)});
         figures.push_back({at + "proven", double(level.proven)});
         figures.push_back({at + "settled", double(level.settled)});
         figures.push_back({at + "seen", double(level.seen)});
+        figures.push_back({at + "given_up", double(level.given_up)});
         figures.push_back({at + "seconds", level.seconds});
     }
     return figures;

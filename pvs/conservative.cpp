@@ -1157,8 +1157,16 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
     for (uint32_t f = 0; f < faces.size(); ++f) phase_faces[size_t(faces[f].phase)].push_back(f);
     const Shared shared = make_shared(config, world, occluders, scene);
     const std::vector<uint32_t> leavable = leavable_objects(world);
+    // The blocks the shaft pass proves over (docs/ALGORITHMS.md#shaft-hierarchy); the cap counts cells.
+    const std::vector<std::vector<uint32_t>> blocks = config.shaft_budget > 0
+                                                          ? grid_shaft_blocks(cells, config.shaft_block)
+                                                          : std::vector<std::vector<uint32_t>>{};
+    const bool shaft_runs = shaft_pass_runs(config, world, grid_shaft_regions(config, cells));
+    // The blocks' proofs before the faces (docs/ALGORITHMS.md#shaft-early).
+    const bool early = shaft_runs && config.shaft_early && config.shaft_block > 1;
     // The single-occluder pass: what one occluder hides from a cell's whole region, no face of it tests.
-    PvsSet hidden = PvsSet::make(config.single_occluder_pass ? uint32_t(cells.size()) : 0, n_objects);
+    PvsSet hidden =
+        PvsSet::make(config.single_occluder_pass || early ? uint32_t(cells.size()) : 0, n_objects);
     std::optional<RegionHiders> hiders;
     if (config.single_occluder_pass) {
         const auto pass_start = std::chrono::steady_clock::now();
@@ -1187,6 +1195,100 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
         figures.region_seconds +=
             std::chrono::duration<double>(std::chrono::steady_clock::now() - pass_start).count();
     }
+    std::optional<ShaftProvers> provers;
+    std::vector<double> cum_area;
+    if (shaft_runs) {
+        provers.emplace(ctx, occluders, config.shaft_fusion, config.shaft_caps, config.shaft_cups);
+        cum_area = cumulative_areas(world);
+    }
+    // Each block's root proofs: failed[b] lists the objects its root could not prove (the pass after the
+    // faces does not try them again there).
+    PvsSet root_failed = PvsSet::make(early ? uint32_t(blocks.size()) : 0, n_objects);
+    if (early) {
+        const auto pass_start = std::chrono::steady_clock::now();
+        ShaftFigures shaft;
+        ctx.progress_begin("shaft pass, blocks first", blocks.size(), "blocks");
+        share.begin(blocks.size());
+#pragma omp parallel
+        {
+            ShaftFigures local;
+            ShaftHierarchy tree;
+            ShaftProbe probe;
+            std::vector<uint32_t> targets;
+            std::vector<uint64_t> node_seen(hidden.words_per_row), replayed,
+                all(hidden.words_per_row, ~uint64_t(0));
+            for_each_dealt(share, ctx, 1, [&](uint64_t b) {
+                const std::vector<uint32_t>& block = blocks[size_t(b)];
+                // A block is taken from the journal when it holds every one of its cells' rows and its
+                // root's failures.
+                if (journal) {
+                    replayed.resize((block.size() + 1) * hidden.words_per_row);
+                    bool found = journal->find("early_failed", b, replayed.data(), hidden.words_per_row);
+                    for (size_t i = 0; i < block.size() && found; ++i)
+                        found = journal->find("early", block[i], replayed.data() + (i + 1) * hidden.words_per_row,
+                                              hidden.words_per_row);
+                    if (found) {
+                        std::copy_n(replayed.data(), hidden.words_per_row, root_failed.row(uint32_t(b)));
+                        for (size_t i = 0; i < block.size(); ++i)
+                            std::copy_n(replayed.data() + (i + 1) * hidden.words_per_row, hidden.words_per_row,
+                                        hidden.row(block[i]));
+                        return;
+                    }
+                }
+                tree.build(cells, regions, block);
+                if (!tree.nodes().empty() && tree.nodes()[0].count >= 2) {
+                    const ShaftHierarchy::Node& root = tree.nodes()[0];
+                    // The objects a cell of the block would still test (not hidden there, not settled by
+                    // a reuse: a plan settles a block's cells alike) and whose bounds miss the root's box.
+                    targets.clear();
+                    for (uint32_t o : leavable) {
+                        if (world.objects[o].bounds.overlaps(root.box)) continue;
+                        bool open = false;
+                        for (uint32_t i = 0; i < root.count && !open; ++i) {
+                            const uint32_t c = tree.cell(i);
+                            open = !row_lists(hidden.row(c), o) && !(reuse && reuse->settled.test(c, o));
+                        }
+                        if (open) targets.push_back(o);
+                    }
+                    // What a ray from an eye of the block reaches, no proof over the block can hide.
+                    std::fill(node_seen.begin(), node_seen.end(), uint64_t(0));
+                    probe_region(scene, world, cum_area, cells.eyes, root.box, targets, all.data(),
+                                 config.shaft_probe_rays, probe, node_seen.data(), local);
+                    const ShaftProver& prover = provers->of(occluders.set_for(root.box));
+                    uint64_t* failed = root_failed.row(uint32_t(b));
+                    for (uint32_t o : targets) {
+                        if (row_lists(node_seen.data(), o)) {
+                            ++local.early.seen;
+                            continue;
+                        }
+                        if (!shaft_prove(prover, world, cells.eyes, tree.shaft(cells.eyes, 0), o,
+                                         config.shaft_budget, local.early, local)) {
+                            failed[o >> 6] |= uint64_t(1) << (o & 63);
+                            continue;
+                        }
+                        for (uint32_t i = 0; i < root.count; ++i) {
+                            uint64_t* row = hidden.row(tree.cell(i));
+                            if (row_lists(row, o)) continue;
+                            row[o >> 6] |= uint64_t(1) << (o & 63);
+                            ++local.early.settled;
+                        }
+                    }
+                }
+                if (journal) {
+                    journal->record("early_failed", b, root_failed.row(uint32_t(b)), hidden.words_per_row);
+                    for (uint32_t c : block) journal->record("early", c, hidden.row(c), hidden.words_per_row);
+                }
+            });
+#pragma omp critical
+            shaft += local;
+        }
+        share.unite(hidden.words.data(), hidden.words.size());
+        share.unite(root_failed.words.data(), root_failed.words.size());
+        ctx.progress_end();
+        if (journal) journal->flush();
+        shaft.early.seconds = seconds_since(pass_start);
+        figures.shaft += shaft;
+    }
     const auto hider = [&](int32_t set) { return hiders ? &hiders->of(set) : nullptr; };
     // What no face tests because it is known hidden: what the single-occluder pass proved, and with a
     // reuse the settled pairs it does not list.
@@ -1196,19 +1298,14 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
         for (uint32_t c = 0; c < cells.size(); ++c)
             for (uint32_t w = 0; w < excluded.words_per_row; ++w)
                 excluded.row(c)[w] = (reuse->settled.row(c)[w] & ~reuse->listed.row(c)[w]) |
-                                     (config.single_occluder_pass ? hidden.row(c)[w] : 0);
+                                     (hidden.cell_count > 0 ? hidden.row(c)[w] : 0);
     }
     const auto hidden_row = [&](int32_t cell) -> const uint64_t* {
         if (cell < 0) return nullptr;
         if (reuse) return excluded.row(uint32_t(cell));
-        return config.single_occluder_pass ? hidden.row(uint32_t(cell)) : nullptr;
+        return hidden.cell_count > 0 ? hidden.row(uint32_t(cell)) : nullptr;
     };
     PvsSet face_rows = PvsSet::make(uint32_t(2 * faces.size()), n_objects);  // face * 2 + side
-    // The blocks the shaft pass proves over (docs/ALGORITHMS.md#shaft-hierarchy); the cap counts cells.
-    const std::vector<std::vector<uint32_t>> blocks = config.shaft_budget > 0
-                                                          ? grid_shaft_blocks(cells, config.shaft_block)
-                                                          : std::vector<std::vector<uint32_t>>{};
-    const bool shaft_runs = shaft_pass_runs(config, world, grid_shaft_regions(config, cells));
     // What sight rays saw, per cell, for the shaft pass: a cell has at most one face in a phase, so each row
     // is written by one thread at a time.
     PvsSet seen = PvsSet::make(shaft_runs ? uint32_t(cells.size()) : 0, n_objects);
@@ -1325,8 +1422,6 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
         figures.shaft += shaft;
     } else if (shaft_runs) {
         const auto pass_start = std::chrono::steady_clock::now();
-        const ShaftProvers provers(ctx, occluders, config.shaft_fusion, config.shaft_caps, config.shaft_cups);
-        const std::vector<double> cum_area = cumulative_areas(world);
         ShaftFigures shaft;
         ctx.progress_begin("shaft pass", blocks.size(), "blocks");
         // The seen rows of faces other processes solved; then each row of the pass comes from the process
@@ -1394,7 +1489,7 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
                     const auto prove = [&](uint32_t n) {
                         const ShaftHierarchy::Node& node = tree.nodes()[n];
                         ShaftLevel& level = local.levels[size_t(std::min(node.level, kShaftLevels - 1))];
-                        if (!shaft_prove(provers.of(occluders.set_for(node.box)), world, cells.eyes,
+                        if (!shaft_prove(provers->of(occluders.set_for(node.box)), world, cells.eyes,
                                          tree.shaft(cells.eyes, n), o, config.shaft_budget, level, local))
                             return false;
                         for (uint32_t i = node.first; i < node.first + node.count; ++i) {
@@ -1411,6 +1506,10 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
                         if (!lists(i) || failed[i]) return !failed[i];
                         failed[i] = prove(tree.leaf(i)) ? 0 : 1;
                         return !failed[i];
+                    };
+                    // Whether a node gives o up for its cells when both its witnesses fail.
+                    const auto give_up_here = [&](const ShaftHierarchy::Node& node) {
+                        return config.shaft_give_up > 0 && node.level >= config.shaft_give_up;
                     };
                     stack.assign(1, 0);
                     while (!stack.empty()) {
@@ -1448,13 +1547,30 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
                         // not meet its box, and the first and last of those cells prove it hidden on their
                         // own (a cell that cannot would most likely fail the node's proof too: the witnesses,
                         // docs/ALGORITHMS.md#shaft-hierarchy); what it cannot prove goes to the children.
+                        ShaftLevel& level = local.levels[size_t(std::min(node.level, kShaftLevels - 1))];
                         if (saw) {
-                            ++local.levels[size_t(std::min(node.level, kShaftLevels - 1))].seen;
-                        } else if (parts >= 2 && !bounds.overlaps(node.box) && prove_cell(first) &&
-                                   prove_cell(last)) {
-                            uint32_t left = 0;
-                            for (uint32_t i = node.first; i < node.first + node.count; ++i) left += lists(i);
-                            if (left == 0 || (left >= 2 && prove(n))) continue;
+                            ++level.seen;
+                        } else if (parts >= 2 && !bounds.overlaps(node.box)) {
+                            const bool first_hidden = prove_cell(first);
+                            const bool last_hidden = (first_hidden || give_up_here(node)) && prove_cell(last);
+                            if (first_hidden && last_hidden) {
+                                uint32_t left = 0;
+                                for (uint32_t i = node.first; i < node.first + node.count; ++i)
+                                    left += lists(i);
+                                // A root the blocks' first proofs could not prove fails again here.
+                                const bool known_failed =
+                                    n == 0 && early && row_lists(root_failed.row(uint32_t(b)), o);
+                                if (left == 0 || (left >= 2 && !known_failed && prove(n))) continue;
+                            } else if (!first_hidden && failed[last] && give_up_here(node)) {
+                                // Both witnesses failed: the node's other cells keep o listed untried
+                                // (docs/ALGORITHMS.md#shaft-give-up).
+                                for (uint32_t i = node.first; i < node.first + node.count; ++i)
+                                    if (lists(i) && !failed[i]) {
+                                        failed[i] = 1;
+                                        ++level.given_up;
+                                    }
+                                continue;
+                            }
                         }
                         for (auto ch = node.children.rbegin(); ch != node.children.rend(); ++ch)
                             stack.push_back(*ch);
@@ -1517,9 +1633,11 @@ PvsSet bake_conservative_pvs(Context& ctx, const ConservativeConfig& config, con
             const ShaftLevel& level = figures.shaft.levels[size_t(l)];
             if (level.tried == 0 && level.seen == 0) continue;
             ctx.info(fmt::format("shaft pass, {}: {} proofs tried, {} proven ({} (cell, object) pairs left out), "
-                                 "{} not tried for a sight ray's hit, {:.1f} thread seconds",
+                                 "{} not tried for a sight ray's hit, {} (cell, object) pairs given up where both "
+                                 "witnesses failed, {:.1f} thread seconds",
                                  l == 0 ? std::string("cells") : fmt::format("nodes of up to {0}x{0}x{0} cells", 1 << l),
-                                 level.tried, level.proven, level.settled, level.seen, level.seconds));
+                                 level.tried, level.proven, level.settled, level.seen, level.given_up,
+                                 level.seconds));
         }
     }
     ctx.info(fmt::format(

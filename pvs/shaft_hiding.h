@@ -38,6 +38,7 @@ struct ShaftLevel {
     uint64_t proven = 0;   // of them, proven hidden from the whole node
     uint64_t settled = 0;  // (cell, object) pairs those proofs left out of rows
     uint64_t seen = 0;     // (node, object) pairs not tried: a sight ray from a cell of the node saw it
+    uint64_t given_up = 0;  // (cell, object) pairs left listed untried: both witnesses of the node failed
     double seconds = 0.0;  // thread seconds of its tries
 
     ShaftLevel& operator+=(const ShaftLevel& o) {
@@ -45,6 +46,7 @@ struct ShaftLevel {
         proven += o.proven;
         settled += o.settled;
         seen += o.seen;
+        given_up += o.given_up;
         seconds += o.seconds;
         return *this;
     }
@@ -70,9 +72,11 @@ struct ShaftFigures {
     // Where the time went, by how each pair ended (shaft_row() times each pair).
     double seconds_hidden = 0.0, seconds_certain = 0.0, seconds_out_of_budget = 0.0, seconds_stuck = 0.0;
     std::array<ShaftLevel, kShaftLevels> levels{};  // by level of the hierarchy (grids; octrees: level 0)
+    ShaftLevel early;  // the blocks' proofs before the faces (docs/ALGORITHMS.md#shaft-early)
 
     ShaftFigures& operator+=(const ShaftFigures& o) {
         for (size_t l = 0; l < levels.size(); ++l) levels[l] += o.levels[l];
+        early += o.early;
         pairs += o.pairs;
         hidden += o.hidden;
         tests += o.tests;

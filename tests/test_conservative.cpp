@@ -572,6 +572,68 @@ TEST(Conservative, TheShaftHierarchyProvesWhatThePerCellPassProvesAndNodesSettle
     EXPECT_GE(hidden_near_eye, 1u) << "the hierarchy proved the target hidden from no cell the cubes left it in";
 }
 
+// GIVING UP WHERE BOTH WITNESSES FAIL (docs/ALGORITHMS.md#shaft-give-up): on a random world, the pass over
+// blocks of 4 x 4 x 4 cells with nodes of every level giving up what both their witnesses could not prove.
+// A given-up pair only stays listed, so every row lists at least what the exact hierarchy lists and at most
+// what the bake without the pass lists; pairs are given up, and fewer proofs are tried.
+TEST(Conservative, NodesWhoseWitnessesBothFailGiveUpTheirCellsAndRowsOnlyGrow) {
+    const World w = make_random_world(4, 0).world;
+    BakeConfig c = conservative_config();
+    c.conservative.shaft_budget = 256;
+    c.conservative.shaft_block = 4;
+    const BakeData exact = bake_without_misses(c, w);
+    c.conservative.shaft_give_up = 1;
+    const BakeData given_up = bake_without_misses(c, w);
+    c.conservative.shaft_budget = 0;
+    const BakeData off = bake_without_misses(c, w);
+    ASSERT_EQ(given_up.cells.size(), exact.cells.size());
+    ASSERT_EQ(off.cells.size(), exact.cells.size());
+    for (uint32_t cell = 0; cell < off.cells.size(); ++cell)
+        for (uint32_t o = 0; o < w.objects.size(); ++o) {
+            EXPECT_FALSE(exact.pvs.test(cell, o) && !given_up.pvs.test(cell, o))
+                << "cell " << cell << ": giving up left out object " << o << ", which the exact pass lists";
+            EXPECT_FALSE(given_up.pvs.test(cell, o) && !off.pvs.test(cell, o))
+                << "cell " << cell << " lists object " << o << " only with the pass";
+        }
+    double given = 0.0;
+    for (int l = 1; l < kShaftLevels; ++l)
+        given += figure(given_up, "conservative_shaft_level" + std::to_string(l) + "_given_up");
+    EXPECT_GT(given, 0.0) << "no node gave up: the world no longer tests the rule";
+    EXPECT_LT(figure(given_up, "conservative_shaft_pairs"), figure(exact, "conservative_shaft_pairs"));
+    EXPECT_EQ(figure(exact, "conservative_shaft_level1_given_up"), 0.0);
+}
+
+// THE BLOCKS' PROOFS BEFORE THE FACES (docs/ALGORITHMS.md#shaft-early): on the two-walls scene and a random
+// world, each block's root tries, before the faces, what no probe ray from it reaches. What it proves, no
+// face tests and no row lists: rows list at most what the bake without the pass lists, the early proofs
+// settle several cells each, the faces draw fewer samples, and dense rays find no miss.
+TEST(Conservative, BlocksProveBeforeTheFacesAndTheFacesSkipWhatTheyProve) {
+    uint32_t target = 0;
+    const World scene = two_walls_at_different_depths(target);
+    const World random = make_random_world(4, 0).world;
+    for (const auto& [w, block] : {std::pair{&scene, 4}, std::pair{&random, 2}}) {
+        SCOPED_TRACE(fmt::format("{} world, blocks of {}", w == &scene ? "scene" : "random", block));
+        BakeConfig c = conservative_config();
+        c.conservative.shaft_budget = 256;
+        c.conservative.shaft_block = block;
+        const BakeData late = bake_without_misses(c, *w);
+        c.conservative.shaft_early = true;
+        const BakeData early = bake_without_misses(c, *w);
+        c.conservative.shaft_budget = 0;
+        const BakeData off = bake_without_misses(c, *w);
+        ASSERT_EQ(early.cells.size(), off.cells.size());
+        for (uint32_t cell = 0; cell < off.cells.size(); ++cell)
+            for (uint32_t o = 0; o < w->objects.size(); ++o)
+                EXPECT_FALSE(early.pvs.test(cell, o) && !off.pvs.test(cell, o))
+                    << "cell " << cell << " lists object " << o << " only with the pass";
+        EXPECT_GT(figure(early, "conservative_shaft_early_proven"), 0.0);
+        EXPECT_GT(figure(early, "conservative_shaft_early_settled"),
+                  figure(early, "conservative_shaft_early_proven"));
+        EXPECT_LT(figure(early, "conservative_samples"), figure(late, "conservative_samples"));
+        EXPECT_EQ(figure(late, "conservative_shaft_early_tried"), 0.0);
+    }
+}
+
 // THE PROBE (docs/ALGORITHMS.md#shaft-probe): rays from eye points of a cell settle what they reach as
 // visible before the shaft pass tries a proof. A proof only holds for what no eye sees, so the rows are
 // those of the pass without the probe, on the scene above and on a random world, per cell and by blocks;
@@ -845,9 +907,14 @@ BakeConfig property_config(uint64_t seed) {
     // The third draws the slanted panels on the depth cubes (--slanted-cubes).
     if (seed == 3) c.conservative.slanted_cubes = true;
     // The fourth to sixth take the shaft pass on what the faces listed (--shaft-budget), the sixth over the
-    // hierarchy of blocks of 2 x 2 x 2 cells (--shaft-block).
+    // hierarchy of blocks of 2 x 2 x 2 cells (--shaft-block), with the blocks' proofs before the faces
+    // (--shaft-early) and nodes giving up where both witnesses fail (--shaft-give-up).
     if (seed >= 4 && seed <= 6) c.conservative.shaft_budget = 256;
-    if (seed == 6) c.conservative.shaft_block = 2;
+    if (seed == 6) {
+        c.conservative.shaft_block = 2;
+        c.conservative.shaft_early = true;
+        c.conservative.shaft_give_up = 1;
+    }
     return c;
 }
 
