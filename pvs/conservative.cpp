@@ -1286,7 +1286,10 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
         share.unite(root_failed.words.data(), root_failed.words.size());
         ctx.progress_end();
         if (journal) journal->flush();
-        shaft.early.seconds = seconds_since(pass_start);
+        ctx.info(fmt::format("shaft pass, blocks first: {} of {} objects tried proven hidden from whole blocks "
+                             "({} (cell, object) pairs the faces skip), {} reached by a block's rays; {:.1f} s",
+                             shaft.early.proven, shaft.early.tried, shaft.early.settled, shaft.early.seen,
+                             seconds_since(pass_start)));
         figures.shaft += shaft;
     }
     const auto hider = [&](int32_t set) { return hiders ? &hiders->of(set) : nullptr; };
