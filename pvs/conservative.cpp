@@ -1201,7 +1201,7 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
         provers.emplace(ctx, occluders, config.shaft_fusion, config.shaft_caps, config.shaft_cups);
         cum_area = cumulative_areas(world);
     }
-    // Each block's root proofs: failed[b] lists the objects its root could not prove (the pass after the
+    // Each block's root proofs: root_failed row b lists the objects its root could not prove (the pass after the
     // faces does not try them again there).
     PvsSet root_failed = PvsSet::make(early ? uint32_t(blocks.size()) : 0, n_objects);
     if (early) {
