@@ -465,11 +465,13 @@ void visit_options(Config& c, Visitor&& v) {
             "halves; never looser than every cell alone (1)",
             1, 16},
         c.conservative.shaft_block);
-    v(OptionSpec{OptionGroup::kConservative, "--shaft-early", "conservative.shaft_early", "",
-                 "with --shaft-block, before the faces each block of cells tries once to prove hidden from its "
-                 "whole eye region every object that no probe ray from it reaches: what it proves, no face of "
-                 "its cells tests (the faces spend most of their time on what the shaft pass proves)"},
-      c.conservative.shaft_early);
+    v(
+        OptionSpec{
+            OptionGroup::kConservative, "--shaft-early", "conservative.shaft_early", "",
+            "with --shaft-block, before the faces each block of cells tries once to prove hidden from its "
+            "whole eye region every object that no probe ray from it reaches: what it proves, no face of "
+            "its cells tests (the faces spend most of their time on what the shaft pass proves)"},
+        c.conservative.shaft_early);
     v(OptionSpec{OptionGroup::kConservative, "--shaft-give-up", "conservative.shaft_give_up", "level",
                  "with --shaft-block, a node of the shaft hierarchy of this level or higher (1: 2 x 2 x 2 "
                  "cells) whose first and last listing cells both fail to prove an object gives it up for "

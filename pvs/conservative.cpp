@@ -1201,8 +1201,8 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
         provers.emplace(ctx, occluders, config.shaft_fusion, config.shaft_caps, config.shaft_cups);
         cum_area = cumulative_areas(world);
     }
-    // Each block's root proofs: root_failed row b lists the objects its root could not prove (the pass after the
-    // faces does not try them again there).
+    // Each block's root proofs: root_failed row b lists the objects its root could not prove (the pass after
+    // the faces does not try them again there).
     PvsSet root_failed = PvsSet::make(early ? uint32_t(blocks.size()) : 0, n_objects);
     if (early) {
         const auto pass_start = std::chrono::steady_clock::now();
@@ -1225,13 +1225,14 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
                     replayed.resize((block.size() + 1) * hidden.words_per_row);
                     bool found = journal->find("early_failed", b, replayed.data(), hidden.words_per_row);
                     for (size_t i = 0; i < block.size() && found; ++i)
-                        found = journal->find("early", block[i], replayed.data() + (i + 1) * hidden.words_per_row,
-                                              hidden.words_per_row);
+                        found =
+                            journal->find("early", block[i], replayed.data() + (i + 1) * hidden.words_per_row,
+                                          hidden.words_per_row);
                     if (found) {
                         std::copy_n(replayed.data(), hidden.words_per_row, root_failed.row(uint32_t(b)));
                         for (size_t i = 0; i < block.size(); ++i)
-                            std::copy_n(replayed.data() + (i + 1) * hidden.words_per_row, hidden.words_per_row,
-                                        hidden.row(block[i]));
+                            std::copy_n(replayed.data() + (i + 1) * hidden.words_per_row,
+                                        hidden.words_per_row, hidden.row(block[i]));
                         return;
                     }
                 }
@@ -1286,10 +1287,11 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
         share.unite(root_failed.words.data(), root_failed.words.size());
         ctx.progress_end();
         if (journal) journal->flush();
-        ctx.info(fmt::format("shaft pass, blocks first: {} of {} objects tried proven hidden from whole blocks "
-                             "({} (cell, object) pairs the faces skip), {} reached by a block's rays; {:.1f} s",
-                             shaft.early.proven, shaft.early.tried, shaft.early.settled, shaft.early.seen,
-                             seconds_since(pass_start)));
+        ctx.info(
+            fmt::format("shaft pass, blocks first: {} of {} objects tried proven hidden from whole blocks "
+                        "({} (cell, object) pairs the faces skip), {} reached by a block's rays; {:.1f} s",
+                        shaft.early.proven, shaft.early.tried, shaft.early.settled, shaft.early.seen,
+                        seconds_since(pass_start)));
         figures.shaft += shaft;
     }
     const auto hider = [&](int32_t set) { return hiders ? &hiders->of(set) : nullptr; };
@@ -1635,12 +1637,12 @@ PvsSet bake_conservative_pvs(Context& ctx, const ConservativeConfig& config, con
         for (int l = kShaftLevels - 1; l >= 0; --l) {
             const ShaftLevel& level = figures.shaft.levels[size_t(l)];
             if (level.tried == 0 && level.seen == 0) continue;
-            ctx.info(fmt::format("shaft pass, {}: {} proofs tried, {} proven ({} (cell, object) pairs left out), "
-                                 "{} not tried for a sight ray's hit, {} (cell, object) pairs given up where both "
-                                 "witnesses failed, {:.1f} thread seconds",
-                                 l == 0 ? std::string("cells") : fmt::format("nodes of up to {0}x{0}x{0} cells", 1 << l),
-                                 level.tried, level.proven, level.settled, level.seen, level.given_up,
-                                 level.seconds));
+            ctx.info(fmt::format(
+                "shaft pass, {}: {} proofs tried, {} proven ({} (cell, object) pairs left out), "
+                "{} not tried for a sight ray's hit, {} (cell, object) pairs given up where both "
+                "witnesses failed, {:.1f} thread seconds",
+                l == 0 ? std::string("cells") : fmt::format("nodes of up to {0}x{0}x{0} cells", 1 << l),
+                level.tried, level.proven, level.settled, level.seen, level.given_up, level.seconds));
         }
     }
     ctx.info(fmt::format(

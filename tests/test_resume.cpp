@@ -303,7 +303,8 @@ TEST(Resume, AGridBakeKilledAtRandomPointsAndResumedWritesTheSameFile) {
     // Every table of the grid: the single-occluder pass, the faces with their seen rows, the shaft pass
     // (by blocks of cells, whose rows are taken from the journal only all together; the blocks' proofs
     // before the faces, with their roots' failures; nodes giving up where both witnesses fail).
-    kill_and_resume({"--shaft-budget", "16", "--shaft-block", "2", "--shaft-early", "--shaft-give-up", "1"}, 1);
+    kill_and_resume({"--shaft-budget", "16", "--shaft-block", "2", "--shaft-early", "--shaft-give-up", "1"},
+                    1);
 }
 
 TEST(Resume, AnOctreeBakeKilledAtRandomPointsAndResumedWritesTheSameFile) {
@@ -444,8 +445,8 @@ TEST(Processes, TwoRanksBakeTheGridOneProcessBakes) {
 
 TEST(Processes, ThreeRanksBakeTheGridOneProcessBakes) {
     // The shaft pass by blocks of cells: a block is dealt whole, in the blocks' proofs before the faces too.
-    expect_same_under_mpirun({"--shaft-budget", "16", "--shaft-block", "2", "--shaft-early", "--shaft-give-up", "1"},
-                             3);
+    expect_same_under_mpirun(
+        {"--shaft-budget", "16", "--shaft-block", "2", "--shaft-early", "--shaft-give-up", "1"}, 3);
 }
 
 // A command that shares no work starts no MPI under mpirun either (driver/processes.h), and only rank 0

@@ -240,16 +240,16 @@ TEST_P(ReuseEdit, TheReBakeFromTheOldBakeIsTheFullBakeOfTheEditedWorld) {
     }
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    Edits, ReuseEdit,
-    ::testing::Values(EditCase{"MovedCrateAndRemovedWall", moved_crate_and_removed_wall},
-                      EditCase{"DoorCutAndCrateAdded", door_and_new_crate}, EditCase{"NoEdit", no_edit},
-                      // The shaft pass by blocks of 2 x 2 x 2 cells, with the blocks' proofs before
-                      // the faces and nodes giving up: a pair is kept only when the edit misses the
-                      // block's box and the object.
-                      EditCase{"DoorCutAndCrateAddedShaftBlocks", door_and_new_crate,
-                               " --shaft-block 2 --shaft-early --shaft-give-up 1"}),
-    [](const auto& info) { return std::string(info.param.name); });
+INSTANTIATE_TEST_SUITE_P(Edits, ReuseEdit,
+                         ::testing::Values(EditCase{"MovedCrateAndRemovedWall", moved_crate_and_removed_wall},
+                                           EditCase{"DoorCutAndCrateAdded", door_and_new_crate},
+                                           EditCase{"NoEdit", no_edit},
+                                           // The shaft pass by blocks of 2 x 2 x 2 cells, with the blocks'
+                                           // proofs before the faces and nodes giving up: a pair is kept only
+                                           // when the edit misses the block's box and the object.
+                                           EditCase{"DoorCutAndCrateAddedShaftBlocks", door_and_new_crate,
+                                                    " --shaft-block 2 --shaft-early --shaft-give-up 1"}),
+                         [](const auto& info) { return std::string(info.param.name); });
 
 TEST(Reuse, AnOldBakeOfOtherParametersOrNoneIsRefusedBeforeAnyStage) {
     test::TempDir dir;
