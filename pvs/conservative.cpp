@@ -1252,9 +1252,13 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
                         if (open) targets.push_back(o);
                     }
                     // What a ray from an eye of the block reaches, no proof over the block can hide.
+                    // Its rays count with the probe's; what they reach counts as `early.seen` below, not as
+                    // the cells' `probe_seen`.
                     std::fill(node_seen.begin(), node_seen.end(), uint64_t(0));
+                    ShaftFigures probed;
                     probe_region(scene, world, cum_area, cells.eyes, root.box, targets, all.data(),
-                                 config.shaft_probe_rays, probe, node_seen.data(), local);
+                                 config.shaft_probe_rays, probe, node_seen.data(), probed);
+                    local.probe_rays += probed.probe_rays;
                     const ShaftProver& prover = provers->of(occluders.set_for(root.box));
                     uint64_t* failed = root_failed.row(uint32_t(b));
                     for (uint32_t o : targets) {

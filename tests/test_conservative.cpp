@@ -524,6 +524,16 @@ TEST(Conservative, TheShaftPassRunsWithinItsCapAndIsSkippedOverIt) {
     }
 }
 
+// Every row of `fewer` lists at most what the same cell's row of `more` lists (the same grid); `why` says
+// what a pair listed only by `fewer` would mean.
+void expect_rows_within(const BakeData& fewer, const BakeData& more, const std::string& why) {
+    ASSERT_EQ(fewer.cells.size(), more.cells.size());
+    for (uint32_t cell = 0; cell < more.cells.size(); ++cell)
+        for (uint32_t o = 0; o < more.pvs.object_count; ++o)
+            EXPECT_FALSE(fewer.pvs.test(cell, o) && !more.pvs.test(cell, o))
+                << "cell " << cell << ", object " << o << ": " << why;
+}
+
 // THE SHAFT PASS'S HIERARCHY (docs/ALGORITHMS.md#shaft-hierarchy): the scene above on 1 m cells, the pass
 // over blocks of 4 x 4 x 4 cells halved down to cells. A node's proof holds for every cell of it, and a
 // node that cannot prove an object hands it to its halves, down to the cells, which try it exactly as the
@@ -541,17 +551,9 @@ TEST(Conservative, TheShaftHierarchyProvesWhatThePerCellPassProvesAndNodesSettle
     const BakeData tree = bake_without_misses(c, w);
     c.conservative.shaft_budget = 0;
     const BakeData off = bake_without_misses(c, w);
-    ASSERT_EQ(tree.cells.size(), off.cells.size());
-    ASSERT_EQ(per_cell.cells.size(), off.cells.size());
     EXPECT_LT(grid_shaft_blocks(tree.cells, 4).size(), tree.cells.size());
-    for (uint32_t cell = 0; cell < off.cells.size(); ++cell)
-        for (uint32_t o = 0; o < w.objects.size(); ++o) {
-            EXPECT_FALSE(per_cell.pvs.test(cell, o) && !off.pvs.test(cell, o))
-                << "cell " << cell << " lists object " << o << " only with the pass";
-            EXPECT_FALSE(tree.pvs.test(cell, o) && !per_cell.pvs.test(cell, o))
-                << "cell " << cell << ": the per-cell pass proved object " << o
-                << " hidden, the hierarchy did not";
-        }
+    expect_rows_within(per_cell, off, "listed only with the pass");
+    expect_rows_within(tree, per_cell, "the per-cell pass proved it hidden, the hierarchy did not");
     uint64_t node_proofs = 0, node_settled = 0;
     for (int l = 1; l < kShaftLevels; ++l) {
         const std::string at = "conservative_shaft_level" + std::to_string(l) + "_";
@@ -586,15 +588,8 @@ TEST(Conservative, NodesWhoseWitnessesBothFailGiveUpTheirCellsAndRowsOnlyGrow) {
     const BakeData given_up = bake_without_misses(c, w);
     c.conservative.shaft_budget = 0;
     const BakeData off = bake_without_misses(c, w);
-    ASSERT_EQ(given_up.cells.size(), exact.cells.size());
-    ASSERT_EQ(off.cells.size(), exact.cells.size());
-    for (uint32_t cell = 0; cell < off.cells.size(); ++cell)
-        for (uint32_t o = 0; o < w.objects.size(); ++o) {
-            EXPECT_FALSE(exact.pvs.test(cell, o) && !given_up.pvs.test(cell, o))
-                << "cell " << cell << ": giving up left out object " << o << ", which the exact pass lists";
-            EXPECT_FALSE(given_up.pvs.test(cell, o) && !off.pvs.test(cell, o))
-                << "cell " << cell << " lists object " << o << " only with the pass";
-        }
+    expect_rows_within(exact, given_up, "giving up left out what the exact pass lists");
+    expect_rows_within(given_up, off, "listed only with the pass");
     double given = 0.0;
     for (int l = 1; l < kShaftLevels; ++l)
         given += figure(given_up, "conservative_shaft_level" + std::to_string(l) + "_given_up");
@@ -621,11 +616,7 @@ TEST(Conservative, BlocksProveBeforeTheFacesAndTheFacesSkipWhatTheyProve) {
         const BakeData early = bake_without_misses(c, *w);
         c.conservative.shaft_budget = 0;
         const BakeData off = bake_without_misses(c, *w);
-        ASSERT_EQ(early.cells.size(), off.cells.size());
-        for (uint32_t cell = 0; cell < off.cells.size(); ++cell)
-            for (uint32_t o = 0; o < w->objects.size(); ++o)
-                EXPECT_FALSE(early.pvs.test(cell, o) && !off.pvs.test(cell, o))
-                    << "cell " << cell << " lists object " << o << " only with the pass";
+        expect_rows_within(early, off, "listed only with the pass");
         EXPECT_GT(figure(early, "conservative_shaft_early_proven"), 0.0);
         EXPECT_GT(figure(early, "conservative_shaft_early_settled"),
                   figure(early, "conservative_shaft_early_proven"));
