@@ -187,6 +187,9 @@ struct ConservativeConfig {
     bool shaft_cups = true;  // the shaft pass also covers piece pairs with cups, boxes around one piece whose
                              // faces are covered where sight leaves them (docs/ALGORITHMS.md#cups); false
                              // for measurement
+    bool shaft_flood = true;  // the shaft pass also covers piece pairs the axis panels and the proven solid
+                              // separate in the hull of their boxes, whatever planes they lie in
+                              // (docs/ALGORITHMS.md#shaft-flood); false for measurement
     bool single_occluder_pass = true;  // first, what ONE occluder hides from a cell's whole eye region is
                                        // proven exactly (pvs/region_hiding.h); the faces skip it
     int refine_levels = 4;  // [Limit: 0..8] adaptive refinement: patches of a face are first tested
@@ -502,6 +505,11 @@ void visit_options(Config& c, Visitor&& v) {
                  "faces, where sight leaves it, are covered: a room's corner, a floor meeting walls), to "
                  "measure what they give: the same safety, a looser PVS"},
       c.conservative.shaft_cups);
+    v(OptionSpec{OptionGroup::kExperimental, "--shaft-flood", "conservative.shaft_flood", "",
+                 "FOR MEASUREMENT ONLY: false leaves out the shaft pass's separation in the shaft (the axis "
+                 "panels and the proven solid cutting the hull of two pieces apart, whatever planes they lie "
+                 "in: a wall on a floor, a staircase), to measure what it gives: the same safety, a looser PVS"},
+      c.conservative.shaft_flood);
     v(OptionSpec{OptionGroup::kConservative, "--panel-refine-levels", "conservative.panel_refine_levels",
                  "levels",
                  "floor patches are halved this many more times for the objects only the "

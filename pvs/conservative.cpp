@@ -1005,7 +1005,8 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
     std::optional<ShaftProvers> own_provers;
     if (shaft_runs && !provers)
         provers =
-            &own_provers.emplace(ctx, occluders, config.shaft_fusion, config.shaft_caps, config.shaft_cups);
+            &own_provers.emplace(ctx, occluders, config.shaft_fusion, config.shaft_caps, config.shaft_cups,
+                               config.shaft_flood);
     if (!shaft_runs) provers = nullptr;
     const std::vector<double> cum_area = shaft_runs ? cumulative_areas(world) : std::vector<double>();
     Counts total;
@@ -1198,7 +1199,8 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
     std::optional<ShaftProvers> provers;
     std::vector<double> cum_area;
     if (shaft_runs) {
-        provers.emplace(ctx, occluders, config.shaft_fusion, config.shaft_caps, config.shaft_cups);
+        provers.emplace(ctx, occluders, config.shaft_fusion, config.shaft_caps, config.shaft_cups,
+                               config.shaft_flood);
         cum_area = cumulative_areas(world);
     }
     // Each block's root proofs: root_failed row b lists the objects its root could not prove (the pass after

@@ -153,6 +153,8 @@ constexpr int kCupRounds = 4;
 // A piece pair tries a cup when it has been halved a multiple of this many times: most of what cups at
 // every depth prove, for a fraction of their cost (docs/RESULTS.md, "Tightness levers").
 constexpr int kCupDepthStep = 4;
+// The flood (pvs/shaft_flood.h) is tried on the same pieces as cups, and on pieces at the depth cap.
+constexpr int kFloodDepthStep = kCupDepthStep;
 
 // How wide convex `p` is: the least, over its sides, of its farthest corner's distance from the side's line.
 double width(const Poly& p) {
@@ -417,8 +419,10 @@ struct ShaftProver::Scratch {
     std::array<std::array<std::vector<float>, 6>, 2> cup_faces;
 };
 
-ShaftProver::ShaftProver(Context& ctx, const ShrunkOccluders& set, bool fusion, bool caps, bool cups)
+ShaftProver::ShaftProver(Context& ctx, const ShrunkOccluders& set, bool fusion, bool caps, bool cups,
+                         bool flood)
     : panels_(set.panels), slanted_(set.slanted), solid_(set.solid), fusion_(fusion), cups_(cups) {
+    if (flood) flood_ = std::make_unique<ShaftFlood>(set.panels, set.solid);
     std::array<std::vector<std::pair<float, uint32_t>>, 3> by_plane;
     for (uint32_t i = 0; i < panels_.size(); ++i) {
         const int a = panel_axis(panels_[i]);
@@ -508,8 +512,10 @@ ShaftProver::ShaftProver(Context& ctx, const ShrunkOccluders& set, bool fusion, 
     }
     size_t n_caps = 0;
     for (const ConvexCap& c : caps_) n_caps += c.empty() ? 0 : 1;
-    ctx.debug(fmt::format("shaft pass: {} panels in {} planes, {} slanted panels, {} convex caps", panels_.size(),
-                          planes_[0].size() + planes_[1].size() + planes_[2].size(), slanted_.size(), n_caps));
+    ctx.debug(fmt::format("shaft pass: {} panels in {} planes, {} slanted panels, {} convex caps, {} occluders "
+                          "of the flood",
+                          panels_.size(), planes_[0].size() + planes_[1].size() + planes_[2].size(),
+                          slanted_.size(), n_caps, flood_ ? flood_->occluders() : 0));
 }
 
 ShaftProver::~ShaftProver() = default;
@@ -1290,6 +1296,14 @@ bool ShaftProver::hides(const World& world, const VoxelMask& eyes, const ShaftRe
             ++figures.cupped;
             continue;
         }
+        // Separation in the shaft, on the same pieces as cups and on pieces at the depth cap.
+        if (blocked && flood_ && (pair.depth % kFloodDepthStep == 0 || pair.depth >= max_halvings)) {
+            const auto start = std::chrono::steady_clock::now();
+            const bool separated = flood_->separates(pair.region, pair.target, figures.flood);
+            figures.flood.seconds +=
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+            if (separated) continue;
+        }
         // A line from an eye to a point of the object that meets no occluder: every cover has a piece pair
         // holding it, and no plane covers that pair.
         if (!blocked) {
@@ -1362,11 +1376,11 @@ bool ShaftProver::hides(const World& world, const VoxelMask& eyes, const ShaftRe
 }
 
 ShaftProvers::ShaftProvers(Context& ctx, const ShrunkOccluders& occluders, bool fusion, bool caps,
-                           bool cups) {
+                           bool cups, bool flood) {
     ScopedTimer timer(ctx, "shaft_provers");
-    provers_.push_back(std::make_unique<ShaftProver>(ctx, occluders, fusion, caps, cups));
+    provers_.push_back(std::make_unique<ShaftProver>(ctx, occluders, fusion, caps, cups, flood));
     for (const ShrunkOccluders& set : occluders.block_sets)
-        provers_.push_back(std::make_unique<ShaftProver>(ctx, set, fusion, caps, cups));
+        provers_.push_back(std::make_unique<ShaftProver>(ctx, set, fusion, caps, cups, flood));
 }
 
 }  // namespace pvs

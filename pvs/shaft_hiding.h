@@ -13,9 +13,10 @@
 // meets its occluder before its end. hides() is true only if every piece pair of a cover of the region's
 // eyes and of the object's triangles passes plane_covers(), slanted_hides(), a convex cap (cap_hides) or a
 // cup: a box holding one piece and not the other, each of whose faces covers, as plane_covers() does, the
-// crossings inside its window of the segments that leave the box through it. So what it proves is hidden
+// crossings inside its window of the segments that leave the box through it; or the flood: the occluders
+// separate the two pieces in the hull of their boxes (pvs/shaft_flood.h). So what it proves is hidden
 // from every eye of the region. The argument: docs/ALGORITHMS.md#shaft-pass, #cross-plane-fusion,
-// #convex-caps and #cups.
+// #convex-caps, #cups and #shaft-flood.
 #pragma once
 
 #include "core/cell_set.h"
@@ -23,6 +24,7 @@
 #include "core/occluder.h"
 #include "core/world.h"
 #include "pvs/convex_cap.h"
+#include "pvs/shaft_flood.h"
 #include "rays/ray_scene.h"
 
 #include <array>
@@ -65,6 +67,7 @@ struct ShaftFigures {
     uint64_t umbrae = 0;  // umbrae of occluders in other planes computed (cross-plane fusion)
     uint64_t capped = 0;  // piece pairs a convex cap covered (pvs/convex_cap.h)
     uint64_t cupped = 0;  // piece pairs a cup covered (docs/ALGORITHMS.md#cups)
+    FloodFigures flood;   // separation in the shaft (docs/ALGORITHMS.md#shaft-flood)
     uint64_t skipped_candidates = 0;  // regions x objects of the passes not run for the pair cap
     uint64_t probe_rays = 0;  // rays of the probe before the proofs (docs/ALGORITHMS.md#shaft-probe)
     uint64_t probe_seen = 0;  // (cell, object) pairs they settled as visible
@@ -88,6 +91,7 @@ struct ShaftFigures {
         umbrae += o.umbrae;
         capped += o.capped;
         cupped += o.cupped;
+        flood += o.flood;
         skipped_candidates += o.skipped_candidates;
         probe_rays += o.probe_rays;
         probe_seen += o.probe_seen;
@@ -132,11 +136,12 @@ bool umbra_on_plane(const std::array<glm::dvec3, 8>& eyes, const glm::dvec3* cor
 // With `fusion`, a plane's cover also takes in the umbrae of occluders in other planes, seen from either
 // piece (docs/ALGORITHMS.md#cross-plane-fusion). With `caps`, a piece pair is also covered by the convex cap
 // of a panel the line meets and its neighbours across edges (pvs/convex_cap.h). With `cups`, a piece pair is
-// also covered by a cup (docs/ALGORITHMS.md#cups).
+// also covered by a cup (docs/ALGORITHMS.md#cups). With `flood`, a piece pair is also covered when the axis
+// panels and the proven solid separate the two pieces in the hull of their boxes (pvs/shaft_flood.h).
 class ShaftProver {
 public:
     ShaftProver(Context& ctx, const ShrunkOccluders& set, bool fusion = true, bool caps = true,
-                bool cups = true);
+                bool cups = true, bool flood = true);
     ~ShaftProver();
     ShaftProver(const ShaftProver&) = delete;
     ShaftProver& operator=(const ShaftProver&) = delete;
@@ -220,13 +225,14 @@ private:
     std::vector<CapPolygon> cap_polygons_;   // panels_, then slanted_ (none for a slab with thickness)
     std::vector<ConvexCap> caps_;            // build_caps(cap_polygons_); empty without caps
     bool cups_ = false;
+    std::unique_ptr<ShaftFlood> flood_;  // null without the flood
 };
 
 // A ShaftProver for every set of a ShrunkOccluders (the global one and each block's), built once.
 class ShaftProvers {
 public:
     ShaftProvers(Context& ctx, const ShrunkOccluders& occluders, bool fusion = true, bool caps = true,
-                 bool cups = true);
+                 bool cups = true, bool flood = true);
     const ShaftProver& of(int32_t i) const { return *provers_[size_t(i + 1)]; }
 
 private:

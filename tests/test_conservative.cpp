@@ -655,8 +655,9 @@ TEST(Conservative, TheShaftProbeSettlesVisiblePairsAndChangesNoRow) {
 // target in the pocket, near the corner, is hidden from the cell at x in [2, 3], z in [5, 6] by the two
 // walls together: every line from the cell passes the corner on one side or the other. Neither wall alone
 // hides it, the cubes lose the corner to the panels' inset, and one plane's cover never fuses the two
-// walls at their edge; the umbra of one wall on the other's plane does, and so does the convex cap of the
-// walls' two outer faces at the corner. Each bake is verified by dense rays.
+// walls at their edge; the umbra of one wall on the other's plane does, so does the convex cap of the
+// walls' two outer faces at the corner, and so does the flood (the two walls cut the shaft in two). Each
+// bake is verified by dense rays.
 TEST(Conservative, BehindTwoWallsMeetingAtACornerTheFusedShaftPassCulls) {
     World w;
     const glm::vec3 size(14, 3, 8);
@@ -666,20 +667,25 @@ TEST(Conservative, BehindTwoWallsMeetingAtACornerTheFusedShaftPassCulls) {
     const uint32_t target = test::add_box(w, "target", Aabb::of({6.5f, 0.5f, 2.5f}, {7.0f, 2.5f, 3.5f}));
     w.view_seeds = {{2.5f, 1.5f, 5.5f}, {9.0f, 1.5f, 1.5f}};
     BakeConfig c = conservative_config();
-    const auto listed = [&](int budget, bool fusion, bool caps, uint64_t& shaft_hidden) {
+    const auto listed = [&](int budget, bool fusion, bool caps, bool flood, uint64_t& shaft_hidden) {
         c.conservative.shaft_budget = budget;
         c.conservative.shaft_fusion = fusion;
         c.conservative.shaft_caps = caps;
+        c.conservative.shaft_flood = flood;
         return listed_at(c, w, {2.5f, 1.5f, 5.5f}, target, shaft_hidden);
     };
     uint64_t hidden = 0;
-    EXPECT_TRUE(listed(0, true, true, hidden)) << "the cubes alone prove it: the scene no longer tests the pass";
-    EXPECT_TRUE(listed(1024, false, false, hidden))
+    EXPECT_TRUE(listed(0, true, true, true, hidden)) << "the cubes alone prove it: the scene no longer tests the pass";
+    EXPECT_TRUE(listed(1024, false, false, false, hidden))
         << "one plane's cover proved the corner: the scene is not telling";
-    EXPECT_FALSE(listed(1024, true, false, hidden)) << "the fused shaft pass did not prove what the corner hides";
+    EXPECT_FALSE(listed(1024, true, false, false, hidden))
+        << "the fused shaft pass did not prove what the corner hides";
     EXPECT_GT(hidden, 0u);
     // The walls' outer faces at the corner also make a convex cap (docs/ALGORITHMS.md#convex-caps).
-    EXPECT_FALSE(listed(1024, false, true, hidden)) << "the convex cap of the corner did not prove it";
+    EXPECT_FALSE(listed(1024, false, true, false, hidden)) << "the convex cap of the corner did not prove it";
+    EXPECT_GT(hidden, 0u);
+    // And the two walls separate the cell from the pocket in the shaft (docs/ALGORITHMS.md#shaft-flood).
+    EXPECT_FALSE(listed(1024, false, false, true, hidden)) << "the flood did not prove what the corner hides";
     EXPECT_GT(hidden, 0u);
 }
 

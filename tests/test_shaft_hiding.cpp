@@ -381,23 +381,28 @@ TEST(ShaftHiding, TwoWallsAtARightAngleHideWhatNeitherHidesAlone) {
         RegionHider one(ctx, occ);
         uint64_t hidden_one = 0;
         EXPECT_EQ(one.hide(w, cell, {object}, &hidden_one), 0u) << "one wall alone hides it";
-        ShaftFigures fig_on, fig_off, fig_cap, fig_cup;
+        ShaftFigures fig_on, fig_off, fig_cap, fig_cup, fig_flood;
         const bool fused =
-            ShaftProver(ctx, occ, true, false, false).hides(w, no_eyes, shaft, object, 256, fig_on);
+            ShaftProver(ctx, occ, true, false, false, false).hides(w, no_eyes, shaft, object, 256, fig_on);
         const bool alone =
-            ShaftProver(ctx, occ, false, false, false).hides(w, no_eyes, shaft, object, 256, fig_off);
+            ShaftProver(ctx, occ, false, false, false, false).hides(w, no_eyes, shaft, object, 256, fig_off);
         // The outer corner of the L is also a convex cap (pvs/convex_cap.h): it proves the pair alone.
         const bool capped =
-            ShaftProver(ctx, occ, false, true, false).hides(w, no_eyes, shaft, object, 256, fig_cap);
+            ShaftProver(ctx, occ, false, true, false, false).hides(w, no_eyes, shaft, object, 256, fig_cap);
         // And seen from the object, the L is the inner corner of a cup (docs/ALGORITHMS.md#cups).
         const bool cupped =
-            ShaftProver(ctx, occ, false, false, true).hides(w, no_eyes, shaft, object, 256, fig_cup);
+            ShaftProver(ctx, occ, false, false, true, false).hides(w, no_eyes, shaft, object, 256, fig_cup);
+        // And the L cuts the shaft in two (pvs/shaft_flood.h), in the first piece pair.
+        const bool flooded =
+            ShaftProver(ctx, occ, false, false, false, true).hides(w, no_eyes, shaft, object, 256, fig_flood);
         EXPECT_EQ(fused, gap == 0.0f) << "gap " << gap << ": " << fig_on.tests << " piece pairs";
         EXPECT_FALSE(alone) << "one plane's cover proved the corner alone";
         EXPECT_EQ(capped, gap == 0.0f) << "gap " << gap << ": " << fig_cap.tests << " piece pairs";
         EXPECT_EQ(fig_cap.capped > 0, gap == 0.0f);
         EXPECT_EQ(cupped, gap == 0.0f) << "gap " << gap << ": " << fig_cup.tests << " piece pairs";
         EXPECT_EQ(fig_cup.cupped > 0, gap == 0.0f);
+        EXPECT_EQ(flooded, gap == 0.0f) << "gap " << gap << ": " << fig_flood.tests << " piece pairs";
+        EXPECT_EQ(fig_flood.flood.separated > 0, gap == 0.0f);
     }
 }
 
@@ -657,9 +662,9 @@ TEST(ShaftHiding, ARoomOfPanelsIsOneCup) {
         for (const uint32_t o : objects) {
             ShaftFigures fig, fig_planes;
             const bool hidden =
-                ShaftProver(ctx, occ, false, false, true).hides(w, no_eyes, shaft, o, 256, fig);
+                ShaftProver(ctx, occ, false, false, true, false).hides(w, no_eyes, shaft, o, 256, fig);
             const bool by_planes =
-                ShaftProver(ctx, occ, false, false, false).hides(w, no_eyes, shaft, o, 256, fig_planes);
+                ShaftProver(ctx, occ, false, false, false, false).hides(w, no_eyes, shaft, o, 256, fig_planes);
             const bool blocked = dense_segments_blocked(occ, cell, w.objects[o].bounds, Rng(43, o), 20000);
             if (hidden) {
                 EXPECT_TRUE(blocked) << "object " << o << ": proven hidden, and a segment passes";
