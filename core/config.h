@@ -505,11 +505,13 @@ void visit_options(Config& c, Visitor&& v) {
                  "faces, where sight leaves it, are covered: a room's corner, a floor meeting walls), to "
                  "measure what they give: the same safety, a looser PVS"},
       c.conservative.shaft_cups);
-    v(OptionSpec{OptionGroup::kExperimental, "--shaft-flood", "conservative.shaft_flood", "",
-                 "FOR MEASUREMENT ONLY: false leaves out the shaft pass's separation in the shaft (the axis "
-                 "panels and the proven solid cutting the hull of two pieces apart, whatever planes they lie "
-                 "in: a wall on a floor, a staircase), to measure what it gives: the same safety, a looser PVS"},
-      c.conservative.shaft_flood);
+    v(
+        OptionSpec{
+            OptionGroup::kExperimental, "--shaft-flood", "conservative.shaft_flood", "",
+            "FOR MEASUREMENT ONLY: false leaves out the shaft pass's separation in the shaft (the axis "
+            "panels and the proven solid cutting the hull of two pieces apart, whatever planes they lie "
+            "in: a wall on a floor, a staircase), to measure what it gives: the same safety, a looser PVS"},
+        c.conservative.shaft_flood);
     v(OptionSpec{OptionGroup::kConservative, "--panel-refine-levels", "conservative.panel_refine_levels",
                  "levels",
                  "floor patches are halved this many more times for the objects only the "

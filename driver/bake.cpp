@@ -218,7 +218,7 @@ void octree_cells_and_pvs(Context& ctx, const BakeConfig& config, const World& w
             }
             if (!provers && level.shaft_budget > 0)
                 provers.emplace(ctx, shrunk, level.shaft_fusion, level.shaft_caps, level.shaft_cups,
-                               level.shaft_flood);
+                                level.shaft_flood);
             // A box's stream names it in every run (its node's index): the journal's key.
             conservative_box_rows(ctx, level, world, boxes, masks.eyes, shrunk, scene, rows,
                                   figures.conservative, hiders ? &*hiders : nullptr, &bounds,

@@ -1004,9 +1004,8 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
     const bool shaft_runs = shaft_pass_runs(config, world, boxes.size());
     std::optional<ShaftProvers> own_provers;
     if (shaft_runs && !provers)
-        provers =
-            &own_provers.emplace(ctx, occluders, config.shaft_fusion, config.shaft_caps, config.shaft_cups,
-                               config.shaft_flood);
+        provers = &own_provers.emplace(ctx, occluders, config.shaft_fusion, config.shaft_caps,
+                                       config.shaft_cups, config.shaft_flood);
     if (!shaft_runs) provers = nullptr;
     const std::vector<double> cum_area = shaft_runs ? cumulative_areas(world) : std::vector<double>();
     Counts total;
@@ -1200,7 +1199,7 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
     std::vector<double> cum_area;
     if (shaft_runs) {
         provers.emplace(ctx, occluders, config.shaft_fusion, config.shaft_caps, config.shaft_cups,
-                               config.shaft_flood);
+                        config.shaft_flood);
         cum_area = cumulative_areas(world);
     }
     // Each block's root proofs: root_failed row b lists the objects its root could not prove (the pass after

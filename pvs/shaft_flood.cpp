@@ -158,7 +158,8 @@ std::vector<FloodBox> solid_tiles(const VoxelMask& m) {
         std::vector<FloodBox>& mine = per_chunk[c];
         for (const Box& b : boxes)
             if (b.x1 > b.x0)
-                mine.push_back(FloodBox{{at(0, b.x0), at(1, b.y0), at(2, b.z0)}, {at(0, b.x1), at(1, b.y1), at(2, b.z1)}});
+                mine.push_back(FloodBox{{at(0, b.x0), at(1, b.y0), at(2, b.z0)},
+                                        {at(0, b.x1), at(1, b.y1), at(2, b.z1)}});
     }
     for (const std::vector<FloodBox>& v : per_chunk) out.insert(out.end(), v.begin(), v.end());
     return out;
@@ -199,13 +200,15 @@ bool ShaftFlood::separates(const Aabb& region, const Aabb& target, FloodFigures&
     const Aabb query = Aabb::of({round_down(dlo.x), round_down(dlo.y), round_down(dlo.z)},
                                 {round_up(dhi.x), round_up(dhi.y), round_up(dhi.z)});
     tree_.walk(
-        [&](const Aabb& b) { return b.overlaps(query) && hull.meets(glm::dvec3(b.min), glm::dvec3(b.max), 0.0); },
-               [&](uint32_t i) {
-                   const FloodBox& b = boxes_[i];
-                   if (!boxes_meet(b.lo, b.hi, dlo, dhi) || !hull.meets(b.lo, b.hi, 0.0)) return;
-                   const glm::dvec3 c = 0.5 * (glm::max(b.lo, dlo) + glm::min(b.hi, dhi));
-                   sc.order.emplace_back(distance2_to_segment(c, qc, xc), i);
-               });
+        [&](const Aabb& b) {
+            return b.overlaps(query) && hull.meets(glm::dvec3(b.min), glm::dvec3(b.max), 0.0);
+        },
+        [&](uint32_t i) {
+            const FloodBox& b = boxes_[i];
+            if (!boxes_meet(b.lo, b.hi, dlo, dhi) || !hull.meets(b.lo, b.hi, 0.0)) return;
+            const glm::dvec3 c = 0.5 * (glm::max(b.lo, dlo) + glm::min(b.hi, dhi));
+            sc.order.emplace_back(distance2_to_segment(c, qc, xc), i);
+        });
     if (sc.order.empty()) return false;
     if (sc.order.size() > kMaxFloodCandidates) {
         figures.dropped += sc.order.size() - kMaxFloodCandidates;
@@ -247,7 +250,8 @@ bool ShaftFlood::separates(const Aabb& region, const Aabb& target, FloodFigures&
         size_t k = 0;
         for (int a = 0; a < 3; ++a) {
             std::vector<double>& p = sc.planes[size_t(a)];
-            for (size_t e = 0; e < extra[size_t(a)]; ++e, ++k) p.insert(std::upper_bound(p.begin(), p.end(), add[k]), add[k]);
+            for (size_t e = 0; e < extra[size_t(a)]; ++e, ++k)
+                p.insert(std::upper_bound(p.begin(), p.end(), add[k]), add[k]);
         }
         sc.used.push_back(i);
     }
@@ -258,7 +262,9 @@ bool ShaftFlood::separates(const Aabb& region, const Aabb& target, FloodFigures&
     figures.cells += cells;
     sc.state.assign(cells, 0);
     sc.cover.assign(cells, 0);
-    const auto cell = [&](int x, int y, int z) { return size_t(x) + size_t(n.x) * (size_t(y) + size_t(n.y) * size_t(z)); };
+    const auto cell = [&](int x, int y, int z) {
+        return size_t(x) + size_t(n.x) * (size_t(y) + size_t(n.y) * size_t(z));
+    };
     // The cells within [lo, hi] on axis a (their sides are planes of the grid): [first, end).
     const auto inside = [&](int a, double lo, double hi, int& first, int& end) {
         const std::vector<double>& p = planes[size_t(a)];
@@ -306,13 +312,15 @@ bool ShaftFlood::separates(const Aabb& region, const Aabb& target, FloodFigures&
         span.resize(size_t(n[a]));
         for (int i = 0; i < n[a]; ++i) {
             double l0 = 0.0, l1 = 1.0;
-            if (!hull.narrow_axis(a, planes[size_t(a)][size_t(i)], planes[size_t(a)][size_t(i) + 1], tol, l0, l1))
+            if (!hull.narrow_axis(a, planes[size_t(a)][size_t(i)], planes[size_t(a)][size_t(i) + 1], tol, l0,
+                                  l1))
                 l0 = 2.0, l1 = -1.0;
             span[size_t(i)] = glm::dvec2(l0, l1);
         }
     }
     const auto meets_hull = [&](const glm::ivec3& at) {
-        const glm::dvec2 &x = sc.span[0][size_t(at.x)], &y = sc.span[1][size_t(at.y)], &z = sc.span[2][size_t(at.z)];
+        const glm::dvec2 &x = sc.span[0][size_t(at.x)], &y = sc.span[1][size_t(at.y)],
+                         &z = sc.span[2][size_t(at.z)];
         return std::max({x[0], y[0], z[0]}) <= std::min({x[1], y[1], z[1]});
     };
     // Seeds: the open cells meeting the region; none may meet the target.

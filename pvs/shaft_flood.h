@@ -36,11 +36,11 @@ constexpr int kSolidTileChunk = 16;
 std::vector<FloodBox> solid_tiles(const VoxelMask& solid);
 
 struct FloodFigures {
-    uint64_t tries = 0;       // separates() calls
-    uint64_t separated = 0;   // of them, proven
-    uint64_t cells = 0;       // grid cells they built
-    uint64_t dropped = 0;     // occluders left out for the budget of planes
-    double seconds = 0.0;     // thread seconds of the tries
+    uint64_t tries = 0;      // separates() calls
+    uint64_t separated = 0;  // of them, proven
+    uint64_t cells = 0;      // grid cells they built
+    uint64_t dropped = 0;    // occluders left out for the budget of planes
+    double seconds = 0.0;    // thread seconds of the tries
 
     FloodFigures& operator+=(const FloodFigures& o) {
         tries += o.tries;

@@ -512,10 +512,11 @@ ShaftProver::ShaftProver(Context& ctx, const ShrunkOccluders& set, bool fusion, 
     }
     size_t n_caps = 0;
     for (const ConvexCap& c : caps_) n_caps += c.empty() ? 0 : 1;
-    ctx.debug(fmt::format("shaft pass: {} panels in {} planes, {} slanted panels, {} convex caps, {} occluders "
-                          "of the flood",
-                          panels_.size(), planes_[0].size() + planes_[1].size() + planes_[2].size(),
-                          slanted_.size(), n_caps, flood_ ? flood_->occluders() : 0));
+    ctx.debug(
+        fmt::format("shaft pass: {} panels in {} planes, {} slanted panels, {} convex caps, {} occluders "
+                    "of the flood",
+                    panels_.size(), planes_[0].size() + planes_[1].size() + planes_[2].size(),
+                    slanted_.size(), n_caps, flood_ ? flood_->occluders() : 0));
 }
 
 ShaftProver::~ShaftProver() = default;
@@ -1375,8 +1376,8 @@ bool ShaftProver::hides(const World& world, const VoxelMask& eyes, const ShaftRe
     return true;
 }
 
-ShaftProvers::ShaftProvers(Context& ctx, const ShrunkOccluders& occluders, bool fusion, bool caps,
-                           bool cups, bool flood) {
+ShaftProvers::ShaftProvers(Context& ctx, const ShrunkOccluders& occluders, bool fusion, bool caps, bool cups,
+                           bool flood) {
     ScopedTimer timer(ctx, "shaft_provers");
     provers_.push_back(std::make_unique<ShaftProver>(ctx, occluders, fusion, caps, cups, flood));
     for (const ShrunkOccluders& set : occluders.block_sets)

@@ -675,7 +675,8 @@ TEST(Conservative, BehindTwoWallsMeetingAtACornerTheFusedShaftPassCulls) {
         return listed_at(c, w, {2.5f, 1.5f, 5.5f}, target, shaft_hidden);
     };
     uint64_t hidden = 0;
-    EXPECT_TRUE(listed(0, true, true, true, hidden)) << "the cubes alone prove it: the scene no longer tests the pass";
+    EXPECT_TRUE(listed(0, true, true, true, hidden))
+        << "the cubes alone prove it: the scene no longer tests the pass";
     EXPECT_TRUE(listed(1024, false, false, false, hidden))
         << "one plane's cover proved the corner: the scene is not telling";
     EXPECT_FALSE(listed(1024, true, false, false, hidden))

@@ -37,7 +37,8 @@ VoxelMask random_mask(Rng& rng, glm::ivec3 dims, float fill) {
             for (int y = lo.y; y < hi.y; ++y)
                 for (int x = lo.x; x < hi.x; ++x) {
                     if (rng.uniform() > fill) continue;
-                    const uint64_t i = uint64_t(x) + uint64_t(dims.x) * (uint64_t(y) + uint64_t(dims.y) * uint64_t(z));
+                    const uint64_t i =
+                        uint64_t(x) + uint64_t(dims.x) * (uint64_t(y) + uint64_t(dims.y) * uint64_t(z));
                     m.bits[i >> 6] |= uint64_t(1) << (i & 63);
                 }
     }
@@ -103,7 +104,8 @@ SteppedWall stepped_wall(Rng& rng, bool holes) {
     const auto panel = [&](glm::vec3 a, glm::vec3 b) { occ.panels.push_back(Aabb::of(a, b)); };
     for (int i = 0; i < kSquares; ++i)
         for (int j = 0; j < kSquares; ++j) {
-            const float y0 = kLo + kSide * float(i), z0 = kLo + kSide * float(j), x = at[size_t(i)][size_t(j)];
+            const float y0 = kLo + kSide * float(i), z0 = kLo + kSide * float(j),
+                        x = at[size_t(i)][size_t(j)];
             if (rng.below(6) == 0) {
                 // A solid block [x, x + 0.5] (voxels from x), whose face x is the square.
                 const Aabb b = Aabb::of({x, y0, z0}, {x + 0.5f, y0 + kSide, z0 + kSide});
@@ -128,11 +130,13 @@ SteppedWall stepped_wall(Rng& rng, bool holes) {
             // The joins to the next squares along y and z: panels between the two steps' x.
             if (i + 1 < kSquares && !(holes && rng.below(8) == 0)) {
                 const float x1 = at[size_t(i + 1)][size_t(j)];
-                if (x1 != x) panel({std::min(x, x1), y0 + kSide, z0}, {std::max(x, x1), y0 + kSide, z0 + kSide});
+                if (x1 != x)
+                    panel({std::min(x, x1), y0 + kSide, z0}, {std::max(x, x1), y0 + kSide, z0 + kSide});
             }
             if (j + 1 < kSquares && !(holes && rng.below(8) == 0)) {
                 const float x1 = at[size_t(i)][size_t(j + 1)];
-                if (x1 != x) panel({std::min(x, x1), y0, z0 + kSide}, {std::max(x, x1), y0 + kSide, z0 + kSide});
+                if (x1 != x)
+                    panel({std::min(x, x1), y0, z0 + kSide}, {std::max(x, x1), y0 + kSide, z0 + kSide});
             }
         }
     return w;
@@ -200,10 +204,12 @@ TEST(ShaftFlood, ASeparationHoldsOnEverySegmentAndAClosedWallSeparatesAll) {
                 const bool separated = flood.separates(region, target, fig);
                 const bool blocked = segments_blocked(w, region, target, Rng(wi, uint64_t(p)), 3000);
                 if (separated) {
-                    ASSERT_TRUE(blocked) << "wall " << wi << " pair " << p << ": a segment passes the flood's proof";
+                    ASSERT_TRUE(blocked)
+                        << "wall " << wi << " pair " << p << ": a segment passes the flood's proof";
                 }
                 if (!holes) {
-                    EXPECT_TRUE(separated) << "wall " << wi << " pair " << p << ": a closed wall did not separate";
+                    EXPECT_TRUE(separated)
+                        << "wall " << wi << " pair " << p << ": a closed wall did not separate";
                     closed_pairs += separated ? 1 : 0;
                 } else {
                     proven_with_holes += separated ? 1 : 0;
@@ -251,10 +257,10 @@ TEST(ShaftFlood, TheShaftPassProvesAStepBehindAStepInOnePiecePair) {
             const Aabb cell = random_box(rng, {1.0f, 0.0f, 0.0f}, {2.5f, 4.0f, 4.0f}, 0.6f);
             const ShaftRegion shaft = shaft_region(no_eyes, cell);
             ShaftFigures with, without;
-            const bool by_flood =
-                ShaftProver(ctx, w.occ, false, false, false, true).hides(world, no_eyes, shaft, object, 1, with);
-            const bool by_rest =
-                ShaftProver(ctx, w.occ, true, true, true, false).hides(world, no_eyes, shaft, object, 1, without);
+            const bool by_flood = ShaftProver(ctx, w.occ, false, false, false, true)
+                                      .hides(world, no_eyes, shaft, object, 1, with);
+            const bool by_rest = ShaftProver(ctx, w.occ, true, true, true, false)
+                                     .hides(world, no_eyes, shaft, object, 1, without);
             if (!holes) {
                 EXPECT_TRUE(by_flood) << "wall " << wi;
                 EXPECT_EQ(with.flood.separated, 1u);
@@ -266,7 +272,8 @@ TEST(ShaftFlood, TheShaftPassProvesAStepBehindAStepInOnePiecePair) {
             }
         }
     }
-    EXPECT_LT(proven_without, tried) << "the rest proves as much in one piece pair: the test does not need the flood";
+    EXPECT_LT(proven_without, tried)
+        << "the rest proves as much in one piece pair: the test does not need the flood";
 }
 
 }  // namespace

@@ -663,8 +663,8 @@ TEST(ShaftHiding, ARoomOfPanelsIsOneCup) {
             ShaftFigures fig, fig_planes;
             const bool hidden =
                 ShaftProver(ctx, occ, false, false, true, false).hides(w, no_eyes, shaft, o, 256, fig);
-            const bool by_planes =
-                ShaftProver(ctx, occ, false, false, false, false).hides(w, no_eyes, shaft, o, 256, fig_planes);
+            const bool by_planes = ShaftProver(ctx, occ, false, false, false, false)
+                                       .hides(w, no_eyes, shaft, o, 256, fig_planes);
             const bool blocked = dense_segments_blocked(occ, cell, w.objects[o].bounds, Rng(43, o), 20000);
             if (hidden) {
                 EXPECT_TRUE(blocked) << "object " << o << ": proven hidden, and a segment passes";
