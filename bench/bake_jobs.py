@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """Bake jobs: what checkpoints cost, what a kill costs with them (docs/ALGORITHMS.md#resume), and what
 several processes gain (docs/ALGORITHMS.md#processes). Prints one JSON object.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bench_block_solid: how much solid sight leaves when it starts from one block of the eye space instead of
 // from all of it (open levels).
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bench_boxes: occluder synthesis (occluders/boxes.h) on random blob grids, against its reference.
 //
 //   bench_boxes [--repeats R] [--sizes 64,128,256] [--seed S]

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bench_conservative: the conservative bake (BakeMode::kConservative) end to end, and how its time grows.
 //
 //   bench_conservative --suite [WORLD.glb ...] [--cells grid|octree|both] [--verify-rays N] [--repeats R]

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bench_cracks: the crack test set at full size (samples/crack_set.h; docs/ALGORITHMS.md#crack-test-set).
 //
 //   bench_cracks [--tolerance T] [--widths w1,w2,...] [--cases N] [--seeds s1,s2,...] [--threads N]

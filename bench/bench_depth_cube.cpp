@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bench_depth_cube: speed of the conservative depth cube map (pvs/depth_cube.h), one thread.
 //
 //   bench_depth_cube [--repeats R]

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bench_loader: the runtime loader (pvsbake/loader.h) on real bakes and on a synthetic 3,000-object bake.
 //
 //   bench_loader [BAKE.h5 ...] [--repeats R] [--queries Q] [--no-synthetic] [--rewrite] [--warm-heap MIB]

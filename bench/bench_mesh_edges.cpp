@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bench_mesh_edges: how closed a world's opaque surface is. The edges of its opaque triangles (vertices
 // welded by exact position) that an odd number of triangles use are the surface's mod-2 boundary; where a
 // long edge meets two shorter ones along one line (a T-junction) the three cancel, so the odd edges are then

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bench_overestimation: where a conservative bake's overestimation comes from (tightness).
 //
 //   bench_overestimation WORLD.glb BAKE.h5 [--cells N] [--rays R] [--seed S]

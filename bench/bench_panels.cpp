@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bench_panels: what the panel finders cover in a world: axis-aligned panels (occluders/panels.h) and
 // slanted panels (occluders/slanted_panels.h), with their time.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bench_ranking: ranked occluders per cell (occluders/ranking.h, occluders/cell_ranking.h). The
 // time of the ranking stage against the sampled PVS of the same cells (one run, so the ratio holds on a
 // shared machine), and the "knee" of Hudson et al.: how much of what the FULL set of proven boxes hides,

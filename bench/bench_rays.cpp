@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bench_rays: ray throughput of the verifier's tracing against plain Embree loops, on one scene in one run.
 //
 //   bench_rays WORLD.glb [--rays N] [--repeats R] [--threads T]

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bench_runtime_cull: the run-time culler of moving objects (pvsbake/occlusion.h).
 //
 //   bench_runtime_cull [--repeats R] [--frames F]

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bench_runtime_file: the runtime file (io/runtime_file.h) and the C99 runtime (runtime/pvsr.h) against the
 // HDF5 loader (pvsbake/loader.h), on bakes.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bench_truth: how much a bake's PVS over-lists against what its own cells really see, by rays aimed at
 // every listed object (the truth bench).
 //

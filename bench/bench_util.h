@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Helpers shared by the benchmarks: medians and means of repeats, wall-clock seconds, and the map compiler's
 // visibility (WORLD.vis.json).
 // Every benchmark prints one JSON document on stdout; figures are medians of repeats and ratios taken

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bench_vis_compare: a bake's PVS against the map compiler's own PVS and against dense rays, at the same
 // eye points.
 //

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """Bad input against a bake's limits: random mutants of a small valid world (samples/tiny_world.py), each
 baked under a wall-clock limit and an address-space limit, and whether every one either baked or was
 refused within them. Prints one JSON object on stdout (or --json), a Markdown table on stderr.

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 # plane_census: how much of a world's opaque area lies off the axis planes, and in how few planes.
 #
 #   bench/plane_census.py WORLD.glb

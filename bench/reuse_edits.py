@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """What an incremental re-bake saves (docs/ALGORITHMS.md#reuse): for each edit of a world, a full bake of the
 edited world against a bake with --reuse of the bake before the edit, one after the other; the two files must
 be the same outside /run. Prints JSON: per edit, the pairs kept, the seconds of each bake and its PVS stage, and

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """Waste on random worlds: how much a plain-defaults bake lists over what its cells really see, on the
 property tests' random closed box worlds (samples/random_world.h), grid and octree. Prints one JSON object.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Stratified eye points in a cell and stratified directions over the sphere.
 #include "cells/eyes.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake cells: where eyes can be. The ONE place that decides it: the sampled PVS, the verifier and the
 // occluder ranking all draw their eye points here (docs/ALGORITHMS.md#eye-points).
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Uniform grid of view cells over a region.
 #include "cells/grid.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake cells: the uniform grid of view cells.
 //
 // Conventions: glTF axes, metres; grid index order x fastest (core/cell_set.h). The grid starts at the

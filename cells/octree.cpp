@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Visibility-driven octree of view cells: split where the children's PVSs differ, down to a minimum size.
 #include "cells/octree.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake cells: a visibility-driven octree of view cells (docs/ALGORITHMS.md#octree).
 //
 // Root cells of `root_cell_size_m` (min_cell_size_m times a power of two) cover the view region; a cell

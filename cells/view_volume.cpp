@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The view volume: voxelize, flood (or walk, with a play height) from the seeds, intersect with boxes and
 // the play height band, grow by one voxel.
 #include "cells/view_volume.h"

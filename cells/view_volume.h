@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake cells: the view volume, where a player's eye can be (docs/ALGORITHMS.md#view-volume).
 //
 // Sources, combined by INTERSECTION (each one only ever removes space):

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The voxels a world's extent gets, and how far each object reaches from the rest (cells/world_extent.h).
 #include "cells/world_extent.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake cells: the voxels a world's extent gets, within their caps, and how far each object reaches from
 // the rest of the world, to name the stray geometry that makes a world's bounds huge (a vertex thrown a
 // thousand kilometres away by a bad export or flipped bytes) when those bounds would make the voxels too

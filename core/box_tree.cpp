@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "core/box_tree.h"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake core: a bounding volume hierarchy over boxes, to find the boxes that meet a query box without
 // testing every one (docs/ALGORITHMS.md#object-bvh).
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake core: the view cells of a bake, as plain data (built by cells/, stored by io/).
 //
 // Conventions: glTF axes, metres. Grid index order: x fastest, then y, then z:

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake core: BakeConfig, every knob of a bake in one place (after Recast's rcConfig).
 //
 // Every field states its units, limits and default. Each stage takes its own part. The options are

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake core: the Context every stage receives: logs, progress and timers (after Recast's rcContext).
 //
 // A Context is passed in, never global. It is thread-safe: stages may log and advance progress from

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake core: a convex polygon cut by an axis plane or by any line (Sutherland-Hodgman), for the shaft
 // pass's pieces (pvs/shaft_hiding.cpp) and the world edits of the samples (samples/world_edit.cpp).
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake core: the one exception type thrown at boundaries (files, glTF, Embree, HDF5, config).
 //
 // Rule (CONTRIBUTING.md): a message says what is wrong, where (file, node, accessor, option) and, when

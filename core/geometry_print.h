@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake core: a bake's geometry print, what an incremental re-bake compares (pvs/reuse.h): everything
 // the conservative solver reads, hashed by place, so that a later bake can tell where its world differs.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake core: vectors and axis-aligned boxes.
 //
 // Conventions (every module): glTF axes, right-handed, +Y up, metres. Boxes are closed: a point on a

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake core: a synthesized occluder, an axis-aligned box inside the opaque solid.
 //
 // Conventions: glTF axes, metres. `proven`: the box passed the ray check against the real triangles

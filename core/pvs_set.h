@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake core: the PVS of every cell, as one packed bit row per cell.
 //
 // Bit order: object i is bit (i % 64) of word (i / 64) of its cell's row. On file the row is stored

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake core: small, fast, seedable random numbers for sampling.
 //
 // Every random stream is derived from (seed, stream id), e.g. (config seed, cell index), never from

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake core: the journal of finished rows, what makes a long stage resumable
 // (docs/ALGORITHMS.md#resume).
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake core: how the items of a pass (grid faces, cells, octree boxes) are shared between the processes
 // of a bake (docs/ALGORITHMS.md#processes).
 //

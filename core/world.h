@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake core: the World, a glTF scene flattened into world-space triangles grouped into objects.
 //
 // Conventions: glTF axes (right-handed, +Y up), metres, world space (every node transform applied).

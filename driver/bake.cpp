@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The bake driver: wires the stages and gathers the figures of a bake.
 #include "driver/bake.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake driver: the bake pipeline, from a loaded World to the BakeData written to the bake file:
 //   view volume (cells/view_volume.h) -> ray scene (rays/ray_scene.h) -> occluders (occluders/synthesis.h)
 //   -> cells and PVS (cells/grid.h or cells/octree.h; pvs/conservative.h, or rays/ray_sampler.h in the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The pvsbake command line: options declared once (core/config.h visit_options) drive parsing, --help,
 // validation and the parameters stored in the bake.
 #include "driver/cli.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake driver: the command line, as a function so tests run it in-process.
 //
 // Subcommands: bake, verify, info, query (pvsbake --help). Exit status: 0 success; 2 bad input (a file,

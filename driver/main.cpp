@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake: bake, verify and inspect potentially-visible sets of glTF worlds. See README.md.
 #include "driver/cli.h"
 #include "driver/processes.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The memory a bake expects (driver/memory_plan.h).
 #include "driver/memory_plan.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake driver: the memory a bake expects, said before its stages run and held against --max-memory, so
 // that a bake too large for the machine is refused with its figures instead of being killed by the kernel
 // halfway through a night (docs/ALGORITHMS.md#memory-plan).

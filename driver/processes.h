@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake driver: the processes of a bake. One, or the ranks of an MPI job when pvsbake is built with
 // PVSBAKE_MPI=ON and started by mpirun (docs/ALGORITHMS.md#processes). Every rank runs the whole command: the
 // stages before the PVS with their probes, ray check and shrunk levels dealt between the ranks

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake driver: the ranks of an MPI job (built with PVSBAKE_MPI=ON; OpenMPI from Debian). Items are dealt
 // by one counter on rank 0 that every rank's threads advance with MPI_Fetch_and_op, a batch at a time
 // (docs/ALGORITHMS.md#processes); unite() is an MPI_Allreduce with MPI_BOR.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake driver: one process (built without PVSBAKE_MPI).
 #include "driver/processes.h"
 

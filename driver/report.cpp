@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The figures of a bake and its JSON report.
 #include "driver/report.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake driver: the figures of a bake (what its stages measured, stored in the bake file's /figures) and
 // the JSON report of a bake (and of `pvsbake info --json`).
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Verification of a PVS against Embree rays: misses, sampled visible sets, overestimation.
 // Aimed rays after Wonka et al., "Guided visibility sampling" (SIGGRAPH 2006): rays from random eye points
 // to random points on the objects uniform sampling did not touch.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake driver: verification of a PVS by Embree ray sampling (docs/ALGORITHMS.md#verification).
 //
 // Independent of how the PVS was made: eye points in each cell's eye region (cells/eyes.h), rays each

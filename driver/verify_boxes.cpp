@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The ranked occluders checked by rays (driver/verify_boxes.h).
 #include "driver/verify_boxes.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake driver: verification of the ranked occluders: every box a cell ranks must be solid for that cell's
 // eyes, since the run-time culler hides moving objects behind it (docs/ALGORITHMS.md#proven-boxes).
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake io: AtomicOutput and write_file_atomically. Output goes to "<final>.tmp-<pid>-<counter>" in the
 // final file's folder (so the rename stays on one file system and is atomic), then commit() renames it
 // over the final path; an uncommitted temporary file is removed by the destructor. Plain POSIX calls, each

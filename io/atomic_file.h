@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake io: write a file whole or not at all, and say in plain words why a write failed.
 //
 // Write to temp_path(), then commit(): the temporary file is renamed over the final path (atomic on

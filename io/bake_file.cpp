@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake io: writes and reads the HDF5 bake file, format 1.2 (layout in docs/FORMAT.md), with the HDF5 C
 // API only (the runtime loader must depend on libhdf5 alone). The writer dedupes PVS rows, builds the file in
 // memory and writes it whole through write_file_atomically() (io/atomic_file.h). The reader is the loader

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake io: the bake file (HDF5), format version 1.5. docs/FORMAT.md documents every group, dataset and
 // attribute; this header is the in-memory form.
 //

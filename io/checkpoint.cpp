@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake io: checkpoint chunks, written with io/hdf5_writer.h and read with the loader's validating
 // Reader (io/loader/hdf5_reader.h).
 #include "io/checkpoint.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake io: the checkpoint of a bake, the finished rows a killed bake leaves for the next run
 // (docs/ALGORITHMS.md#resume, layout in docs/FORMAT.md#checkpoint).
 //

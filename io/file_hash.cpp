@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Content hash of a file with xxHash's XXH3 (64 bits): fast enough to hash every world at every bake.
 #include "io/file_hash.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake io: content hash of a file (XXH3, 64 bits, as 16 hex digits), to tie a bake to its world.
 #pragma once
 

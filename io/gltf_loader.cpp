@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake io: load_world, a glTF 2.0 file (.gltf or .glb) flattened into a World of world-space triangles.
 //
 // tinygltf parses the JSON and the buffers; everything it hands back is then treated as untrusted: every

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake io: load a glTF 2.0 world (.gltf with external or embedded buffers, or .glb) into a World.
 //
 // Conventions: glTF axes (right-handed, +Y up), metres; every node transform (TRS or matrix) is applied,

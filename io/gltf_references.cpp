@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The glTF document's ids, counts, offsets and enums checked against the schema (io/gltf_references.h).
 #include "io/gltf_references.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake io: the glTF document's numbers that name or size things (ids, counts, offsets, enums), checked
 // against the glTF 2.0 schema before the loader trusts them: an integer, within its minimum and enum, an
 // id that names an existing element (the Khronos glTF-Validator's TYPE_MISMATCH, VALUE_NOT_IN_RANGE,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake io: make_box_node and write_glb, simple triangle scenes written as one glTF 2.0 binary (.glb):
 // JSON built with nlohmann, one buffer of float VEC3 positions and u32 indices in the BIN chunk.
 #include "io/gltf_writer.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake io: write simple triangle scenes as glTF 2.0 binary (.glb): the sample world generator, test
 // worlds and (later) the synthesized occluder boxes use it.
 //

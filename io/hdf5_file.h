@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake io: HDF5 plumbing for the baker's files (the bake file, checkpoint chunks), with the HDF5 C API
 // only. Handles, the quiet error stack and the validating Reader are the loader's (io/loader/hdf5_reader.h);
 // files are written without object times and with creation order tracked, so the same content gives the

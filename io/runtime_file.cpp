@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake io: writes the runtime file (io/runtime_file.h; docs/FORMAT.md, "The runtime file") from the
 // arrays the bake file's validating reader gives (io/loader/bake_reader.h).
 #include "io/runtime_file.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake io: the runtime file (.pvsr), what a game ships: cells, masks, PVS rows, objects and ranked
 // occluders of a bake, flat, little-endian, checksummed, every section 64-byte aligned (docs/FORMAT.md,
 // "The runtime file"), read in place by the C99 runtime runtime/pvsr.h. The HDF5 bake file stays the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Occluder synthesis by greedy box growth in the solid voxels, then sort and cut (after Andújar et al.,
 // "Integrating Occlusion Culling and Levels of Detail through Hardly-Visible Sets", 2000, and the
 // occluder-skin idea of the largest boxes of inner voxels). The algorithm is described in boxes.h.

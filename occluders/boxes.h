@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake occluders: occluder synthesis, few large axis-aligned boxes inside the solid voxels (after
 // Andújar, Saona-Vázquez, Navazo, Brunet, "Integrating Occlusion Culling and Levels of Detail through
 // Hardly-Visible Sets", 2000, and the "occluder skin" idea of taking the largest boxes of inner voxels;

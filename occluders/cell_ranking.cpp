@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The ranking stage: occluders/ranking.h's per-cell ranking over every cell, dealt to the threads and
 // processes of the bake (core/work_share.h; each cell's eyes drawn from its own seeded stream and its result
 // kept in its own slot, then joined in cell order, so that the output does not depend on who ranked which

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake occluders: the ranking stage (docs/ALGORITHMS.md#ranking): for every view cell, the few synthesized
 // occluder boxes worth testing at run time, best first, with their scores (occluders/ranking.h defines the
 // solid angle, the shadow frustum test and the score; after Hudson et al., SoCG 1997).

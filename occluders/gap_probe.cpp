@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The gap probe: lines across the gaps between nearby opaque triangles, looking for sight into the solid.
 #include "occluders/gap_probe.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake occluders: the GAP PROBE, openings at least the gap tolerance wide looked for where the triangles
 // leave them (why, and what it finds: docs/ALGORITHMS.md#gap-probe).
 //

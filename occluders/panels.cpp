@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Panels: rectangles wholly covered by opaque triangles, found exactly. Conventions: panels.h.
 #include "occluders/panels.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake occluders: PANELS, flat axis-aligned rectangles wholly covered by opaque triangles: the faces of
 // walls, floors and ceilings, found exactly from the triangles (no voxels). A wall thinner than about
 // 2 epsilon + 2 voxels leaves no box in the solid once shrunk (occluders/boxes.h); its faces still give

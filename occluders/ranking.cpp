@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Ranking occluder boxes for a view cell: exact solid angles, shadow frusta and the score (ranking.h).
 // After Hudson et al., "Accelerated Occlusion Culling using Shadow Frusta" (SoCG 1997), and Van Oosterom and
 // Strackee, "The Solid Angle of a Plane Triangle" (IEEE Trans. Biomed. Eng. 1983).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake occluders: ranking occluder boxes for a view cell (docs/ALGORITHMS.md#ranking). After Hudson,
 // Manocha, Cohen, Lin, Hoff and Zhang, "Accelerated Occlusion Culling using Shadow Frusta" (SoCG 1997): for
 // each cell keep the few occluders worth testing at run time (for dynamic objects, which a PVS cannot

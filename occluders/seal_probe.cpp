@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The seal probe: rays from the solid's frontier voxels to the eye space, tested against the triangles.
 #include "occluders/seal_probe.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake occluders: the SEAL PROBE, sight through touched voxels into the solid, looked for from the
 // solid's side (why, and why from that side: docs/ALGORITHMS.md#seal-probe).
 //

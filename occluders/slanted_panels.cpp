@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Slanted panels: convex polygons tiled by coplanar opaque triangles. Conventions: slanted_panels.h.
 #include "occluders/slanted_panels.h"
 

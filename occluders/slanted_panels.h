@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake occluders: SLANTED PANELS, convex polygons in planes that are not axis planes, tiled exactly by
 // opaque triangles that share whole edges: the slopes, ramps and roofs that axis-aligned boxes and panels
 // (occluders/panels.h) cannot cover. docs/ALGORITHMS.md#slanted-panels says how they are grown and what

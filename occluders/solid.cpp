@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Solid classification: sight from the eye space through untouched voxels (voxels/flood.h sight_reach);
 // the rest, less the touched voxels, is solid.
 #include "occluders/solid.h"

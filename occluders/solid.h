@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake occluders: the opaque solid, where occluders may live (docs/ALGORITHMS.md#solid).
 //
 // Conventions: voxels as in voxels/voxels.h. Sight starts at the eye space (the view volume's free

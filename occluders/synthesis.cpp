@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Occluder synthesis: solid voxels, greedy boxes, and the ray check of every box against the triangles.
 #include "occluders/synthesis.h"
 

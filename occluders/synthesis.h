@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake occluders: occluder synthesis, from a world and its view volume to few large boxes inside the
 // opaque solid (docs/ALGORITHMS.md#occluders):
 //   solid (occluders/solid.h: voxels sight from the eye space never reaches) -> SIGHT PROBE (rays over the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The conservative solver: every cell's boundary cut into patches, refined where objects are not yet proven
 // hidden; a depth cube of the shrunk occluders from each patch centre. Safety argument:
 // docs/ALGORITHMS.md#conservative-pvs.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake solver: the conservative PVS with occluder fusion, by occluder shrinking (after P. Wonka,
 // M. Wimmer, D. Schmalstieg, "Visibility Preprocessing with Occluder Fusion for Urban Walkthroughs",
 // EGWR 2000).

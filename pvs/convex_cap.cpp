@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "pvs/convex_cap.h"
 
 #include "core/convex_clip.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake solver: convex caps, the shaft pass's occluders that fuse panels of different planes meeting at an
 // edge (a roof ridge, the outer corner of a pillar, a bevel). A cap is the convex hull P of a few opaque
 // convex polygons that are faces of P. A segment from a point outside P that meets P enters it through a

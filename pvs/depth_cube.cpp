@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Conservative depth cube map: occluder boxes written where they cover whole pixels, occludee boxes tested
 // against every pixel they touch. Conventions: depth_cube.h; the safety argument:
 // docs/ALGORITHMS.md#depth-cube and docs/ALGORITHMS.md#panel-inset.

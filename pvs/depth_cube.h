@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake solver: a conservative from-point occlusion test on a depth cube map around an eye point s.
 //
 // This is the from-point test of occluder shrinking (Wonka, Wimmer, Schmalstieg 2000; the caller passes the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Objects one occluder hides from a whole region: the 64 corner segments, candidates by Embree.
 #include "pvs/region_hiding.h"
 

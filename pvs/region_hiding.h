@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake solver: objects that ONE occluder hides from a whole eye region, proven exactly: no shrinking, no
 // pixels, no patches. A first pass of the conservative solver (pvs/conservative.h): what it proves for a
 // cell's region, no face of the cell tests.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The incremental re-bake: the geometry print and the plan of which (cell, object) pairs keep their bit
 // (docs/ALGORITHMS.md#reuse).
 #include "pvs/reuse.h"

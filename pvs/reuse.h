@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake solver: the incremental re-bake. After an edit of the world, the (cell, object) pairs the edit
 // cannot change keep the old bake's bit; the solver tests only the others, and the rows are those a full
 // bake of the new world makes. The argument: docs/ALGORITHMS.md#reuse.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Separation in the shaft: a flood over an exact grid of the occluders that meet the hull of two boxes.
 #include "pvs/shaft_flood.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake solver: separation in the shaft, a proof by the union of occluders whatever planes they lie in.
 // Every segment between two boxes lies in the hull of the two; when the axis panels and the proven solid cut
 // that hull into parts with the boxes in different ones, every segment meets an occluder before its end

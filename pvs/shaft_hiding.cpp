@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The shaft pass: piece pairs of a region and an object, each covered in one plane by panels and the solid.
 #include "pvs/shaft_hiding.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake solver: the shaft pass. An object the depth cubes left listed is proven hidden from a cell's whole
 // eye region, exactly, when the region and the object can be cut into pieces such that, for every pair of
 // pieces, ONE plane holds an occluder cover of all the segments between them: no shrinking, no inset, no

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Sight-line widths: exact segment-triangle distances over the opaque triangles near a segment.
 // The closest-point routines follow C. Ericson, "Real-Time Collision Detection" (2005), 5.1.5 and 5.1.9.
 #include "rays/clearance.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake rays: how wide an opening a line of sight passes, against the real opaque triangles
 // (docs/ALGORITHMS.md#openings).
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Ray sampling per cell and the sampled (aggressive) PVS.
 #include "rays/ray_sampler.h"
 

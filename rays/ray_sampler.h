@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake rays: ray sampling from eye points of each cell, and the sampled PVS
 // (docs/ALGORITHMS.md#sampled-pvs).
 //

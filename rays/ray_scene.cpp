@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The world as an Embree 3 scene: two triangle geometries (opaque, see-through). See-through hits are
 // recorded and rejected by an intersection filter so the ray carries on to the first opaque hit.
 #include "rays/ray_scene.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake rays: the world as an Embree scene, for tracing sight rays (verification and sampled PVS).
 //
 // Conventions: glTF axes, metres. A ray from `origin` along unit `direction` sees, in order, every

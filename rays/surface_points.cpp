@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "rays/surface_points.h"
 
 #include <algorithm>

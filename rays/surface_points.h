@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake rays: uniform random points on an object's surface (aimed verification rays, and the benchmarks
 // that ask whether an object is visible from a cell).
 #pragma once

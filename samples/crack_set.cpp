@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The crack test set: compartments with one opening each (crack_set.h).
 #include "samples/crack_set.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake samples: the crack test set, worlds of openings of known kind and width
 // (docs/ALGORITHMS.md#crack-test-set).
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // edit_world: writes a world again, with edits of the kind a level designer makes between two bakes:
 // an object moved or removed, objects within a box removed (a wall), a hole cut (a door), a crate added;
 // and, for measures of scale, the whole world tiled NX x NZ times (closed in walls first with --enclose,

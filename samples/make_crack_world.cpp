@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // make_crack_world: writes a world of the crack test set (samples/crack_set.h) to a .glb, and prints its
 // cases (kind, width, wall, witness eye, target) as lines of text.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // make_random_world: writes one of the property tests' random closed box worlds (samples/random_world.h) to
 // a .glb (through edited_world, samples/world_edit.h, with no edit), so that the command-line tools and benchmarks (bench_truth) can bake and measure it.
 //

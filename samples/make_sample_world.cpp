@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // make_sample_world: writes the bundled sample world, a maze of rooms joined by doorways, to a .glb.
 //
 //   make_sample_world OUT.glb [--rooms N] [--seed S]

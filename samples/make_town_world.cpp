@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // make_town_world: writes a generated town (samples/town_world.h) as .glb: the big open level "a big world is
 // not a fault" is measured on (docs/RESULTS.md).
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "samples/random_world.h"
 
 #include "core/random.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Random closed box worlds: the property tests' worlds (tests/test_conservative.cpp), and the truth bench's
 // random levels (samples/make_random_world.cpp writes one as .glb). Deterministic: the same seed and attempt
 // give the same world on every machine (core/random.h).

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """A tiny valid glTF 2.0 world, written without any dependency: a closed room, a crate and a spawn point.
 
 It is the world the mutation bench (bench/mutate_worlds.py) and the glTF-Validator comparison

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "samples/town_world.h"
 
 #include "core/random.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A generated town: a big open level (a ground slab of some hundred metres, blocks of closed box buildings
 // of random heights, streets between them, a view seed at every crossing). The worlds "a big world is not a
 // fault" is checked on (tests/test_world_extent.cpp) and measured with (samples/make_town_world.cpp,

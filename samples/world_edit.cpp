@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A world written again with edits (samples/world_edit.h).
 #include "samples/world_edit.h"
 

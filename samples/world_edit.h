@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake samples: a world written again with edits of the kind a level designer makes between two bakes
 // (an object moved or removed, the objects in a box removed, a hole cut, a crate added): the input of the
 // incremental re-bake's tests and measures (samples/edit_world.cpp, docs/ALGORITHMS.md#reuse).

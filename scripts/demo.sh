@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # The main job on the bundled sample world: set up, bake (with verification), print the summary.
 set -euo pipefail
 cd "$(dirname "$0")/.."

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # Sets up everything pvsbake needs on Debian 12 (run as root) and builds it (Release) into build/.
 # Idempotent: packages already installed are not fetched again, and the build is incremental.
 #   scripts/setup.sh            install what is missing, configure, build

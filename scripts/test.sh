@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # Set up, build and run the whole test suite. CI=true runs the long checks at a smaller size.
 # Then the runtime loader's round-trip and fuzz tests, the runtime file's tests and the run-time culler's
 # tests again, built with

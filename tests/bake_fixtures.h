@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Bakes and checks for the loader's tests (test_runtime_loader*): bakes are written by write_bake_file, so
 // every file a test loads is one the baker could have made; the checks compare what the loader answers
 // with what was written.

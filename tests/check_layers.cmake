@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 # Checks that every #include "folder/..." of the project goes down the layers of CONTRIBUTING.md ("Layers"):
 # a folder includes only itself and the folders below it. Run: cmake -DROOT=<source dir> -P check_layers.cmake
 # (ctest runs it as the test `layers`). Prints every include that climbs and fails if there is one.

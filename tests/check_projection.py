@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """bench/bake_jobs.py --project against hand-made reports: Amdahl's law per outermost stage from wall and
 CPU seconds, inner stages not counted twice, verification after the PVS, and every stage taken as parallel
 without CPU seconds."""

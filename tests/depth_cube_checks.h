@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Test helpers for the depth cube (pvs/depth_cube.h): the kernel against the reference on a scene's
 // occludees, and the conservative guarantee for an eye box checked on segments from it.
 #pragma once

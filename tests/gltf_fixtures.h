@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Test helpers: build small glTF 2.0 files by hand (JSON with nlohmann plus one binary buffer) and write
 // them as .gltf with an external .bin, .gltf with a base64 data: URI, or .glb. Header-only.
 #pragma once

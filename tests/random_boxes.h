@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Random points and boxes for the property tests (a seeded core/random.h stream, so every run draws the
 // same).
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Checks of the runtime file (io/runtime_file.h) against the HDF5 loader, for test_runtime_file and
 // test_runtime_export: an exported bake answers every query of the C99 runtime (runtime/pvsr.h, through
 // runtime/pvsr.hpp) as the HDF5 loader answers it on the bake file.

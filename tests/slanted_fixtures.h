@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Test helpers for slanted panels: bumpy tilted sheets of opaque triangles, and a segment-triangle test in
 // double to check that a segment claimed blocked meets one.
 #pragma once

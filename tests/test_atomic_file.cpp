@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests io/atomic_file: commit publishes the bytes, no commit leaves nothing, the temporary file sits next
 // to the final one, and failures throw pvs::Error (kIo) naming the paths.
 #include "io/atomic_file.h"

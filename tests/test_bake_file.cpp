@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests io/bake_file: write-then-read is lossless for every field (UTF-8 names, deduped rows, object counts
 // around byte and word edges, empty sets, dropped grid cells), the file is byte-identical for the same
 // bake, damaged or foreign files are refused with a pvs::Error (kBadInput) naming the file and what is

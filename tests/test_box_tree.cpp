@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The box tree (core/box_tree.h) against a scan of every box: a walk that opens the nodes meeting a query
 // box visits exactly the boxes a scan finds; and the tree's links (leaves, parents, pre-order) hold.
 #include "core/box_tree.h"

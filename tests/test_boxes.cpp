@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Occluder synthesis (occluders/boxes.h): boxes stay inside the solid (property test on random grids),
 // the fast path gives exactly the reference's boxes (differential test on fixed seeds and awkward grids),
 // simple shapes get the few boxes they should, and the limits of the config are honoured.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Uniform grid: dimensions, lookup at borders and corners; eye points and sphere directions.
 #include "cells/eyes.h"
 #include "cells/grid.h"

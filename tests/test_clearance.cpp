@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Sight-line widths (rays/clearance.h): the exact segment-triangle distance against dense sampling, the
 // Embree gather of triangles near a segment against testing every triangle, and the width of lines through
 // slits of known width.

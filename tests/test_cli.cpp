@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The command line end to end, in-process: bake, info, query, verify, and bad input.
 #include "core/config.h"
 #include "core/error.h"

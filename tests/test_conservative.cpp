@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The conservative mode on scenes whose visibility is known (who sees whom, fusion), and zero misses against
 // dense rays on random box worlds.
 #include "cells/eyes.h"

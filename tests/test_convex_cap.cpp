@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Convex caps (pvs/convex_cap.h): the hull of opaque polygons meeting at edges, checked against dense
 // segments tested polygon by polygon (the slow reference), and their construction on small scenes.
 #include "pvs/convex_cap.h"

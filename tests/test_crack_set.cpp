@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The crack test set (samples/crack_set.h): its geometry checked with the sight-line widths of
 // rays/clearance.h (the witness line through each opening is exactly as wide as the opening), and a small
 // set baked in the conservative mode: what the occluder stage found is listed, and the wide openings are

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The conservative depth cube map: hand-built scenes (who hides whom), the fast kernel against the plain
 // reference on fixed seeds (identical answers), and the conservative guarantee against dense ray sampling.
 #include "core/error.h"

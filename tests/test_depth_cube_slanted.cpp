@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Slanted panels on the conservative depth cube (pvs/depth_cube.h, add_slanted_panel()): who hides whom
 // behind off-axis walls, fusion of off-axis walls, the kernel against the plain reference (identical
 // answers), and the guarantee against the real triangles: a box proven hidden for an eye box is hidden from

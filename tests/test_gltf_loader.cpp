@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests of load_world on hand-built glTF files (tests/gltf_fixtures.h): transforms, primitive modes,
 // accessor layouts, names, materials, extras, degenerate triangles, bad inputs, and the real worlds.
 #include "io/gltf_loader.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests of write_glb and make_box_node: the GLB layout, the JSON written, errors, and a round trip through
 // load_world (objects, names, triangles, bounds, materials, extras).
 #include "io/gltf_writer.h"

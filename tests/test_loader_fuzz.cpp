@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Fuzz test of load_world: truncations, bit and byte flips and JSON digit edits of real and hand-built
 // worlds (fixed seeds). Each mutant must load into a sane World or throw pvs::Error (kBadInput); any other
 // exception, an internal error, or a crash fails.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The runtime loader as games consume it, from an installed prefix (cmake --install): a game in C only
 // (CMake, static and shared library), a game in C++ (CMake), a C build with plain pkg-config, a Python
 // script through ctypes checked against `pvsbake query`, and the shared library's exported symbols.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Occluder synthesis: boxes fill the sealed solid, the sight probe carves what a crack lets eyes see,
 // and no proven box ever stands where a ray from the eye space reaches.
 #include "cells/eyes.h"

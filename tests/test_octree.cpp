@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The visibility-driven octree: small cells where visibility changes (a maze), big ones where it does
 // not (an open field); lookups descend to the right leaf.
 #include "cells/octree.h"

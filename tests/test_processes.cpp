@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The processes of a bake (driver/processes.h): MPI starts only for a bake or a verification that an MPI
 // launcher started; every other command, and a bake run alone, starts no MPI runtime.
 #include "driver/processes.h"

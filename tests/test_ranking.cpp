@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Ranked occluders per cell (occluders/ranking.h, occluders/cell_ranking.h): the exact solid angle of a box
 // against closed forms; the shadow frustum test against a scene (behind a wall: hidden; peeking past its
 // edge: not) and against the simple segment test on random inputs; the hierarchy's counts against brute

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The single-occluder pass (pvs/region_hiding.h): exact tests of one panel or one box between a region
 // and an object, checked against many random segments, and the hider on a small scene.
 #include "core/random.h"

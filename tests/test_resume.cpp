@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Resumable bakes (docs/ALGORITHMS.md#resume): the journal of finished rows, its checkpoint chunks, and
 // bakes of the real pvsbake binary killed with SIGKILL and run again, which must write the file an
 // uninterrupted bake writes (the same outside /run, docs/FORMAT.md).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The incremental re-bake (docs/ALGORITHMS.md#reuse): the geometry print, and bakes of an edited sample world
 // with --reuse of the bake before the edit, which must write the file a full bake of the edited world
 // writes (the same outside /run, docs/FORMAT.md) while testing fewer pairs.

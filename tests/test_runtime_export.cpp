@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests the runtime file from the baker's side: a real bake (a random world, grid and octree) exported
 // answers every query as the HDF5 loader does, and `pvsbake export` and `pvsbake bake --runtime-output`
 // write it (the same bytes), or fail with exit 2 and no file.

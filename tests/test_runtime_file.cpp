@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests the runtime file (io/runtime_file.h) and the C99 runtime that reads it (runtime/pvsr.h): an exported
 // bake answers every query as the HDF5 loader does on the same bake (every cell, every object, random points
 // for the lookups; grids and octrees, with and without masks, object counts around the word edges and past

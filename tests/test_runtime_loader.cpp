@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests the runtime loader (pvsbake/loader.h, pvsbake/loader_c.h): everything write_bake_file writes, the
 // loader reads back identically (cells and their lookup, rows, objects, figures; grids and octrees, view
 // masks, format 1.0 files without the PVS code); each status comes with its message; the C API mirrors

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Fuzz test of the runtime loader (pvsbake::Bake::load): damaged copies of small grid and octree bakes
 // (truncations, flipped bytes anywhere, in the stored data of datasets and in attributes, datasets and
 // attributes rewritten with wrong types, and datasets claiming huge sizes). Every mutant must load or

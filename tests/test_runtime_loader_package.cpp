@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tests of the runtime loader that need the whole build: a real bake made by the pvsbake command reads
 // back identically through the loader, and the installed CMake package (cmake --install) builds a consumer
 // in C and C++ with find_package(pvsbake) + target_link_libraries(... pvsbake::loader).

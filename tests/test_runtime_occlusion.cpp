@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The run-time culler of moving objects (pvsbake/occlusion.h): scenes whose answer is known (behind a wall,
 // peeking round its edge, two walls that only hide together), awkward inputs (eye inside an occluder, a box
 // holding the eye, empty, flat and non-finite boxes, a NaN eye), the C API, and zero wrong culls against

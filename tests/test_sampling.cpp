@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Ray sampling and verification on hand-built scenes whose visibility is known by construction.
 #include "cells/eyes.h"
 #include "core/error.h"

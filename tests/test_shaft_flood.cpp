@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Separation in the shaft (pvs/shaft_flood.h): the solid's tiles against the voxels; the flood held to a slow
 // reference (many segments between the two boxes against every panel and every solid voxel) on stepped walls
 // of panels in three planes, closed and with holes; and, in the shaft pass, pairs at junctions that the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The shaft pass (pvs/shaft_hiding.h): a plane's cover by panels and the proven solid's slice, held to a
 // plain reference on many random segments; with cross-plane fusion, held to whole segments against every
 // occluder; the umbra against brute force; walls of two planes that hide together what neither hides alone;

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Helpers shared by the tests: temporary folders, the real worlds when present, CI sizing.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The view volume: sealed rooms, leaks, boxes, play height; grid clipping and eye points inside it.
 #include "cells/eyes.h"
 #include "cells/grid.h"

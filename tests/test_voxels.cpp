@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Conservative voxelization (against an independent clipping reference) and the flood of free space.
 #include "core/error.h"
 #include "core/random.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Worlds whose extent would break the voxel caps: the automatic voxel size fits any shape within
 // --max-voxels; a world that needs voxels coarser than --max-voxel-size or the cells to do so keeps voxels of
 // that limit when it is just large (a town), and is refused, naming the objects that stand apart, when a

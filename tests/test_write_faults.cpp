@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Allocations that fail in the writers (docs/ALGORITHMS.md#faults), in the manner of SQLite's malloc tests:
 // the Nth allocation of a write throws std::bad_alloc, for every N until a write needs no more. Each failed
 // write must end in an exception (std::bad_alloc or pvs::Error), leave no file, temporary or final, and leave

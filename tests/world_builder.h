@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Test helper: build a World in memory from named boxes (no glTF), and hand-made cell sets.
 #pragma once
 

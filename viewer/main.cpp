@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsview: the VTK viewer of pvsbake's bakes. See viewer/README.md and viewer/pvsview.h.
 #include "viewer/pvsview.h"
 

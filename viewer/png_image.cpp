@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake viewer: read a PNG back as plain RGB pixels, with VTK's PNG reader. See png_image.h.
 #include "viewer/png_image.h"
 

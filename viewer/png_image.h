@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake viewer: read a PNG back as plain RGB pixels (the screenshot tests look at pixels).
 //
 // Conventions: row 0 is the top of the image (as the picture is seen), 3 bytes per pixel.

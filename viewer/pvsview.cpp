@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake viewer: pvsview on VTK. See pvsview.h. What is shown is decided in view_model.h (plain data);
 // this file only turns it into VTK actors, handles keys and clicks, and writes screenshots.
 #include "viewer/pvsview.h"

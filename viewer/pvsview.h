@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake viewer: pvsview, the VTK viewer of bakes (the world, cells coloured by PVS size, a picked cell's
 // PVS and figures, occluders, verification misses, the leak path, the view volume), interactive or
 // headless (--screenshot). VTK stays inside the .cpp files.

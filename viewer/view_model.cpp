@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake viewer: what pvsview shows, as plain data. See view_model.h.
 #include "viewer/view_model.h"
 

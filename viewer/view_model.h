@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake viewer: what pvsview shows, as plain data (no VTK here, so it is tested without a window).
 //
 // Conventions: glTF axes (right-handed, +Y up), metres, world space. Colours are 8-bit RGBA, alpha 255

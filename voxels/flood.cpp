@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Flood of free voxels from seeds: on all threads for the reached set; breadth first on one thread when it
 // leaks, up to the first border voxel reached, for the path to it.
 #include "voxels/flood.h"

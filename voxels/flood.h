@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake voxels: flood of free space from view seeds, and leak finding (after Quake's vis and its
 // point file; docs/ALGORITHMS.md#flood); sight through free voxels (docs/ALGORITHMS.md#sight-sweep).
 //

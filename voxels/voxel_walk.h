@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake voxels: exact voxel traversal of a ray (J. Amanatides and A. Woo, "A Fast Voxel Traversal
 // Algorithm for Ray Tracing", Eurographics 1987).
 //

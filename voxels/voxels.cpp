@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Conservative voxelization: Akenine-Möller's triangle-box separating-axis test, applied hierarchically
 // (a box of voxels the triangle misses is skipped whole; one it overlaps is halved until single voxels).
 #include "voxels/voxels.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake voxels: a dense voxel grid over the world and conservative voxelization of its opaque
 // triangles (after Akenine-Möller, "Fast 3D Triangle-Box Overlap Testing", JGT 2001;
 // docs/ALGORITHMS.md#voxelization).

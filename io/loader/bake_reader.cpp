@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake loader (internal): the validated sections of a bake file (bake_reader.h).
 #include "bake_reader.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake loader (internal): reads and validates the sections of a bake file (docs/FORMAT.md) into plain
 // arrays, as they are in the file. The one reader of the format: the runtime loader builds its lookup
 // structures from these, and the baker's read_bake_file (io/bake_file.cpp) builds a BakeData.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake loader (internal): checked HDF5 reading (see hdf5_reader.h). Every check here guards against a
 // kind of damaged file that crashed or exhausted HDF5 1.10.8 in fuzzing (docs/FORMAT.md, "Reading").
 #include "hdf5_reader.h"

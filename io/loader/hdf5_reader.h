@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake loader (internal): checked reading of HDF5 files with the HDF5 C library alone. The one place
 // that knows how HDF5 1.10.8 must be guarded against damaged files (docs/FORMAT.md, "Reading"); both the
 // baker's reader (io/bake_file.cpp, read_bake_file) and the runtime loader (pvsbake::Bake::load) use it.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake runtime loader: load() (reads and validates everything through bake_reader.h, then builds the
 // lookup structures) and the queries of pvsbake/loader.h. Nothing here throws out of load(); queries are
 // noexcept and read only validated data.

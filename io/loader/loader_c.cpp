@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake runtime loader: the C API (pvsbake/loader_c.h) over pvsbake::Bake. Every entry point is
 // noexcept in effect: Bake's queries do not throw, and load() reports instead of throwing.
 #include "pvsbake/loader_c.h"

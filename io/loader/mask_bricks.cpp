@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake loader (internal): voxel masks as bricks (mask_bricks.h).
 #include "mask_bricks.h"
 

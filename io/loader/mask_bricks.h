@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake loader (internal): voxel masks as 8 x 8 x 8 bricks (docs/FORMAT.md, "Voxel masks"), the form the
 // runtime loader looks masks up in and, from format 1.4, the form the file stores beside the plain bits.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Run-time culling of moving objects: shadow frusta of single occluder boxes, then a conservative float
 // depth cube that fuses them. Conventions: include/pvsbake/occlusion.h; the safety argument:
 // docs/ALGORITHMS.md#runtime-culler.

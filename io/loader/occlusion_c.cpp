@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The C API of the run-time occlusion culler (pvsbake/occlusion_c.h) over pvsbake::OcclusionCuller.
 #include <pvsbake/occlusion.h>
 #include <pvsbake/occlusion_c.h>

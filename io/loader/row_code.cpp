@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake loader (internal): the PVS code (row_code.h). Rice coding of gaps: Golomb, "Run-length encodings"
 // (IEEE Trans. Inf. Theory, 1966), with power-of-two parameters after Rice (1979); coding a row against a
 // similar earlier one is the key-frame idea of video codecs.

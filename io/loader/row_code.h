@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake loader (internal): the PVS code, the compact form of PVS rows that the loader keeps in memory and
 // that format 1.1 files store in /pvs/code (docs/FORMAT.md, "The PVS code"). The writer (io/bake_file.cpp)
 // encodes with encode_rows(); the loader validates with check_row_code() and decodes while walking

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 /* A preloaded library (LD_PRELOAD) that makes a chosen write-side call of a process fail, in the manner of
  * SQLite's I/O error tests: tests/faults/inject.py runs a command once to count its calls, then once for every
  * N, failing the Nth.

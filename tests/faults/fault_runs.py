@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """What the fault scripts (inject.py, reads.py) share: the cheap bake options and running pvsbake undisturbed
 or under the preloaded tests/faults/fail_io.c."""
 

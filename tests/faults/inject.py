@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Fails every write of pvsbake's commands in turn, in the manner of SQLite's I/O error tests.
 
 Each scenario (a bake with its report and runtime file, a bake of a leaking world with its leak path, export,

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Reads that fail: every command that reads a bake file or a checkpoint, given one that is truncated, empty,
 unreadable, a folder, or missing, must end with status 1 or 2 and one line naming the file, write nothing,
 and never crash or hang.

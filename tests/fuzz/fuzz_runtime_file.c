@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 /* libFuzzer target of the C99 runtime (runtime/pvsr.h): any bytes, with the checksum made right (so that the
  * mutations reach the structural checks), are refused by pvsr_open() or every query of the level stays inside
  * the bytes and in range; and the culler of moving objects, given the bytes as floats (an eye, occluder boxes,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // libFuzzer target: the world loader (io/gltf_loader.h, from memory) and the checks that follow it before
 // any voxel is made (cells/world_extent.h: the voxel grid within its caps, the farthest-reaching objects).
 //

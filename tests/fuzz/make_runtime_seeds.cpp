@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // make_runtime_seeds OUT_DIR: a few small runtime files for the fuzz target's corpus (grid and octree, with
 // and without masks and ranked occluders), exported from the loader tests' synthetic bakes.
 #include "io/bake_file.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // tinygltf's implementation compiled into the world loader's fuzz target, so that its parser is
 // instrumented (coverage, ASan, UBSan) like our code; the bake links Debian's libtinygltf instead. Images
 // are never decoded by the loader (io/gltf_loader.cpp sets no image loader), so stb is left out.

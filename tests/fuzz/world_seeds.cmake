@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 # The seed corpus of the world loader's fuzz target (tests/fuzz/fuzz_world.cpp): the sample world, the tiny
 # world (samples/tiny_world.py) and the shared levels when they are there. cmake -DOUT=DIR -DROOT=REPO
 # [-DPYTHON=python3] -P world_seeds.cmake

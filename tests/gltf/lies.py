@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """Worlds that lie, set before the Khronos glTF-Validator and before pvsbake: pvsbake must refuse each one,
 naming what lies, and the validator must raise its error code for it where it has a rule.
 

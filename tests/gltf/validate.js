@@ -1,4 +1,5 @@
 #!/usr/bin/env node
+// SPDX-License-Identifier: MIT
 /*
  * What the Khronos glTF-Validator (npm package gltf-validator) says about glTF files: one JSON line per
  * file, so that tests/gltf/lies.py can set the validator's rules beside pvsbake's own checks.

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """The shared loader exports the C API and nothing else (docs/LOADER.md, "Stability").
 
     check_exports.py LIB SONAME HEADER...

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """A Python game over the installed shared loader through ctypes (tests/test_loader_install.cpp).
 
     ctypes_query.py LIB BAKE PVSBAKE POINTS SEED [RUNTIME_LIB LEVEL.pvsr]

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 /* A game in plain C over the installed runtime loader (tests/test_loader_install.cpp builds it with CMake,
  * static and shared, and with pkg-config). Usage: game BAKE.h5
  * Loads the bake, walks the PVS of every cell three ways (visit, list, bit set), checks that they agree,

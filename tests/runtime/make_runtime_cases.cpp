@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // make_runtime_cases OUT_DIR: runtime files and what the HDF5 loader (pvsbake/loader.h) answers on their bake
 // files, as OUT_DIR/cases.txt, for runtime_check (tests/runtime/runtime_check.c) to compare the C99 runtime
 // against on other machines: grids and octrees with masks and ranked occluders, no objects, and more objects

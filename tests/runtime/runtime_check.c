@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 /* runtime_check CASES.txt: the C99 runtime (runtime/pvsr.h) against expectations the HDF5 loader wrote
  * (make_runtime_cases), on whatever machine this is built for: natively, 32-bit x86, Windows (MinGW-w64,
  * run under Wine) and WebAssembly (Emscripten, run under Node). For each case: the runtime file opens; every

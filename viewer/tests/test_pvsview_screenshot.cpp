@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsview headless: renders screenshots of a tiny world and checks pixels for what they must show.
 // The world: box "a" (object 0) left of box "b" (object 1), seen from straight above (camera on +Z);
 // four cells of 2 m in a row below them on screen; cells 0 and 1 see "a" only, cells 2 and 3 "b" only;

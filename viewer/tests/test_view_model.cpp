@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsview's view model (viewer/view_model.h): which objects are coloured, cell figures, picking, cameras,
 // the view volume's surface. Plain data, no window.
 #include "viewer/view_model.h"

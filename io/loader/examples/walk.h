@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake example helpers: the camera path of the game-loop example (pvsbake_walkthrough) and the moving
 // objects it culls. Shared with bench/bench_runtime_cull.cpp, which follows the same path and moves the
 // same objects to check the culler against rays. A level is any type with cell_count(), cell_bounds(c)

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake example: a game loop over a bake. Loads the bake at "level load", then every frame moves a
 // camera along a smooth path through the world's cells (a Catmull-Rom spline through the centres of
 // neighbouring cells, going straight where it can), looks up the camera's cell and walks its PVS, and prints

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A game in C++17 over the installed runtime loader's static library (tests/test_loader_install.cpp).
 // Usage: game_cxx BAKE.h5. Walks every cell's PVS with the C++ API and checks it against the C API on the
 // same file; prints the line tests/install/game.c prints, so the two can be compared.

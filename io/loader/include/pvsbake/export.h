@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 /* pvsbake runtime loader: PVSBAKE_API marks the functions of the C API (pvsbake/loader_c.h,
  * pvsbake/occlusion_c.h), the only symbols the shared library libpvsbake_loader.so exports; it is built
  * with hidden visibility and a linker version script (io/loader/loader.map), see docs/LOADER.md,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake runtime loader: load a bake file (docs/FORMAT.md) at level load, then every frame find the
 // camera's cell and walk its potentially visible set. Links the HDF5 C library only; no exceptions leave
 // it, no global state; a loaded Bake is immutable, so any number of threads may query it at once. load()

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 /* pvsbake runtime loader, plain C API (for engines in C or other languages). Mirrors pvsbake/loader.h:
  * an opaque handle from pvsbake_load(), status codes, and no allocation by the caller beyond the buffers
  * it passes. A loaded bake is immutable: any number of threads may query it at once. Nothing here

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // pvsbake runtime loader: run-time culling of MOVING objects (characters, vehicles, props: what no PVS can
 // list) against a few occluder boxes, such as the ranked occluders a bake stores per cell
 // (docs/ALGORITHMS.md#ranking; why the culler is conservative: docs/ALGORITHMS.md#runtime-culler). Every

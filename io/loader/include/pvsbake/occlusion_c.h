@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 /* pvsbake runtime loader, plain C API of the run-time occlusion culler of moving objects. Mirrors
  * pvsbake/occlusion.h (read its conventions: glTF axes, metres, solid occluder boxes, "hidden" only when
  * certainly hidden). Boxes are float[6]: min x, y, z, max x, y, z, as in pvsbake/loader_c.h. Nothing here
