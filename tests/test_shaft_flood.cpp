@@ -241,6 +241,35 @@ TEST(ShaftFlood, ASlitAtTheJunctionKeepsTheObjectSeen) {
     }
 }
 
+// A wall standing on a floor that ends at it (a ledge over a drop), seen from above the floor: an object
+// behind the wall and below the floor's level is hidden by the two together, in one piece pair of the
+// shaft pass with the flood alone (no fusion, caps or cups); with a 2 cm slit under the wall, the object
+// is seen through it and stays listed. Dense segments confirm both.
+TEST(ShaftFlood, AWallOnAFloorHidesWhatIsBehindAndBelowIt) {
+    Context ctx = quiet_context();
+    for (const float slit : {0.0f, 0.02f}) {
+        SteppedWall w;
+        w.occ.epsilon_m = {0.1};
+        w.occ.boxes = {{}};
+        w.occ.panels.push_back(Aabb::of({0.0f, slit, -5.0f}, {0.0f, 3.0f, 5.0f}));    // the wall, x = 0
+        w.occ.panels.push_back(Aabb::of({-6.0f, 0.0f, -5.0f}, {0.0f, 0.0f, 5.0f}));   // the floor, y = 0
+        World world;
+        const Aabb box = Aabb::of({1.0f, -2.0f, -0.5f}, {2.0f, -1.0f, 0.5f});
+        const uint32_t object = test::add_box(world, "o", box);
+        const Aabb cell = Aabb::of({-3.0f, 0.5f, -1.0f}, {-2.0f, 2.0f, 1.0f});
+        const VoxelMask no_eyes;
+        const ShaftRegion shaft = shaft_region(no_eyes, cell);
+        EXPECT_EQ(segments_blocked(w, cell, box, Rng(3, 3), 200000), slit == 0.0f) << "the scene is not telling";
+        ShaftFigures fig;
+        EXPECT_EQ(ShaftProver(ctx, w.occ, false, false, false, true).hides(world, no_eyes, shaft, object, 1, fig),
+                  slit == 0.0f)
+            << "slit " << slit;
+        ShaftFigures alone;
+        EXPECT_FALSE(ShaftProver(ctx, w.occ, false, false, false, false).hides(world, no_eyes, shaft, object, 256, alone))
+            << "one plane's cover proved it: the scene is not telling";
+    }
+}
+
 // In the shaft pass: an object behind a closed stepped wall is proven in ONE piece pair by the flood; one
 // plane's covers, umbrae, caps and cups do not prove it in as few. With holes, whatever the pass proves
 // holds on dense segments from the region to the object's box.
