@@ -251,21 +251,24 @@ TEST(ShaftFlood, AWallOnAFloorHidesWhatIsBehindAndBelowIt) {
         SteppedWall w;
         w.occ.epsilon_m = {0.1};
         w.occ.boxes = {{}};
-        w.occ.panels.push_back(Aabb::of({0.0f, slit, -5.0f}, {0.0f, 3.0f, 5.0f}));    // the wall, x = 0
-        w.occ.panels.push_back(Aabb::of({-6.0f, 0.0f, -5.0f}, {0.0f, 0.0f, 5.0f}));   // the floor, y = 0
+        w.occ.panels.push_back(Aabb::of({0.0f, slit, -5.0f}, {0.0f, 3.0f, 5.0f}));   // the wall, x = 0
+        w.occ.panels.push_back(Aabb::of({-6.0f, 0.0f, -5.0f}, {0.0f, 0.0f, 5.0f}));  // the floor, y = 0
         World world;
         const Aabb box = Aabb::of({1.0f, -2.0f, -0.5f}, {2.0f, -1.0f, 0.5f});
         const uint32_t object = test::add_box(world, "o", box);
         const Aabb cell = Aabb::of({-3.0f, 0.5f, -1.0f}, {-2.0f, 2.0f, 1.0f});
         const VoxelMask no_eyes;
         const ShaftRegion shaft = shaft_region(no_eyes, cell);
-        EXPECT_EQ(segments_blocked(w, cell, box, Rng(3, 3), 200000), slit == 0.0f) << "the scene is not telling";
+        EXPECT_EQ(segments_blocked(w, cell, box, Rng(3, 3), 200000), slit == 0.0f)
+            << "the scene is not telling";
         ShaftFigures fig;
-        EXPECT_EQ(ShaftProver(ctx, w.occ, false, false, false, true).hides(world, no_eyes, shaft, object, 1, fig),
-                  slit == 0.0f)
+        EXPECT_EQ(
+            ShaftProver(ctx, w.occ, false, false, false, true).hides(world, no_eyes, shaft, object, 1, fig),
+            slit == 0.0f)
             << "slit " << slit;
         ShaftFigures alone;
-        EXPECT_FALSE(ShaftProver(ctx, w.occ, false, false, false, false).hides(world, no_eyes, shaft, object, 256, alone))
+        EXPECT_FALSE(ShaftProver(ctx, w.occ, false, false, false, false)
+                         .hides(world, no_eyes, shaft, object, 256, alone))
             << "one plane's cover proved it: the scene is not telling";
     }
 }
