@@ -16,6 +16,16 @@
 
 namespace pvs {
 
+// The float nearest x on its side: float_at_most(x) <= x <= float_at_least(x), each the nearest such float.
+inline float float_at_most(double x) {
+    const float f = float(x);
+    return double(f) > x ? std::nextafter(f, -std::numeric_limits<float>::infinity()) : f;
+}
+inline float float_at_least(double x) {
+    const float f = float(x);
+    return double(f) < x ? std::nextafter(f, std::numeric_limits<float>::infinity()) : f;
+}
+
 struct Aabb {
     glm::vec3 min{std::numeric_limits<float>::infinity()};
     glm::vec3 max{-std::numeric_limits<float>::infinity()};

@@ -227,14 +227,6 @@ std::vector<Rect> plane_rectangles(int axis, float plane, const std::vector<Tri2
     return out;
 }
 
-// Rounds x toward `toward` when the float conversion moved it away (insets must never grow a panel).
-float float_inward(double x, bool up) {
-    float f = float(x);
-    if (up && double(f) < x) f = std::nextafter(f, std::numeric_limits<float>::infinity());
-    if (!up && double(f) > x) f = std::nextafter(f, -std::numeric_limits<float>::infinity());
-    return f;
-}
-
 }  // namespace
 
 int panel_axis(const Aabb& panel) {
@@ -295,8 +287,9 @@ std::vector<Aabb> inset_panels(const std::vector<Aabb>& panels, double inset_m) 
         bool empty = false;
         for (int a = 0; a < 3; ++a) {
             if (a == axis) continue;
-            q.min[a] = float_inward(double(p.min[a]) + inset_m, true);
-            q.max[a] = float_inward(double(p.max[a]) - inset_m, false);
+            q.min[a] =
+                float_at_least(double(p.min[a]) + inset_m);  // rounded inward: an inset never grows a panel
+            q.max[a] = float_at_most(double(p.max[a]) - inset_m);
             empty = empty || !(q.min[a] < q.max[a]);
         }
         if (!empty) out.push_back(q);

@@ -56,15 +56,6 @@ bool boxes_meet(const glm::dvec3& alo, const glm::dvec3& ahi, const glm::dvec3& 
            blo.z <= ahi.z;
 }
 
-float round_down(double v) {
-    float f = float(v);
-    return double(f) > v ? std::nextafter(f, -INFINITY) : f;
-}
-float round_up(double v) {
-    float f = float(v);
-    return double(f) < v ? std::nextafter(f, INFINITY) : f;
-}
-
 // The squared distance from p to the segment a -> b.
 double distance2_to_segment(const glm::dvec3& p, const glm::dvec3& a, const glm::dvec3& b) {
     const glm::dvec3 d = b - a;
@@ -179,8 +170,8 @@ ShaftFlood::ShaftFlood(const std::vector<Aabb>& panels, const VoxelMask& solid) 
     }
     bounds_.reserve(boxes_.size());
     for (const FloodBox& b : boxes_) {
-        bounds_.push_back(Aabb::of({round_down(b.lo.x), round_down(b.lo.y), round_down(b.lo.z)},
-                                   {round_up(b.hi.x), round_up(b.hi.y), round_up(b.hi.z)}));
+        bounds_.push_back(Aabb::of({float_at_most(b.lo.x), float_at_most(b.lo.y), float_at_most(b.lo.z)},
+                                   {float_at_least(b.hi.x), float_at_least(b.hi.y), float_at_least(b.hi.z)}));
     }
     tree_ = BoxTree::build(bounds_);
 }
@@ -198,8 +189,8 @@ bool ShaftFlood::separates(const Aabb& region, const Aabb& target, FloodFigures&
     // The occluders that meet the hull, nearest the line between the boxes' centres first (panels before
     // the solid's tiles at equal distance).
     sc.order.clear();
-    const Aabb query = Aabb::of({round_down(dlo.x), round_down(dlo.y), round_down(dlo.z)},
-                                {round_up(dhi.x), round_up(dhi.y), round_up(dhi.z)});
+    const Aabb query = Aabb::of({float_at_most(dlo.x), float_at_most(dlo.y), float_at_most(dlo.z)},
+                                {float_at_least(dhi.x), float_at_least(dhi.y), float_at_least(dhi.z)});
     tree_.walk(
         [&](const Aabb& b) {
             return b.overlaps(query) && hull.meets(glm::dvec3(b.min), glm::dvec3(b.max), 0.0);

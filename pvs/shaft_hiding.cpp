@@ -196,15 +196,6 @@ bool inside(const Poly& poly, glm::dvec2 p) {
     return true;
 }
 
-float down(double x) {
-    float f = float(x);
-    return double(f) > x ? std::nextafter(f, -INFINITY) : f;
-}
-float up(double x) {
-    float f = float(x);
-    return double(f) < x ? std::nextafter(f, INFINITY) : f;
-}
-
 }  // namespace
 
 // Per thread: the pieces of a plane's cover, and the umbrae found for it.
@@ -1226,8 +1217,9 @@ bool ShaftProver::hides(const World& world, const VoxelMask& eyes, const ShaftRe
             if (uint32_t(sc.tri_arena.size()) == out.tris_first)
                 out.point = glm::vec3(sum / double(sc.poly.size()));
             sc.tri_arena.push_back(t);
-            out.target.extend(Aabb::of(glm::vec3(down(lo.x), down(lo.y), down(lo.z)),
-                                       glm::vec3(up(hi.x), up(hi.y), up(hi.z))));
+            out.target.extend(
+                Aabb::of(glm::vec3(float_at_most(lo.x), float_at_most(lo.y), float_at_most(lo.z)),
+                         glm::vec3(float_at_least(hi.x), float_at_least(hi.y), float_at_least(hi.z))));
         }
         out.target.min = glm::max(out.target.min, box.min);
         out.target.max = glm::min(out.target.max, box.max);

@@ -16,6 +16,7 @@ namespace pvs {
 namespace {
 
 using test::point_in;
+using test::segment_meets_closed_box;
 
 Context quiet_context() {
     return Context(Context::Options{LogLevel::kError, true, nullptr});
@@ -143,23 +144,6 @@ SteppedWall stepped_wall(Rng& rng, bool holes) {
     return w;
 }
 
-// Does the segment q -> x meet the closed box (a slab test in double)?
-bool segment_meets_box(const Aabb& b, glm::dvec3 q, glm::dvec3 x) {
-    double t0 = 0.0, t1 = 1.0;
-    for (int k = 0; k < 3; ++k) {
-        const double d = x[k] - q[k];
-        if (d == 0.0) {
-            if (q[k] < b.min[k] || q[k] > b.max[k]) return false;
-            continue;
-        }
-        double e0 = (double(b.min[k]) - q[k]) / d, e1 = (double(b.max[k]) - q[k]) / d;
-        if (e0 > e1) std::swap(e0, e1);
-        t0 = std::max(t0, e0);
-        t1 = std::min(t1, e1);
-    }
-    return t0 <= t1;
-}
-
 // The slow reference: do all of `n` segments between the boxes (the 64 corner segments, then random ones)
 // meet a panel or a block of the solid?
 bool segments_blocked(const SteppedWall& w, const Aabb& from, const Aabb& to, Rng rng, int n) {
@@ -175,8 +159,8 @@ bool segments_blocked(const SteppedWall& w, const Aabb& from, const Aabb& to, Rn
             x = glm::dvec3(point_in(to, rng));
         }
         bool blocked = false;
-        for (const Aabb& p : w.occ.panels) blocked = blocked || segment_meets_box(p, q, x);
-        for (const Aabb& b : w.solid_boxes) blocked = blocked || segment_meets_box(b, q, x);
+        for (const Aabb& p : w.occ.panels) blocked = blocked || segment_meets_closed_box(p, q, x);
+        for (const Aabb& b : w.solid_boxes) blocked = blocked || segment_meets_closed_box(b, q, x);
         if (!blocked) return false;
     }
     return true;

@@ -20,6 +20,7 @@ namespace pvs {
 namespace {
 
 using test::point_in;
+using test::segment_meets_closed_box;
 
 Context quiet_context() {
     return Context(Context::Options{LogLevel::kError, true, nullptr});
@@ -93,23 +94,6 @@ Aabb box_around(glm::vec3 c, glm::vec3 half) {
     return Aabb::of(c - half, c + half);
 }
 
-// Does the segment q -> x meet the closed box (a slab test in double)?
-bool segment_meets_box(const Aabb& b, glm::dvec3 q, glm::dvec3 x) {
-    double t0 = 0.0, t1 = 1.0;
-    for (int k = 0; k < 3; ++k) {
-        const double d = x[k] - q[k];
-        if (d == 0.0) {
-            if (q[k] < b.min[k] || q[k] > b.max[k]) return false;
-            continue;
-        }
-        double e0 = (double(b.min[k]) - q[k]) / d, e1 = (double(b.max[k]) - q[k]) / d;
-        if (e0 > e1) std::swap(e0, e1);
-        t0 = std::max(t0, e0);
-        t1 = std::min(t1, e1);
-    }
-    return t0 <= t1;
-}
-
 // Do all of `n` random segments from `from` to `to` meet one of the occluders (a panel is a flat closed box;
 // a slanted panel of no thickness is its quad of two triangles)? The slow reference of the scene tests.
 bool dense_segments_blocked(const ShrunkOccluders& occ, const Aabb& from, const Aabb& to, Rng rng,
@@ -117,7 +101,7 @@ bool dense_segments_blocked(const ShrunkOccluders& occ, const Aabb& from, const 
     for (int s = 0; s < n; ++s) {
         const glm::dvec3 q(point_in(from, rng)), x(point_in(to, rng));
         bool blocked = false;
-        for (const Aabb& p : occ.panels) blocked = blocked || segment_meets_box(p, q, x);
+        for (const Aabb& p : occ.panels) blocked = blocked || segment_meets_closed_box(p, q, x);
         for (const SlantedPanel& p : occ.slanted) {
             const std::vector<glm::dvec3>& c = p.corners;
             for (size_t i = 1; i + 1 < c.size() && !blocked; ++i)
@@ -335,7 +319,7 @@ TEST(ShaftHiding, TheUmbraHoldsOnlyPointsHiddenFromTheWholeBox) {
         const std::array<glm::dvec3, 8> ec = box_corners(eyes), oc = box_corners(occ);
         std::vector<glm::dvec2> umbra;
         const bool some = umbra_on_plane(ec, oc.data(), 8, 2, 0.0, 1, umbra);
-        const auto meets = [&](glm::dvec3 q, glm::dvec3 y) { return segment_meets_box(occ, q, y); };
+        const auto meets = [&](glm::dvec3 q, glm::dvec3 y) { return segment_meets_closed_box(occ, q, y); };
         for (int s = 0; s < 40; ++s) {
             const glm::dvec3 y(-2.0 + 8.0 * rng.uniform(), -2.0 + 8.0 * rng.uniform(), 0.0);
             bool in = some && umbra.size() >= 3;
@@ -451,7 +435,7 @@ TEST(ShaftHiding, StaggeredPillarsFuse) {
             const glm::dvec3 q(point_in(cell, rng)), x(point_in(w.objects[object].bounds, rng));
             bool first = false, any = false;
             for (size_t i = 0; i < pillars.size(); ++i)
-                if (segment_meets_box(pillars[i], q, x)) {
+                if (segment_meets_closed_box(pillars[i], q, x)) {
                     any = true;
                     first = first || i % 2 == 0;
                 }
