@@ -908,13 +908,24 @@ static void xor_chain(gap_reader* chain, int n, uint64_t* words) {
         for (i = gap_next(&chain[k]); i != PVSR_END; i = gap_next(&chain[k])) words[i >> 6] ^= (uint64_t)1 << (i & 63);
 }
 
-/* What a walk gives each visible object to: a callback, or a list (counting past its capacity). */
+/* What a walk gives each visible object to: a callback, or a list (counting past its capacity); with a
+ * culler, only the objects it does not prove hidden (drawn()). */
 typedef struct sink {
     pvsr_visit_fn visit;
     void* user;
     uint32_t* list;
     size_t capacity;
+    const pvsr_culler* culler;
 } sink;
+
+/* 1 when the walk gives the object on: no culler, an object the bake marks always visible, one without
+ * bounds, or bounds the culler does not prove hidden. */
+static int drawn(const pvsr_level* l, const sink* s, uint32_t object) {
+    float box[6];
+    if (s->culler == NULL || (pvsr_object_flags(l, object) & PVSR_OBJECT_ALWAYS_VISIBLE) != 0) return 1;
+    if (!pvsr_object_bounds(l, object, box)) return 1;
+    return !pvsr_culler_is_hidden(s->culler, box);
+}
 
 /* Walks the cell's row: gives each visible object to the sink in increasing order; returns how many. */
 static uint32_t walk(const pvsr_level* l, uint32_t cell, const sink* s) {
@@ -923,14 +934,16 @@ static uint32_t walk(const pvsr_level* l, uint32_t cell, const sink* s) {
     int n;
     if (l == NULL || cell >= l->cell_count) return 0;
     n = row_chain(l, index_at(&l->cell_row, cell), chain);
-#define PVSR_GIVE(object)                                                 \
-    do {                                                                  \
-        if (s->list != NULL) {                                            \
-            if (count < s->capacity) s->list[count] = (object);           \
-        } else if (s->visit != NULL) {                                    \
-            s->visit(s->user, (object));                                  \
-        }                                                                 \
-        ++count;                                                          \
+#define PVSR_GIVE(object)                                 \
+    do {                                                  \
+        const uint32_t o_ = (object);                     \
+        if (!drawn(l, s, o_)) break;                      \
+        if (s->list != NULL) {                            \
+            if (count < s->capacity) s->list[count] = o_; \
+        } else if (s->visit != NULL) {                    \
+            s->visit(s->user, o_);                        \
+        }                                                 \
+        ++count;                                          \
     } while (0)
     if (n == 1) {
         for (i = gap_next(&chain[0]); i != PVSR_END; i = gap_next(&chain[0])) PVSR_GIVE(i);
@@ -969,11 +982,17 @@ static uint32_t walk(const pvsr_level* l, uint32_t cell, const sink* s) {
 }
 
 uint32_t pvsr_visit_visible(const pvsr_level* l, uint32_t cell, pvsr_visit_fn visit, void* user) {
+    return pvsr_visit_drawn(l, cell, NULL, visit, user);
+}
+
+uint32_t pvsr_visit_drawn(const pvsr_level* l, uint32_t cell, const pvsr_culler* culler, pvsr_visit_fn visit,
+                          void* user) {
     sink s;
     s.visit = visit;
     s.user = user;
     s.list = NULL;
     s.capacity = 0;
+    s.culler = culler;
     return walk(l, cell, &s);
 }
 
@@ -982,12 +1001,18 @@ uint32_t pvsr_visible_count(const pvsr_level* l, uint32_t cell) {
 }
 
 uint32_t pvsr_visible_objects(const pvsr_level* l, uint32_t cell, uint32_t* objects, size_t capacity) {
+    return pvsr_drawn_objects(l, cell, NULL, objects, capacity);
+}
+
+uint32_t pvsr_drawn_objects(const pvsr_level* l, uint32_t cell, const pvsr_culler* culler, uint32_t* objects,
+                            size_t capacity) {
     static uint32_t none;
     sink s;
     s.visit = NULL;
     s.user = NULL;
     s.list = objects != NULL ? objects : &none; /* a list of no room: counts */
     s.capacity = objects != NULL ? capacity : 0;
+    s.culler = culler;
     return walk(l, cell, &s);
 }
 
@@ -1538,4 +1563,14 @@ void pvsr_culler_begin_frame(pvsr_culler* c, const float eye[3], const float* bo
         if (r > 0) rasterize(c, cand->box);
         build_frustum(c, cand->box, cand->delta, &c->frusta[c->frustum_count++]);
     }
+}
+
+uint32_t pvsr_culler_begin_cell(pvsr_culler* c, const pvsr_level* l, uint32_t cell, const float eye[3],
+                                uint32_t max_occluders) {
+    float boxes[6 * PVSR_CULLER_MAX_OCCLUDERS];
+    const uint32_t n = pvsr_occluder_boxes(
+        l, cell, boxes,
+        max_occluders < PVSR_CULLER_MAX_OCCLUDERS ? max_occluders : PVSR_CULLER_MAX_OCCLUDERS);
+    pvsr_culler_begin_frame(c, eye, boxes, n);
+    return n;
 }

@@ -137,6 +137,19 @@ uint32_t pvsr_visible_count(const pvsr_level* level, uint32_t cell);
 /* Writes up to capacity visible object indices in increasing order; returns how many there are (may be
  * more than capacity). */
 uint32_t pvsr_visible_objects(const pvsr_level* level, uint32_t cell, uint32_t* objects, size_t capacity);
+struct pvsr_culler; /* below, with the culler's calls */
+/* What a game draws of the cell from one eye: the cell's PVS less what the culler, set up for this frame
+ * (pvsr_culler_begin_cell() with the cell's ranked occluders, or pvsr_culler_begin_frame()), proves hidden
+ * by the object's bounds. Objects flagged always visible, and objects without bounds, are never culled. Calls
+ * visit(user, object) for every drawn object, in increasing order; returns how many. A NULL culler draws the
+ * whole PVS (pvsr_visit_visible()). Allocates nothing; the culler is only read, so threads may walk cells
+ * with one culler between its begin calls (docs/ALGORITHMS.md#runtime-culler). */
+uint32_t pvsr_visit_drawn(const pvsr_level* level, uint32_t cell, const struct pvsr_culler* culler,
+                          pvsr_visit_fn visit, void* user);
+/* The same objects into a list: writes up to capacity of them in increasing order; returns how many there
+ * are (may be more than capacity). */
+uint32_t pvsr_drawn_objects(const pvsr_level* level, uint32_t cell, const struct pvsr_culler* culler,
+                            uint32_t* objects, size_t capacity);
 /* Fills words[0 .. word_count) with the cell's PVS as a bit set (object i = bit i % 64 of word i / 64; the
  * words past the objects zero); returns the number of visible objects, or UINT32_MAX (words untouched)
  * when word_count < pvsr_words_per_row(), words is NULL or the cell is out of range. */
@@ -146,6 +159,10 @@ int pvsr_is_visible(const pvsr_level* level, uint32_t cell, uint32_t object);
 
 /* ---- Objects: name (UTF-8, NUL-terminated, in the file's bytes; "" out of range), bounds, triangles,
  * flags (bit 0 opaque, 1 see-through, 2 always visible, 3 never occludes). */
+#define PVSR_OBJECT_OPAQUE 1u
+#define PVSR_OBJECT_SEE_THROUGH 2u
+#define PVSR_OBJECT_ALWAYS_VISIBLE 4u
+#define PVSR_OBJECT_NEVER_OCCLUDES 8u
 const char* pvsr_object_name(const pvsr_level* level, uint32_t object);
 int pvsr_object_bounds(const pvsr_level* level, uint32_t object, float box[6]);
 uint32_t pvsr_object_triangles(const pvsr_level* level, uint32_t object);
@@ -189,9 +206,10 @@ const char* pvsr_string(const pvsr_level* level, const char* key);
  *   static pvsr_culler culler;                     (about 20 KiB; keep one per thread that begins frames)
  *   void* memory = malloc(pvsr_culler_memory_bytes(32));
  *   pvsr_culler_init(&culler, 32, memory, pvsr_culler_memory_bytes(32));
- *   each frame: n = pvsr_occluder_boxes(&level, cell, boxes, 16);
- *               pvsr_culler_begin_frame(&culler, eye, boxes, n);
+ *   each frame: pvsr_culler_begin_cell(&culler, &level, cell, eye, PVSR_CULLER_MAX_OCCLUDERS);
+ *               pvsr_visit_drawn(&level, cell, &culler, draw_object, &scene);     (the level's objects)
  *               for each moving object: if (!pvsr_culler_is_hidden(&culler, box)) draw(object);
+ * (pvsr_culler_begin_frame() takes any boxes instead of the cell's ranked occluders.)
  */
 #define PVSR_CULLER_MAX_OCCLUDERS 64 /* more are ignored: pass the best first */
 #define PVSR_CULLER_MIN_RESOLUTION 2
@@ -233,6 +251,11 @@ size_t pvsr_culler_memory_bytes(int resolution);
 int pvsr_culler_init(pvsr_culler* culler, int resolution, void* memory, size_t memory_bytes);
 /* Prepares a frame: the eye (float[3]) and `count` occluder boxes (6 floats each, count * 6 floats). */
 void pvsr_culler_begin_frame(pvsr_culler* culler, const float eye[3], const float* boxes, size_t count);
+/* Prepares a frame with the cell's best min(occluder count, max_occluders, PVSR_CULLER_MAX_OCCLUDERS) ranked
+ * occluders (pvsr_occluder_boxes()); returns how many were given. Allocates nothing (a buffer of
+ * PVSR_CULLER_MAX_OCCLUDERS boxes on the stack). Then pvsr_visit_drawn() gives what to draw. */
+uint32_t pvsr_culler_begin_cell(pvsr_culler* culler, const pvsr_level* level, uint32_t cell,
+                                const float eye[3], uint32_t max_occluders);
 /* 1 only if the box (float[6]) is certainly hidden from this frame's eye. */
 int pvsr_culler_is_hidden(const pvsr_culler* culler, const float box[6]);
 /* Which test proved it (pvsr_cull_path). */

@@ -41,6 +41,8 @@
 
 namespace pvsr {
 
+class Culler;
+
 class Level {
 public:
     // Opens `size` bytes at `data` (pvsr_open); on failure the level is empty and *why (if given) says why.
@@ -84,6 +86,13 @@ public:
             &level_, cell, [](void* user, uint32_t object) { (*static_cast<Fn*>(user))(object); },
             const_cast<void*>(static_cast<const void*>(&visit)));
     }
+    // What a game draws of the cell from one eye: the PVS less what the culler, set up for this frame
+    // (Culler::begin_cell), proves hidden (pvsr_visit_drawn). Calls visit(object) in increasing order;
+    // returns how many.
+    template <class F>
+    uint32_t for_each_drawn(uint32_t cell, const Culler& culler, F&& visit) const;
+    uint32_t drawn_objects(uint32_t cell, const Culler& culler, uint32_t* objects,
+                           size_t capacity) const noexcept;
     uint32_t visible_count(uint32_t cell) const noexcept { return pvsr_visible_count(&level_, cell); }
     uint32_t visible_objects(uint32_t cell, uint32_t* objects, size_t capacity) const noexcept {
         return pvsr_visible_objects(&level_, cell, objects, capacity);
@@ -149,6 +158,12 @@ public:
     void begin_frame(const float eye[3], const float* boxes, size_t count) noexcept {
         pvsr_culler_begin_frame(&culler_, eye, boxes, count);
     }
+    // The eye (float[3]) and the cell's best min(its count, max_occluders, PVSR_CULLER_MAX_OCCLUDERS) ranked
+    // occluders; returns how many were given (pvsr_culler_begin_cell).
+    uint32_t begin_cell(const Level& level, uint32_t cell, const float eye[3],
+                        uint32_t max_occluders = PVSR_CULLER_MAX_OCCLUDERS) noexcept {
+        return pvsr_culler_begin_cell(&culler_, &level.c_level(), cell, eye, max_occluders);
+    }
     bool is_hidden(const float box[6]) const noexcept { return pvsr_culler_is_hidden(&culler_, box) != 0; }
     pvsr_cull_path classify(const float box[6]) const noexcept {
         return pvsr_cull_path(pvsr_culler_classify(&culler_, box));
@@ -156,10 +171,26 @@ public:
     // Occluders this frame uses (those touching the eye and those nearer ones already hide are skipped).
     size_t occluders_used() const noexcept { return culler_.used; }
 
+    const pvsr_culler& c_culler() const noexcept { return culler_; }
+
 private:
     std::vector<float> memory_;
     pvsr_culler culler_{};
     bool ok_ = false;
 };
+
+template <class F>
+uint32_t Level::for_each_drawn(uint32_t cell, const Culler& culler, F&& visit) const {
+    using Fn = std::remove_reference_t<F>;
+    return pvsr_visit_drawn(
+        &level_, cell, &culler.c_culler(),
+        [](void* user, uint32_t object) { (*static_cast<Fn*>(user))(object); },
+        const_cast<void*>(static_cast<const void*>(&visit)));
+}
+
+inline uint32_t Level::drawn_objects(uint32_t cell, const Culler& culler, uint32_t* objects,
+                                     size_t capacity) const noexcept {
+    return pvsr_drawn_objects(&level_, cell, &culler.c_culler(), objects, capacity);
+}
 
 }  // namespace pvsr

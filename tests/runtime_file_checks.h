@@ -12,6 +12,9 @@
 #include "tests/test_util.h"
 
 #include <pvsbake/loader.h>
+#include <pvsbake/loader_c.h>
+#include <pvsbake/occlusion.h>
+#include <pvsbake/occlusion_c.h>
 
 #include <gtest/gtest.h>
 #include <xxhash.h>
@@ -47,6 +50,71 @@ inline std::string opened_message(const Bytes& b, pvsr_status* status) {
     char message[256];
     *status = pvsr_open(&level, b.data(), b.size, message, sizeof message);
     return message;
+}
+
+// What a game draws (the culled walk) from a random eye in each cell (every cell of small bakes), with all
+// of the cell's ranked occluders and with the best 2: the C99 runtime (C and C++ calls) and the HDF5
+// loader (C++ and C calls) give the same objects, and they are the cell's PVS less exactly the objects
+// whose bounds the culler hides, objects flagged always visible kept. Adds how many were culled to culled.
+inline void expect_same_drawn(const pvsr::Level& got, const pvsbake::Bake& want, const pvsbake_bake* c_bake,
+                              uint32_t seed, uint64_t& culled) {
+    std::mt19937 rng(seed ^ 0xd7a3u);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    pvsr::Culler culler(32);
+    pvsbake::OcclusionCuller want_culler(32);
+    EXPECT_TRUE(culler.ok());
+    pvsbake_culler* c_culler = pvsbake_culler_create(32);
+    EXPECT_NE(c_culler, nullptr);
+    const uint32_t step = std::max(1u, want.cell_count() / 150);
+    std::vector<uint32_t> list(want.object_count() + 1);
+    for (uint32_t c = 0; c < want.cell_count(); c += step) {
+        const pvsbake::Box cell = want.cell_bounds(c);
+        float eye[3];
+        for (int a = 0; a < 3; ++a) eye[a] = cell.min[a] + u(rng) * (cell.max[a] - cell.min[a]);
+        for (const uint32_t max : {uint32_t(PVSR_CULLER_MAX_OCCLUDERS), 2u}) {
+            SCOPED_TRACE("cell " + std::to_string(c) + ", up to " + std::to_string(max) + " occluders");
+            const uint32_t given = culler.begin_cell(got, c, eye, max);
+            EXPECT_EQ(given, std::min(want.occluder_count(c), max));
+            EXPECT_EQ(want_culler.begin_cell(want, c, eye, max), given);
+            std::vector<uint32_t> expected, walked, want_walked;
+            want.for_each_visible(c, [&](uint32_t o) {
+                float box[6];
+                got.object_bounds(o, box);
+                if ((got.object_flags(o) & PVSR_OBJECT_ALWAYS_VISIBLE) || !culler.is_hidden(box))
+                    expected.push_back(o);
+            });
+            culled += want.visible_count(c) - expected.size();
+            const uint32_t n = got.for_each_drawn(c, culler, [&](uint32_t o) { walked.push_back(o); });
+            ASSERT_EQ(walked, expected);
+            EXPECT_EQ(n, expected.size());
+            EXPECT_EQ(got.drawn_objects(c, culler, list.data(), list.size()), expected.size());
+            EXPECT_TRUE(std::equal(expected.begin(), expected.end(), list.begin()));
+            EXPECT_EQ(pvsr_visit_drawn(&got.c_level(), c, &culler.c_culler(), nullptr, nullptr),
+                      expected.size());
+            EXPECT_EQ(
+                pvsbake::for_each_drawn(want, c, want_culler, [&](uint32_t o) { want_walked.push_back(o); }),
+                expected.size());
+            ASSERT_EQ(want_walked, expected);
+            if (c_culler != nullptr && c_bake != nullptr) {
+                EXPECT_EQ(pvsbake_culler_begin_cell(c_culler, c_bake, c, eye, max), given);
+                EXPECT_EQ(pvsbake_drawn_objects(c_bake, c, c_culler, list.data(), list.size()),
+                          expected.size());
+                EXPECT_TRUE(std::equal(expected.begin(), expected.end(), list.begin()));
+                EXPECT_EQ(pvsbake_visit_drawn(c_bake, c, c_culler, nullptr, nullptr), expected.size());
+                EXPECT_EQ(pvsbake_visit_drawn(c_bake, c, nullptr, nullptr, nullptr), want.visible_count(c));
+            }
+        }
+        // No culler: the whole PVS.
+        EXPECT_EQ(pvsr_visit_drawn(&got.c_level(), c, nullptr, nullptr, nullptr), want.visible_count(c));
+    }
+    // Out of range, or no bake: nothing.
+    EXPECT_EQ(got.for_each_drawn(want.cell_count(), culler, [](uint32_t) {}), 0u);
+    if (c_culler != nullptr) {
+        const float eye[3] = {0, 0, 0};
+        EXPECT_EQ(pvsbake_culler_begin_cell(c_culler, nullptr, 0, eye, 8), 0u);
+        EXPECT_EQ(pvsbake_drawn_objects(nullptr, 0, c_culler, nullptr, 0), 0u);
+    }
+    pvsbake_culler_free(c_culler);
 }
 
 // Every query of the runtime equals the HDF5 loader's on the same bake.
@@ -173,11 +241,16 @@ inline void expect_same_as_loader(const pvsr::Level& got, const pvsbake::Bake& w
 
 // Writes the bake as HDF5, exports it (without the ranked occluders' measures and every row whole, with them
 // and chains of up to 8 rows, and with the defaults), and checks the runtime against the HDF5 loader.
-inline void round_trip(const BakeData& bake, uint32_t seed) {
+// Adds to *culled (when given) the objects the drawn walks culled (expect_same_drawn).
+inline void round_trip(const BakeData& bake, uint32_t seed, uint64_t* culled = nullptr) {
+    uint64_t culled_here = 0;
     TempDir dir;
     const std::string h5 = dir.file("bake.h5");
     pvsbake::Bake loaded;
     write_and_load(bake, h5, loaded);
+    pvsbake_bake* c_bake = nullptr;
+    char message[256];
+    EXPECT_EQ(pvsbake_load(h5.c_str(), &c_bake, message, sizeof message), PVSBAKE_OK) << message;
     for (const int variant : {0, 1, 2}) {
         const bool measures = variant == 1;
         SCOPED_TRACE(variant == 0 ? "rows whole" : variant == 1 ? "measures, chains of 8" : "defaults");
@@ -194,7 +267,10 @@ inline void round_trip(const BakeData& bake, uint32_t seed) {
         EXPECT_EQ(why, "");
         EXPECT_EQ(pvsr_has_occluder_measures(&level.c_level()) != 0, measures && !bake.ranked.offsets.empty());
         expect_same_as_loader(level, loaded, seed);
+        expect_same_drawn(level, loaded, c_bake, seed, culled_here);
     }
+    pvsbake_free(c_bake);
+    if (culled != nullptr) *culled += culled_here;
 }
 
 }  // namespace pvs::test

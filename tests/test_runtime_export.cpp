@@ -64,7 +64,9 @@ TEST(RuntimeExport, TheSampleWorldAnswersAsTheHdf5Loader) {
                                "--no-verify", "-q", "--eyes", "4", "--rays", "256"}),
                   0);
         BakeData bake = read_bake_file(h5);
-        round_trip(bake, 17);
+        uint64_t culled = 0;
+        round_trip(bake, 17, &culled);
+        EXPECT_GT(culled, 0u) << "the ranked occluders should cull some object of the PVS from some eye";
     }
 }
 

@@ -3,14 +3,11 @@
 // noexcept in effect: Bake's queries do not throw, and load() reports instead of throwing.
 #include "pvsbake/loader_c.h"
 
+#include "c_handles.h"
 #include "pvsbake/loader.h"
 
 #include <cstring>
 #include <new>
-
-struct pvsbake_bake {
-    pvsbake::Bake bake;
-};
 
 namespace {
 

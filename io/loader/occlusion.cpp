@@ -138,6 +138,14 @@ OcclusionCuller::OcclusionCuller(int resolution) noexcept {
     }
 }
 
+uint32_t OcclusionCuller::begin_cell(const Bake& bake, uint32_t c, const float eye[3],
+                                     size_t max_occluders) noexcept {
+    Box boxes[kMaxOccluders];
+    const uint32_t n = bake.occluder_boxes(c, boxes, uint32_t(std::min(max_occluders, kMaxOccluders)));
+    begin_frame(eye, boxes, n);
+    return n;
+}
+
 void OcclusionCuller::begin_frame(const float eye[3], const Box* occluders, size_t count,
                                   size_t stride_bytes) noexcept {
     // Clear what the last frame wrote.

@@ -3,13 +3,10 @@
 #include <pvsbake/occlusion.h>
 #include <pvsbake/occlusion_c.h>
 
+#include "c_handles.h"
+
 #include <cstring>
 #include <new>
-
-struct pvsbake_culler {
-    pvsbake::OcclusionCuller culler;
-    explicit pvsbake_culler(int resolution) : culler(resolution) {}
-};
 
 namespace {
 
@@ -56,6 +53,37 @@ int pvsbake_culler_is_hidden(const pvsbake_culler* culler, const float box[6]) {
 int pvsbake_culler_classify(const pvsbake_culler* culler, const float box[6]) {
     if (culler == nullptr || box == nullptr) return PVSBAKE_CULL_VISIBLE;
     return int(culler->culler.classify(to_box(box)));
+}
+
+uint32_t pvsbake_culler_begin_cell(pvsbake_culler* culler, const pvsbake_bake* bake, uint32_t cell,
+                                   const float eye[3], size_t max_occluders) {
+    if (culler == nullptr) return 0;
+    if (bake == nullptr) {
+        culler->culler.begin_frame(eye, nullptr, 0);
+        return 0;
+    }
+    return culler->culler.begin_cell(bake->bake, cell, eye, max_occluders);
+}
+
+uint32_t pvsbake_visit_drawn(const pvsbake_bake* bake, uint32_t cell, const pvsbake_culler* culler,
+                             pvsbake_visit_fn visit, void* user) {
+    if (culler == nullptr) return pvsbake_visit_visible(bake, cell, visit, user);
+    if (bake == nullptr) return 0;
+    return pvsbake::for_each_drawn(bake->bake, cell, culler->culler, [&](uint32_t o) {
+        if (visit != nullptr) visit(user, o);
+    });
+}
+
+uint32_t pvsbake_drawn_objects(const pvsbake_bake* bake, uint32_t cell, const pvsbake_culler* culler,
+                               uint32_t* objects, size_t capacity) {
+    if (culler == nullptr) return pvsbake_visible_objects(bake, cell, objects, capacity);
+    if (bake == nullptr) return 0;
+    uint32_t n = 0;
+    pvsbake::for_each_drawn(bake->bake, cell, culler->culler, [&](uint32_t o) {
+        if (objects != nullptr && n < capacity) objects[n] = o;
+        ++n;
+    });
+    return n;
 }
 
 }  // extern "C"

@@ -119,6 +119,24 @@ void write_case(std::FILE* out, const std::filesystem::path& dir, const std::str
             cull_box(box);
         }
     }
+    // What a game draws: from a random eye in each of the first 40 cells, with the best 1 to 7 or all of the
+    // cell's ranked occluders, the objects of the culled walk ("drawn" line: cell, eye, the most occluders,
+    // the count and the objects).
+    for (uint32_t c = 0; c < b.cell_count() && c < 40; ++c) {
+        const pvsbake::Box cell = b.cell_bounds(c);
+        float eye[3];
+        for (int a = 0; a < 3; ++a)
+            eye[a] = cell.min[a] +
+                     (cell.max[a] - cell.min[a]) * std::uniform_real_distribution<float>(0.0f, 1.0f)(rng);
+        const uint32_t most = c % 8 == 0 ? 64u : c % 8;
+        culler.begin_cell(b, c, eye, most);
+        std::vector<uint32_t> drawn;
+        pvsbake::for_each_drawn(b, c, culler, [&](uint32_t o) { drawn.push_back(o); });
+        std::fprintf(out, "drawn %u %x %x %x %u %zu", c, bits(eye[0]), bits(eye[1]), bits(eye[2]), most,
+                     drawn.size());
+        for (const uint32_t o : drawn) std::fprintf(out, " %u", o);
+        std::fprintf(out, "\n");
+    }
     // Random scenes of walls and blocks around the eye, where the depth cube fuses occluders.
     std::uniform_real_distribution<float> w(-20.0f, 20.0f), size(0.2f, 6.0f), thin(0.05f, 0.6f);
     for (int scene = 0; scene < 40; ++scene) {

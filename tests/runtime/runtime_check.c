@@ -14,6 +14,7 @@
 
 static int failures = 0;
 static unsigned long culled = 0;
+static unsigned long drawn_culled = 0; /* objects of cells' PVS that drawn walks leave out */
 static pvsr_culler culler;
 
 #define CHECK(cond, ...)                              \
@@ -204,6 +205,28 @@ static int run_case(FILE* in, const char* folder) {
             for (i = 0; i < 6; ++i) box[i] = float_of(b[i]);
             ++culled;
             CHECK(pvsr_culler_classify(&culler, box) == path, "%s: the culler's answer for a box differs", name);
+        } else if (strcmp(word, "drawn") == 0) {
+            unsigned long c, e[3], most, count, k, o;
+            float eye[3];
+            uint32_t* list;
+            if (fscanf(in, "%lu %lx %lx %lx %lu %lu", &c, &e[0], &e[1], &e[2], &most, &count) != 6) return 0;
+            for (k = 0; k < 3; ++k) eye[k] = float_of(e[k]);
+            list = (uint32_t*)malloc(sizeof(uint32_t) * (count + 1));
+            if (list == NULL) return 0;
+            pvsr_culler_begin_cell(&culler, &level, (uint32_t)c, eye, (uint32_t)most);
+            CHECK(pvsr_drawn_objects(&level, (uint32_t)c, &culler, list, count + 1) == count,
+                  "%s: cell %lu draws another count", name, c);
+            CHECK(pvsr_visit_drawn(&level, (uint32_t)c, &culler, NULL, NULL) == count,
+                  "%s: cell %lu walks another count", name, c);
+            for (k = 0; k < count; ++k) {
+                if (fscanf(in, "%lu", &o) != 1) {
+                    free(list);
+                    return 0;
+                }
+                CHECK(list[k] == (uint32_t)o, "%s: cell %lu draws another object", name, c);
+            }
+            drawn_culled += pvsr_visible_count(&level, (uint32_t)c) - (uint32_t)count;
+            free(list);
         } else if (strcmp(word, "point") == 0) {
             unsigned long p[3];
             long cell;
@@ -265,7 +288,10 @@ int main(int argc, char** argv) {
     }
     fclose(in);
     if (failures == 0)
-        printf("runtime_check: %d cases and %lu culled boxes, every query as expected (%u-bit pointers)\n", cases, culled,
-               (unsigned)(8 * sizeof(void*)));
+        printf(
+            "runtime_check: %d cases, %lu culled boxes and %lu objects culled from drawn walks, every query "
+            "as expected "
+            "(%u-bit pointers)\n",
+            cases, culled, drawn_culled, (unsigned)(8 * sizeof(void*)));
     return failures == 0 && cases > 0 ? 0 : 1;
 }

@@ -106,6 +106,12 @@ public:
         begin_frame(eye, occluders.data(), occluders.size());
     }
 
+    // Prepares one frame with cell c's best min(its count, max_occluders, kMaxOccluders) ranked occluders
+    // (Bake::occluder_boxes); returns how many were given. Allocates nothing. Then for_each_drawn() gives
+    // what to draw of the cell's PVS.
+    uint32_t begin_cell(const Bake& bake, uint32_t c, const float eye[3],
+                        size_t max_occluders = kMaxOccluders) noexcept;
+
     // True only if the box is certainly hidden from this frame's eye (see the conventions above).
     // Thread-safe between begin_frame() calls (const, no scratch).
     bool is_hidden(const Box& box) const noexcept { return classify(box) != Path::kVisible; }
@@ -163,5 +169,28 @@ private:
     // Scratch of rasterize(): per grid vertex, slab intervals along u and v and corner depths of two rows.
     std::vector<float> col_enter_, col_exit_, row_enter_, row_exit_, corner_prev_, corner_cur_;
 };
+
+// Whether the culler culls object o of the bake from this frame's eye: the test for_each_drawn makes.
+inline bool is_culled(const Bake& bake, const OcclusionCuller& culler, uint32_t o) noexcept {
+    constexpr uint32_t kAlwaysVisible = 4;  // object_flags bit 2
+    if ((bake.object_flags(o) & kAlwaysVisible) != 0) return false;
+    return culler.is_hidden(bake.object_bounds(o));  // an empty box is never hidden
+}
+
+// What a game draws of cell c from this frame's eye: its PVS less what the culler (set up by begin_cell, or
+// begin_frame with any occluders) proves hidden by the object's bounds; objects flagged always visible, and
+// those without bounds, are never culled. Calls visit(object) in increasing order; returns how many.
+// Allocates nothing; the culler is only read, so threads may walk cells with one culler between frames.
+template <class F>
+uint32_t for_each_drawn(const Bake& bake, uint32_t c, const OcclusionCuller& culler, F&& visit) {
+    uint32_t drawn = 0;
+    bake.for_each_visible(c, [&](uint32_t o) {
+        if (!is_culled(bake, culler, o)) {
+            visit(o);
+            ++drawn;
+        }
+    });
+    return drawn;
+}
 
 }  // namespace pvsbake

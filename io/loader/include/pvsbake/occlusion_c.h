@@ -6,8 +6,10 @@
  *
  *   pvsbake_culler* culler = pvsbake_culler_create(0);       // 0: the default cube resolution
  *   each frame:
- *     pvsbake_culler_begin_frame(culler, eye, occluder_boxes, occluder_count);
+ *     pvsbake_culler_begin_cell(culler, bake, cell, eye, 64);  // the cell's ranked occluders
+ *     pvsbake_visit_drawn(bake, cell, culler, draw_object, &scene);
  *     for each moving object: if (!pvsbake_culler_is_hidden(culler, box)) draw(object);
+ *   (pvsbake_culler_begin_frame takes any occluder boxes instead.)
  *   pvsbake_culler_free(culler);
  */
 #ifndef PVSBAKE_OCCLUSION_C_H
@@ -17,6 +19,7 @@
 #include <stdint.h>
 
 #include "pvsbake/export.h"
+#include "pvsbake/loader_c.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -38,6 +41,18 @@ PVSBAKE_API void pvsbake_culler_free(pvsbake_culler* culler);
 /* Prepares a frame: eye float[3] and `count` occluder boxes (float[6] each, count * 6 floats). */
 PVSBAKE_API void pvsbake_culler_begin_frame(pvsbake_culler* culler, const float eye[3], const float* boxes,
                                             size_t count);
+/* Prepares a frame with the cell's best min(its count, max_occluders, 64) ranked occluders of the bake;
+ * returns how many were given (a NULL bake: none, nothing is culled). */
+PVSBAKE_API uint32_t pvsbake_culler_begin_cell(pvsbake_culler* culler, const pvsbake_bake* bake,
+                                               uint32_t cell, const float eye[3], size_t max_occluders);
+/* What a game draws of the cell from this frame's eye: the cell's PVS less the objects whose bounds the
+ * culler proves hidden (objects flagged always visible are never culled). Calls visit(user, object) in
+ * increasing order; returns how many. A NULL culler draws the whole PVS (pvsbake_visit_visible). */
+PVSBAKE_API uint32_t pvsbake_visit_drawn(const pvsbake_bake* bake, uint32_t cell,
+                                         const pvsbake_culler* culler, pvsbake_visit_fn visit, void* user);
+/* The same objects into a list: up to capacity of them; returns how many there are (may be more). */
+PVSBAKE_API uint32_t pvsbake_drawn_objects(const pvsbake_bake* bake, uint32_t cell,
+                                           const pvsbake_culler* culler, uint32_t* objects, size_t capacity);
 /* 1 only if box (float[6]) is certainly hidden from this frame's eye. */
 PVSBAKE_API int pvsbake_culler_is_hidden(const pvsbake_culler* culler, const float box[6]);
 /* Which test proved it (pvsbake_cull_path). */
