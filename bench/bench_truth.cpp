@@ -30,6 +30,7 @@
 // Deterministic for a seed at any thread count: eyes from (seed, cell), rays from (seed, cell, object).
 // Prints JSON on stdout, progress on stderr. Exit status 2 on bad input (the message names the file or
 // option).
+#include "bench/aimed_rays.h"
 #include "bench/bench_util.h"
 #include "core/error.h"
 #include "core/random.h"
@@ -60,92 +61,15 @@
 
 namespace {
 
+using pvs::bench::kSegmentEnd;
 using pvs::bench::mean;
 using pvs::bench::median;
+using pvs::bench::OpaqueScene;
+using pvs::bench::random_point_on;
 using pvs::bench::seconds_since;
 
 constexpr uint32_t kMinRays = 16384;      // rays per listed object the definition asks for at least
 constexpr uint32_t kDefaultRays = 65536;  // 16384 leave a few percent of what is visible unfound
-constexpr float kSegmentEnd = 1.0f - 1e-5f;  // the segment stops this far along to its point
-constexpr uint32_t kFirstBatch = 32, kMaxBatch = 2048;  // rays per Embree stream, doubling
-constexpr uint32_t kNoTarget = UINT32_MAX;
-
-// The world's OPAQUE triangles as an Embree scene (see-through ones never block, so they are left out).
-// An occlusion query skips the one triangle its ray aims at (its primID in the context's target[ray.id]).
-class OpaqueScene {
-public:
-    explicit OpaqueScene(const pvs::World& world) : prim_of_triangle_(world.triangles.size(), kNoTarget) {
-        device_ = rtcNewDevice(nullptr);
-        if (!device_) throw pvs::internal_error("bench_truth: cannot create an Embree device");
-        scene_ = rtcNewScene(device_);
-        rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);
-        rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
-        size_t count = 0;
-        for (size_t t = 0; t < world.triangles.size(); ++t) count += world.triangle_opaque[t] != 0;
-        RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
-        rtcSetGeometryBuildQuality(geom, RTC_BUILD_QUALITY_HIGH);
-        auto* verts =
-            static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                        3 * sizeof(float), std::max<size_t>(1, 3 * count)));
-        auto* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
-            geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), count));
-        uint32_t k = 0;
-        for (size_t t = 0; t < world.triangles.size(); ++t) {
-            if (!world.triangle_opaque[t]) continue;
-            for (int c = 0; c < 3; ++c) {
-                const glm::vec3 p = world.positions[world.triangles[t].v[c]];
-                verts[9 * size_t(k) + 3 * c + 0] = p.x;
-                verts[9 * size_t(k) + 3 * c + 1] = p.y;
-                verts[9 * size_t(k) + 3 * c + 2] = p.z;
-                idx[3 * size_t(k) + c] = unsigned(3 * k + c);
-            }
-            prim_of_triangle_[t] = k++;
-        }
-        rtcSetGeometryOccludedFilterFunction(geom, skip_target);
-        rtcCommitGeometry(geom);
-        rtcAttachGeometry(scene_, geom);
-        rtcReleaseGeometry(geom);
-        rtcCommitScene(scene_);
-        if (rtcGetDeviceError(device_) != RTC_ERROR_NONE)
-            throw pvs::internal_error("bench_truth: the Embree scene build failed");
-    }
-    ~OpaqueScene() {
-        rtcReleaseScene(scene_);
-        rtcReleaseDevice(device_);
-    }
-    OpaqueScene(const OpaqueScene&) = delete;
-    OpaqueScene& operator=(const OpaqueScene&) = delete;
-
-    // The primID of world triangle t, or kNoTarget when it is see-through (not in the scene).
-    uint32_t prim_of(uint32_t t) const { return prim_of_triangle_[t]; }
-
-    // rays[i] (ids 0..n-1) aims at primID target[i]: sets tfar < 0 on the rays some OTHER opaque triangle
-    // blocks. Thread-safe.
-    void occluded(RTCRay* rays, const uint32_t* target, uint32_t n) const {
-        AimContext c;
-        rtcInitIntersectContext(&c.rtc);
-        c.target = target;
-        rtcOccluded1M(scene_, &c.rtc, rays, n, sizeof(RTCRay));
-    }
-
-private:
-    struct AimContext {
-        RTCIntersectContext rtc;  // first: Embree hands the filter this pointer
-        const uint32_t* target = nullptr;
-    };
-    static void skip_target(const RTCFilterFunctionNArguments* args) {
-        const auto* c = reinterpret_cast<const AimContext*>(args->context);
-        for (unsigned i = 0; i < args->N; ++i) {
-            if (args->valid[i] != -1) continue;
-            if (RTCHitN_primID(args->hit, args->N, i) == c->target[RTCRayN_id(args->ray, args->N, i)])
-                args->valid[i] = 0;  // the aimed-at triangle itself: not a blocker
-        }
-    }
-
-    RTCDevice device_ = nullptr;
-    RTCScene scene_ = nullptr;
-    std::vector<uint32_t> prim_of_triangle_;
-};
 
 // The eye space of a box: the set voxels of `eyes` meeting it with volume, clipped to it, and their running
 // volumes (m3). Both empty when no eye voxel meets the box.
@@ -200,23 +124,6 @@ glm::vec3 random_eye(const EyeSpace& space, pvs::Rng& rng) {
     const pvs::Aabb& p = space.pieces[k];
     const glm::vec3 jitter(rng.uniform(), rng.uniform(), rng.uniform());
     return glm::clamp(p.min + (p.max - p.min) * jitter, p.min, p.max);
-}
-
-// A triangle of `object` picked by area, and a uniform point in it (as rays/surface_points.h does, keeping
-// the triangle). Returns the world triangle's index.
-uint32_t random_point_on(const pvs::World& world, const std::vector<double>& cum_area, uint32_t object,
-                         pvs::Rng& rng, glm::vec3& point) {
-    const pvs::WorldObject& obj = world.objects[object];
-    const auto first = cum_area.begin() + obj.first_triangle;
-    const auto last = first + obj.triangle_count;
-    const double pick = double(rng.uniform()) * *(last - 1);
-    const auto it = std::min(std::upper_bound(first, last, pick), last - 1);
-    const uint32_t t = obj.first_triangle + uint32_t(it - first);
-    const pvs::Triangle& tri = world.triangles[t];
-    const float r = std::sqrt(rng.uniform()), v = rng.uniform();
-    point = (1.0f - r) * world.positions[tri.v[0]] + r * (1.0f - v) * world.positions[tri.v[1]] +
-            r * v * world.positions[tri.v[2]];
-    return t;
 }
 
 // Per chosen cell.
@@ -426,47 +333,18 @@ int main(int argc, char** argv) {
             const unsigned csr = _mm_getcsr();  // denormals flushed while tracing, as Embree advises
             _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
             _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
-            std::vector<RTCRay> rays(kMaxBatch);
-            std::vector<uint32_t> target(kMaxBatch);
+            pvs::bench::AimScratch scratch;
 #pragma omp for schedule(dynamic, 1)
             for (int64_t p = 0; p < int64_t(pairs.size()); ++p) {
                 const CellFigures& f = figs[pairs[size_t(p)].fig];
                 const uint32_t object = pairs[size_t(p)].object;
                 pvs::Rng rng(pvs::mix64(seed ^ 0x41494d0000000000ULL), (uint64_t(f.cell) << 32) | object);
                 const uint32_t first_eye = rng.below(uint32_t(f.eyes.size()));
-                uint32_t done = 0, batch = kFirstBatch;
-                int64_t reached = -1;
-                while (done < n_rays && reached < 0) {
-                    const uint32_t n = std::min(batch, n_rays - done);
-                    int64_t at_eye = -1;  // a point at the eye itself: reached, nothing between
-                    for (uint32_t k = 0; k < n; ++k) {
-                        const glm::vec3 eye = f.eyes[(first_eye + uint64_t(done) + k) % f.eyes.size()];
-                        glm::vec3 point;
-                        const uint32_t t = random_point_on(world, cum_area, object, rng, point);
-                        const glm::vec3 d = point - eye;
-                        if (at_eye < 0 && d == glm::vec3(0.0f)) at_eye = done + k;
-                        RTCRay& r = rays[k];
-                        r.org_x = eye.x;
-                        r.org_y = eye.y;
-                        r.org_z = eye.z;
-                        r.dir_x = d.x;
-                        r.dir_y = d.y;
-                        r.dir_z = d.z;
-                        r.tnear = 0.0f;
-                        r.tfar = d == glm::vec3(0.0f) ? -1.0f : kSegmentEnd;  // unnormalized: t in [0, 1]
-                        r.time = 0.0f;
-                        r.mask = 0xffffffffu;
-                        r.id = k;
-                        r.flags = 0;
-                        target[k] = scene.prim_of(t);
-                    }
-                    scene.occluded(rays.data(), target.data(), n);
-                    for (uint32_t k = 0; k < n && reached < 0; ++k)
-                        if (rays[k].tfar >= 0.0f) reached = done + k;
-                    if (at_eye >= 0 && (reached < 0 || at_eye < reached)) reached = at_eye;
-                    done += n;
-                    batch = std::min(batch * 2, kMaxBatch);
-                }
+                const pvs::bench::Aim aim =
+                    pvs::bench::aim_at_object(scene, world, cum_area, object, f.eyes.data(), f.eyes.size(),
+                                              first_eye, n_rays, rng, scratch);
+                const int64_t reached = aim.first_reaching;
+                const uint32_t done = aim.rays;
                 first_reach[size_t(p)] = reached;
                 pair_rays[size_t(p)] = done;
                 ctx.progress_advance();

@@ -149,17 +149,17 @@ TEST_F(Installed, PkgConfigGame) {
 
 // A Python script loads the shared library with ctypes, finds the cells of random points and walks their
 // PVS; every answer equals `pvsbake query --json` on the same point, on a grid and an octree bake of the
-// sample world; and the same through the installed C99 runtime's shared library on the bakes' runtime files.
+// sample world; and the same through the installed C99 runtime's shared library on the bakes' runtime files,
+// the walk of what a game draws from each point (the PVS less what the cell's ranked occluders hide) too.
 TEST_F(Installed, PythonCtypesMatchesQuery) {
     const std::string script = test::source_file("tests/install/ctypes_query.py");
     const std::string shared = lib + "/" + PVSBAKE_LOADER_SONAME;
     for (const std::string cells : {"grid", "octree"}) {
         const std::string out = dir.file(cells + ".h5");
-        ASSERT_EQ(
-            shell(std::string(PVSBAKE_BINARY) + " bake " + test::sample_world() + " -o " + out + " --cells " +
-                      cells + " --mode sampled --no-verify --no-occluders --quiet --eyes 4 --rays 256",
-                  log),
-            0)
+        ASSERT_EQ(shell(std::string(PVSBAKE_BINARY) + " bake " + test::sample_world() + " -o " + out +
+                            " --cells " + cells + " --mode sampled --no-verify --quiet --eyes 4 --rays 256",
+                        log),
+                  0)
             << test::read_file(log);
         const std::string level = dir.file(cells + ".pvsr");
         ASSERT_EQ(shell(std::string(PVSBAKE_BINARY) + " export " + out + " -o " + level + " --quiet", log), 0)

@@ -47,6 +47,12 @@ def bind(lib):
         "pvsbake_fill_bitset": (ctypes.c_uint32, [bake_p, ctypes.c_uint32, ctypes.POINTER(ctypes.c_uint64),
                                                   ctypes.c_size_t]),
         "pvsbake_object_name": (ctypes.c_char_p, [bake_p, ctypes.c_uint32]),
+        "pvsbake_culler_create": (ctypes.c_void_p, [ctypes.c_int]),
+        "pvsbake_culler_free": (None, [ctypes.c_void_p]),
+        "pvsbake_culler_begin_cell": (ctypes.c_uint32, [ctypes.c_void_p, bake_p, ctypes.c_uint32,
+                                                        ctypes.POINTER(ctypes.c_float), ctypes.c_size_t]),
+        "pvsbake_drawn_objects": (ctypes.c_uint32, [bake_p, ctypes.c_uint32, ctypes.c_void_p,
+                                                    ctypes.POINTER(ctypes.c_uint32), ctypes.c_size_t]),
     }
     for name, (restype, argtypes) in sigs.items():
         fn = getattr(lib, name)
@@ -78,6 +84,13 @@ class Runtime:
             "pvsr_fill_bitset": (ctypes.c_uint32, [level_p, ctypes.c_uint32, ctypes.POINTER(ctypes.c_uint64),
                                                    ctypes.c_size_t]),
             "pvsr_object_name": (ctypes.c_char_p, [level_p, ctypes.c_uint32]),
+            "pvsr_culler_bytes": (ctypes.c_size_t, []),
+            "pvsr_culler_memory_bytes": (ctypes.c_size_t, [ctypes.c_int]),
+            "pvsr_culler_init": (ctypes.c_int, [ctypes.c_void_p, ctypes.c_int, ctypes.c_void_p, ctypes.c_size_t]),
+            "pvsr_culler_begin_cell": (ctypes.c_uint32, [ctypes.c_void_p, level_p, ctypes.c_uint32,
+                                                         ctypes.POINTER(ctypes.c_float), ctypes.c_uint32]),
+            "pvsr_drawn_objects": (ctypes.c_uint32, [level_p, ctypes.c_uint32, ctypes.c_void_p,
+                                                     ctypes.POINTER(ctypes.c_uint32), ctypes.c_size_t]),
         }
         for name, (restype, argtypes) in sigs.items():
             fn = getattr(lib, name)
@@ -97,6 +110,19 @@ class Runtime:
         if lib.pvsr_open(ctypes.create_string_buffer(lib.pvsr_level_bytes()), broken, len(data) - 1, message,
                          len(message)) == 0 or b"truncated" not in message.value:
             fail("%s less its last byte opened: %r" % (level_path, message.value))
+        # The culler: its struct and its depth cube's memory (32 pixels a face), both allocated here once.
+        self.culler = ctypes.create_string_buffer(lib.pvsr_culler_bytes())
+        self.culler_memory = (ctypes.c_float * (lib.pvsr_culler_memory_bytes(32) // 4 + 1))()
+        if not lib.pvsr_culler_init(self.culler, 32, self.culler_memory, ctypes.sizeof(self.culler_memory)):
+            fail("the runtime's culler did not take its memory")
+
+    def drawn(self, cell, eye, objects):
+        """What a game draws of the cell from the eye: its PVS less what its ranked occluders hide."""
+        lib = self.lib
+        lib.pvsr_culler_begin_cell(self.culler, self.level, cell, eye, 64)
+        listed = (ctypes.c_uint32 * max(objects, 1))()
+        n = lib.pvsr_drawn_objects(self.level, cell, self.culler, listed, objects)
+        return list(listed[:n])
 
     def check(self, cell, objects, words, names, expect, where):
         lib, level = self.lib, self.level
@@ -147,6 +173,11 @@ def main():
         hi = [max(hi[i], box[3 + i]) for i in range(3)]
 
     rng = random.Random(int(seed))
+    culler = lib.pvsbake_culler_create(0)
+    if not culler:
+        fail("pvsbake_culler_create gave NULL")
+    drawn = (ctypes.c_uint32 * max(objects, 1))()
+    culled = 0
     listed = (ctypes.c_uint32 * max(objects, 1))()
     bits = (ctypes.c_uint64 * max(words, 1))()
     inside = 0
@@ -192,12 +223,23 @@ def main():
                  % (where, cell, n, expect["visible_count"]))
         if runtime is not None:
             runtime.check(cell, objects, words, names, expect, where)
+        # What a game draws from this point as its eye: the PVS less what the cell's ranked occluders hide.
+        eye = (ctypes.c_float * 3)(*p)
+        lib.pvsbake_culler_begin_cell(culler, bake, cell, eye, 64)
+        d = lib.pvsbake_drawn_objects(bake, cell, culler, drawn, objects)
+        if not set(drawn[:d]) <= set(walked) or list(drawn[:d]) != sorted(drawn[:d]):
+            fail("%s: cell %d draws objects out of order or outside its PVS" % (where, cell))
+        culled += n - d
+        if runtime is not None and runtime.drawn(cell, eye, objects) != list(drawn[:d]):
+            fail("%s: cell %d: the runtime draws other objects than the library" % (where, cell))
     kind = "octree" if lib.pvsbake_cell_kind(bake) == 1 else "grid"
+    lib.pvsbake_culler_free(culler)
     lib.pvsbake_free(bake)
     if inside == 0:
         fail("no random point fell in a cell")
-    print("ctypes_query: %s: %d %s cells, %d points, %d in a cell, all as pvsbake query%s"
-          % (bake_path, cells, kind, int(points), inside,
+    print("ctypes_query: %s: %d %s cells, %d points, %d in a cell (their ranked occluders culled %d objects of "
+          "the PVS from them), all as pvsbake query%s"
+          % (bake_path, cells, kind, int(points), inside, culled,
              ", and the same through the runtime file" if runtime is not None else ""))
 
 

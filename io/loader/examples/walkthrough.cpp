@@ -1,11 +1,13 @@
 // SPDX-License-Identifier: MIT
 // pvsbake example: a game loop over a bake. Loads the bake at "level load", then every frame moves a
 // camera along a smooth path through the world's cells (a Catmull-Rom spline through the centres of
-// neighbouring cells, going straight where it can), looks up the camera's cell and walks its PVS, and prints
-// how many objects and triangles it would draw against all of them. Outside the view volume a game draws
-// everything. Moving objects (people and vehicles, which no PVS can list) walk through the view volume, and
-// every frame the occlusion culler (pvsbake/occlusion.h) tests their boxes against the current cell's ranked
-// occluders; the example prints how many it culled and what that cost.
+// neighbouring cells, going straight where it can), looks up the camera's cell, sets the occlusion culler
+// (pvsbake/occlusion.h) up with the cell's ranked occluders, and walks what to draw: the cell's PVS less what
+// those occluders hide from the eye. It prints how many objects and triangles it would draw against the PVS
+// and all of them. Outside the view volume a game draws everything; outside the eye space (the rim around
+// it, up to and into thin walls) it draws the whole PVS. Moving objects (people and vehicles, which no PVS
+// can list) walk through the view volume, and the same culler tests their boxes; the example prints how many
+// it culled and what the culling cost.
 //
 //   pvsbake_walkthrough BAKE.h5|LEVEL.pvsr [--frames N] [--objects M] [--seed S] [--quiet]
 //
@@ -55,16 +57,17 @@ struct RuntimeLevel {
     void for_each_visible(uint32_t c, F&& visit) const {
         level.for_each_visible(c, visit);
     }
-    uint32_t occluder_boxes(uint32_t c, pvsbake::Box* out, uint32_t capacity) const {
-        static_assert(sizeof(pvsbake::Box) == 6 * sizeof(float), "a Box is six floats");
-        return level.occluder_boxes(c, &out[0].min[0], capacity);
-    }
 };
 
 struct RuntimeCuller {
     pvsr::Culler culler;
-    void begin_frame(const float eye[3], const pvsbake::Box* boxes, uint32_t count) {
-        culler.begin_frame(eye, count ? &boxes[0].min[0] : nullptr, count);
+    void begin_cell(const RuntimeLevel& l, uint32_t c, const float eye[3]) {
+        culler.begin_cell(l.level, c, eye);
+    }
+    void begin_empty(const float eye[3]) { culler.begin_frame(eye, nullptr, 0); }
+    template <class F>
+    uint32_t for_each_drawn(const RuntimeLevel& l, uint32_t c, F&& visit) const {
+        return l.level.for_each_drawn(c, culler, visit);
     }
     int classify(const pvsbake::Box& box) const { return int(culler.classify(&box.min[0])); }
     size_t occluders_used() const { return culler.occluders_used(); }
@@ -77,8 +80,11 @@ struct LoaderLevel {
 
 struct LoaderCuller {
     pvsbake::OcclusionCuller culler;
-    void begin_frame(const float eye[3], const pvsbake::Box* boxes, uint32_t count) {
-        culler.begin_frame(eye, boxes, count);
+    void begin_cell(const pvsbake::Bake& b, uint32_t c, const float eye[3]) { culler.begin_cell(b, c, eye); }
+    void begin_empty(const float eye[3]) { culler.begin_frame(eye, nullptr, 0); }
+    template <class F>
+    uint32_t for_each_drawn(const pvsbake::Bake& b, uint32_t c, F&& visit) const {
+        return pvsbake::for_each_drawn(b, c, culler, visit);
     }
     int classify(const pvsbake::Box& box) const { return int(culler.classify(box)); }
     size_t occluders_used() const { return culler.occluders_used(); }
@@ -165,41 +171,39 @@ int play(const Level& bake, Culler& culler, int frames, int movers_wanted, unsig
     std::mt19937 rng(seed);
     std::vector<pvsbake::walk::Mover> movers =
         pvsbake::walk::spawn_movers(bake, uint32_t(movers_wanted), rng);
-    uint64_t drawn_objects = 0, drawn_triangles = 0, outside = 0;
+    uint64_t drawn_objects = 0, drawn_triangles = 0, pvs_triangles = 0, outside = 0;
     uint64_t moving_tested = 0, moving_culled = 0, culled_by_frusta = 0, occluders_used = 0,
              frames_culling = 0;
     double cull_us = 0.0;
     for (int f = 0; f < frames && !way.empty(); ++f) {
         const Vec3 eye = pvsbake::walk::camera_eye(way, f);
+        const float eye_m[3] = {eye.x, eye.y, eye.z};
         pvsbake::walk::step_movers(bake, movers, 1.0f / 30.0f, rng);
 
-        // The per-frame work of a game: find the cell, walk its PVS.
+        // The per-frame work of a game: find the cell; in the eye space, where the bake promises what its
+        // occluders hide, set the culler up with the cell's ranked occluders (elsewhere with none); walk what
+        // to draw: the cell's PVS less what they hide from the eye.
         const int32_t cell = bake.find_cell(eye.x, eye.y, eye.z);
-        uint32_t n = objects;
-        uint64_t tris = triangles;
+        const bool can_cull = cell >= 0 && bake.in_eye_space(eye.x, eye.y, eye.z);
+        frames_culling += can_cull;
+        const auto c0 = std::chrono::steady_clock::now();
+        if (can_cull)
+            culler.begin_cell(bake, uint32_t(cell), eye_m);
+        else
+            culler.begin_empty(eye_m);
+        uint32_t n = objects, pvs = objects;
+        uint64_t tris = triangles, pvs_tris = triangles;
         if (cell >= 0) {
             n = 0;
             tris = 0;
-            bake.for_each_visible(uint32_t(cell), [&](uint32_t o) {
+            culler.for_each_drawn(bake, uint32_t(cell), [&](uint32_t o) {
                 ++n;
                 tris += bake.object_triangles(o);
             });
         } else {
             ++outside;
         }
-        drawn_objects += n;
-        drawn_triangles += tris;
-
-        // Moving objects: cull their boxes against the cell's ranked occluders (format 1.2, best first),
-        // only when the eye is in the eye space, where the bake promises what they hide (in the rim
-        // around it, up to and into thin walls, it does not: cull nothing there).
-        const bool can_cull = cell >= 0 && bake.in_eye_space(eye.x, eye.y, eye.z);
-        pvsbake::Box occluders[8];
-        const uint32_t occluder_count = can_cull ? bake.occluder_boxes(uint32_t(cell), occluders, 8) : 0;
-        frames_culling += can_cull;
-        const auto c0 = std::chrono::steady_clock::now();
-        const float eye_m[3] = {eye.x, eye.y, eye.z};
-        culler.begin_frame(eye_m, occluders, occluder_count);
+        // Moving objects: their boxes against the same occluders.
         uint32_t culled = 0;
         for (const pvsbake::walk::Mover& m : movers) {
             const int path = culler.classify(pvsbake::walk::mover_box(m));
@@ -207,27 +211,42 @@ int play(const Level& bake, Culler& culler, int frames, int movers_wanted, unsig
             culled_by_frusta += path == 1;
         }
         cull_us += std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - c0).count();
+        if (cell >= 0) {  // the PVS, for the printout
+            pvs = 0;
+            pvs_tris = 0;
+            bake.for_each_visible(uint32_t(cell), [&](uint32_t o) {
+                ++pvs;
+                pvs_tris += bake.object_triangles(o);
+            });
+        }
+        drawn_objects += n;
+        drawn_triangles += tris;
+        pvs_triangles += pvs_tris;
         moving_tested += movers.size();
         moving_culled += culled;
         occluders_used += culler.occluders_used();
         if (!quiet) {
             std::printf(
-                "frame %4d  eye (%8.2f %8.2f %8.2f)  cell %7d  draws %5u / %u objects, %8llu / %llu "
-                "triangles; moving: culled %4u / %zu (%zu occluders)\n",
-                f, eye.x, eye.y, eye.z, cell, n, objects, (unsigned long long)tris,
-                (unsigned long long)triangles, culled, movers.size(), culler.occluders_used());
+                "frame %4d  eye (%8.2f %8.2f %8.2f)  cell %7d  draws %5u of the PVS's %5u / %u objects, "
+                "%8llu / "
+                "%llu / %llu triangles; moving: culled %4u / %zu (%zu occluders)\n",
+                f, eye.x, eye.y, eye.z, cell, n, pvs, objects, (unsigned long long)tris,
+                (unsigned long long)pvs_tris, (unsigned long long)triangles, culled, movers.size(),
+                culler.occluders_used());
         }
     }
     const double fo = double(drawn_objects) / std::max(1.0, double(frames) * objects);
     const double ft = double(drawn_triangles) / std::max(1.0, double(frames) * double(triangles));
+    const double fp = double(pvs_triangles) / std::max(1.0, double(frames) * double(triangles));
     std::printf(
         "total: %d frames (%llu outside the view volume, drawn whole): drew %.1f%% of objects and %.1f%% of "
-        "triangles\n",
-        frames, (unsigned long long)outside, 100.0 * fo, 100.0 * ft);
+        "triangles (the PVS: %.1f%%)\n",
+        frames, (unsigned long long)outside, 100.0 * fo, 100.0 * ft, 100.0 * fp);
     std::printf(
         "moving objects: %zu; the occluders culled %llu of %llu boxes tested (%.1f%%; %llu by single shadow "
-        "frusta, %llu by the fused depth cube) with %.1f occluders a frame, at %.1f us a frame; %llu frames "
-        "in the eye space culled, the others drew every moving object\n",
+        "frusta, %llu by the fused depth cube) with %.1f occluders a frame; the culling (the level's objects "
+        "and the moving ones) at %.1f us a frame; %llu frames in the eye space culled, the others drew the "
+        "whole PVS and every moving object\n",
         movers.size(), (unsigned long long)moving_culled, (unsigned long long)moving_tested,
         100.0 * double(moving_culled) / std::max(1.0, double(moving_tested)),
         (unsigned long long)culled_by_frusta, (unsigned long long)(moving_culled - culled_by_frusta),

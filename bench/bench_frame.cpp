@@ -1,0 +1,344 @@
+// SPDX-License-Identifier: MIT
+// bench_frame: what a game draws per frame against what the eye really sees, through the shipped C99 runtime
+// (runtime/pvsr.h) as a game calls it.
+//
+//   bench_frame WORLD.glb LEVEL.pvsr [--frames F] [--check-frames C] [--rays R] [--occluders K]
+//                                    [--resolution N] [--seed S]
+//
+// Frames: F (default 200) eyes, each uniform in the eye space of a cell drawn at random (seed S, default 1):
+// a cell uniform among the level's cells, then a point uniform in its box kept when pvsr_in_eye_space() holds
+// and pvsr_find_cell() gives that cell (up to 256 draws, else another cell). Per frame, with one thread:
+// the cell's PVS (pvsr_visible_objects), then pvsr_culler_begin_cell() with the cell's best K (default all)
+// ranked occluders on a culler of N (default 32) pixels a cube face and pvsr_drawn_objects(): the objects the
+// game draws. Truth: for every listed object, up to R (default 4096) rays from the frame's eye at random
+// points of the object (bench/aimed_rays.h: Embree against the world's opaque triangles, nothing of the
+// bake decides); the object is visible from the eye when one reaches. A WRONG CULL is a culled object a ray
+// reaches. Then C (default 0) more frames whose culled objects alone are traced, for the wrong-cull count.
+// Figures: the shares of the level's triangles (mean over frames) in the PVS, drawn, and visible;
+// drawn / visible and PVS / visible (ratios of the sums); the share of the PVS's triangles culled, and of
+// the PVS's invisible triangles culled (what the run-time level could take); the cost per frame (median
+// and 90th percentile of begin_cell + drawn walk, and of the plain walk alone, microseconds, one thread);
+// wrong culls in all frames. Deterministic for a seed; the rays run on every thread. Prints JSON on stdout,
+// progress on stderr. Exit status 2 on bad input (the message names the file or option).
+#include "bench/aimed_rays.h"
+#include "bench/bench_util.h"
+#include "core/context.h"
+#include "core/error.h"
+#include "core/random.h"
+#include "io/gltf_loader.h"
+#include "rays/surface_points.h"
+#include "runtime/pvsr.h"
+
+#include <omp.h>
+#include <pmmintrin.h>
+#include <xmmintrin.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <iostream>
+#include <iterator>
+#include <limits>
+#include <string>
+#include <vector>
+
+namespace {
+
+using pvs::bench::median;
+using pvs::bench::seconds_since;
+
+constexpr uint32_t kEyeDraws = 256;  // draws of a point in a cell's box before another cell is drawn
+
+struct Frame {
+    uint32_t cell = 0;
+    glm::vec3 eye{0.0f};
+    std::vector<uint32_t> listed, drawn;
+    double frame_us = 0.0, walk_us = 0.0;
+    uint32_t occluders = 0;
+    bool full = true;  // truth for every listed object; else for the culled ones only
+};
+
+[[noreturn]] void bad_option(const std::string& message) {
+    throw pvs::bad_input("bench_frame: " + message);
+}
+
+uint64_t parse_count(const char* option, const char* text, uint64_t min, uint64_t max) {
+    char* end = nullptr;
+    errno = 0;
+    const unsigned long long v = std::strtoull(text, &end, 10);
+    if (errno != 0 || end == text || *end != '\0' || text[0] == '-' || v < min || v > max)
+        bad_option(std::string(option) + " " + text + ": wants a whole number from " + std::to_string(min) +
+                   " to " + std::to_string(max));
+    return v;
+}
+
+double micros(std::chrono::steady_clock::time_point a, std::chrono::steady_clock::time_point b) {
+    return std::chrono::duration<double, std::micro>(b - a).count();
+}
+
+// The 90th percentile (nearest rank); 0 when empty.
+double percentile90(std::vector<double> v) {
+    if (v.empty()) return 0.0;
+    std::sort(v.begin(), v.end());
+    return v[std::min(v.size() - 1, size_t(0.9 * double(v.size())))];
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    const char* usage =
+        "usage: bench_frame WORLD.glb LEVEL.pvsr [--frames F] [--check-frames C] [--rays R] [--occluders K]\n"
+        "                   [--resolution N] [--seed S]\n";
+    if (argc < 3 || argv[1][0] == '-' || argv[2][0] == '-') {
+        std::fputs(usage, stderr);
+        return 2;
+    }
+    const auto t_start = std::chrono::steady_clock::now();
+    const std::string world_path = argv[1], level_path = argv[2];
+    uint32_t n_frames = 200, n_check = 0, n_rays = 4096, max_occluders = PVSR_CULLER_MAX_OCCLUDERS;
+    int resolution = 32;
+    uint64_t seed = 1;
+    try {
+        for (int a = 3; a < argc; ++a) {
+            const std::string k = argv[a];
+            if (k != "--frames" && k != "--check-frames" && k != "--rays" && k != "--occluders" &&
+                k != "--resolution" && k != "--seed")
+                bad_option("unknown option " + k + " (run it with no arguments for the usage)");
+            if (a + 1 >= argc) bad_option(k + " wants a value");
+            const char* v = argv[++a];
+            if (k == "--frames")
+                n_frames = uint32_t(parse_count("--frames", v, 1, 10'000'000));
+            else if (k == "--check-frames")
+                n_check = uint32_t(parse_count("--check-frames", v, 0, 100'000'000));
+            else if (k == "--rays")
+                n_rays = uint32_t(parse_count("--rays", v, 1, 100'000'000));
+            else if (k == "--occluders")
+                max_occluders = uint32_t(parse_count("--occluders", v, 0, PVSR_CULLER_MAX_OCCLUDERS));
+            else if (k == "--resolution")
+                resolution = int(parse_count("--resolution", v, 0, PVSR_CULLER_MAX_RESOLUTION));
+            else
+                seed = parse_count("--seed", v, 0, std::numeric_limits<uint64_t>::max());
+        }
+    } catch (const pvs::Error& e) {
+        std::fprintf(stderr, "error: %s\n", e.what());
+        return 2;
+    }
+
+    try {
+        pvs::Context ctx(pvs::Context::Options{pvs::LogLevel::kWarning, false, stderr});
+        std::fprintf(stderr, "bench_frame: loading %s and %s\n", world_path.c_str(), level_path.c_str());
+        const pvs::World world = pvs::load_world(ctx, world_path);
+        std::vector<uint64_t> bytes;  // 8-byte aligned, as pvsr_open wants
+        size_t size = 0;
+        {
+            std::ifstream in(level_path, std::ios::binary);
+            if (!in) throw pvs::bad_input(level_path + ": cannot read the runtime file");
+            const std::string s((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+            size = s.size();
+            bytes.resize((size + 7) / 8 + 1);
+            std::copy(s.begin(), s.end(), reinterpret_cast<char*>(bytes.data()));
+        }
+        pvsr_level level;
+        char message[256];
+        if (pvsr_open(&level, bytes.data(), size, message, sizeof message) != PVSR_OK)
+            throw pvs::bad_input(level_path + ": not a runtime file pvsr_open accepts: " + message);
+        const uint32_t n_objects = pvsr_object_count(&level), n_cells = pvsr_cell_count(&level);
+        bool same_objects = n_objects == world.objects.size();
+        for (uint32_t o = 0; same_objects && o < n_objects; ++o)
+            same_objects = pvsr_object_triangles(&level, o) == world.objects[o].triangle_count;
+        if (!same_objects)
+            throw pvs::bad_input(level_path + ": was not baked from " + world_path +
+                                 " (its objects or their triangle counts differ)");
+        if (n_cells == 0) throw pvs::bad_input(level_path + ": the level has no cells");
+        const double world_triangles = double(pvsr_total_triangles(&level));
+
+        // Frames: eyes and the game's per-frame calls, one thread.
+        std::vector<float> culler_memory(pvsr_culler_memory_bytes(resolution) / sizeof(float) + 1);
+        pvsr_culler culler;
+        if (!pvsr_culler_init(&culler, resolution, culler_memory.data(),
+                              culler_memory.size() * sizeof(float)))
+            throw pvs::internal_error("bench_frame: the culler did not take its memory");
+        std::vector<Frame> frames(size_t(n_frames) + n_check);
+        std::vector<uint32_t> scratch(n_objects + 1);
+        pvs::Rng rng(seed, 0x4652414d45ULL);
+        uint64_t cell_draws = 0;
+        for (size_t i = 0; i < frames.size(); ++i) {
+            Frame& f = frames[i];
+            f.full = i < n_frames;
+            for (bool found = false; !found;) {
+                if (++cell_draws > 1000 * (uint64_t(frames.size()) + 1000))
+                    throw pvs::bad_input(level_path + ": too few cells have eye space to draw eyes in");
+                f.cell = rng.below(n_cells);
+                float box[6];
+                pvsr_cell_bounds(&level, f.cell, box);
+                for (uint32_t d = 0; d < kEyeDraws && !found; ++d) {
+                    const glm::vec3 p(box[0] + rng.uniform() * (box[3] - box[0]),
+                                      box[1] + rng.uniform() * (box[4] - box[1]),
+                                      box[2] + rng.uniform() * (box[5] - box[2]));
+                    if (pvsr_in_eye_space(&level, p.x, p.y, p.z) &&
+                        pvsr_find_cell(&level, p.x, p.y, p.z) == int32_t(f.cell)) {
+                        f.eye = p;
+                        found = true;
+                    }
+                }
+            }
+            const float eye[3] = {f.eye.x, f.eye.y, f.eye.z};
+            const auto t0 = std::chrono::steady_clock::now();
+            const uint32_t listed = pvsr_visible_objects(&level, f.cell, scratch.data(), scratch.size());
+            const auto t1 = std::chrono::steady_clock::now();
+            f.occluders = pvsr_culler_begin_cell(&culler, &level, f.cell, eye, max_occluders);
+            const uint32_t drawn = pvsr_drawn_objects(&level, f.cell, &culler, nullptr, 0);
+            const auto t2 = std::chrono::steady_clock::now();
+            f.walk_us = micros(t0, t1);
+            f.frame_us = micros(t1, t2);
+            f.listed.assign(scratch.begin(), scratch.begin() + listed);
+            f.drawn.resize(drawn);
+            pvsr_drawn_objects(&level, f.cell, &culler, f.drawn.data(), f.drawn.size());
+        }
+
+        // Truth: rays from each frame's eye at its listed objects (the culled ones only in check frames).
+        struct Pair {
+            uint32_t frame, object;
+            bool drawn;
+        };
+        std::vector<Pair> pairs;
+        const std::vector<double> cum_area = pvs::cumulative_areas(world);
+        for (uint32_t i = 0; i < frames.size(); ++i) {
+            const Frame& f = frames[i];
+            size_t d = 0;
+            for (const uint32_t o : f.listed) {
+                while (d < f.drawn.size() && f.drawn[d] < o) ++d;
+                const bool drawn = d < f.drawn.size() && f.drawn[d] == o;
+                const pvs::WorldObject& obj = world.objects[o];
+                if (obj.triangle_count == 0 || !(cum_area[obj.first_triangle + obj.triangle_count - 1] > 0.0))
+                    continue;  // nothing to see
+                if (f.full || !drawn) pairs.push_back({i, o, drawn});
+            }
+        }
+        const auto t_build = std::chrono::steady_clock::now();
+        const pvs::bench::OpaqueScene scene(world);
+        const double build_seconds = seconds_since(t_build);
+        std::vector<uint8_t> visible(pairs.size(), 0);
+        uint64_t rays_traced = 0;
+        std::fprintf(stderr,
+                     "bench_frame: %zu frames, %zu (frame, object) pairs to trace, up to %u rays each\n",
+                     frames.size(), pairs.size(), n_rays);
+        const auto t_rays = std::chrono::steady_clock::now();
+        ctx.progress_begin("aimed rays", pairs.size(), "pairs");
+#pragma omp parallel reduction(+ : rays_traced)
+        {
+            const unsigned csr = _mm_getcsr();  // denormals flushed while tracing, as Embree advises
+            _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
+            _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
+            pvs::bench::AimScratch aim_scratch;
+#pragma omp for schedule(dynamic, 16)
+            for (int64_t p = 0; p < int64_t(pairs.size()); ++p) {
+                const Pair& pair = pairs[size_t(p)];
+                pvs::Rng pair_rng(pvs::mix64(seed ^ 0x4652414d45524159ULL),
+                                  (uint64_t(pair.frame) << 32) | pair.object);
+                const pvs::bench::Aim aim =
+                    pvs::bench::aim_at_object(scene, world, cum_area, pair.object, &frames[pair.frame].eye, 1,
+                                              0, n_rays, pair_rng, aim_scratch);
+                visible[size_t(p)] = aim.first_reaching >= 0;
+                rays_traced += aim.rays;
+                ctx.progress_advance();
+            }
+            _mm_setcsr(csr);
+        }
+        ctx.progress_end();
+        const double ray_seconds = seconds_since(t_rays);
+
+        // Figures.
+        double pvs_tri = 0, drawn_tri = 0, visible_tri = 0, invisible_tri = 0, culled_invisible_tri = 0;
+        uint64_t listed_objects = 0, drawn_objects = 0, visible_objects = 0, wrong_culls = 0,
+                 culled_objects = 0;
+        uint64_t occluders_given = 0;
+        std::vector<double> frame_us, walk_us;
+        nlohmann::ordered_json wrong = nlohmann::ordered_json::array();
+        for (size_t p = 0; p < pairs.size(); ++p) {
+            const Pair& pair = pairs[p];
+            const Frame& f = frames[pair.frame];
+            if (!pair.drawn && visible[p]) {
+                ++wrong_culls;
+                if (wrong.size() < 20)
+                    wrong.push_back({{"frame", pair.frame},
+                                     {"cell", f.cell},
+                                     {"eye", {f.eye.x, f.eye.y, f.eye.z}},
+                                     {"object", pair.object},
+                                     {"name", world.objects[pair.object].name}});
+            }
+            if (!f.full) continue;
+            const double t = double(world.objects[pair.object].triangle_count);
+            if (visible[p]) {
+                visible_tri += t;
+                ++visible_objects;
+            } else {
+                invisible_tri += t;
+                if (!pair.drawn) culled_invisible_tri += t;
+            }
+        }
+        for (const Frame& f : frames) {
+            culled_objects += f.listed.size() - f.drawn.size();
+            if (!f.full) continue;
+            frame_us.push_back(f.frame_us);
+            walk_us.push_back(f.walk_us);
+            listed_objects += f.listed.size();
+            drawn_objects += f.drawn.size();
+            occluders_given += f.occluders;
+            for (const uint32_t o : f.listed) pvs_tri += double(world.objects[o].triangle_count);
+            for (const uint32_t o : f.drawn) drawn_tri += double(world.objects[o].triangle_count);
+        }
+        auto ratio = [](double a, double b) { return b > 0.0 ? a / b : 0.0; };
+        const double frames_d = double(n_frames);
+        nlohmann::ordered_json out;
+        out["bench"] = "frame";
+        out["world"] = world_path;
+        out["level"] = level_path;
+        out["pvs_kind"] = pvsr_mode_label(&level);
+        out["cells_kind"] = pvsr_cell_kind(&level) == 1 ? "octree" : "grid";
+        out["level_bytes"] = size;
+        out["cells"] = n_cells;
+        out["objects"] = n_objects;
+        out["world_triangles"] = world_triangles;
+        out["seed"] = seed;
+        out["frames"] = n_frames;
+        out["check_frames"] = n_check;
+        out["rays_per_object"] = n_rays;
+        out["max_occluders"] = max_occluders;
+        out["culler_resolution"] = resolution;
+        out["threads"] = omp_get_max_threads();
+        out["occluders_given_mean"] = ratio(double(occluders_given), frames_d);
+        out["pvs_triangle_share_mean"] = pvs_tri / frames_d / world_triangles;
+        out["drawn_triangle_share_mean"] = drawn_tri / frames_d / world_triangles;
+        out["visible_triangle_share_mean"] = visible_tri / frames_d / world_triangles;
+        out["drawn_over_visible_triangles"] = ratio(drawn_tri, visible_tri);
+        out["pvs_over_visible_triangles"] = ratio(pvs_tri, visible_tri);
+        out["culled_share_of_pvs_triangles"] = ratio(pvs_tri - drawn_tri, pvs_tri);
+        out["culled_share_of_invisible_pvs_triangles"] = ratio(culled_invisible_tri, invisible_tri);
+        out["pvs_objects_mean"] = double(listed_objects) / frames_d;
+        out["drawn_objects_mean"] = double(drawn_objects) / frames_d;
+        out["visible_objects_mean"] = double(visible_objects) / frames_d;
+        out["frame_us_median"] = median(frame_us);
+        out["frame_us_p90"] = percentile90(frame_us);
+        out["walk_us_median"] = median(walk_us);
+        out["culled_objects_all_frames"] = culled_objects;
+        out["wrong_culls"] = wrong_culls;
+        out["wrong_cull_examples"] = wrong;
+        out["rays_traced"] = rays_traced;
+        out["cell_draws"] = cell_draws;
+        out["seconds"] = {
+            {"scene_build", build_seconds}, {"rays", ray_seconds}, {"total", seconds_since(t_start)}};
+        std::cout << out.dump(2) << std::endl;
+    } catch (const pvs::Error& e) {
+        std::fprintf(stderr, "error: %s\n", e.what());
+        return e.kind() == pvs::ErrorKind::kInternal ? 1 : 2;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "error: %s\n", e.what());
+        return 1;
+    }
+    return 0;
+}
