@@ -3,7 +3,8 @@
 // (runtime/pvsr.h) as a game calls it.
 //
 //   bench_frame WORLD.glb LEVEL.pvsr [--frames F] [--check-frames C] [--rays R] [--occluders K]
-//                                    [--resolution N] [--seed S]
+//                                    [--resolution N] [--seed S] [--bake BAKE.h5] [--split M]
+//                                    [--eye-occluders E] [--parts 0|1]
 //
 // Frames: F (default 200) eyes, each uniform in the eye space of a cell drawn at random (seed S, default 1):
 // a cell uniform among the level's cells, then a point uniform in its box kept when pvsr_in_eye_space() holds
@@ -20,12 +21,29 @@
 // and 90th percentile of begin_cell + drawn walk, and of the plain walk alone, microseconds, one thread);
 // wrong culls in all frames. Deterministic for a seed; the rays run on every thread. Prints JSON on stdout,
 // progress on stderr. Exit status 2 on bad input (the message names the file or option).
+//
+// Measurement only (what other run-time occluders would give; not what a game gets from the file):
+// --eye-occluders E (with --bake, the level's bake file): the culler takes, per frame, the E proven boxes of
+// the bake with the largest solid angle from the eye instead of the cell's ranked ones; --parts 1: an object
+// is also culled when the culler hides each of its M (--split, default 8) part boxes (its triangles split at
+// the median of their centres on the longest axis, recursively): a finer test of the object. Both make the
+// bench walk the PVS itself (the timing is then not the runtime's).
+// Where the drawn but invisible triangles go (the "waste" object, of the full frames' drawn objects no ray
+// reached): split_culls: the culler hides each of the object's M part boxes; given_boxes: each of
+// kOracleRays segments from the eye to random points of the object meets one of the frame's occluder boxes
+// (what they hide, exactly, that the culler misses); all_proven_boxes (with --bake): ... meets one of every
+// proven box of the bake; all_proven_boxes_and_panels: ... or one of the world's panels (occluders/panels.h,
+// exact covered rectangles of the opaque surface); no_box_set: neither box set. Boxes sharing volume with
+// the object's bounds are left out (an object's own solid cannot cull its bounds).
 #include "bench/aimed_rays.h"
 #include "bench/bench_util.h"
 #include "core/context.h"
 #include "core/error.h"
 #include "core/random.h"
+#include "io/bake_file.h"
 #include "io/gltf_loader.h"
+#include "occluders/panels.h"
+#include "occluders/ranking.h"
 #include "rays/surface_points.h"
 #include "runtime/pvsr.h"
 
@@ -43,6 +61,7 @@
 #include <iostream>
 #include <iterator>
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -52,11 +71,142 @@ using pvs::bench::median;
 using pvs::bench::seconds_since;
 
 constexpr uint32_t kEyeDraws = 256;  // draws of a point in a cell's box before another cell is drawn
+constexpr uint32_t kOracleRays = 64;  // segments per object for the waste classes
+
+// Boxes as an Embree scene of their faces: does a segment meet one of them (those sharing volume with a given
+// box left out: an object's own solid cannot cull the object by its bounds)?
+class BoxScene {
+public:
+    explicit BoxScene(const std::vector<pvs::Aabb>& boxes) : boxes_(boxes) {
+        device_ = rtcNewDevice(nullptr);
+        scene_ = rtcNewScene(device_);
+        rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);
+        RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
+        const size_t n = std::max<size_t>(1, boxes.size());
+        auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0,
+                                                              RTC_FORMAT_FLOAT3, 3 * sizeof(float), 8 * n));
+        auto* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
+            geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), 12 * n));
+        static const unsigned kFaces[12][3] = {{0, 1, 3}, {0, 3, 2}, {4, 6, 7}, {4, 7, 5},
+                                               {0, 4, 5}, {0, 5, 1}, {2, 3, 7}, {2, 7, 6},
+                                               {0, 2, 6}, {0, 6, 4}, {1, 5, 7}, {1, 7, 3}};
+        for (size_t b = 0; b < n; ++b) {
+            const pvs::Aabb box =
+                b < boxes.size() ? boxes[b] : pvs::Aabb::of(glm::vec3(1e30f), glm::vec3(1e30f));
+            for (int c = 0; c < 8; ++c) {
+                v[24 * b + 3 * c + 0] = c & 4 ? box.max.x : box.min.x;
+                v[24 * b + 3 * c + 1] = c & 2 ? box.max.y : box.min.y;
+                v[24 * b + 3 * c + 2] = c & 1 ? box.max.z : box.min.z;
+            }
+            for (int f = 0; f < 12; ++f)
+                for (int c = 0; c < 3; ++c) idx[36 * b + 3 * f + c] = unsigned(8 * b + kFaces[f][c]);
+        }
+        rtcSetGeometryOccludedFilterFunction(geom, skip_excluded);
+        rtcCommitGeometry(geom);
+        rtcAttachGeometry(scene_, geom);
+        rtcReleaseGeometry(geom);
+        rtcCommitScene(scene_);
+    }
+    ~BoxScene() {
+        rtcReleaseScene(scene_);
+        rtcReleaseDevice(device_);
+    }
+    BoxScene(const BoxScene&) = delete;
+    BoxScene& operator=(const BoxScene&) = delete;
+
+    // Whether every segment eye -> points[i] meets a box that does not meet `excluded`.
+    bool all_blocked(glm::vec3 eye, const std::vector<glm::vec3>& points, const pvs::Aabb& excluded) const {
+        ExcludeContext c;
+        c.boxes = &boxes_;
+        c.excluded = excluded;
+        for (const glm::vec3& p : points) {
+            RTCRay r{};
+            r.org_x = eye.x;
+            r.org_y = eye.y;
+            r.org_z = eye.z;
+            const glm::vec3 d = p - eye;
+            r.dir_x = d.x;
+            r.dir_y = d.y;
+            r.dir_z = d.z;
+            r.tnear = 0.0f;
+            r.tfar = pvs::bench::kSegmentEnd;
+            r.mask = 0xffffffffu;
+            rtcInitIntersectContext(&c.rtc);
+            rtcOccluded1(scene_, &c.rtc, &r);
+            if (r.tfar >= 0.0f) return false;
+        }
+        return true;
+    }
+
+private:
+    struct ExcludeContext {
+        RTCIntersectContext rtc;  // first: Embree hands the filter this pointer
+        const std::vector<pvs::Aabb>* boxes = nullptr;
+        pvs::Aabb excluded;
+    };
+    static void skip_excluded(const RTCFilterFunctionNArguments* args) {
+        const auto* c = reinterpret_cast<const ExcludeContext*>(args->context);
+        for (unsigned i = 0; i < args->N; ++i) {
+            if (args->valid[i] != -1) continue;
+            const unsigned box = RTCHitN_primID(args->hit, args->N, i) / 12;
+            if (box >= c->boxes->size()) continue;
+            const pvs::Aabb& b = (*c->boxes)[box];
+            const bool shares_volume = b.min.x < c->excluded.max.x && c->excluded.min.x < b.max.x &&
+                                       b.min.y < c->excluded.max.y && c->excluded.min.y < b.max.y &&
+                                       b.min.z < c->excluded.max.z && c->excluded.min.z < b.max.z;
+            if (shares_volume) args->valid[i] = 0;
+        }
+    }
+    std::vector<pvs::Aabb> boxes_;
+    RTCDevice device_ = nullptr;
+    RTCScene scene_ = nullptr;
+};
+
+// The boxes of up to `parts` groups of the object's triangles: split at the median of their centres on the
+// longest axis of the centres, recursively.
+std::vector<pvs::Aabb> part_boxes(const pvs::World& world, uint32_t object, uint32_t parts) {
+    const pvs::WorldObject& obj = world.objects[object];
+    std::vector<uint32_t> tris(obj.triangle_count);
+    for (uint32_t k = 0; k < obj.triangle_count; ++k) tris[k] = obj.first_triangle + k;
+    auto centre = [&](uint32_t t) {
+        const pvs::Triangle& tri = world.triangles[t];
+        return (world.positions[tri.v[0]] + world.positions[tri.v[1]] + world.positions[tri.v[2]]) / 3.0f;
+    };
+    std::vector<pvs::Aabb> out;
+    struct Range {
+        size_t a, b;
+        uint32_t parts;
+    };
+    std::vector<Range> todo{{0, tris.size(), std::max(1u, parts)}};
+    while (!todo.empty()) {
+        const Range r = todo.back();
+        todo.pop_back();
+        if (r.b <= r.a) continue;
+        if (r.parts <= 1 || r.b - r.a == 1) {
+            pvs::Aabb box;
+            for (size_t k = r.a; k < r.b; ++k)
+                for (int c = 0; c < 3; ++c) box.extend(world.positions[world.triangles[tris[k]].v[c]]);
+            out.push_back(box);
+            continue;
+        }
+        pvs::Aabb cb;
+        for (size_t k = r.a; k < r.b; ++k) cb.extend(centre(tris[k]));
+        const glm::vec3 e = cb.max - cb.min;
+        const int axis = e.x >= e.y && e.x >= e.z ? 0 : e.y >= e.z ? 1 : 2;
+        const size_t mid = (r.a + r.b) / 2;
+        std::nth_element(tris.begin() + long(r.a), tris.begin() + long(mid), tris.begin() + long(r.b),
+                         [&](uint32_t x, uint32_t y) { return centre(x)[axis] < centre(y)[axis]; });
+        todo.push_back({r.a, mid, r.parts / 2});
+        todo.push_back({mid, r.b, r.parts - r.parts / 2});
+    }
+    return out;
+}
 
 struct Frame {
     uint32_t cell = 0;
     glm::vec3 eye{0.0f};
     std::vector<uint32_t> listed, drawn;
+    std::vector<float> boxes;  // the occluder boxes the frame began with
     double frame_us = 0.0, walk_us = 0.0;
     uint32_t occluders = 0;
     bool full = true;  // truth for every listed object; else for the culled ones only
@@ -92,21 +242,26 @@ double percentile90(std::vector<double> v) {
 int main(int argc, char** argv) {
     const char* usage =
         "usage: bench_frame WORLD.glb LEVEL.pvsr [--frames F] [--check-frames C] [--rays R] [--occluders K]\n"
-        "                   [--resolution N] [--seed S]\n";
+        "                   [--resolution N] [--seed S] [--split M] [--bake BAKE.h5]\n";
     if (argc < 3 || argv[1][0] == '-' || argv[2][0] == '-') {
         std::fputs(usage, stderr);
         return 2;
     }
     const auto t_start = std::chrono::steady_clock::now();
     const std::string world_path = argv[1], level_path = argv[2];
-    uint32_t n_frames = 200, n_check = 0, n_rays = 4096, max_occluders = PVSR_CULLER_MAX_OCCLUDERS;
+    uint32_t n_frames = 200, n_check = 0, n_rays = 4096, max_occluders = PVSR_CULLER_MAX_OCCLUDERS,
+             n_split = 8;
+    uint32_t eye_occluders = 0;
+    bool parts_drawn = false;
+    std::string bake_path;
     int resolution = 32;
     uint64_t seed = 1;
     try {
         for (int a = 3; a < argc; ++a) {
             const std::string k = argv[a];
             if (k != "--frames" && k != "--check-frames" && k != "--rays" && k != "--occluders" &&
-                k != "--resolution" && k != "--seed")
+                k != "--resolution" && k != "--seed" && k != "--split" && k != "--bake" &&
+                k != "--eye-occluders" && k != "--parts")
                 bad_option("unknown option " + k + " (run it with no arguments for the usage)");
             if (a + 1 >= argc) bad_option(k + " wants a value");
             const char* v = argv[++a];
@@ -120,6 +275,14 @@ int main(int argc, char** argv) {
                 max_occluders = uint32_t(parse_count("--occluders", v, 0, PVSR_CULLER_MAX_OCCLUDERS));
             else if (k == "--resolution")
                 resolution = int(parse_count("--resolution", v, 0, PVSR_CULLER_MAX_RESOLUTION));
+            else if (k == "--split")
+                n_split = uint32_t(parse_count("--split", v, 1, 4096));
+            else if (k == "--bake")
+                bake_path = v;
+            else if (k == "--eye-occluders")
+                eye_occluders = uint32_t(parse_count("--eye-occluders", v, 0, PVSR_CULLER_MAX_OCCLUDERS));
+            else if (k == "--parts")
+                parts_drawn = parse_count("--parts", v, 0, 1) == 1;
             else
                 seed = parse_count("--seed", v, 0, std::numeric_limits<uint64_t>::max());
         }
@@ -164,6 +327,17 @@ int main(int argc, char** argv) {
             throw pvs::internal_error("bench_frame: the culler did not take its memory");
         std::vector<Frame> frames(size_t(n_frames) + n_check);
         std::vector<uint32_t> scratch(n_objects + 1);
+        // Measurement only: the bake's proven boxes and the objects' part boxes.
+        std::vector<pvs::Aabb> proven;
+        if (!bake_path.empty()) {
+            const pvs::BakeData bake = pvs::read_bake_file(bake_path);
+            for (const pvs::Occluder& o : bake.occluders)
+                if (o.proven) proven.push_back(o.box);
+        }
+        if (eye_occluders > 0 && bake_path.empty()) bad_option("--eye-occluders wants --bake");
+        std::vector<std::vector<pvs::Aabb>> parts(n_objects);
+        if (parts_drawn)
+            for (uint32_t o = 0; o < n_objects; ++o) parts[o] = part_boxes(world, o, n_split);
         pvs::Rng rng(seed, 0x4652414d45ULL);
         uint64_t cell_draws = 0;
         for (size_t i = 0; i < frames.size(); ++i) {
@@ -190,14 +364,63 @@ int main(int argc, char** argv) {
             const auto t0 = std::chrono::steady_clock::now();
             const uint32_t listed = pvsr_visible_objects(&level, f.cell, scratch.data(), scratch.size());
             const auto t1 = std::chrono::steady_clock::now();
-            f.occluders = pvsr_culler_begin_cell(&culler, &level, f.cell, eye, max_occluders);
-            const uint32_t drawn = pvsr_drawn_objects(&level, f.cell, &culler, nullptr, 0);
-            const auto t2 = std::chrono::steady_clock::now();
-            f.walk_us = micros(t0, t1);
-            f.frame_us = micros(t1, t2);
             f.listed.assign(scratch.begin(), scratch.begin() + listed);
-            f.drawn.resize(drawn);
-            pvsr_drawn_objects(&level, f.cell, &culler, f.drawn.data(), f.drawn.size());
+            if (eye_occluders == 0 && !parts_drawn) {  // the game's calls
+                f.occluders = pvsr_culler_begin_cell(&culler, &level, f.cell, eye, max_occluders);
+                const uint32_t drawn = pvsr_drawn_objects(&level, f.cell, &culler, nullptr, 0);
+                const auto t2 = std::chrono::steady_clock::now();
+                f.walk_us = micros(t0, t1);
+                f.frame_us = micros(t1, t2);
+                f.boxes.resize(6 * size_t(f.occluders));
+                pvsr_occluder_boxes(&level, f.cell, f.boxes.data(), f.occluders);
+                f.drawn.resize(drawn);
+                pvsr_drawn_objects(&level, f.cell, &culler, f.drawn.data(), f.drawn.size());
+            } else {  // measurement only: the eye's own best proven boxes, objects by their parts
+                std::vector<std::pair<double, uint32_t>> ranked;
+                for (uint32_t b = 0; b < proven.size() && eye_occluders > 0; ++b) {
+                    const pvs::Aabb& box = proven[b];
+                    if (glm::all(glm::lessThanEqual(box.min, f.eye)) &&
+                        glm::all(glm::lessThanEqual(f.eye, box.max)))
+                        continue;
+                    ranked.push_back({-pvs::box_solid_angle_sr(box, f.eye), b});
+                }
+                const size_t k = std::min<size_t>(eye_occluders, ranked.size());
+                std::partial_sort(ranked.begin(), ranked.begin() + long(k), ranked.end());
+                for (size_t r = 0; r < k; ++r) {
+                    const pvs::Aabb& box = proven[ranked[r].second];
+                    f.boxes.insert(f.boxes.end(),
+                                   {box.min.x, box.min.y, box.min.z, box.max.x, box.max.y, box.max.z});
+                }
+                f.occluders = uint32_t(k);
+                if (eye_occluders == 0) {
+                    f.boxes.resize(6 * size_t(PVSR_CULLER_MAX_OCCLUDERS));
+                    f.occluders = pvsr_occluder_boxes(&level, f.cell, f.boxes.data(), max_occluders);
+                    f.boxes.resize(6 * size_t(f.occluders));
+                }
+                const auto t2 = std::chrono::steady_clock::now();
+                pvsr_culler_begin_frame(&culler, eye, f.boxes.data(), f.occluders);
+                for (const uint32_t o : f.listed) {
+                    float box[6];
+                    pvsr_object_bounds(&level, o, box);
+                    bool hidden = (pvsr_object_flags(&level, o) & PVSR_OBJECT_ALWAYS_VISIBLE) == 0 &&
+                                  pvsr_culler_is_hidden(&culler, box);
+                    if (!hidden && parts_drawn &&
+                        (pvsr_object_flags(&level, o) & PVSR_OBJECT_ALWAYS_VISIBLE) == 0) {
+                        hidden = !parts[o].empty();
+                        for (const pvs::Aabb& b : parts[o]) {
+                            const float pb[6] = {b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z};
+                            if (!pvsr_culler_is_hidden(&culler, pb)) {
+                                hidden = false;
+                                break;
+                            }
+                        }
+                    }
+                    if (!hidden) f.drawn.push_back(o);
+                }
+                const auto t3 = std::chrono::steady_clock::now();
+                f.walk_us = micros(t0, t1);
+                f.frame_us = micros(t2, t3);
+            }
         }
 
         // Truth: rays from each frame's eye at its listed objects (the culled ones only in check frames).
@@ -251,6 +474,59 @@ int main(int argc, char** argv) {
         }
         ctx.progress_end();
         const double ray_seconds = seconds_since(t_rays);
+
+        // Where the drawn but invisible triangles go (measurement only).
+        const auto t_waste = std::chrono::steady_clock::now();
+        std::unique_ptr<BoxScene> all_boxes, with_panels;
+        if (!bake_path.empty()) {
+            all_boxes = std::make_unique<BoxScene>(proven);
+            std::vector<pvs::Aabb> both = proven, panels = pvs::find_panels(world);
+            both.insert(both.end(), panels.begin(), panels.end());
+            with_panels = std::make_unique<BoxScene>(both);
+        }
+        double waste_tri = 0, split_tri = 0, given_tri = 0, all_tri = 0, none_tri = 0, panels_tri = 0;
+        {
+            size_t p = 0;
+            for (uint32_t i = 0; i < n_frames; ++i) {
+                const Frame& f = frames[i];
+                const float eye[3] = {f.eye.x, f.eye.y, f.eye.z};
+                pvsr_culler_begin_frame(&culler, eye, f.boxes.data(), f.occluders);
+                std::vector<pvs::Aabb> given;
+                for (uint32_t k = 0; k < f.occluders; ++k)
+                    given.push_back(
+                        pvs::Aabb::of({f.boxes[6 * k], f.boxes[6 * k + 1], f.boxes[6 * k + 2]},
+                                      {f.boxes[6 * k + 3], f.boxes[6 * k + 4], f.boxes[6 * k + 5]}));
+                const BoxScene given_scene(given);
+                for (; p < pairs.size() && pairs[p].frame == i; ++p) {
+                    if (!pairs[p].drawn || visible[p]) continue;
+                    const uint32_t o = pairs[p].object;
+                    const double t = double(world.objects[o].triangle_count);
+                    waste_tri += t;
+                    bool split_hidden = true;
+                    for (const pvs::Aabb& b : part_boxes(world, o, n_split)) {
+                        const float box[6] = {b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z};
+                        if (!pvsr_culler_is_hidden(&culler, box)) {
+                            split_hidden = false;
+                            break;
+                        }
+                    }
+                    split_tri += split_hidden ? t : 0.0;
+                    pvs::Rng point_rng(pvs::mix64(seed ^ 0x4f5241434c45ULL), (uint64_t(i) << 32) | o);
+                    std::vector<glm::vec3> points(kOracleRays);
+                    for (glm::vec3& q : points) pvs::bench::random_point_on(world, cum_area, o, point_rng, q);
+                    const bool by_given = given_scene.all_blocked(f.eye, points, world.objects[o].bounds);
+                    const bool by_all =
+                        all_boxes && all_boxes->all_blocked(f.eye, points, world.objects[o].bounds);
+                    given_tri += by_given ? t : 0.0;
+                    panels_tri +=
+                        with_panels && with_panels->all_blocked(f.eye, points, world.objects[o].bounds) ? t
+                                                                                                        : 0.0;
+                    all_tri += by_all ? t : 0.0;
+                    none_tri += !by_given && !by_all ? t : 0.0;
+                }
+            }
+        }
+        const double waste_seconds = seconds_since(t_waste);
 
         // Figures.
         double pvs_tri = 0, drawn_tri = 0, visible_tri = 0, invisible_tri = 0, culled_invisible_tri = 0;
@@ -328,10 +604,24 @@ int main(int argc, char** argv) {
         out["culled_objects_all_frames"] = culled_objects;
         out["wrong_culls"] = wrong_culls;
         out["wrong_cull_examples"] = wrong;
+        nlohmann::ordered_json waste;
+        waste["drawn_invisible_triangle_share_mean"] = waste_tri / frames_d / world_triangles;
+        waste["split_parts"] = n_split;
+        waste["split_culls_share"] = ratio(split_tri, waste_tri);
+        waste["given_boxes_hide_share"] = ratio(given_tri, waste_tri);
+        waste["all_proven_boxes_hide_share"] =
+            all_boxes ? nlohmann::ordered_json(ratio(all_tri, waste_tri)) : nullptr;
+        waste["all_proven_boxes_and_panels_hide_share"] =
+            with_panels ? nlohmann::ordered_json(ratio(panels_tri, waste_tri)) : nullptr;
+        waste["no_box_set_hides_share"] = ratio(none_tri, waste_tri);
+        waste["segments_per_object"] = kOracleRays;
+        out["waste"] = waste;
         out["rays_traced"] = rays_traced;
         out["cell_draws"] = cell_draws;
-        out["seconds"] = {
-            {"scene_build", build_seconds}, {"rays", ray_seconds}, {"total", seconds_since(t_start)}};
+        out["seconds"] = {{"scene_build", build_seconds},
+                          {"rays", ray_seconds},
+                          {"waste", waste_seconds},
+                          {"total", seconds_since(t_start)}};
         std::cout << out.dump(2) << std::endl;
     } catch (const pvs::Error& e) {
         std::fprintf(stderr, "error: %s\n", e.what());
