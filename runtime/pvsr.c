@@ -1157,6 +1157,27 @@ static int usable_box(const float b[6]) {
     return 1;
 }
 
+/* The one axis along which b is flat (a panel), -1 for a solid box, -2 when flat along two or three axes. */
+static int flat_axis(const float b[6]) {
+    int flat = -1, a;
+    for (a = 0; a < 3; ++a) {
+        if (b[a] != b[3 + a]) continue;
+        if (flat != -1) return -2;
+        flat = a;
+    }
+    return flat;
+}
+
+/* x + delta rounded up to a float (x - |delta| rounded down for delta < 0): a bound moved inward by |delta|.
+ */
+static float moved_in(float x, double delta) {
+    const double want = (double)x + delta;
+    float f = (float)want;
+    if (delta > 0.0 && (double)f < want) f = nextafterf(f, INFINITY);
+    if (delta < 0.0 && (double)f > want) f = nextafterf(f, -INFINITY);
+    return f;
+}
+
 /* Largest |coordinate| of the eye and the box: the scale of the margins. */
 static double scale_of(const double eye[3], const float b[6]) {
     double m = 0.0;
@@ -1293,16 +1314,18 @@ int pvsr_culler_init(pvsr_culler* c, int resolution, void* memory, size_t memory
     return 1;
 }
 
-static void build_frustum(const pvsr_culler* c, const float b[6], double delta, pvsr_culler_frustum* fr) {
+static void build_frustum(const pvsr_culler* c, const float b[6], double delta, int flat,
+                          pvsr_culler_frustum* fr) {
     const double* e = c->eye_d;
     double lo[3], hi[3];
     int below[3], above[3], a, k3, si, sj;
     fr->planes = 0;
     fr->usable = 1;
     for (a = 0; a < 3; ++a) {
-        lo[a] = (double)b[a] + delta - e[a];
-        hi[a] = (double)b[3 + a] - delta - e[a];
-        fr->usable = fr->usable && lo[a] < hi[a];
+        const double shrink = a == flat ? 0.0 : delta;
+        lo[a] = (double)b[a] + shrink - e[a];
+        hi[a] = (double)b[3 + a] - shrink - e[a];
+        fr->usable = fr->usable && (a == flat ? lo[a] == hi[a] && lo[a] != 0.0 : lo[a] < hi[a]);
         below[a] = 0.0 < lo[a];
         above[a] = hi[a] < 0.0;
         fr->lo[a] = below[a] ? lo[a] : -INFINITY;
@@ -1358,9 +1381,10 @@ static float corner_pixel(const float* p, const float* c, int i) {
     return a > b ? a : b;
 }
 
-static void rasterize(pvsr_culler* c, const float b[6]) {
+static void rasterize(pvsr_culler* c, const float b[6], int flat) {
     const int r = c->resolution;
     const float* g = c->grid;
+    const float room = flat >= 0 ? 1.0f : 1.0f + CULL_DEPTH_SLACK; /* a panel's plane is one depth */
     int face;
     for (face = 0; face < 6; ++face) {
         const face_box fb = face_box_of(b, c->eye, face);
@@ -1369,7 +1393,7 @@ static void rasterize(pvsr_culler* c, const float b[6]) {
         int* w;
         if (!finite_face_box(&fb)) return;
         d_lo = maxf(fb.d_min, CULL_NEAR_PLANE_M);
-        if (!(d_lo < fb.d_max)) continue;
+        if (flat == face / 2 ? !(d_lo <= fb.d_max) : !(d_lo < fb.d_max)) continue;
         u0 = fb.u_lo >= 0.0f ? fb.u_lo / fb.d_max : fb.u_lo / d_lo;
         u1 = fb.u_hi >= 0.0f ? fb.u_hi / d_lo : fb.u_hi / fb.d_max;
         v0 = fb.v_lo >= 0.0f ? fb.v_lo / fb.d_max : fb.v_lo / d_lo;
@@ -1391,7 +1415,7 @@ static void rasterize(pvsr_culler* c, const float b[6]) {
                 const float enter = maxf(re, c->col_enter[iv]);
                 const float exit = minf(rx, c->col_exit[iv]);
                 const float hit_depth = enter * (1.0f + CULL_DEPTH_SLACK);
-                c->corner_cur[iv] = exit >= hit_depth ? hit_depth : INFINITY;
+                c->corner_cur[iv] = exit >= enter * room ? hit_depth : INFINITY;
             }
             if (jv > jv0) {
                 float* const row = face_depth + (size_t)(jv - 1) * (size_t)r;
@@ -1537,6 +1561,20 @@ void pvsr_culler_begin_frame(pvsr_culler* c, const float eye[3], const float* bo
         memcpy(cand.box, boxes + 6 * k, sizeof cand.box);
         if (!usable_box(cand.box)) continue;
         cand.delta = CULL_MARGIN_M + CULL_MARGIN_REL * scale_of(c->eye_d, cand.box);
+        cand.flat = flat_axis(cand.box);
+        memcpy(cand.raster, cand.box, sizeof cand.raster);
+        if (cand.flat == -2) continue; /* a segment or a point: hides nothing */
+        if (cand.flat >= 0) {          /* a panel: off its plane, its rectangle shrunk by the margin */
+            int empty = 0;
+            if (!(fabs((double)cand.box[cand.flat] - c->eye_d[cand.flat]) > cand.delta)) continue;
+            for (a = 0; a < 3; ++a) {
+                if (a == cand.flat) continue;
+                cand.raster[a] = moved_in(cand.box[a], cand.delta);
+                cand.raster[3 + a] = moved_in(cand.box[3 + a], -cand.delta);
+                empty = empty || !(cand.raster[a] < cand.raster[3 + a]);
+            }
+            if (empty) continue;
+        }
         for (a = 0; a < 3; ++a) {
             const double d = maxd(0.0, maxd((double)cand.box[a] - c->eye_d[a], c->eye_d[a] - (double)cand.box[3 + a]));
             touches_eye = touches_eye && (double)cand.box[a] - cand.delta <= c->eye_d[a] &&
@@ -1560,8 +1598,8 @@ void pvsr_culler_begin_frame(pvsr_culler* c, const float eye[3], const float* bo
             continue;
         }
         ++c->used;
-        if (r > 0) rasterize(c, cand->box);
-        build_frustum(c, cand->box, cand->delta, &c->frusta[c->frustum_count++]);
+        if (r > 0) rasterize(c, cand->raster, cand->flat);
+        build_frustum(c, cand->box, cand->delta, cand->flat, &c->frusta[c->frustum_count++]);
     }
 }
 

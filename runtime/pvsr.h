@@ -200,8 +200,10 @@ const char* pvsr_string(const pvsr_level* level, const char* key);
  * boxes, such as a cell's ranked occluders: the same tests and answers as pvsbake/occlusion.h, whose
  * conventions it follows (read them there): shadow frusta of single boxes, then a float depth cube around the
  * eye that fuses them; "hidden" only when certainly hidden (docs/ALGORITHMS.md#runtime-culler). Boxes are
- * float[6] (min x, y, z, max x, y, z), SOLID. No allocation: the depth cube lives in memory the caller gives
- * (pvsr_culler_memory_bytes). Between pvsr_culler_begin_frame() calls any number of threads may test boxes.
+ * float[6] (min x, y, z, max x, y, z), SOLID; an occluder flat along exactly one axis is a PANEL, a
+ * rectangle of the opaque surface (docs/ALGORITHMS.md#runtime-panels). No allocation: the depth cube lives in
+ * memory the caller gives (pvsr_culler_memory_bytes). Between pvsr_culler_begin_frame() calls any number of
+ * threads may test boxes.
  *
  *   static pvsr_culler culler;                     (about 20 KiB; keep one per thread that begins frames)
  *   void* memory = malloc(pvsr_culler_memory_bytes(32));
@@ -227,7 +229,8 @@ typedef struct pvsr_culler_frustum {
 } pvsr_culler_frustum;
 
 typedef struct pvsr_culler_candidate {
-    float box[6];
+    float box[6], raster[6]; /* raster: what the depth cube draws (a panel's rectangle shrunk by delta) */
+    int flat;                /* a panel's flat axis, -1 for a solid box */
     double delta, dist2;
 } pvsr_culler_candidate;
 

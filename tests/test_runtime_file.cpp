@@ -249,11 +249,14 @@ TEST_F(RuntimeFileDamage, HostileBytesAreRefusedOrStayInRange) {
 TEST(RuntimeFile, TheCullerAnswersAsTheLoadersCuller) {
     std::mt19937 rng(20261128u);
     std::uniform_real_distribution<float> u(-20.0f, 20.0f), size(0.2f, 6.0f), thin(0.05f, 0.6f);
+    // flat: thin along one axis, or (one in three) a panel, flat along it.
     const auto random_box = [&](bool flat) {
         pvsbake::Box b;
+        const int thin_axis = int(rng() % 3);
+        const bool panel = flat && rng() % 3 == 0;
         for (int a = 0; a < 3; ++a) {
             b.min[a] = u(rng);
-            b.max[a] = b.min[a] + (flat && a == int(rng() % 3) ? thin(rng) : size(rng));
+            b.max[a] = b.min[a] + (flat && a == thin_axis ? (panel ? 0.0f : thin(rng)) : size(rng));
         }
         return b;
     };

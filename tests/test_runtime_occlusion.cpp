@@ -103,6 +103,33 @@ TEST(RuntimeOcclusion, TwoWallsThatOnlyTogetherHideABoxFuseOnTheDepthCube) {
     EXPECT_EQ(frusta_only.classify(target), Path::kVisible);
 }
 
+// A panel, the wall's near face alone (flat along z), hides what the wall hides: by its shadow frustum and on
+// the depth cube, and two overlapping halves of it together on the depth cube only (fused). Seen edge-on (the
+// eye in its plane), or a box flat along two axes, hides nothing; a box peeking past its edge stays visible.
+TEST(RuntimeOcclusion, APanelHidesWhatIsBehindItAndNothingEdgeOn) {
+    const Box face = box(-5, 0, 5, 5, 4, 5);
+    const Box behind = box(-0.5f, 0.5f, 8, 0.5f, 1.5f, 9);
+    Culler culler;
+    culler.begin_frame(kEye, {face});
+    EXPECT_EQ(culler.occluders_used(), 1u);
+    EXPECT_EQ(culler.classify(behind), Path::kShadowFrustum);
+    EXPECT_TRUE(culler.hidden_by_depth_cube(behind));
+    EXPECT_FALSE(culler.is_hidden(box(4.0f, 0.5f, 8, 9.0f, 1.5f, 9)));      // past the edge
+    EXPECT_FALSE(culler.is_hidden(box(-0.5f, 0.5f, 4, 0.5f, 1.5f, 4.9f)));  // in front
+    // Two overlapping halves of the face (as panels overlap: docs/ALGORITHMS.md#panels): only fused do they
+    // hide the box across the overlap.
+    culler.begin_frame(kEye, {box(-5, 0, 5, 0.2f, 4, 5), box(-0.2f, 0, 5, 5, 4, 5)});
+    EXPECT_EQ(culler.classify(behind), Path::kDepthBuffer);
+    // Edge-on: the eye in the panel's plane (or within its margin of it).
+    const float in_plane[3] = {0.0f, 1.7f, 5.0f};
+    culler.begin_frame(in_plane, {box(1, 0, 5, 5, 4, 5)});
+    EXPECT_EQ(culler.occluders_used(), 0u);
+    EXPECT_FALSE(culler.is_hidden(box(6, 0.5f, 4, 7, 1.5f, 6)));
+    // Flat along two axes: a segment, not a rectangle.
+    culler.begin_frame(kEye, {box(-5, 2, 5, 5, 2, 5)});
+    EXPECT_EQ(culler.occluders_used(), 0u);
+}
+
 TEST(RuntimeOcclusion, AnOccluderHoldingOrTouchingTheEyeIsSkipped) {
     const Box behind = box(-0.3f, 0, 8, 0.3f, 1.8f, 8.6f);
     Culler culler;
@@ -155,9 +182,8 @@ TEST(RuntimeOcclusion, EmptyFlatAndNonFiniteBoxes) {
                                   box(-5, 0, 5, 5, 4, 5)};  // the last one: a flat wall
     culler.begin_frame(kEye, odd);
     EXPECT_EQ(culler.occluders_used(), 1u);
-    // A flat (zero-thickness) occluder hides nothing on either path: its shrunk box is empty, and no corner
-    // ray passes through it with room to spare.
-    EXPECT_FALSE(culler.is_hidden(box(-0.3f, 0, 8, 0.3f, 1.8f, 8.6f)));
+    // A flat (zero-thickness) occluder is a panel: the rectangle hides what lies behind it.
+    EXPECT_TRUE(culler.is_hidden(box(-0.3f, 0, 8, 0.3f, 1.8f, 8.6f)));
 }
 
 TEST(RuntimeOcclusion, ANonFiniteEyeMakesEverythingVisible) {
@@ -311,8 +337,9 @@ struct PropertyTally {
 // Random box worlds: K walls (thin on one axis), eyes outside them, query boxes of person to vehicle size,
 // half of them placed behind a random wall as seen from the eye. Every box the culler hides is checked with
 // rays; then grown by bisection to the largest copy the culler still hides, which is checked again.
+// panels: every other occluder is a panel (flat along its thin axis: a rectangle, two-sided in the world).
 void random_worlds(int worlds, int eyes_per_world, int queries_per_eye, int resolution, uint32_t seed,
-                   PropertyTally& t) {
+                   PropertyTally& t, bool panels = false) {
     std::mt19937 rng(seed);
     std::uniform_real_distribution<float> u(0.0f, 1.0f);
     const auto range = [&](float a, float b) { return a + (b - a) * u(rng); };
@@ -328,6 +355,10 @@ void random_worlds(int worlds, int eyes_per_world, int queries_per_eye, int reso
                 half[a] = range(1.0f, 6.0f);
             }
             half[rng() % 3] = range(0.1f, 0.8f);
+            if (panels && i % 2 == 0) {  // flat along its thinnest axis
+                const int a = half[0] < half[1] ? (half[0] < half[2] ? 0 : 2) : (half[1] < half[2] ? 1 : 2);
+                half[a] = 0.0f;
+            }
             const Box b = box(c[0] - half[0], c[1] - half[1], c[2] - half[2], c[0] + half[0], c[1] + half[1],
                               c[2] + half[2]);
             occ.push_back(b);
@@ -408,6 +439,26 @@ TEST(RuntimeOcclusionProperty, NeverCullsABoxARayReaches) {
             (unsigned long long)t.wrong);
         EXPECT_EQ(t.wrong, 0u);
         // The scenes are built so that many boxes are hidden: a culler hiding nothing fails here.
+        EXPECT_GT(t.hidden_frustum, t.queries / 20);
+        if (resolution >= Culler::kDefaultResolution) {
+            EXPECT_GT(t.hidden_cube, 0u);
+        }
+    }
+}
+
+// Panels (rectangles of the opaque surface) among the occluders: half of each world's occluders are flat.
+TEST(RuntimeOcclusionProperty, PanelsNeverCullABoxARayReaches) {
+    const bool ci = test::in_ci();
+    for (int resolution : {Culler::kDefaultResolution, 8}) {
+        PropertyTally t;
+        random_worlds(ci ? 12 : 60, 6, ci ? 100 : 200, resolution, 20261129u + uint32_t(resolution), t, true);
+        std::printf(
+            "panels, resolution %d: %llu queries, hidden %llu by frusta + %llu by the cube only, %llu edge "
+            "boxes, %llu rays, %llu wrong\n",
+            resolution, (unsigned long long)t.queries, (unsigned long long)t.hidden_frustum,
+            (unsigned long long)t.hidden_cube, (unsigned long long)t.edge_boxes, (unsigned long long)t.rays,
+            (unsigned long long)t.wrong);
+        EXPECT_EQ(t.wrong, 0u);
         EXPECT_GT(t.hidden_frustum, t.queries / 20);
         if (resolution >= Culler::kDefaultResolution) {
             EXPECT_GT(t.hidden_cube, 0u);

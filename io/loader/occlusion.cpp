@@ -27,6 +27,27 @@ inline bool usable_box(const Box& b) {
     return true;
 }
 
+// The one axis along which b is flat (a panel), -1 for a solid box, -2 when flat along two or three axes.
+inline int flat_axis(const Box& b) {
+    int flat = -1;
+    for (int a = 0; a < 3; ++a) {
+        if (b.min[a] != b.max[a]) continue;
+        if (flat != -1) return -2;
+        flat = a;
+    }
+    return flat;
+}
+
+// x + delta rounded up to a float (or x - delta rounded down, for delta < 0): a float bound moved inward by
+// at least |delta|.
+inline float moved_in(float x, double delta) {
+    const double want = double(x) + delta;
+    float f = float(want);
+    if (delta > 0.0 && double(f) < want) f = std::nextafter(f, kInfF);
+    if (delta < 0.0 && double(f) > want) f = std::nextafter(f, -kInfF);
+    return f;
+}
+
 // Largest |coordinate| of the eye and the box: the scale of the margins.
 inline double scale_of(const double eye[3], const Box& b) {
     double m = 0.0;
@@ -182,6 +203,20 @@ void OcclusionCuller::begin_frame(const float eye[3], const Box* occluders, size
         if (!usable_box(c.box)) continue;
         const Box& b = c.box;
         c.delta = kMargin_m + kMarginRel * scale_of(e, b);
+        c.flat = flat_axis(b);
+        c.raster = b;
+        if (c.flat == -2) continue;  // a segment or a point: hides nothing
+        if (c.flat >= 0) {           // a panel: off its plane, its rectangle shrunk by the margin
+            if (!(std::abs(double(b.min[c.flat]) - e[c.flat]) > c.delta)) continue;
+            bool empty = false;
+            for (int a = 0; a < 3; ++a) {
+                if (a == c.flat) continue;
+                c.raster.min[a] = moved_in(b.min[a], c.delta);
+                c.raster.max[a] = moved_in(b.max[a], -c.delta);
+                empty = empty || !(c.raster.min[a] < c.raster.max[a]);
+            }
+            if (empty) continue;
+        }
         bool touches_eye = true;
         double dist2 = 0.0;
         for (int a = 0; a < 3; ++a) {
@@ -202,22 +237,23 @@ void OcclusionCuller::begin_frame(const float eye[3], const Box* occluders, size
             continue;
         }
         ++used_;
-        if (r > 0) rasterize(c.box);
-        build_frustum(c.box, c.delta, frusta_[frustum_count_++]);
+        if (r > 0) rasterize(c.raster, c.flat);
+        build_frustum(c.box, c.delta, c.flat, frusta_[frustum_count_++]);
     }
 }
 
-void OcclusionCuller::build_frustum(const Box& b, double delta, Frustum& fr) const noexcept {
+void OcclusionCuller::build_frustum(const Box& b, double delta, int flat, Frustum& fr) const noexcept {
     const double* e = eye_d_;
-    // The shadow frustum of B shrunk by delta, relative to the eye.
+    // The shadow frustum of B shrunk by delta (a panel: in its plane only), relative to the eye.
     fr.planes = 0;
     fr.usable = true;
     double lo[3], hi[3];
     bool below[3], above[3];
     for (int a = 0; a < 3; ++a) {
-        lo[a] = double(b.min[a]) + delta - e[a];
-        hi[a] = double(b.max[a]) - delta - e[a];
-        fr.usable = fr.usable && lo[a] < hi[a];
+        const double shrink = a == flat ? 0.0 : delta;
+        lo[a] = double(b.min[a]) + shrink - e[a];
+        hi[a] = double(b.max[a]) - shrink - e[a];
+        fr.usable = fr.usable && (a == flat ? lo[a] == hi[a] && lo[a] != 0.0 : lo[a] < hi[a]);
         below[a] = 0.0 < lo[a];  // the eye is below the box on axis a: face min[a] faces it
         above[a] = hi[a] < 0.0;
         fr.lo[a] = below[a] ? lo[a] : -kInfD;
@@ -256,14 +292,14 @@ void OcclusionCuller::build_frustum(const Box& b, double delta, Frustum& fr) con
     }
 }
 
-void OcclusionCuller::rasterize(const Box& b) noexcept {
+void OcclusionCuller::rasterize(const Box& b, int flat) noexcept {
     const int r = resolution_;
     const float* g = grid_.data();
     for (int face = 0; face < 6; ++face) {
         const FaceBox fb = face_box(b, eye_, face);
         if (!finite_face_box(fb)) return;
         const float d_lo = std::max(fb.d_min, kNearPlane_m);  // clip to d >= near (safe: a sub-box)
-        if (!(d_lo < fb.d_max)) continue;
+        if (flat == face / 2 ? !(d_lo <= fb.d_max) : !(d_lo < fb.d_max)) continue;
         // Candidate vertices: the bounding rectangle of the projection of B ∩ {d >= d_lo}, one vertex of
         // slack each side; the corner tests decide, so extra candidates change nothing.
         const float u0 = fb.u_lo >= 0.0f ? fb.u_lo / fb.d_max : fb.u_lo / d_lo;
@@ -281,7 +317,10 @@ void OcclusionCuller::rasterize(const Box& b) noexcept {
         if (iv1 - iv0 < 1 || jv1 - jv0 < 1) continue;  // fewer than two vertices: no whole pixel
 
         // Separable slab test: the corner ray (u, v, 1), parameterized by depth, enters B at
-        // max(d_lo, enter_u(u), enter_v(v)) and leaves at min(d_max, exit_u(u), exit_v(v)).
+        // max(d_lo, enter_u(u), enter_v(v)) and leaves at min(d_max, exit_u(u), exit_v(v)). A solid box needs
+        // room to spare (exit >= entry * (1 + slack)); a panel's plane is one depth, so entry = exit there,
+        // and the margin its rectangle was shrunk by stands in for the room.
+        const float room = flat >= 0 ? 1.0f : 1.0f + kDepthSlack;
         for (int iv = iv0; iv <= iv1; ++iv) slab(fb.u_lo, fb.u_hi, g[iv], col_enter_[iv], col_exit_[iv]);
         for (int jv = jv0; jv <= jv1; ++jv) slab(fb.v_lo, fb.v_hi, g[jv], row_enter_[jv], row_exit_[jv]);
 
@@ -293,7 +332,7 @@ void OcclusionCuller::rasterize(const Box& b) noexcept {
                 const float enter = std::max(re, col_enter_[iv]);
                 const float exit = std::min(rx, col_exit_[iv]);
                 const float hit_depth = enter * (1.0f + kDepthSlack);
-                corner_cur_[iv] = exit >= hit_depth ? hit_depth : kInfF;
+                corner_cur_[iv] = exit >= enter * room ? hit_depth : kInfF;
             }
             if (jv > jv0) {
                 // The pixel's depth: the farthest of its four corners (+inf when one misses). Branch-free, so

@@ -147,7 +147,8 @@ void write_case(std::FILE* out, const std::filesystem::path& dir, const std::str
             const int flat = int(rng() % 3);
             for (int a = 0; a < 3; ++a) {
                 o.min[a] = w(rng) * 0.6f;
-                o.max[a] = o.min[a] + (k % 2 == 0 && a == flat ? thin(rng) : size(rng));
+                o.max[a] = o.min[a] + (k % 2 == 0 && a == flat ? (k % 6 == 0 ? 0.0f : thin(rng))
+                                                               : size(rng));  // k % 6 == 0: a panel
             }
             boxes.push_back(o);
         }

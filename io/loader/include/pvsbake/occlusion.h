@@ -21,6 +21,13 @@
 // - Occluders are SOLID boxes: a box counts as blocking sight exactly inside its own volume (as the
 //   bake's occluders are boxes inside the opaque solid: no sight line from the view volume enters them).
 //   An occluder that contains or touches the eye (within its margin) is skipped: it hides nothing.
+// - PANELS: an occluder flat along exactly one axis (min == max there) is a RECTANGLE, a face of the opaque
+//   surface such as a bake's panels (every segment that meets one meets an opaque triangle). It blocks the
+//   segments that cross its plane inside it. It is used with its rectangle shrunk by its margin, and skipped
+//   when the eye lies within that margin of its plane (seen edge-on it hides nothing). Its shadow frustum is
+//   the half-space behind its plane within the planes through the eye and its edges; on the depth cube a
+//   corner ray passes it when it crosses the plane inside the shrunk rectangle (entry = exit there). A box
+//   flat along two or three axes hides nothing (docs/ALGORITHMS.md#runtime-panels).
 // - "Hidden" (the one conservative answer): is_hidden(Q) is true only if every segment from the eye to any
 //   point x of Q enters some occluder strictly before x. Anything not proven is visible: empty or
 //   non-finite boxes, a box within kNearPlane_m of the eye (which covers "contains the eye"), and every box
@@ -145,12 +152,14 @@ private:
 
     struct Candidate {
         Box box;
+        Box raster;    // what the depth cube draws: the box, or a panel's rectangle shrunk by its margin
+        int flat;      // a panel's flat axis, -1 for a solid box
         double delta;  // its margin
         double dist2;  // squared distance from the eye
     };
 
-    void rasterize(const Box& b) noexcept;
-    void build_frustum(const Box& b, double delta, Frustum& fr) const noexcept;
+    void rasterize(const Box& b, int flat) noexcept;
+    void build_frustum(const Box& b, double delta, int flat, Frustum& fr) const noexcept;
     bool inside_shadow(const Frustum& fr, const double q_min[3], const double q_max[3]) const noexcept;
 
     bool ok_ = false;
