@@ -4,7 +4,9 @@
 //
 //   bench_frame WORLD.glb LEVEL.pvsr [--frames F] [--check-frames C] [--rays R] [--occluders K]
 //                                    [--resolution N] [--seed S] [--bake BAKE.h5] [--split M]
-//                                    [--eye-occluders E] [--parts 0|1]
+//                                    [--eye-occluders E] [--eye-panels 0|1] [--eye-select
+//                                    solid-angle|first-hit]
+//                                    [--parts 0|1]
 //
 // Frames: F (default 200) eyes, each uniform in the eye space of a cell drawn at random (seed S, default 1):
 // a cell uniform among the level's cells, then a point uniform in its box kept when pvsr_in_eye_space() holds
@@ -24,7 +26,10 @@
 //
 // Measurement only (what other run-time occluders would give; not what a game gets from the file):
 // --eye-occluders E (with --bake, the level's bake file): the culler takes, per frame, the E proven boxes of
-// the bake with the largest solid angle from the eye instead of the cell's ranked ones; --parts 1: an object
+// the bake with the largest solid angle from the eye instead of the cell's ranked ones (--eye-panels 1: the
+// world's panels, occluders/panels.h, among them; the culler takes them as panels; --eye-select first-hit:
+// ranked instead by how many of 32 segments from the eye to random points of each listed object they are
+// the first of them to meet, an oracle of what blocks this eye's sight); --parts 1: an object
 // is also culled when the culler hides each of its M (--split, default 8) part boxes (its triangles split at
 // the median of their centres on the longest axis, recursively): a finer test of the object. Both make the
 // bench walk the PVS itself (the timing is then not the runtime's).
@@ -138,6 +143,28 @@ public:
         return true;
     }
 
+    // The box the segment eye -> p meets first, or -1.
+    int64_t first_hit(glm::vec3 eye, glm::vec3 p) const {
+        RTCRayHit rh{};
+        rh.ray.org_x = eye.x;
+        rh.ray.org_y = eye.y;
+        rh.ray.org_z = eye.z;
+        const glm::vec3 d = p - eye;
+        rh.ray.dir_x = d.x;
+        rh.ray.dir_y = d.y;
+        rh.ray.dir_z = d.z;
+        rh.ray.tnear = 0.0f;
+        rh.ray.tfar = pvs::bench::kSegmentEnd;
+        rh.ray.mask = 0xffffffffu;
+        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        ExcludeContext c;
+        c.boxes = &boxes_;
+        c.excluded = pvs::Aabb::empty();
+        rtcInitIntersectContext(&c.rtc);
+        rtcIntersect1(scene_, &c.rtc, &rh);
+        return rh.hit.geomID == RTC_INVALID_GEOMETRY_ID ? -1 : int64_t(rh.hit.primID / 12);
+    }
+
 private:
     struct ExcludeContext {
         RTCIntersectContext rtc;  // first: Embree hands the filter this pointer
@@ -242,7 +269,8 @@ double percentile90(std::vector<double> v) {
 int main(int argc, char** argv) {
     const char* usage =
         "usage: bench_frame WORLD.glb LEVEL.pvsr [--frames F] [--check-frames C] [--rays R] [--occluders K]\n"
-        "                   [--resolution N] [--seed S] [--split M] [--bake BAKE.h5]\n";
+        "                   [--resolution N] [--seed S] [--split M] [--bake BAKE.h5] [--eye-occluders E]\n"
+        "                   [--eye-panels 0|1] [--eye-select solid-angle|first-hit] [--parts 0|1]\n";
     if (argc < 3 || argv[1][0] == '-' || argv[2][0] == '-') {
         std::fputs(usage, stderr);
         return 2;
@@ -252,7 +280,7 @@ int main(int argc, char** argv) {
     uint32_t n_frames = 200, n_check = 0, n_rays = 4096, max_occluders = PVSR_CULLER_MAX_OCCLUDERS,
              n_split = 8;
     uint32_t eye_occluders = 0;
-    bool parts_drawn = false;
+    bool parts_drawn = false, eye_panels = false, eye_select_first_hit = false;
     std::string bake_path;
     int resolution = 32;
     uint64_t seed = 1;
@@ -261,7 +289,7 @@ int main(int argc, char** argv) {
             const std::string k = argv[a];
             if (k != "--frames" && k != "--check-frames" && k != "--rays" && k != "--occluders" &&
                 k != "--resolution" && k != "--seed" && k != "--split" && k != "--bake" &&
-                k != "--eye-occluders" && k != "--parts")
+                k != "--eye-occluders" && k != "--parts" && k != "--eye-panels" && k != "--eye-select")
                 bad_option("unknown option " + k + " (run it with no arguments for the usage)");
             if (a + 1 >= argc) bad_option(k + " wants a value");
             const char* v = argv[++a];
@@ -283,7 +311,13 @@ int main(int argc, char** argv) {
                 eye_occluders = uint32_t(parse_count("--eye-occluders", v, 0, PVSR_CULLER_MAX_OCCLUDERS));
             else if (k == "--parts")
                 parts_drawn = parse_count("--parts", v, 0, 1) == 1;
-            else
+            else if (k == "--eye-panels")
+                eye_panels = parse_count("--eye-panels", v, 0, 1) == 1;
+            else if (k == "--eye-select") {
+                if (std::string(v) != "solid-angle" && std::string(v) != "first-hit")
+                    bad_option(std::string("--eye-select ") + v + ": wants solid-angle or first-hit");
+                eye_select_first_hit = std::string(v) == "first-hit";
+            } else
                 seed = parse_count("--seed", v, 0, std::numeric_limits<uint64_t>::max());
         }
     } catch (const pvs::Error& e) {
@@ -335,6 +369,14 @@ int main(int argc, char** argv) {
                 if (o.proven) proven.push_back(o.box);
         }
         if (eye_occluders > 0 && bake_path.empty()) bad_option("--eye-occluders wants --bake");
+        const size_t proven_boxes = proven.size();
+        if (eye_panels) {
+            const std::vector<pvs::Aabb> panels = pvs::find_panels(world);
+            proven.insert(proven.end(), panels.begin(), panels.end());
+        }
+        const std::vector<double> cum_area = pvs::cumulative_areas(world);
+        std::unique_ptr<BoxScene> blocking_scene;
+        if (eye_select_first_hit) blocking_scene = std::make_unique<BoxScene>(proven);
         std::vector<std::vector<pvs::Aabb>> parts(n_objects);
         if (parts_drawn)
             for (uint32_t o = 0; o < n_objects; ++o) parts[o] = part_boxes(world, o, n_split);
@@ -377,7 +419,26 @@ int main(int argc, char** argv) {
                 pvsr_drawn_objects(&level, f.cell, &culler, f.drawn.data(), f.drawn.size());
             } else {  // measurement only: the eye's own best proven boxes, objects by their parts
                 std::vector<std::pair<double, uint32_t>> ranked;
-                for (uint32_t b = 0; b < proven.size() && eye_occluders > 0; ++b) {
+                if (blocking_scene &&
+                    eye_occluders > 0) {  // by the segments to listed objects they stop first
+                    std::vector<double> hits(proven.size(), 0.0);
+                    pvs::Rng point_rng(seed ^ 0x424c4f434bULL, i);
+                    for (const uint32_t o : f.listed) {
+                        const pvs::WorldObject& obj = world.objects[o];
+                        if (obj.triangle_count == 0 ||
+                            !(cum_area[obj.first_triangle + obj.triangle_count - 1] > 0.0))
+                            continue;
+                        for (int k = 0; k < 32; ++k) {
+                            glm::vec3 q;
+                            pvs::bench::random_point_on(world, cum_area, o, point_rng, q);
+                            const int64_t hit = blocking_scene->first_hit(f.eye, q);
+                            if (hit >= 0) hits[size_t(hit)] += 1.0;
+                        }
+                    }
+                    for (uint32_t b = 0; b < proven.size(); ++b)
+                        if (hits[b] > 0.0) ranked.push_back({-hits[b], b});
+                }
+                for (uint32_t b = 0; b < proven.size() && eye_occluders > 0 && !blocking_scene; ++b) {
                     const pvs::Aabb& box = proven[b];
                     if (glm::all(glm::lessThanEqual(box.min, f.eye)) &&
                         glm::all(glm::lessThanEqual(f.eye, box.max)))
@@ -429,7 +490,6 @@ int main(int argc, char** argv) {
             bool drawn;
         };
         std::vector<Pair> pairs;
-        const std::vector<double> cum_area = pvs::cumulative_areas(world);
         for (uint32_t i = 0; i < frames.size(); ++i) {
             const Frame& f = frames[i];
             size_t d = 0;
@@ -479,8 +539,10 @@ int main(int argc, char** argv) {
         const auto t_waste = std::chrono::steady_clock::now();
         std::unique_ptr<BoxScene> all_boxes, with_panels;
         if (!bake_path.empty()) {
-            all_boxes = std::make_unique<BoxScene>(proven);
-            std::vector<pvs::Aabb> both = proven, panels = pvs::find_panels(world);
+            all_boxes = std::make_unique<BoxScene>(
+                std::vector<pvs::Aabb>(proven.begin(), proven.begin() + long(proven_boxes)));
+            std::vector<pvs::Aabb> both(proven.begin(), proven.begin() + long(proven_boxes));
+            const std::vector<pvs::Aabb> panels = pvs::find_panels(world);
             both.insert(both.end(), panels.begin(), panels.end());
             with_panels = std::make_unique<BoxScene>(both);
         }
