@@ -249,14 +249,22 @@ TEST_F(RuntimeFileDamage, HostileBytesAreRefusedOrStayInRange) {
 TEST(RuntimeFile, TheCullerAnswersAsTheLoadersCuller) {
     std::mt19937 rng(20261128u);
     std::uniform_real_distribution<float> u(-20.0f, 20.0f), size(0.2f, 6.0f), thin(0.05f, 0.6f);
-    // flat: thin along one axis, or (one in three) a panel, flat along it.
-    const auto random_box = [&](bool flat) {
+    const auto random_box = [&](bool flat) {  // flat: thin along one axis
         pvsbake::Box b;
-        const int thin_axis = int(rng() % 3);
-        const bool panel = flat && rng() % 3 == 0;
         for (int a = 0; a < 3; ++a) {
             b.min[a] = u(rng);
-            b.max[a] = b.min[a] + (flat && a == thin_axis ? (panel ? 0.0f : thin(rng)) : size(rng));
+            b.max[a] = b.min[a] + (flat && a == int(rng() % 3) ? thin(rng) : size(rng));
+        }
+        return b;
+    };
+    // Panels (boxes flat along one axis), from their own stream so that the boxes above stay as they were.
+    std::mt19937 panel_rng(20261129u);
+    const auto random_panel = [&]() {
+        pvsbake::Box b;
+        const int flat = int(panel_rng() % 3);
+        for (int a = 0; a < 3; ++a) {
+            b.min[a] = u(panel_rng);
+            b.max[a] = a == flat ? b.min[a] : b.min[a] + size(panel_rng);
         }
         return b;
     };
@@ -270,6 +278,7 @@ TEST(RuntimeFile, TheCullerAnswersAsTheLoadersCuller) {
             std::vector<pvsbake::Box> occluders;
             const int n = 1 + int(rng() % 24);
             for (int k = 0; k < n; ++k) occluders.push_back(random_box(k % 2 == 0));
+            for (int k = 0; k < n / 3; ++k) occluders.push_back(random_panel());
             const float eye[3] = {u(rng) * 0.5f, u(rng) * 0.5f, u(rng) * 0.5f};
             want.begin_frame(eye, occluders);
             pvsr_culler_begin_frame(&got, eye, &occluders[0].min[0], occluders.size());
