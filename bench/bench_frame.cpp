@@ -244,13 +244,7 @@ struct Frame {
 }
 
 uint64_t parse_count(const char* option, const char* text, uint64_t min, uint64_t max) {
-    char* end = nullptr;
-    errno = 0;
-    const unsigned long long v = std::strtoull(text, &end, 10);
-    if (errno != 0 || end == text || *end != '\0' || text[0] == '-' || v < min || v > max)
-        bad_option(std::string(option) + " " + text + ": wants a whole number from " + std::to_string(min) +
-                   " to " + std::to_string(max));
-    return v;
+    return pvs::bench::parse_count("bench_frame", option, text, min, max);
 }
 
 double micros(std::chrono::steady_clock::time_point a, std::chrono::steady_clock::time_point b) {
@@ -409,14 +403,14 @@ int main(int argc, char** argv) {
             f.listed.assign(scratch.begin(), scratch.begin() + listed);
             if (eye_occluders == 0 && !parts_drawn) {  // the game's calls
                 f.occluders = pvsr_culler_begin_cell(&culler, &level, f.cell, eye, max_occluders);
-                const uint32_t drawn = pvsr_drawn_objects(&level, f.cell, &culler, nullptr, 0);
+                const uint32_t drawn =
+                    pvsr_drawn_objects(&level, f.cell, &culler, scratch.data(), scratch.size());
                 const auto t2 = std::chrono::steady_clock::now();
                 f.walk_us = micros(t0, t1);
                 f.frame_us = micros(t1, t2);
                 f.boxes.resize(6 * size_t(f.occluders));
                 pvsr_occluder_boxes(&level, f.cell, f.boxes.data(), f.occluders);
-                f.drawn.resize(drawn);
-                pvsr_drawn_objects(&level, f.cell, &culler, f.drawn.data(), f.drawn.size());
+                f.drawn.assign(scratch.begin(), scratch.begin() + drawn);
             } else {  // measurement only: the eye's own best proven boxes, objects by their parts
                 std::vector<std::pair<double, uint32_t>> ranked;
                 if (blocking_scene &&

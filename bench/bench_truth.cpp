@@ -148,13 +148,7 @@ struct CellFigures {
 }
 
 uint64_t parse_count(const char* option, const char* text, uint64_t min, uint64_t max) {
-    char* end = nullptr;
-    errno = 0;
-    const unsigned long long v = std::strtoull(text, &end, 10);
-    if (errno != 0 || end == text || *end != '\0' || text[0] == '-' || v < min || v > max)
-        bad_option(std::string(option) + " " + text + ": wants a whole number from " + std::to_string(min) +
-                   " to " + std::to_string(max));
-    return v;
+    return pvs::bench::parse_count("bench_truth", option, text, min, max);
 }
 
 }  // namespace

@@ -5,9 +5,13 @@
 // within one run (the machines are shared and noisy). The commands are in docs/RESULTS.md.
 #pragma once
 
+#include "core/error.h"
+
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cstdint>
+#include <cstdlib>
 #include <numeric>
 #include <stdexcept>
 #include <string>
@@ -26,6 +30,20 @@ inline double median(std::vector<double> v) {
 // The arithmetic mean; 0 when empty.
 inline double mean(const std::vector<double>& v) {
     return v.empty() ? 0.0 : std::accumulate(v.begin(), v.end(), 0.0) / double(v.size());
+}
+
+// A whole number in [min, max] given to `option` of the bench named `bench`; throws pvs::bad_input naming
+// both (exit status 2) on anything else.
+inline uint64_t parse_count(const char* bench, const char* option, const char* text, uint64_t min,
+                            uint64_t max) {
+    char* end = nullptr;
+    errno = 0;
+    const unsigned long long v = std::strtoull(text, &end, 10);
+    if (errno != 0 || end == text || *end != '\0' || text[0] == '-' || v < min || v > max)
+        throw pvs::bad_input(std::string(bench) + ": " + option + " " + text +
+                             ": wants a whole number from " + std::to_string(min) + " to " +
+                             std::to_string(max));
+    return v;
 }
 
 inline double seconds_since(std::chrono::steady_clock::time_point t0) {

@@ -918,11 +918,11 @@ typedef struct sink {
     const pvsr_culler* culler;
 } sink;
 
-/* 1 when the walk gives the object on: no culler, an object the bake marks always visible, one without
+/* 1 when the walk with a culler gives the object on: an object the bake marks always visible, one without
  * bounds, or bounds the culler does not prove hidden. */
 static int drawn(const pvsr_level* l, const sink* s, uint32_t object) {
     float box[6];
-    if (s->culler == NULL || (pvsr_object_flags(l, object) & PVSR_OBJECT_ALWAYS_VISIBLE) != 0) return 1;
+    if ((pvsr_object_flags(l, object) & PVSR_OBJECT_ALWAYS_VISIBLE) != 0) return 1;
     if (!pvsr_object_bounds(l, object, box)) return 1;
     return !pvsr_culler_is_hidden(s->culler, box);
 }
@@ -937,7 +937,7 @@ static uint32_t walk(const pvsr_level* l, uint32_t cell, const sink* s) {
 #define PVSR_GIVE(object)                                 \
     do {                                                  \
         const uint32_t o_ = (object);                     \
-        if (!drawn(l, s, o_)) break;                      \
+        if (s->culler != NULL && !drawn(l, s, o_)) break; \
         if (s->list != NULL) {                            \
             if (count < s->capacity) s->list[count] = o_; \
         } else if (s->visit != NULL) {                    \
