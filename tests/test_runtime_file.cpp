@@ -257,7 +257,7 @@ TEST(RuntimeFile, TheCullerAnswersAsTheLoadersCuller) {
         }
         return b;
     };
-    // Panels (boxes flat along one axis), from their own stream so that the boxes above stay as they were.
+    // Panels (boxes flat along one axis) come from their own stream: the boxes above do not depend on them.
     std::mt19937 panel_rng(20261129u);
     const auto random_panel = [&]() {
         pvsbake::Box b;
