@@ -1514,15 +1514,357 @@ static int hidden_by_depth_cube(const pvsr_culler* c, const float box[6]) {
     return any_face;
 }
 
+/* ---- Exact fusion of the occluders' faces (docs/ALGORITHMS.md#runtime-faces): the box is cut into
+ * fragments, each a sub-box with a convex polygon of directions, until every fragment lies beyond a face in
+ * directions the face covers (hidden) or one fragment has passed every face (visible). Directions are
+ * central projections along one axis p on which the whole box lies ahead of the eye: u = x[U] / d,
+ * v = x[V] / d with d = sign * x[p] > 0 (everything relative to the eye). */
+#define FUSE_MAX_VERTS 12     /* of a fragment's polygon; more: give up (visible) */
+#define FUSE_MAX_FACES 64     /* faces a box is tested against (the nearest first) */
+#define FUSE_MAX_FRAGMENTS 32 /* fragments pending; more: give up (visible) */
+#define FUSE_EPS 1e-10        /* relative: a covered region shrunk, a box's directions widened */
+
+typedef struct fuse_poly {
+    int n;
+    double x[FUSE_MAX_VERTS], y[FUSE_MAX_VERTS];
+} fuse_poly;
+
+typedef struct fuse_face {
+    double x[6], y[6], lo[2], hi[2]; /* its projection (counter-clockwise) and that polygon's bounds */
+    double plane, delta;
+    int n, axis, above;
+} fuse_face;
+
+typedef struct fuse_fragment {
+    double b[6]; /* relative to the eye */
+    fuse_poly r;
+    int next; /* the first face not yet applied */
+} fuse_fragment;
+
+typedef struct fuse_frame {
+    int p, u, v;
+    double sign;
+} fuse_frame;
+
+static double widen(double x, int up) {
+    const double m = FUSE_EPS * (1.0 + fabs(x));
+    return up ? x + m : x - m;
+}
+
+/* Keeps the part of `in` where a * x + b * y <= w; 0 when the result would have too many vertices. */
+static int clip_poly(const fuse_poly* in, double a, double b, double w, fuse_poly* out) {
+    int i;
+    out->n = 0;
+    for (i = 0; i < in->n; ++i) {
+        const int j = (i + 1) % in->n;
+        const double si = a * in->x[i] + b * in->y[i] - w, sj = a * in->x[j] + b * in->y[j] - w;
+        if (si <= 0.0) {
+            if (out->n == FUSE_MAX_VERTS) return 0;
+            out->x[out->n] = in->x[i];
+            out->y[out->n++] = in->y[i];
+        }
+        if ((si < 0.0 && sj > 0.0) || (si > 0.0 && sj < 0.0)) {
+            const double t = si / (si - sj);
+            if (out->n == FUSE_MAX_VERTS) return 0;
+            out->x[out->n] = in->x[i] + t * (in->x[j] - in->x[i]);
+            out->y[out->n++] = in->y[i] + t * (in->y[j] - in->y[i]);
+        }
+    }
+    return 1;
+}
+
+static void poly_bounds(const double* x, const double* y, int n, double lo[2], double hi[2]) {
+    int i;
+    lo[0] = hi[0] = x[0];
+    lo[1] = hi[1] = y[0];
+    for (i = 1; i < n; ++i) {
+        lo[0] = x[i] < lo[0] ? x[i] : lo[0];
+        hi[0] = x[i] > hi[0] ? x[i] : hi[0];
+        lo[1] = y[i] < lo[1] ? y[i] : lo[1];
+        hi[1] = y[i] > hi[1] ? y[i] : hi[1];
+    }
+}
+
+/* The bounds of the directions of box b (relative, all of it at d >= its near side > 0), widened. */
+static void box_directions(const fuse_frame* f, const double b[6], double lo[2], double hi[2]) {
+    const double d0 = f->sign > 0.0 ? b[f->p] : -b[3 + f->p], d1 = f->sign > 0.0 ? b[3 + f->p] : -b[f->p];
+    const int ax[2] = {f->u, f->v};
+    int k;
+    for (k = 0; k < 2; ++k) {
+        const double l = b[ax[k]], h = b[3 + ax[k]];
+        lo[k] = widen(l >= 0.0 ? l / d1 : l / d0, 0);
+        hi[k] = widen(h >= 0.0 ? h / d0 : h / d1, 1);
+    }
+}
+
+/* r clipped to the rectangle [lo, hi]: 1, 0 when empty, -1 when a polygon would have too many vertices. */
+static int clip_to_rect(fuse_poly* r, const double lo[2], const double hi[2]) {
+    const double a[4] = {-1.0, 1.0, 0.0, 0.0}, b[4] = {0.0, 0.0, -1.0, 1.0};
+    const double w[4] = {-lo[0], hi[0], -lo[1], hi[1]};
+    double plo[2], phi[2];
+    int k;
+    fuse_poly t;
+    poly_bounds(r->x, r->y, r->n, plo, phi);
+    for (k = 0; k < 4 && r->n >= 3; ++k) {
+        const int cuts = k == 0   ? plo[0] < lo[0]
+                         : k == 1 ? phi[0] > hi[0]
+                         : k == 2 ? plo[1] < lo[1]
+                                  : phi[1] > hi[1];
+        if (!cuts) continue;
+        if (!clip_poly(r, a[k], b[k], w[k], &t)) return -1;
+        *r = t;
+    }
+    return r->n >= 3;
+}
+
+/* Projects a face (relative to the eye) in frame f: its part at d >= the near plane, counter-clockwise. */
+static int project_face(const fuse_frame* f, const pvsr_culler_face* face, const double e[3],
+                        fuse_face* out) {
+    const int a = face->axis, a1 = (a + 1) % 3, a2 = (a + 2) % 3;
+    const double near_d = (double)CULL_NEAR_PLANE_M;
+    double c[4][3], d[5], u[5], v[5], area = 0.0;
+    int i, n = 0;
+    for (i = 0; i < 4; ++i) {
+        c[i][a] = face->plane - e[a];
+        c[i][a1] = (i == 1 || i == 2 ? face->hi[0] : face->lo[0]) - e[a1];
+        c[i][a2] = (i >= 2 ? face->hi[1] : face->lo[1]) - e[a2];
+    }
+    for (i = 0; i < 4; ++i) { /* the quad clipped to d >= near */
+        const int j = (i + 1) % 4;
+        const double di = f->sign * c[i][f->p], dj = f->sign * c[j][f->p];
+        if (di >= near_d) {
+            d[n] = di;
+            u[n] = c[i][f->u];
+            v[n++] = c[i][f->v];
+        }
+        if ((di < near_d && dj > near_d) || (di > near_d && dj < near_d)) {
+            const double t = (near_d - di) / (dj - di);
+            d[n] = near_d;
+            u[n] = c[i][f->u] + t * (c[j][f->u] - c[i][f->u]);
+            v[n++] = c[i][f->v] + t * (c[j][f->v] - c[i][f->v]);
+        }
+    }
+    if (n < 3) return 0;
+    for (i = 0; i < n; ++i) {
+        out->x[i] = u[i] / d[i];
+        out->y[i] = v[i] / d[i];
+    }
+    for (i = 0; i < n; ++i) {
+        const int j = (i + 1) % n;
+        area += out->x[i] * out->y[j] - out->x[j] * out->y[i];
+    }
+    if (!(area != 0.0) || !isfinite(area)) return 0;
+    if (area < 0.0) {
+        for (i = 0; i < n / 2; ++i) {
+            double t = out->x[i];
+            out->x[i] = out->x[n - 1 - i];
+            out->x[n - 1 - i] = t;
+            t = out->y[i];
+            out->y[i] = out->y[n - 1 - i];
+            out->y[n - 1 - i] = t;
+        }
+    }
+    out->n = n;
+    poly_bounds(out->x, out->y, n, out->lo, out->hi);
+    out->axis = a;
+    out->above = face->above;
+    out->plane = face->plane - e[a];
+    out->delta = face->delta;
+    return 1;
+}
+
+static int push_fragment(fuse_fragment* stack, int* top, const double b[6], const fuse_poly* r, int next) {
+    if (*top == FUSE_MAX_FRAGMENTS) return 0;
+    memcpy(stack[*top].b, b, sizeof stack[*top].b);
+    stack[*top].r = *r;
+    stack[(*top)++].next = next;
+    return 1;
+}
+
+/* Pushes the parts of r outside the face's polygon, shrunk by FUSE_EPS (their union covers r less the
+ * shrunk polygon); 0 when the stack or a polygon overflows. */
+static int push_outside(fuse_fragment* stack, int* top, const double b[6], const fuse_poly* r,
+                        const fuse_face* q, int next) {
+    fuse_poly cur = *r, piece, rest;
+    int k, i;
+    for (k = 0; k < q->n; ++k) {
+        const int k1 = (k + 1) % q->n;
+        const double nx = -(q->y[k1] - q->y[k]), ny = q->x[k1] - q->x[k]; /* inward: left of the edge */
+        const double w = nx * q->x[k] + ny * q->y[k];
+        const double eps = FUSE_EPS * (fabs(nx) + fabs(ny)) * (1.0 + fabs(q->x[k]) + fabs(q->y[k]));
+        int any_out = 0, any_in = 0;
+        for (i = 0; i < cur.n; ++i) {
+            const double s = nx * cur.x[i] + ny * cur.y[i] - w;
+            any_out = any_out || s < eps;
+            any_in = any_in || s > eps;
+        }
+        if (!any_out) continue;
+        if (!any_in) return push_fragment(stack, top, b, &cur, next);
+        if (!clip_poly(&cur, nx, ny, w + eps, &piece) || !clip_poly(&cur, -nx, -ny, -(w + eps), &rest))
+            return 0;
+        if (piece.n >= 3 && !push_fragment(stack, top, b, &piece, next)) return 0;
+        if (rest.n < 3) return 1;
+        cur = rest;
+    }
+    return 1;
+}
+
+/* 1 when the segment from the eye to point x (relative) crosses a face (beyond its plane, inside its
+ * rectangle): a point no face hides proves the box it belongs to visible, before any projection. */
+static int point_behind_a_face(const pvsr_culler* c, const double x[3]) {
+    size_t k;
+    for (k = 0; k < c->face_count; ++k) {
+        const pvsr_culler_face* f = &c->faces[k];
+        const int a = f->axis, a1 = (a + 1) % 3, a2 = (a + 2) % 3;
+        const double plane = f->plane - c->eye_d[a];
+        double t, y1, y2;
+        if (f->above ? !(x[a] > plane) : !(x[a] < plane)) continue;
+        t = plane / x[a];
+        y1 = t * x[a1] + c->eye_d[a1];
+        y2 = t * x[a2] + c->eye_d[a2];
+        if (y1 >= f->lo[0] && y1 <= f->hi[0] && y2 >= f->lo[1] && y2 <= f->hi[1]) return 1;
+    }
+    return 0;
+}
+
+static int hidden_by_faces(const pvsr_culler* c, const float box[6]) {
+    const double near_d = (double)CULL_NEAR_PLANE_M;
+    fuse_face faces[FUSE_MAX_FACES];
+    fuse_fragment stack[FUSE_MAX_FRAGMENTS];
+    fuse_frame f;
+    double delta, q[6], best = near_d, lo[2], hi[2];
+    int a, nf = 0, top = 0;
+    size_t k;
+    fuse_poly r;
+    if (!c->eye_ok || c->face_count == 0 || !usable_box(box)) return 0;
+    delta = CULL_MARGIN_M + CULL_MARGIN_REL * scale_of(c->eye_d, box);
+    f.p = -1;
+    f.sign = 1.0;
+    for (a = 0; a < 3; ++a) {
+        q[a] = (double)box[a] - delta - c->eye_d[a];
+        q[3 + a] = (double)box[3 + a] + delta - c->eye_d[a];
+    }
+    for (a = 0; a < 3; ++a) { /* the axis along which the box lies farthest ahead of the eye */
+        if (q[a] > best) {
+            best = q[a];
+            f.p = a;
+            f.sign = 1.0;
+        }
+        if (-q[3 + a] > best) {
+            best = -q[3 + a];
+            f.p = a;
+            f.sign = -1.0;
+        }
+    }
+    if (f.p < 0) return 0;
+    for (a = 0; a < 9; ++a) { /* the centre and the corners: one that no face hides shows the box */
+        double x[3];
+        int b;
+        for (b = 0; b < 3; ++b) x[b] = a == 8 ? 0.5 * (q[b] + q[3 + b]) : (a >> b & 1) ? q[3 + b] : q[b];
+        if (!point_behind_a_face(c, x)) return 0;
+    }
+    f.u = (f.p + 1) % 3;
+    f.v = (f.p + 2) % 3;
+    box_directions(&f, q, lo, hi);
+    for (k = 0; k < c->face_count && nf < FUSE_MAX_FACES; ++k) {
+        const pvsr_culler_face* face = &c->faces[k];
+        fuse_face* ff = &faces[nf];
+        const double plane = face->plane - c->eye_d[face->axis];
+        if (face->above ? !(q[3 + face->axis] > plane + face->delta) : !(q[face->axis] < plane - face->delta))
+            continue; /* nothing of the box lies beyond it */
+        if (!project_face(&f, face, c->eye_d, ff)) continue;
+        if (ff->hi[0] < lo[0] || ff->lo[0] > hi[0] || ff->hi[1] < lo[1] || ff->lo[1] > hi[1]) continue;
+        ++nf;
+    }
+    if (nf == 0) return 0;
+    r.n = 4;
+    r.x[0] = lo[0];
+    r.y[0] = lo[1];
+    r.x[1] = hi[0];
+    r.y[1] = lo[1];
+    r.x[2] = hi[0];
+    r.y[2] = hi[1];
+    r.x[3] = lo[0];
+    r.y[3] = hi[1];
+    push_fragment(stack, &top, q, &r, 0);
+    while (top > 0) {
+        const fuse_fragment g = stack[--top];
+        double plo[2], phi[2], near_part[6], far_part[6], blo[2], bhi[2];
+        const fuse_face* ff = NULL;
+        int i = g.next, ax, ok;
+        double cut;
+        fuse_poly rn, rf;
+        poly_bounds(g.r.x, g.r.y, g.r.n, plo, phi);
+        for (; i < nf; ++i) { /* the next face that could hide part of this fragment */
+            const fuse_face* t = &faces[i];
+            if (t->above ? !(g.b[3 + t->axis] > t->plane + t->delta) : !(g.b[t->axis] < t->plane - t->delta))
+                continue;
+            if (t->hi[0] < plo[0] || t->lo[0] > phi[0] || t->hi[1] < plo[1] || t->lo[1] > phi[1]) continue;
+            ff = t;
+            break;
+        }
+        if (ff == NULL) return 0; /* a fragment no face hides: visible */
+        ax = ff->axis;
+        cut = ff->above ? ff->plane + ff->delta : ff->plane - ff->delta;
+        memcpy(near_part, g.b, sizeof near_part);
+        memcpy(far_part, g.b, sizeof far_part);
+        if (ff->above) {
+            near_part[3 + ax] = near_part[3 + ax] < cut ? near_part[3 + ax] : cut;
+            far_part[ax] = far_part[ax] > cut ? far_part[ax] : cut;
+        } else {
+            near_part[ax] = near_part[ax] > cut ? near_part[ax] : cut;
+            far_part[3 + ax] = far_part[3 + ax] < cut ? far_part[3 + ax] : cut;
+        }
+        if (near_part[ax] <= near_part[3 + ax]) { /* the part on the eye's side keeps its directions */
+            rn = g.r;
+            box_directions(&f, near_part, blo, bhi);
+            ok = clip_to_rect(&rn, blo, bhi);
+            if (ok < 0 || (ok > 0 && !push_fragment(stack, &top, near_part, &rn, i + 1))) return 0;
+        }
+        rf = g.r;
+        box_directions(&f, far_part, blo, bhi);
+        ok = clip_to_rect(&rf, blo, bhi);
+        if (ok < 0) return 0;
+        if (ok == 0) continue;
+        if (!push_outside(stack, &top, far_part, &rf, ff, i + 1)) return 0;
+    }
+    return 1;
+}
+
 int pvsr_culler_classify(const pvsr_culler* c, const float box[6]) {
     if (c == NULL || box == NULL || !c->eye_ok || c->used == 0 || !usable_box(box)) return PVSR_CULL_VISIBLE;
     if (hidden_by_shadow_frusta(c, box)) return PVSR_CULL_SHADOW_FRUSTUM;
     if (hidden_by_depth_cube(c, box)) return PVSR_CULL_DEPTH_CUBE;
+    if (hidden_by_faces(c, box)) return PVSR_CULL_FACES;
     return PVSR_CULL_VISIBLE;
 }
 
 int pvsr_culler_is_hidden(const pvsr_culler* c, const float box[6]) {
     return pvsr_culler_classify(c, box) != PVSR_CULL_VISIBLE;
+}
+
+/* The faces of a used occluder that face the eye: a panel's rectangle, or a box's faces toward the eye, each
+ * GROWN by delta in its plane: the faces' union hides what every segment reaching it within delta of a face
+ * meets, so that faces meeting at a junction close it (docs/ALGORITHMS.md#runtime-faces). */
+static void add_faces(pvsr_culler* c, const pvsr_culler_candidate* cand) {
+    int a;
+    for (a = 0; a < 3; ++a) {
+        const int a1 = (a + 1) % 3, a2 = (a + 2) % 3;
+        pvsr_culler_face* f = &c->faces[c->face_count];
+        if (cand->flat >= 0 && a != cand->flat) continue;
+        if (cand->flat < 0 && !(c->eye_d[a] < (double)cand->box[a] - cand->delta) &&
+            !(c->eye_d[a] > (double)cand->box[3 + a] + cand->delta))
+            continue;
+        f->axis = a;
+        f->above = c->eye_d[a] < (double)cand->box[a];
+        f->plane = f->above ? (double)cand->box[a] : (double)cand->box[3 + a];
+        f->delta = cand->delta;
+        f->lo[0] = (double)cand->box[a1] - cand->delta;
+        f->hi[0] = (double)cand->box[3 + a1] + cand->delta;
+        f->lo[1] = (double)cand->box[a2] - cand->delta;
+        f->hi[1] = (double)cand->box[3 + a2] + cand->delta;
+        ++c->face_count;
+    }
 }
 
 void pvsr_culler_begin_frame(pvsr_culler* c, const float eye[3], const float* boxes, size_t count) {
@@ -1545,6 +1887,7 @@ void pvsr_culler_begin_frame(pvsr_culler* c, const float eye[3], const float* bo
     c->used = 0;
     c->redundant = 0;
     c->frustum_count = 0;
+    c->face_count = 0;
     c->candidate_count = 0;
     c->eye_ok = c->ok && eye != NULL && isfinite(eye[0]) && isfinite(eye[1]) && isfinite(eye[2]);
     if (!c->eye_ok) return;
@@ -1600,6 +1943,7 @@ void pvsr_culler_begin_frame(pvsr_culler* c, const float eye[3], const float* bo
         ++c->used;
         if (r > 0) rasterize(c, cand->raster, cand->flat);
         build_frustum(c, cand->box, cand->delta, cand->flat, &c->frusta[c->frustum_count++]);
+        add_faces(c, cand);
     }
 }
 

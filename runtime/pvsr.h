@@ -199,13 +199,14 @@ const char* pvsr_string(const pvsr_level* level, const char* key);
 /* ---- The culler of moving objects (characters, vehicles, props: what no PVS lists) against a few occluder
  * boxes, such as a cell's ranked occluders: the same tests and answers as pvsbake/occlusion.h, whose
  * conventions it follows (read them there): shadow frusta of single boxes, then a float depth cube around the
- * eye that fuses them; "hidden" only when certainly hidden (docs/ALGORITHMS.md#runtime-culler). Boxes are
- * float[6] (min x, y, z, max x, y, z), SOLID; an occluder flat along exactly one axis is a PANEL, a
- * rectangle of the opaque surface (docs/ALGORITHMS.md#runtime-panels). No allocation: the depth cube lives in
- * memory the caller gives (pvsr_culler_memory_bytes). Between pvsr_culler_begin_frame() calls any number of
- * threads may test boxes.
+ * eye that fuses them, then the exact union of their faces toward the eye (closing the junctions where they
+ * meet, up to a margin of about 1e-5 m); "hidden" only when certainly hidden
+ * (docs/ALGORITHMS.md#runtime-culler). Boxes are float[6] (min x, y, z, max x, y, z), SOLID; an occluder flat
+ * along exactly one axis is a PANEL, a rectangle of the opaque surface (docs/ALGORITHMS.md#runtime-panels).
+ * No allocation: the depth cube lives in memory the caller gives (pvsr_culler_memory_bytes). Between
+ * pvsr_culler_begin_frame() calls any number of threads may test boxes.
  *
- *   static pvsr_culler culler;                     (about 20 KiB; keep one per thread that begins frames)
+ *   static pvsr_culler culler;                     (about 31 KiB; keep one per thread that begins frames)
  *   void* memory = malloc(pvsr_culler_memory_bytes(32));
  *   pvsr_culler_init(&culler, 32, memory, pvsr_culler_memory_bytes(32));
  *   each frame: pvsr_culler_begin_cell(&culler, &level, cell, eye, PVSR_CULLER_MAX_OCCLUDERS);
@@ -220,7 +221,8 @@ const char* pvsr_string(const pvsr_level* level, const char* key);
 typedef enum pvsr_cull_path {
     PVSR_CULL_VISIBLE = 0,        /* not proven hidden: draw it */
     PVSR_CULL_SHADOW_FRUSTUM = 1, /* inside the shadow frustum of one occluder */
-    PVSR_CULL_DEPTH_CUBE = 2      /* hidden by the fused depth cube only */
+    PVSR_CULL_DEPTH_CUBE = 2,     /* hidden by the fused depth cube, not by one frustum */
+    PVSR_CULL_FACES = 3           /* hidden by the exact union of the occluders' faces only */
 } pvsr_cull_path;
 
 typedef struct pvsr_culler_frustum {
@@ -234,6 +236,14 @@ typedef struct pvsr_culler_candidate {
     double delta, dist2;
 } pvsr_culler_candidate;
 
+/* A face that hides what lies beyond its plane from the eye: a panel, or a solid box's face toward the eye,
+ * its rectangle shrunk by delta (docs/ALGORITHMS.md#runtime-faces). */
+typedef struct pvsr_culler_face {
+    double plane, lo[2], hi[2]; /* x[axis] = plane; the rectangle on axes (axis + 1) % 3, (axis + 2) % 3 */
+    double delta;
+    int axis, above; /* above: the eye is below the plane, and what lies above it is hidden */
+} pvsr_culler_face;
+
 /* A culler: its fields are the runtime's (their layout may change between versions). */
 typedef struct pvsr_culler {
     int ok, eye_ok, resolution;
@@ -242,6 +252,8 @@ typedef struct pvsr_culler {
     size_t used, redundant, frustum_count, candidate_count;
     pvsr_culler_candidate candidates[PVSR_CULLER_MAX_OCCLUDERS];
     pvsr_culler_frustum frusta[PVSR_CULLER_MAX_OCCLUDERS];
+    size_t face_count;
+    pvsr_culler_face faces[3 * PVSR_CULLER_MAX_OCCLUDERS];
     int written[6][4]; /* per face: i0, i1, j0, j1 of the written pixels (empty when i0 > i1) */
     float *grid, *depth, *col_enter, *col_exit, *row_enter, *row_exit, *corner_prev, *corner_cur;
 } pvsr_culler;

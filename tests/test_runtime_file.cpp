@@ -245,7 +245,7 @@ TEST_F(RuntimeFileDamage, HostileBytesAreRefusedOrStayInRange) {
 
 // The C99 culler answers as pvsbake::OcclusionCuller (io/loader/occlusion.cpp, itself checked against rays by
 // test_runtime_occlusion) on random scenes: the same path for every box, the same occluders used and skipped,
-// at every resolution (0: shadow frusta only), and a culler without its memory culls nothing.
+// at every resolution (0: shadow frusta and faces only), and a culler without its memory culls nothing.
 TEST(RuntimeFile, TheCullerAnswersAsTheLoadersCuller) {
     std::mt19937 rng(20261128u);
     std::uniform_real_distribution<float> u(-20.0f, 20.0f), size(0.2f, 6.0f), thin(0.05f, 0.6f);
@@ -268,7 +268,7 @@ TEST(RuntimeFile, TheCullerAnswersAsTheLoadersCuller) {
         }
         return b;
     };
-    uint64_t hidden = 0, fused = 0, total = 0;
+    uint64_t hidden = 0, fused = 0, by_faces = 0, total = 0;
     for (const int resolution : {0, 2, 32, 64}) {
         pvsbake::OcclusionCuller want(resolution);
         std::vector<float> memory(pvsr_culler_memory_bytes(resolution) / sizeof(float) + 1);
@@ -290,12 +290,14 @@ TEST(RuntimeFile, TheCullerAnswersAsTheLoadersCuller) {
                 ASSERT_EQ(path, int(want.classify(box))) << "resolution " << resolution << " scene " << scene;
                 hidden += path != PVSR_CULL_VISIBLE;
                 fused += path == PVSR_CULL_DEPTH_CUBE;
+                by_faces += path == PVSR_CULL_FACES;
                 ++total;
             }
         }
     }
     EXPECT_GT(hidden, total / 100) << "the scenes should hide something";
     EXPECT_GT(fused, 0u) << "some boxes should be hidden by fused occluders only";
+    EXPECT_GT(by_faces, 0u) << "some boxes should be hidden by the union of faces only";
     // No memory: it culls nothing.
     pvsr_culler none;
     EXPECT_EQ(pvsr_culler_init(&none, 32, nullptr, 0), 0);

@@ -85,23 +85,56 @@ TEST(RuntimeOcclusion, TwoWallsThatOnlyTogetherHideABoxFuseOnTheDepthCube) {
     EXPECT_EQ(culler.classify(target), Path::kDepthBuffer);
     EXPECT_FALSE(culler.hidden_by_shadow_frusta(target));
     EXPECT_TRUE(culler.hidden_by_depth_cube(target));
-    for (const Box& wall : walls) {  // each wall alone hides it on neither path
+    EXPECT_TRUE(culler.hidden_by_faces(target));
+    for (const Box& wall : walls) {  // each wall alone hides it on no path
         culler.begin_frame(kEye, &wall, 1);
         EXPECT_EQ(culler.classify(target), Path::kVisible);
     }
     // From 8 pixels per face edge on, the pixels the box touches are each covered whole by one wall (x = 0 is
-    // a pixel edge on every even resolution); at 2 and 4 they are too coarse. Never by single frusta.
+    // a pixel edge on every even resolution); at 2 and 4 they are too coarse, and the faces' exact union
+    // hides it. Never by single frusta.
     for (int r : {2, 4, 8, 16, 32, 64, 128}) {
         Culler c(r);
         c.begin_frame(kEye, walls);
-        EXPECT_EQ(c.classify(target), r >= 8 ? Path::kDepthBuffer : Path::kVisible) << r;
+        EXPECT_EQ(c.classify(target), r >= 8 ? Path::kDepthBuffer : Path::kFaces) << r;
         EXPECT_FALSE(c.hidden_by_shadow_frusta(target)) << r;
     }
-    // Shadow frusta only (resolution 0): no fusion, so not hidden.
+    // Shadow frusta and faces only (resolution 0): the faces fuse.
     Culler frusta_only(0);
     frusta_only.begin_frame(kEye, walls);
     EXPECT_EQ(frusta_only.resolution(), 0);
-    EXPECT_EQ(frusta_only.classify(target), Path::kVisible);
+    EXPECT_EQ(frusta_only.classify(target), Path::kFaces);
+}
+
+// A floor and a wall that meet along a line (panels, or solid boxes whose faces meet there) hide together a
+// box behind the wall that reaches below the floor: the wall hides its part above y = 0, the floor its part
+// below. No pixel of the depth cube along the junction is covered whole by one of them, at any resolution;
+// the union of their faces is exact, and a box that peeks over the wall stays visible.
+TEST(RuntimeOcclusion, AFloorAndAWallMeetingAtAJunctionHideWhatNeitherHidesAlone) {
+    const Box target = box(-1, -1, 6, 1, 1, 7);
+    const std::vector<std::vector<Box>> scenes = {
+        {box(-5, 0, 0, 5, 0, 5), box(-5, 0, 5, 5, 4, 5)},              // two panels
+        {box(-5, -0.5f, 0, 5, 0, 5), box(-5, 0, 5, 5, 4, 5.5f)},       // two solid boxes
+        {box(-5, 0, 0, 5, 0, 5.25f), box(-5, -0.5f, 5, 5, 4, 5.5f)}};  // a panel over a box's foot
+    for (size_t s = 0; s < scenes.size(); ++s) {
+        for (int r : {0, 8, 32, 128}) {
+            Culler c(r);
+            c.begin_frame(kEye, scenes[s]);
+            EXPECT_TRUE(c.hidden_by_faces(target)) << "scene " << s << " resolution " << r;
+            if (s <
+                2) {  // (the third scene's panel reaches into the wall: pixels along it are covered whole)
+                EXPECT_EQ(c.classify(target), Path::kFaces) << "scene " << s << " resolution " << r;
+                EXPECT_FALSE(c.hidden_by_depth_cube(target)) << s << " " << r;
+            }
+            EXPECT_FALSE(c.is_hidden(box(-1, -1, 6, 1, 4.5f, 7))) << s << " " << r;  // over the wall's top
+            EXPECT_FALSE(c.is_hidden(box(-1, -1, 3, 1, 1, 4))) << s << " " << r;     // in front of the wall
+        }
+        for (const Box& one : scenes[s]) {
+            Culler c;
+            c.begin_frame(kEye, &one, 1);
+            EXPECT_FALSE(c.is_hidden(target)) << s;
+        }
+    }
 }
 
 // A panel, the wall's near face alone (flat along z), hides what the wall hides: by its shadow frustum and on
@@ -270,7 +303,7 @@ TEST(RuntimeOcclusion, CApiMirrorsTheCppApi) {
     pvsbake_culler* frusta_only = pvsbake_culler_create(-1);
     ASSERT_NE(frusta_only, nullptr);
     pvsbake_culler_begin_frame(frusta_only, kEye, walls, 2);
-    EXPECT_EQ(pvsbake_culler_classify(frusta_only, fused), PVSBAKE_CULL_VISIBLE);
+    EXPECT_EQ(pvsbake_culler_classify(frusta_only, fused), PVSBAKE_CULL_FACES);
     EXPECT_EQ(pvsbake_culler_classify(frusta_only, single), PVSBAKE_CULL_SHADOW_FRUSTUM);
     pvsbake_culler_free(frusta_only);
 }
@@ -332,8 +365,23 @@ uint32_t rays_reaching(const RayScene& scene, const float eye_f[3], const Box& b
 }
 
 struct PropertyTally {
-    uint64_t queries = 0, hidden_frustum = 0, hidden_cube = 0, wrong = 0, rays = 0, edge_boxes = 0;
+    uint64_t queries = 0, hidden_frustum = 0, hidden_cube = 0, hidden_faces = 0, wrong = 0, rays = 0,
+             edge_boxes = 0;
+    void count(Path path) {
+        (path == Path::kShadowFrustum ? hidden_frustum
+         : path == Path::kFaces       ? hidden_faces
+                                      : hidden_cube) += 1;
+    }
 };
+
+// The faces' union hides what every segment meets within the culler's margin of a face (about 1e-5 m plus
+// 1e-6 of the coordinates; docs/ALGORITHMS.md#runtime-faces): rays are traced against the occluders grown by
+// more than that, so that a ray grazing an edge of a box grown to the edge of what the culler hides does not
+// count as seen.
+constexpr float kRayTolerance_m = 1e-4f;
+Box grown(const Box& b, float by) {
+    return box(b.min[0] - by, b.min[1] - by, b.min[2] - by, b.max[0] + by, b.max[1] + by, b.max[2] + by);
+}
 
 // Random box worlds: K walls (thin on one axis), eyes outside them, query boxes of person to vehicle size,
 // half of them placed behind a random wall as seen from the eye. Every box the culler hides is checked with
@@ -363,7 +411,7 @@ void random_worlds(int worlds, int eyes_per_world, int queries_per_eye, int reso
             const Box b = box(c[0] - half[0], c[1] - half[1], c[2] - half[2], c[0] + half[0], c[1] + half[1],
                               c[2] + half[2]);
             occ.push_back(b);
-            test::add_box(world, "occ" + std::to_string(i), to_aabb(b));
+            test::add_box(world, "occ" + std::to_string(i), to_aabb(grown(b, kRayTolerance_m)));
         }
         const RayScene scene(ctx, world, BuildQuality::kMedium, 1);
         Culler culler(resolution);
@@ -392,7 +440,7 @@ void random_worlds(int worlds, int eyes_per_world, int queries_per_eye, int reso
                 ++t.queries;
                 const Path path = culler.classify(qb);
                 if (path == Path::kVisible) continue;
-                (path == Path::kShadowFrustum ? t.hidden_frustum : t.hidden_cube) += 1;
+                t.count(path);
                 const uint32_t seen = rays_reaching(scene, eye, qb, 40, rng, t.rays);
                 t.wrong += seen;
                 EXPECT_EQ(seen, 0u) << "world " << w << " eye " << eye[0] << " " << eye[1] << " " << eye[2]
@@ -436,13 +484,15 @@ void expect_random_worlds_hold(const char* label, std::initializer_list<int> res
         PropertyTally t;
         random_worlds(ci ? 12 : 60, 6, ci ? 100 : 200, resolution, seed + uint32_t(resolution), t, panels);
         std::printf(
-            "%sresolution %d: %llu queries, hidden %llu by frusta + %llu by the cube only, %llu edge boxes, "
-            "%llu rays, %llu wrong\n",
+            "%sresolution %d: %llu queries, hidden %llu by frusta + %llu by the cube only + %llu by the "
+            "faces "
+            "only, %llu edge boxes, %llu rays, %llu wrong\n",
             label, resolution, (unsigned long long)t.queries, (unsigned long long)t.hidden_frustum,
-            (unsigned long long)t.hidden_cube, (unsigned long long)t.edge_boxes, (unsigned long long)t.rays,
-            (unsigned long long)t.wrong);
+            (unsigned long long)t.hidden_cube, (unsigned long long)t.hidden_faces,
+            (unsigned long long)t.edge_boxes, (unsigned long long)t.rays, (unsigned long long)t.wrong);
         EXPECT_EQ(t.wrong, 0u);
         EXPECT_GT(t.hidden_frustum, t.queries / 20);
+        EXPECT_GT(t.hidden_faces, 0u);
         if (resolution >= Culler::kDefaultResolution) {
             EXPECT_GT(t.hidden_cube, 0u);
         }
@@ -468,7 +518,7 @@ TEST(RuntimeOcclusionProperty, FusedWallsNeverCullABoxARayReaches) {
     for (int i = 0; i < 16; ++i) {  // segments 1.6 m wide every 1.2 m of x, alternating z = 6 and z = 7
         const float x0 = -10.0f + 1.2f * float(i), z0 = i % 2 ? 7.0f : 6.0f;
         occ.push_back(box(x0, -1, z0, x0 + 1.6f, 5, z0 + 0.3f));
-        test::add_box(world, "wall" + std::to_string(i), to_aabb(occ.back()));
+        test::add_box(world, "wall" + std::to_string(i), to_aabb(grown(occ.back(), kRayTolerance_m)));
     }
     Context ctx = quiet_context();
     const RayScene scene(ctx, world, BuildQuality::kMedium, 1);
@@ -484,16 +534,18 @@ TEST(RuntimeOcclusionProperty, FusedWallsNeverCullABoxARayReaches) {
             ++t.queries;
             const Path path = culler.classify(qb);
             if (path == Path::kVisible) continue;
-            (path == Path::kShadowFrustum ? t.hidden_frustum : t.hidden_cube) += 1;
+            t.count(path);
             const uint32_t seen = rays_reaching(scene, eye, qb, 60, rng, t.rays);
             t.wrong += seen;
             EXPECT_EQ(seen, 0u);
         }
     }
     std::printf(
-        "fused walls: %llu queries, hidden %llu by frusta + %llu by the cube only, %llu rays, %llu wrong\n",
+        "fused walls: %llu queries, hidden %llu by frusta + %llu by the cube only + %llu by the faces only, "
+        "%llu rays, %llu wrong\n",
         (unsigned long long)t.queries, (unsigned long long)t.hidden_frustum,
-        (unsigned long long)t.hidden_cube, (unsigned long long)t.rays, (unsigned long long)t.wrong);
+        (unsigned long long)t.hidden_cube, (unsigned long long)t.hidden_faces, (unsigned long long)t.rays,
+        (unsigned long long)t.wrong);
     EXPECT_EQ(t.wrong, 0u);
     EXPECT_GT(t.hidden_cube, t.queries / 10);
 }

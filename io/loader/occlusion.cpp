@@ -135,6 +135,192 @@ inline float pad_high(float x) {
     return y < 1.0f ? std::max(y, -1.0f) : 1.0f;
 }
 
+// ---- Exact fusion of the occluders' faces (docs/ALGORITHMS.md#runtime-faces): the box is cut into
+// fragments, each a sub-box with a convex polygon of directions, until every fragment lies beyond a face in
+// directions the face covers (hidden) or one fragment has passed every face (visible). Directions are
+// central projections along one axis p on which the whole box lies ahead of the eye: u = x[U] / d,
+// v = x[V] / d with d = sign * x[p] > 0 (everything relative to the eye). The same arithmetic as the C99
+// runtime's (runtime/pvsr.c), so that both give the same answers.
+constexpr int kFuseMaxVerts = 12;      // of a fragment's polygon; more: give up (visible)
+constexpr int kFuseMaxFaces = 64;      // faces a box is tested against (the nearest first)
+constexpr int kFuseMaxFragments = 32;  // fragments pending; more: give up (visible)
+constexpr double kFuseEps = 1e-10;     // relative: a covered region shrunk, a box's directions widened
+
+struct FusePoly {
+    int n = 0;
+    double x[kFuseMaxVerts], y[kFuseMaxVerts];
+};
+
+struct FuseFace {
+    double x[6], y[6], lo[2], hi[2];  // its projection (counter-clockwise) and that polygon's bounds
+    double plane, delta;
+    int n, axis;
+    bool above;
+};
+
+struct FuseFragment {
+    double b[6];  // relative to the eye
+    FusePoly r;
+    int next;  // the first face not yet applied
+};
+
+struct FuseFrame {
+    int p, u, v;
+    double sign;
+};
+
+inline double widen(double x, bool up) {
+    const double m = kFuseEps * (1.0 + std::abs(x));
+    return up ? x + m : x - m;
+}
+
+// Keeps the part of `in` where a * x + b * y <= w; false when the result would have too many vertices.
+bool clip_poly(const FusePoly& in, double a, double b, double w, FusePoly& out) {
+    out.n = 0;
+    for (int i = 0; i < in.n; ++i) {
+        const int j = (i + 1) % in.n;
+        const double si = a * in.x[i] + b * in.y[i] - w, sj = a * in.x[j] + b * in.y[j] - w;
+        if (si <= 0.0) {
+            if (out.n == kFuseMaxVerts) return false;
+            out.x[out.n] = in.x[i];
+            out.y[out.n++] = in.y[i];
+        }
+        if ((si < 0.0 && sj > 0.0) || (si > 0.0 && sj < 0.0)) {
+            const double t = si / (si - sj);
+            if (out.n == kFuseMaxVerts) return false;
+            out.x[out.n] = in.x[i] + t * (in.x[j] - in.x[i]);
+            out.y[out.n++] = in.y[i] + t * (in.y[j] - in.y[i]);
+        }
+    }
+    return true;
+}
+
+void poly_bounds(const double* x, const double* y, int n, double lo[2], double hi[2]) {
+    lo[0] = hi[0] = x[0];
+    lo[1] = hi[1] = y[0];
+    for (int i = 1; i < n; ++i) {
+        lo[0] = x[i] < lo[0] ? x[i] : lo[0];
+        hi[0] = x[i] > hi[0] ? x[i] : hi[0];
+        lo[1] = y[i] < lo[1] ? y[i] : lo[1];
+        hi[1] = y[i] > hi[1] ? y[i] : hi[1];
+    }
+}
+
+// The bounds of the directions of box b (relative, all of it at d >= its near side > 0), widened.
+void box_directions(const FuseFrame& f, const double b[6], double lo[2], double hi[2]) {
+    const double d0 = f.sign > 0.0 ? b[f.p] : -b[3 + f.p], d1 = f.sign > 0.0 ? b[3 + f.p] : -b[f.p];
+    const int ax[2] = {f.u, f.v};
+    for (int k = 0; k < 2; ++k) {
+        const double l = b[ax[k]], h = b[3 + ax[k]];
+        lo[k] = widen(l >= 0.0 ? l / d1 : l / d0, false);
+        hi[k] = widen(h >= 0.0 ? h / d0 : h / d1, true);
+    }
+}
+
+// r clipped to the rectangle [lo, hi]: 1, 0 when empty, -1 when a polygon would have too many vertices.
+int clip_to_rect(FusePoly& r, const double lo[2], const double hi[2]) {
+    const double a[4] = {-1.0, 1.0, 0.0, 0.0}, b[4] = {0.0, 0.0, -1.0, 1.0};
+    const double w[4] = {-lo[0], hi[0], -lo[1], hi[1]};
+    double plo[2], phi[2];
+    poly_bounds(r.x, r.y, r.n, plo, phi);
+    for (int k = 0; k < 4 && r.n >= 3; ++k) {
+        const bool cuts = k == 0   ? plo[0] < lo[0]
+                          : k == 1 ? phi[0] > hi[0]
+                          : k == 2 ? plo[1] < lo[1]
+                                   : phi[1] > hi[1];
+        if (!cuts) continue;
+        FusePoly t;
+        if (!clip_poly(r, a[k], b[k], w[k], t)) return -1;
+        r = t;
+    }
+    return r.n >= 3 ? 1 : 0;
+}
+
+bool push_fragment(FuseFragment* stack, int& top, const double b[6], const FusePoly& r, int next) {
+    if (top == kFuseMaxFragments) return false;
+    std::memcpy(stack[top].b, b, sizeof stack[top].b);
+    stack[top].r = r;
+    stack[top++].next = next;
+    return true;
+}
+
+// Pushes the parts of r outside the face's polygon, shrunk by kFuseEps (their union covers r less the
+// shrunk polygon); false when the stack or a polygon overflows.
+bool push_outside(FuseFragment* stack, int& top, const double b[6], const FusePoly& r, const FuseFace& q,
+                  int next) {
+    FusePoly cur = r, piece, rest;
+    for (int k = 0; k < q.n; ++k) {
+        const int k1 = (k + 1) % q.n;
+        const double nx = -(q.y[k1] - q.y[k]), ny = q.x[k1] - q.x[k];  // inward: left of the edge
+        const double w = nx * q.x[k] + ny * q.y[k];
+        const double eps =
+            kFuseEps * (std::abs(nx) + std::abs(ny)) * (1.0 + std::abs(q.x[k]) + std::abs(q.y[k]));
+        bool any_out = false, any_in = false;
+        for (int i = 0; i < cur.n; ++i) {
+            const double s = nx * cur.x[i] + ny * cur.y[i] - w;
+            any_out = any_out || s < eps;
+            any_in = any_in || s > eps;
+        }
+        if (!any_out) continue;
+        if (!any_in) return push_fragment(stack, top, b, cur, next);
+        if (!clip_poly(cur, nx, ny, w + eps, piece) || !clip_poly(cur, -nx, -ny, -(w + eps), rest))
+            return false;
+        if (piece.n >= 3 && !push_fragment(stack, top, b, piece, next)) return false;
+        if (rest.n < 3) return true;
+        cur = rest;
+    }
+    return true;
+}
+
+// Projects a face (x[axis] = plane, the rectangle lo..hi on the other two axes; absolute) in frame f: its
+// part at d >= the near plane, counter-clockwise.
+bool project_face(const FuseFrame& f, int a, double plane, const double lo[2], const double hi[2],
+                  const double e[3], FuseFace& out) {
+    const int a1 = (a + 1) % 3, a2 = (a + 2) % 3;
+    const double near_d = double(OcclusionCuller::kNearPlane_m);
+    double c[4][3], d[5], u[5], v[5], area = 0.0;
+    int n = 0;
+    for (int i = 0; i < 4; ++i) {
+        c[i][a] = plane - e[a];
+        c[i][a1] = (i == 1 || i == 2 ? hi[0] : lo[0]) - e[a1];
+        c[i][a2] = (i >= 2 ? hi[1] : lo[1]) - e[a2];
+    }
+    for (int i = 0; i < 4; ++i) {  // the quad clipped to d >= near
+        const int j = (i + 1) % 4;
+        const double di = f.sign * c[i][f.p], dj = f.sign * c[j][f.p];
+        if (di >= near_d) {
+            d[n] = di;
+            u[n] = c[i][f.u];
+            v[n++] = c[i][f.v];
+        }
+        if ((di < near_d && dj > near_d) || (di > near_d && dj < near_d)) {
+            const double t = (near_d - di) / (dj - di);
+            d[n] = near_d;
+            u[n] = c[i][f.u] + t * (c[j][f.u] - c[i][f.u]);
+            v[n++] = c[i][f.v] + t * (c[j][f.v] - c[i][f.v]);
+        }
+    }
+    if (n < 3) return false;
+    for (int i = 0; i < n; ++i) {
+        out.x[i] = u[i] / d[i];
+        out.y[i] = v[i] / d[i];
+    }
+    for (int i = 0; i < n; ++i) {
+        const int j = (i + 1) % n;
+        area += out.x[i] * out.y[j] - out.x[j] * out.y[i];
+    }
+    if (!(area != 0.0) || !std::isfinite(area)) return false;
+    if (area < 0.0) {
+        std::reverse(out.x, out.x + n);
+        std::reverse(out.y, out.y + n);
+    }
+    out.n = n;
+    poly_bounds(out.x, out.y, n, out.lo, out.hi);
+    out.axis = a;
+    out.plane = plane - e[a];
+    return true;
+}
+
 }  // namespace
 
 OcclusionCuller::OcclusionCuller(int resolution) noexcept {
@@ -142,6 +328,7 @@ OcclusionCuller::OcclusionCuller(int resolution) noexcept {
     for (Rect& w : written_) w = {0, -1, 0, -1};
     try {
         frusta_.resize(kMaxOccluders);
+        faces_.resize(3 * kMaxOccluders);
         candidates_.reserve(kMaxOccluders);
         if (r > 0) {
             grid_.resize(size_t(r) + 1);
@@ -182,6 +369,7 @@ void OcclusionCuller::begin_frame(const float eye[3], const Box* occluders, size
     used_ = 0;
     redundant_ = 0;
     frustum_count_ = 0;
+    face_count_ = 0;
     eye_ok_ =
         ok_ && eye != nullptr && std::isfinite(eye[0]) && std::isfinite(eye[1]) && std::isfinite(eye[2]);
     if (!eye_ok_) return;
@@ -229,8 +417,14 @@ void OcclusionCuller::begin_frame(const float eye[3], const Box* occluders, size
         c.dist2 = dist2;
         candidates_.push_back(c);  // no allocation: reserved for kMaxOccluders
     }
-    std::sort(candidates_.begin(), candidates_.end(),
-              [](const Candidate& x, const Candidate& y) { return x.dist2 < y.dist2; });
+    // Nearest first, ties in their given order (insertion, as the C99 runtime: std::stable_sort may
+    // allocate).
+    for (size_t k = 1; k < candidates_.size(); ++k) {
+        const Candidate c = candidates_[k];
+        size_t n = k;
+        for (; n > 0 && candidates_[n - 1].dist2 > c.dist2; --n) candidates_[n] = candidates_[n - 1];
+        candidates_[n] = c;
+    }
     for (const Candidate& c : candidates_) {
         if (used_ > 0 && classify(c.box) != Path::kVisible) {
             ++redundant_;
@@ -239,6 +433,7 @@ void OcclusionCuller::begin_frame(const float eye[3], const Box* occluders, size
         ++used_;
         if (r > 0) rasterize(c.raster, c.flat);
         build_frustum(c.box, c.delta, c.flat, frusta_[frustum_count_++]);
+        add_faces(c);
     }
 }
 
@@ -438,10 +633,148 @@ bool OcclusionCuller::hidden_by_depth_cube(const Box& box) const noexcept {
     return any_face;
 }
 
+// A panel's rectangle, or a box's faces toward the eye, each GROWN by its margin in its plane, so that faces
+// meeting at a junction close it (docs/ALGORITHMS.md#runtime-faces).
+void OcclusionCuller::add_faces(const Candidate& c) noexcept {
+    for (int a = 0; a < 3; ++a) {
+        const int a1 = (a + 1) % 3, a2 = (a + 2) % 3;
+        if (c.flat >= 0 && a != c.flat) continue;
+        if (c.flat < 0 && !(eye_d_[a] < double(c.box.min[a]) - c.delta) &&
+            !(eye_d_[a] > double(c.box.max[a]) + c.delta))
+            continue;
+        Face& f = faces_[face_count_++];
+        f.axis = a;
+        f.above = eye_d_[a] < double(c.box.min[a]);
+        f.plane = f.above ? double(c.box.min[a]) : double(c.box.max[a]);
+        f.delta = c.delta;
+        f.lo[0] = double(c.box.min[a1]) - c.delta;
+        f.hi[0] = double(c.box.max[a1]) + c.delta;
+        f.lo[1] = double(c.box.min[a2]) - c.delta;
+        f.hi[1] = double(c.box.max[a2]) + c.delta;
+    }
+}
+
+// Whether the segment from the eye to point x (relative) crosses a face (beyond its plane, inside its
+// rectangle): a point no face hides proves the box it belongs to visible, before any projection.
+bool OcclusionCuller::point_behind_a_face(const double x[3]) const noexcept {
+    for (size_t k = 0; k < face_count_; ++k) {
+        const Face& f = faces_[k];
+        const int a = f.axis, a1 = (a + 1) % 3, a2 = (a + 2) % 3;
+        const double plane = f.plane - eye_d_[a];
+        if (f.above ? !(x[a] > plane) : !(x[a] < plane)) continue;
+        const double t = plane / x[a];
+        const double y1 = t * x[a1] + eye_d_[a1], y2 = t * x[a2] + eye_d_[a2];
+        if (y1 >= f.lo[0] && y1 <= f.hi[0] && y2 >= f.lo[1] && y2 <= f.hi[1]) return true;
+    }
+    return false;
+}
+
+bool OcclusionCuller::hidden_by_faces(const Box& box) const noexcept {
+    const double near_d = double(kNearPlane_m);
+    if (!eye_ok_ || face_count_ == 0 || !usable_box(box)) return false;
+    const double delta = kMargin_m + kMarginRel * scale_of(eye_d_, box);
+    double q[6], best = near_d, lo[2], hi[2];
+    FuseFrame f{-1, 0, 0, 1.0};
+    for (int a = 0; a < 3; ++a) {
+        q[a] = double(box.min[a]) - delta - eye_d_[a];
+        q[3 + a] = double(box.max[a]) + delta - eye_d_[a];
+    }
+    for (int a = 0; a < 3; ++a) {  // the axis along which the box lies farthest ahead of the eye
+        if (q[a] > best) {
+            best = q[a];
+            f.p = a;
+            f.sign = 1.0;
+        }
+        if (-q[3 + a] > best) {
+            best = -q[3 + a];
+            f.p = a;
+            f.sign = -1.0;
+        }
+    }
+    if (f.p < 0) return false;
+    for (int k = 0; k < 9; ++k) {  // the centre and the corners: one that no face hides shows the box
+        double x[3];
+        for (int b = 0; b < 3; ++b) x[b] = k == 8 ? 0.5 * (q[b] + q[3 + b]) : (k >> b & 1) ? q[3 + b] : q[b];
+        if (!point_behind_a_face(x)) return false;
+    }
+    f.u = (f.p + 1) % 3;
+    f.v = (f.p + 2) % 3;
+    box_directions(f, q, lo, hi);
+    FuseFace faces[kFuseMaxFaces];
+    int nf = 0;
+    for (size_t k = 0; k < face_count_ && nf < kFuseMaxFaces; ++k) {
+        const Face& face = faces_[k];
+        FuseFace& ff = faces[nf];
+        const double plane = face.plane - eye_d_[face.axis];
+        if (face.above ? !(q[3 + face.axis] > plane + face.delta) : !(q[face.axis] < plane - face.delta))
+            continue;  // nothing of the box lies beyond it
+        if (!project_face(f, face.axis, face.plane, face.lo, face.hi, eye_d_, ff)) continue;
+        ff.above = face.above;
+        ff.delta = face.delta;
+        if (ff.hi[0] < lo[0] || ff.lo[0] > hi[0] || ff.hi[1] < lo[1] || ff.lo[1] > hi[1]) continue;
+        ++nf;
+    }
+    if (nf == 0) return false;
+    FuseFragment stack[kFuseMaxFragments];
+    int top = 0;
+    FusePoly r;
+    r.n = 4;
+    r.x[0] = lo[0];
+    r.y[0] = lo[1];
+    r.x[1] = hi[0];
+    r.y[1] = lo[1];
+    r.x[2] = hi[0];
+    r.y[2] = hi[1];
+    r.x[3] = lo[0];
+    r.y[3] = hi[1];
+    push_fragment(stack, top, q, r, 0);
+    while (top > 0) {
+        const FuseFragment g = stack[--top];
+        double plo[2], phi[2], near_part[6], far_part[6], blo[2], bhi[2];
+        const FuseFace* ff = nullptr;
+        int i = g.next;
+        poly_bounds(g.r.x, g.r.y, g.r.n, plo, phi);
+        for (; i < nf; ++i) {  // the next face that could hide part of this fragment
+            const FuseFace& t = faces[i];
+            if (t.above ? !(g.b[3 + t.axis] > t.plane + t.delta) : !(g.b[t.axis] < t.plane - t.delta))
+                continue;
+            if (t.hi[0] < plo[0] || t.lo[0] > phi[0] || t.hi[1] < plo[1] || t.lo[1] > phi[1]) continue;
+            ff = &t;
+            break;
+        }
+        if (ff == nullptr) return false;  // a fragment no face hides: visible
+        const int ax = ff->axis;
+        const double cut = ff->above ? ff->plane + ff->delta : ff->plane - ff->delta;
+        std::memcpy(near_part, g.b, sizeof near_part);
+        std::memcpy(far_part, g.b, sizeof far_part);
+        if (ff->above) {
+            near_part[3 + ax] = near_part[3 + ax] < cut ? near_part[3 + ax] : cut;
+            far_part[ax] = far_part[ax] > cut ? far_part[ax] : cut;
+        } else {
+            near_part[ax] = near_part[ax] > cut ? near_part[ax] : cut;
+            far_part[3 + ax] = far_part[3 + ax] < cut ? far_part[3 + ax] : cut;
+        }
+        if (near_part[ax] <= near_part[3 + ax]) {  // the part on the eye's side keeps its directions
+            FusePoly rn = g.r;
+            box_directions(f, near_part, blo, bhi);
+            const int ok = clip_to_rect(rn, blo, bhi);
+            if (ok < 0 || (ok > 0 && !push_fragment(stack, top, near_part, rn, i + 1))) return false;
+        }
+        FusePoly rf = g.r;
+        box_directions(f, far_part, blo, bhi);
+        const int ok = clip_to_rect(rf, blo, bhi);
+        if (ok < 0) return false;
+        if (ok == 0) continue;
+        if (!push_outside(stack, top, far_part, rf, *ff, i + 1)) return false;
+    }
+    return true;
+}
+
 OcclusionCuller::Path OcclusionCuller::classify(const Box& box) const noexcept {
     if (!eye_ok_ || used_ == 0 || !usable_box(box)) return Path::kVisible;
     if (hidden_by_shadow_frusta(box)) return Path::kShadowFrustum;
     if (hidden_by_depth_cube(box)) return Path::kDepthBuffer;
+    if (hidden_by_faces(box)) return Path::kFaces;
     return Path::kVisible;
 }
 

@@ -29,7 +29,8 @@
 //   corner ray passes it when it crosses the plane inside the shrunk rectangle (entry = exit there). A box
 //   flat along two or three axes hides nothing (docs/ALGORITHMS.md#runtime-panels).
 // - "Hidden" (the one conservative answer): is_hidden(Q) is true only if every segment from the eye to any
-//   point x of Q enters some occluder strictly before x. Anything not proven is visible: empty or
+//   point x of Q enters some occluder strictly before x, or (path 3 only) passes within the occluder's
+//   margin delta of it (about 1e-5 m: far below any gap tolerance). Anything not proven is visible: empty or
 //   non-finite boxes, a box within kNearPlane_m of the eye (which covers "contains the eye"), and every box
 //   when the eye is not finite or there are no usable occluders. Wrong answers can only be "visible".
 // - Path 1, shadow frusta (one occluder at a time, Hudson et al.): the shadow of a convex occluder B from
@@ -61,7 +62,14 @@
 //   or an occludee bound (under 1e-6 relative) tenfold, so the rules hold as if computed exactly
 //   (docs/ALGORITHMS.md#runtime-depth-cube).
 // - Costs: begin_frame() is O(occluders * pixels they cover) (the cube's written parts are cleared, not
-//   the whole cube); is_hidden() is O(occluders) for the frusta, then O(pixels the box touches).
+//   the whole cube); is_hidden() is O(occluders) for the frusta, then O(pixels the box touches), then
+//   O(faces) to find a point of the box no face hides, and only failing that the fragments of path 3.
+// - Path 3, the faces (exact fusion: occluders meeting at junctions): the faces of the used occluders toward
+//   the eye (a panel's rectangle, a box's front faces), each grown by delta in its plane so that faces that
+//   meet overlap; the box is cut into fragments (a sub-box with a convex polygon of directions, projected
+//   along an axis on which the box lies ahead of the eye) until every fragment lies beyond a face within its
+//   directions (hidden) or one passes every face (visible). Limits on faces, fragments and vertices; past
+//   one the answer is visible (docs/ALGORITHMS.md#runtime-faces).
 #pragma once
 
 #include <pvsbake/loader.h>
@@ -79,6 +87,7 @@ public:
         kVisible = 0,        // not proven hidden: draw it
         kShadowFrustum = 1,  // inside the shadow frustum of one occluder
         kDepthBuffer = 2,    // hidden by the depth cube, not by any single frustum (occluders fused)
+        kFaces = 3,          // hidden by the exact union of the occluders' faces only
     };
 
     static constexpr int kDefaultResolution = 32;  // pixels per cube face edge
@@ -122,11 +131,12 @@ public:
     // True only if the box is certainly hidden from this frame's eye (see the conventions above).
     // Thread-safe between begin_frame() calls (const, no scratch).
     bool is_hidden(const Box& box) const noexcept { return classify(box) != Path::kVisible; }
-    // The same answer with the test that proved it: shadow frusta first, then the depth cube.
+    // The same answer with the test that proved it: shadow frusta first, then the depth cube, then the faces.
     Path classify(const Box& box) const noexcept;
-    // The depth cube's answer alone, or the shadow frusta's alone (tests, figures).
+    // The depth cube's answer alone, the shadow frusta's alone, or the faces' alone (tests, figures).
     bool hidden_by_depth_cube(const Box& box) const noexcept;
     bool hidden_by_shadow_frusta(const Box& box) const noexcept;
+    bool hidden_by_faces(const Box& box) const noexcept;
 
     bool ok() const noexcept { return ok_; }
     int resolution() const noexcept { return resolution_; }
@@ -158,7 +168,18 @@ private:
         double dist2;  // squared distance from the eye
     };
 
+    // A face that hides what lies beyond its plane: a panel, or a solid box's face toward the eye, its
+    // rectangle shrunk by delta (docs/ALGORITHMS.md#runtime-faces).
+    struct Face {
+        double plane, lo[2], hi[2];  // x[axis] = plane; the rectangle on axes (axis + 1) % 3, (axis + 2) % 3
+        double delta;
+        int axis;
+        bool above;  // the eye is below the plane, and what lies above it is hidden
+    };
+
     void rasterize(const Box& b, int flat) noexcept;
+    void add_faces(const Candidate& c) noexcept;
+    bool point_behind_a_face(const double x[3]) const noexcept;
     void build_frustum(const Box& b, double delta, int flat, Frustum& fr) const noexcept;
     bool inside_shadow(const Frustum& fr, const double q_min[3], const double q_max[3]) const noexcept;
 
@@ -172,6 +193,8 @@ private:
     std::vector<Candidate> candidates_;  // reserved for kMaxOccluders
     std::vector<Frustum> frusta_;        // kMaxOccluders
     size_t frustum_count_ = 0;
+    std::vector<Face> faces_;  // 3 * kMaxOccluders
+    size_t face_count_ = 0;
     std::vector<float> grid_;   // g(0 .. R)
     std::vector<float> depth_;  // 6 * R * R, index face * R * R + j * R + i
     Rect written_[6] = {};      // per face: bounding rectangle of written pixels

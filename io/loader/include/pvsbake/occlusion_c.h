@@ -31,7 +31,8 @@ typedef struct pvsbake_culler pvsbake_culler;
 typedef enum pvsbake_cull_path {
     PVSBAKE_CULL_VISIBLE = 0,        /* not proven hidden: draw it */
     PVSBAKE_CULL_SHADOW_FRUSTUM = 1, /* inside one occluder's shadow frustum */
-    PVSBAKE_CULL_DEPTH_BUFFER = 2    /* hidden by the fused depth cube only */
+    PVSBAKE_CULL_DEPTH_BUFFER = 2,   /* hidden by the fused depth cube, not by one frustum */
+    PVSBAKE_CULL_FACES = 3           /* hidden by the exact union of the occluders' faces only */
 } pvsbake_cull_path;
 
 /* A new culler (free it with pvsbake_culler_free). resolution: pixels per cube face edge, 0 = default
