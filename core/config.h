@@ -136,11 +136,16 @@ struct OccluderConfig {
 
 // Ranked occluders per cell (occluders/ranking.h, occluders/cell_ranking.h; docs/ALGORITHMS.md#ranking).
 struct RankingConfig {
-    uint32_t occluders_per_cell = 8;   // [Limit: 0..1024] boxes kept per cell, best first; 0 = off
+    uint32_t occluders_per_cell = 16;  // [Limit: 0..1024] occluders kept per cell, best first; 0 = off
     double min_solid_angle_sr = 0.01;  // [Limit: 0..4 pi] [Units: sr] a box is a candidate for a cell when
                                        // its exact solid angle from some sampled eye of the cell passes this
     uint32_t eyes_per_cell = 8;        // [Limit: 1..1024] seeded eye points per cell (cells/eyes.h)
     uint64_t seed = 0x72616e6bULL;     // [Limit: any] the same seed gives the same ranking for any threads
+    uint32_t sight_lines = 1024;  // [Limit: 0..1e6] sight lines per cell from its eyes to its PVS's objects:
+                                  // the occluders (proven boxes and panels) that stop the most first are kept
+                                  // (occluders/sight_ranking.h); 0 = rank proven boxes by solid angle and
+                                  // depth complexity (occluders/ranking.h)
+    double min_panel_area_m2 = 1.0;  // [Limit: >= 0] [Units: m2] panels this large are candidates (by sight)
 };
 
 // The conservative solver (pvs/conservative.h).
@@ -422,6 +427,15 @@ void visit_options(Config& c, Visitor&& v) {
     v(OptionSpec{OptionGroup::kRanking, "--ranking-seed", "ranking.seed", "", "random seed of the eye points",
                  0, kInf},
       c.ranking.seed);
+    v(OptionSpec{OptionGroup::kRanking, "--ranking-sight-lines", "ranking.sight_lines", "lines",
+                 "sight lines per cell from its eyes to its PVS's objects: the occluders (proven boxes and "
+                 "panels) that stop the most of them first are kept; 0 = rank boxes by solid angle and depth "
+                 "complexity",
+                 0, 1e6},
+      c.ranking.sight_lines);
+    v(OptionSpec{OptionGroup::kRanking, "--ranking-panel-area", "ranking.min_panel_area_m2", "m2",
+                 "panels at least this large are candidates when ranking by sight", 0, 1e12},
+      c.ranking.min_panel_area_m2);
     v(OptionSpec{OptionGroup::kConservative, "--epsilon", "conservative.epsilon_m", "m",
                  "occluders shrink by this and cell faces are sampled within it", 0.01, 100},
       c.conservative.epsilon_m);

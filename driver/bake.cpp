@@ -310,9 +310,22 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
     }
     // 5. Ranked occluders per cell, once the cells are final (the octree's depend on the PVS); dealt like
     //    the PVS (every process ends the stages before the PVS with the same occluders).
+    //    By sight, the panels at least --ranking-panel-area large join the proven occluders (stored with
+    //    them, flat along their plane: docs/ALGORITHMS.md#ranking-sight).
+    if (config.ranking.sight_lines > 0 && config.ranking.occluders_per_cell > 0) {
+        for (const Aabb& p : shrunk.panels) {
+            const glm::vec3 s = p.size();
+            const float area = s.x == 0.0f ? s.y * s.z : s.y == 0.0f ? s.x * s.z : s.x * s.y;
+            if (double(area) < config.ranking.min_panel_area_m2) continue;
+            Occluder o;
+            o.box = p;
+            o.proven = true;  // every point of the rectangle lies in an opaque triangle
+            bake.occluders.push_back(o);
+        }
+    }
     if (!bake.occluders.empty()) {
-        bake.ranked =
-            rank_occluders(ctx, config.ranking, world, bake.cells, bake.occluders, figures.ranking, share);
+        bake.ranked = rank_occluders(ctx, config.ranking, world, bake.cells, bake.occluders, figures.ranking,
+                                     share, &bake.pvs);
     }
     // 6. The figures of the bake (driver/report.h).
     figures.shrunk_boxes = shrunk.boxes.empty() ? 0 : shrunk.boxes[0].size();

@@ -44,6 +44,9 @@ RankedBoxCheck check_ranked_boxes(Context& ctx, const RayScene& scene, const Cel
             seen[size_t(i)] = "not proven";
             continue;
         }
+        const glm::vec3 size = o.box.size();
+        if (size.x == 0.0f || size.y == 0.0f || size.z == 0.0f)
+            continue;  // a panel: covered by its triangles
         Rng rng(seed, boxes[size_t(i)]);
         std::vector<glm::vec3> eyes, origins, dirs;
         std::vector<float> tfar;

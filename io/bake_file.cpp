@@ -495,7 +495,7 @@ void write_leak_path(Writer& w, hid_t root, const std::vector<glm::vec3>& path) 
                   "view volume flood from a seed to the outside, when the level leaks; empty = sealed");
 }
 
-void write_occluders(Writer& w, hid_t root, const std::vector<Occluder>& occluders,
+void write_occluders(Writer& w, hid_t root, bool by_sight, const std::vector<Occluder>& occluders,
                      const RankedOccluders& ranked) {
     Handle g = w.group(root, "/", "occluders");
     w.u32_attr(g.get(), "count", uint32_t(occluders.size()));
@@ -534,10 +534,13 @@ void write_occluders(Writer& w, hid_t root, const std::vector<Occluder>& occlude
         std::tie(box[k], score[k], solid[k], hidden[k], share[k]) =
             std::tie(e.box, e.score, e.solid_angle_sr, e.hidden_objects, e.hidden_triangle_share);
     }
-    w.string_attr(
-        g.get(), "ranked_score",
-        "sqrt(mean solid angle / 4 pi * (mean hidden objects / objects + mean hidden triangle share) "
-        "/ 2), over the cell's sampled eyes; higher is better (docs/FORMAT.md)");
+    w.string_attr(g.get(), "ranked_score",
+                  by_sight
+                      ? "the share of the cell's sampled sight lines (from its eyes to points of its PVS's "
+                        "objects) that the occluder stops first; higher is better (docs/FORMAT.md)"
+                      : "sqrt(mean solid angle / 4 pi * (mean hidden objects / objects + mean hidden "
+                        "triangle share) / 2), over the cell's sampled eyes; higher is better "
+                        "(docs/FORMAT.md)");
     w.dataset(g.get(), "/occluders", "ranked_offsets", H5T_STD_U32LE, H5T_NATIVE_UINT32,
               {ranked.offsets.size()}, ranked.offsets.data(), true);
     // The entries are stored plain (not deflated): their measures gain 1.1 to 1.6 x from deflate, and
@@ -775,7 +778,10 @@ void write_bake_file(const std::string& path, const BakeData& bake) {
             write_cells(w, root.get(), bake.cells);
             write_pvs(w, root.get(), bake);
             write_leak_path(w, root.get(), bake.leak_path);
-            write_occluders(w, root.get(), bake.occluders, bake.ranked);
+            const auto lines = std::find_if(bake.parameters.begin(), bake.parameters.end(),
+                                            [](const auto& p) { return p.first == "ranking.sight_lines"; });
+            const bool by_sight = lines != bake.parameters.end() && lines->second != "0";
+            write_occluders(w, root.get(), by_sight, bake.occluders, bake.ranked);
             w.named_values(root.get(), "/", "figures", bake.figures, nullptr);
             write_verification(w, root.get(), bake.verification);
             write_print(w, root.get(), bake.print);

@@ -8,11 +8,15 @@
 #include "cells/eyes.h"
 #include "core/error.h"
 #include "occluders/ranking.h"
+#include "occluders/sight_ranking.h"
+#include "rays/surface_points.h"
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstring>
+#include <memory>
 
 namespace pvs {
 
@@ -58,11 +62,51 @@ private:
     std::vector<uint64_t> words_;
 };
 
+// One cell ranked by sight: the candidates (usable[k]) that stop first the most of its sight lines, with the
+// measures of occluders/ranking.h for the kept ones; ties by the lower occluder index.
+void rank_cell_by_sight(const RankingConfig& config, const OccluderSightScene& scene, const World& world,
+                        const std::vector<double>& cum_area, const std::vector<Aabb>& boxes,
+                        const std::vector<uint32_t>& usable, const Occludees& occludees, const uint64_t* row,
+                        const std::vector<glm::vec3>& eyes, uint32_t cell, std::vector<RankedOccluder>& out) {
+    out.clear();
+    Rng rng(config.seed ^ 0x7369676874ULL, cell);
+    std::vector<uint32_t> counts;
+    count_first_hits(scene, world, cum_area, row, eyes, config.sight_lines, rng, counts);
+    std::vector<std::pair<uint32_t, uint32_t>> hits;  // (count, candidate)
+    for (uint32_t k = 0; k < counts.size(); ++k)
+        if (counts[k] > 0) hits.emplace_back(counts[k], k);
+    const size_t keep = std::min<size_t>(config.occluders_per_cell, hits.size());
+    std::partial_sort(hits.begin(), hits.begin() + std::ptrdiff_t(keep), hits.end(),
+                      [](const auto& a, const auto& b) {
+                          return a.first > b.first || (a.first == b.first && a.second < b.second);
+                      });
+    const double total_triangles = double(std::max<uint64_t>(1, occludees.total_triangles()));
+    for (size_t i = 0; i < keep; ++i) {
+        const uint32_t box = usable[hits[i].second];
+        RankedOccluder r;
+        r.box = box;
+        r.score = float(double(hits[i].first) / double(config.sight_lines));
+        double hidden = 0.0, share = 0.0;
+        for (const glm::vec3& e : eyes) {
+            const double w = box_solid_angle_sr(boxes[box], e);
+            if (w < kFourPi) r.solid_angle_sr = std::max(r.solid_angle_sr, float(w));
+            uint32_t objects = 0;
+            uint64_t triangles = 0;
+            occludees.count_hidden(shadow_frustum(boxes[box], e), objects, triangles);
+            hidden += double(objects);
+            share += double(triangles) / total_triangles;
+        }
+        r.hidden_objects = float(hidden / double(eyes.size()));
+        r.hidden_triangle_share = float(share / double(eyes.size()));
+        out.push_back(r);
+    }
+}
+
 }  // namespace
 
 RankedOccluders rank_occluders(Context& ctx, const RankingConfig& config, const World& world,
                                const CellSet& cells, const std::vector<Occluder>& occluders,
-                               RankingFigures& figures, WorkShare* share) {
+                               RankingFigures& figures, WorkShare* share, const PvsSet* pvs) {
     figures = RankingFigures{};
     RankedOccluders ranked;
     if (config.occluders_per_cell == 0) return ranked;
@@ -78,6 +122,16 @@ RankedOccluders rank_occluders(Context& ctx, const RankingConfig& config, const 
     figures.boxes_usable = uint32_t(usable.size());
     const Occludees occludees(world);
     const int64_t n_cells = int64_t(cells.size());
+    const bool by_sight = config.sight_lines > 0 && pvs != nullptr && pvs->cell_count == cells.size() &&
+                          pvs->object_count == world.objects.size();
+    std::unique_ptr<OccluderSightScene> sight;
+    std::vector<double> cum_area;
+    if (by_sight && !usable.empty()) {
+        std::vector<Aabb> candidates;
+        for (uint32_t i : usable) candidates.push_back(boxes[i]);
+        sight = std::make_unique<OccluderSightScene>(ctx, candidates);
+        cum_area = cumulative_areas(world);
+    }
     std::vector<std::vector<RankedOccluder>> per_cell(static_cast<size_t>(n_cells));
     WorkShare alone;
     WorkShare& deal = share ? *share : alone;
@@ -89,7 +143,12 @@ RankedOccluders rank_occluders(Context& ctx, const RankingConfig& config, const 
         for_each_dealt(deal, ctx, 16, [&](uint64_t c) {
             eyes.clear();
             sample_eye_points(cells, uint32_t(c), config.eyes_per_cell, config.seed, eyes);
-            rank_cell_occluders(config, boxes, usable, occludees, eyes, per_cell[size_t(c)]);
+            if (sight) {
+                rank_cell_by_sight(config, *sight, world, cum_area, boxes, usable, occludees,
+                                   pvs->row(uint32_t(c)), eyes, uint32_t(c), per_cell[size_t(c)]);
+            } else if (!by_sight) {
+                rank_cell_occluders(config, boxes, usable, occludees, eyes, per_cell[size_t(c)]);
+            }
         });
     }
     if (deal.processes() > 1) {  // every process gets every cell's list
@@ -121,10 +180,11 @@ RankedOccluders rank_occluders(Context& ctx, const RankingConfig& config, const 
     }
     figures.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     ctx.info(fmt::format(
-        "occluder ranking: {} of {} boxes usable, {:.2f} ranked per cell ({} cells with none), "
+        "occluder ranking ({}): {} of {} boxes usable, {:.2f} ranked per cell ({} cells with none), "
         "{:.2f} s",
-        usable.size(), occluders.size(), n_cells > 0 ? double(ranked.entries.size()) / double(n_cells) : 0.0,
-        figures.cells_with_none, figures.seconds));
+        by_sight ? "by sight" : "by solid angle and depth complexity", usable.size(), occluders.size(),
+        n_cells > 0 ? double(ranked.entries.size()) / double(n_cells) : 0.0, figures.cells_with_none,
+        figures.seconds));
     return ranked;
 }
 

@@ -12,6 +12,7 @@
 #include "core/config.h"
 #include "core/context.h"
 #include "core/occluder.h"
+#include "core/pvs_set.h"
 #include "core/work_share.h"
 #include "core/world.h"
 
@@ -29,11 +30,15 @@ struct RankingFigures {
     double seconds = 0.0;
 };
 
-// Ranks the proven occluders for every cell. config.occluders_per_cell == 0 gives an empty result. With
+// Ranks the proven occluders for every cell. config.occluders_per_cell == 0 gives an empty result. With the
+// cells' PVS and config.sight_lines > 0, by sight (occluders/sight_ranking.h: the proven occluders, panels
+// among them, that stop first the most sight lines from the cell's eyes to its PVS; score = the share of the
+// lines each stops first); otherwise by solid angle and depth complexity (occluders/ranking.h). With
 // `share`, the cells are dealt over its processes (collective: every process calls it, and every one gets
 // the whole result).
 RankedOccluders rank_occluders(Context& ctx, const RankingConfig& config, const World& world,
                                const CellSet& cells, const std::vector<Occluder>& occluders,
-                               RankingFigures& figures, WorkShare* share = nullptr);
+                               RankingFigures& figures, WorkShare* share = nullptr,
+                               const PvsSet* pvs = nullptr);
 
 }  // namespace pvs

@@ -1520,7 +1520,7 @@ static int hidden_by_depth_cube(const pvsr_culler* c, const float box[6]) {
  * central projections along one axis p on which the whole box lies ahead of the eye: u = x[U] / d,
  * v = x[V] / d with d = sign * x[p] > 0 (everything relative to the eye). */
 #define FUSE_MAX_VERTS 12     /* of a fragment's polygon; more: give up (visible) */
-#define FUSE_MAX_FACES 64     /* faces a box is tested against (the nearest first) */
+#define FUSE_MAX_FACES 96     /* faces a box is tested against (the nearest first) */
 #define FUSE_MAX_FRAGMENTS 32 /* fragments pending; more: give up (visible) */
 #define FUSE_EPS 1e-10        /* relative: a covered region shrunk, a box's directions widened */
 
@@ -1760,7 +1760,8 @@ static int hidden_by_faces(const pvsr_culler* c, const float box[6]) {
     for (a = 0; a < 9; ++a) { /* the centre and the corners: one that no face hides shows the box */
         double x[3];
         int b;
-        for (b = 0; b < 3; ++b) x[b] = a == 8 ? 0.5 * (q[b] + q[3 + b]) : (a >> b & 1) ? q[3 + b] : q[b];
+        for (b = 0; b < 3; ++b)
+            x[b] = a == 0 ? 0.5 * (q[b] + q[3 + b]) : ((a - 1) >> b & 1) ? q[3 + b] : q[b];
         if (!point_behind_a_face(c, x)) return 0;
     }
     f.u = (f.p + 1) % 3;
@@ -1936,7 +1937,7 @@ void pvsr_culler_begin_frame(pvsr_culler* c, const float eye[3], const float* bo
     }
     for (k = 0; k < c->candidate_count; ++k) {
         const pvsr_culler_candidate* cand = &c->candidates[k];
-        if (c->used > 0 && pvsr_culler_classify(c, cand->box) != PVSR_CULL_VISIBLE) {
+        if (c->used > 0 && (hidden_by_shadow_frusta(c, cand->box) || hidden_by_depth_cube(c, cand->box))) {
             ++c->redundant;
             continue;
         }

@@ -5,6 +5,7 @@
 // force; the ranking in a small world (a big near wall outranks a small far box); the stage's output the
 // same for any thread count.
 #include "core/context.h"
+#include "core/pvs_set.h"
 #include "driver/verify_boxes.h"
 #include "occluders/cell_ranking.h"
 #include "occluders/ranking.h"
@@ -306,6 +307,43 @@ TEST(Ranking, BigNearWallOutranksSmallFarBox) {
     EXPECT_TRUE(rank_occluders(ctx, config, s.world, s.cells, s.occluders, f2).empty());
 }
 
+// Ranking by sight (occluders/sight_ranking.h): the cell's PVS is every object; the wall's front face as a
+// panel stops first every sight line to what lies behind the wall (the wall's own box lies behind it), so it
+// comes first, with the share of the lines it stops as its score; the unproven box never comes; a cell with
+// an empty PVS keeps none.
+TEST(RankingBySight, TheFaceThatStopsTheCellsSightFirstComesFirst) {
+    Scene s = wall_and_small_box();
+    s.occluders.push_back(Occluder{Aabb::of({-6, -1, 3}, {8, 5, 3}), 0.0f, true, {}});  // 3: the wall's face
+    Context ctx = quiet_context();
+    RankingConfig config;
+    config.sight_lines = 4096;
+    PvsSet pvs = PvsSet::make(1, uint32_t(s.world.objects.size()));
+    for (uint32_t o = 0; o < s.world.objects.size(); ++o) pvs.set(0, o);
+    RankingFigures figures;
+    const RankedOccluders r =
+        rank_occluders(ctx, config, s.world, s.cells, s.occluders, figures, nullptr, &pvs);
+    ASSERT_EQ(r.offsets.size(), 2u);
+    ASSERT_GE(r.count(0), 1u);
+    EXPECT_EQ(r.entries[0].box, 3u);
+    // 8 of the 10 objects (the crates, the small box, the pebble), each of 12 triangles, lie behind the wall:
+    // at least 0.8 of the lines, less those to the small box's and pebble's sides the wall does not cover.
+    EXPECT_GT(r.entries[0].score, 0.7f);
+    EXPECT_LE(r.entries[0].score, 1.0f);
+    EXPECT_GT(r.entries[0].solid_angle_sr, 1.0f);
+    for (uint32_t k = 0; k < r.count(0); ++k) {
+        EXPECT_NE(r.entries[k].box, 2u) << "an unproven box";
+        EXPECT_GT(r.entries[k].score, 0.0f);
+        if (k > 0) EXPECT_LE(r.entries[k].score, r.entries[k - 1].score);
+    }
+    // With the PVS empty, no line: none kept. Without the PVS: by solid angle and depth complexity.
+    PvsSet none = PvsSet::make(1, uint32_t(s.world.objects.size()));
+    EXPECT_EQ(rank_occluders(ctx, config, s.world, s.cells, s.occluders, figures, nullptr, &none).count(0),
+              0u);
+    const RankedOccluders by_frusta = rank_occluders(ctx, config, s.world, s.cells, s.occluders, figures);
+    ASSERT_GE(by_frusta.count(0), 1u);
+    EXPECT_NE(by_frusta.entries[0].score, r.entries[0].score);
+}
+
 // Verification's check of the ranked boxes (driver/verify_boxes.h): boxes inside the wall are never seen
 // into from the cell's eyes; a box across a 2 m crack in the wall (its two halves apart) is.
 TEST(Ranking, VerificationFindsARankedBoxThatSpansACrack) {
@@ -376,12 +414,22 @@ TEST(Ranking, SameResultForAnyThreadCount) {
     Context ctx = quiet_context();
     RankingConfig config;
     config.occluders_per_cell = 5;
-    std::vector<RankedOccluders> results;
+    std::vector<RankedOccluders> results, by_sight;
+    PvsSet pvs = PvsSet::make(uint32_t(cells.size()), uint32_t(world.objects.size()));
+    for (uint32_t c = 0; c < cells.size(); ++c)
+        for (uint32_t o = 0; o < world.objects.size(); ++o)
+            if ((c + o) % 3 != 0) pvs.set(c, o);
     for (int threads : {1, 2}) {
         omp_set_num_threads(threads);
         RankingFigures f;
         results.push_back(rank_occluders(ctx, config, world, cells, occluders, f));
+        by_sight.push_back(rank_occluders(ctx, config, world, cells, occluders, f, nullptr, &pvs));
     }
+    ASSERT_EQ(by_sight[0].offsets, by_sight[1].offsets);
+    EXPECT_GT(by_sight[0].entries.size(), 25u);
+    EXPECT_EQ(std::memcmp(by_sight[0].entries.data(), by_sight[1].entries.data(),
+                          by_sight[0].entries.size() * sizeof(RankedOccluder)),
+              0);
     omp_set_num_threads(omp_get_num_procs());
     const RankedOccluders& r = results[0];
     ASSERT_EQ(r.offsets, results[1].offsets);

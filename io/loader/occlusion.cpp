@@ -142,7 +142,7 @@ inline float pad_high(float x) {
 // v = x[V] / d with d = sign * x[p] > 0 (everything relative to the eye). The same arithmetic as the C99
 // runtime's (runtime/pvsr.c), so that both give the same answers.
 constexpr int kFuseMaxVerts = 12;      // of a fragment's polygon; more: give up (visible)
-constexpr int kFuseMaxFaces = 64;      // faces a box is tested against (the nearest first)
+constexpr int kFuseMaxFaces = 96;      // faces a box is tested against (the nearest first)
 constexpr int kFuseMaxFragments = 32;  // fragments pending; more: give up (visible)
 constexpr double kFuseEps = 1e-10;     // relative: a covered region shrunk, a box's directions widened
 
@@ -426,7 +426,7 @@ void OcclusionCuller::begin_frame(const float eye[3], const Box* occluders, size
         candidates_[n] = c;
     }
     for (const Candidate& c : candidates_) {
-        if (used_ > 0 && classify(c.box) != Path::kVisible) {
+        if (used_ > 0 && (hidden_by_shadow_frusta(c.box) || hidden_by_depth_cube(c.box))) {
             ++redundant_;
             continue;
         }
@@ -694,7 +694,8 @@ bool OcclusionCuller::hidden_by_faces(const Box& box) const noexcept {
     if (f.p < 0) return false;
     for (int k = 0; k < 9; ++k) {  // the centre and the corners: one that no face hides shows the box
         double x[3];
-        for (int b = 0; b < 3; ++b) x[b] = k == 8 ? 0.5 * (q[b] + q[3 + b]) : (k >> b & 1) ? q[3 + b] : q[b];
+        for (int b = 0; b < 3; ++b)
+            x[b] = k == 0 ? 0.5 * (q[b] + q[3 + b]) : ((k - 1) >> b & 1) ? q[3 + b] : q[b];
         if (!point_behind_a_face(x)) return false;
     }
     f.u = (f.p + 1) % 3;
