@@ -94,8 +94,8 @@ TEST(Cli, BakeInfoQueryOnTheSampleWorld) {
     EXPECT_TRUE(contains(info.out, "objects     149")) << info.out;
     EXPECT_FALSE(contains(info.out, "aggressive"));
     // Every bake ranks its proven occluders per cell (docs/ALGORITHMS.md#ranking), and info sums them up.
-    EXPECT_TRUE(contains(info.out, "ranked      8.00 per cell")) << info.out;
-    EXPECT_EQ(j["figures"]["ranked_occluders_per_cell_mean"].get<double>(), 8.0);
+    EXPECT_TRUE(contains(info.out, "ranked      16.00 per cell")) << info.out;
+    EXPECT_EQ(j["figures"]["ranked_occluders_per_cell_mean"].get<double>(), 16.0);
     const CliRun info_json = run({"info", out, "--json"});
     ASSERT_EQ(info_json.status, 0);
     EXPECT_EQ(nlohmann::json::parse(info_json.out)["objects"], 149);
