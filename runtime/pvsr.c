@@ -1522,7 +1522,8 @@ static int hidden_by_depth_cube(const pvsr_culler* c, const float box[6]) {
 #define FUSE_MAX_VERTS 12     /* of a fragment's polygon; more: give up (visible) */
 #define FUSE_MAX_FACES 96     /* faces a box is tested against (the nearest first) */
 #define FUSE_MAX_FRAGMENTS 32 /* fragments pending; more: give up (visible) */
-#define FUSE_EPS 1e-10        /* relative: a covered region shrunk, a box's directions widened */
+#define FUSE_EPS 1e-12        /* relative: a covered region shrunk, a box's directions widened */
+#define FUSE_GROW_REL 1e-9    /* a face grows by this times (1 + the largest |coordinate|), metres */
 
 typedef struct fuse_poly {
     int n;
@@ -1845,9 +1846,10 @@ int pvsr_culler_is_hidden(const pvsr_culler* c, const float box[6]) {
 }
 
 /* The faces of a used occluder that face the eye: a panel's rectangle, or a box's faces toward the eye, each
- * GROWN by delta in its plane: the faces' union hides what every segment reaching it within delta of a face
- * meets, so that faces meeting at a junction close it (docs/ALGORITHMS.md#runtime-faces). */
+ * GROWN in its plane by FUSE_GROW_REL of its scale (far below the float precision of its corners), so that
+ * faces meeting at a junction close it (docs/ALGORITHMS.md#runtime-faces). */
 static void add_faces(pvsr_culler* c, const pvsr_culler_candidate* cand) {
+    const double grow = FUSE_GROW_REL * (1.0 + scale_of(c->eye_d, cand->box));
     int a;
     for (a = 0; a < 3; ++a) {
         const int a1 = (a + 1) % 3, a2 = (a + 2) % 3;
@@ -1860,10 +1862,10 @@ static void add_faces(pvsr_culler* c, const pvsr_culler_candidate* cand) {
         f->above = c->eye_d[a] < (double)cand->box[a];
         f->plane = f->above ? (double)cand->box[a] : (double)cand->box[3 + a];
         f->delta = cand->delta;
-        f->lo[0] = (double)cand->box[a1] - cand->delta;
-        f->hi[0] = (double)cand->box[3 + a1] + cand->delta;
-        f->lo[1] = (double)cand->box[a2] - cand->delta;
-        f->hi[1] = (double)cand->box[3 + a2] + cand->delta;
+        f->lo[0] = (double)cand->box[a1] - grow;
+        f->hi[0] = (double)cand->box[3 + a1] + grow;
+        f->lo[1] = (double)cand->box[a2] - grow;
+        f->hi[1] = (double)cand->box[3 + a2] + grow;
         ++c->face_count;
     }
 }

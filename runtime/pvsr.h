@@ -200,7 +200,7 @@ const char* pvsr_string(const pvsr_level* level, const char* key);
  * boxes, such as a cell's ranked occluders: the same tests and answers as pvsbake/occlusion.h, whose
  * conventions it follows (read them there): shadow frusta of single boxes, then a float depth cube around the
  * eye that fuses them, then the exact union of their faces toward the eye (closing the junctions where they
- * meet, up to a margin of about 1e-5 m); "hidden" only when certainly hidden
+ * meet, up to 1e-9 of the coordinates' scale); "hidden" only when certainly hidden
  * (docs/ALGORITHMS.md#runtime-culler). Boxes are float[6] (min x, y, z, max x, y, z), SOLID; an occluder flat
  * along exactly one axis is a PANEL, a rectangle of the opaque surface (docs/ALGORITHMS.md#runtime-panels).
  * No allocation: the depth cube lives in memory the caller gives (pvsr_culler_memory_bytes). Between

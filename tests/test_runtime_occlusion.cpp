@@ -374,10 +374,10 @@ struct PropertyTally {
     }
 };
 
-// The faces' union hides what every segment meets within the culler's margin of a face (about 1e-5 m plus
-// 1e-6 of the coordinates; docs/ALGORITHMS.md#runtime-faces): rays are traced against the occluders grown by
-// more than that, so that a ray grazing an edge of a box grown to the edge of what the culler hides does not
-// count as seen.
+// The faces' union hides what every segment meets within 1e-9 of the coordinates' scale of a face
+// (docs/ALGORITHMS.md#runtime-faces), and Embree's float rays graze edges within their own precision: rays
+// are traced against the occluders grown by 0.1 mm, so that a ray grazing an edge of a box grown to the edge
+// of what the culler hides does not count as seen.
 constexpr float kRayTolerance_m = 1e-4f;
 Box grown(const Box& b, float by) {
     return box(b.min[0] - by, b.min[1] - by, b.min[2] - by, b.max[0] + by, b.max[1] + by, b.max[2] + by);

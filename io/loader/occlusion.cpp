@@ -144,7 +144,8 @@ inline float pad_high(float x) {
 constexpr int kFuseMaxVerts = 12;      // of a fragment's polygon; more: give up (visible)
 constexpr int kFuseMaxFaces = 96;      // faces a box is tested against (the nearest first)
 constexpr int kFuseMaxFragments = 32;  // fragments pending; more: give up (visible)
-constexpr double kFuseEps = 1e-10;     // relative: a covered region shrunk, a box's directions widened
+constexpr double kFuseEps = 1e-12;     // relative: a covered region shrunk, a box's directions widened
+constexpr double kFuseGrowRel = 1e-9;  // a face grows by this times (1 + the largest |coordinate|), metres
 
 struct FusePoly {
     int n = 0;
@@ -633,9 +634,11 @@ bool OcclusionCuller::hidden_by_depth_cube(const Box& box) const noexcept {
     return any_face;
 }
 
-// A panel's rectangle, or a box's faces toward the eye, each GROWN by its margin in its plane, so that faces
-// meeting at a junction close it (docs/ALGORITHMS.md#runtime-faces).
+// A panel's rectangle, or a box's faces toward the eye, each GROWN in its plane by kFuseGrowRel of its scale
+// (far below the float precision of its corners), so that faces meeting at a junction close it
+// (docs/ALGORITHMS.md#runtime-faces).
 void OcclusionCuller::add_faces(const Candidate& c) noexcept {
+    const double grow = kFuseGrowRel * (1.0 + scale_of(eye_d_, c.box));
     for (int a = 0; a < 3; ++a) {
         const int a1 = (a + 1) % 3, a2 = (a + 2) % 3;
         if (c.flat >= 0 && a != c.flat) continue;
@@ -647,10 +650,10 @@ void OcclusionCuller::add_faces(const Candidate& c) noexcept {
         f.above = eye_d_[a] < double(c.box.min[a]);
         f.plane = f.above ? double(c.box.min[a]) : double(c.box.max[a]);
         f.delta = c.delta;
-        f.lo[0] = double(c.box.min[a1]) - c.delta;
-        f.hi[0] = double(c.box.max[a1]) + c.delta;
-        f.lo[1] = double(c.box.min[a2]) - c.delta;
-        f.hi[1] = double(c.box.max[a2]) + c.delta;
+        f.lo[0] = double(c.box.min[a1]) - grow;
+        f.hi[0] = double(c.box.max[a1]) + grow;
+        f.lo[1] = double(c.box.min[a2]) - grow;
+        f.hi[1] = double(c.box.max[a2]) + grow;
     }
 }
 

@@ -29,8 +29,8 @@
 //   corner ray passes it when it crosses the plane inside the shrunk rectangle (entry = exit there). A box
 //   flat along two or three axes hides nothing (docs/ALGORITHMS.md#runtime-panels).
 // - "Hidden" (the one conservative answer): is_hidden(Q) is true only if every segment from the eye to any
-//   point x of Q enters some occluder strictly before x, or (path 3 only) passes within the occluder's
-//   margin delta of it (about 1e-5 m: far below any gap tolerance). Anything not proven is visible: empty or
+//   point x of Q enters some occluder strictly before x, or (path 3 only) passes within 1e-9 of the scale
+//   of the coordinates of it (below their float precision). Anything not proven is visible: empty or
 //   non-finite boxes, a box within kNearPlane_m of the eye (which covers "contains the eye"), and every box
 //   when the eye is not finite or there are no usable occluders. Wrong answers can only be "visible".
 // - Path 1, shadow frusta (one occluder at a time, Hudson et al.): the shadow of a convex occluder B from
@@ -65,11 +65,11 @@
 //   the whole cube); is_hidden() is O(occluders) for the frusta, then O(pixels the box touches), then
 //   O(faces) to find a point of the box no face hides, and only failing that the fragments of path 3.
 // - Path 3, the faces (exact fusion: occluders meeting at junctions): the faces of the used occluders toward
-//   the eye (a panel's rectangle, a box's front faces), each grown by delta in its plane so that faces that
-//   meet overlap; the box is cut into fragments (a sub-box with a convex polygon of directions, projected
-//   along an axis on which the box lies ahead of the eye) until every fragment lies beyond a face within its
-//   directions (hidden) or one passes every face (visible). Limits on faces, fragments and vertices; past
-//   one the answer is visible (docs/ALGORITHMS.md#runtime-faces).
+//   the eye (a panel's rectangle, a box's front faces), each grown by 1e-9 of its scale in its plane so that
+//   faces that meet overlap; the box is cut into fragments (a sub-box with a convex polygon of directions,
+//   projected along an axis on which the box lies ahead of the eye) until every fragment lies beyond a face
+//   within its directions (hidden) or one passes every face (visible). Limits on faces, fragments and
+//   vertices; past one the answer is visible (docs/ALGORITHMS.md#runtime-faces).
 #pragma once
 
 #include <pvsbake/loader.h>
