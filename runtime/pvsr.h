@@ -207,8 +207,9 @@ const char* pvsr_string(const pvsr_level* level, const char* key);
  * pvsr_culler_begin_frame() calls any number of threads may test boxes.
  *
  *   static pvsr_culler culler;                     (about 31 KiB; keep one per thread that begins frames)
- *   void* memory = malloc(pvsr_culler_memory_bytes(32));
- *   pvsr_culler_init(&culler, 32, memory, pvsr_culler_memory_bytes(32));
+ *   pvsr_culler_init(&culler, 0, NULL, 0);         (no depth cube: for the culled walk the faces fuse exactly;
+ *                                                   with many moving objects a cube of 32 may pay:
+ *                                                   pvsr_culler_init(&culler, 32, memory, pvsr_culler_memory_bytes(32)))
  *   each frame: pvsr_culler_begin_cell(&culler, &level, cell, eye, PVSR_CULLER_MAX_OCCLUDERS);
  *               pvsr_visit_drawn(&level, cell, &culler, draw_object, &scene);     (the level's objects)
  *               for each moving object: if (!pvsr_culler_is_hidden(&culler, box)) draw(object);
