@@ -776,6 +776,14 @@ bool OcclusionCuller::hidden_by_faces(const Box& box) const noexcept {
 
 OcclusionCuller::Path OcclusionCuller::classify(const Box& box) const noexcept {
     if (!eye_ok_ || used_ == 0 || !usable_box(box)) return Path::kVisible;
+    // The centre of the box (grown by its margin) behind no face: no test can hide the box (each hides only
+    // boxes every point of which some face hides), so most visible boxes end here.
+    const double delta = kMargin_m + kMarginRel * scale_of(eye_d_, box);
+    double centre[3];
+    for (int a = 0; a < 3; ++a)
+        centre[a] =
+            0.5 * ((double(box.min[a]) - delta - eye_d_[a]) + (double(box.max[a]) + delta - eye_d_[a]));
+    if (!point_behind_a_face(centre)) return Path::kVisible;
     if (hidden_by_shadow_frusta(box)) return Path::kShadowFrustum;
     if (hidden_by_depth_cube(box)) return Path::kDepthBuffer;
     if (hidden_by_faces(box)) return Path::kFaces;
