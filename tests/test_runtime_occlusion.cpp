@@ -550,6 +550,101 @@ TEST(RuntimeOcclusionProperty, FusedWallsNeverCullABoxARayReaches) {
     EXPECT_GT(t.hidden_cube, t.queries / 10);
 }
 
+// The faces' union against a slow reference without rays: every box the faces hide has each of its sampled
+// points (corners, centre and random ones) behind some occluder, by an exact segment test in double against
+// the occluders grown by 1e-6 m (the faces grow by 1e-9 of the scale); and the union is tight: of the boxes
+// whose every sampled point is behind an occluder as given, the faces hide nearly all. Random boxes and
+// panels, random eyes, query boxes behind them.
+TEST(RuntimeOcclusionProperty, TheFacesHideWhatSegmentsToEveryPointMeetAndLittleElse) {
+    std::mt19937 rng(20261205u);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    const auto range = [&](float a, float b) { return a + (b - a) * u(rng); };
+    const auto meets = [](const float e[3], const double p[3], const Box& b, double grow) {
+        double t0 = 0.0, t1 = 1.0;
+        for (int a = 0; a < 3; ++a) {
+            const double d = p[a] - double(e[a]), lo = double(b.min[a]) - grow, hi = double(b.max[a]) + grow;
+            if (d == 0.0) {
+                if (double(e[a]) < lo || double(e[a]) > hi) return false;
+                continue;
+            }
+            double ta = (lo - double(e[a])) / d, tb = (hi - double(e[a])) / d;
+            if (ta > tb) std::swap(ta, tb);
+            t0 = std::max(t0, ta);
+            t1 = std::min(t1, tb);
+        }
+        return t0 <= t1 && t0 < 1.0;
+    };
+    const bool ci = test::in_ci();
+    uint64_t hidden = 0, points = 0, all_points_hidden = 0, of_them_hidden = 0;
+    for (int world = 0; world < (ci ? 60 : 300); ++world) {
+        std::vector<Box> occ;
+        const int k = 3 + int(rng() % 12);
+        for (int i = 0; i < k; ++i) {
+            float c[3], half[3];
+            for (int a = 0; a < 3; ++a) {
+                c[a] = range(-12.0f, 12.0f);
+                half[a] = range(1.0f, 6.0f);
+            }
+            const int thin = int(rng() % 3);
+            half[thin] = i % 2 == 0 ? 0.0f : range(0.1f, 0.8f);  // half of them panels
+            occ.push_back(box(c[0] - half[0], c[1] - half[1], c[2] - half[2], c[0] + half[0], c[1] + half[1],
+                              c[2] + half[2]));
+        }
+        float eye[3];
+        bool ok = false;
+        for (int tries = 0; tries < 100 && !ok; ++tries) {
+            for (float& x : eye) x = range(-15.0f, 15.0f);
+            ok = std::none_of(occ.begin(), occ.end(), [&](const Box& b) { return inside(b, eye, 0.05f); });
+        }
+        if (!ok) continue;
+        Culler culler(0);
+        culler.begin_frame(eye, occ);
+        for (int q = 0; q < 60; ++q) {
+            const Box& b = occ[rng() % occ.size()];
+            const float s = range(1.05f, 3.0f);
+            float c[3], half[3];
+            for (int a = 0; a < 3; ++a) {
+                c[a] = eye[a] + s * (range(b.min[a], b.max[a]) - eye[a]);
+                half[a] = range(0.05f, 1.5f);
+            }
+            const Box qb = box(c[0] - half[0], c[1] - half[1], c[2] - half[2], c[0] + half[0], c[1] + half[1],
+                               c[2] + half[2]);
+            const bool by_faces = culler.hidden_by_faces(qb);
+            bool all = true;
+            for (int n = 0; n < 64; ++n) {
+                double p[3];
+                for (int a = 0; a < 3; ++a) {
+                    const double lo = qb.min[a], hi = qb.max[a];
+                    p[a] = n < 8    ? ((n >> a) & 1 ? hi : lo)
+                           : n == 8 ? 0.5 * (lo + hi)
+                                    : lo + (hi - lo) * u(rng);
+                }
+                const bool grown =
+                    std::any_of(occ.begin(), occ.end(), [&](const Box& o) { return meets(eye, p, o, 1e-6); });
+                const bool exact =
+                    std::any_of(occ.begin(), occ.end(), [&](const Box& o) { return meets(eye, p, o, 0.0); });
+                if (by_faces) {
+                    ++points;
+                    ASSERT_TRUE(grown) << "world " << world << " box " << q << " point " << n;
+                }
+                all = all && exact;
+            }
+            hidden += by_faces;
+            if (all) {
+                ++all_points_hidden;
+                of_them_hidden += by_faces;
+            }
+        }
+    }
+    std::printf(
+        "faces: %llu boxes hidden (%llu points checked); of %llu boxes with every sampled point behind "
+        "an occluder, %llu hidden\n",
+        (unsigned long long)hidden, (unsigned long long)points, (unsigned long long)all_points_hidden,
+        (unsigned long long)of_them_hidden);
+    EXPECT_GT(hidden, ci ? 100u : 500u);
+    EXPECT_GT(double(of_them_hidden), 0.9 * double(all_points_hidden));
+}
+
 // The shadow frusta against their definition: a box is in B's shadow when the segment from the eye to each
 // of its corners meets B (the shadow is convex). Random boxes; the planes may only be stricter.
 TEST(RuntimeOcclusionProperty, ShadowFrustaAgreeWithCornerSegments) {
