@@ -38,8 +38,10 @@
 // kOracleRays segments from the eye to random points of the object meets one of the frame's occluder boxes
 // (what they hide, exactly, that the culler misses); all_proven_boxes (with --bake): ... meets one of every
 // proven box of the bake; all_proven_boxes_and_panels: ... or one of the world's panels (occluders/panels.h,
-// exact covered rectangles of the opaque surface); no_box_set: neither box set. Boxes sharing volume with
-// the object's bounds are left out (an object's own solid cannot cull its bounds).
+// exact covered rectangles of the opaque surface); all_proven_boxes_panels_and_slanted_panels: ... or one of
+// the slanted panels the bake finds (occluders/slanted_panels.h), more than 1 cm before the point;
+// no_box_set: neither box set. Boxes sharing volume with the object's bounds are left out (an object's own
+// solid cannot cull its bounds).
 #include "bench/aimed_rays.h"
 #include "bench/bench_util.h"
 #include "core/context.h"
@@ -49,6 +51,8 @@
 #include "io/gltf_loader.h"
 #include "occluders/panels.h"
 #include "occluders/ranking.h"
+#include "occluders/slanted_panels.h"
+#include "rays/ray_scene.h"
 #include "rays/surface_points.h"
 #include "runtime/pvsr.h"
 
@@ -120,6 +124,11 @@ public:
     BoxScene& operator=(const BoxScene&) = delete;
 
     // Whether every segment eye -> points[i] meets a box that does not meet `excluded`.
+    // Whether the segment eye -> p meets a box that does not meet `excluded`.
+    bool blocked(glm::vec3 eye, glm::vec3 p, const pvs::Aabb& excluded) const {
+        return all_blocked(eye, std::vector<glm::vec3>{p}, excluded);
+    }
+
     bool all_blocked(glm::vec3 eye, const std::vector<glm::vec3>& points, const pvs::Aabb& excluded) const {
         ExcludeContext c;
         c.boxes = &boxes_;
@@ -532,7 +541,30 @@ int main(int argc, char** argv) {
         // Where the drawn but invisible triangles go (measurement only).
         const auto t_waste = std::chrono::steady_clock::now();
         std::unique_ptr<BoxScene> all_boxes, with_panels;
+        std::unique_ptr<pvs::RayScene> slanted_scene;  // the slanted panels (as the bake finds them), opaque
+        pvs::World slanted_world;
         if (!bake_path.empty()) {
+            for (const pvs::SlantedPanel& sp : pvs::find_slanted_panels(world, 1e-4, 0.25)) {
+                pvs::WorldObject o;
+                o.name = "slanted" + std::to_string(slanted_world.objects.size());
+                o.first_triangle = uint32_t(slanted_world.triangles.size());
+                o.flags = pvs::kObjectHasOpaque;
+                const uint32_t base = uint32_t(slanted_world.positions.size());
+                for (const glm::dvec3& c : sp.corners) {
+                    slanted_world.positions.push_back(glm::vec3(c));
+                    o.bounds.extend(glm::vec3(c));
+                }
+                for (uint32_t k = 1; k + 1 < sp.corners.size(); ++k)
+                    slanted_world.triangles.push_back(pvs::Triangle{{base, base + k, base + k + 1}});
+                o.triangle_count = uint32_t(slanted_world.triangles.size()) - o.first_triangle;
+                slanted_world.bounds.extend(o.bounds);
+                slanted_world.objects.push_back(o);
+            }
+            slanted_world.triangle_opaque.assign(slanted_world.triangles.size(), 1);
+            slanted_world.triangle_double_sided.assign(slanted_world.triangles.size(), 1);
+            if (!slanted_world.triangles.empty())
+                slanted_scene =
+                    std::make_unique<pvs::RayScene>(ctx, slanted_world, pvs::BuildQuality::kMedium);
             all_boxes = std::make_unique<BoxScene>(
                 std::vector<pvs::Aabb>(proven.begin(), proven.begin() + long(proven_boxes)));
             std::vector<pvs::Aabb> both(proven.begin(), proven.begin() + long(proven_boxes));
@@ -540,7 +572,8 @@ int main(int argc, char** argv) {
             both.insert(both.end(), panels.begin(), panels.end());
             with_panels = std::make_unique<BoxScene>(both);
         }
-        double waste_tri = 0, split_tri = 0, given_tri = 0, all_tri = 0, none_tri = 0, panels_tri = 0;
+        double waste_tri = 0, split_tri = 0, given_tri = 0, all_tri = 0, none_tri = 0, panels_tri = 0,
+               slanted_tri = 0;
         {
             size_t p = 0;
             for (uint32_t i = 0; i < n_frames; ++i) {
@@ -578,6 +611,29 @@ int main(int argc, char** argv) {
                         with_panels && with_panels->all_blocked(f.eye, points, world.objects[o].bounds) ? t
                                                                                                         : 0.0;
                     all_tri += by_all ? t : 0.0;
+                    if (with_panels) {  // each segment: a box or panel, else a slanted panel over 1 cm before
+                        std::vector<glm::vec3> from, dirs;
+                        std::vector<float> ends;
+                        bool open = false;
+                        for (const glm::vec3& q : points) {
+                            if (with_panels->blocked(f.eye, q, world.objects[o].bounds)) continue;
+                            const float len = glm::length(q - f.eye);
+                            if (!slanted_scene || !(len > 0.02f)) {
+                                open = true;
+                                break;
+                            }
+                            from.push_back(f.eye);
+                            dirs.push_back((q - f.eye) / len);
+                            ends.push_back(len - 0.01f);
+                        }
+                        if (!open && !from.empty()) {
+                            std::vector<uint8_t> hit(from.size());
+                            slanted_scene->occluded_opaque(from.data(), dirs.data(), ends.data(),
+                                                           uint32_t(from.size()), hit.data());
+                            open = std::find(hit.begin(), hit.end(), uint8_t(0)) != hit.end();
+                        }
+                        slanted_tri += open ? 0.0 : t;
+                    }
                     none_tri += !by_given && !by_all ? t : 0.0;
                 }
             }
@@ -669,6 +725,8 @@ int main(int argc, char** argv) {
             all_boxes ? nlohmann::ordered_json(ratio(all_tri, waste_tri)) : nullptr;
         waste["all_proven_boxes_and_panels_hide_share"] =
             with_panels ? nlohmann::ordered_json(ratio(panels_tri, waste_tri)) : nullptr;
+        waste["all_proven_boxes_panels_and_slanted_panels_hide_share"] =
+            with_panels ? nlohmann::ordered_json(ratio(slanted_tri, waste_tri)) : nullptr;
         waste["no_box_set_hides_share"] = ratio(none_tri, waste_tri);
         waste["segments_per_object"] = kOracleRays;
         out["waste"] = waste;
