@@ -1696,7 +1696,7 @@ static int push_outside(fuse_fragment* stack, int* top, const double b[6], const
         int any_out = 0, any_in = 0;
         for (i = 0; i < cur.n; ++i) {
             const double s = nx * cur.x[i] + ny * cur.y[i] - w;
-            any_out = any_out || s < eps;
+            any_out = any_out || !(s >= eps); /* a NaN counts as outside: kept, never hidden */
             any_in = any_in || s > eps;
         }
         if (!any_out) continue;

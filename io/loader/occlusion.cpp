@@ -259,7 +259,7 @@ bool push_outside(FuseFragment* stack, int& top, const double b[6], const FusePo
         bool any_out = false, any_in = false;
         for (int i = 0; i < cur.n; ++i) {
             const double s = nx * cur.x[i] + ny * cur.y[i] - w;
-            any_out = any_out || s < eps;
+            any_out = any_out || !(s >= eps);  // a NaN counts as outside: kept, never hidden
             any_in = any_in || s > eps;
         }
         if (!any_out) continue;
