@@ -32,9 +32,11 @@ RankedBoxCheck check_ranked_boxes(Context& ctx, const RayScene& scene, const Cel
             const uint32_t box = ranked.entries[k].box;
             if (box < rankers.size() && rankers[box].size() < kCellsPerBox) rankers[box].push_back(c);
         }
-    std::vector<uint32_t> boxes;
-    for (uint32_t b = 0; b < rankers.size(); ++b)
-        if (!rankers[b].empty()) boxes.push_back(b);
+    std::vector<uint32_t> boxes;  // not the panels (flat: proven by their triangles, nothing inside to see)
+    for (uint32_t b = 0; b < rankers.size(); ++b) {
+        const glm::vec3 size = occluders[b].box.size();
+        if (!rankers[b].empty() && size.x != 0.0f && size.y != 0.0f && size.z != 0.0f) boxes.push_back(b);
+    }
     std::vector<uint64_t> rays(boxes.size(), 0);
     std::vector<std::string> seen(boxes.size());
 #pragma omp parallel for schedule(dynamic, 1)
@@ -44,9 +46,6 @@ RankedBoxCheck check_ranked_boxes(Context& ctx, const RayScene& scene, const Cel
             seen[size_t(i)] = "not proven";
             continue;
         }
-        const glm::vec3 size = o.box.size();
-        if (size.x == 0.0f || size.y == 0.0f || size.z == 0.0f)
-            continue;  // a panel: covered by its triangles
         Rng rng(seed, boxes[size_t(i)]);
         std::vector<glm::vec3> eyes, origins, dirs;
         std::vector<float> tfar;

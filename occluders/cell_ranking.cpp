@@ -80,24 +80,19 @@ void rank_cell_by_sight(const RankingConfig& config, const OccluderSightScene& s
                       [](const auto& a, const auto& b) {
                           return a.first > b.first || (a.first == b.first && a.second < b.second);
                       });
-    const double total_triangles = double(std::max<uint64_t>(1, occludees.total_triangles()));
     for (size_t i = 0; i < keep; ++i) {
         const uint32_t box = usable[hits[i].second];
         RankedOccluder r;
         r.box = box;
         r.score = float(double(hits[i].first) / double(config.sight_lines));
-        double hidden = 0.0, share = 0.0;
         for (const glm::vec3& e : eyes) {
             const double w = box_solid_angle_sr(boxes[box], e);
             if (w < kFourPi) r.solid_angle_sr = std::max(r.solid_angle_sr, float(w));
-            uint32_t objects = 0;
-            uint64_t triangles = 0;
-            occludees.count_hidden(shadow_frustum(boxes[box], e), objects, triangles);
-            hidden += double(objects);
-            share += double(triangles) / total_triangles;
         }
-        r.hidden_objects = float(hidden / double(eyes.size()));
-        r.hidden_triangle_share = float(share / double(eyes.size()));
+        BoxMeasures m;
+        measure_hidden(boxes[box], occludees, eyes, m);
+        r.hidden_objects = float(m.hidden_objects_mean);
+        r.hidden_triangle_share = float(m.hidden_triangle_share_mean);
         out.push_back(r);
     }
 }

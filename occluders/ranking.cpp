@@ -269,6 +269,23 @@ double ranking_score(const BoxMeasures& m, size_t object_count) {
     return std::sqrt(std::max(0.0, m.solid_angle_mean_sr / kFourPi * hidden));
 }
 
+void measure_hidden(const Aabb& box, const Occludees& occludees, const std::vector<glm::vec3>& eyes,
+                    BoxMeasures& m) {
+    const double total_triangles = double(std::max<uint64_t>(1, occludees.total_triangles()));
+    m.hidden_objects_mean = 0.0;
+    m.hidden_triangle_share_mean = 0.0;
+    if (eyes.empty()) return;
+    for (const glm::vec3& e : eyes) {
+        uint32_t hidden = 0;
+        uint64_t triangles = 0;
+        occludees.count_hidden(shadow_frustum(box, e), hidden, triangles);
+        m.hidden_objects_mean += double(hidden);
+        m.hidden_triangle_share_mean += double(triangles) / total_triangles;
+    }
+    m.hidden_objects_mean /= double(eyes.size());
+    m.hidden_triangle_share_mean /= double(eyes.size());
+}
+
 void rank_cell_occluders(const RankingConfig& config, const std::vector<Aabb>& boxes,
                          const std::vector<uint32_t>& usable, const Occludees& occludees,
                          const std::vector<glm::vec3>& eyes, std::vector<RankedOccluder>& out) {
@@ -276,7 +293,6 @@ void rank_cell_occluders(const RankingConfig& config, const std::vector<Aabb>& b
     Aabb eye_box;
     for (const glm::vec3& e : eyes) eye_box.extend(e);
     const double n_eyes = double(eyes.size());
-    const double total_triangles = double(std::max<uint64_t>(1, occludees.total_triangles()));
     struct Candidate {
         uint32_t box;
         BoxMeasures m;
@@ -314,15 +330,7 @@ void rank_cell_occluders(const RankingConfig& config, const std::vector<Aabb>& b
     std::vector<double> best;  // the K best scores so far, a min-heap
     for (Candidate& c : candidates) {
         if (best.size() == k_best && c.score < best.front()) break;  // sorted by bound: no later one enters
-        for (const glm::vec3& e : eyes) {
-            uint32_t hidden = 0;
-            uint64_t triangles = 0;
-            occludees.count_hidden(shadow_frustum(boxes[c.box], e), hidden, triangles);
-            c.m.hidden_objects_mean += double(hidden);
-            c.m.hidden_triangle_share_mean += double(triangles) / total_triangles;
-        }
-        c.m.hidden_objects_mean /= n_eyes;
-        c.m.hidden_triangle_share_mean /= n_eyes;
+        measure_hidden(boxes[c.box], occludees, eyes, c.m);
         c.score = ranking_score(c.m, occludees.object_count());
         measured.push_back(c);
         best.push_back(c.score);

@@ -137,6 +137,11 @@ struct BoxMeasures {
     double hidden_triangle_share_mean = 0.0;
 };
 
+// The sampled depth complexity of `box` from `eyes` (see above): m.hidden_objects_mean and
+// m.hidden_triangle_share_mean, means over the eyes (0 with no eyes).
+void measure_hidden(const Aabb& box, const Occludees& occludees, const std::vector<glm::vec3>& eyes,
+                    BoxMeasures& m);
+
 // The documented score (see above) of a box's measures, for a world of `object_count` objects.
 double ranking_score(const BoxMeasures& m, size_t object_count);
 
