@@ -1519,21 +1519,30 @@ static int hidden_by_depth_cube(const pvsr_culler* c, const float box[6]) {
  * directions the face covers (hidden) or one fragment has passed every face (visible). Directions are
  * central projections along one axis p on which the whole box lies ahead of the eye: u = x[U] / d,
  * v = x[V] / d with d = sign * x[p] > 0 (everything relative to the eye). */
-#define FUSE_MAX_VERTS 12     /* of a fragment's polygon; more: give up (visible) */
-#define FUSE_MAX_FACES 96     /* faces a box is tested against (the nearest first) */
+#define FUSE_MAX_VERTS 16     /* of a fragment's polygon; more: give up (visible) */
+#define FUSE_MAX_FACES 96     /* faces a box is tested against (the nearest first), polygons among them */
 #define FUSE_MAX_FRAGMENTS 32 /* fragments pending; more: give up (visible) */
 #define FUSE_EPS 1e-12        /* relative: a covered region shrunk, a box's directions widened */
 #define FUSE_GROW_REL 1e-9    /* a face grows by this times (1 + the largest |coordinate|), metres */
+#define FUSE_PROJ_VERTS \
+    (PVSR_POLYGON_MAX_CORNERS + 1)            /* a polygon's cross-section clipped at the near plane */
+#define FUSE_POLY_VERTS (2 * FUSE_PROJ_VERTS) /* two such projections intersected */
+#define FUSE_POOL (6 * FUSE_MAX_FACES + FUSE_POLY_VERTS * PVSR_CULLER_MAX_POLYGONS) /* projected vertices */
 
 typedef struct fuse_poly {
     int n;
     double x[FUSE_MAX_VERTS], y[FUSE_MAX_VERTS];
 } fuse_poly;
 
+/* A face or polygon occluder in the test's frame. The part of a box beyond it is, along `axis`, where the
+ * coordinate is at least (`above`) or at most its cut: a face's plane moved away by delta, or, for a
+ * polygon, the least coordinate there at which every point of the box's cross-section has n.x >= w. */
 typedef struct fuse_face {
-    double x[6], y[6], lo[2], hi[2]; /* its projection (counter-clockwise) and that polygon's bounds */
-    double plane, delta;
-    int n, axis, above;
+    const double *x, *y; /* its projection (counter-clockwise), in the test's vertex pool */
+    double lo[2], hi[2]; /* that polygon's bounds */
+    double plane, delta; /* a face */
+    double n[3], w;      /* a polygon: n.x >= w (relative) lies beyond its slab and margin */
+    int count, axis, above, poly;
 } fuse_face;
 
 typedef struct fuse_fragment {
@@ -1618,60 +1627,130 @@ static int clip_to_rect(fuse_poly* r, const double lo[2], const double hi[2]) {
     return r->n >= 3;
 }
 
-/* Projects a face (relative to the eye) in frame f: its part at d >= the near plane, counter-clockwise. */
-static int project_face(const fuse_frame* f, const pvsr_culler_face* face, const double e[3],
-                        fuse_face* out) {
-    const int a = face->axis, a1 = (a + 1) % 3, a2 = (a + 2) % 3;
+/* Projects a convex polygon of n <= PVSR_POLYGON_MAX_CORNERS points (relative to the eye) in frame f: its
+ * part at d >= the near plane, counter-clockwise, into x, y (FUSE_PROJ_VERTS room); its vertex count, or 0
+ * when nothing or a degenerate polygon is left. */
+static int project_points(const fuse_frame* f, const double (*c)[3], int n, double* x, double* y) {
     const double near_d = (double)CULL_NEAR_PLANE_M;
-    double c[4][3], d[5], u[5], v[5], area = 0.0;
-    int i, n = 0;
+    double d[FUSE_PROJ_VERTS], u[FUSE_PROJ_VERTS], v[FUSE_PROJ_VERTS], area = 0.0;
+    int i, m = 0;
+    for (i = 0; i < n; ++i) { /* clipped to d >= near */
+        const int j = (i + 1) % n;
+        const double di = f->sign * c[i][f->p], dj = f->sign * c[j][f->p];
+        if (di >= near_d) {
+            d[m] = di;
+            u[m] = c[i][f->u];
+            v[m++] = c[i][f->v];
+        }
+        if ((di < near_d && dj > near_d) || (di > near_d && dj < near_d)) {
+            const double t = (near_d - di) / (dj - di);
+            d[m] = near_d;
+            u[m] = c[i][f->u] + t * (c[j][f->u] - c[i][f->u]);
+            v[m++] = c[i][f->v] + t * (c[j][f->v] - c[i][f->v]);
+        }
+    }
+    if (m < 3) return 0;
+    for (i = 0; i < m; ++i) {
+        x[i] = u[i] / d[i];
+        y[i] = v[i] / d[i];
+    }
+    for (i = 0; i < m; ++i) {
+        const int j = (i + 1) % m;
+        area += x[i] * y[j] - x[j] * y[i];
+    }
+    if (!(area != 0.0) || !isfinite(area)) return 0;
+    if (area < 0.0) {
+        for (i = 0; i < m / 2; ++i) {
+            double t = x[i];
+            x[i] = x[m - 1 - i];
+            x[m - 1 - i] = t;
+            t = y[i];
+            y[i] = y[m - 1 - i];
+            y[m - 1 - i] = t;
+        }
+    }
+    return m;
+}
+
+/* Projects a face (relative to the eye) in frame f into the pool at x, y. */
+static int project_face(const fuse_frame* f, const pvsr_culler_face* face, const double e[3], double* x,
+                        double* y, fuse_face* out) {
+    const int a = face->axis, a1 = (a + 1) % 3, a2 = (a + 2) % 3;
+    double c[4][3];
+    int i;
     for (i = 0; i < 4; ++i) {
         c[i][a] = face->plane - e[a];
         c[i][a1] = (i == 1 || i == 2 ? face->hi[0] : face->lo[0]) - e[a1];
         c[i][a2] = (i >= 2 ? face->hi[1] : face->lo[1]) - e[a2];
     }
-    for (i = 0; i < 4; ++i) { /* the quad clipped to d >= near */
-        const int j = (i + 1) % 4;
-        const double di = f->sign * c[i][f->p], dj = f->sign * c[j][f->p];
-        if (di >= near_d) {
-            d[n] = di;
-            u[n] = c[i][f->u];
-            v[n++] = c[i][f->v];
-        }
-        if ((di < near_d && dj > near_d) || (di > near_d && dj < near_d)) {
-            const double t = (near_d - di) / (dj - di);
-            d[n] = near_d;
-            u[n] = c[i][f->u] + t * (c[j][f->u] - c[i][f->u]);
-            v[n++] = c[i][f->v] + t * (c[j][f->v] - c[i][f->v]);
-        }
-    }
-    if (n < 3) return 0;
-    for (i = 0; i < n; ++i) {
-        out->x[i] = u[i] / d[i];
-        out->y[i] = v[i] / d[i];
-    }
-    for (i = 0; i < n; ++i) {
-        const int j = (i + 1) % n;
-        area += out->x[i] * out->y[j] - out->x[j] * out->y[i];
-    }
-    if (!(area != 0.0) || !isfinite(area)) return 0;
-    if (area < 0.0) {
-        for (i = 0; i < n / 2; ++i) {
-            double t = out->x[i];
-            out->x[i] = out->x[n - 1 - i];
-            out->x[n - 1 - i] = t;
-            t = out->y[i];
-            out->y[i] = out->y[n - 1 - i];
-            out->y[n - 1 - i] = t;
-        }
-    }
-    out->n = n;
-    poly_bounds(out->x, out->y, n, out->lo, out->hi);
+    out->count = project_points(f, (const double(*)[3])c, 4, x, y);
+    if (out->count == 0) return 0;
+    out->x = x;
+    out->y = y;
+    poly_bounds(x, y, out->count, out->lo, out->hi);
     out->axis = a;
     out->above = face->above;
     out->plane = face->plane - e[a];
     out->delta = face->delta;
+    out->poly = 0;
     return 1;
+}
+
+/* Projects a polygon occluder in frame f into the pool at x, y (FUSE_POLY_VERTS room): the directions whose
+ * segments cross both planes of its slab inside its prism, the projections of the two cross-sections
+ * intersected (docs/ALGORITHMS.md#runtime-polygons). */
+static int project_polygon(const fuse_frame* f, const pvsr_culler_polygon* pg, double* x, double* y,
+                           fuse_face* out) {
+    double s[2][PVSR_POLYGON_MAX_CORNERS][3], px[2][FUSE_PROJ_VERTS], py[2][FUSE_PROJ_VERTS];
+    int n[2], h, i, k, a;
+    fuse_poly cur, next;
+    for (h = 0; h < 2; ++h) {
+        const double w = h == 0 ? pg->near_w : pg->far_w;
+        for (i = 0; i < pg->count; ++i) {
+            const double up = w - (pg->n[0] * pg->c[i][0] + pg->n[1] * pg->c[i][1] + pg->n[2] * pg->c[i][2]);
+            for (a = 0; a < 3; ++a) s[h][i][a] = pg->c[i][a] + up * pg->n[a];
+        }
+        n[h] = project_points(f, (const double(*)[3])s[h], pg->count, px[h], py[h]);
+        if (n[h] == 0) return 0;
+    }
+    cur.n = n[0];
+    memcpy(cur.x, px[0], (size_t)n[0] * sizeof(double));
+    memcpy(cur.y, py[0], (size_t)n[0] * sizeof(double));
+    for (k = 0; k < n[1] && cur.n >= 3; ++k) { /* left of every edge of the far projection */
+        const int k1 = (k + 1) % n[1];
+        const double dx = px[1][k1] - px[1][k], dy = py[1][k1] - py[1][k];
+        if (!clip_poly(&cur, dy, -dx, dy * px[1][k] - dx * py[1][k], &next)) return 0;
+        cur = next;
+    }
+    if (cur.n < 3) return 0;
+    memcpy(x, cur.x, (size_t)cur.n * sizeof(double));
+    memcpy(y, cur.y, (size_t)cur.n * sizeof(double));
+    out->x = x;
+    out->y = y;
+    out->count = cur.n;
+    poly_bounds(x, y, cur.n, out->lo, out->hi);
+    memcpy(out->n, pg->n, sizeof out->n);
+    out->w = pg->far_w + pg->delta;
+    out->axis = pg->axis;
+    out->above = pg->n[pg->axis] > 0.0;
+    out->poly = 1;
+    return 1;
+}
+
+/* The part of box b beyond face t: along *ax the coordinates at least *cut (t->above) or at most it; 0 when
+ * no part of b lies beyond. */
+static int beyond_part(const fuse_face* t, const double b[6], int* ax, double* cut) {
+    const int a = t->axis;
+    *ax = a;
+    if (!t->poly) {
+        *cut = t->above ? t->plane + t->delta : t->plane - t->delta;
+    } else { /* n.x >= w over the cross-section: n[a] x[a] >= w - (the least of the other two terms) */
+        const int a1 = (a + 1) % 3, a2 = (a + 2) % 3;
+        const double m1 = t->n[a1] > 0.0 ? t->n[a1] * b[a1] : t->n[a1] * b[3 + a1];
+        const double m2 = t->n[a2] > 0.0 ? t->n[a2] * b[a2] : t->n[a2] * b[3 + a2];
+        *cut = widen((t->w - m1 - m2) / t->n[a], t->above);
+    }
+    return t->above ? b[3 + a] > *cut : b[a] < *cut;
 }
 
 static int push_fragment(fuse_fragment* stack, int* top, const double b[6], const fuse_poly* r, int next) {
@@ -1688,8 +1767,8 @@ static int push_outside(fuse_fragment* stack, int* top, const double b[6], const
                         const fuse_face* q, int next) {
     fuse_poly cur = *r, piece, rest;
     int k, i;
-    for (k = 0; k < q->n; ++k) {
-        const int k1 = (k + 1) % q->n;
+    for (k = 0; k < q->count; ++k) {
+        const int k1 = (k + 1) % q->count;
         const double nx = -(q->y[k1] - q->y[k]), ny = q->x[k1] - q->x[k]; /* inward: left of the edge */
         const double w = nx * q->x[k] + ny * q->y[k];
         const double eps = FUSE_EPS * (fabs(nx) + fabs(ny)) * (1.0 + fabs(q->x[k]) + fabs(q->y[k]));
@@ -1711,9 +1790,11 @@ static int push_outside(fuse_fragment* stack, int* top, const double b[6], const
 }
 
 /* 1 when the segment from the eye to point x (relative) crosses a face (beyond its plane, inside its
- * rectangle): a point no face hides proves the box it belongs to visible, before any projection. */
+ * rectangle) or a polygon (its slab, entering and leaving inside its prism): a point nothing hides proves
+ * the box it belongs to visible, before any projection. */
 static int point_behind_a_face(const pvsr_culler* c, const double x[3]) {
     size_t k;
+    int i;
     for (k = 0; k < c->face_count; ++k) {
         const pvsr_culler_face* f = &c->faces[k];
         const int a = f->axis, a1 = (a + 1) % 3, a2 = (a + 2) % 3;
@@ -1725,6 +1806,19 @@ static int point_behind_a_face(const pvsr_culler* c, const double x[3]) {
         y2 = t * x[a2] + c->eye_d[a2];
         if (y1 >= f->lo[0] && y1 <= f->hi[0] && y2 >= f->lo[1] && y2 <= f->hi[1]) return 1;
     }
+    for (k = 0; k < c->polygon_count; ++k) {
+        const pvsr_culler_polygon* pg = &c->polygons[k];
+        const double s = pg->n[0] * x[0] + pg->n[1] * x[1] + pg->n[2] * x[2];
+        double t0, t1;
+        if (!(s > pg->far_w)) continue;
+        t0 = pg->near_w / s; /* the segment t * x meets the slab's planes at t0 and t1 */
+        t1 = pg->far_w / s;
+        for (i = 0; i < pg->count; ++i) {
+            const double mx = pg->m[i][0] * x[0] + pg->m[i][1] * x[1] + pg->m[i][2] * x[2];
+            if (!(t0 * mx >= pg->k[i]) || !(t1 * mx >= pg->k[i])) break;
+        }
+        if (i == pg->count) return 1;
+    }
     return 0;
 }
 
@@ -1732,12 +1826,13 @@ static int hidden_by_faces(const pvsr_culler* c, const float box[6]) {
     const double near_d = (double)CULL_NEAR_PLANE_M;
     fuse_face faces[FUSE_MAX_FACES];
     fuse_fragment stack[FUSE_MAX_FRAGMENTS];
+    double pool_x[FUSE_POOL], pool_y[FUSE_POOL];
     fuse_frame f;
-    double delta, q[6], best = near_d, lo[2], hi[2];
-    int a, nf = 0, top = 0;
+    double delta, q[6], best = near_d, lo[2], hi[2], cut;
+    int a, nf = 0, top = 0, ax, used = 0;
     size_t k;
     fuse_poly r;
-    if (!c->eye_ok || c->face_count == 0 || !usable_box(box)) return 0;
+    if (!c->eye_ok || c->face_count + c->polygon_count == 0 || !usable_box(box)) return 0;
     delta = CULL_MARGIN_M + CULL_MARGIN_REL * scale_of(c->eye_d, box);
     f.p = -1;
     f.sign = 1.0;
@@ -1758,7 +1853,7 @@ static int hidden_by_faces(const pvsr_culler* c, const float box[6]) {
         }
     }
     if (f.p < 0) return 0;
-    for (a = 0; a < 9; ++a) { /* the centre and the corners: one that no face hides shows the box */
+    for (a = 0; a < 9; ++a) { /* the centre and the corners: one that nothing hides shows the box */
         double x[3];
         int b;
         for (b = 0; b < 3; ++b)
@@ -1768,14 +1863,31 @@ static int hidden_by_faces(const pvsr_culler* c, const float box[6]) {
     f.u = (f.p + 1) % 3;
     f.v = (f.p + 2) % 3;
     box_directions(&f, q, lo, hi);
-    for (k = 0; k < c->face_count && nf < FUSE_MAX_FACES; ++k) {
-        const pvsr_culler_face* face = &c->faces[k];
+    for (k = 0; k < c->face_count + c->polygon_count && nf < FUSE_MAX_FACES; ++k) {
         fuse_face* ff = &faces[nf];
-        const double plane = face->plane - c->eye_d[face->axis];
-        if (face->above ? !(q[3 + face->axis] > plane + face->delta) : !(q[face->axis] < plane - face->delta))
-            continue; /* nothing of the box lies beyond it */
-        if (!project_face(&f, face, c->eye_d, ff)) continue;
+        const int is_poly = k >= c->face_count;
+        if (!is_poly) {
+            const pvsr_culler_face* face = &c->faces[k];
+            ff->poly = 0;
+            ff->axis = face->axis;
+            ff->above = face->above;
+            ff->plane = face->plane - c->eye_d[face->axis];
+            ff->delta = face->delta;
+            if (!beyond_part(ff, q, &ax, &cut)) continue; /* nothing of the box lies beyond it */
+            if (!project_face(&f, face, c->eye_d, pool_x + used, pool_y + used, ff)) continue;
+        } else {
+            const pvsr_culler_polygon* pg = &c->polygons[k - c->face_count];
+            ff->poly = 1;
+            ff->axis = pg->axis;
+            ff->above = pg->n[pg->axis] > 0.0;
+            memcpy(ff->n, pg->n, sizeof ff->n);
+            ff->w = pg->far_w + pg->delta;
+            if (!beyond_part(ff, q, &ax, &cut)) continue;
+            if (FUSE_POOL - used < FUSE_POLY_VERTS) break;
+            if (!project_polygon(&f, pg, pool_x + used, pool_y + used, ff)) continue;
+        }
         if (ff->hi[0] < lo[0] || ff->lo[0] > hi[0] || ff->hi[1] < lo[1] || ff->lo[1] > hi[1]) continue;
+        used += ff->count;
         ++nf;
     }
     if (nf == 0) return 0;
@@ -1793,21 +1905,17 @@ static int hidden_by_faces(const pvsr_culler* c, const float box[6]) {
         const fuse_fragment g = stack[--top];
         double plo[2], phi[2], near_part[6], far_part[6], blo[2], bhi[2];
         const fuse_face* ff = NULL;
-        int i = g.next, ax, ok;
-        double cut;
+        int i = g.next, ok;
         fuse_poly rn, rf;
         poly_bounds(g.r.x, g.r.y, g.r.n, plo, phi);
         for (; i < nf; ++i) { /* the next face that could hide part of this fragment */
             const fuse_face* t = &faces[i];
-            if (t->above ? !(g.b[3 + t->axis] > t->plane + t->delta) : !(g.b[t->axis] < t->plane - t->delta))
-                continue;
             if (t->hi[0] < plo[0] || t->lo[0] > phi[0] || t->hi[1] < plo[1] || t->lo[1] > phi[1]) continue;
+            if (!beyond_part(t, g.b, &ax, &cut)) continue;
             ff = t;
             break;
         }
-        if (ff == NULL) return 0; /* a fragment no face hides: visible */
-        ax = ff->axis;
-        cut = ff->above ? ff->plane + ff->delta : ff->plane - ff->delta;
+        if (ff == NULL) return 0; /* a fragment nothing hides: visible */
         memcpy(near_part, g.b, sizeof near_part);
         memcpy(far_part, g.b, sizeof far_part);
         if (ff->above) {
@@ -1845,7 +1953,8 @@ static int centre_behind_a_face(const pvsr_culler* c, const float box[6]) {
 }
 
 int pvsr_culler_classify(const pvsr_culler* c, const float box[6]) {
-    if (c == NULL || box == NULL || !c->eye_ok || c->used == 0 || !usable_box(box)) return PVSR_CULL_VISIBLE;
+    if (c == NULL || box == NULL || !c->eye_ok || (c->used == 0 && c->polygon_count == 0) || !usable_box(box))
+        return PVSR_CULL_VISIBLE;
     if (!centre_behind_a_face(c, box)) return PVSR_CULL_VISIBLE;
     if (hidden_by_shadow_frusta(c, box)) return PVSR_CULL_SHADOW_FRUSTUM;
     if (hidden_by_depth_cube(c, box)) return PVSR_CULL_DEPTH_CUBE;
@@ -1903,6 +2012,7 @@ void pvsr_culler_begin_frame(pvsr_culler* c, const float eye[3], const float* bo
     c->redundant = 0;
     c->frustum_count = 0;
     c->face_count = 0;
+    c->polygon_count = 0;
     c->candidate_count = 0;
     c->eye_ok = c->ok && eye != NULL && isfinite(eye[0]) && isfinite(eye[1]) && isfinite(eye[2]);
     if (!c->eye_ok) return;
@@ -1960,6 +2070,71 @@ void pvsr_culler_begin_frame(pvsr_culler* c, const float eye[3], const float* bo
         build_frustum(c, cand->box, cand->delta, cand->flat, &c->frusta[c->frustum_count++]);
         add_faces(c, cand);
     }
+}
+
+int pvsr_culler_add_polygon(pvsr_culler* c, const float plane[5], const float* corners, uint32_t count) {
+    pvsr_culler_polygon* pg;
+    double n[3], len, o, t, scale = 0.0, s_e, sign, grow, area = 0.0;
+    uint32_t i, j;
+    int a;
+    if (c == NULL || !c->eye_ok || plane == NULL || corners == NULL || count < 3 ||
+        count > PVSR_POLYGON_MAX_CORNERS || c->polygon_count >= PVSR_CULLER_MAX_POLYGONS)
+        return 0;
+    for (i = 0; i < 5; ++i)
+        if (!isfinite(plane[i])) return 0;
+    for (i = 0; i < 3 * count; ++i)
+        if (!isfinite(corners[i])) return 0;
+    len = sqrt((double)plane[0] * plane[0] + (double)plane[1] * plane[1] + (double)plane[2] * plane[2]);
+    if (!(len > 0.0) || !isfinite(len) || !(plane[4] >= 0.0f)) return 0;
+    for (a = 0; a < 3; ++a) {
+        n[a] = (double)plane[a] / len;
+        scale = maxd(scale, fabs(c->eye_d[a]));
+    }
+    o = (double)plane[3] / len;
+    t = (double)plane[4] / len;
+    for (i = 0; i < 3 * count; ++i) scale = maxd(scale, fabs((double)corners[i]));
+    pg = &c->polygons[c->polygon_count];
+    pg->delta = CULL_MARGIN_M + CULL_MARGIN_REL * scale;
+    grow = FUSE_GROW_REL * (1.0 + scale);
+    s_e = n[0] * c->eye_d[0] + n[1] * c->eye_d[1] + n[2] * c->eye_d[2] - o;
+    if (s_e < -(t + pg->delta))
+        sign = 1.0;
+    else if (s_e > t + pg->delta)
+        sign = -1.0;
+    else
+        return 0;                 /* the eye within the slab and its margin */
+    pg->near_w = -sign * s_e - t; /* > delta */
+    pg->far_w = -sign * s_e + t;
+    pg->axis = 0;
+    for (a = 0; a < 3; ++a) {
+        pg->n[a] = sign * n[a];
+        if (fabs(n[a]) > fabs(n[pg->axis])) pg->axis = a;
+    }
+    for (i = 0; i < count; ++i)
+        for (a = 0; a < 3; ++a) pg->c[i][a] = (double)corners[3 * i + (uint32_t)a] - c->eye_d[a];
+    for (i = 0; i < count; ++i) { /* edge planes, inward for a counter-clockwise polygon seen from +n */
+        const double* p0 = pg->c[i];
+        const double* p1 = pg->c[(i + 1) % count];
+        const double d[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
+        double* m = pg->m[i];
+        double ml;
+        m[0] = n[1] * d[2] - n[2] * d[1];
+        m[1] = n[2] * d[0] - n[0] * d[2];
+        m[2] = n[0] * d[1] - n[1] * d[0];
+        ml = sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
+        if (!(ml > 0.0) || !isfinite(ml)) return 0;
+        for (a = 0; a < 3; ++a) m[a] /= ml;
+        pg->k[i] = m[0] * p0[0] + m[1] * p0[1] + m[2] * p0[2];
+        for (j = 0; j < count; ++j) /* convex and counter-clockwise: every corner inside every edge */
+            if (!(m[0] * pg->c[j][0] + m[1] * pg->c[j][1] + m[2] * pg->c[j][2] >= pg->k[i] - grow)) return 0;
+        pg->k[i] -= grow;
+        area += n[0] * (p0[1] * p1[2] - p0[2] * p1[1]) + n[1] * (p0[2] * p1[0] - p0[0] * p1[2]) +
+                n[2] * (p0[0] * p1[1] - p0[1] * p1[0]);
+    }
+    if (!(area > 0.0)) return 0;
+    pg->count = (int)count;
+    ++c->polygon_count;
+    return 1;
 }
 
 uint32_t pvsr_culler_begin_cell(pvsr_culler* c, const pvsr_level* l, uint32_t cell, const float eye[3],

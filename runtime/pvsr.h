@@ -216,6 +216,8 @@ const char* pvsr_string(const pvsr_level* level, const char* key);
  * (pvsr_culler_begin_frame() takes any boxes instead of the cell's ranked occluders.)
  */
 #define PVSR_CULLER_MAX_OCCLUDERS 64 /* more are ignored: pass the best first */
+#define PVSR_CULLER_MAX_POLYGONS 32  /* polygon occluders of a frame; more are refused */
+#define PVSR_POLYGON_MAX_CORNERS 8   /* corners of a polygon occluder */
 #define PVSR_CULLER_MIN_RESOLUTION 2
 #define PVSR_CULLER_MAX_RESOLUTION 256
 
@@ -245,6 +247,18 @@ typedef struct pvsr_culler_face {
     int axis, above; /* above: the eye is below the plane, and what lies above it is hidden */
 } pvsr_culler_face;
 
+/* A convex polygon occluder as the culler keeps it (pvsr_culler_add_polygon): the slab, its normal turned
+ * away from the eye, and the prism over its corners (docs/ALGORITHMS.md#runtime-polygons). */
+typedef struct pvsr_culler_polygon {
+    /* Relative to the eye (x is a point less the eye): */
+    double n[3];                 /* unit, pointing away from the eye */
+    double near_w, far_w, delta; /* the slab: near_w <= n.x <= far_w, 0 < near_w (the eye before it) */
+    double c[PVSR_POLYGON_MAX_CORNERS][3]; /* the corners */
+    double m[PVSR_POLYGON_MAX_CORNERS][3]; /* the prism: m[i].x >= k[i] for every edge i */
+    double k[PVSR_POLYGON_MAX_CORNERS];
+    int count, axis; /* axis: the largest |n[axis]| */
+} pvsr_culler_polygon;
+
 /* A culler: its fields are the runtime's (their layout may change between versions). */
 typedef struct pvsr_culler {
     int ok, eye_ok, resolution;
@@ -255,6 +269,8 @@ typedef struct pvsr_culler {
     pvsr_culler_frustum frusta[PVSR_CULLER_MAX_OCCLUDERS];
     size_t face_count;
     pvsr_culler_face faces[3 * PVSR_CULLER_MAX_OCCLUDERS];
+    size_t polygon_count;
+    pvsr_culler_polygon polygons[PVSR_CULLER_MAX_POLYGONS];
     int written[6][4]; /* per face: i0, i1, j0, j1 of the written pixels (empty when i0 > i1) */
     float *grid, *depth, *col_enter, *col_exit, *row_enter, *row_exit, *corner_prev, *corner_cur;
 } pvsr_culler;
@@ -272,6 +288,15 @@ void pvsr_culler_begin_frame(pvsr_culler* culler, const float eye[3], const floa
  * PVSR_CULLER_MAX_OCCLUDERS boxes on the stack). Then pvsr_visit_drawn() gives what to draw. */
 uint32_t pvsr_culler_begin_cell(pvsr_culler* culler, const pvsr_level* level, uint32_t cell,
                                 const float eye[3], uint32_t max_occluders);
+/* Adds a convex POLYGON occluder to this frame, after pvsr_culler_begin_frame(): a slanted panel of the
+ * opaque surface (pvsr_occluder_polygon()). plane = normal x, y, z, offset, thickness: the opaque surface
+ * lies in the slab |normal . x - offset| <= thickness; corners = `count` points of 3 floats, convex and
+ * counter-clockwise seen from the side the normal points to, 3 <= count <= PVSR_POLYGON_MAX_CORNERS. Its
+ * promise: every segment that crosses the slab from one side to the other, entering and leaving it inside the
+ * prism over the corners (along the normal), meets the opaque surface. Only the faces test uses polygons.
+ * 1 when added; 0 when refused (the eye within the slab's margin, a polygon that is not convex and
+ * counter-clockwise, a value that is not finite, or PVSR_CULLER_MAX_POLYGONS already added). */
+int pvsr_culler_add_polygon(pvsr_culler* culler, const float plane[5], const float* corners, uint32_t count);
 /* 1 only if the box (float[6]) is certainly hidden from this frame's eye. */
 int pvsr_culler_is_hidden(const pvsr_culler* culler, const float box[6]);
 /* Which test proved it (pvsr_cull_path). */

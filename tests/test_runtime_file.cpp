@@ -7,6 +7,7 @@
 // Links the loader, io and core only, so that scripts/test.sh runs it under the sanitizers too
 // (test_runtime_export has the tests that bake or run the pvsbake command).
 #include "core/error.h"
+#include "tests/random_polygons.h"
 #include "tests/runtime_file_checks.h"
 
 #include <pvsbake/occlusion.h>
@@ -268,6 +269,7 @@ TEST(RuntimeFile, TheCullerAnswersAsTheLoadersCuller) {
         }
         return b;
     };
+    std::mt19937 polygon_rng(20261206u);
     uint64_t hidden = 0, fused = 0, by_faces = 0, total = 0;
     for (const int resolution : {0, 2, 32, 64}) {
         pvsbake::OcclusionCuller want(resolution);
@@ -284,6 +286,12 @@ TEST(RuntimeFile, TheCullerAnswersAsTheLoadersCuller) {
             pvsr_culler_begin_frame(&got, eye, &occluders[0].min[0], occluders.size());
             ASSERT_EQ(got.used, want.occluders_used());
             ASSERT_EQ(got.redundant, want.occluders_redundant());
+            for (int k = 0, m = int(polygon_rng() % 5); k < m; ++k) {  // polygons, from their own stream
+                const float centre[3] = {u(polygon_rng), u(polygon_rng), u(polygon_rng)};
+                const test::TestPolygon p = test::random_polygon(polygon_rng, centre, 8.0f, 0.05f);
+                ASSERT_EQ(pvsr_culler_add_polygon(&got, p.plane, p.corners.data(), p.count()),
+                          int(want.add_polygon(p.plane, p.corners.data(), p.count())));
+            }
             for (int q = 0; q < 300; ++q) {
                 const pvsbake::Box box = random_box(false);
                 const int path = pvsr_culler_classify(&got, &box.min[0]);

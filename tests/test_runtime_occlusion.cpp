@@ -6,6 +6,7 @@
 // before an occluder), including boxes grown to the edge of what the culler still hides.
 #include "core/context.h"
 #include "rays/ray_scene.h"
+#include "tests/random_polygons.h"
 #include "tests/test_util.h"
 #include "tests/world_builder.h"
 
@@ -135,6 +136,49 @@ TEST(RuntimeOcclusion, AFloorAndAWallMeetingAtAJunctionHideWhatNeitherHidesAlone
             EXPECT_FALSE(c.is_hidden(target)) << s;
         }
     }
+}
+
+// A slope (a polygon occluder: the ground rising from y = 0 at z = 2 to y = 4 at z = 6, x in [-5, 5]) hides a
+// box behind its crest from an eye at its foot; boxes that show over the crest, past its side or in front of
+// it stay visible. The eye within the slab, a clockwise or non-convex polygon, and non-finite values are
+// refused.
+TEST(RuntimeOcclusion, ASlopeHidesWhatIsBehindItsCrest) {
+    const float n[3] = {0.0f, 0.707106781f, -0.707106781f};  // up the slope's face, towards the eye's side
+    const float offset = n[1] * 0.0f + n[2] * 2.0f;          // through (0, 0, 2) and (0, 4, 6)
+    const float plane[5] = {n[0], n[1], n[2], offset, 0.001f};
+    const float corners[12] = {-5, 0, 2, -5, 4, 6, 5, 4, 6, 5, 0, 2};  // counter-clockwise seen from +n
+    const float eye[3] = {0.0f, 1.0f, -2.0f};
+    const Box behind = box(-1, 1, 8, 1, 3, 9);  // below the line of sight over the crest
+    for (int r : {0, 32}) {
+        Culler c(r);
+        c.begin_frame(eye, nullptr, 0);
+        EXPECT_FALSE(c.is_hidden(behind));
+        ASSERT_TRUE(c.add_polygon(plane, corners, 4));
+        EXPECT_EQ(c.polygons_used(), 1u);
+        EXPECT_EQ(c.classify(behind), Path::kFaces) << r;
+        EXPECT_FALSE(c.is_hidden(box(-1, 1, 8, 1, 6.5f, 9))) << r;  // over the crest
+        EXPECT_FALSE(c.is_hidden(box(-1, 2, 0, 1, 3, 1))) << r;     // in front of the slope
+        EXPECT_FALSE(c.is_hidden(box(12, 1, 8, 13, 3, 9))) << r;    // past its side
+        // With a box in front of the eye too, the polygon still counts (boxes and polygons together).
+        c.begin_frame(eye, {box(-0.2f, 0.8f, -0.5f, 0.2f, 1.2f, -0.4f)});
+        ASSERT_TRUE(c.add_polygon(plane, corners, 4));
+        EXPECT_TRUE(c.is_hidden(behind)) << r;
+    }
+    Culler c(0);
+    c.begin_frame(eye, nullptr, 0);
+    const float in_slab[3] = {0.0f, 2.0f, 4.0f};  // on the slope's plane
+    Culler on(0);
+    on.begin_frame(in_slab, nullptr, 0);
+    EXPECT_FALSE(on.add_polygon(plane, corners, 4));
+    const float clockwise[12] = {-5, 0, 2, 5, 0, 2, 5, 4, 6, -5, 4, 6};
+    EXPECT_FALSE(c.add_polygon(plane, clockwise, 4));
+    const float bow_tie[12] = {-5, 0, 2, 5, 4, 6, -5, 4, 6, 5, 0, 2};
+    EXPECT_FALSE(c.add_polygon(plane, bow_tie, 4));
+    float nan_plane[5] = {n[0], n[1], n[2], kNaN, 0.0f};
+    EXPECT_FALSE(c.add_polygon(nan_plane, corners, 4));
+    EXPECT_FALSE(c.add_polygon(plane, corners, 2));
+    EXPECT_FALSE(c.add_polygon(plane, corners, Culler::kMaxPolygonCorners + 1));
+    EXPECT_EQ(c.polygons_used(), 0u);
 }
 
 // A panel, the wall's near face alone (flat along z), hides what the wall hides: by its shadow frustum and on
@@ -643,6 +687,116 @@ TEST(RuntimeOcclusionProperty, TheFacesHideWhatSegmentsToEveryPointMeetAndLittle
         (unsigned long long)of_them_hidden);
     EXPECT_GT(hidden, ci ? 100u : 500u);
     EXPECT_GT(double(of_them_hidden), 0.9 * double(all_points_hidden));
+}
+
+// Polygon occluders (slanted convex polygons with a slab) among boxes and panels: every box the faces test
+// hides has every sampled point behind some occluder by the slow references (a segment meeting a box, or
+// crossing a polygon's slab inside its prism, each grown by 1e-6 m), and the test hides most of the boxes
+// whose every sampled point is so hidden.
+TEST(RuntimeOcclusionProperty, PolygonsHideWhatSegmentsToEveryPointCrossAndLittleElse) {
+    std::mt19937 rng(20261206u);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    const auto range = [&](float a, float b) { return a + (b - a) * u(rng); };
+    const auto meets = [](const float e[3], const double p[3], const Box& b, double grow) {
+        double t0 = 0.0, t1 = 1.0;
+        for (int a = 0; a < 3; ++a) {
+            const double d = p[a] - double(e[a]), lo = double(b.min[a]) - grow, hi = double(b.max[a]) + grow;
+            if (d == 0.0) {
+                if (double(e[a]) < lo || double(e[a]) > hi) return false;
+                continue;
+            }
+            double ta = (lo - double(e[a])) / d, tb = (hi - double(e[a])) / d;
+            if (ta > tb) std::swap(ta, tb);
+            t0 = std::max(t0, ta);
+            t1 = std::min(t1, tb);
+        }
+        return t0 <= t1 && t0 < 1.0;
+    };
+    const bool ci = test::in_ci();
+    uint64_t hidden = 0, by_polygon_only = 0, all_points_hidden = 0, of_them_hidden = 0, refused = 0;
+    for (int world = 0; world < (ci ? 80 : 400); ++world) {
+        std::vector<Box> occ;
+        for (int i = 0, k = int(rng() % 4); i < k; ++i) {
+            float c[3], half[3];
+            for (int a = 0; a < 3; ++a) {
+                c[a] = range(-10.0f, 10.0f);
+                half[a] = range(1.0f, 5.0f);
+            }
+            half[rng() % 3] = i % 2 == 0 ? 0.0f : range(0.1f, 0.8f);
+            occ.push_back(box(c[0] - half[0], c[1] - half[1], c[2] - half[2], c[0] + half[0], c[1] + half[1],
+                              c[2] + half[2]));
+        }
+        std::vector<test::TestPolygon> polys;
+        for (int i = 0, k = 2 + int(rng() % 5); i < k; ++i) {
+            const float centre[3] = {range(-10.0f, 10.0f), range(-10.0f, 10.0f), range(-10.0f, 10.0f)};
+            polys.push_back(test::random_polygon(rng, centre, 7.0f, 0.05f));
+        }
+        const float eye[3] = {range(-14.0f, 14.0f), range(-14.0f, 14.0f), range(-14.0f, 14.0f)};
+        Culler culler(0);
+        culler.begin_frame(eye, occ);
+        std::vector<test::TestPolygon> used;
+        for (const test::TestPolygon& p : polys) {
+            if (culler.add_polygon(p.plane, p.corners.data(), p.count()))
+                used.push_back(p);
+            else
+                ++refused;
+        }
+        if (used.empty()) continue;
+        const auto behind = [&](const double p[3], double grow) {
+            return std::any_of(occ.begin(), occ.end(),
+                               [&](const Box& o) { return meets(eye, p, o, grow); }) ||
+                   std::any_of(used.begin(), used.end(), [&](const test::TestPolygon& t) {
+                       return test::segment_crosses_polygon(eye, p, t, grow);
+                   });
+        };
+        for (int q = 0; q < 60; ++q) {  // boxes seen through a polygon's corner region, farther away
+            const test::TestPolygon& t = used[rng() % used.size()];
+            const float* corner = &t.corners[3 * (rng() % t.count())];
+            const float* other = &t.corners[3 * (rng() % t.count())];
+            const float mix = u(rng), s = range(1.05f, 3.0f);
+            float c[3], half[3];
+            for (int a = 0; a < 3; ++a) {
+                const float p = corner[a] + mix * (other[a] - corner[a]);
+                c[a] = eye[a] + s * (p - eye[a]);
+                half[a] = range(0.05f, 1.5f);
+            }
+            const Box qb = box(c[0] - half[0], c[1] - half[1], c[2] - half[2], c[0] + half[0], c[1] + half[1],
+                               c[2] + half[2]);
+            const bool by_faces = culler.hidden_by_faces(qb);
+            bool all = true;
+            for (int n = 0; n < 64; ++n) {
+                double p[3];
+                for (int a = 0; a < 3; ++a) {
+                    const double lo = qb.min[a], hi = qb.max[a];
+                    p[a] = n < 8    ? ((n >> a) & 1 ? hi : lo)
+                           : n == 8 ? 0.5 * (lo + hi)
+                                    : lo + (hi - lo) * u(rng);
+                }
+                if (by_faces) {
+                    ASSERT_TRUE(behind(p, 1e-6)) << "world " << world << " box " << q << " point " << n;
+                }
+                all = all && behind(p, 0.0);
+            }
+            hidden += by_faces;
+            if (by_faces) {
+                Culler boxes_only(0);
+                boxes_only.begin_frame(eye, occ);
+                by_polygon_only += !boxes_only.is_hidden(qb);
+            }
+            if (all) {
+                ++all_points_hidden;
+                of_them_hidden += by_faces;
+            }
+        }
+    }
+    std::printf(
+        "polygons: %llu boxes hidden (%llu need a polygon); of %llu boxes with every sampled point "
+        "behind an occluder, %llu hidden; %llu polygons refused\n",
+        (unsigned long long)hidden, (unsigned long long)by_polygon_only,
+        (unsigned long long)all_points_hidden, (unsigned long long)of_them_hidden,
+        (unsigned long long)refused);
+    EXPECT_GT(by_polygon_only, ci ? 50u : 250u);
+    EXPECT_GT(double(of_them_hidden), 0.8 * double(all_points_hidden));
 }
 
 // The shadow frusta against their definition: a box is in B's shadow when the segment from the eye to each

@@ -141,22 +141,30 @@ inline float pad_high(float x) {
 // central projections along one axis p on which the whole box lies ahead of the eye: u = x[U] / d,
 // v = x[V] / d with d = sign * x[p] > 0 (everything relative to the eye). The same arithmetic as the C99
 // runtime's (runtime/pvsr.c), so that both give the same answers.
-constexpr int kFuseMaxVerts = 12;      // of a fragment's polygon; more: give up (visible)
-constexpr int kFuseMaxFaces = 96;      // faces a box is tested against (the nearest first)
+constexpr int kFuseMaxVerts = 16;  // of a fragment's polygon; more: give up (visible)
+constexpr int kFuseMaxFaces = 96;  // faces a box is tested against (the nearest first), polygons among them
 constexpr int kFuseMaxFragments = 32;  // fragments pending; more: give up (visible)
 constexpr double kFuseEps = 1e-12;     // relative: a covered region shrunk, a box's directions widened
 constexpr double kFuseGrowRel = 1e-9;  // a face grows by this times (1 + the largest |coordinate|), metres
+constexpr int kFuseProjVerts = OcclusionCuller::kMaxPolygonCorners + 1;  // a cross-section clipped at near
+constexpr int kFusePolyVerts = 2 * kFuseProjVerts;                       // two such projections intersected
+constexpr int kFusePool = 6 * kFuseMaxFaces + kFusePolyVerts * int(OcclusionCuller::kMaxPolygons);
 
 struct FusePoly {
     int n = 0;
     double x[kFuseMaxVerts], y[kFuseMaxVerts];
 };
 
+// A face or polygon occluder in the test's frame. The part of a box beyond it is, along `axis`, where the
+// coordinate is at least (`above`) or at most its cut: a face's plane moved away by delta, or, for a
+// polygon, the least coordinate there at which every point of the box's cross-section has n.x >= w.
 struct FuseFace {
-    double x[6], y[6], lo[2], hi[2];  // its projection (counter-clockwise) and that polygon's bounds
-    double plane, delta;
-    int n, axis;
-    bool above;
+    const double *x, *y;  // its projection (counter-clockwise), in the test's vertex pool
+    double lo[2], hi[2];  // that polygon's bounds
+    double plane, delta;  // a face
+    double n[3], w;       // a polygon: n.x >= w (relative) lies beyond its slab and margin
+    int count, axis;
+    bool above, poly;
 };
 
 struct FuseFragment {
@@ -250,8 +258,8 @@ bool push_fragment(FuseFragment* stack, int& top, const double b[6], const FuseP
 bool push_outside(FuseFragment* stack, int& top, const double b[6], const FusePoly& r, const FuseFace& q,
                   int next) {
     FusePoly cur = r, piece, rest;
-    for (int k = 0; k < q.n; ++k) {
-        const int k1 = (k + 1) % q.n;
+    for (int k = 0; k < q.count; ++k) {
+        const int k1 = (k + 1) % q.count;
         const double nx = -(q.y[k1] - q.y[k]), ny = q.x[k1] - q.x[k];  // inward: left of the edge
         const double w = nx * q.x[k] + ny * q.y[k];
         const double eps =
@@ -273,52 +281,114 @@ bool push_outside(FuseFragment* stack, int& top, const double b[6], const FusePo
     return true;
 }
 
-// Projects a face (x[axis] = plane, the rectangle lo..hi on the other two axes; absolute) in frame f: its
-// part at d >= the near plane, counter-clockwise.
-bool project_face(const FuseFrame& f, int a, double plane, const double lo[2], const double hi[2],
-                  const double e[3], FuseFace& out) {
-    const int a1 = (a + 1) % 3, a2 = (a + 2) % 3;
+// Projects a convex polygon of n <= kMaxPolygonCorners points (relative to the eye) in frame f: its part at
+// d >= the near plane, counter-clockwise, into x, y (kFuseProjVerts room); its vertex count, or 0 when
+// nothing or a degenerate polygon is left.
+int project_points(const FuseFrame& f, const double (*c)[3], int n, double* x, double* y) {
     const double near_d = double(OcclusionCuller::kNearPlane_m);
-    double c[4][3], d[5], u[5], v[5], area = 0.0;
-    int n = 0;
+    double d[kFuseProjVerts], u[kFuseProjVerts], v[kFuseProjVerts], area = 0.0;
+    int m = 0;
+    for (int i = 0; i < n; ++i) {  // clipped to d >= near
+        const int j = (i + 1) % n;
+        const double di = f.sign * c[i][f.p], dj = f.sign * c[j][f.p];
+        if (di >= near_d) {
+            d[m] = di;
+            u[m] = c[i][f.u];
+            v[m++] = c[i][f.v];
+        }
+        if ((di < near_d && dj > near_d) || (di > near_d && dj < near_d)) {
+            const double t = (near_d - di) / (dj - di);
+            d[m] = near_d;
+            u[m] = c[i][f.u] + t * (c[j][f.u] - c[i][f.u]);
+            v[m++] = c[i][f.v] + t * (c[j][f.v] - c[i][f.v]);
+        }
+    }
+    if (m < 3) return 0;
+    for (int i = 0; i < m; ++i) {
+        x[i] = u[i] / d[i];
+        y[i] = v[i] / d[i];
+    }
+    for (int i = 0; i < m; ++i) {
+        const int j = (i + 1) % m;
+        area += x[i] * y[j] - x[j] * y[i];
+    }
+    if (!(area != 0.0) || !std::isfinite(area)) return 0;
+    if (area < 0.0) {
+        std::reverse(x, x + m);
+        std::reverse(y, y + m);
+    }
+    return m;
+}
+
+// The part of box b beyond face t: along *ax the coordinates at least *cut (t.above) or at most it; false
+// when no part of b lies beyond.
+bool beyond_part(const FuseFace& t, const double b[6], int& ax, double& cut) {
+    const int a = t.axis;
+    ax = a;
+    if (!t.poly) {
+        cut = t.above ? t.plane + t.delta : t.plane - t.delta;
+    } else {  // n.x >= w over the cross-section: n[a] x[a] >= w - (the least of the other two terms)
+        const int a1 = (a + 1) % 3, a2 = (a + 2) % 3;
+        const double m1 = t.n[a1] > 0.0 ? t.n[a1] * b[a1] : t.n[a1] * b[3 + a1];
+        const double m2 = t.n[a2] > 0.0 ? t.n[a2] * b[a2] : t.n[a2] * b[3 + a2];
+        cut = widen((t.w - m1 - m2) / t.n[a], t.above);
+    }
+    return t.above ? b[3 + a] > cut : b[a] < cut;
+}
+
+// Projects a face (x[axis] = plane, the rectangle lo..hi on the other two axes; absolute) in frame f into the
+// pool at x, y: its part at d >= the near plane, counter-clockwise.
+bool project_face(const FuseFrame& f, int a, double plane, const double lo[2], const double hi[2],
+                  const double e[3], double* x, double* y, FuseFace& out) {
+    const int a1 = (a + 1) % 3, a2 = (a + 2) % 3;
+    double c[4][3];
     for (int i = 0; i < 4; ++i) {
         c[i][a] = plane - e[a];
         c[i][a1] = (i == 1 || i == 2 ? hi[0] : lo[0]) - e[a1];
         c[i][a2] = (i >= 2 ? hi[1] : lo[1]) - e[a2];
     }
-    for (int i = 0; i < 4; ++i) {  // the quad clipped to d >= near
-        const int j = (i + 1) % 4;
-        const double di = f.sign * c[i][f.p], dj = f.sign * c[j][f.p];
-        if (di >= near_d) {
-            d[n] = di;
-            u[n] = c[i][f.u];
-            v[n++] = c[i][f.v];
+    out.count = project_points(f, c, 4, x, y);
+    if (out.count == 0) return false;
+    out.x = x;
+    out.y = y;
+    poly_bounds(x, y, out.count, out.lo, out.hi);
+    return true;
+}
+
+// Projects a polygon occluder (relative to the eye: unit normal n away from the eye, its slab's planes
+// n.x = near_w and far_w, `count` corners) in frame f into the pool at x, y (kFusePolyVerts room): the
+// directions whose segments cross both planes of its slab inside its prism, the projections of the two
+// cross-sections intersected (docs/ALGORITHMS.md#runtime-polygons).
+bool project_polygon(const FuseFrame& f, const double n[3], double near_w, double far_w, const double (*c)[3],
+                     int count, double* x, double* y, FuseFace& out) {
+    double s[2][OcclusionCuller::kMaxPolygonCorners][3], px[2][kFuseProjVerts], py[2][kFuseProjVerts];
+    int m[2];
+    for (int h = 0; h < 2; ++h) {
+        const double w = h == 0 ? near_w : far_w;
+        for (int i = 0; i < count; ++i) {
+            const double up = w - (n[0] * c[i][0] + n[1] * c[i][1] + n[2] * c[i][2]);
+            for (int a = 0; a < 3; ++a) s[h][i][a] = c[i][a] + up * n[a];
         }
-        if ((di < near_d && dj > near_d) || (di > near_d && dj < near_d)) {
-            const double t = (near_d - di) / (dj - di);
-            d[n] = near_d;
-            u[n] = c[i][f.u] + t * (c[j][f.u] - c[i][f.u]);
-            v[n++] = c[i][f.v] + t * (c[j][f.v] - c[i][f.v]);
-        }
+        m[h] = project_points(f, s[h], count, px[h], py[h]);
+        if (m[h] == 0) return false;
     }
-    if (n < 3) return false;
-    for (int i = 0; i < n; ++i) {
-        out.x[i] = u[i] / d[i];
-        out.y[i] = v[i] / d[i];
+    FusePoly cur, next;
+    cur.n = m[0];
+    std::copy(px[0], px[0] + m[0], cur.x);
+    std::copy(py[0], py[0] + m[0], cur.y);
+    for (int k = 0; k < m[1] && cur.n >= 3; ++k) {  // left of every edge of the far projection
+        const int k1 = (k + 1) % m[1];
+        const double dx = px[1][k1] - px[1][k], dy = py[1][k1] - py[1][k];
+        if (!clip_poly(cur, dy, -dx, dy * px[1][k] - dx * py[1][k], next)) return false;
+        cur = next;
     }
-    for (int i = 0; i < n; ++i) {
-        const int j = (i + 1) % n;
-        area += out.x[i] * out.y[j] - out.x[j] * out.y[i];
-    }
-    if (!(area != 0.0) || !std::isfinite(area)) return false;
-    if (area < 0.0) {
-        std::reverse(out.x, out.x + n);
-        std::reverse(out.y, out.y + n);
-    }
-    out.n = n;
-    poly_bounds(out.x, out.y, n, out.lo, out.hi);
-    out.axis = a;
-    out.plane = plane - e[a];
+    if (cur.n < 3) return false;
+    std::copy(cur.x, cur.x + cur.n, x);
+    std::copy(cur.y, cur.y + cur.n, y);
+    out.x = x;
+    out.y = y;
+    out.count = cur.n;
+    poly_bounds(x, y, cur.n, out.lo, out.hi);
     return true;
 }
 
@@ -330,6 +400,7 @@ OcclusionCuller::OcclusionCuller(int resolution) noexcept {
     try {
         frusta_.resize(kMaxOccluders);
         faces_.resize(3 * kMaxOccluders);
+        polygons_.resize(kMaxPolygons);
         candidates_.reserve(kMaxOccluders);
         if (r > 0) {
             grid_.resize(size_t(r) + 1);
@@ -371,6 +442,7 @@ void OcclusionCuller::begin_frame(const float eye[3], const Box* occluders, size
     redundant_ = 0;
     frustum_count_ = 0;
     face_count_ = 0;
+    polygon_count_ = 0;
     eye_ok_ =
         ok_ && eye != nullptr && std::isfinite(eye[0]) && std::isfinite(eye[1]) && std::isfinite(eye[2]);
     if (!eye_ok_) return;
@@ -657,8 +729,73 @@ void OcclusionCuller::add_faces(const Candidate& c) noexcept {
     }
 }
 
+bool OcclusionCuller::add_polygon(const float plane[5], const float* corners, uint32_t count) noexcept {
+    if (!eye_ok_ || plane == nullptr || corners == nullptr || count < 3 || count > kMaxPolygonCorners ||
+        polygon_count_ >= kMaxPolygons)
+        return false;
+    for (int i = 0; i < 5; ++i)
+        if (!std::isfinite(plane[i])) return false;
+    for (uint32_t i = 0; i < 3 * count; ++i)
+        if (!std::isfinite(corners[i])) return false;
+    const double len =
+        std::sqrt(double(plane[0]) * plane[0] + double(plane[1]) * plane[1] + double(plane[2]) * plane[2]);
+    if (!(len > 0.0) || !std::isfinite(len) || !(plane[4] >= 0.0f)) return false;
+    double n[3], scale = 0.0;
+    for (int a = 0; a < 3; ++a) {
+        n[a] = double(plane[a]) / len;
+        scale = std::max(scale, std::abs(eye_d_[a]));
+    }
+    const double o = double(plane[3]) / len, t = double(plane[4]) / len;
+    for (uint32_t i = 0; i < 3 * count; ++i) scale = std::max(scale, std::abs(double(corners[i])));
+    Polygon& pg = polygons_[polygon_count_];
+    pg.delta = kMargin_m + kMarginRel * scale;
+    const double grow = kFuseGrowRel * (1.0 + scale);
+    const double s_e = n[0] * eye_d_[0] + n[1] * eye_d_[1] + n[2] * eye_d_[2] - o;
+    double sign;
+    if (s_e < -(t + pg.delta))
+        sign = 1.0;
+    else if (s_e > t + pg.delta)
+        sign = -1.0;
+    else
+        return false;             // the eye within the slab and its margin
+    pg.near_w = -sign * s_e - t;  // > delta
+    pg.far_w = -sign * s_e + t;
+    pg.axis = 0;
+    for (int a = 0; a < 3; ++a) {
+        pg.n[a] = sign * n[a];
+        if (std::abs(n[a]) > std::abs(n[pg.axis])) pg.axis = a;
+    }
+    for (uint32_t i = 0; i < count; ++i)
+        for (int a = 0; a < 3; ++a) pg.c[i][a] = double(corners[3 * i + uint32_t(a)]) - eye_d_[a];
+    double area = 0.0;
+    for (uint32_t i = 0; i < count;
+         ++i) {  // edge planes, inward for a counter-clockwise polygon seen from +n
+        const double* p0 = pg.c[i];
+        const double* p1 = pg.c[(i + 1) % count];
+        const double d[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
+        double* m = pg.m[i];
+        m[0] = n[1] * d[2] - n[2] * d[1];
+        m[1] = n[2] * d[0] - n[0] * d[2];
+        m[2] = n[0] * d[1] - n[1] * d[0];
+        const double ml = std::sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
+        if (!(ml > 0.0) || !std::isfinite(ml)) return false;
+        for (int a = 0; a < 3; ++a) m[a] /= ml;
+        pg.k[i] = m[0] * p0[0] + m[1] * p0[1] + m[2] * p0[2];
+        for (uint32_t j = 0; j < count; ++j)  // convex and counter-clockwise: every corner inside every edge
+            if (!(m[0] * pg.c[j][0] + m[1] * pg.c[j][1] + m[2] * pg.c[j][2] >= pg.k[i] - grow)) return false;
+        pg.k[i] -= grow;
+        area += n[0] * (p0[1] * p1[2] - p0[2] * p1[1]) + n[1] * (p0[2] * p1[0] - p0[0] * p1[2]) +
+                n[2] * (p0[0] * p1[1] - p0[1] * p1[0]);
+    }
+    if (!(area > 0.0)) return false;
+    pg.count = int(count);
+    ++polygon_count_;
+    return true;
+}
+
 // Whether the segment from the eye to point x (relative) crosses a face (beyond its plane, inside its
-// rectangle): a point no face hides proves the box it belongs to visible, before any projection.
+// rectangle) or a polygon (its slab, entering and leaving inside its prism): a point nothing hides proves
+// the box it belongs to visible, before any projection.
 bool OcclusionCuller::point_behind_a_face(const double x[3]) const noexcept {
     for (size_t k = 0; k < face_count_; ++k) {
         const Face& f = faces_[k];
@@ -669,14 +806,27 @@ bool OcclusionCuller::point_behind_a_face(const double x[3]) const noexcept {
         const double y1 = t * x[a1] + eye_d_[a1], y2 = t * x[a2] + eye_d_[a2];
         if (y1 >= f.lo[0] && y1 <= f.hi[0] && y2 >= f.lo[1] && y2 <= f.hi[1]) return true;
     }
+    for (size_t k = 0; k < polygon_count_; ++k) {
+        const Polygon& pg = polygons_[k];
+        const double s = pg.n[0] * x[0] + pg.n[1] * x[1] + pg.n[2] * x[2];
+        if (!(s > pg.far_w)) continue;
+        const double t0 = pg.near_w / s, t1 = pg.far_w / s;  // the segment t * x meets the slab's planes
+        int i = 0;
+        for (; i < pg.count; ++i) {
+            const double mx = pg.m[i][0] * x[0] + pg.m[i][1] * x[1] + pg.m[i][2] * x[2];
+            if (!(t0 * mx >= pg.k[i]) || !(t1 * mx >= pg.k[i])) break;
+        }
+        if (i == pg.count) return true;
+    }
     return false;
 }
 
 bool OcclusionCuller::hidden_by_faces(const Box& box) const noexcept {
     const double near_d = double(kNearPlane_m);
-    if (!eye_ok_ || face_count_ == 0 || !usable_box(box)) return false;
+    if (!eye_ok_ || face_count_ + polygon_count_ == 0 || !usable_box(box)) return false;
     const double delta = kMargin_m + kMarginRel * scale_of(eye_d_, box);
-    double q[6], best = near_d, lo[2], hi[2];
+    double q[6], best = near_d, lo[2], hi[2], cut;
+    int ax;
     FuseFrame f{-1, 0, 0, 1.0};
     for (int a = 0; a < 3; ++a) {
         q[a] = double(box.min[a]) - delta - eye_d_[a];
@@ -695,7 +845,7 @@ bool OcclusionCuller::hidden_by_faces(const Box& box) const noexcept {
         }
     }
     if (f.p < 0) return false;
-    for (int k = 0; k < 9; ++k) {  // the centre and the corners: one that no face hides shows the box
+    for (int k = 0; k < 9; ++k) {  // the centre and the corners: one that nothing hides shows the box
         double x[3];
         for (int b = 0; b < 3; ++b)
             x[b] = k == 0 ? 0.5 * (q[b] + q[3 + b]) : ((k - 1) >> b & 1) ? q[3 + b] : q[b];
@@ -705,17 +855,36 @@ bool OcclusionCuller::hidden_by_faces(const Box& box) const noexcept {
     f.v = (f.p + 2) % 3;
     box_directions(f, q, lo, hi);
     FuseFace faces[kFuseMaxFaces];
-    int nf = 0;
-    for (size_t k = 0; k < face_count_ && nf < kFuseMaxFaces; ++k) {
-        const Face& face = faces_[k];
+    double pool_x[kFusePool], pool_y[kFusePool];
+    int nf = 0, used = 0;
+    for (size_t k = 0; k < face_count_ + polygon_count_ && nf < kFuseMaxFaces; ++k) {
         FuseFace& ff = faces[nf];
-        const double plane = face.plane - eye_d_[face.axis];
-        if (face.above ? !(q[3 + face.axis] > plane + face.delta) : !(q[face.axis] < plane - face.delta))
-            continue;  // nothing of the box lies beyond it
-        if (!project_face(f, face.axis, face.plane, face.lo, face.hi, eye_d_, ff)) continue;
-        ff.above = face.above;
-        ff.delta = face.delta;
+        if (k < face_count_) {
+            const Face& face = faces_[k];
+            ff.poly = false;
+            ff.axis = face.axis;
+            ff.above = face.above;
+            ff.plane = face.plane - eye_d_[face.axis];
+            ff.delta = face.delta;
+            if (!beyond_part(ff, q, ax, cut)) continue;  // nothing of the box lies beyond it
+            if (!project_face(f, face.axis, face.plane, face.lo, face.hi, eye_d_, pool_x + used,
+                              pool_y + used, ff))
+                continue;
+        } else {
+            const Polygon& pg = polygons_[k - face_count_];
+            ff.poly = true;
+            ff.axis = pg.axis;
+            ff.above = pg.n[pg.axis] > 0.0;
+            std::copy(pg.n, pg.n + 3, ff.n);
+            ff.w = pg.far_w + pg.delta;
+            if (!beyond_part(ff, q, ax, cut)) continue;
+            if (kFusePool - used < kFusePolyVerts) break;
+            if (!project_polygon(f, pg.n, pg.near_w, pg.far_w, pg.c, pg.count, pool_x + used, pool_y + used,
+                                 ff))
+                continue;
+        }
         if (ff.hi[0] < lo[0] || ff.lo[0] > hi[0] || ff.hi[1] < lo[1] || ff.lo[1] > hi[1]) continue;
+        used += ff.count;
         ++nf;
     }
     if (nf == 0) return false;
@@ -740,15 +909,12 @@ bool OcclusionCuller::hidden_by_faces(const Box& box) const noexcept {
         poly_bounds(g.r.x, g.r.y, g.r.n, plo, phi);
         for (; i < nf; ++i) {  // the next face that could hide part of this fragment
             const FuseFace& t = faces[i];
-            if (t.above ? !(g.b[3 + t.axis] > t.plane + t.delta) : !(g.b[t.axis] < t.plane - t.delta))
-                continue;
             if (t.hi[0] < plo[0] || t.lo[0] > phi[0] || t.hi[1] < plo[1] || t.lo[1] > phi[1]) continue;
+            if (!beyond_part(t, g.b, ax, cut)) continue;
             ff = &t;
             break;
         }
-        if (ff == nullptr) return false;  // a fragment no face hides: visible
-        const int ax = ff->axis;
-        const double cut = ff->above ? ff->plane + ff->delta : ff->plane - ff->delta;
+        if (ff == nullptr) return false;  // a fragment nothing hides: visible
         std::memcpy(near_part, g.b, sizeof near_part);
         std::memcpy(far_part, g.b, sizeof far_part);
         if (ff->above) {
@@ -775,7 +941,7 @@ bool OcclusionCuller::hidden_by_faces(const Box& box) const noexcept {
 }
 
 OcclusionCuller::Path OcclusionCuller::classify(const Box& box) const noexcept {
-    if (!eye_ok_ || used_ == 0 || !usable_box(box)) return Path::kVisible;
+    if (!eye_ok_ || (used_ == 0 && polygon_count_ == 0) || !usable_box(box)) return Path::kVisible;
     // The centre of the box (grown by its margin) behind no face: no test can hide the box (each hides only
     // boxes every point of which some face hides), so most visible boxes end here.
     const double delta = kMargin_m + kMarginRel * scale_of(eye_d_, box);

@@ -94,6 +94,8 @@ public:
     static constexpr int kMinResolution = 2;       // even sizes only: g(R / 2) = 0 is a pixel edge
     static constexpr int kMaxResolution = 256;
     static constexpr size_t kMaxOccluders = 64;  // more are ignored (pass the best first)
+    static constexpr size_t kMaxPolygons = 32;   // polygon occluders of a frame; more are refused
+    static constexpr uint32_t kMaxPolygonCorners = 8;
     static constexpr float kNearPlane_m = 1e-3f;
     static constexpr float kDepthSlack = 1e-5f;
     static constexpr float kRectPad = 1e-5f;
@@ -127,6 +129,17 @@ public:
     // what to draw of the cell's PVS.
     uint32_t begin_cell(const Bake& bake, uint32_t c, const float eye[3],
                         size_t max_occluders = kMaxOccluders) noexcept;
+
+    // Adds a convex POLYGON occluder to this frame, after begin_frame(): a slanted panel of the opaque
+    // surface (Bake::occluder_polygon). plane = normal x, y, z, offset, thickness: the opaque surface lies in
+    // the slab |normal . x - offset| <= thickness; corners = `count` points of 3 floats, convex and
+    // counter-clockwise seen from the side the normal points to, 3 <= count <= kMaxPolygonCorners. Its
+    // promise: every segment that crosses the slab from one side to the other, entering and leaving it inside
+    // the prism over the corners (along the normal), meets the opaque surface. Only the faces test uses
+    // polygons (docs/ALGORITHMS.md#runtime-polygons). False when refused: the eye within the slab's margin, a
+    // polygon that is not convex and counter-clockwise, a value that is not finite, or kMaxPolygons added.
+    bool add_polygon(const float plane[5], const float* corners, uint32_t count) noexcept;
+    size_t polygons_used() const noexcept { return polygon_count_; }
 
     // True only if the box is certainly hidden from this frame's eye (see the conventions above).
     // Thread-safe between begin_frame() calls (const, no scratch).
@@ -177,6 +190,16 @@ private:
         bool above;  // the eye is below the plane, and what lies above it is hidden
     };
 
+    // A polygon occluder, relative to the eye (a point less the eye): pvsr.h's pvsr_culler_polygon.
+    struct Polygon {
+        double n[3];                      // unit, pointing away from the eye
+        double near_w, far_w, delta;      // the slab: near_w <= n.x <= far_w, 0 < near_w
+        double c[kMaxPolygonCorners][3];  // the corners
+        double m[kMaxPolygonCorners][3];  // the prism: m[i].x >= k[i] for every edge i
+        double k[kMaxPolygonCorners];
+        int count, axis;  // axis: the largest |n[axis]|
+    };
+
     void rasterize(const Box& b, int flat) noexcept;
     void add_faces(const Candidate& c) noexcept;
     bool point_behind_a_face(const double x[3]) const noexcept;
@@ -195,6 +218,8 @@ private:
     size_t frustum_count_ = 0;
     std::vector<Face> faces_;  // 3 * kMaxOccluders
     size_t face_count_ = 0;
+    std::vector<Polygon> polygons_;  // kMaxPolygons
+    size_t polygon_count_ = 0;
     std::vector<float> grid_;   // g(0 .. R)
     std::vector<float> depth_;  // 6 * R * R, index face * R * R + j * R + i
     Rect written_[6] = {};      // per face: bounding rectangle of written pixels
