@@ -25,6 +25,8 @@
 // progress on stderr. Exit status 2 on bad input (the message names the file or option).
 //
 // Measurement only (what other run-time occluders would give; not what a game gets from the file):
+// --eye-polygons P (with --bake): the culler also takes, per frame, the P polygon occluders of the bake with
+// the largest solid angle from the eye (after the cell's own, up to PVSR_CULLER_MAX_POLYGONS in all);
 // --eye-occluders E (with --bake, the level's bake file): the culler takes, per frame, the E proven boxes of
 // the bake with the largest solid angle from the eye instead of the cell's ranked ones (--eye-panels 1: the
 // world's panels, occluders/panels.h, among them; the culler takes them as panels; --eye-select first-hit:
@@ -244,7 +246,8 @@ struct Frame {
     std::vector<uint32_t> listed, drawn;
     std::vector<float> boxes;  // the occluder boxes the frame began with
     double frame_us = 0.0, walk_us = 0.0;
-    uint32_t occluders = 0;
+    uint32_t occluders = 0;  // boxes and polygons given
+    uint32_t polygons = 0;   // of them polygons (the cell's, pvsr_culler_begin_cell)
     bool full = true;  // truth for every listed object; else for the culled ones only
 };
 
@@ -273,7 +276,8 @@ int main(int argc, char** argv) {
     const char* usage =
         "usage: bench_frame WORLD.glb LEVEL.pvsr [--frames F] [--check-frames C] [--rays R] [--occluders K]\n"
         "                   [--resolution N] [--seed S] [--split M] [--bake BAKE.h5] [--eye-occluders E]\n"
-        "                   [--eye-panels 0|1] [--eye-select solid-angle|first-hit] [--parts 0|1]\n";
+        "                   [--eye-panels 0|1] [--eye-select solid-angle|first-hit] [--parts 0|1]\n"
+        "                   [--eye-polygons P]\n";
     if (argc < 3 || argv[1][0] == '-' || argv[2][0] == '-') {
         std::fputs(usage, stderr);
         return 2;
@@ -282,7 +286,7 @@ int main(int argc, char** argv) {
     const std::string world_path = argv[1], level_path = argv[2];
     uint32_t n_frames = 200, n_check = 0, n_rays = 4096, max_occluders = PVSR_CULLER_MAX_OCCLUDERS,
              n_split = 8;
-    uint32_t eye_occluders = 0;
+    uint32_t eye_occluders = 0, eye_polygons = 0;
     bool parts_drawn = false, eye_panels = false, eye_select_first_hit = false;
     std::string bake_path;
     int resolution = 32;
@@ -292,7 +296,8 @@ int main(int argc, char** argv) {
             const std::string k = argv[a];
             if (k != "--frames" && k != "--check-frames" && k != "--rays" && k != "--occluders" &&
                 k != "--resolution" && k != "--seed" && k != "--split" && k != "--bake" &&
-                k != "--eye-occluders" && k != "--parts" && k != "--eye-panels" && k != "--eye-select")
+                k != "--eye-occluders" && k != "--parts" && k != "--eye-panels" && k != "--eye-select" &&
+                k != "--eye-polygons")
                 bad_option("unknown option " + k + " (run it with no arguments for the usage)");
             if (a + 1 >= argc) bad_option(k + " wants a value");
             const char* v = argv[++a];
@@ -312,6 +317,8 @@ int main(int argc, char** argv) {
                 bake_path = v;
             else if (k == "--eye-occluders")
                 eye_occluders = uint32_t(parse_count("--eye-occluders", v, 0, PVSR_CULLER_MAX_OCCLUDERS));
+            else if (k == "--eye-polygons")
+                eye_polygons = uint32_t(parse_count("--eye-polygons", v, 0, PVSR_CULLER_MAX_POLYGONS));
             else if (k == "--parts")
                 parts_drawn = parse_count("--parts", v, 0, 1) == 1;
             else if (k == "--eye-panels")
@@ -366,12 +373,41 @@ int main(int argc, char** argv) {
         std::vector<uint32_t> scratch(n_objects + 1);
         // Measurement only: the bake's proven boxes and the objects' part boxes.
         std::vector<pvs::Aabb> proven;
+        std::vector<pvs::OccluderPolygon> polygons;
         if (!bake_path.empty()) {
             const pvs::BakeData bake = pvs::read_bake_file(bake_path);
             for (const pvs::Occluder& o : bake.occluders)
                 if (o.proven) proven.push_back(o.box);
+            polygons = bake.polygons;
         }
         if (eye_occluders > 0 && bake_path.empty()) bad_option("--eye-occluders wants --bake");
+        if (eye_polygons > 0 && bake_path.empty()) bad_option("--eye-polygons wants --bake");
+        // --eye-polygons: up to P of the bake's polygons with the largest solid angle from the eye (area
+        // times the cosine over the squared distance, at the centre), added to the cell's occluders.
+        const auto add_eye_polygons = [&](const glm::vec3& eye) {
+            std::vector<std::pair<double, uint32_t>> by_angle;
+            for (uint32_t i = 0; i < polygons.size(); ++i) {
+                const pvs::OccluderPolygon& p = polygons[i];
+                glm::dvec3 c(0.0), area(0.0);
+                for (size_t k = 0; k < p.corners.size(); ++k) {
+                    c += glm::dvec3(p.corners[k]);
+                    area += glm::cross(glm::dvec3(p.corners[k]),
+                                       glm::dvec3(p.corners[(k + 1) % p.corners.size()]));
+                }
+                c /= double(p.corners.size());
+                const glm::dvec3 d = c - glm::dvec3(eye);
+                const double len = glm::length(d);
+                if (len > 0.0)
+                    by_angle.push_back({-std::abs(glm::dot(0.5 * area, d)) / (len * len * len), i});
+            }
+            const size_t k = std::min<size_t>(eye_polygons, by_angle.size());
+            std::partial_sort(by_angle.begin(), by_angle.begin() + long(k), by_angle.end());
+            for (size_t r = 0; r < k; ++r) {
+                const pvs::OccluderPolygon& p = polygons[by_angle[r].second];
+                const float plane[5] = {p.normal.x, p.normal.y, p.normal.z, p.offset, p.thickness};
+                pvsr_culler_add_polygon(&culler, plane, &p.corners[0].x, uint32_t(p.corners.size()));
+            }
+        };
         const size_t proven_boxes = proven.size();
         if (eye_panels) {
             const std::vector<pvs::Aabb> panels = pvs::find_panels(world);
@@ -412,13 +448,17 @@ int main(int argc, char** argv) {
             f.listed.assign(scratch.begin(), scratch.begin() + listed);
             if (eye_occluders == 0 && !parts_drawn) {  // the game's calls
                 f.occluders = pvsr_culler_begin_cell(&culler, &level, f.cell, eye, max_occluders);
+                const size_t cell_polygons = culler.polygon_count;
+                if (eye_polygons > 0) add_eye_polygons(f.eye);
+                f.occluders += uint32_t(culler.polygon_count - cell_polygons);
                 const uint32_t drawn =
                     pvsr_drawn_objects(&level, f.cell, &culler, scratch.data(), scratch.size());
                 const auto t2 = std::chrono::steady_clock::now();
                 f.walk_us = micros(t0, t1);
                 f.frame_us = micros(t1, t2);
-                f.boxes.resize(6 * size_t(f.occluders));
-                pvsr_occluder_boxes(&level, f.cell, f.boxes.data(), f.occluders);
+                f.polygons = uint32_t(culler.polygon_count);
+                f.boxes.resize(6 * size_t(f.occluders - f.polygons));
+                pvsr_occluder_boxes(&level, f.cell, f.boxes.data(), f.occluders - f.polygons);
                 f.drawn.assign(scratch.begin(), scratch.begin() + drawn);
             } else {  // measurement only: the eye's own best proven boxes, objects by their parts
                 std::vector<std::pair<double, uint32_t>> ranked;
@@ -579,9 +619,13 @@ int main(int argc, char** argv) {
             for (uint32_t i = 0; i < n_frames; ++i) {
                 const Frame& f = frames[i];
                 const float eye[3] = {f.eye.x, f.eye.y, f.eye.z};
-                pvsr_culler_begin_frame(&culler, eye, f.boxes.data(), f.occluders);
+                if (eye_occluders == 0 && !parts_drawn) {  // the cell's ranked boxes and polygons
+                    pvsr_culler_begin_cell(&culler, &level, f.cell, eye, max_occluders);
+                    if (eye_polygons > 0) add_eye_polygons(f.eye);
+                } else
+                    pvsr_culler_begin_frame(&culler, eye, f.boxes.data(), f.occluders);
                 std::vector<pvs::Aabb> given;
-                for (uint32_t k = 0; k < f.occluders; ++k)
+                for (uint32_t k = 0; k < f.occluders - f.polygons; ++k)
                     given.push_back(
                         pvs::Aabb::of({f.boxes[6 * k], f.boxes[6 * k + 1], f.boxes[6 * k + 2]},
                                       {f.boxes[6 * k + 3], f.boxes[6 * k + 4], f.boxes[6 * k + 5]}));
@@ -644,7 +688,7 @@ int main(int argc, char** argv) {
         double pvs_tri = 0, drawn_tri = 0, visible_tri = 0, invisible_tri = 0, culled_invisible_tri = 0;
         uint64_t listed_objects = 0, drawn_objects = 0, visible_objects = 0, wrong_culls = 0,
                  culled_objects = 0;
-        uint64_t occluders_given = 0;
+        uint64_t occluders_given = 0, polygons_given = 0;
         std::vector<double> frame_us, walk_us;
         nlohmann::ordered_json wrong = nlohmann::ordered_json::array();
         for (size_t p = 0; p < pairs.size(); ++p) {
@@ -677,6 +721,7 @@ int main(int argc, char** argv) {
             listed_objects += f.listed.size();
             drawn_objects += f.drawn.size();
             occluders_given += f.occluders;
+            polygons_given += f.polygons;
             for (const uint32_t o : f.listed) pvs_tri += double(world.objects[o].triangle_count);
             for (const uint32_t o : f.drawn) drawn_tri += double(world.objects[o].triangle_count);
         }
@@ -700,6 +745,7 @@ int main(int argc, char** argv) {
         out["culler_resolution"] = resolution;
         out["threads"] = omp_get_max_threads();
         out["occluders_given_mean"] = ratio(double(occluders_given), frames_d);
+        out["polygons_given_mean"] = ratio(double(polygons_given), frames_d);
         out["pvs_triangle_share_mean"] = pvs_tri / frames_d / world_triangles;
         out["drawn_triangle_share_mean"] = drawn_tri / frames_d / world_triangles;
         out["visible_triangle_share_mean"] = visible_tri / frames_d / world_triangles;

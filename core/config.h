@@ -146,6 +146,9 @@ struct RankingConfig {
                                   // (occluders/sight_ranking.h); 0 = rank proven boxes by solid angle and
                                   // depth complexity (occluders/ranking.h)
     double min_panel_area_m2 = 1.0;  // [Limit: >= 0] [Units: m2] panels this large are candidates (by sight)
+    bool polygons = false;  // by sight, the slanted panels this large are candidates too, as the run-time
+                            // culler's polygon occluders (docs/ALGORITHMS.md#runtime-polygons); opt-in: on
+                            // the shared levels they gain little for their frame time (docs/RESULTS.md)
 };
 
 // The conservative solver (pvs/conservative.h).
@@ -436,6 +439,12 @@ void visit_options(Config& c, Visitor&& v) {
     v(OptionSpec{OptionGroup::kRanking, "--ranking-panel-area", "ranking.min_panel_area_m2", "m2",
                  "panels at least this large are candidates when ranking by sight", 0, 1e12},
       c.ranking.min_panel_area_m2);
+    v(
+        OptionSpec{
+            OptionGroup::kRanking, "--ranking-polygons", "ranking.polygons", "",
+            "by sight, slanted panels (convex polygons off the axis planes) at least --ranking-panel-area "
+            "large are candidates too, stored as polygon occluders for the run-time culler"},
+        c.ranking.polygons);
     v(OptionSpec{OptionGroup::kConservative, "--epsilon", "conservative.epsilon_m", "m",
                  "occluders shrink by this and cell faces are sampled within it", 0.01, 100},
       c.conservative.epsilon_m);

@@ -23,7 +23,8 @@ struct Occluder {
 
 // One ranked occluder of a cell (occluders/ranking.h defines the score and the measures).
 struct RankedOccluder {
-    uint32_t box = 0;                    // index into the bake's occluders (always a proven one)
+    uint32_t box = 0;                    // index into the bake's occluders (always a proven one), or, from
+                                         // their count B on, polygon box - B of the bake's polygons
     float score = 0.0f;                  // higher is better (occluders/ranking.h)
     float solid_angle_sr = 0.0f;         // largest exact solid angle from the cell's sampled eyes
     float hidden_objects = 0.0f;         // mean over the sampled eyes: objects wholly in its shadow
@@ -46,6 +47,18 @@ struct SlantedPanel {
     double area_m2 = 0.0;
     uint32_t triangles = 0;
     Aabb bounds;
+};
+
+// A POLYGON OCCLUDER for the run-time culler (docs/ALGORITHMS.md#runtime-polygons): a slanted panel made
+// smaller and rounded to floats so that its promise holds as written: every segment that crosses the slab
+// |dot(normal, x) - offset| <= thickness from one side to the other, entering and leaving it inside the prism
+// over the corners (along the normal), meets an opaque triangle.
+struct OccluderPolygon {
+    glm::vec3 normal{0.0f};  // unit, to float rounding
+    float offset = 0.0f;
+    float thickness = 0.0f;
+    std::vector<glm::vec3> corners;  // convex, counter-clockwise seen from the side normal points to; 3 to 8
+    Aabb bounds;                     // of the corners
 };
 
 // The ranked occluders of every cell: cell c has entries[offsets[c] .. offsets[c + 1]), best first.

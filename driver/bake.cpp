@@ -11,11 +11,12 @@
 #include "driver/report.h"
 #include "driver/verify_boxes.h"
 #include "occluders/cell_ranking.h"
+#include "occluders/slanted_panels.h"
 #include "occluders/synthesis.h"
-#include "rays/ray_sampler.h"
-#include "rays/ray_scene.h"
 #include "pvs/conservative.h"
 #include "pvs/reuse.h"
+#include "rays/ray_sampler.h"
+#include "rays/ray_scene.h"
 
 #include <fmt/format.h>
 #include <omp.h>
@@ -322,10 +323,12 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
             o.proven = true;  // every point of the rectangle lies in an opaque triangle
             bake.occluders.push_back(o);
         }
+        if (config.ranking.polygons)
+            bake.polygons = runtime_polygons(shrunk.slanted, config.ranking.min_panel_area_m2);
     }
-    if (!bake.occluders.empty()) {
+    if (!bake.occluders.empty() || !bake.polygons.empty()) {
         bake.ranked = rank_occluders(ctx, config.ranking, world, bake.cells, bake.occluders, figures.ranking,
-                                     share, &bake.pvs);
+                                     share, &bake.pvs, &bake.polygons);
     }
     // 6. The figures of the bake (driver/report.h).
     figures.shrunk_boxes = shrunk.boxes.empty() ? 0 : shrunk.boxes[0].size();
@@ -356,7 +359,8 @@ void check_reuse(const BakeConfig& config, const BakeData& old, const std::strin
         throw bad_input(fmt::format("--reuse {}: not a conservative bake (mode {})", old_path, old.mode));
     std::map<std::string, std::string> before(old.parameters.begin(), old.parameters.end());
     for (const auto& [name, value] : resolved_parameters(config)) {
-        if (is_run_parameter(name)) continue;
+        // The ranking runs in full after the PVS and reads nothing of the old bake: its options may differ.
+        if (is_run_parameter(name) || name.rfind("ranking.", 0) == 0) continue;
         const auto it = before.find(name);
         if (it == before.end() || it->second != value) {
             throw bad_input(

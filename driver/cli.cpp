@@ -554,7 +554,8 @@ int run_verify(Context& ctx, BakeConfig config, const std::string& world_path, c
 std::string ranked_summary(const BakeData& bake) {
     uint32_t proven = 0;
     for (const Occluder& o : bake.occluders) proven += o.proven ? 1 : 0;
-    std::string text = fmt::format("occluders   {} boxes, {} proven\n", bake.occluders.size(), proven);
+    std::string text = fmt::format("occluders   {} boxes, {} proven; {} polygons\n", bake.occluders.size(),
+                                   proven, bake.polygons.size());
     const RankedOccluders& r = bake.ranked;
     if (r.empty()) {
         return text + (bake.format_minor < 2 && bake.format_major == 1
@@ -564,7 +565,7 @@ std::string ranked_summary(const BakeData& bake) {
     const size_t cells = bake.cells.size();
     uint32_t most = 0, none = 0;
     double score = 0.0, solid = 0.0, hidden = 0.0, share = 0.0, best_share = 0.0;
-    std::vector<uint32_t> uses(bake.occluders.size(), 0);
+    std::vector<uint32_t> uses(bake.occluders.size() + bake.polygons.size(), 0);
     for (uint32_t c = 0; c < cells; ++c) {
         const uint32_t n = r.count(c);
         most = std::max(most, n);
@@ -580,7 +581,7 @@ std::string ranked_summary(const BakeData& bake) {
     }
     const double n = std::max<double>(1.0, double(r.entries.size()));
     const size_t distinct = size_t(std::count_if(uses.begin(), uses.end(), [](uint32_t u) { return u > 0; }));
-    text += fmt::format("ranked      {:.2f} per cell (most {}, {} cells with none), {} distinct boxes\n",
+    text += fmt::format("ranked      {:.2f} per cell (most {}, {} cells with none), {} distinct occluders\n",
                         cells ? double(r.entries.size()) / double(cells) : 0.0, most, none, distinct);
     text += fmt::format(
         "            mean of the kept: score {:.3f}, solid angle {:.3f} sr, hides {:.1f} objects and {:.1f}% "

@@ -171,20 +171,36 @@ void check_writable(const std::string& path, const BakeData& bake) {
             if (ranked.offsets[c + 1] < ranked.offsets[c]) bad("the ranked occluders' offsets decrease");
             for (uint32_t k = ranked.offsets[c]; k < ranked.offsets[c + 1]; ++k) {
                 const RankedOccluder& e = ranked.entries[k];
-                if (e.box >= bake.occluders.size() || !bake.occluders[e.box].proven)
+                if (k > ranked.offsets[c] && e.score > ranked.entries[k - 1].score)
+                    bad(fmt::format("the ranked occluders of cell {} are not best first", c));
+                if (e.box >= bake.occluders.size()) {  // a polygon
+                    if (e.box - bake.occluders.size() >= bake.polygons.size())
+                        bad(fmt::format("ranked occluder {} names occluder {}, neither a box nor a polygon",
+                                        k, e.box));
+                    if (!std::isfinite(e.score) || e.score < 0.0f)
+                        bad(fmt::format("ranked occluder {} has a score out of range", k));
+                    continue;
+                }
+                if (!bake.occluders[e.box].proven)
                     bad(fmt::format("ranked occluder {} names box {}, not a proven occluder", k, e.box));
                 if (!std::isfinite(e.score) || e.score < 0.0f || !(e.solid_angle_sr >= 0.0f) ||
                     !(e.solid_angle_sr <= 12.566371f) || !(e.hidden_objects >= 0.0f) ||
                     !(e.hidden_objects <= float(objects)) || !(e.hidden_triangle_share >= 0.0f) ||
                     !(e.hidden_triangle_share <= 1.0f))
                     bad(fmt::format("ranked occluder {} has a measure out of range", k));
-                if (k > ranked.offsets[c] && e.score > ranked.entries[k - 1].score)
-                    bad(fmt::format("the ranked occluders of cell {} are not best first", c));
                 if (!is_finite(bake.occluders[e.box].box.min) || !is_finite(bake.occluders[e.box].box.max) ||
                     bake.occluders[e.box].box.is_empty())
                     bad(fmt::format("ranked occluder {} names box {}, which is not a finite box", k, e.box));
             }
         }
+    }
+    for (size_t i = 0; i < bake.polygons.size(); ++i) {  // as the reader checks them
+        const OccluderPolygon& p = bake.polygons[i];
+        bool ok = p.corners.size() >= 3 && p.corners.size() <= 8 && is_finite(p.normal) &&
+                  std::isfinite(p.offset) && std::isfinite(p.thickness) && p.thickness >= 0.0f &&
+                  p.normal != glm::vec3(0.0f);
+        for (const glm::vec3& c : p.corners) ok = ok && is_finite(c);
+        if (!ok) bad(fmt::format("polygon occluder {} is not 3 to 8 finite corners on a finite plane", i));
     }
     const VerificationRecord& v = bake.verification;
     if (!v.cell_sampled_visible.empty() && v.cell_sampled_visible.size() != cells) {
@@ -496,7 +512,7 @@ void write_leak_path(Writer& w, hid_t root, const std::vector<glm::vec3>& path) 
 }
 
 void write_occluders(Writer& w, hid_t root, bool by_sight, const std::vector<Occluder>& occluders,
-                     const RankedOccluders& ranked) {
+                     const std::vector<OccluderPolygon>& polygons, const RankedOccluders& ranked) {
     Handle g = w.group(root, "/", "occluders");
     w.u32_attr(g.get(), "count", uint32_t(occluders.size()));
     w.string_attr(
@@ -525,15 +541,30 @@ void write_occluders(Writer& w, hid_t root, bool by_sight, const std::vector<Occ
               objects.data(), true);
     if (ranked.empty()) return;
     // Format 1.2: the ranked occluders of each cell (occluders/ranking.h), as indices into the boxes above
-    // and their measures; cell c has entries ranked_offsets[c] .. ranked_offsets[c + 1], best first.
-    const size_t m = ranked.entries.size();
-    std::vector<uint32_t> box(m);
-    std::vector<float> score(m), solid(m), hidden(m), share(m);
-    for (size_t k = 0; k < m; ++k) {
-        const RankedOccluder& e = ranked.entries[k];
-        std::tie(box[k], score[k], solid[k], hidden[k], share[k]) =
-            std::tie(e.box, e.score, e.solid_angle_sr, e.hidden_objects, e.hidden_triangle_share);
+    // and their measures; cell c has entries ranked_offsets[c] .. ranked_offsets[c + 1], best first. From
+    // 1.7 the polygons a cell ranks are kept apart (a 1.6 reader reads the boxes as before), each with its
+    // place in the cell's whole list.
+    std::vector<uint32_t> box, box_offsets = {0}, poly, poly_rank, poly_offsets = {0};
+    std::vector<float> score, solid, hidden, share, poly_score;
+    for (size_t c = 0; c + 1 < ranked.offsets.size(); ++c) {
+        for (uint32_t k = ranked.offsets[c]; k < ranked.offsets[c + 1]; ++k) {
+            const RankedOccluder& e = ranked.entries[k];
+            if (e.box >= occluders.size()) {
+                poly.push_back(e.box - uint32_t(occluders.size()));
+                poly_rank.push_back(k - ranked.offsets[c]);
+                poly_score.push_back(e.score);
+                continue;
+            }
+            box.push_back(e.box);
+            score.push_back(e.score);
+            solid.push_back(e.solid_angle_sr);
+            hidden.push_back(e.hidden_objects);
+            share.push_back(e.hidden_triangle_share);
+        }
+        box_offsets.push_back(uint32_t(box.size()));
+        poly_offsets.push_back(uint32_t(poly.size()));
     }
+    const size_t m = box.size();
     w.string_attr(g.get(), "ranked_score",
                   by_sight
                       ? "the share of the cell's sampled sight lines (from its eyes to points of its PVS's "
@@ -541,8 +572,8 @@ void write_occluders(Writer& w, hid_t root, bool by_sight, const std::vector<Occ
                       : "sqrt(mean solid angle / 4 pi * (mean hidden objects / objects + mean hidden "
                         "triangle share) / 2), over the cell's sampled eyes; higher is better "
                         "(docs/FORMAT.md)");
-    w.dataset(g.get(), "/occluders", "ranked_offsets", H5T_STD_U32LE, H5T_NATIVE_UINT32,
-              {ranked.offsets.size()}, ranked.offsets.data(), true);
+    w.dataset(g.get(), "/occluders", "ranked_offsets", H5T_STD_U32LE, H5T_NATIVE_UINT32, {box_offsets.size()},
+              box_offsets.data(), true);
     // The entries are stored plain (not deflated): their measures gain 1.1 to 1.6 x from deflate, and
     // inflating them was most of the runtime loader's load time (docs/LOADER.md, "Costs").
     w.dataset(g.get(), "/occluders", "ranked_box", H5T_STD_U32LE, H5T_NATIVE_UINT32, {m}, box.data());
@@ -554,6 +585,30 @@ void write_occluders(Writer& w, hid_t root, bool by_sight, const std::vector<Occ
               hidden.data());
     w.dataset(g.get(), "/occluders", "ranked_hidden_triangle_share", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, {m},
               share.data());
+    if (polygons.empty()) return;
+    // Format 1.7: the polygon occluders (docs/ALGORITHMS.md#runtime-polygons) and the cells' ranked polygons.
+    std::vector<uint32_t> corner_offsets = {0};
+    std::vector<float> corners, planes;
+    for (const OccluderPolygon& p : polygons) {
+        for (const glm::vec3& c : p.corners) corners.insert(corners.end(), {c.x, c.y, c.z});
+        corner_offsets.push_back(uint32_t(corners.size() / 3));
+        planes.insert(planes.end(), {p.normal.x, p.normal.y, p.normal.z, p.offset, p.thickness});
+    }
+    w.dataset(g.get(), "/occluders", "polygon_offsets", H5T_STD_U32LE, H5T_NATIVE_UINT32,
+              {corner_offsets.size()}, corner_offsets.data());
+    w.dataset(g.get(), "/occluders", "polygon_corners", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT,
+              {corners.size() / 3, 3}, corners.data());
+    Handle pl = w.dataset(g.get(), "/occluders", "polygon_planes", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT,
+                          {polygons.size(), 5}, planes.data());
+    w.string_attr(pl.get(), "columns", "normal x, normal y, normal z, offset, thickness");
+    w.dataset(g.get(), "/occluders", "ranked_polygon_offsets", H5T_STD_U32LE, H5T_NATIVE_UINT32,
+              {poly_offsets.size()}, poly_offsets.data(), true);
+    w.dataset(g.get(), "/occluders", "ranked_polygon", H5T_STD_U32LE, H5T_NATIVE_UINT32, {poly.size()},
+              poly.data());
+    w.dataset(g.get(), "/occluders", "ranked_polygon_rank", H5T_STD_U32LE, H5T_NATIVE_UINT32, {poly.size()},
+              poly_rank.data());
+    w.dataset(g.get(), "/occluders", "ranked_polygon_score", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, {poly.size()},
+              poly_score.data());
 }
 
 void write_verification(Writer& w, hid_t root, const VerificationRecord& v) {
@@ -691,13 +746,41 @@ void read_occluders(const Reader& r, hid_t root, BakeData& bake) {
                          f.objects.begin() + f.object_offsets[i + 1]);
         bake.occluders.push_back(std::move(o));
     }
+    for (size_t i = 0; i + 1 < f.polygon_offsets.size(); ++i) {
+        OccluderPolygon p;
+        p.normal =
+            glm::vec3(f.polygon_planes[5 * i], f.polygon_planes[5 * i + 1], f.polygon_planes[5 * i + 2]);
+        p.offset = f.polygon_planes[5 * i + 3];
+        p.thickness = f.polygon_planes[5 * i + 4];
+        for (uint32_t k = f.polygon_offsets[i]; k < f.polygon_offsets[i + 1]; ++k) {
+            p.corners.emplace_back(f.polygon_corners[3 * k], f.polygon_corners[3 * k + 1],
+                                   f.polygon_corners[3 * k + 2]);
+            p.bounds.extend(p.corners.back());
+        }
+        bake.polygons.push_back(std::move(p));
+    }
     if (f.ranked_offsets.empty()) return;  // older than format 1.2, or ranking was off
-    bake.ranked.offsets = f.ranked_offsets;
-    bake.ranked.entries.resize(f.ranked_box.size());
-    for (size_t k = 0; k < f.ranked_box.size(); ++k) {
-        bake.ranked.entries[k] =
-            RankedOccluder{f.ranked_box[k], f.ranked_score[k], f.ranked_solid_angle_sr[k],
-                           f.ranked_hidden_objects[k], f.ranked_hidden_triangle_share[k]};
+    // The boxes and (1.7) the polygons of each cell in one list, each polygon at its place.
+    const size_t cells = f.ranked_offsets.size() - 1;
+    const bool polys = !f.ranked_polygon_offsets.empty();
+    bake.ranked.offsets = {0};
+    for (size_t c = 0; c < cells; ++c) {
+        uint32_t b = f.ranked_offsets[c], p = polys ? f.ranked_polygon_offsets[c] : 0;
+        const uint32_t b_end = f.ranked_offsets[c + 1], p_end = polys ? f.ranked_polygon_offsets[c + 1] : 0;
+        for (uint32_t place = 0; b < b_end || p < p_end; ++place) {
+            if (p < p_end && f.ranked_polygon_rank[p] == place) {
+                RankedOccluder e;
+                e.box = uint32_t(bake.occluders.size()) + f.ranked_polygon[p];
+                e.score = f.ranked_polygon_score[p++];
+                bake.ranked.entries.push_back(e);
+            } else {
+                bake.ranked.entries.push_back(
+                    RankedOccluder{f.ranked_box[b], f.ranked_score[b], f.ranked_solid_angle_sr[b],
+                                   f.ranked_hidden_objects[b], f.ranked_hidden_triangle_share[b]});
+                ++b;
+            }
+        }
+        bake.ranked.offsets.push_back(uint32_t(bake.ranked.entries.size()));
     }
 }
 
@@ -781,7 +864,7 @@ void write_bake_file(const std::string& path, const BakeData& bake) {
             const auto lines = std::find_if(bake.parameters.begin(), bake.parameters.end(),
                                             [](const auto& p) { return p.first == "ranking.sight_lines"; });
             const bool by_sight = lines != bake.parameters.end() && lines->second != "0";
-            write_occluders(w, root.get(), by_sight, bake.occluders, bake.ranked);
+            write_occluders(w, root.get(), by_sight, bake.occluders, bake.polygons, bake.ranked);
             w.named_values(root.get(), "/", "figures", bake.figures, nullptr);
             write_verification(w, root.get(), bake.verification);
             write_print(w, root.get(), bake.print);

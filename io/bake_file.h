@@ -24,10 +24,10 @@
 namespace pvs {
 
 constexpr int kBakeFormatMajor = 1;
-constexpr int kBakeFormatMinor = 6;  // 1.1 added the PVS code (/pvs/code), 1.2 ranked occluders per cell,
+constexpr int kBakeFormatMinor = 7;  // 1.1 added the PVS code (/pvs/code), 1.2 ranked occluders per cell,
                                      // 1.3 the opening width of each verification miss, 1.4 the voxel
                                      // masks as bricks, 1.5 the run's own record (/run), 1.6 the geometry
-                                     // print (/reuse)
+                                     // print (/reuse), 1.7 polygon occluders ranked per cell
 
 struct ObjectRecord {
     std::string name;
@@ -91,7 +91,9 @@ struct BakeData {
     NamedValues figures;               // counts and figures of the result (the run's own: run.figures)
     std::vector<glm::vec3> leak_path;  // view volume flood: seed to outside, when the level leaks
     std::vector<Occluder> occluders;   // synthesized boxes (only proven ones may occlude)
-    RankedOccluders ranked;            // per cell, indices into `occluders` (empty: none, or a file < 1.2)
+    std::vector<OccluderPolygon> polygons;  // 1.7: the polygon occluders the ranking may name
+    RankedOccluders
+        ranked;  // per cell, indices into `occluders`, then `polygons` (empty: none, or a file < 1.2)
     VerificationRecord verification;
     GeometryPrint print;  // conservative bakes from 1.6: what a re-bake after an edit compares (/reuse)
     RunRecord run;

@@ -369,6 +369,40 @@ std::string assemble(const std::string& path, Bake& b, const RuntimeFileOptions&
         sections.push_back(std::move(list));
         if (options.occluder_measures) sections.push_back(std::move(measures));
     }
+    // 1.1: the polygons a ranking names, renumbered in order of first use ('OPLN': plane and corner range,
+    // 'OPCO': corners), and per cell its polygons with their places in its whole list ('RPOF', 'RPLS').
+    if (!b.occluders.ranked_polygon_offsets.empty()) {
+        const size_t polygons = b.occluders.polygon_offsets.size() - 1;
+        std::vector<uint32_t> renumber(polygons, UINT32_MAX);
+        Section planes{PVSR_TAG('O', 'P', 'L', 'N'), PVSR_POLYGON_BYTES, 0, {}};
+        Section corners{PVSR_TAG('O', 'P', 'C', 'O'), 12, 0, {}};
+        Section list{PVSR_TAG('R', 'P', 'L', 'S'), 8, b.occluders.ranked_polygon.size(), {}};
+        for (size_t e = 0; e < b.occluders.ranked_polygon.size(); ++e) {
+            const uint32_t p = b.occluders.ranked_polygon[e];
+            if (renumber[p] == UINT32_MAX) {
+                renumber[p] = uint32_t(planes.count++);
+                for (int k = 0; k < 5; ++k)
+                    put(planes.bytes, b.occluders.polygon_planes[5 * size_t(p) + size_t(k)]);
+                put(planes.bytes, uint32_t(corners.count));
+                const uint32_t first = b.occluders.polygon_offsets[p],
+                               end = b.occluders.polygon_offsets[p + 1];
+                put(planes.bytes, end - first);
+                put(planes.bytes, uint32_t(0));
+                for (uint32_t c = first; c < end; ++c) {
+                    for (int a = 0; a < 3; ++a)
+                        put(corners.bytes, b.occluders.polygon_corners[3 * size_t(c) + size_t(a)]);
+                    ++corners.count;
+                }
+            }
+            put(list.bytes, renumber[p]);
+            put(list.bytes, b.occluders.ranked_polygon_rank[e]);
+        }
+        sections.push_back(std::move(planes));
+        sections.push_back(std::move(corners));
+        sections.push_back(
+            array_section(PVSR_TAG('R', 'P', 'O', 'F'), 4, b.occluders.ranked_polygon_offsets));
+        sections.push_back(std::move(list));
+    }
 
     // The header, the table, the sections at multiples of 64.
     const auto aligned = [](uint64_t n) { return (n + PVSR_ALIGN - 1) / PVSR_ALIGN * PVSR_ALIGN; };

@@ -81,10 +81,15 @@ void rank_cell_by_sight(const RankingConfig& config, const OccluderSightScene& s
                           return a.first > b.first || (a.first == b.first && a.second < b.second);
                       });
     for (size_t i = 0; i < keep; ++i) {
-        const uint32_t box = usable[hits[i].second];
         RankedOccluder r;
-        r.box = box;
         r.score = float(double(hits[i].first) / double(config.sight_lines));
+        if (hits[i].second >= usable.size()) {  // a polygon: no box measures
+            r.box = uint32_t(boxes.size() + (hits[i].second - usable.size()));
+            out.push_back(r);
+            continue;
+        }
+        const uint32_t box = usable[hits[i].second];
+        r.box = box;
         for (const glm::vec3& e : eyes) {
             const double w = box_solid_angle_sr(boxes[box], e);
             if (w < kFourPi) r.solid_angle_sr = std::max(r.solid_angle_sr, float(w));
@@ -101,7 +106,8 @@ void rank_cell_by_sight(const RankingConfig& config, const OccluderSightScene& s
 
 RankedOccluders rank_occluders(Context& ctx, const RankingConfig& config, const World& world,
                                const CellSet& cells, const std::vector<Occluder>& occluders,
-                               RankingFigures& figures, WorkShare* share, const PvsSet* pvs) {
+                               RankingFigures& figures, WorkShare* share, const PvsSet* pvs,
+                               const std::vector<OccluderPolygon>* polygons) {
     figures = RankingFigures{};
     RankedOccluders ranked;
     if (config.occluders_per_cell == 0) return ranked;
@@ -121,10 +127,12 @@ RankedOccluders rank_occluders(Context& ctx, const RankingConfig& config, const 
                           pvs->object_count == world.objects.size();
     std::unique_ptr<OccluderSightScene> sight;
     std::vector<double> cum_area;
-    if (by_sight && !usable.empty()) {
+    const std::vector<OccluderPolygon> no_polygons;
+    const std::vector<OccluderPolygon>& polys = polygons != nullptr && by_sight ? *polygons : no_polygons;
+    if (by_sight && !(usable.empty() && polys.empty())) {
         std::vector<Aabb> candidates;
         for (uint32_t i : usable) candidates.push_back(boxes[i]);
-        sight = std::make_unique<OccluderSightScene>(ctx, candidates);
+        sight = std::make_unique<OccluderSightScene>(ctx, candidates, polys);
         cum_area = cumulative_areas(world);
     }
     std::vector<std::vector<RankedOccluder>> per_cell(static_cast<size_t>(n_cells));

@@ -35,10 +35,12 @@ struct RankingFigures {
 // among them, that stop first the most sight lines from the cell's eyes to its PVS; score = the share of the
 // lines each stops first); otherwise by solid angle and depth complexity (occluders/ranking.h). With
 // `share`, the cells are dealt over its processes (collective: every process calls it, and every one gets
-// the whole result).
+// the whole result). By sight, `polygons` (the run-time culler's polygon occluders) are candidates too: an
+// entry naming one has box = occluders.size() + its index, and measures of 0 (they are the boxes' measures).
 RankedOccluders rank_occluders(Context& ctx, const RankingConfig& config, const World& world,
                                const CellSet& cells, const std::vector<Occluder>& occluders,
                                RankingFigures& figures, WorkShare* share = nullptr,
-                               const PvsSet* pvs = nullptr);
+                               const PvsSet* pvs = nullptr,
+                               const std::vector<OccluderPolygon>* polygons = nullptr);
 
 }  // namespace pvs

@@ -41,10 +41,29 @@ void add_candidate(World& w, const Aabb& b) {
     w.objects.push_back(o);
 }
 
+void add_polygon(World& w, const OccluderPolygon& p) {
+    WorldObject o;
+    o.name = "occluder" + std::to_string(w.objects.size());
+    o.bounds = p.bounds;
+    o.first_triangle = uint32_t(w.triangles.size());
+    o.flags = kObjectHasOpaque;
+    const uint32_t base = uint32_t(w.positions.size());
+    for (const glm::vec3& c : p.corners) w.positions.push_back(c);
+    for (uint32_t i = 1; i + 1 < p.corners.size(); ++i)
+        w.triangles.push_back(Triangle{{base, base + i, base + i + 1}});
+    o.triangle_count = uint32_t(w.triangles.size()) - o.first_triangle;
+    w.triangle_opaque.resize(w.triangles.size(), 1);
+    w.triangle_double_sided.resize(w.triangles.size(), 1);
+    w.bounds.extend(p.bounds);
+    w.objects.push_back(o);
+}
+
 }  // namespace
 
-OccluderSightScene::OccluderSightScene(Context& ctx, const std::vector<Aabb>& candidates) {
+OccluderSightScene::OccluderSightScene(Context& ctx, const std::vector<Aabb>& candidates,
+                                       const std::vector<OccluderPolygon>& polygons) {
     for (const Aabb& b : candidates) add_candidate(world_, b);
+    for (const OccluderPolygon& p : polygons) add_polygon(world_, p);
     scene_ = std::make_unique<RayScene>(ctx, world_, BuildQuality::kMedium);
 }
 

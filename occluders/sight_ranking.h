@@ -13,6 +13,7 @@
 #pragma once
 
 #include "core/math.h"
+#include "core/occluder.h"
 #include "core/random.h"
 #include "core/world.h"
 #include "rays/ray_scene.h"
@@ -26,10 +27,12 @@ namespace pvs {
 constexpr float kSightEndMargin_m = 0.01f;
 
 // The candidate occluders as an opaque ray scene: candidate k is object k (a box as its 12 triangles; a
-// panel, flat along one axis, as its rectangle).
+// panel, flat along one axis, as its rectangle), then the polygons, polygon j as candidate boxes.size() + j
+// (its corners as a fan of triangles).
 class OccluderSightScene {
 public:
-    OccluderSightScene(Context& ctx, const std::vector<Aabb>& candidates);
+    OccluderSightScene(Context& ctx, const std::vector<Aabb>& candidates,
+                       const std::vector<OccluderPolygon>& polygons = {});
     // For each segment eye[i] -> point[i]: the candidate it meets first, or UINT32_MAX.
     void first_hits(const glm::vec3* eyes, const glm::vec3* points, uint32_t count, uint32_t* first) const;
     const World& world() const { return world_; }

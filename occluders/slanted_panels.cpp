@@ -7,6 +7,7 @@
 #include <cmath>
 #include <map>
 #include <numeric>
+#include <optional>
 #include <tuple>
 
 namespace pvs {
@@ -176,6 +177,78 @@ std::vector<SlantedPanel> find_slanted_panels(const World& world, double max_thi
     }
     fig.panels = out.size();
     if (figures) *figures = fig;
+    return out;
+}
+
+namespace {
+
+// The polygon occluder of one panel, or nothing when its float form fails the checks.
+std::optional<OccluderPolygon> runtime_polygon(const SlantedPanel& panel) {
+    std::vector<glm::dvec3> c = panel.corners;
+    const auto corner_area = [&](size_t i) {  // what dropping corner i loses
+        const glm::dvec3& a = c[(i + c.size() - 1) % c.size()];
+        const glm::dvec3& b = c[(i + 1) % c.size()];
+        return 0.5 * glm::length(glm::cross(c[i] - a, b - a));
+    };
+    while (c.size() > kPolygonMaxCorners) {
+        size_t drop = 0;
+        for (size_t i = 1; i < c.size(); ++i)
+            if (corner_area(i) < corner_area(drop)) drop = i;
+        c.erase(c.begin() + std::ptrdiff_t(drop));
+    }
+    // Shrunk towards the mean of the corners g by 1 - d / h, h the least distance from g to an edge line of
+    // the panel: each edge moves in by at least d (the corners kept lie in the panel, so its prism holds
+    // them).
+    glm::dvec3 g(0.0);
+    for (const glm::dvec3& p : c) g += p;
+    g /= double(c.size());
+    double h = INFINITY;
+    for (size_t i = 0; i < panel.corners.size(); ++i)
+        h = std::min(h, glm::dot(panel.edge_normal[i], g) - panel.edge_offset[i]);
+    if (!(h > 4.0 * kPolygonInsetM)) return std::nullopt;
+    const double s = 1.0 - kPolygonInsetM / h;
+    OccluderPolygon out;
+    out.normal = glm::vec3(panel.normal);
+    out.offset = float(panel.offset);
+    out.thickness = float(panel.thickness + kPolygonSlabGrowM);
+    for (const glm::dvec3& p : c) {
+        out.corners.push_back(glm::vec3(g + s * (p - g)));
+        out.bounds.extend(out.corners.back());
+    }
+    // The float form as the culler reads it (in double), checked at the corners of its prism's part in its
+    // slab: each inside the panel's prism, the near ones on the near side of the panel's slab, the far ones
+    // on the far side, and the corners convex and counter-clockwise about its normal.
+    const glm::dvec3 nf(out.normal);
+    const double len = glm::length(nf);
+    const glm::dvec3 n = nf / len;
+    const double o = double(out.offset) / len, t = double(out.thickness) / len;
+    const size_t k = out.corners.size();
+    const double margin = 1e-6;
+    for (size_t i = 0; i < k; ++i) {
+        const glm::dvec3 p0(out.corners[i]), p1(out.corners[(i + 1) % k]);
+        const glm::dvec3 m = glm::cross(n, p1 - p0);
+        for (size_t j = 0; j < k; ++j)
+            if (!(glm::dot(m, glm::dvec3(out.corners[j]) - p0) >= 0.0)) return std::nullopt;
+        for (const double side : {-1.0, 1.0}) {
+            const glm::dvec3 v = p0 + (o + side * t - glm::dot(n, p0)) * n;
+            for (size_t e = 0; e < panel.corners.size(); ++e)
+                if (!(glm::dot(panel.edge_normal[e], v) >= panel.edge_offset[e] + margin))
+                    return std::nullopt;
+            const double above = glm::dot(panel.normal, v) - panel.offset;
+            if (!(side * above >= panel.thickness + margin)) return std::nullopt;
+        }
+    }
+    return out;
+}
+
+}  // namespace
+
+std::vector<OccluderPolygon> runtime_polygons(const std::vector<SlantedPanel>& panels, double min_area_m2) {
+    std::vector<OccluderPolygon> out;
+    for (const SlantedPanel& p : panels) {
+        if (p.area_m2 < min_area_m2) continue;
+        if (std::optional<OccluderPolygon> q = runtime_polygon(p)) out.push_back(std::move(*q));
+    }
     return out;
 }
 

@@ -41,4 +41,15 @@ bool set_slanted_edges(SlantedPanel& panel);
 std::vector<SlantedPanel> find_slanted_panels(const World& world, double max_thickness_m, double min_area_m2,
                                               SlantedPanelFigures* figures = nullptr);
 
+// The run-time culler's polygon occluders (docs/ALGORITHMS.md#runtime-polygons) of the panels of at least
+// min_area_m2: each reduced to at most 8 corners by dropping corners (a convex polygon's corners span a part
+// of it), shrunk towards its centre by kPolygonInsetM, rounded to floats with its slab grown by
+// kPolygonSlabGrowM, and kept only when the float form is checked (in double, at the corners of its prism's
+// part in its slab) to lie inside the panel's prism and to cross the panel's slab from side to side: then the
+// float form's promise (core/occluder.h) follows from the panel's. Deterministic.
+constexpr double kPolygonInsetM = 1e-3;
+constexpr double kPolygonSlabGrowM = 1e-3;
+constexpr size_t kPolygonMaxCorners = 8;
+std::vector<OccluderPolygon> runtime_polygons(const std::vector<SlantedPanel>& panels, double min_area_m2);
+
 }  // namespace pvs

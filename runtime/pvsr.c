@@ -685,6 +685,52 @@ static const char* check_ranked(pvsr_level* l, const prescan* ps) {
     return NULL;
 }
 
+/* File version 1.1: the polygon occluders ('OPLN', 'OPCO') and the cells' ranked polygons ('RPOF', 'RPLS'):
+ * all four or none; each polygon 3 to PVSR_POLYGON_MAX_CORNERS finite corners in range on a finite plane;
+ * each cell's polygons in range, at places increasing and within its whole list. */
+static const char* check_polygons(pvsr_level* l) {
+    uint64_t c, e;
+    const char* bad;
+    if (!section(l, PVSR_TAG('R', 'P', 'O', 'F'), &l->ranked_polygon_offsets)) return NULL; /* none */
+    if (l->ranked_offsets.at == NULL) return "ranked polygons without ranked occluders";
+    bad =
+        need(l, PVSR_TAG('R', 'P', 'O', 'F'), 4, (uint64_t)l->cell_count + 1, 1, &l->ranked_polygon_offsets);
+    if (!bad)
+        bad = need(l, PVSR_TAG('O', 'P', 'L', 'N'), PVSR_POLYGON_BYTES, UINT64_MAX, 1, &l->occluder_polygons);
+    if (!bad) bad = need(l, PVSR_TAG('O', 'P', 'C', 'O'), 12, UINT64_MAX, 1, &l->polygon_corners);
+    if (!bad) bad = need(l, PVSR_TAG('R', 'P', 'L', 'S'), 8, UINT64_MAX, 1, &l->ranked_polygons);
+    if (bad) return bad;
+    for (e = 0; e < l->occluder_polygons.count; ++e) {
+        const uint8_t* p = l->occluder_polygons.at + PVSR_POLYGON_BYTES * e;
+        const uint64_t first = rd32(p + 20), n = rd32(p + 24);
+        int k;
+        for (k = 0; k < 5; ++k)
+            if (!isfinite(rdf(p + 4 * k))) return "a polygon occluder's plane is not finite";
+        if (!(rdf(p + 16) >= 0.0f)) return "a polygon occluder's thickness is negative";
+        if (n < 3 || n > PVSR_POLYGON_MAX_CORNERS || first + n > l->polygon_corners.count)
+            return "a polygon occluder's corners are out of range";
+    }
+    for (e = 0; e < 3 * l->polygon_corners.count; ++e)
+        if (!isfinite(rdf(l->polygon_corners.at + 4 * e))) return "a polygon occluder's corner is not finite";
+    if (rd32(l->ranked_polygon_offsets.at) != 0 ||
+        rd32(l->ranked_polygon_offsets.at + 4 * (uint64_t)l->cell_count) != l->ranked_polygons.count)
+        return "the ranked polygon offsets do not start at 0 and end at the entries' count";
+    for (c = 0; c < l->cell_count; ++c) {
+        const uint32_t a = rd32(l->ranked_polygon_offsets.at + 4 * c),
+                       b = rd32(l->ranked_polygon_offsets.at + 4 * c + 4);
+        uint64_t whole;
+        if (b < a) return "the ranked polygon offsets decrease";
+        whole = (uint64_t)(b - a) + pvsr_occluder_count(l, (uint32_t)c);
+        for (e = a; e < b; ++e) {
+            const uint8_t* r = l->ranked_polygons.at + 8 * e;
+            if (rd32(r) >= l->occluder_polygons.count) return "a ranked polygon names a polygon out of range";
+            if (rd32(r + 4) >= whole || (e > a && rd32(r + 4) <= rd32(r - 4)))
+                return "a ranked polygon's place is out of its cell's list or not after the one before it";
+        }
+    }
+    return NULL;
+}
+
 static const char* check_strings(pvsr_level* l) {
     uint64_t i, fields = 0;
     const char* bad = need(l, PVSR_TAG('S', 'T', 'R', 'S'), 1, UINT64_MAX, 1, &l->strings);
@@ -772,6 +818,7 @@ pvsr_status pvsr_open(pvsr_level* level, const void* data, size_t size, char* me
     if (!bad) bad = rows_bad;
     if (!bad) bad = check_objects(level);
     if (!bad) bad = check_ranked(level, &ps);
+    if (!bad) bad = check_polygons(level);
     if (!bad) bad = check_strings(level);
     if (bad) return fail(&o, PVSR_CORRUPT, bad);
     if (message != NULL && message_size > 0) message[0] = '\0';
@@ -1088,6 +1135,31 @@ int pvsr_occluder(const pvsr_level* l, uint32_t cell, uint32_t rank, pvsr_ranked
         out->score = out->solid_angle_sr = out->hidden_objects = out->hidden_triangle_share = NAN;
     }
     return 1;
+}
+
+uint32_t pvsr_occluder_polygon_count(const pvsr_level* l, uint32_t cell) {
+    if (l == NULL || cell >= l->cell_count || l->ranked_polygon_offsets.at == NULL) return 0;
+    return rd32(l->ranked_polygon_offsets.at + 4 * (uint64_t)cell + 4) -
+           rd32(l->ranked_polygon_offsets.at + 4 * (uint64_t)cell);
+}
+
+uint32_t pvsr_occluder_polygon(const pvsr_level* l, uint32_t cell, uint32_t rank, float plane[5],
+                               float* corners, uint32_t capacity, uint32_t* place) {
+    const uint8_t *r, *p;
+    uint32_t n, k;
+    int a;
+    if (plane == NULL || rank >= pvsr_occluder_polygon_count(l, cell)) return 0;
+    r = l->ranked_polygons.at +
+        8 * ((uint64_t)rd32(l->ranked_polygon_offsets.at + 4 * (uint64_t)cell) + rank);
+    p = l->occluder_polygons.at + PVSR_POLYGON_BYTES * (uint64_t)rd32(r);
+    for (a = 0; a < 5; ++a) plane[a] = rdf(p + 4 * a);
+    n = rd32(p + 24);
+    for (k = 0; k < n && k < capacity && corners != NULL; ++k)
+        for (a = 0; a < 3; ++a)
+            corners[3 * k + (uint32_t)a] =
+                rdf(l->polygon_corners.at + 12 * ((uint64_t)rd32(p + 20) + k) + 4 * a);
+    if (place != NULL) *place = rd32(r + 4);
+    return n;
 }
 
 int pvsr_has_occluder_measures(const pvsr_level* l) {
@@ -2139,10 +2211,19 @@ int pvsr_culler_add_polygon(pvsr_culler* c, const float plane[5], const float* c
 
 uint32_t pvsr_culler_begin_cell(pvsr_culler* c, const pvsr_level* l, uint32_t cell, const float eye[3],
                                 uint32_t max_occluders) {
-    float boxes[6 * PVSR_CULLER_MAX_OCCLUDERS];
-    const uint32_t n = pvsr_occluder_boxes(
-        l, cell, boxes,
-        max_occluders < PVSR_CULLER_MAX_OCCLUDERS ? max_occluders : PVSR_CULLER_MAX_OCCLUDERS);
+    float boxes[6 * PVSR_CULLER_MAX_OCCLUDERS] = {0.0f}, plane[5], corners[3 * PVSR_POLYGON_MAX_CORNERS];
+    const uint32_t limit =
+        max_occluders < PVSR_CULLER_MAX_OCCLUDERS ? max_occluders : PVSR_CULLER_MAX_OCCLUDERS;
+    const uint32_t polygons = pvsr_occluder_polygon_count(l, cell);
+    uint32_t k, place, first = 0, n; /* first: the cell's polygons at places below the limit */
+    while (first < polygons && pvsr_occluder_polygon(l, cell, first, plane, NULL, 0, &place) > 0 &&
+           place < limit)
+        ++first;
+    n = pvsr_occluder_boxes(l, cell, boxes, limit - first);
     pvsr_culler_begin_frame(c, eye, boxes, n);
+    for (k = 0; k < first; ++k) {
+        const uint32_t m = pvsr_occluder_polygon(l, cell, k, plane, corners, PVSR_POLYGON_MAX_CORNERS, NULL);
+        n += (uint32_t)pvsr_culler_add_polygon(c, plane, corners, m);
+    }
     return n;
 }

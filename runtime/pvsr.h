@@ -56,7 +56,7 @@ extern "C" {
 #endif
 
 #define PVSR_VERSION_MAJOR 1 /* the newest file version this runtime reads: 1.x */
-#define PVSR_VERSION_MINOR 0
+#define PVSR_VERSION_MINOR 1
 
 typedef enum pvsr_status {
     PVSR_OK = 0,
@@ -91,7 +91,8 @@ typedef struct pvsr_level {
     int32_t mask_dims[3], tile_dims[3];
     pvsr_array grid_to_cell, nodes, cell_grid, cell_boxes, view_tiles, eye_tiles, mask_refs, mask_bits,
         cell_row, row_offsets, code, object_boxes, object_triangles, object_flags, name_offsets, names,
-        occluder_boxes, ranked_offsets, ranked_boxes, ranked_measures, strings;
+        occluder_boxes, ranked_offsets, ranked_boxes, ranked_measures, strings, occluder_polygons,
+        polygon_corners, ranked_polygon_offsets, ranked_polygons;
     uint64_t code_bytes; /* the code without its padding */
     uint64_t total_triangles;
 } pvsr_level;
@@ -188,6 +189,18 @@ int pvsr_occluder(const pvsr_level* level, uint32_t cell, uint32_t rank, pvsr_ra
  * returns how many were written. */
 uint32_t pvsr_occluder_boxes(const pvsr_level* level, uint32_t cell, float* boxes, uint32_t capacity);
 int pvsr_has_occluder_measures(const pvsr_level* level);
+/* File version 1.1: the cell's ranked POLYGON occluders (slanted panels of the opaque surface, for the faces
+ * test: pvsr_culler_add_polygon()), best first. They rank among the boxes: a cell's whole list of ranked
+ * occluders holds its pvsr_occluder_count() boxes and its pvsr_occluder_polygon_count() polygons, each
+ * polygon at the place *place says (0 = the best of all), the boxes in order at the other places. Older
+ * files: none. */
+uint32_t pvsr_occluder_polygon_count(const pvsr_level* level, uint32_t cell);
+/* The cell's polygon of that rank among its polygons (0 = best): writes plane[5] (normal x, y, z, offset,
+ * thickness), up to `capacity` corners (3 floats each, PVSR_POLYGON_MAX_CORNERS at most) and, when place is
+ * not NULL, its place in the cell's whole list; returns its corner count, or 0 (nothing written) out of
+ * range. */
+uint32_t pvsr_occluder_polygon(const pvsr_level* level, uint32_t cell, uint32_t rank, float plane[5],
+                               float* corners, uint32_t capacity, uint32_t* place);
 
 /* ---- What the bake is */
 int pvsr_is_conservative(const pvsr_level* level);
@@ -283,9 +296,10 @@ size_t pvsr_culler_memory_bytes(int resolution);
 int pvsr_culler_init(pvsr_culler* culler, int resolution, void* memory, size_t memory_bytes);
 /* Prepares a frame: the eye (float[3]) and `count` occluder boxes (6 floats each, count * 6 floats). */
 void pvsr_culler_begin_frame(pvsr_culler* culler, const float eye[3], const float* boxes, size_t count);
-/* Prepares a frame with the cell's best min(occluder count, max_occluders, PVSR_CULLER_MAX_OCCLUDERS) ranked
- * occluders (pvsr_occluder_boxes()); returns how many were given. Allocates nothing (a buffer of
- * PVSR_CULLER_MAX_OCCLUDERS boxes on the stack). Then pvsr_visit_drawn() gives what to draw. */
+/* Prepares a frame with the best min(max_occluders, PVSR_CULLER_MAX_OCCLUDERS) of the cell's ranked
+ * occluders, boxes (pvsr_occluder_boxes()) and polygons (pvsr_culler_add_polygon()) at their places; returns
+ * how many were given. Allocates nothing (a buffer of PVSR_CULLER_MAX_OCCLUDERS boxes on the stack). Then
+ * pvsr_visit_drawn() gives what to draw. */
 uint32_t pvsr_culler_begin_cell(pvsr_culler* culler, const pvsr_level* level, uint32_t cell,
                                 const float eye[3], uint32_t max_occluders);
 /* Adds a convex POLYGON occluder to this frame, after pvsr_culler_begin_frame(): a slanted panel of the
@@ -316,6 +330,8 @@ int pvsr_culler_classify(const pvsr_culler* culler, const float box[6]);
 #define PVSR_LEVEL_BYTES 64        /* 'LEVL': the cells' grid and the masks' voxels */
 #define PVSR_NODE_BYTES 20         /* 'NODE': float center[3], int32 first_child, int32 cell */
 #define PVSR_MEASURE_BYTES 16      /* 'RMEA': float score, solid angle, hidden objects, hidden triangle share */
+#define PVSR_POLYGON_BYTES \
+    32 /* 'OPLN': float normal[3], offset, thickness; uint32 first corner, corners, 0 */
 #define PVSR_MAX_OBJECTS (1u << 27) /* the PVS code's limit */
 #define PVSR_MAX_CHAIN 8            /* rows XORed to decode one row: a key row and up to 7 coded against it */
 #define PVSR_STACK_OBJECTS 16384    /* objects of the bit set a walk keeps on the stack; past it, chains of 2 */

@@ -114,6 +114,14 @@ public:
     bool occluder(uint32_t cell, uint32_t rank, pvsr_ranked_occluder& out) const noexcept {
         return pvsr_occluder(&level_, cell, rank, &out) != 0;
     }
+    // The cell's ranked polygon occluders (file version 1.1), each at its place among the boxes.
+    uint32_t occluder_polygon_count(uint32_t cell) const noexcept {
+        return pvsr_occluder_polygon_count(&level_, cell);
+    }
+    uint32_t occluder_polygon(uint32_t cell, uint32_t rank, float plane[5], float* corners, uint32_t capacity,
+                              uint32_t* place = nullptr) const noexcept {
+        return pvsr_occluder_polygon(&level_, cell, rank, plane, corners, capacity, place);
+    }
     uint32_t occluder_boxes(uint32_t cell, float* boxes, uint32_t capacity) const noexcept {
         return pvsr_occluder_boxes(&level_, cell, boxes, capacity);
     }
@@ -158,8 +166,13 @@ public:
     void begin_frame(const float eye[3], const float* boxes, size_t count) noexcept {
         pvsr_culler_begin_frame(&culler_, eye, boxes, count);
     }
-    // The eye (float[3]) and the cell's best min(its count, max_occluders, PVSR_CULLER_MAX_OCCLUDERS) ranked
-    // occluders; returns how many were given (pvsr_culler_begin_cell).
+    // A convex polygon occluder for this frame, after begin_frame (pvsr_culler_add_polygon); false when
+    // refused.
+    bool add_polygon(const float plane[5], const float* corners, uint32_t count) noexcept {
+        return pvsr_culler_add_polygon(&culler_, plane, corners, count) != 0;
+    }
+    // The eye (float[3]) and the best min(max_occluders, PVSR_CULLER_MAX_OCCLUDERS) of the cell's ranked
+    // occluders, boxes and polygons; returns how many were given (pvsr_culler_begin_cell).
     uint32_t begin_cell(const Level& level, uint32_t cell, const float eye[3],
                         uint32_t max_occluders = PVSR_CULLER_MAX_OCCLUDERS) noexcept {
         return pvsr_culler_begin_cell(&culler_, &level.c_level(), cell, eye, max_occluders);

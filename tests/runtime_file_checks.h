@@ -74,7 +74,7 @@ inline void expect_same_drawn(const pvsr::Level& got, const pvsbake::Bake& want,
         for (const uint32_t max : {uint32_t(PVSR_CULLER_MAX_OCCLUDERS), 2u}) {
             SCOPED_TRACE("cell " + std::to_string(c) + ", up to " + std::to_string(max) + " occluders");
             const uint32_t given = culler.begin_cell(got, c, eye, max);
-            EXPECT_EQ(given, std::min(want.occluder_count(c), max));
+            EXPECT_LE(given, std::min(want.occluder_count(c) + want.occluder_polygon_count(c), max));
             EXPECT_EQ(want_culler.begin_cell(want, c, eye, max), given);
             std::vector<uint32_t> expected, walked, want_walked;
             want.for_each_visible(c, [&](uint32_t o) {
@@ -207,6 +207,21 @@ inline void expect_same_as_loader(const pvsr::Level& got, const pvsbake::Bake& w
         }
         pvsr_ranked_occluder none;
         EXPECT_FALSE(got.occluder(c, want.occluder_count(c), none));
+        ASSERT_EQ(got.occluder_polygon_count(c), want.occluder_polygon_count(c));
+        for (uint32_t k = 0; k <= want.occluder_polygon_count(c); ++k) {
+            float plane[5], corners[3 * PVSR_POLYGON_MAX_CORNERS];
+            uint32_t place = 0;
+            const uint32_t n = got.occluder_polygon(c, k, plane, corners, PVSR_POLYGON_MAX_CORNERS, &place);
+            pvsbake::RankedPolygon w;
+            if (!want.occluder_polygon(c, k, w)) {
+                EXPECT_EQ(n, 0u);
+                continue;
+            }
+            ASSERT_EQ(n, w.count);
+            EXPECT_EQ(place, w.place);
+            EXPECT_TRUE(std::equal(plane, plane + 5, w.plane));
+            EXPECT_TRUE(std::equal(corners, corners + 3 * n, w.corners));
+        }
     }
     // Lookups at random points in and around the cells, on cell and voxel faces, and not finite.
     float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};

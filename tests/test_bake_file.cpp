@@ -320,6 +320,22 @@ void patch_element(const std::string& path, const std::string& dataset, hsize_t 
     H5Dclose(ds);
 }
 
+// A 1-D uint32 dataset, whole.
+std::vector<uint32_t> read_u32_dataset(const std::string& path, const std::string& dataset) {
+    H5File f(path, false);
+    std::vector<uint32_t> out;
+    const hid_t ds = H5Dopen2(f.id(), dataset.c_str(), H5P_DEFAULT);
+    if (ds < 0) return out;
+    const hid_t space = H5Dget_space(ds);
+    hsize_t n = 0;
+    H5Sget_simple_extent_dims(space, &n, nullptr);
+    out.resize(size_t(n));
+    if (n > 0) H5Dread(ds, H5T_NATIVE_UINT32, H5S_ALL, H5S_ALL, H5P_DEFAULT, out.data());
+    H5Sclose(space);
+    H5Dclose(ds);
+    return out;
+}
+
 void patch_byte(const std::string& path, const std::string& dataset, hsize_t row, hsize_t column,
                 uint8_t value) {
     H5File f(path, true);
@@ -958,6 +974,80 @@ TEST(BakeFile, RankedOccludersRoundTrip) {
     // Same bake, same bytes (the ranking too).
     write_bake_file(dir.file("again.h5"), back);
     EXPECT_EQ(test::read_file(dir.file("again.h5")), test::read_file(path));
+}
+
+// The ranked bake with two polygon occluders (format 1.7) among the boxes: cell 0 ranks polygon 1 between its
+// two boxes, cell 3 polygon 0 first and polygon 1 last. They come back at their places; a 1.6 reader's
+// datasets (the boxes' ranking) hold the boxes alone.
+BakeData polygon_bake() {
+    BakeData bake = ranked_bake();
+    OccluderPolygon p;
+    p.normal = glm::normalize(glm::vec3(0.0f, 0.6f, 0.8f));
+    p.offset = 2.0f;
+    p.thickness = 0.001f;
+    p.corners = {{-1, 0, 2.5f}, {3, 0, 2.5f}, {3, 3, 0.25f}, {-1, 3, 0.25f}};
+    for (const glm::vec3& c : p.corners) p.bounds.extend(c);
+    bake.polygons.push_back(p);
+    p.corners.pop_back();
+    p.bounds = Aabb{};
+    for (const glm::vec3& c : p.corners) p.bounds.extend(c);
+    bake.polygons.push_back(p);
+    bake.ranked.offsets = {0, 3, 3, 4, 8};
+    bake.ranked.entries = {
+        {2, 0.5f, 1.25f, 3.5f, 0.25f}, {4, 0.25f, 0, 0, 0}, {0, 0.125f, 0.5f, 1.0f, 0.0625f},
+        {0, 0.75f, 2.0f, 9.0f, 0.5f},  {3, 0.5f, 0, 0, 0},  {0, 0.0f, 0.02f, 0.0f, 0.0f},
+        {2, 0.0f, 0.01f, 0.0f, 0.0f},  {4, 0.0f, 0, 0, 0}};
+    return bake;
+}
+
+TEST(BakeFile, PolygonOccludersRoundTripAtTheirPlaces) {
+    test::TempDir dir;
+    const BakeData bake = polygon_bake();
+    const std::string path = dir.file("polygons.h5");
+    write_bake_file(path, bake);
+    const BakeData back = read_bake_file(path);
+    expect_same(bake, back);
+    ASSERT_EQ(back.polygons.size(), 2u);
+    for (size_t i = 0; i < 2; ++i) {
+        EXPECT_EQ(back.polygons[i].normal, bake.polygons[i].normal);
+        EXPECT_EQ(back.polygons[i].offset, bake.polygons[i].offset);
+        EXPECT_EQ(back.polygons[i].thickness, bake.polygons[i].thickness);
+        EXPECT_EQ(back.polygons[i].corners, bake.polygons[i].corners);
+        EXPECT_EQ(back.polygons[i].bounds, bake.polygons[i].bounds);
+    }
+    EXPECT_EQ(read_u32_dataset(path, "/occluders/ranked_offsets"), (std::vector<uint32_t>{0, 2, 2, 3, 5}));
+    EXPECT_EQ(read_u32_dataset(path, "/occluders/ranked_polygon_offsets"),
+              (std::vector<uint32_t>{0, 1, 1, 1, 3}));
+    EXPECT_EQ(read_u32_dataset(path, "/occluders/ranked_polygon_rank"), (std::vector<uint32_t>{1, 0, 3}));
+    write_bake_file(dir.file("again.h5"), back);
+    EXPECT_EQ(test::read_file(dir.file("again.h5")), test::read_file(path));
+}
+
+TEST(BakeFileBad, PolygonOccludersOutOfRangeOrDamaged) {
+    test::TempDir dir;
+    const std::string good = dir.file("good.h5");
+    write_bake_file(good, polygon_bake());
+    const std::string path = dir.file("bad.h5");
+    auto patched = [&](const char* dataset, hsize_t index, hid_t type, const void* value,
+                       std::vector<std::string> needles) {
+        SCOPED_TRACE(dataset);
+        fs::copy_file(good, path, fs::copy_options::overwrite_existing);
+        patch_element(path, dataset, index, type, value);
+        expect_bad_input(path, needles);
+    };
+    const uint32_t big = 99, two = 2, zero = 0;
+    const float negative = -1.0f;
+    patched("/occluders/ranked_polygon", 0, H5T_NATIVE_UINT32, &big,
+            {"/occluders/ranked_polygon[0]", "not a polygon index below 2"});
+    patched("/occluders/ranked_polygon_rank", 0, H5T_NATIVE_UINT32, &big,
+            {"/occluders/ranked_polygon_rank[0]"});
+    patched("/occluders/ranked_polygon_rank", 2, H5T_NATIVE_UINT32, &zero,
+            {"/occluders/ranked_polygon_rank[2]"});
+    patched("/occluders/ranked_polygon_score", 1, H5T_NATIVE_FLOAT, &negative,
+            {"/occluders/ranked_polygon_score[1]"});
+    patched("/occluders/polygon_offsets", 1, H5T_NATIVE_UINT32, &two, {"/occluders/polygon_offsets"});
+    patched("/occluders/ranked_polygon_offsets", 2, H5T_NATIVE_UINT32, &zero,
+            {"/occluders/ranked_polygon_offsets[2] decreases"});
 }
 
 // A bake without a ranking (ranking off, or read from an older file) writes no ranked datasets, and a file

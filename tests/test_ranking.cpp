@@ -344,6 +344,38 @@ TEST(RankingBySight, TheFaceThatStopsTheCellsSightFirstComesFirst) {
     EXPECT_NE(by_frusta.entries[0].score, r.entries[0].score);
 }
 
+// A polygon occluder (a slanted sheet in front of the wall, nearer than any box) stops first what the wall's
+// box would: by sight it comes first, named after the boxes (index = occluder count + its own), with its
+// share of the lines and no box measures.
+TEST(RankingBySight, APolygonNearerThanTheWallComesFirstAfterTheBoxesIndices) {
+    Scene s = wall_and_small_box();
+    OccluderPolygon p;
+    p.normal = glm::normalize(glm::vec3(0.0f, -0.5f, 6.0f));
+    p.corners = {
+        {-6, -1, 2.0f}, {8, -1, 2.0f}, {8, 5, 2.5f}, {-6, 5, 2.5f}};  // counter-clockwise from +normal
+    p.offset = glm::dot(p.normal, p.corners[0]);
+    p.thickness = 0.001f;
+    for (const glm::vec3& c : p.corners) p.bounds.extend(c);
+    const std::vector<OccluderPolygon> polygons = {p};
+    Context ctx = quiet_context();
+    RankingConfig config;
+    config.sight_lines = 4096;
+    PvsSet pvs = PvsSet::make(1, uint32_t(s.world.objects.size()));
+    for (uint32_t o = 0; o < s.world.objects.size(); ++o) pvs.set(0, o);
+    RankingFigures figures;
+    const RankedOccluders r =
+        rank_occluders(ctx, config, s.world, s.cells, s.occluders, figures, nullptr, &pvs, &polygons);
+    ASSERT_GE(r.count(0), 1u);
+    EXPECT_EQ(r.entries[0].box, uint32_t(s.occluders.size()));
+    EXPECT_GT(r.entries[0].score, 0.7f);
+    EXPECT_EQ(r.entries[0].solid_angle_sr, 0.0f);
+    // Without it, the wall's box leads as before.
+    const RankedOccluders boxes =
+        rank_occluders(ctx, config, s.world, s.cells, s.occluders, figures, nullptr, &pvs);
+    ASSERT_GE(boxes.count(0), 1u);
+    EXPECT_LT(boxes.entries[0].box, uint32_t(s.occluders.size()));
+}
+
 // Verification's check of the ranked boxes (driver/verify_boxes.h): boxes inside the wall are never seen
 // into from the cell's eyes; a box across a 2 m crack in the wall (its two halves apart) is.
 TEST(Ranking, VerificationFindsARankedBoxThatSpansACrack) {

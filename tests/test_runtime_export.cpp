@@ -50,11 +50,17 @@ TEST(RuntimeExport, ARealBakeAnswersAsTheHdf5Loader) {
         const RandomWorld random = make_random_world(2, 0);
         BakeConfig config;
         config.cells.kind = kind;
+        config.ranking.polygons = kind == CellKind::kGrid;  // the turned walls' sides as polygon occluders
         config.verify.enabled = false;
         config.run.threads = 2;
         Context ctx = quiet_context();
         const BakeData bake = bake_world(ctx, config, random.world, "random.glb", "");
         ASSERT_GT(bake.cells.size(), 0u);
+        if (config.ranking.polygons) {
+            ASSERT_FALSE(bake.polygons.empty());
+            EXPECT_TRUE(std::any_of(bake.ranked.entries.begin(), bake.ranked.entries.end(),
+                                    [&](const RankedOccluder& e) { return e.box >= bake.occluders.size(); }));
+        }
         round_trip(bake, 13);
     }
 }
@@ -76,17 +82,19 @@ TEST(RuntimeExport, TheSampleWorldAnswersAsTheHdf5Loader) {
 }
 
 // What a game draws, against rays: random worlds baked with their ranked occluders (proven boxes of the
-// solid), exported; from random eyes in random cells' eye space, every object the culled walk leaves out of
-// the cell's PVS is checked with segments from the eye to points of its triangles (vertices pulled in a
-// hair, centroids and random points): none may reach one (a wrong cull). Not vacuous: some are culled.
+// solid, panels, and the turned walls' sides as polygon occluders), exported; from random eyes in random
+// cells' eye space, every object the culled walk leaves out of the cell's PVS is checked with segments from
+// the eye to points of its triangles (vertices pulled in a hair, centroids and random points): none may reach
+// one (a wrong cull). Not vacuous: some are culled.
 TEST(RuntimeExport, TheDrawnWalkCullsNothingARayReaches) {
-    uint64_t culled = 0, segments = 0, wrong = 0, frames = 0;
+    uint64_t culled = 0, segments = 0, wrong = 0, frames = 0, polygons = 0;
     for (const uint64_t seed : {3u, 5u}) {
         SCOPED_TRACE("world seed " + std::to_string(seed));
         const RandomWorld random = make_random_world(seed, 0);
         BakeConfig config;
         config.verify.enabled = false;
         config.run.threads = 2;
+        config.ranking.polygons = true;
         Context ctx = quiet_context();
         const World& w = random.world;
         const BakeData bake = bake_world(ctx, config, w, "random.glb", "");
@@ -113,6 +121,7 @@ TEST(RuntimeExport, TheDrawnWalkCullsNothingARayReaches) {
             if (!found) continue;
             ++frames;
             culler.begin_cell(level, cell, eye);
+            polygons += culler.c_culler().polygon_count;
             std::vector<uint32_t> listed, drawn;
             level.for_each_visible(cell, [&](uint32_t o) { listed.push_back(o); });
             level.for_each_drawn(cell, culler, [&](uint32_t o) { drawn.push_back(o); });
@@ -155,10 +164,12 @@ TEST(RuntimeExport, TheDrawnWalkCullsNothingARayReaches) {
             }
         }
     }
-    std::printf("drawn walks: %llu frames, %llu objects culled, %llu segments, %llu wrong\n",
-                (unsigned long long)frames, (unsigned long long)culled, (unsigned long long)segments,
-                (unsigned long long)wrong);
+    std::printf(
+        "drawn walks: %llu frames (%llu polygons given), %llu objects culled, %llu segments, %llu wrong\n",
+        (unsigned long long)frames, (unsigned long long)polygons, (unsigned long long)culled,
+        (unsigned long long)segments, (unsigned long long)wrong);
     EXPECT_GT(frames, 0u);
+    EXPECT_GT(polygons, 0u) << "the frames should use some polygon occluder";
     EXPECT_GT(culled, 0u) << "the ranked occluders should cull some object of the PVS";
     EXPECT_EQ(wrong, 0u);
 }

@@ -341,6 +341,13 @@ TEST(RuntimeOcclusion, CApiMirrorsTheCppApi) {
     EXPECT_EQ(pvsbake_culler_is_hidden(nullptr, fused), 0);
     pvsbake_culler_begin_frame(c, kEye, nullptr, 3);
     EXPECT_EQ(pvsbake_culler_is_hidden(c, fused), 0);
+    // A polygon: a slanted sheet across the view (4 m to 5 m ahead) hides the box behind it.
+    const float sheet[12] = {-5, 0, 4, 5, 0, 4, 5, 4, 5, -5, 4, 5};
+    const float plane[5] = {0.0f, -0.242535625f, 0.970142500f, 3.88057f, 0.001f};
+    EXPECT_EQ(pvsbake_culler_add_polygon(c, plane, sheet, 4), 1);
+    EXPECT_EQ(pvsbake_culler_classify(c, fused), PVSBAKE_CULL_FACES);
+    EXPECT_EQ(pvsbake_culler_add_polygon(c, plane, sheet, 2), 0);
+    EXPECT_EQ(pvsbake_culler_add_polygon(nullptr, plane, sheet, 4), 0);
     pvsbake_culler_begin_frame(nullptr, kEye, walls, 2);
     pvsbake_culler_free(c);
     pvsbake_culler_free(nullptr);

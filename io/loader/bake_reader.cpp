@@ -347,6 +347,67 @@ FilePvs read_pvs(const Reader& r, hid_t root, uint32_t objects, uint32_t cells, 
     return pvs;
 }
 
+namespace {
+
+// Format 1.7: the polygon occluders and the cells' ranked polygons (FileOccluders), checked.
+void read_polygons(const Reader& r, hid_t g, uint32_t cells, FileOccluders& o) {
+    const std::string where = "/occluders";
+    std::vector<int64_t> shape = {-1};
+    o.polygon_offsets =
+        r.numeric_dataset<uint32_t>(g, where, "polygon_offsets", H5T_NATIVE_UINT32, shape, H5T_INTEGER);
+    const int64_t polygons = shape[0] - 1;
+    std::vector<int64_t> corner_shape = {-1, 3};
+    o.polygon_corners =
+        r.numeric_dataset<float>(g, where, "polygon_corners", H5T_NATIVE_FLOAT, corner_shape, H5T_FLOAT);
+    o.polygon_planes =
+        r.numeric_dataset<float>(g, where, "polygon_planes", H5T_NATIVE_FLOAT, {polygons, 5}, H5T_FLOAT);
+    if (polygons < 0 || o.polygon_offsets[0] != 0 || int64_t(o.polygon_offsets.back()) != corner_shape[0])
+        r.fail(
+            "/occluders/polygon_offsets does not start at 0 and end at the rows of "
+            "/occluders/polygon_corners");
+    for (int64_t i = 0; i < polygons; ++i) {
+        const uint32_t n = o.polygon_offsets[size_t(i) + 1] - o.polygon_offsets[size_t(i)];
+        if (o.polygon_offsets[size_t(i) + 1] < o.polygon_offsets[size_t(i)] || n < 3 || n > 8)
+            r.fail(cat("/occluders/polygon_offsets: polygon ", i, " does not have 3 to 8 corners"));
+        const float* pl = &o.polygon_planes[5 * size_t(i)];
+        bool ok = pl[4] >= 0.0f && (pl[0] != 0.0f || pl[1] != 0.0f || pl[2] != 0.0f);
+        for (int k = 0; k < 5; ++k) ok = ok && std::isfinite(pl[k]);
+        if (!ok) r.fail(cat("/occluders/polygon_planes[", i, "] is not a finite plane with thickness >= 0"));
+    }
+    for (size_t k = 0; k < o.polygon_corners.size(); ++k)
+        if (!std::isfinite(o.polygon_corners[k]))
+            r.fail(cat("/occluders/polygon_corners[", k / 3, "] is not finite"));
+    o.ranked_polygon_offsets = r.numeric_dataset<uint32_t>(
+        g, where, "ranked_polygon_offsets", H5T_NATIVE_UINT32, {int64_t(cells) + 1}, H5T_INTEGER);
+    shape = {-1};
+    o.ranked_polygon =
+        r.numeric_dataset<uint32_t>(g, where, "ranked_polygon", H5T_NATIVE_UINT32, shape, H5T_INTEGER);
+    const int64_t m = shape[0];
+    o.ranked_polygon_rank =
+        r.numeric_dataset<uint32_t>(g, where, "ranked_polygon_rank", H5T_NATIVE_UINT32, {m}, H5T_INTEGER);
+    o.ranked_polygon_score =
+        r.numeric_dataset<float>(g, where, "ranked_polygon_score", H5T_NATIVE_FLOAT, {m}, H5T_FLOAT);
+    const std::vector<uint32_t>& off = o.ranked_polygon_offsets;
+    if (off[0] != 0 || int64_t(off.back()) != m)
+        r.fail(cat("/occluders/ranked_polygon_offsets does not start at 0 and end at ", m));
+    for (uint32_t c = 0; c < cells; ++c) {
+        if (off[c + 1] < off[c]) r.fail(cat("/occluders/ranked_polygon_offsets[", c + 1, "] decreases"));
+        const uint32_t total = off[c + 1] - off[c] + o.ranked_offsets[c + 1] - o.ranked_offsets[c];
+        for (uint32_t k = off[c]; k < off[c + 1]; ++k) {
+            if (int64_t(o.ranked_polygon[k]) >= polygons)
+                r.fail(cat("/occluders/ranked_polygon[", k, "] is not a polygon index below ", polygons));
+            if (!std::isfinite(o.ranked_polygon_score[k]) || o.ranked_polygon_score[k] < 0.0f)
+                r.fail(cat("/occluders/ranked_polygon_score[", k, "] is not a finite number >= 0"));
+            if (o.ranked_polygon_rank[k] >= total ||
+                (k > off[c] && o.ranked_polygon_rank[k] <= o.ranked_polygon_rank[k - 1]))
+                r.fail(cat("/occluders/ranked_polygon_rank[", k, "] is not a place in cell ", c,
+                           "'s list after the polygon before it"));
+        }
+    }
+}
+
+}  // namespace
+
 FileOccluders read_occluders(const Reader& r, hid_t root, uint32_t objects, uint32_t cells, bool want_boxes) {
     FileOccluders o;
     if (!r.has_link(root, "occluders")) return o;  // a bake made without occluders
@@ -453,6 +514,7 @@ FileOccluders read_occluders(const Reader& r, hid_t root, uint32_t objects, uint
             }
         }
     }
+    if (r.has_link(g.get(), "polygon_offsets")) read_polygons(r, g.get(), cells, o);
     return o;
 }
 

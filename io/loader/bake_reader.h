@@ -19,7 +19,7 @@ namespace pvsbake::detail {
 
 constexpr const char* kFormatName = "pvsbake";
 constexpr int kFormatMajor = 1;
-constexpr int kFormatMinor = 6;
+constexpr int kFormatMinor = 7;
 
 // The root attributes. Throws kNotBakeFile without format = "pvsbake", kVersionTooNew for a newer major.
 BakeInfo read_header(const Reader& r, hid_t root);
@@ -107,6 +107,13 @@ struct FileOccluders {
     std::vector<uint32_t> ranked_box;
     std::vector<float> ranked_score, ranked_solid_angle_sr, ranked_hidden_objects,
         ranked_hidden_triangle_share;
+    // 1.7: the polygon occluders (3 to 8 corners each) and the polygons each cell ranks, with their place in
+    // the cell's whole list (boxes and polygons); all empty in older files or without polygons.
+    std::vector<uint32_t> polygon_offsets;  // polygons + 1, into polygon_corners' corners
+    std::vector<float> polygon_corners;     // 3 floats a corner
+    std::vector<float> polygon_planes;      // 5 floats a polygon: normal, offset, thickness
+    std::vector<uint32_t> ranked_polygon_offsets, ranked_polygon, ranked_polygon_rank;
+    std::vector<float> ranked_polygon_score;
 };
 FileOccluders read_occluders(const Reader& r, hid_t root, uint32_t objects, uint32_t cells, bool want_boxes);
 

@@ -206,6 +206,13 @@ private:
         b.ranked_hidden_objects_ = std::move(f.ranked_hidden_objects);
         b.ranked_hidden_triangle_share_ = std::move(f.ranked_hidden_triangle_share);
         b.ranked_offset_.assign(std::move(f.ranked_offsets));
+        b.polygon_offset_ = std::move(f.polygon_offsets);
+        b.polygon_corners_ = std::move(f.polygon_corners);
+        b.polygon_planes_ = std::move(f.polygon_planes);
+        b.ranked_polygon_offset_ = std::move(f.ranked_polygon_offsets);
+        b.ranked_polygon_ = std::move(f.ranked_polygon);
+        b.ranked_polygon_place_ = std::move(f.ranked_polygon_rank);
+        b.ranked_polygon_score_ = std::move(f.ranked_polygon_score);
     }
 
     template <class T>
@@ -225,7 +232,9 @@ private:
                b.row_offset_.bytes() + b.cell_row_.bytes() + b.ranked_offset_.bytes() +
                bytes(b.ranked_boxes_) + bytes(b.ranked_box_) + bytes(b.ranked_score_) +
                bytes(b.ranked_solid_angle_sr_) + bytes(b.ranked_hidden_objects_) +
-               bytes(b.ranked_hidden_triangle_share_);
+               bytes(b.ranked_hidden_triangle_share_) + bytes(b.polygon_offset_) +
+               bytes(b.ranked_polygon_offset_) + bytes(b.ranked_polygon_) + bytes(b.ranked_polygon_place_) +
+               bytes(b.polygon_corners_) + bytes(b.polygon_planes_) + bytes(b.ranked_polygon_score_);
     }
 };
 
@@ -404,6 +413,22 @@ uint32_t Bake::occluder_boxes(uint32_t c, Box* out, uint32_t capacity) const noe
     const uint32_t n = std::min(occluder_count(c), capacity);
     for (uint32_t k = 0; k < n; ++k) out[k] = ranked_boxes_[ranked_box_[ranked_offset_[c] + k]];
     return n;
+}
+
+uint32_t Bake::occluder_polygon_count(uint32_t c) const noexcept {
+    if (size_t(c) + 1 >= ranked_polygon_offset_.size()) return 0;
+    return ranked_polygon_offset_[size_t(c) + 1] - ranked_polygon_offset_[c];
+}
+
+bool Bake::occluder_polygon(uint32_t c, uint32_t k, RankedPolygon& out) const noexcept {
+    if (k >= occluder_polygon_count(c)) return false;
+    const size_t e = size_t(ranked_polygon_offset_[c]) + k, p = ranked_polygon_[e];
+    out.plane = polygon_planes_.data() + 5 * p;
+    out.corners = polygon_corners_.data() + 3 * size_t(polygon_offset_[p]);
+    out.count = polygon_offset_[p + 1] - polygon_offset_[p];
+    out.place = ranked_polygon_place_[e];
+    out.score = ranked_polygon_score_[e];
+    return true;
 }
 
 const double* Bake::figure(std::string_view name) const noexcept {

@@ -421,8 +421,15 @@ OcclusionCuller::OcclusionCuller(int resolution) noexcept {
 uint32_t OcclusionCuller::begin_cell(const Bake& bake, uint32_t c, const float eye[3],
                                      size_t max_occluders) noexcept {
     Box boxes[kMaxOccluders];
-    const uint32_t n = bake.occluder_boxes(c, boxes, uint32_t(std::min(max_occluders, kMaxOccluders)));
+    const uint32_t limit = uint32_t(std::min(max_occluders, kMaxOccluders));
+    const uint32_t polygons = bake.occluder_polygon_count(c);
+    uint32_t first = 0;  // the cell's polygons at places below the limit
+    RankedPolygon p;
+    while (first < polygons && bake.occluder_polygon(c, first, p) && p.place < limit) ++first;
+    uint32_t n = bake.occluder_boxes(c, boxes, limit - first);
     begin_frame(eye, boxes, n);
+    for (uint32_t k = 0; k < first; ++k)
+        if (bake.occluder_polygon(c, k, p)) n += add_polygon(p.plane, p.corners, p.count) ? 1 : 0;
     return n;
 }
 

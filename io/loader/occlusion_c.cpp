@@ -46,6 +46,11 @@ void pvsbake_culler_begin_frame(pvsbake_culler* culler, const float eye[3], cons
                                6 * sizeof(float));
 }
 
+int pvsbake_culler_add_polygon(pvsbake_culler* culler, const float plane[5], const float* corners,
+                               uint32_t count) {
+    return culler != nullptr && culler->culler.add_polygon(plane, corners, count) ? 1 : 0;
+}
+
 int pvsbake_culler_is_hidden(const pvsbake_culler* culler, const float box[6]) {
     return pvsbake_culler_classify(culler, box) != PVSBAKE_CULL_VISIBLE ? 1 : 0;
 }

@@ -1,10 +1,11 @@
 // SPDX-License-Identifier: MIT
 /* libFuzzer target of the C99 runtime (runtime/pvsr.h): any bytes, with the checksum made right (so that the
  * mutations reach the structural checks), are refused by pvsr_open() or every query of the level stays inside
- * the bytes and in range; and the culler of moving objects, given the bytes as floats (an eye, occluder boxes,
- * boxes to test: any values, NaN and infinities too), stays in its memory. Built with Clang, -fsanitize=fuzzer,address,undefined (tests/CMakeLists.txt); run
- *   fuzz_runtime_file -runs=1000000 CORPUS_DIR SEEDS_DIR
- * with the seeds make_runtime_seeds writes. docs/RESULTS.md has the runs. */
+ * the bytes and in range (the cells' occluders, boxes and polygons, given to a culler too); and the culler of
+ * moving objects, given the bytes as floats (an eye, occluder boxes, polygons, boxes to test: any values, NaN
+ * and infinities too), stays in its memory. Built with Clang, -fsanitize=fuzzer,address,undefined
+ * (tests/CMakeLists.txt); run fuzz_runtime_file -runs=1000000 CORPUS_DIR SEEDS_DIR with the seeds
+ * make_runtime_seeds writes. docs/RESULTS.md has the runs. */
 #include "pvsr.h"
 
 #include <stdint.h>
@@ -39,6 +40,20 @@ int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
             (void)pvsr_is_visible(&level, c, objects / 2);
             (void)pvsr_cell_bounds(&level, c, box);
             for (k = 0; k < pvsr_occluder_count(&level, c) && k < 64; ++k) (void)pvsr_occluder(&level, c, k, &o);
+            for (k = 0; k < pvsr_occluder_polygon_count(&level, c) && k < 64; ++k) {
+                float plane[5], corners[3 * PVSR_POLYGON_MAX_CORNERS];
+                uint32_t place;
+                if (pvsr_occluder_polygon(&level, c, k, plane, corners, PVSR_POLYGON_MAX_CORNERS, &place) >
+                    PVSR_POLYGON_MAX_CORNERS)
+                    abort(); /* a polygon with more corners than checked */
+            }
+            if (c < 64) { /* the cell's occluders, boxes and polygons, in the culler */
+                static pvsr_culler cell_culler;
+                const float eye[3] = {box[0], box[1], box[2]};
+                pvsr_culler_init(&cell_culler, 0, NULL, 0);
+                (void)pvsr_culler_begin_cell(&cell_culler, &level, c, eye, PVSR_CULLER_MAX_OCCLUDERS);
+                (void)pvsr_culler_classify(&cell_culler, box);
+            }
         }
         for (k = 0; k < objects && k < 4096; ++k) (void)strlen(pvsr_object_name(&level, k));
         (void)strlen(pvsr_string(&level, "mode"));
@@ -63,6 +78,8 @@ int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
             if (floats >= 3) {
                 boxes = (floats - 3) / 6;
                 pvsr_culler_begin_frame(&culler, f, f + 3, boxes < 12 ? boxes : 12);
+                for (q = 0; q < 4 && 3 + 29 * (q + 1) <= floats; ++q) /* polygons: plane, corners */
+                    (void)pvsr_culler_add_polygon(&culler, f + 3 + 29 * q, f + 8 + 29 * q, 3 + (uint32_t)q);
                 for (q = 0; q < 16 && 3 + 6 * (q + 1) <= floats; ++q) (void)pvsr_culler_classify(&culler, f + 3 + 6 * q);
             }
             free(f);

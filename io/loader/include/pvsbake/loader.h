@@ -71,6 +71,16 @@ struct RankedOccluder {
     float hidden_triangle_share;  // mean share of the world's triangles wholly in its shadow
 };
 
+// One ranked POLYGON occluder of a cell (format 1.7; docs/FORMAT.md, "/occluders"): a slanted panel of the
+// opaque surface for the run-time culler's faces test (OcclusionCuller::add_polygon takes plane and corners).
+struct RankedPolygon {
+    const float* plane = nullptr;    // normal x, y, z, offset, thickness (in the Bake's memory)
+    const float* corners = nullptr;  // `count` corners of 3 floats, convex, counter-clockwise from +normal
+    uint32_t count = 0;              // 3 to 8
+    uint32_t place = 0;              // its place in the cell's whole list of ranked occluders (0 = the best)
+    float score = 0.0f;              // the documented ranking score, higher is better
+};
+
 enum class CellKind : int32_t { kGrid = 0, kOctree = 1 };
 
 // What a bake is: the root attributes of the file (docs/FORMAT.md).
@@ -362,6 +372,12 @@ public:
     // The boxes of the best min(occluder_count(c), capacity) occluders of cell c into out, best first (as
     // OcclusionCuller::begin_frame takes them); returns how many were written.
     uint32_t occluder_boxes(uint32_t c, Box* out, uint32_t capacity) const noexcept;
+    // Format 1.7: the cell's ranked polygon occluders, best first. They rank among the boxes: the cell's
+    // whole list holds its occluder_count(c) boxes and its occluder_polygon_count(c) polygons, each polygon
+    // at its `place`, the boxes in order at the other places. Older files: none.
+    uint32_t occluder_polygon_count(uint32_t c) const noexcept;
+    // The polygon of rank k among the cell's polygons; false (out untouched) out of range.
+    bool occluder_polygon(uint32_t c, uint32_t k, RankedPolygon& out) const noexcept;
 
     // ---- What the bake is
     const BakeInfo& info() const { return info_; }
@@ -463,6 +479,11 @@ private:
     std::vector<uint32_t> ranked_box_;
     std::vector<float> ranked_score_, ranked_solid_angle_sr_, ranked_hidden_objects_,
         ranked_hidden_triangle_share_;
+    // Ranked polygons (1.7): cell c has entries ranked_polygon_offset_[c] .. [c + 1]; entry k is polygon
+    // ranked_polygon_[k] (corners polygon_offset_[p] .. [p + 1] of polygon_corners_, plane 5 floats at
+    // polygon_planes_[5 p]) at place ranked_polygon_place_[k].
+    std::vector<uint32_t> polygon_offset_, ranked_polygon_offset_, ranked_polygon_, ranked_polygon_place_;
+    std::vector<float> polygon_corners_, polygon_planes_, ranked_polygon_score_;
     // The PVS: row code (plus 8 bytes of padding), where each distinct row starts, and each cell's row.
     std::vector<uint8_t> code_;
     detail::IndexArray row_offset_;

@@ -42,8 +42,13 @@ PVSBAKE_API void pvsbake_culler_free(pvsbake_culler* culler);
 /* Prepares a frame: eye float[3] and `count` occluder boxes (float[6] each, count * 6 floats). */
 PVSBAKE_API void pvsbake_culler_begin_frame(pvsbake_culler* culler, const float eye[3], const float* boxes,
                                             size_t count);
-/* Prepares a frame with the cell's best min(its count, max_occluders, 64) ranked occluders of the bake;
- * returns how many were given (a NULL bake: none, nothing is culled). */
+/* Adds a convex polygon occluder to this frame, after begin_frame: plane = normal x, y, z, offset, thickness;
+ * `count` corners of 3 floats (OcclusionCuller::add_polygon says what it promises). 1 when added, 0 when
+ * refused. */
+PVSBAKE_API int pvsbake_culler_add_polygon(pvsbake_culler* culler, const float plane[5], const float* corners,
+                                           uint32_t count);
+/* Prepares a frame with the best min(max_occluders, 64) of the cell's ranked occluders of the bake, boxes and
+ * polygons at their places; returns how many were given (a NULL bake: none, nothing is culled). */
 PVSBAKE_API uint32_t pvsbake_culler_begin_cell(pvsbake_culler* culler, const pvsbake_bake* bake,
                                                uint32_t cell, const float eye[3], size_t max_occluders);
 /* What a game draws of the cell from this frame's eye: the cell's PVS less the objects whose bounds the
