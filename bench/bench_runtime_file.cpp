@@ -3,6 +3,7 @@
 // HDF5 loader (pvsbake/loader.h), on bakes.
 //
 //   bench_runtime_file BAKE.h5 [BAKE.h5 ...] [--repeats R] [--queries Q] [--max-chain N] [--merge-cells K]
+//                      [--row-order blocks|bake]
 //
 // For each bake: the runtime file's size and its sections' sizes, against the HDF5 file's size and what the
 // HDF5 loader holds in memory (its footprint); the time of pvsr_open (checksum and every check) on the
@@ -62,7 +63,7 @@ struct Point {
 };
 
 nlohmann::ordered_json measure(const std::string& bake_path, int repeats, int queries, uint32_t max_chain,
-                               uint32_t merge_cells) {
+                               uint32_t merge_cells, bool block_order) {
     nlohmann::ordered_json j;
     j["bake"] = bake_path;
     j["bake_file_bytes"] = std::filesystem::file_size(bake_path);
@@ -70,7 +71,9 @@ nlohmann::ordered_json measure(const std::string& bake_path, int repeats, int qu
     pvs::RuntimeFileOptions options;
     options.max_chain = max_chain;
     options.merge_cells = merge_cells;
+    options.block_order = block_order;
     j["max_chain"] = max_chain;
+    j["row_order"] = block_order ? "blocks" : "bake";
     j["merge_cells"] = merge_cells;
     const std::string bytes = pvs::runtime_file_bytes(bake_path, options, &figures);
     j["runtime_file_bytes"] = figures.file_bytes;
@@ -214,6 +217,7 @@ int main(int argc, char** argv) {
     std::vector<std::string> bakes;
     int repeats = 11, queries = 2000;
     uint32_t max_chain = 4, merge_cells = 1;
+    bool block_order = true;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         if (a == "--repeats" && i + 1 < argc) {
@@ -222,17 +226,28 @@ int main(int argc, char** argv) {
             merge_cells = uint32_t(std::max(1, std::atoi(argv[++i])));
         } else if (a == "--max-chain" && i + 1 < argc) {
             max_chain = uint32_t(std::max(1, std::atoi(argv[++i])));
+        } else if (a == "--row-order" && i + 1 < argc) {
+            const std::string v = argv[++i];
+            if (v != "blocks" && v != "bake") {
+                std::fprintf(stderr, "bench_runtime_file: --row-order %s: wants blocks or bake\n", v.c_str());
+                return 2;
+            }
+            block_order = v == "blocks";
         } else if (a == "--queries" && i + 1 < argc) {
             queries = std::max(1, std::atoi(argv[++i]));
         } else if (a == "--help" || a.rfind("--", 0) == 0) {
-            std::fprintf(stderr, "usage: bench_runtime_file BAKE.h5 [BAKE.h5 ...] [--repeats R] [--queries Q] [--max-chain N] [--merge-cells K]\n");
+            std::fprintf(stderr,
+                         "usage: bench_runtime_file BAKE.h5 [BAKE.h5 ...] [--repeats R] [--queries Q] "
+                         "[--max-chain N] [--merge-cells K] [--row-order blocks|bake]\n");
             return a == "--help" ? 0 : 2;
         } else {
             bakes.push_back(a);
         }
     }
     if (bakes.empty()) {
-        std::fprintf(stderr, "usage: bench_runtime_file BAKE.h5 [BAKE.h5 ...] [--repeats R] [--queries Q] [--max-chain N] [--merge-cells K]\n");
+        std::fprintf(stderr,
+                     "usage: bench_runtime_file BAKE.h5 [BAKE.h5 ...] [--repeats R] [--queries Q] "
+                     "[--max-chain N] [--merge-cells K] [--row-order blocks|bake]\n");
         return 2;
     }
     nlohmann::ordered_json out;
@@ -241,7 +256,7 @@ int main(int argc, char** argv) {
     out["queries"] = queries;
     for (const std::string& b : bakes) {
         try {
-            out["bakes"].push_back(measure(b, repeats, queries, max_chain, merge_cells));
+            out["bakes"].push_back(measure(b, repeats, queries, max_chain, merge_cells, block_order));
         } catch (const std::exception& e) {
             std::fprintf(stderr, "%s: %s\n", b.c_str(), e.what());
             return 2;

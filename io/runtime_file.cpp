@@ -15,6 +15,7 @@
 #include <xxhash.h>
 
 #include <algorithm>
+#include <array>
 #include <cstring>
 #include <limits>
 #include <unordered_map>
@@ -292,8 +293,66 @@ std::string assemble(const std::string& path, Bake& b, const RuntimeFileOptions&
         sections.push_back(std::move(s));
     }
     // CROW, ROFF, CODE (and the padding the decoders read into): the rows coded again, each against the
-    // cheapest of its cell's earlier neighbours along -x, -y and -z (a grid) and the rows before it, in chains
-    // of at most PVSR_MAX_CHAIN rows (2 past the runtime's stack bit set: PVSR_STACK_OBJECTS).
+    // cheapest of its cell's earlier neighbours (a grid) and the rows before it, in chains of at most
+    // PVSR_MAX_CHAIN rows (2 past the runtime's stack bit set: PVSR_STACK_OBJECTS). On a grid whose cells are
+    // its grid boxes the rows are put in BLOCK ORDER first: blocks of kRowBlock^3 grid positions in turn, and
+    // in each the positions in breadth-first order from one near its centre, so that every cell but the first
+    // of a block has a neighbour one step nearer that centre before it, and chains need not restart along a
+    // line (docs/FORMAT.md, "The rows' code").
+    if (!cell_grid.empty() && options.block_order && b.pvs.row_bytes > 0) {
+        const int32_t* d = b.cells.dims;
+        const uint32_t bytes = b.pvs.row_bytes;
+        constexpr int32_t kRowBlock = 4;
+        std::vector<uint32_t> new_row(size_t(b.pvs.unique_rows), UINT32_MAX);
+        std::vector<uint8_t> rows;
+        rows.reserve(b.pvs.rows.size());
+        std::vector<std::array<int32_t, 3>> order;  // positions of a block, breadth first from (1, 1, 1)
+        {
+            std::vector<int32_t> seen(size_t(kRowBlock * kRowBlock * kRowBlock), 0);
+            order.push_back({1, 1, 1});
+            seen[size_t(1 + kRowBlock * (1 + kRowBlock))] = 1;
+            for (size_t i = 0; i < order.size(); ++i) {
+                for (int a = 0; a < 3; ++a) {
+                    for (const int32_t step : {-1, 1}) {
+                        std::array<int32_t, 3> q = order[i];
+                        q[size_t(a)] += step;
+                        if (q[size_t(a)] < 0 || q[size_t(a)] >= kRowBlock) continue;
+                        int32_t& s = seen[size_t(q[0] + kRowBlock * (q[1] + kRowBlock * q[2]))];
+                        if (s) continue;
+                        s = 1;
+                        order.push_back(q);
+                    }
+                }
+            }
+        }
+        for (int32_t bz = 0; bz < d[2]; bz += kRowBlock) {
+            for (int32_t by = 0; by < d[1]; by += kRowBlock) {
+                for (int32_t bx = 0; bx < d[0]; bx += kRowBlock) {
+                    for (const std::array<int32_t, 3>& o : order) {
+                        const int32_t x = bx + o[0], y = by + o[1], z = bz + o[2];
+                        if (x >= d[0] || y >= d[1] || z >= d[2]) continue;
+                        const int32_t c =
+                            b.cells.grid_to_cell[size_t(x) +
+                                                 size_t(d[0]) * (size_t(y) + size_t(d[1]) * size_t(z))];
+                        if (c < 0) continue;
+                        const uint32_t r = b.pvs.cell_row[size_t(c)];
+                        if (new_row[r] != UINT32_MAX) continue;
+                        new_row[r] = uint32_t(rows.size() / bytes);
+                        rows.insert(rows.end(), b.pvs.rows.begin() + std::ptrdiff_t(size_t(r) * bytes),
+                                    b.pvs.rows.begin() + std::ptrdiff_t(size_t(r + 1) * bytes));
+                    }
+                }
+            }
+        }
+        for (uint64_t r = 0; r < b.pvs.unique_rows; ++r) {  // rows of no grid position (none on such a grid)
+            if (new_row[size_t(r)] != UINT32_MAX) continue;
+            new_row[size_t(r)] = uint32_t(rows.size() / bytes);
+            rows.insert(rows.end(), b.pvs.rows.begin() + std::ptrdiff_t(size_t(r) * bytes),
+                        b.pvs.rows.begin() + std::ptrdiff_t(size_t(r + 1) * bytes));
+        }
+        for (uint32_t& r : b.pvs.cell_row) r = new_row[r];
+        b.pvs.rows = std::move(rows);
+    }
     {
         std::vector<uint64_t> first_cell(size_t(b.pvs.unique_rows), UINT64_MAX);
         for (uint32_t c = 0; c < cells; ++c) first_cell[b.pvs.cell_row[c]] = std::min<uint64_t>(first_cell[b.pvs.cell_row[c]], c);
@@ -304,10 +363,12 @@ std::string assemble(const std::string& path, Bake& b, const RuntimeFileOptions&
             const int64_t at[3] = {int64_t(g % uint32_t(d[0])), int64_t(g / uint32_t(d[0]) % uint32_t(d[1])),
                                    int64_t(g / (uint32_t(d[0]) * uint32_t(d[1])))};
             const int64_t stride[3] = {1, d[0], int64_t(d[0]) * d[1]};
-            for (int a = 0; a < 3; ++a) {
-                if (at[a] == 0) continue;
-                const int32_t n = b.cells.grid_to_cell[size_t(int64_t(g) - stride[a])];
-                if (n >= 0) out.push_back(b.pvs.cell_row[size_t(n)]);
+            for (int a = 0; a < 3; ++a) {  // the six neighbours (the encoder keeps the earlier rows)
+                for (const int64_t step : {-1, 1}) {
+                    if (at[a] + step < 0 || at[a] + step >= d[a]) continue;
+                    const int32_t n = b.cells.grid_to_cell[size_t(int64_t(g) + step * stride[a])];
+                    if (n >= 0) out.push_back(b.pvs.cell_row[size_t(n)]);
+                }
             }
         };
         const uint32_t max_chain = std::clamp<uint32_t>(options.max_chain, 1, objects <= PVSR_STACK_OBJECTS ? PVSR_MAX_CHAIN : 2);

@@ -25,6 +25,9 @@ struct RuntimeFileOptions {
     // 1: every cell keeps its row. K > 1 (a grid bake): each cell lists what its block of K x K x K cells
     // lists (the union of their rows): fewer distinct rows, a larger PVS, still conservative.
     uint32_t merge_cells = 1;
+    // On a grid whose cells are its grid boxes, the rows in block order (io/runtime_file.cpp) before they are
+    // coded: fewer key rows. False: the bake's order (measurement).
+    bool block_order = true;
 };
 
 // The runtime file of the bake file at bake_path, as bytes. Throws pvs::Error (bad input) naming the file

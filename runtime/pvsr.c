@@ -1591,7 +1591,7 @@ static int hidden_by_depth_cube(const pvsr_culler* c, const float box[6]) {
  * directions the face covers (hidden) or one fragment has passed every face (visible). Directions are
  * central projections along one axis p on which the whole box lies ahead of the eye: u = x[U] / d,
  * v = x[V] / d with d = sign * x[p] > 0 (everything relative to the eye). */
-#define FUSE_MAX_VERTS 16     /* of a fragment's polygon; more: give up (visible) */
+#define FUSE_MAX_VERTS 12     /* of a fragment's polygon; more: give up (visible) */
 #define FUSE_MAX_FACES 96     /* faces a box is tested against (the nearest first), polygons among them */
 #define FUSE_MAX_FRAGMENTS 32 /* fragments pending; more: give up (visible) */
 #define FUSE_EPS 1e-12        /* relative: a covered region shrunk, a box's directions widened */
@@ -1633,26 +1633,35 @@ static double widen(double x, int up) {
     return up ? x + m : x - m;
 }
 
-/* Keeps the part of `in` where a * x + b * y <= w; 0 when the result would have too many vertices. */
-static int clip_poly(const fuse_poly* in, double a, double b, double w, fuse_poly* out) {
-    int i;
-    out->n = 0;
-    for (i = 0; i < in->n; ++i) {
-        const int j = (i + 1) % in->n;
-        const double si = a * in->x[i] + b * in->y[i] - w, sj = a * in->x[j] + b * in->y[j] - w;
+/* Keeps the part of the polygon (ix, iy, n) where a * x + b * y <= w, into (ox, oy); its vertex count, or -1
+ * when it would have more than cap. */
+static int clip_arrays(const double* ix, const double* iy, int n, double a, double b, double w, double* ox,
+                       double* oy, int cap) {
+    int i, m = 0;
+    for (i = 0; i < n; ++i) {
+        const int j = (i + 1) % n;
+        const double si = a * ix[i] + b * iy[i] - w, sj = a * ix[j] + b * iy[j] - w;
         if (si <= 0.0) {
-            if (out->n == FUSE_MAX_VERTS) return 0;
-            out->x[out->n] = in->x[i];
-            out->y[out->n++] = in->y[i];
+            if (m == cap) return -1;
+            ox[m] = ix[i];
+            oy[m++] = iy[i];
         }
         if ((si < 0.0 && sj > 0.0) || (si > 0.0 && sj < 0.0)) {
             const double t = si / (si - sj);
-            if (out->n == FUSE_MAX_VERTS) return 0;
-            out->x[out->n] = in->x[i] + t * (in->x[j] - in->x[i]);
-            out->y[out->n++] = in->y[i] + t * (in->y[j] - in->y[i]);
+            if (m == cap) return -1;
+            ox[m] = ix[i] + t * (ix[j] - ix[i]);
+            oy[m++] = iy[i] + t * (iy[j] - iy[i]);
         }
     }
-    return 1;
+    return m;
+}
+
+/* Keeps the part of `in` where a * x + b * y <= w; 0 when the result would have too many vertices. */
+static int clip_poly(const fuse_poly* in, double a, double b, double w, fuse_poly* out) {
+    out->n = clip_arrays(in->x, in->y, in->n, a, b, w, out->x, out->y, FUSE_MAX_VERTS);
+    if (out->n >= 0) return 1;
+    out->n = 0;
+    return 0;
 }
 
 static void poly_bounds(const double* x, const double* y, int n, double lo[2], double hi[2]) {
@@ -1723,8 +1732,9 @@ static int project_points(const fuse_frame* f, const double (*c)[3], int n, doub
     }
     if (m < 3) return 0;
     for (i = 0; i < m; ++i) {
-        x[i] = u[i] / d[i];
-        y[i] = v[i] / d[i];
+        const double inv = 1.0 / d[i];
+        x[i] = u[i] * inv;
+        y[i] = v[i] * inv;
     }
     for (i = 0; i < m; ++i) {
         const int j = (i + 1) % m;
@@ -1774,8 +1784,8 @@ static int project_face(const fuse_frame* f, const pvsr_culler_face* face, const
 static int project_polygon(const fuse_frame* f, const pvsr_culler_polygon* pg, double* x, double* y,
                            fuse_face* out) {
     double s[2][PVSR_POLYGON_MAX_CORNERS][3], px[2][FUSE_PROJ_VERTS], py[2][FUSE_PROJ_VERTS];
-    int n[2], h, i, k, a;
-    fuse_poly cur, next;
+    double cx[2][FUSE_POLY_VERTS], cy[2][FUSE_POLY_VERTS];
+    int n[2], h, i, k, a, m, cur = 0;
     for (h = 0; h < 2; ++h) {
         const double w = h == 0 ? pg->near_w : pg->far_w;
         for (i = 0; i < pg->count; ++i) {
@@ -1785,22 +1795,23 @@ static int project_polygon(const fuse_frame* f, const pvsr_culler_polygon* pg, d
         n[h] = project_points(f, (const double(*)[3])s[h], pg->count, px[h], py[h]);
         if (n[h] == 0) return 0;
     }
-    cur.n = n[0];
-    memcpy(cur.x, px[0], (size_t)n[0] * sizeof(double));
-    memcpy(cur.y, py[0], (size_t)n[0] * sizeof(double));
-    for (k = 0; k < n[1] && cur.n >= 3; ++k) { /* left of every edge of the far projection */
+    m = n[0];
+    memcpy(cx[0], px[0], (size_t)m * sizeof(double));
+    memcpy(cy[0], py[0], (size_t)m * sizeof(double));
+    for (k = 0; k < n[1] && m >= 3; ++k) { /* left of every edge of the far projection */
         const int k1 = (k + 1) % n[1];
         const double dx = px[1][k1] - px[1][k], dy = py[1][k1] - py[1][k];
-        if (!clip_poly(&cur, dy, -dx, dy * px[1][k] - dx * py[1][k], &next)) return 0;
-        cur = next;
+        m = clip_arrays(cx[cur], cy[cur], m, dy, -dx, dy * px[1][k] - dx * py[1][k], cx[1 - cur], cy[1 - cur],
+                        FUSE_POLY_VERTS);
+        cur = 1 - cur;
     }
-    if (cur.n < 3) return 0;
-    memcpy(x, cur.x, (size_t)cur.n * sizeof(double));
-    memcpy(y, cur.y, (size_t)cur.n * sizeof(double));
+    if (m < 3) return 0;
+    memcpy(x, cx[cur], (size_t)m * sizeof(double));
+    memcpy(y, cy[cur], (size_t)m * sizeof(double));
     out->x = x;
     out->y = y;
-    out->count = cur.n;
-    poly_bounds(x, y, cur.n, out->lo, out->hi);
+    out->count = m;
+    poly_bounds(x, y, m, out->lo, out->hi);
     memcpy(out->n, pg->n, sizeof out->n);
     out->w = pg->far_w + pg->delta;
     out->axis = pg->axis;
@@ -1867,16 +1878,17 @@ static int push_outside(fuse_fragment* stack, int* top, const double b[6], const
 static int point_behind_a_face(const pvsr_culler* c, const double x[3]) {
     size_t k;
     int i;
-    for (k = 0; k < c->face_count; ++k) {
+    for (k = 0; k < c->face_count; ++k) { /* the crossing p x[a1] / x[a], p x[a2] / x[a], times |x[a]| */
         const pvsr_culler_face* f = &c->faces[k];
-        const int a = f->axis, a1 = (a + 1) % 3, a2 = (a + 2) % 3;
-        const double plane = f->plane - c->eye_d[a];
-        double t, y1, y2;
-        if (f->above ? !(x[a] > plane) : !(x[a] < plane)) continue;
-        t = plane / x[a];
-        y1 = t * x[a1] + c->eye_d[a1];
-        y2 = t * x[a2] + c->eye_d[a2];
-        if (y1 >= f->lo[0] && y1 <= f->hi[0] && y2 >= f->lo[1] && y2 <= f->hi[1]) return 1;
+        const double p = f->rel_plane, xa = x[f->axis];
+        double m, u1, u2;
+        if (f->above ? !(xa > p) : !(xa < p)) continue;
+        m = f->above ? xa : -xa; /* p and x[a] have one sign: the eye is off the plane, x beyond it */
+        u1 = (f->above ? p : -p) * x[f->axis1];
+        u2 = (f->above ? p : -p) * x[f->axis2];
+        if (u1 >= f->rel_lo[0] * m && u1 <= f->rel_hi[0] * m && u2 >= f->rel_lo[1] * m &&
+            u2 <= f->rel_hi[1] * m)
+            return 1;
     }
     for (k = 0; k < c->polygon_count; ++k) {
         const pvsr_culler_polygon* pg = &c->polygons[k];
@@ -2059,6 +2071,13 @@ static void add_faces(pvsr_culler* c, const pvsr_culler_candidate* cand) {
         f->hi[0] = (double)cand->box[3 + a1] + grow;
         f->lo[1] = (double)cand->box[a2] - grow;
         f->hi[1] = (double)cand->box[3 + a2] + grow;
+        f->axis1 = a1;
+        f->axis2 = a2;
+        f->rel_plane = f->plane - c->eye_d[a];
+        f->rel_lo[0] = f->lo[0] - c->eye_d[a1];
+        f->rel_hi[0] = f->hi[0] - c->eye_d[a1];
+        f->rel_lo[1] = f->lo[1] - c->eye_d[a2];
+        f->rel_hi[1] = f->hi[1] - c->eye_d[a2];
         ++c->face_count;
     }
 }

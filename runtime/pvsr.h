@@ -257,7 +257,9 @@ typedef struct pvsr_culler_candidate {
 typedef struct pvsr_culler_face {
     double plane, lo[2], hi[2]; /* x[axis] = plane; the rectangle on axes (axis + 1) % 3, (axis + 2) % 3 */
     double delta;
+    double rel_plane, rel_lo[2], rel_hi[2]; /* the same less the eye */
     int axis, above; /* above: the eye is below the plane, and what lies above it is hidden */
+    int axis1, axis2; /* (axis + 1) % 3, (axis + 2) % 3 */
 } pvsr_culler_face;
 
 /* A convex polygon occluder as the culler keeps it (pvsr_culler_add_polygon): the slab, its normal turned

@@ -183,25 +183,35 @@ inline double widen(double x, bool up) {
     return up ? x + m : x - m;
 }
 
-// Keeps the part of `in` where a * x + b * y <= w; false when the result would have too many vertices.
-bool clip_poly(const FusePoly& in, double a, double b, double w, FusePoly& out) {
-    out.n = 0;
-    for (int i = 0; i < in.n; ++i) {
-        const int j = (i + 1) % in.n;
-        const double si = a * in.x[i] + b * in.y[i] - w, sj = a * in.x[j] + b * in.y[j] - w;
+// Keeps the part of the polygon (ix, iy, n) where a * x + b * y <= w, into (ox, oy); its vertex count, or -1
+// when it would have more than cap.
+int clip_arrays(const double* ix, const double* iy, int n, double a, double b, double w, double* ox,
+                double* oy, int cap) {
+    int m = 0;
+    for (int i = 0; i < n; ++i) {
+        const int j = (i + 1) % n;
+        const double si = a * ix[i] + b * iy[i] - w, sj = a * ix[j] + b * iy[j] - w;
         if (si <= 0.0) {
-            if (out.n == kFuseMaxVerts) return false;
-            out.x[out.n] = in.x[i];
-            out.y[out.n++] = in.y[i];
+            if (m == cap) return -1;
+            ox[m] = ix[i];
+            oy[m++] = iy[i];
         }
         if ((si < 0.0 && sj > 0.0) || (si > 0.0 && sj < 0.0)) {
             const double t = si / (si - sj);
-            if (out.n == kFuseMaxVerts) return false;
-            out.x[out.n] = in.x[i] + t * (in.x[j] - in.x[i]);
-            out.y[out.n++] = in.y[i] + t * (in.y[j] - in.y[i]);
+            if (m == cap) return -1;
+            ox[m] = ix[i] + t * (ix[j] - ix[i]);
+            oy[m++] = iy[i] + t * (iy[j] - iy[i]);
         }
     }
-    return true;
+    return m;
+}
+
+// Keeps the part of `in` where a * x + b * y <= w; false when the result would have too many vertices.
+bool clip_poly(const FusePoly& in, double a, double b, double w, FusePoly& out) {
+    out.n = clip_arrays(in.x, in.y, in.n, a, b, w, out.x, out.y, kFuseMaxVerts);
+    if (out.n >= 0) return true;
+    out.n = 0;
+    return false;
 }
 
 void poly_bounds(const double* x, const double* y, int n, double lo[2], double hi[2]) {
@@ -305,8 +315,9 @@ int project_points(const FuseFrame& f, const double (*c)[3], int n, double* x, d
     }
     if (m < 3) return 0;
     for (int i = 0; i < m; ++i) {
-        x[i] = u[i] / d[i];
-        y[i] = v[i] / d[i];
+        const double inv = 1.0 / d[i];
+        x[i] = u[i] * inv;
+        y[i] = v[i] * inv;
     }
     for (int i = 0; i < m; ++i) {
         const int j = (i + 1) % m;
@@ -372,23 +383,24 @@ bool project_polygon(const FuseFrame& f, const double n[3], double near_w, doubl
         m[h] = project_points(f, s[h], count, px[h], py[h]);
         if (m[h] == 0) return false;
     }
-    FusePoly cur, next;
-    cur.n = m[0];
-    std::copy(px[0], px[0] + m[0], cur.x);
-    std::copy(py[0], py[0] + m[0], cur.y);
-    for (int k = 0; k < m[1] && cur.n >= 3; ++k) {  // left of every edge of the far projection
+    double cx[2][kFusePolyVerts], cy[2][kFusePolyVerts];
+    int cn = m[0], cur = 0;
+    std::copy(px[0], px[0] + cn, cx[0]);
+    std::copy(py[0], py[0] + cn, cy[0]);
+    for (int k = 0; k < m[1] && cn >= 3; ++k) {  // left of every edge of the far projection
         const int k1 = (k + 1) % m[1];
         const double dx = px[1][k1] - px[1][k], dy = py[1][k1] - py[1][k];
-        if (!clip_poly(cur, dy, -dx, dy * px[1][k] - dx * py[1][k], next)) return false;
-        cur = next;
+        cn = clip_arrays(cx[cur], cy[cur], cn, dy, -dx, dy * px[1][k] - dx * py[1][k], cx[1 - cur],
+                         cy[1 - cur], kFusePolyVerts);
+        cur = 1 - cur;
     }
-    if (cur.n < 3) return false;
-    std::copy(cur.x, cur.x + cur.n, x);
-    std::copy(cur.y, cur.y + cur.n, y);
+    if (cn < 3) return false;
+    std::copy(cx[cur], cx[cur] + cn, x);
+    std::copy(cy[cur], cy[cur] + cn, y);
     out.x = x;
     out.y = y;
-    out.count = cur.n;
-    poly_bounds(x, y, cur.n, out.lo, out.hi);
+    out.count = cn;
+    poly_bounds(x, y, cn, out.lo, out.hi);
     return true;
 }
 
@@ -733,6 +745,13 @@ void OcclusionCuller::add_faces(const Candidate& c) noexcept {
         f.hi[0] = double(c.box.max[a1]) + grow;
         f.lo[1] = double(c.box.min[a2]) - grow;
         f.hi[1] = double(c.box.max[a2]) + grow;
+        f.axis1 = a1;
+        f.axis2 = a2;
+        f.rel_plane = f.plane - eye_d_[a];
+        f.rel_lo[0] = f.lo[0] - eye_d_[a1];
+        f.rel_hi[0] = f.hi[0] - eye_d_[a1];
+        f.rel_lo[1] = f.lo[1] - eye_d_[a2];
+        f.rel_hi[1] = f.hi[1] - eye_d_[a2];
     }
 }
 
@@ -804,14 +823,16 @@ bool OcclusionCuller::add_polygon(const float plane[5], const float* corners, ui
 // rectangle) or a polygon (its slab, entering and leaving inside its prism): a point nothing hides proves
 // the box it belongs to visible, before any projection.
 bool OcclusionCuller::point_behind_a_face(const double x[3]) const noexcept {
-    for (size_t k = 0; k < face_count_; ++k) {
+    for (size_t k = 0; k < face_count_; ++k) {  // the crossing p x[a1] / x[a], p x[a2] / x[a], times |x[a]|
         const Face& f = faces_[k];
-        const int a = f.axis, a1 = (a + 1) % 3, a2 = (a + 2) % 3;
-        const double plane = f.plane - eye_d_[a];
-        if (f.above ? !(x[a] > plane) : !(x[a] < plane)) continue;
-        const double t = plane / x[a];
-        const double y1 = t * x[a1] + eye_d_[a1], y2 = t * x[a2] + eye_d_[a2];
-        if (y1 >= f.lo[0] && y1 <= f.hi[0] && y2 >= f.lo[1] && y2 <= f.hi[1]) return true;
+        const double p = f.rel_plane, xa = x[f.axis];
+        if (f.above ? !(xa > p) : !(xa < p)) continue;
+        const double m =
+            f.above ? xa : -xa;  // p and x[a] have one sign: the eye is off the plane, x beyond it
+        const double u1 = (f.above ? p : -p) * x[f.axis1];
+        const double u2 = (f.above ? p : -p) * x[f.axis2];
+        if (u1 >= f.rel_lo[0] * m && u1 <= f.rel_hi[0] * m && u2 >= f.rel_lo[1] * m && u2 <= f.rel_hi[1] * m)
+            return true;
     }
     for (size_t k = 0; k < polygon_count_; ++k) {
         const Polygon& pg = polygons_[k];

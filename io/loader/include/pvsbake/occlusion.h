@@ -186,7 +186,8 @@ private:
     struct Face {
         double plane, lo[2], hi[2];  // x[axis] = plane; the rectangle on axes (axis + 1) % 3, (axis + 2) % 3
         double delta;
-        int axis;
+        double rel_plane, rel_lo[2], rel_hi[2];  // the same less the eye
+        int axis, axis1, axis2;                  // axis1, axis2: (axis + 1) % 3, (axis + 2) % 3
         bool above;  // the eye is below the plane, and what lies above it is hidden
     };
 
