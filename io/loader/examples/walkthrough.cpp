@@ -91,7 +91,8 @@ struct LoaderCuller {
 };
 
 // The game loop over a level (pvsbake::Bake or RuntimeLevel) and its culler. Path values: 0 visible, 1 one
-// shadow frustum, 2 the fused depth cube (both cullers number them so).
+// shadow frustum, 2 the fused depth cube, 3 the exact union of the occluders' faces (both cullers number them
+// so). The cullers keep their depth cube (32 pixels): with moving objects to test as well it pays.
 template <class Level, class Culler>
 int play(const Level& bake, Culler& culler, int frames, int movers_wanted, unsigned seed, bool quiet);
 
