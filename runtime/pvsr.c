@@ -1952,6 +1952,10 @@ static int hidden_by_faces(const pvsr_culler* c, const float box[6]) {
         const int is_poly = k >= c->face_count;
         if (!is_poly) {
             const pvsr_culler_face* face = &c->faces[k];
+            const float* db = c->face_directions[2 * f.p + (f.sign < 0.0)][k];
+            if ((double)db[2] < lo[0] || (double)db[0] > hi[0] || (double)db[3] < lo[1] ||
+                (double)db[1] > hi[1])
+                continue; /* its projection misses the box's directions: the check below would skip it */
             ff->poly = 0;
             ff->axis = face->axis;
             ff->above = face->above;
@@ -2082,6 +2086,46 @@ static void add_faces(pvsr_culler* c, const pvsr_culler_candidate* cand) {
     }
 }
 
+static float float_down(double x) {
+    float f = (float)x;
+    if ((double)f > x) f = nextafterf(f, -INFINITY);
+    return f;
+}
+static float float_up(double x) {
+    float f = (float)x;
+    if ((double)f < x) f = nextafterf(f, INFINITY);
+    return f;
+}
+
+/* Each face's projection bounds in the six frames of the faces test, once a frame: the test then projects a
+ * face only for the boxes whose directions its bounds meet (the same faces as projecting each for every box).
+ */
+static void face_directions(pvsr_culler* c) {
+    double x[FUSE_PROJ_VERTS], y[FUSE_PROJ_VERTS];
+    size_t k;
+    int frame;
+    for (k = 0; k < c->face_count; ++k) {
+        for (frame = 0; frame < 6; ++frame) {
+            fuse_frame f;
+            fuse_face ff;
+            float* b = c->face_directions[frame][k];
+            f.p = frame / 2;
+            f.sign = frame % 2 == 0 ? 1.0 : -1.0;
+            f.u = (f.p + 1) % 3;
+            f.v = (f.p + 2) % 3;
+            if (!project_face(&f, &c->faces[k], c->eye_d, x, y, &ff)) {
+                b[0] = b[1] = INFINITY;
+                b[2] = b[3] = -INFINITY;
+                continue;
+            }
+            b[0] = float_down(ff.lo[0]);
+            b[1] = float_down(ff.lo[1]);
+            b[2] = float_up(ff.hi[0]);
+            b[3] = float_up(ff.hi[1]);
+        }
+    }
+}
+
 void pvsr_culler_begin_frame(pvsr_culler* c, const float eye[3], const float* boxes, size_t count) {
     const int r = c != NULL ? c->resolution : 0;
     size_t k, n;
@@ -2161,6 +2205,7 @@ void pvsr_culler_begin_frame(pvsr_culler* c, const float eye[3], const float* bo
         build_frustum(c, cand->box, cand->delta, cand->flat, &c->frusta[c->frustum_count++]);
         add_faces(c, cand);
     }
+    face_directions(c);
 }
 
 int pvsr_culler_add_polygon(pvsr_culler* c, const float plane[5], const float* corners, uint32_t count) {

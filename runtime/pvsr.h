@@ -219,13 +219,12 @@ const char* pvsr_string(const pvsr_level* level, const char* key);
  * No allocation: the depth cube lives in memory the caller gives (pvsr_culler_memory_bytes). Between
  * pvsr_culler_begin_frame() calls any number of threads may test boxes.
  *
- *   static pvsr_culler culler;                     (about 31 KiB; keep one per thread that begins frames)
- *   pvsr_culler_init(&culler, 0, NULL, 0);         (no depth cube: for the culled walk the faces fuse exactly;
- *                                                   with many moving objects a cube of 32 may pay:
- *                                                   pvsr_culler_init(&culler, 32, memory, pvsr_culler_memory_bytes(32)))
- *   each frame: pvsr_culler_begin_cell(&culler, &level, cell, eye, PVSR_CULLER_MAX_OCCLUDERS);
- *               pvsr_visit_drawn(&level, cell, &culler, draw_object, &scene);     (the level's objects)
- *               for each moving object: if (!pvsr_culler_is_hidden(&culler, box)) draw(object);
+ *   static pvsr_culler culler;                     (about 74 KiB; keep one per thread that begins frames)
+ *   pvsr_culler_init(&culler, 0, NULL, 0);         (no depth cube: for the culled walk the faces fuse
+ * exactly; with many moving objects a cube of 32 may pay: pvsr_culler_init(&culler, 32, memory,
+ * pvsr_culler_memory_bytes(32))) each frame: pvsr_culler_begin_cell(&culler, &level, cell, eye,
+ * PVSR_CULLER_MAX_OCCLUDERS); pvsr_visit_drawn(&level, cell, &culler, draw_object, &scene);     (the level's
+ * objects) for each moving object: if (!pvsr_culler_is_hidden(&culler, box)) draw(object);
  * (pvsr_culler_begin_frame() takes any boxes instead of the cell's ranked occluders.)
  */
 #define PVSR_CULLER_MAX_OCCLUDERS 64 /* more are ignored: pass the best first */
@@ -284,6 +283,9 @@ typedef struct pvsr_culler {
     pvsr_culler_frustum frusta[PVSR_CULLER_MAX_OCCLUDERS];
     size_t face_count;
     pvsr_culler_face faces[3 * PVSR_CULLER_MAX_OCCLUDERS];
+    /* Per face and per frame of the faces test (axis p, sign: 2 p + (sign < 0)), the bounds of its projection
+     * (u lo, v lo, u hi, v hi), rounded outward; lo > hi when it has none. */
+    float face_directions[6][3 * PVSR_CULLER_MAX_OCCLUDERS][4];
     size_t polygon_count;
     pvsr_culler_polygon polygons[PVSR_CULLER_MAX_POLYGONS];
     int written[6][4]; /* per face: i0, i1, j0, j1 of the written pixels (empty when i0 > i1) */

@@ -412,6 +412,7 @@ OcclusionCuller::OcclusionCuller(int resolution) noexcept {
     try {
         frusta_.resize(kMaxOccluders);
         faces_.resize(3 * kMaxOccluders);
+        face_directions_.resize(3 * kMaxOccluders * 24);
         polygons_.resize(kMaxPolygons);
         candidates_.reserve(kMaxOccluders);
         if (r > 0) {
@@ -526,6 +527,45 @@ void OcclusionCuller::begin_frame(const float eye[3], const Box* occluders, size
         if (r > 0) rasterize(c.raster, c.flat);
         build_frustum(c.box, c.delta, c.flat, frusta_[frustum_count_++]);
         add_faces(c);
+    }
+    face_directions();
+}
+
+namespace {
+
+float float_down(double x) {
+    float f = float(x);
+    if (double(f) > x) f = std::nextafter(f, -kInfF);
+    return f;
+}
+float float_up(double x) {
+    float f = float(x);
+    if (double(f) < x) f = std::nextafter(f, kInfF);
+    return f;
+}
+
+}  // namespace
+
+// Each face's projection bounds in the six frames of the faces test, once a frame: the test then projects a
+// face only for the boxes whose directions its bounds meet (the same faces as projecting each for every box).
+void OcclusionCuller::face_directions() noexcept {
+    double x[kFuseProjVerts], y[kFuseProjVerts];
+    for (size_t k = 0; k < face_count_; ++k) {
+        const Face& face = faces_[k];
+        for (int frame = 0; frame < 6; ++frame) {
+            FuseFrame f{frame / 2, (frame / 2 + 1) % 3, (frame / 2 + 2) % 3, frame % 2 == 0 ? 1.0 : -1.0};
+            FuseFace ff;
+            float* b = &face_directions_[24 * k + 4 * size_t(frame)];
+            if (!project_face(f, face.axis, face.plane, face.lo, face.hi, eye_d_, x, y, ff)) {
+                b[0] = b[1] = kInfF;
+                b[2] = b[3] = -kInfF;
+                continue;
+            }
+            b[0] = float_down(ff.lo[0]);
+            b[1] = float_down(ff.lo[1]);
+            b[2] = float_up(ff.hi[0]);
+            b[3] = float_up(ff.hi[1]);
+        }
     }
 }
 
@@ -889,6 +929,10 @@ bool OcclusionCuller::hidden_by_faces(const Box& box) const noexcept {
         FuseFace& ff = faces[nf];
         if (k < face_count_) {
             const Face& face = faces_[k];
+            const float* db = &face_directions_[24 * k + 4 * size_t(2 * f.p + (f.sign < 0.0 ? 1 : 0))];
+            if (double(db[2]) < lo[0] || double(db[0]) > hi[0] || double(db[3]) < lo[1] ||
+                double(db[1]) > hi[1])
+                continue;  // its projection misses the box's directions: the check below would skip it
             ff.poly = false;
             ff.axis = face.axis;
             ff.above = face.above;

@@ -219,6 +219,10 @@ private:
     size_t frustum_count_ = 0;
     std::vector<Face> faces_;  // 3 * kMaxOccluders
     size_t face_count_ = 0;
+    // Per face and per frame of the faces test (axis p, sign: 2 p + (sign < 0)), the bounds of its projection
+    // (u lo, v lo, u hi, v hi), rounded outward; lo > hi when it has none. 24 floats a face.
+    std::vector<float> face_directions_;
+    void face_directions() noexcept;
     std::vector<Polygon> polygons_;  // kMaxPolygons
     size_t polygon_count_ = 0;
     std::vector<float> grid_;   // g(0 .. R)
