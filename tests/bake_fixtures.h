@@ -24,7 +24,8 @@ namespace pvs::test {
 // every third splits into 8 leaves, the first of which is empty. view: a voxel mask of 0.5 m voxels
 // with a hole in it (about one voxel in seven unset). Six occluder boxes (box 1 not proven) and a ranking:
 // cell c has c % 4 ranked occluders, best first.
-inline BakeData coherent_bake(uint32_t objects, glm::ivec3 dims, bool octree, bool view, uint32_t seed) {
+inline BakeData coherent_bake(uint32_t objects, glm::ivec3 dims, bool octree, bool view, uint32_t seed,
+                              bool polygons = false) {
     BakeData b;
     b.tool_version = "pvsbake test";
     b.world_path = "worlds/hof_ü.glb";
@@ -115,6 +116,31 @@ inline BakeData coherent_bake(uint32_t objects, glm::ivec3 dims, bool octree, bo
                                                       0.125f * float(k)});
         }
         b.ranked.offsets.push_back(uint32_t(b.ranked.entries.size()));
+    }
+    if (polygons) {  // two slanted quads, ranked first in every third cell (format 1.7)
+        for (int i = 0; i < 2; ++i) {
+            OccluderPolygon p;
+            p.normal = glm::normalize(glm::vec3(0.0f, 0.6f, i == 0 ? 0.8f : -0.8f));
+            const float z0 = i == 0 ? 6.0f : 3.0f, z1 = i == 0 ? 3.0f : 6.0f;
+            p.corners = {{1.0f, 0.5f, z0}, {8.0f, 0.5f, z0}, {8.0f, 4.5f, z1}, {1.0f, 4.5f, z1}};
+            if (glm::dot(glm::cross(p.corners[1] - p.corners[0], p.corners[2] - p.corners[1]), p.normal) <
+                0.0f)
+                std::reverse(p.corners.begin(), p.corners.end());
+            p.offset = glm::dot(p.normal, p.corners[0]);
+            p.thickness = 0.001f;
+            for (const glm::vec3& c : p.corners) p.bounds.extend(c);
+            b.polygons.push_back(p);
+        }
+        RankedOccluders mixed;
+        mixed.offsets = {0};
+        for (uint32_t c = 0; c < n_cells; ++c) {
+            if (c % 3 == 0)
+                mixed.entries.push_back(RankedOccluder{uint32_t(b.occluders.size()) + c % 2, 1.0f, 0, 0, 0});
+            for (uint32_t k = b.ranked.offsets[c]; k < b.ranked.offsets[c + 1]; ++k)
+                mixed.entries.push_back(b.ranked.entries[k]);
+            mixed.offsets.push_back(uint32_t(mixed.entries.size()));
+        }
+        b.ranked = std::move(mixed);
     }
     b.figures = {{"cells", double(n_cells)}, {"objects", double(objects)}, {"", 0.5}, {"cells", 7.0}};
     b.run.timings_s = {{"solve", 1.25}};

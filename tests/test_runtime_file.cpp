@@ -33,7 +33,7 @@ TEST(RuntimeFile, GridsAndOctreesAnswerAsTheHdf5Loader) {
     for (const bool octree : {false, true})
         for (const bool view : {false, true}) {
             SCOPED_TRACE(std::string(octree ? "octree" : "grid") + (view ? " with masks" : ""));
-            round_trip(test::coherent_bake(133, {7, 3, 6}, octree, view, 3 + uint32_t(octree)), 11);
+            round_trip(test::coherent_bake(133, {7, 3, 6}, octree, view, 3 + uint32_t(octree), view), 11);
         }
 }
 

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // make_runtime_seeds OUT_DIR: a few small runtime files for the fuzz target's corpus (grid and octree, with
-// and without masks and ranked occluders), exported from the loader tests' synthetic bakes.
+// and without masks, ranked occluders and polygon occluders), exported from the loader tests' synthetic
+// bakes.
 #include "io/bake_file.h"
 #include "io/runtime_file.h"
 #include "tests/bake_fixtures.h"
@@ -21,7 +22,8 @@ int main(int argc, char** argv) {
     for (const bool octree : {false, true})
         for (const bool view : {false, true})
             for (const uint32_t objects : {0u, 9u, 70u}) {
-                pvs::BakeData bake = pvs::test::coherent_bake(objects, {2, 1, 2}, octree, view, 3 + uint32_t(n));
+                pvs::BakeData bake =
+                    pvs::test::coherent_bake(objects, {2, 1, 2}, octree, view, 3 + uint32_t(n), objects == 9);
                 if (view) {  // a small mask: a small seed
                     bake.cells.view.voxel_size_m = 1.5f;
                     bake.cells.view.dims = bake.cells.dims + 1;
