@@ -221,11 +221,14 @@ const char* pvsr_string(const pvsr_level* level, const char* key);
  *
  *   static pvsr_culler culler;                     (about 74 KiB; keep one per thread that begins frames)
  *   pvsr_culler_init(&culler, 0, NULL, 0);         (no depth cube: for the culled walk the faces fuse
- * exactly; with many moving objects a cube of 32 may pay: pvsr_culler_init(&culler, 32, memory,
- * pvsr_culler_memory_bytes(32))) each frame: pvsr_culler_begin_cell(&culler, &level, cell, eye,
- * PVSR_CULLER_MAX_OCCLUDERS); pvsr_visit_drawn(&level, cell, &culler, draw_object, &scene);     (the level's
- * objects) for each moving object: if (!pvsr_culler_is_hidden(&culler, box)) draw(object);
- * (pvsr_culler_begin_frame() takes any boxes instead of the cell's ranked occluders.)
+ *                                                   exactly; with many moving objects a cube of 32 may pay:
+ *                                                   pvsr_culler_init(&culler, 32, memory, bytes), bytes =
+ *                                                   pvsr_culler_memory_bytes(32))
+ *   each frame: pvsr_culler_begin_cell(&culler, &level, cell, eye, PVSR_CULLER_MAX_OCCLUDERS);
+ *               pvsr_visit_drawn(&level, cell, &culler, draw_object, &scene);     (the level's objects)
+ *               for each moving object: if (!pvsr_culler_is_hidden(&culler, box)) draw(object);
+ * (pvsr_culler_begin_frame() takes any boxes instead of the cell's ranked occluders; then
+ * pvsr_culler_add_polygon() any convex polygons: docs/ALGORITHMS.md#runtime-polygons.)
  */
 #define PVSR_CULLER_MAX_OCCLUDERS 64 /* more are ignored: pass the best first */
 #define PVSR_CULLER_MAX_POLYGONS 32  /* polygon occluders of a frame; more are refused */
