@@ -252,6 +252,25 @@ INSTANTIATE_TEST_SUITE_P(Edits, ReuseEdit,
                                                     " --shaft-block 2 --shaft-early --shaft-give-up 1"}),
                          [](const auto& info) { return std::string(info.param.name); });
 
+// The ranking runs in full after the PVS and reads nothing of the old bake, so a re-bake may rank otherwise
+// (other counts, polygons): its file is still the full bake's of those options.
+TEST(Reuse, AReBakeMayRankOtherwiseAndWritesTheFullBakeOfItsOptions) {
+    test::TempDir dir;
+    const std::string log = dir.file("log.txt"), old = dir.file("old.h5");
+    const std::string ranking = " --occluders-per-cell 8 --ranking-polygons";
+    ASSERT_EQ(run(bake_args(test::sample_world(), old), log), 0) << test::read_file(log);
+    ASSERT_EQ(run(bake_args(test::sample_world(), dir.file("full.h5")) + ranking, log), 0)
+        << test::read_file(log);
+    ASSERT_EQ(
+        run(bake_args(test::sample_world(), dir.file("reuse.h5")) + ranking + " --reuse '" + old + "'", log),
+        0)
+        << test::read_file(log);
+    EXPECT_EQ(test::h5diff_outside_run(dir.file("full.h5"), dir.file("reuse.h5"), dir.file("diff.txt")), 0)
+        << test::read_file(dir.file("diff.txt"));
+    EXPECT_NE(test::h5diff_outside_run(old, dir.file("reuse.h5"), dir.file("diff2.txt")), 0)
+        << "the ranking should differ from the old bake's";
+}
+
 TEST(Reuse, AnOldBakeOfOtherParametersOrNoneIsRefusedBeforeAnyStage) {
     test::TempDir dir;
     const std::string log = dir.file("log.txt"), old = dir.file("old.h5");
