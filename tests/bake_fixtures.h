@@ -149,15 +149,25 @@ inline BakeData coherent_bake(uint32_t objects, glm::ivec3 dims, bool octree, bo
     return b;
 }
 
-// The loader's ranked occluders are the bake's, each with its box (C++ and C).
+// The loader's ranked occluders are the bake's, each with its box (C++ and C), and its polygons (format 1.7)
+// at their places among them.
 inline void expect_same_ranked(const pvsbake::Bake& got, const BakeData& want) {
     for (uint32_t c = 0; c <= got.cell_count(); ++c) {  // one past the end too: 0, empty
-        const uint32_t n = want.ranked.count(c);
+        std::vector<RankedOccluder> boxes;
+        std::vector<std::pair<uint32_t, RankedOccluder>> polygons;  // (place, entry)
+        for (uint32_t k = 0; k < want.ranked.count(c); ++k) {
+            const RankedOccluder& e = want.ranked.entries[want.ranked.offsets[c] + k];
+            if (e.box < want.occluders.size())
+                boxes.push_back(e);
+            else
+                polygons.push_back({k, e});
+        }
+        const uint32_t n = uint32_t(boxes.size());
         ASSERT_EQ(got.occluder_count(c), n) << "cell " << c;
         const pvsbake::OccluderList list = got.occluders(c);
         ASSERT_EQ(list.size(), n);
         for (uint32_t k = 0; k < n; ++k) {
-            const RankedOccluder& w = want.ranked.entries[want.ranked.offsets[c] + k];
+            const RankedOccluder& w = boxes[k];
             const Aabb& box = want.occluders[w.box].box;
             const pvsbake::RankedOccluder& g = list[k];
             EXPECT_EQ(glm::vec3(g.box.min[0], g.box.min[1], g.box.min[2]), box.min);
@@ -167,6 +177,23 @@ inline void expect_same_ranked(const pvsbake::Bake& got, const BakeData& want) {
             EXPECT_EQ(g.hidden_objects, w.hidden_objects);
             EXPECT_EQ(g.hidden_triangle_share, w.hidden_triangle_share);
         }
+        ASSERT_EQ(got.occluder_polygon_count(c), polygons.size()) << "cell " << c;
+        for (uint32_t k = 0; k < polygons.size(); ++k) {
+            pvsbake::RankedPolygon g;
+            ASSERT_TRUE(got.occluder_polygon(c, k, g));
+            const OccluderPolygon& w = want.polygons[polygons[k].second.box - want.occluders.size()];
+            EXPECT_EQ(g.place, polygons[k].first);
+            EXPECT_EQ(g.score, polygons[k].second.score);
+            ASSERT_EQ(g.count, uint32_t(w.corners.size()));
+            for (uint32_t i = 0; i < g.count; ++i)
+                EXPECT_EQ(glm::vec3(g.corners[3 * i], g.corners[3 * i + 1], g.corners[3 * i + 2]),
+                          w.corners[i]);
+            EXPECT_EQ(g.plane[0], w.normal.x);
+            EXPECT_EQ(g.plane[3], w.offset);
+            EXPECT_EQ(g.plane[4], w.thickness);
+        }
+        pvsbake::RankedPolygon none;
+        EXPECT_FALSE(got.occluder_polygon(c, uint32_t(polygons.size()), none));
     }
 }
 

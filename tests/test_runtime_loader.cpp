@@ -37,7 +37,7 @@ TEST(RuntimeLoader, GridRoundTrip) {
     test::TempDir dir;
     for (bool view : {false, true}) {
         SCOPED_TRACE(view);
-        const BakeData bake = test::coherent_bake(133, {7, 3, 6}, false, view, 3);
+        const BakeData bake = test::coherent_bake(133, {7, 3, 6}, false, view, 3, /*polygons=*/view);
         const std::string path = dir.file("grid.h5");
         pvsbake::Bake loaded;
         test::write_and_load(bake, path, loaded);
