@@ -147,8 +147,8 @@ struct RankingConfig {
                                   // depth complexity (occluders/ranking.h)
     double min_panel_area_m2 = 1.0;  // [Limit: >= 0] [Units: m2] panels this large are candidates (by sight)
     bool polygons = false;  // by sight, the slanted panels this large are candidates too, as the run-time
-                            // culler's polygon occluders (docs/ALGORITHMS.md#runtime-polygons); opt-in: on
-                            // the shared levels they gain little for their frame time (docs/RESULTS.md)
+                            // culler's polygon occluders (docs/ALGORITHMS.md#runtime-polygons); opt-in (what
+                            // they gain and cost: docs/RESULTS.md, "What a game draws per frame")
 };
 
 // The conservative solver (pvs/conservative.h).
@@ -610,6 +610,12 @@ std::vector<std::pair<std::string, std::string>> resolved_parameters(const BakeC
 // match them.
 inline bool is_run_parameter(const std::string& key) {
     return key.rfind("run.", 0) == 0;
+}
+
+// True for the ranking's options (ranking.*): they change no PVS row, only the ranked occluders, which every
+// bake computes in full after the PVS (so a re-bake with --reuse may rank otherwise).
+inline bool is_ranking_parameter(const std::string& key) {
+    return key.rfind("ranking.", 0) == 0;
 }
 
 // The inverse: the config a bake was made with, from its stored parameters (keys not given keep their

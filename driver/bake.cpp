@@ -359,8 +359,7 @@ void check_reuse(const BakeConfig& config, const BakeData& old, const std::strin
         throw bad_input(fmt::format("--reuse {}: not a conservative bake (mode {})", old_path, old.mode));
     std::map<std::string, std::string> before(old.parameters.begin(), old.parameters.end());
     for (const auto& [name, value] : resolved_parameters(config)) {
-        // The ranking runs in full after the PVS and reads nothing of the old bake: its options may differ.
-        if (is_run_parameter(name) || name.rfind("ranking.", 0) == 0) continue;
+        if (is_run_parameter(name) || is_ranking_parameter(name)) continue;
         const auto it = before.find(name);
         if (it == before.end() || it->second != value) {
             throw bad_input(

@@ -366,6 +366,17 @@ void expect_bad_input(const std::string& path, const std::vector<std::string>& n
     }
 }
 
+// A copy of the good file at `path` with element `index` of `dataset` patched to `value` is refused as
+// expect_bad_input says.
+void expect_patch_refused(const std::string& good, const std::string& path, const char* dataset,
+                          hsize_t index, hid_t type, const void* value,
+                          const std::vector<std::string>& needles) {
+    SCOPED_TRACE(dataset);
+    fs::copy_file(good, path, fs::copy_options::overwrite_existing);
+    patch_element(path, dataset, index, type, value);
+    expect_bad_input(path, needles);
+}
+
 std::vector<std::string> folder_entries(const fs::path& folder) {
     std::vector<std::string> names;
     for (const auto& e : fs::directory_iterator(folder)) names.push_back(e.path().filename().string());
@@ -1030,10 +1041,7 @@ TEST(BakeFileBad, PolygonOccludersOutOfRangeOrDamaged) {
     const std::string path = dir.file("bad.h5");
     auto patched = [&](const char* dataset, hsize_t index, hid_t type, const void* value,
                        std::vector<std::string> needles) {
-        SCOPED_TRACE(dataset);
-        fs::copy_file(good, path, fs::copy_options::overwrite_existing);
-        patch_element(path, dataset, index, type, value);
-        expect_bad_input(path, needles);
+        expect_patch_refused(good, path, dataset, index, type, value, needles);
     };
     const uint32_t big = 99, two = 2, zero = 0;
     const float negative = -1.0f;
@@ -1074,10 +1082,7 @@ TEST(BakeFileBad, RankedOccludersOutOfRangeOrDamaged) {
     const std::string path = dir.file("bad.h5");
     auto patched = [&](const char* dataset, hsize_t index, hid_t type, const void* value,
                        std::vector<std::string> needles) {
-        SCOPED_TRACE(dataset);
-        fs::copy_file(good, path, fs::copy_options::overwrite_existing);
-        patch_element(path, dataset, index, type, value);
-        expect_bad_input(path, needles);
+        expect_patch_refused(good, path, dataset, index, type, value, needles);
     };
     const uint32_t big = 99, unproven = 1, down = 1;
     const float nan = std::nanf(""), negative = -1.0f, higher = 0.9f, too_much = 1.5f, huge_angle = 13.0f;

@@ -601,6 +601,24 @@ TEST(RuntimeOcclusionProperty, FusedWallsNeverCullABoxARayReaches) {
     EXPECT_GT(t.hidden_cube, t.queries / 10);
 }
 
+// The slow reference of the faces tests: does the segment from the eye to p (double) meet box b grown by grow
+// metres? (A slab test in double; a segment that only starts inside counts.)
+bool segment_meets_grown_box(const float e[3], const double p[3], const Box& b, double grow) {
+    double t0 = 0.0, t1 = 1.0;
+    for (int a = 0; a < 3; ++a) {
+        const double d = p[a] - double(e[a]), lo = double(b.min[a]) - grow, hi = double(b.max[a]) + grow;
+        if (d == 0.0) {
+            if (double(e[a]) < lo || double(e[a]) > hi) return false;
+            continue;
+        }
+        double ta = (lo - double(e[a])) / d, tb = (hi - double(e[a])) / d;
+        if (ta > tb) std::swap(ta, tb);
+        t0 = std::max(t0, ta);
+        t1 = std::min(t1, tb);
+    }
+    return t0 <= t1 && t0 < 1.0;
+}
+
 // The faces' union against a slow reference without rays: every box the faces hide has each of its sampled
 // points (corners, centre and random ones) behind some occluder, by an exact segment test in double against
 // the occluders grown by 1e-6 m (the faces grow by 1e-9 of the scale); and the union is tight: of the boxes
@@ -610,21 +628,6 @@ TEST(RuntimeOcclusionProperty, TheFacesHideWhatSegmentsToEveryPointMeetAndLittle
     std::mt19937 rng(20261205u);
     std::uniform_real_distribution<float> u(0.0f, 1.0f);
     const auto range = [&](float a, float b) { return a + (b - a) * u(rng); };
-    const auto meets = [](const float e[3], const double p[3], const Box& b, double grow) {
-        double t0 = 0.0, t1 = 1.0;
-        for (int a = 0; a < 3; ++a) {
-            const double d = p[a] - double(e[a]), lo = double(b.min[a]) - grow, hi = double(b.max[a]) + grow;
-            if (d == 0.0) {
-                if (double(e[a]) < lo || double(e[a]) > hi) return false;
-                continue;
-            }
-            double ta = (lo - double(e[a])) / d, tb = (hi - double(e[a])) / d;
-            if (ta > tb) std::swap(ta, tb);
-            t0 = std::max(t0, ta);
-            t1 = std::min(t1, tb);
-        }
-        return t0 <= t1 && t0 < 1.0;
-    };
     const bool ci = test::in_ci();
     uint64_t hidden = 0, points = 0, all_points_hidden = 0, of_them_hidden = 0;
     for (int world = 0; world < (ci ? 60 : 300); ++world) {
@@ -670,10 +673,12 @@ TEST(RuntimeOcclusionProperty, TheFacesHideWhatSegmentsToEveryPointMeetAndLittle
                            : n == 8 ? 0.5 * (lo + hi)
                                     : lo + (hi - lo) * u(rng);
                 }
-                const bool grown =
-                    std::any_of(occ.begin(), occ.end(), [&](const Box& o) { return meets(eye, p, o, 1e-6); });
-                const bool exact =
-                    std::any_of(occ.begin(), occ.end(), [&](const Box& o) { return meets(eye, p, o, 0.0); });
+                const bool grown = std::any_of(occ.begin(), occ.end(), [&](const Box& o) {
+                    return segment_meets_grown_box(eye, p, o, 1e-6);
+                });
+                const bool exact = std::any_of(occ.begin(), occ.end(), [&](const Box& o) {
+                    return segment_meets_grown_box(eye, p, o, 0.0);
+                });
                 if (by_faces) {
                     ++points;
                     ASSERT_TRUE(grown) << "world " << world << " box " << q << " point " << n;
@@ -704,21 +709,6 @@ TEST(RuntimeOcclusionProperty, PolygonsHideWhatSegmentsToEveryPointCrossAndLittl
     std::mt19937 rng(20261206u);
     std::uniform_real_distribution<float> u(0.0f, 1.0f);
     const auto range = [&](float a, float b) { return a + (b - a) * u(rng); };
-    const auto meets = [](const float e[3], const double p[3], const Box& b, double grow) {
-        double t0 = 0.0, t1 = 1.0;
-        for (int a = 0; a < 3; ++a) {
-            const double d = p[a] - double(e[a]), lo = double(b.min[a]) - grow, hi = double(b.max[a]) + grow;
-            if (d == 0.0) {
-                if (double(e[a]) < lo || double(e[a]) > hi) return false;
-                continue;
-            }
-            double ta = (lo - double(e[a])) / d, tb = (hi - double(e[a])) / d;
-            if (ta > tb) std::swap(ta, tb);
-            t0 = std::max(t0, ta);
-            t1 = std::min(t1, tb);
-        }
-        return t0 <= t1 && t0 < 1.0;
-    };
     const bool ci = test::in_ci();
     uint64_t hidden = 0, by_polygon_only = 0, all_points_hidden = 0, of_them_hidden = 0, refused = 0;
     for (int world = 0; world < (ci ? 80 : 400); ++world) {
@@ -751,7 +741,7 @@ TEST(RuntimeOcclusionProperty, PolygonsHideWhatSegmentsToEveryPointCrossAndLittl
         if (used.empty()) continue;
         const auto behind = [&](const double p[3], double grow) {
             return std::any_of(occ.begin(), occ.end(),
-                               [&](const Box& o) { return meets(eye, p, o, grow); }) ||
+                               [&](const Box& o) { return segment_meets_grown_box(eye, p, o, grow); }) ||
                    std::any_of(used.begin(), used.end(), [&](const test::TestPolygon& t) {
                        return test::segment_crosses_polygon(eye, p, t, grow);
                    });
