@@ -216,7 +216,7 @@ nlohmann::ordered_json measure(const std::string& bake_path, int repeats, int qu
 int main(int argc, char** argv) {
     std::vector<std::string> bakes;
     int repeats = 11, queries = 2000;
-    uint32_t max_chain = 4, merge_cells = 1;
+    uint32_t max_chain = pvs::RuntimeFileOptions{}.max_chain, merge_cells = 1;
     bool block_order = true;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
