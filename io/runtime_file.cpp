@@ -192,7 +192,9 @@ std::string assemble(const std::string& path, Bake& b, const RuntimeFileOptions&
             sections.push_back(array_section(PVSR_TAG('M', 'B', 'I', 'T'), 64, tiles.bricks));
         }
     }
-    // GRID, NODE, and CGRD (a grid cell's box is its grid box: 4 bytes, not 24) or CBOX.
+    // GRID, NODE, and CGRD (a grid cell's box is its grid box: 4 bytes, not 24) or CBOX; neither GRID nor
+    // CGRD for a grid whose position g is cell g (2.0).
+    const size_t placed_sections = sections.size();
     sections.push_back(array_section(PVSR_TAG('G', 'R', 'I', 'D'), 4, b.cells.grid_to_cell));
     if (b.cells.kind == 1) {
         Section s{PVSR_TAG('N', 'O', 'D', 'E'), PVSR_NODE_BYTES, b.cells.node_first_child.size(), {}};
@@ -232,7 +234,11 @@ std::string assemble(const std::string& path, Bake& b, const RuntimeFileOptions&
                 }
             }
         }
-        if (derived) {
+        bool identity = derived && b.cells.grid_to_cell.size() == cells;
+        for (uint32_t c = 0; c < cells && identity; ++c) identity = cell_grid[c] == c;
+        if (identity) {
+            sections.resize(placed_sections);  // GRID is implied
+        } else if (derived) {
             sections.push_back(array_section(PVSR_TAG('C', 'G', 'R', 'D'), 4, cell_grid));
         } else {
             cell_grid.clear();

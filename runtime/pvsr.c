@@ -461,7 +461,12 @@ static const char* check_level(pvsr_level* l, const prescan* ps) {
     if (g > (1u << 31)) return "the grid has too many cells";
     if (l->cell_kind > 1) return "the cell kind is neither grid nor octree";
     if (l->cell_kind == 0 && l->node_count != 0) return "a grid with octree nodes";
-    bad = need(l, PVSR_TAG('G', 'R', 'I', 'D'), 4, g, 1, &l->grid_to_cell);
+    /* 2.0: a grid whose every position is a cell, position g cell g, has neither GRID nor CGRD. */
+    l->grid_identity =
+        l->version_major >= 2 && l->cell_kind == 0 && !section(l, PVSR_TAG('G', 'R', 'I', 'D'), &a);
+    if (l->grid_identity && g != l->cell_count)
+        return "a grid without positions whose cells are not its positions";
+    bad = l->grid_identity ? NULL : need(l, PVSR_TAG('G', 'R', 'I', 'D'), 4, g, 1, &l->grid_to_cell);
     if (bad) return bad;
     if (l->mask_flags & PVSR_MASK_VIEW) {
         uint64_t tiles = 1, t;
@@ -522,7 +527,11 @@ static const char* check_cells(pvsr_level* l, const prescan* ps) {
             if (cell < -1 || cell >= (int64_t)c) return "an octree node names a cell out of range";
         }
     }
-    if (section(l, PVSR_TAG('C', 'G', 'R', 'D'), &l->cell_grid)) {
+    if (l->grid_identity) {
+        if (section(l, PVSR_TAG('C', 'G', 'R', 'D'), &l->cell_grid) ||
+            section(l, PVSR_TAG('C', 'B', 'O', 'X'), &l->cell_boxes))
+            return "a grid without positions that gives its cells' places";
+    } else if (section(l, PVSR_TAG('C', 'G', 'R', 'D'), &l->cell_grid)) {
         bad = need(l, PVSR_TAG('C', 'G', 'R', 'D'), 4, c, 1, &l->cell_grid);
         if (bad) return bad;
         if (l->cell_kind != 0) return "an octree's cells given by grid positions";
@@ -912,6 +921,7 @@ int32_t pvsr_find_cell(const pvsr_level* l, float x, float y, float z) {
         idx[a] = f < l->dims[a] - 1 ? f : l->dims[a] - 1;
     }
     g = (uint64_t)idx[0] + (uint64_t)l->dims[0] * ((uint64_t)idx[1] + (uint64_t)l->dims[1] * (uint64_t)idx[2]);
+    if (l->grid_identity) return (int32_t)g;
     n = rdi32(l->grid_to_cell.at + 4 * g);
     if (l->cell_kind == 0) return n;
     while (n >= 0) { /* children come after their parent (checked): this ends */
@@ -936,7 +946,7 @@ int pvsr_cell_bounds(const pvsr_level* l, uint32_t cell, float box[6]) {
         return 1;
     }
     {
-        const uint32_t g = rd32(l->cell_grid.at + 4 * (uint64_t)cell);
+        const uint32_t g = l->grid_identity ? cell : rd32(l->cell_grid.at + 4 * (uint64_t)cell);
         const uint32_t idx[3] = {g % (uint32_t)l->dims[0], g / (uint32_t)l->dims[0] % (uint32_t)l->dims[1],
                                  g / ((uint32_t)l->dims[0] * (uint32_t)l->dims[1])};
         for (a = 0; a < 3; ++a) {

@@ -55,8 +55,8 @@
 extern "C" {
 #endif
 
-#define PVSR_VERSION_MAJOR 1 /* the newest file version this runtime reads: 1.x */
-#define PVSR_VERSION_MINOR 1
+#define PVSR_VERSION_MAJOR 2 /* the newest file version this runtime reads: 1.x and 2.x */
+#define PVSR_VERSION_MINOR 0
 
 typedef enum pvsr_status {
     PVSR_OK = 0,
@@ -85,6 +85,7 @@ typedef struct pvsr_level {
     uint32_t version_major, version_minor;
     uint32_t flags, mask_flags;
     uint32_t object_count, cell_count, cell_kind, node_count, row_count, occluder_box_count;
+    uint32_t grid_identity; /* 2.0: a grid whose position g is cell g, stored without GRID and CGRD */
     float origin[3], cell_size_m;
     int32_t dims[3];
     float mask_origin[3], mask_voxel_m;

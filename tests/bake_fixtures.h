@@ -18,14 +18,15 @@
 
 namespace pvs::test {
 
-// A bake over a grid of `dims` cells of 1.5 m (every fifth grid position dropped), `objects` objects and a
+// A bake over a grid of `dims` cells of 1.5 m (every fifth grid position dropped unless every_position),
+// `objects` objects and a
 // PVS that is spatially coherent (object o is seen from cells near its own cell, plus noise), so that the
 // code has both key rows and rows coded against them. octree: each kept root position becomes a node;
 // every third splits into 8 leaves, the first of which is empty. view: a voxel mask of 0.5 m voxels
 // with a hole in it (about one voxel in seven unset). Six occluder boxes (box 1 not proven) and a ranking:
 // cell c has c % 4 ranked occluders, best first.
 inline BakeData coherent_bake(uint32_t objects, glm::ivec3 dims, bool octree, bool view, uint32_t seed,
-                              bool polygons = false) {
+                              bool polygons = false, bool every_position = false) {
     BakeData b;
     b.tool_version = "pvsbake test";
     b.world_path = "worlds/hof_ü.glb";
@@ -51,7 +52,7 @@ inline BakeData coherent_bake(uint32_t objects, glm::ivec3 dims, bool octree, bo
         return int32_t(cells.cells.size() - 1);
     };
     for (size_t g = 0; g < grid; ++g) {
-        if (g % 5 == 1) {
+        if (g % 5 == 1 && !every_position) {
             cells.grid_to_cell.push_back(-1);
             continue;
         }

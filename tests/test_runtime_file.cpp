@@ -37,6 +37,55 @@ TEST(RuntimeFile, GridsAndOctreesAnswerAsTheHdf5Loader) {
         }
 }
 
+// 2.0: a grid whose position g is cell g is stored without GRID and CGRD, and answers as before; an octree
+// over every position keeps its root grid. The same file labelled 1.1 is refused (1.x requires GRID), and a
+// 1.1 file (with GRID) still opens.
+TEST(RuntimeFile, AGridOfEveryPositionIsStoredWithoutItsPositions) {
+    for (const bool octree : {false, true})
+        for (const bool view : {false, true}) {
+            SCOPED_TRACE(std::string(octree ? "octree" : "grid") + (view ? " with masks" : ""));
+            const BakeData bake =
+                test::coherent_bake(97, {5, 3, 4}, octree, view, 21, view, /*every_position=*/true);
+            round_trip(bake, 13);
+            test::TempDir dir;
+            const std::string h5 = dir.file("full.h5");
+            write_bake_file(h5, bake);
+            Bytes bytes(runtime_file_bytes(h5));
+            pvsr_level level;
+            char message[256];
+            ASSERT_EQ(pvsr_open(&level, bytes.data(), bytes.size, message, sizeof message), PVSR_OK)
+                << message;
+            EXPECT_EQ(level.grid_identity, octree ? 0u : 1u);
+            EXPECT_EQ(level.grid_to_cell.at == nullptr, !octree);
+            EXPECT_EQ(level.cell_grid.at, nullptr);
+            if (octree) continue;
+            for (uint32_t c = 0; c < level.cell_count; ++c) {
+                float box[6];
+                ASSERT_EQ(pvsr_cell_bounds(&level, c, box), 1);
+                if (!view)  // (the mask has holes)
+                    EXPECT_EQ(pvsr_find_cell(&level, 0.5f * (box[0] + box[3]), 0.5f * (box[1] + box[4]),
+                                             0.5f * (box[2] + box[5])),
+                              int32_t(c));
+            }
+            const uint16_t old_version[2] = {1, 1};
+            std::memcpy(bytes.bytes() + 8, old_version, sizeof old_version);
+            rechecksum(bytes);
+            pvsr_status status;
+            EXPECT_EQ(opened_message(bytes, &status), "a required section is missing");
+            EXPECT_EQ(status, PVSR_CORRUPT);
+        }
+    test::TempDir dir;
+    const std::string h5 = dir.file("sparse.h5");
+    write_bake_file(h5, test::coherent_bake(50, {4, 2, 3}, false, true, 4));
+    Bytes bytes(runtime_file_bytes(h5));
+    const uint16_t old_version[2] = {1, 1};
+    std::memcpy(bytes.bytes() + 8, old_version, sizeof old_version);
+    rechecksum(bytes);
+    pvsr_status status;
+    EXPECT_EQ(opened_message(bytes, &status), "");
+    EXPECT_EQ(status, PVSR_OK);
+}
+
 // Around the 64-bit words, none at all, and past the 16,384 objects the walk XORs on the stack (it merges
 // the two rows' indices there).
 TEST(RuntimeFile, ObjectCountsAroundTheEdges) {

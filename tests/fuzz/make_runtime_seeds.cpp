@@ -23,7 +23,8 @@ int main(int argc, char** argv) {
         for (const bool view : {false, true})
             for (const uint32_t objects : {0u, 9u, 70u}) {
                 pvs::BakeData bake =
-                    pvs::test::coherent_bake(objects, {2, 1, 2}, octree, view, 3 + uint32_t(n), objects == 9);
+                    pvs::test::coherent_bake(objects, {2, 1, 2}, octree, view, 3 + uint32_t(n), objects == 9,
+                                             /*every_position=*/objects == 70);
                 if (view) {  // a small mask: a small seed
                     bake.cells.view.voxel_size_m = 1.5f;
                     bake.cells.view.dims = bake.cells.dims + 1;

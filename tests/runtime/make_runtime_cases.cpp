@@ -182,7 +182,10 @@ int main(int argc, char** argv) {
     write_case(out, dir, "sampled_grid_without_masks", pvs::test::coherent_bake(64, {3, 2, 4}, false, false, 5), 3, true);
     write_case(out, dir, "no_objects", pvs::test::coherent_bake(0, {2, 2, 2}, false, true, 6), 4, false);
     write_case(out, dir, "many_objects", pvs::test::coherent_bake(16400, {3, 1, 2}, true, false, 7), 5, false);
+    write_case(out, dir, "grid_of_every_position",
+               pvs::test::coherent_bake(90, {5, 3, 4}, false, true, 9, true, /*every_position=*/true), 6,
+               true);
     std::fclose(out);
-    std::printf("make_runtime_cases: 5 cases in %s\n", argv[1]);
+    std::printf("make_runtime_cases: 6 cases in %s\n", argv[1]);
     return 0;
 }
