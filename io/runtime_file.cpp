@@ -155,6 +155,57 @@ struct Bake {
     FileOccluders occluders;
 };
 
+// 2.0: the ranked entries as indices into the palette of each cell's block (runtime/pvsr.c, palette_block:
+// the 4 x 4 x 4 block of grid positions holding the cell when cells have positions, else 64 cells in turn).
+struct PaletteLists {
+    std::vector<uint32_t> offsets;  // blocks + 1: block b's palette is boxes[offsets[b] .. offsets[b + 1])
+    std::vector<uint32_t> boxes;    // into the file's ranked boxes
+    std::vector<uint32_t> entries;  // per ranked entry, its index in its cell's block's palette
+    uint32_t largest = 0;           // the largest palette
+    uint64_t bytes() const {
+        const uint64_t top = boxes.empty() ? 0 : *std::max_element(boxes.begin(), boxes.end());
+        return 4 * offsets.size() + (top <= 65535 ? 2 : 4) * boxes.size() +
+               entries.size() * (largest <= 256     ? 1
+                                 : largest <= 65536 ? 2
+                                                    : 4);
+    }
+};
+
+PaletteLists palette_lists(const FileCells& cells, const std::vector<uint32_t>& cell_grid,
+                           const std::vector<uint32_t>& ranked_offsets,
+                           const std::vector<uint32_t>& entry_box) {
+    constexpr uint32_t kSide = 4, kCells = 64;
+    const uint32_t count = cells.count;
+    const bool positions = !cell_grid.empty();
+    uint32_t n[3] = {0, 0, 0};
+    for (int a = 0; a < 3; ++a) n[a] = (uint32_t(cells.dims[a]) + kSide - 1) / kSide;
+    const uint32_t blocks = positions ? n[0] * n[1] * n[2] : (count + kCells - 1) / kCells;
+    const auto block_of = [&](uint32_t c) {
+        if (!positions) return c / kCells;
+        const uint32_t g = cell_grid[c], d0 = uint32_t(cells.dims[0]), d1 = uint32_t(cells.dims[1]);
+        return g % d0 / kSide + n[0] * (g / d0 % d1 / kSide + n[1] * (g / (d0 * d1) / kSide));
+    };
+    std::vector<std::vector<uint32_t>> palette(blocks);
+    std::vector<std::unordered_map<uint32_t, uint32_t>> index(blocks);
+    PaletteLists out;
+    out.entries.resize(entry_box.size());
+    for (uint32_t c = 0; c < count; ++c) {
+        const uint32_t b = block_of(c);
+        for (uint32_t e = ranked_offsets[c]; e < ranked_offsets[size_t(c) + 1]; ++e) {
+            const auto [it, fresh] = index[b].emplace(entry_box[e], uint32_t(palette[b].size()));
+            if (fresh) palette[b].push_back(entry_box[e]);
+            out.entries[e] = it->second;
+        }
+    }
+    out.offsets.push_back(0);
+    for (const std::vector<uint32_t>& p : palette) {
+        out.boxes.insert(out.boxes.end(), p.begin(), p.end());
+        out.offsets.push_back(uint32_t(out.boxes.size()));
+        out.largest = std::max(out.largest, uint32_t(p.size()));
+    }
+    return out;
+}
+
 std::string assemble(const std::string& path, Bake& b, const RuntimeFileOptions& options) {
     const uint32_t objects = uint32_t(b.objects.names.size());
     const uint32_t cells = b.cells.count;
@@ -424,16 +475,29 @@ std::string assemble(const std::string& path, Bake& b, const RuntimeFileOptions&
             put(measures.bytes, b.occluders.ranked_hidden_objects[e]);
             put(measures.bytes, b.occluders.ranked_hidden_triangle_share[e]);
         }
-        Section list{PVSR_TAG('R', 'L', 'S', 'T'), 4, entry_box.size(), {}};
-        if (boxes.count <= 256) {
+        // 2.0: when it is smaller, each entry indexes the palette of its cell's block (the distinct boxes its
+        // cells name, in order of first use): neighbouring cells rank mostly the same boxes.
+        const PaletteLists palettes =
+            palette_lists(b.cells, cell_grid, b.occluders.ranked_offsets, entry_box);
+        const uint64_t direct_bytes = entry_box.size() * (boxes.count <= 256     ? 1
+                                                          : boxes.count <= 65536 ? 2
+                                                                                 : 4);
+        const bool use_palette = palettes.bytes() < direct_bytes;
+        const std::vector<uint32_t>& entries = use_palette ? palettes.entries : entry_box;
+        Section list{PVSR_TAG('R', 'L', 'S', 'T'), 4, entries.size(), {}};
+        if ((use_palette ? palettes.largest : boxes.count) <= 256) {
             list.item_bytes = 1;
-            for (uint32_t v : entry_box) put(list.bytes, uint8_t(v));
+            for (uint32_t v : entries) put(list.bytes, uint8_t(v));
         } else {
-            list = index_section(PVSR_TAG('R', 'L', 'S', 'T'), entry_box);
+            list = index_section(PVSR_TAG('R', 'L', 'S', 'T'), entries);
         }
         sections.push_back(std::move(boxes));
         sections.push_back(array_section(PVSR_TAG('R', 'O', 'F', 'S'), 4, b.occluders.ranked_offsets));
         sections.push_back(std::move(list));
+        if (use_palette) {
+            sections.push_back(array_section(PVSR_TAG('R', 'P', 'B', 'K'), 4, palettes.offsets));
+            sections.push_back(index_section(PVSR_TAG('R', 'P', 'A', 'L'), palettes.boxes));
+        }
         if (options.occluder_measures) sections.push_back(std::move(measures));
     }
     // 1.1: the polygons a ranking names, renumbered in order of first use ('OPLN': plane and corner range,

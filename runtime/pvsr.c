@@ -142,10 +142,46 @@ static uint32_t largest(const prescan* ps, const pvsr_array* a) {
     return max_item(a);
 }
 
-/* Entry e of the ranked occluders: its box (1, 2 or 4 bytes an entry). */
-static uint32_t ranked_box(const pvsr_level* l, uint64_t e) {
-    const pvsr_array* a = &l->ranked_boxes;
-    return a->item_bytes == 1 ? a->at[e] : a->item_bytes == 2 ? rd16(a->at + 2 * e) : rd32(a->at + 4 * e);
+/* 2.0: the block of the cell whose ranked entries index its palette: on a grid whose cells have positions,
+ * the 4 x 4 x 4 block of grid positions holding it (x fastest, then y, then z); else cells 64 c / 64 .. + 63.
+ */
+#define PVSR_PALETTE_SIDE 4u
+#define PVSR_PALETTE_CELLS 64u
+static uint32_t palette_block_count(const pvsr_level* l) {
+    uint32_t n[3];
+    int a;
+    if (!l->grid_identity && l->cell_grid.at == NULL)
+        return (uint32_t)(((uint64_t)l->cell_count + PVSR_PALETTE_CELLS - 1) / PVSR_PALETTE_CELLS);
+    for (a = 0; a < 3; ++a) n[a] = ((uint32_t)l->dims[a] + PVSR_PALETTE_SIDE - 1) / PVSR_PALETTE_SIDE;
+    return n[0] * n[1] * n[2];
+}
+
+static uint32_t palette_block(const pvsr_level* l, uint32_t cell) {
+    uint32_t g, d0, d1, n0, n1;
+    if (!l->grid_identity && l->cell_grid.at == NULL) return cell / PVSR_PALETTE_CELLS;
+    g = l->grid_identity ? cell : rd32(l->cell_grid.at + 4 * (uint64_t)cell);
+    d0 = (uint32_t)l->dims[0];
+    d1 = (uint32_t)l->dims[1];
+    n0 = (d0 + PVSR_PALETTE_SIDE - 1) / PVSR_PALETTE_SIDE;
+    n1 = (d1 + PVSR_PALETTE_SIDE - 1) / PVSR_PALETTE_SIDE;
+    return g % d0 / PVSR_PALETTE_SIDE +
+           n0 * (g / d0 % d1 / PVSR_PALETTE_SIDE + n1 * (g / (d0 * d1) / PVSR_PALETTE_SIDE));
+}
+
+static uint32_t array_item(const pvsr_array* a, uint64_t i) {
+    return a->item_bytes == 1 ? a->at[i] : a->item_bytes == 2 ? rd16(a->at + 2 * i) : rd32(a->at + 4 * i);
+}
+
+/* Entry e of the ranked occluders, of cell `cell`: its box (1, 2 or 4 bytes an entry; 2.0: through the
+ * palette of the cell's block when the file has one), or UINT32_MAX for an entry past its block's palette
+ * (only in a file made to pass the checksum: pvsr_open checks every entry against the largest palette). */
+static uint32_t ranked_box(const pvsr_level* l, uint32_t cell, uint64_t e) {
+    const uint32_t v = array_item(&l->ranked_boxes, e);
+    const uint8_t* block;
+    if (l->palette.at == NULL) return v;
+    block = l->palette_blocks.at + 4 * (uint64_t)palette_block(l, cell);
+    if (v >= rd32(block + 4) - rd32(block)) return UINT32_MAX;
+    return array_item(&l->palette, (uint64_t)rd32(block) + v);
 }
 
 static const char* const kEmpty = "";
@@ -669,8 +705,31 @@ static const char* check_ranked(pvsr_level* l, const prescan* ps) {
     l->occluder_box_count = (uint32_t)l->occluder_boxes.count;
     for (e = 0; e < l->occluder_boxes.count; ++e)
         if (!finite_box(l->occluder_boxes.at + 24 * e)) return "an occluder box is not finite";
-    if (l->ranked_boxes.count > 0 && largest(ps, &l->ranked_boxes) >= l->occluder_boxes.count)
+    if (section(l, PVSR_TAG('R', 'P', 'A', 'L'),
+                &l->palette)) { /* 2.0: entries index their block's palette */
+        const uint32_t blocks = palette_block_count(l);
+        uint32_t wrong = 0, largest_palette = 0;
+        if (l->version_major < 2) return "a palette of ranked occluders in a 1.x file";
+        bad = need(l, PVSR_TAG('R', 'P', 'A', 'L'), 0, UINT64_MAX, 1, &l->palette);
+        if (!bad) bad = need(l, PVSR_TAG('R', 'P', 'B', 'K'), 4, (uint64_t)blocks + 1, 1, &l->palette_blocks);
+        if (bad) return bad;
+        if (l->palette.count > 0 && max_item(&l->palette) >= l->occluder_boxes.count)
+            return "a ranked occluder names a box out of range";
+        if (rd32(l->palette_blocks.at) != 0 ||
+            rd32(l->palette_blocks.at + 4 * (uint64_t)blocks) != l->palette.count)
+            return "the palettes do not start at 0 and end at their entries' count";
+        for (c = 0; c < blocks; ++c) {
+            const uint32_t size = rd32(l->palette_blocks.at + 4 * c + 4) - rd32(l->palette_blocks.at + 4 * c);
+            wrong |= rd32(l->palette_blocks.at + 4 * c + 4) < rd32(l->palette_blocks.at + 4 * c);
+            largest_palette = size > largest_palette ? size : largest_palette;
+        }
+        if (wrong) return "the palettes' offsets decrease";
+        /* Within the largest palette here; within its own block's when read (ranked_box). */
+        if (l->ranked_boxes.count > 0 && largest(ps, &l->ranked_boxes) >= largest_palette)
+            return "a ranked occluder is out of its block's palette";
+    } else if (l->ranked_boxes.count > 0 && largest(ps, &l->ranked_boxes) >= l->occluder_boxes.count) {
         return "a ranked occluder names a box out of range";
+    }
     if (rd32(l->ranked_offsets.at) != 0 || rd32(l->ranked_offsets.at + 4 * (uint64_t)l->cell_count) != l->ranked_boxes.count)
         return "the ranked offsets do not start at 0 and end at the entries' count";
     {
@@ -1131,10 +1190,13 @@ uint32_t pvsr_occluder_count(const pvsr_level* l, uint32_t cell) {
 
 int pvsr_occluder(const pvsr_level* l, uint32_t cell, uint32_t rank, pvsr_ranked_occluder* out) {
     uint64_t e;
+    uint32_t box;
     int a;
     if (out == NULL || rank >= pvsr_occluder_count(l, cell)) return 0;
     e = (uint64_t)rd32(l->ranked_offsets.at + 4 * (uint64_t)cell) + rank;
-    for (a = 0; a < 6; ++a) out->box[a] = rdf(l->occluder_boxes.at + 24 * (uint64_t)ranked_box(l, e) + 4 * a);
+    box = ranked_box(l, cell, e);
+    if (box == UINT32_MAX) return 0;
+    for (a = 0; a < 6; ++a) out->box[a] = rdf(l->occluder_boxes.at + 24 * (uint64_t)box + 4 * a);
     if (l->ranked_measures.at != NULL) {
         const uint8_t* r = l->ranked_measures.at + PVSR_MEASURE_BYTES * e;
         out->score = rdf(r);
@@ -1182,7 +1244,10 @@ uint32_t pvsr_occluder_boxes(const pvsr_level* l, uint32_t cell, float* boxes, u
     if (boxes == NULL) return 0;
     for (k = 0; k < n; ++k) {
         pvsr_ranked_occluder o;
-        pvsr_occluder(l, cell, k, &o);
+        if (!pvsr_occluder(l, cell, k, &o)) { /* an entry past its palette (a forged file): an empty box */
+            o.box[0] = o.box[1] = o.box[2] = INFINITY;
+            o.box[3] = o.box[4] = o.box[5] = -INFINITY;
+        }
         memcpy(boxes + 6 * (size_t)k, o.box, sizeof o.box);
     }
     return n;

@@ -93,7 +93,7 @@ typedef struct pvsr_level {
     pvsr_array grid_to_cell, nodes, cell_grid, cell_boxes, view_tiles, eye_tiles, mask_refs, mask_bits,
         cell_row, row_offsets, code, object_boxes, object_triangles, object_flags, name_offsets, names,
         occluder_boxes, ranked_offsets, ranked_boxes, ranked_measures, strings, occluder_polygons,
-        polygon_corners, ranked_polygon_offsets, ranked_polygons;
+        polygon_corners, ranked_polygon_offsets, ranked_polygons, palette_blocks, palette;
     uint64_t code_bytes; /* the code without its padding */
     uint64_t total_triangles;
 } pvsr_level;
@@ -183,8 +183,10 @@ typedef struct pvsr_ranked_occluder {
     float hidden_triangle_share;
 } pvsr_ranked_occluder;
 uint32_t pvsr_occluder_count(const pvsr_level* level, uint32_t cell);
-/* The occluder of that rank (0 = best) into *out: 1, or 0 (out untouched) out of range. Its measures are NaN
- * when the file does not hold them (pvsr_has_occluder_measures: `pvsbake export --occluder-measures`). */
+/* The occluder of that rank (0 = best) into *out: 1, or 0 (out untouched) out of range (or, in a file made to
+ * pass the checksum, an entry past its block's palette: pvsr_occluder_boxes gives an empty box). Its measures
+ * are NaN when the file does not hold them (pvsr_has_occluder_measures: `pvsbake export
+ * --occluder-measures`). */
 int pvsr_occluder(const pvsr_level* level, uint32_t cell, uint32_t rank, pvsr_ranked_occluder* out);
 /* The boxes of the best min(count, capacity) occluders of the cell into boxes (6 floats each), best first;
  * returns how many were written. */

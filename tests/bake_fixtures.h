@@ -150,6 +150,33 @@ inline BakeData coherent_bake(uint32_t objects, glm::ivec3 dims, bool octree, bo
     return b;
 }
 
+// More ranked boxes than a byte indexes, so that the runtime file gives each block of cells a palette
+// (format 2.0): `boxes` proven boxes added, and every cell's ranking replaced by `per_cell` of them (at most
+// 40) drawn from a window of 40 that its 4 x 4 x 4 block of grid positions picks, best first: neighbours
+// rank mostly the same boxes. For bakes without polygons.
+inline void rank_many_boxes(BakeData& b, uint32_t boxes, uint32_t per_cell, uint32_t seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    const uint32_t first = uint32_t(b.occluders.size());
+    for (uint32_t i = 0; i < boxes; ++i) {
+        const glm::vec3 lo(u(rng) * 10.0f, u(rng) * 5.0f, u(rng) * 10.0f);
+        b.occluders.push_back(Occluder{Aabb::of(lo, lo + glm::vec3(0.5f, 1.5f, 2.0f)), 0.25f, true, {}});
+    }
+    b.ranked = {};
+    b.ranked.offsets = {0};
+    for (uint32_t c = 0; c < uint32_t(b.cells.size()); ++c) {
+        const glm::vec3 at = b.cells.cells[c].bounds.min - b.cells.origin;
+        const glm::ivec3 block = glm::ivec3(glm::floor(at / (4.0f * b.cells.cell_size_m)));
+        const uint32_t base = uint32_t(block.x * 73 + block.y * 151 + block.z * 233) % boxes;
+        for (uint32_t k = 0; k < std::min(per_cell, 40u); ++k) {
+            const uint32_t box = first + (base + (k * 7 + c % 3) % 40) % boxes;
+            b.ranked.entries.push_back(
+                RankedOccluder{box, 1.0f / float(k + 1), 0.01f * float(k), float(k % 3), 0.02f * float(k)});
+        }
+        b.ranked.offsets.push_back(uint32_t(b.ranked.entries.size()));
+    }
+}
+
 // The loader's ranked occluders are the bake's, each with its box (C++ and C), and its polygons (format 1.7)
 // at their places among them.
 inline void expect_same_ranked(const pvsbake::Bake& got, const BakeData& want) {

@@ -62,10 +62,11 @@ TEST(RuntimeFile, AGridOfEveryPositionIsStoredWithoutItsPositions) {
             for (uint32_t c = 0; c < level.cell_count; ++c) {
                 float box[6];
                 ASSERT_EQ(pvsr_cell_bounds(&level, c, box), 1);
-                if (!view)  // (the mask has holes)
+                if (!view) {  // (the mask has holes)
                     EXPECT_EQ(pvsr_find_cell(&level, 0.5f * (box[0] + box[3]), 0.5f * (box[1] + box[4]),
                                              0.5f * (box[2] + box[5])),
                               int32_t(c));
+                }
             }
             const uint16_t old_version[2] = {1, 1};
             std::memcpy(bytes.bytes() + 8, old_version, sizeof old_version);
@@ -84,6 +85,95 @@ TEST(RuntimeFile, AGridOfEveryPositionIsStoredWithoutItsPositions) {
     pvsr_status status;
     EXPECT_EQ(opened_message(bytes, &status), "");
     EXPECT_EQ(status, PVSR_OK);
+}
+
+// 2.0: with more ranked boxes than a byte indexes, each block of cells (4 x 4 x 4 grid positions, or 64
+// cells of an octree) gets a palette of the boxes its cells rank, and the entries index it in a byte: the
+// same answers as the HDF5 loader on grids with and without positions and on octrees. A damaged palette is
+// refused; an entry past its own block's palette but inside the largest (a file made to pass the checksum)
+// opens and reads as an empty box.
+TEST(RuntimeFile, BlocksOfCellsShareAPaletteOfRankedBoxes) {
+    for (int kind = 0; kind < 3; ++kind) {
+        SCOPED_TRACE(kind == 0 ? "grid" : kind == 1 ? "grid of every position" : "octree");
+        BakeData bake = test::coherent_bake(80, {13, 3, 13}, kind == 2, true, 31, false, kind == 1);
+        test::rank_many_boxes(bake, 600, 12, 5);
+        round_trip(bake, 17);
+        test::TempDir dir;
+        const std::string h5 = dir.file("palette.h5");
+        write_bake_file(h5, bake);
+        const Bytes good(runtime_file_bytes(h5));
+        pvsr_level l;
+        char message[256];
+        ASSERT_EQ(pvsr_open(&l, good.data(), good.size, message, sizeof message), PVSR_OK) << message;
+        ASSERT_NE(l.palette.at, nullptr);
+        EXPECT_EQ(l.ranked_boxes.item_bytes, 1u);
+        if (kind != 0) continue;
+        const auto offset = [&](const uint8_t* at) {
+            return size_t(at - static_cast<const uint8_t*>(good.data()));
+        };
+        const uint32_t* blocks = reinterpret_cast<const uint32_t*>(l.palette_blocks.at);
+        uint32_t largest = 0;
+        for (uint64_t k = 0; k + 1 < l.palette_blocks.count; ++k)
+            largest = std::max(largest, blocks[k + 1] - blocks[k]);
+        pvsr_status status;
+        {
+            Bytes b(good);  // a palette entry past the boxes
+            const uint32_t bad = l.occluder_box_count;
+            if (l.palette.item_bytes == 2) {
+                const uint16_t bad16 = uint16_t(bad);
+                std::memcpy(b.bytes() + offset(l.palette.at), &bad16, 2);
+            } else {
+                std::memcpy(b.bytes() + offset(l.palette.at), &bad, 4);
+            }
+            rechecksum(b);
+            EXPECT_EQ(opened_message(b, &status), "a ranked occluder names a box out of range");
+        }
+        {
+            Bytes b(good);  // the palettes' offsets decreasing
+            uint64_t k = 1;
+            while (k + 1 < l.palette_blocks.count && blocks[k] == 0) ++k;
+            ASSERT_LT(k + 1, l.palette_blocks.count);
+            const uint32_t bad = blocks[k] - 1;
+            std::memcpy(b.bytes() + offset(l.palette_blocks.at) + 4 * (k + 1), &bad, 4);
+            rechecksum(b);
+            EXPECT_EQ(opened_message(b, &status), "the palettes' offsets decrease");
+        }
+        {
+            Bytes b(good);  // an entry past every palette
+            b.bytes()[offset(l.ranked_boxes.at)] = uint8_t(largest);
+            rechecksum(b);
+            EXPECT_EQ(opened_message(b, &status), "a ranked occluder is out of its block's palette");
+        }
+        {
+            // An entry past its own block's palette but inside the largest: it opens, and reads as nothing.
+            uint32_t cell = UINT32_MAX;
+            for (uint32_t c = 0; c < l.cell_count && cell == UINT32_MAX; ++c) {
+                if (pvsr_occluder_count(&l, c) == 0) continue;
+                float box[6];
+                pvsr_cell_bounds(&l, c, box);
+                const int32_t g[3] = {int32_t(std::floor((box[0] + 1e-3f - l.origin[0]) / l.cell_size_m)),
+                                      int32_t(std::floor((box[1] + 1e-3f - l.origin[1]) / l.cell_size_m)),
+                                      int32_t(std::floor((box[2] + 1e-3f - l.origin[2]) / l.cell_size_m))};
+                const uint32_t n0 = (uint32_t(l.dims[0]) + 3) / 4, n1 = (uint32_t(l.dims[1]) + 3) / 4;
+                const uint32_t block =
+                    uint32_t(g[0]) / 4 + n0 * (uint32_t(g[1]) / 4 + n1 * (uint32_t(g[2]) / 4));
+                if (blocks[block + 1] - blocks[block] < largest) cell = c;
+            }
+            ASSERT_NE(cell, UINT32_MAX);
+            const uint32_t entry = reinterpret_cast<const uint32_t*>(l.ranked_offsets.at)[cell];
+            Bytes b(good);
+            b.bytes()[offset(l.ranked_boxes.at) + entry] = uint8_t(largest - 1);
+            rechecksum(b);
+            pvsr_level damaged;
+            ASSERT_EQ(pvsr_open(&damaged, b.data(), b.size, message, sizeof message), PVSR_OK) << message;
+            pvsr_ranked_occluder o;
+            EXPECT_EQ(pvsr_occluder(&damaged, cell, 0, &o), 0);
+            EXPECT_EQ(pvsr_occluder(&damaged, cell, 1, &o), 1);
+            std::vector<float> boxes(6 * 64);
+            ASSERT_GE(pvsr_occluder_boxes(&damaged, cell, boxes.data(), 64), 1u);
+            EXPECT_GT(boxes[0], boxes[3]);  // empty
+        }
+    }
 }
 
 // Around the 64-bit words, none at all, and past the 16,384 objects the walk XORs on the stack (it merges

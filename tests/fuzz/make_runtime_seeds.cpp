@@ -40,6 +40,15 @@ int main(int argc, char** argv) {
                 std::ofstream((out / ("seed_" + std::to_string(n++) + ".pvsr")).string(), std::ios::binary) << bytes;
                 std::filesystem::remove(h5);
             }
+    {  // ranked boxes through palettes (2.0)
+        pvs::BakeData bake = pvs::test::coherent_bake(12, {13, 2, 13}, false, false, 29);
+        pvs::test::rank_many_boxes(bake, 600, 24, 3);
+        const std::string h5 = (out / ("seed.h5")).string();
+        pvs::write_bake_file(h5, bake);
+        const std::string bytes = pvs::runtime_file_bytes(h5);
+        std::ofstream((out / ("seed_" + std::to_string(n++) + ".pvsr")).string(), std::ios::binary) << bytes;
+        std::filesystem::remove(h5);
+    }
     std::printf("make_runtime_seeds: %d seeds in %s\n", n, argv[1]);
     return 0;
 }

@@ -185,7 +185,10 @@ int main(int argc, char** argv) {
     write_case(out, dir, "grid_of_every_position",
                pvs::test::coherent_bake(90, {5, 3, 4}, false, true, 9, true, /*every_position=*/true), 6,
                true);
+    pvs::BakeData palettes = pvs::test::coherent_bake(80, {13, 3, 13}, false, true, 31);
+    pvs::test::rank_many_boxes(palettes, 600, 12, 5);
+    write_case(out, dir, "grid_with_palettes", palettes, 7, true);
     std::fclose(out);
-    std::printf("make_runtime_cases: 6 cases in %s\n", argv[1]);
+    std::printf("make_runtime_cases: 7 cases in %s\n", argv[1]);
     return 0;
 }
