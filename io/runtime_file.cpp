@@ -258,6 +258,7 @@ std::string assemble(const std::string& path, Bake& b, const RuntimeFileOptions&
         sections.push_back(std::move(s));
     }
     std::vector<uint32_t> cell_grid;  // each cell's grid position (a grid whose cells are their grid boxes)
+    bool grid_identity = false;       // a grid whose position g is cell g (2.0: no GRID, CGRD)
     {
         bool derived = b.cells.kind == 0;
         if (derived) {
@@ -285,9 +286,9 @@ std::string assemble(const std::string& path, Bake& b, const RuntimeFileOptions&
                 }
             }
         }
-        bool identity = derived && b.cells.grid_to_cell.size() == cells;
-        for (uint32_t c = 0; c < cells && identity; ++c) identity = cell_grid[c] == c;
-        if (identity) {
+        grid_identity = derived && b.cells.grid_to_cell.size() == cells;
+        for (uint32_t c = 0; c < cells && grid_identity; ++c) grid_identity = cell_grid[c] == c;
+        if (grid_identity) {
             sections.resize(placed_sections);  // GRID is implied
         } else if (derived) {
             sections.push_back(array_section(PVSR_TAG('C', 'G', 'R', 'D'), 4, cell_grid));
@@ -356,13 +357,19 @@ std::string assemble(const std::string& path, Bake& b, const RuntimeFileOptions&
     // in each the positions in breadth-first order from one near its centre, so that every cell but the first
     // of a block has a neighbour one step nearer that centre before it, and chains need not restart along a
     // line (docs/FORMAT.md, "The rows' code").
+    // On a grid of every position, every cell has a row of its own in block order (2.0): a cell's row is then
+    // its place in that order, computed where it is read (runtime/pvsr.c, block_rank), and CROW is left out;
+    // a row that repeats an earlier one is coded against it (twin).
+    const bool implicit_rows = grid_identity && options.block_order && b.pvs.row_bytes > 0;
+    std::vector<uint64_t> twin;
     if (!cell_grid.empty() && options.block_order && b.pvs.row_bytes > 0) {
         const int32_t* d = b.cells.dims;
         const uint32_t bytes = b.pvs.row_bytes;
         constexpr int32_t kRowBlock = 4;
         std::vector<uint32_t> new_row(size_t(b.pvs.unique_rows), UINT32_MAX);
+        std::vector<uint32_t> cell_own_row(implicit_rows ? cells : 0, UINT32_MAX);
         std::vector<uint8_t> rows;
-        rows.reserve(b.pvs.rows.size());
+        rows.reserve(implicit_rows ? size_t(cells) * b.pvs.row_bytes : b.pvs.rows.size());
         std::vector<std::array<int32_t, 3>> order;  // positions of a block, breadth first from (1, 1, 1)
         {
             std::vector<int32_t> seen(size_t(kRowBlock * kRowBlock * kRowBlock), 0);
@@ -393,6 +400,14 @@ std::string assemble(const std::string& path, Bake& b, const RuntimeFileOptions&
                                                  size_t(d[0]) * (size_t(y) + size_t(d[1]) * size_t(z))];
                         if (c < 0) continue;
                         const uint32_t r = b.pvs.cell_row[size_t(c)];
+                        if (implicit_rows) {
+                            twin.push_back(new_row[r] == UINT32_MAX ? UINT64_MAX : new_row[r]);
+                            if (new_row[r] == UINT32_MAX) new_row[r] = uint32_t(rows.size() / bytes);
+                            cell_own_row[size_t(c)] = uint32_t(rows.size() / bytes);
+                            rows.insert(rows.end(), b.pvs.rows.begin() + std::ptrdiff_t(size_t(r) * bytes),
+                                        b.pvs.rows.begin() + std::ptrdiff_t(size_t(r + 1) * bytes));
+                            continue;
+                        }
                         if (new_row[r] != UINT32_MAX) continue;
                         new_row[r] = uint32_t(rows.size() / bytes);
                         rows.insert(rows.end(), b.pvs.rows.begin() + std::ptrdiff_t(size_t(r) * bytes),
@@ -401,13 +416,19 @@ std::string assemble(const std::string& path, Bake& b, const RuntimeFileOptions&
                 }
             }
         }
-        for (uint64_t r = 0; r < b.pvs.unique_rows; ++r) {  // rows of no grid position (none on such a grid)
+        for (uint64_t r = 0; r < b.pvs.unique_rows && !implicit_rows;
+             ++r) {  // rows of no grid position (none)
             if (new_row[size_t(r)] != UINT32_MAX) continue;
             new_row[size_t(r)] = uint32_t(rows.size() / bytes);
             rows.insert(rows.end(), b.pvs.rows.begin() + std::ptrdiff_t(size_t(r) * bytes),
                         b.pvs.rows.begin() + std::ptrdiff_t(size_t(r + 1) * bytes));
         }
-        for (uint32_t& r : b.pvs.cell_row) r = new_row[r];
+        if (implicit_rows) {
+            b.pvs.cell_row = std::move(cell_own_row);
+            b.pvs.unique_rows = cells;
+        } else {
+            for (uint32_t& r : b.pvs.cell_row) r = new_row[r];
+        }
         b.pvs.rows = std::move(rows);
     }
     {
@@ -420,6 +441,7 @@ std::string assemble(const std::string& path, Bake& b, const RuntimeFileOptions&
             const int64_t at[3] = {int64_t(g % uint32_t(d[0])), int64_t(g / uint32_t(d[0]) % uint32_t(d[1])),
                                    int64_t(g / (uint32_t(d[0]) * uint32_t(d[1])))};
             const int64_t stride[3] = {1, d[0], int64_t(d[0]) * d[1]};
+            if (r < twin.size() && twin[size_t(r)] != UINT64_MAX) out.push_back(twin[size_t(r)]);
             for (int a = 0; a < 3; ++a) {  // the six neighbours (the encoder keeps the earlier rows)
                 for (const int64_t step : {-1, 1}) {
                     if (at[a] + step < 0 || at[a] + step >= d[a]) continue;
@@ -432,7 +454,7 @@ std::string assemble(const std::string& path, Bake& b, const RuntimeFileOptions&
         const pvsbake::detail::RowCode code = pvsbake::detail::encode_rows_chained(
             b.pvs.rows.data(), b.pvs.unique_rows, b.pvs.row_bytes, max_chain, neighbours);
         const uint64_t code_size = code.offsets.back();
-        sections.push_back(index_section(PVSR_TAG('C', 'R', 'O', 'W'), b.pvs.cell_row));
+        if (!implicit_rows) sections.push_back(index_section(PVSR_TAG('C', 'R', 'O', 'W'), b.pvs.cell_row));
         sections.push_back(index_section(PVSR_TAG('R', 'O', 'F', 'F'), code.offsets));
         Section s{PVSR_TAG('C', 'O', 'D', 'E'), 1, code_size, {}};
         s.bytes.assign(reinterpret_cast<const char*>(code.code.data()), size_t(code_size));

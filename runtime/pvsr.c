@@ -586,12 +586,20 @@ static const char* check_cells(pvsr_level* l, const prescan* ps) {
 static const char* check_row_sections(pvsr_level* l) {
     const uint32_t n = l->object_count;
     uint64_t code_size, padding;
-    const char* bad = need(l, PVSR_TAG('C', 'R', 'O', 'W'), 0, l->cell_count, 1, &l->cell_row);
+    pvsr_array grid;
+    /* 2.0: a grid of every position (no GRID) without CROW gives every cell its own row, in block order. */
+    const int implicit = l->version_major >= 2 && l->cell_kind == 0 &&
+                         !section(l, PVSR_TAG('G', 'R', 'I', 'D'), &grid) &&
+                         !section(l, PVSR_TAG('C', 'R', 'O', 'W'), &l->cell_row);
+    const char* bad =
+        implicit ? NULL : need(l, PVSR_TAG('C', 'R', 'O', 'W'), 0, l->cell_count, 1, &l->cell_row);
     if (!bad) bad = need(l, PVSR_TAG('R', 'O', 'F', 'F'), 0, UINT64_MAX, 1, &l->row_offsets);
     if (!bad) bad = need(l, PVSR_TAG('C', 'O', 'D', 'E'), 1, UINT64_MAX, 1, &l->code);
     if (bad) return bad;
     if (l->row_offsets.count < 1 || l->row_offsets.count - 1 > 0xffffffffu) return "the row offsets are empty";
     l->row_count = (uint32_t)(l->row_offsets.count - 1);
+    if (implicit && l->row_count != l->cell_count)
+        return "a grid whose cells have their own rows with another count of rows";
     code_size = l->code.count;
     l->code_bytes = code_size;
     /* The decoders read whole words past a row: the section holds the code and then at least this much. */
@@ -603,10 +611,40 @@ static const char* check_row_sections(pvsr_level* l) {
 
 /* The cells' rows in range and the row offsets' ends (after check_row_sections, before the rows). */
 static const char* check_row_ends(const pvsr_level* l, const prescan* ps) {
-    if (l->cell_count > 0 && largest(ps, &l->cell_row) >= l->row_count) return "a cell's row is out of range";
+    if (l->cell_row.at != NULL && l->cell_count > 0 && largest(ps, &l->cell_row) >= l->row_count)
+        return "a cell's row is out of range";
     if (index_at(&l->row_offsets, 0) != 0 || index_at(&l->row_offsets, l->row_count) != l->code.count)
         return "the row offsets do not start at 0 and end at the code's size";
     return NULL;
+}
+
+/* 2.0: the positions of a 4 x 4 x 4 block (x + 4 (y + 4 z)) breadth first from (1, 1, 1), neighbours taken
+ * -x, +x, -y, +y, -z, +z: the order of the rows of a grid whose cells have their own rows. */
+static const uint8_t kBlockOrder[64] = {21, 20, 22, 17, 25, 5,  37, 16, 24, 4,  36, 23, 18, 26, 6,  38,
+                                        1,  33, 29, 9,  41, 53, 0,  32, 28, 8,  40, 52, 19, 27, 7,  39,
+                                        2,  34, 30, 10, 42, 54, 49, 13, 45, 57, 48, 12, 44, 56, 3,  35,
+                                        31, 11, 43, 55, 50, 14, 46, 58, 61, 60, 51, 15, 47, 59, 62, 63};
+
+/* The place of grid position g in block order: the blocks of 4 x 4 x 4 positions x fastest, then y, then z
+ * (cut at the grid's faces), and in each its positions in kBlockOrder. */
+static uint32_t block_rank(const pvsr_level* l, uint32_t g) {
+    const uint32_t dx = (uint32_t)l->dims[0], dy = (uint32_t)l->dims[1], dz = (uint32_t)l->dims[2];
+    const uint32_t x = g % dx, y = g / dx % dy, z = g / (dx * dy);
+    const uint32_t bx = x & ~3u, by = y & ~3u, bz = z & ~3u;
+    const uint32_t tx = dx - bx < 4u ? dx - bx : 4u, ty = dy - by < 4u ? dy - by : 4u,
+                   tz = dz - bz < 4u ? dz - bz : 4u;
+    const uint32_t want = (x - bx) + 4u * ((y - by) + 4u * (z - bz));
+    uint32_t r = bz * dx * dy + by * dx * tz + bx * ty * tz, i;
+    for (i = 0; i < 64u && kBlockOrder[i] != want; ++i) {
+        const uint32_t p = kBlockOrder[i];
+        r += (p & 3u) < tx && (p >> 2 & 3u) < ty && (p >> 4) < tz;
+    }
+    return r;
+}
+
+/* The row of a cell (in range: checked at open). */
+static uint32_t cell_row(const pvsr_level* l, uint32_t cell) {
+    return l->cell_row.at != NULL ? index_at(&l->cell_row, cell) : block_rank(l, cell);
 }
 
 /* Rows whose chain lengths check_row keeps (a power of 2): a row coded against one of the rows just before
@@ -1049,7 +1087,7 @@ static uint32_t walk(const pvsr_level* l, uint32_t cell, const sink* s) {
     uint32_t count = 0, i, a, b;
     int n;
     if (l == NULL || cell >= l->cell_count) return 0;
-    n = row_chain(l, index_at(&l->cell_row, cell), chain);
+    n = row_chain(l, cell_row(l, cell), chain);
 #define PVSR_GIVE(object)                                 \
     do {                                                  \
         const uint32_t o_ = (object);                     \
@@ -1138,7 +1176,7 @@ uint32_t pvsr_fill_bitset(const pvsr_level* l, uint32_t cell, uint64_t* words, s
     size_t w;
     if (l == NULL || words == NULL || cell >= l->cell_count || word_count < pvsr_words_per_row(l)) return 0xffffffffu;
     memset(words, 0, word_count * sizeof(uint64_t));
-    xor_chain(chain, row_chain(l, index_at(&l->cell_row, cell), chain), words);
+    xor_chain(chain, row_chain(l, cell_row(l, cell), chain), words);
     for (w = 0; w < pvsr_words_per_row(l); ++w) count += popcount64(words[w]);
     return count;
 }
@@ -1148,7 +1186,7 @@ int pvsr_is_visible(const pvsr_level* l, uint32_t cell, uint32_t object) {
     uint32_t i;
     int in = 0, n, k;
     if (l == NULL || cell >= l->cell_count || object >= l->object_count) return 0;
-    n = row_chain(l, index_at(&l->cell_row, cell), chain);
+    n = row_chain(l, cell_row(l, cell), chain);
     for (k = 0; k < n; ++k) { /* in when an odd number of the chain's rows hold it */
         for (i = gap_next(&chain[k]); i < object; i = gap_next(&chain[k])) {
         }

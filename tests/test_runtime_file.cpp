@@ -37,7 +37,8 @@ TEST(RuntimeFile, GridsAndOctreesAnswerAsTheHdf5Loader) {
         }
 }
 
-// 2.0: a grid whose position g is cell g is stored without GRID and CGRD, and answers as before; an octree
+// 2.0: a grid whose position g is cell g is stored without GRID, CGRD and CROW (each cell has its own row,
+// in block order), and answers as before; an octree
 // over every position keeps its root grid. The same file labelled 1.1 is refused (1.x requires GRID), and a
 // 1.1 file (with GRID) still opens.
 TEST(RuntimeFile, AGridOfEveryPositionIsStoredWithoutItsPositions) {
@@ -58,6 +59,7 @@ TEST(RuntimeFile, AGridOfEveryPositionIsStoredWithoutItsPositions) {
             EXPECT_EQ(level.grid_identity, octree ? 0u : 1u);
             EXPECT_EQ(level.grid_to_cell.at == nullptr, !octree);
             EXPECT_EQ(level.cell_grid.at, nullptr);
+            EXPECT_EQ(level.cell_row.at == nullptr, !octree);  // every cell its own row, in block order
             if (octree) continue;
             for (uint32_t c = 0; c < level.cell_count; ++c) {
                 float box[6];
