@@ -258,7 +258,8 @@ std::string assemble(const std::string& path, Bake& b, const RuntimeFileOptions&
         sections.push_back(std::move(s));
     }
     std::vector<uint32_t> cell_grid;  // each cell's grid position (a grid whose cells are their grid boxes)
-    bool grid_identity = false;       // a grid whose position g is cell g (2.0: no GRID, CGRD)
+    bool grid_identity =
+        false;  // a grid whose cells are its (occupied) positions in order (2.0: no GRID, CGRD)
     {
         bool derived = b.cells.kind == 0;
         if (derived) {
@@ -286,10 +287,20 @@ std::string assemble(const std::string& path, Bake& b, const RuntimeFileOptions&
                 }
             }
         }
-        grid_identity = derived && b.cells.grid_to_cell.size() == cells;
-        for (uint32_t c = 0; c < cells && grid_identity; ++c) grid_identity = cell_grid[c] == c;
+        grid_identity = derived && b.cells.grid_to_cell.size() <= UINT32_MAX;
+        for (uint32_t c = 1; c < cells && grid_identity; ++c) grid_identity = cell_grid[c - 1] < cell_grid[c];
         if (grid_identity) {
-            sections.resize(placed_sections);  // GRID is implied
+            sections.resize(placed_sections);  // GRID is implied: every position a cell, or an occupancy mask
+            const size_t positions = b.cells.grid_to_cell.size();
+            if (positions != cells) {
+                std::vector<uint64_t> occupied((positions + 63) / 64, 0);
+                std::vector<uint32_t> before(occupied.size(), 0);
+                for (const uint32_t g : cell_grid) occupied[g / 64] |= uint64_t(1) << (g % 64);
+                for (size_t w = 1; w < occupied.size(); ++w)
+                    before[w] = before[w - 1] + uint32_t(__builtin_popcountll(occupied[w - 1]));
+                sections.push_back(array_section(PVSR_TAG('G', 'O', 'C', 'C'), 8, occupied));
+                sections.push_back(array_section(PVSR_TAG('G', 'O', 'C', 'R'), 4, before));
+            }
         } else if (derived) {
             sections.push_back(array_section(PVSR_TAG('C', 'G', 'R', 'D'), 4, cell_grid));
         } else {
@@ -360,7 +371,9 @@ std::string assemble(const std::string& path, Bake& b, const RuntimeFileOptions&
     // On a grid of every position, every cell has a row of its own in block order (2.0): a cell's row is then
     // its place in that order, computed where it is read (runtime/pvsr.c, block_rank), and CROW is left out;
     // a row that repeats an earlier one is coded against it (twin).
-    const bool implicit_rows = grid_identity && options.block_order && b.pvs.row_bytes > 0;
+    const size_t positions = b.cells.grid_to_cell.size();
+    const bool implicit_rows = grid_identity && options.block_order && b.pvs.row_bytes > 0 &&
+                               (positions - cells) * 16 <= positions;  // few empty rows to code
     std::vector<uint64_t> twin;
     if (!cell_grid.empty() && options.block_order && b.pvs.row_bytes > 0) {
         const int32_t* d = b.cells.dims;
@@ -368,8 +381,9 @@ std::string assemble(const std::string& path, Bake& b, const RuntimeFileOptions&
         constexpr int32_t kRowBlock = 4;
         std::vector<uint32_t> new_row(size_t(b.pvs.unique_rows), UINT32_MAX);
         std::vector<uint32_t> cell_own_row(implicit_rows ? cells : 0, UINT32_MAX);
+        uint64_t empty_row = UINT64_MAX;
         std::vector<uint8_t> rows;
-        rows.reserve(implicit_rows ? size_t(cells) * b.pvs.row_bytes : b.pvs.rows.size());
+        rows.reserve(implicit_rows ? positions * b.pvs.row_bytes : b.pvs.rows.size());
         std::vector<std::array<int32_t, 3>> order;  // positions of a block, breadth first from (1, 1, 1)
         {
             std::vector<int32_t> seen(size_t(kRowBlock * kRowBlock * kRowBlock), 0);
@@ -398,6 +412,12 @@ std::string assemble(const std::string& path, Bake& b, const RuntimeFileOptions&
                         const int32_t c =
                             b.cells.grid_to_cell[size_t(x) +
                                                  size_t(d[0]) * (size_t(y) + size_t(d[1]) * size_t(z))];
+                        if (c < 0 && implicit_rows) {  // an empty position: an empty row (never read)
+                            twin.push_back(empty_row);
+                            if (empty_row == UINT64_MAX) empty_row = rows.size() / bytes;
+                            rows.resize(rows.size() + bytes, 0);
+                            continue;
+                        }
                         if (c < 0) continue;
                         const uint32_t r = b.pvs.cell_row[size_t(c)];
                         if (implicit_rows) {
@@ -425,7 +445,7 @@ std::string assemble(const std::string& path, Bake& b, const RuntimeFileOptions&
         }
         if (implicit_rows) {
             b.pvs.cell_row = std::move(cell_own_row);
-            b.pvs.unique_rows = cells;
+            b.pvs.unique_rows = positions;
         } else {
             for (uint32_t& r : b.pvs.cell_row) r = new_row[r];
         }
@@ -436,12 +456,12 @@ std::string assemble(const std::string& path, Bake& b, const RuntimeFileOptions&
         for (uint32_t c = 0; c < cells; ++c) first_cell[b.pvs.cell_row[c]] = std::min<uint64_t>(first_cell[b.pvs.cell_row[c]], c);
         const int32_t* d = b.cells.dims;
         const auto neighbours = [&](uint64_t r, std::vector<uint64_t>& out) {
+            if (r < twin.size() && twin[size_t(r)] != UINT64_MAX) out.push_back(twin[size_t(r)]);
             if (cell_grid.empty() || first_cell[size_t(r)] == UINT64_MAX) return;
             const uint32_t g = cell_grid[size_t(first_cell[size_t(r)])];
             const int64_t at[3] = {int64_t(g % uint32_t(d[0])), int64_t(g / uint32_t(d[0]) % uint32_t(d[1])),
                                    int64_t(g / (uint32_t(d[0]) * uint32_t(d[1])))};
             const int64_t stride[3] = {1, d[0], int64_t(d[0]) * d[1]};
-            if (r < twin.size() && twin[size_t(r)] != UINT64_MAX) out.push_back(twin[size_t(r)]);
             for (int a = 0; a < 3; ++a) {  // the six neighbours (the encoder keeps the earlier rows)
                 for (const int64_t step : {-1, 1}) {
                     if (at[a] + step < 0 || at[a] + step >= d[a]) continue;

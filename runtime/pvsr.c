@@ -142,6 +142,42 @@ static uint32_t largest(const prescan* ps, const pvsr_array* a) {
     return max_item(a);
 }
 
+/* 2.0, a grid without GRID: the cell at grid position g (-1 for none): g itself, or, with an occupancy mask
+ * (GOCC, one bit a position), the number of occupied positions before g (GOCR: per 64 positions, those
+ * before them). */
+static int32_t cell_of_position(const pvsr_level* l, uint64_t g) {
+    uint64_t word;
+    if (l->occupancy.at == NULL) return (int32_t)g;
+    word = rd64(l->occupancy.at + 8 * (g >> 6));
+    if (!((word >> (g & 63u)) & 1u)) return -1;
+    word &= ((uint64_t)1 << (g & 63u)) - 1u;
+    return (int32_t)(rd32(l->occupancy_ranks.at + 4 * (g >> 6)) + (uint32_t)popcount64(word));
+}
+
+/* The grid position of a cell of a grid whose cells have positions (in range: checked at open). */
+static uint32_t cell_position(const pvsr_level* l, uint32_t cell) {
+    uint64_t lo = 0, hi;
+    uint64_t word;
+    uint32_t left;
+    if (!l->grid_identity) return rd32(l->cell_grid.at + 4 * (uint64_t)cell);
+    if (l->occupancy.at == NULL) return cell;
+    hi = l->occupancy_ranks.count; /* the last word whose rank is at most cell */
+    while (hi - lo > 1) {
+        const uint64_t mid = lo + (hi - lo) / 2;
+        if (rd32(l->occupancy_ranks.at + 4 * mid) <= cell)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    word = rd64(l->occupancy.at + 8 * lo);
+    left = cell - rd32(l->occupancy_ranks.at + 4 * lo);
+    while (left > 0 && word != 0) { /* the (left + 1)-th set bit */
+        word &= word - 1u;
+        --left;
+    }
+    return (uint32_t)(64u * lo + (uint32_t)ctz64(word));
+}
+
 /* 2.0: the block of the cell whose ranked entries index its palette: on a grid whose cells have positions,
  * the 4 x 4 x 4 block of grid positions holding it (x fastest, then y, then z); else cells 64 c / 64 .. + 63.
  */
@@ -159,7 +195,7 @@ static uint32_t palette_block_count(const pvsr_level* l) {
 static uint32_t palette_block(const pvsr_level* l, uint32_t cell) {
     uint32_t g, d0, d1, n0, n1;
     if (!l->grid_identity && l->cell_grid.at == NULL) return cell / PVSR_PALETTE_CELLS;
-    g = l->grid_identity ? cell : rd32(l->cell_grid.at + 4 * (uint64_t)cell);
+    g = cell_position(l, cell);
     d0 = (uint32_t)l->dims[0];
     d1 = (uint32_t)l->dims[1];
     n0 = (d0 + PVSR_PALETTE_SIDE - 1) / PVSR_PALETTE_SIDE;
@@ -497,11 +533,32 @@ static const char* check_level(pvsr_level* l, const prescan* ps) {
     if (g > (1u << 31)) return "the grid has too many cells";
     if (l->cell_kind > 1) return "the cell kind is neither grid nor octree";
     if (l->cell_kind == 0 && l->node_count != 0) return "a grid with octree nodes";
-    /* 2.0: a grid whose every position is a cell, position g cell g, has neither GRID nor CGRD. */
+    /* 2.0: a grid whose cells are its positions in order has neither GRID nor CGRD: every position a cell
+     * (cell g at position g), or the occupied ones of an occupancy mask. */
     l->grid_identity =
         l->version_major >= 2 && l->cell_kind == 0 && !section(l, PVSR_TAG('G', 'R', 'I', 'D'), &a);
-    if (l->grid_identity && g != l->cell_count)
+    if (l->grid_identity && section(l, PVSR_TAG('G', 'O', 'C', 'C'), &l->occupancy)) {
+        const uint64_t words = (g + 63u) / 64u;
+        uint64_t w;
+        uint32_t before = 0;
+        bad = need(l, PVSR_TAG('G', 'O', 'C', 'C'), 8, words, 1, &l->occupancy);
+        if (!bad) bad = need(l, PVSR_TAG('G', 'O', 'C', 'R'), 4, words, 1, &l->occupancy_ranks);
+        if (bad) return bad;
+        for (w = 0; w < words; ++w) {
+            const uint64_t word = rd64(l->occupancy.at + 8 * w);
+            if (rd32(l->occupancy_ranks.at + 4 * w) != before)
+                return "the occupancy's counts disagree with its bits";
+            if (w + 1 == words && (g & 63u) != 0 && (word >> (g & 63u)) != 0)
+                return "the occupancy marks positions past the grid";
+            before += (uint32_t)popcount64(word);
+        }
+        if (before != l->cell_count) return "the occupancy's positions are not the cells";
+    } else if (l->grid_identity && g != l->cell_count) {
         return "a grid without positions whose cells are not its positions";
+    }
+    /* Cells with their own rows (no CROW): one row a grid position, in block order. */
+    if (l->grid_identity && l->cell_row.at == NULL && l->row_count != g)
+        return "a grid whose cells have their own rows with another count of rows";
     bad = l->grid_identity ? NULL : need(l, PVSR_TAG('G', 'R', 'I', 'D'), 4, g, 1, &l->grid_to_cell);
     if (bad) return bad;
     if (l->mask_flags & PVSR_MASK_VIEW) {
@@ -598,8 +655,6 @@ static const char* check_row_sections(pvsr_level* l) {
     if (bad) return bad;
     if (l->row_offsets.count < 1 || l->row_offsets.count - 1 > 0xffffffffu) return "the row offsets are empty";
     l->row_count = (uint32_t)(l->row_offsets.count - 1);
-    if (implicit && l->row_count != l->cell_count)
-        return "a grid whose cells have their own rows with another count of rows";
     code_size = l->code.count;
     l->code_bytes = code_size;
     /* The decoders read whole words past a row: the section holds the code and then at least this much. */
@@ -644,7 +699,7 @@ static uint32_t block_rank(const pvsr_level* l, uint32_t g) {
 
 /* The row of a cell (in range: checked at open). */
 static uint32_t cell_row(const pvsr_level* l, uint32_t cell) {
-    return l->cell_row.at != NULL ? index_at(&l->cell_row, cell) : block_rank(l, cell);
+    return l->cell_row.at != NULL ? index_at(&l->cell_row, cell) : block_rank(l, cell_position(l, cell));
 }
 
 /* Rows whose chain lengths check_row keeps (a power of 2): a row coded against one of the rows just before
@@ -1018,7 +1073,7 @@ int32_t pvsr_find_cell(const pvsr_level* l, float x, float y, float z) {
         idx[a] = f < l->dims[a] - 1 ? f : l->dims[a] - 1;
     }
     g = (uint64_t)idx[0] + (uint64_t)l->dims[0] * ((uint64_t)idx[1] + (uint64_t)l->dims[1] * (uint64_t)idx[2]);
-    if (l->grid_identity) return (int32_t)g;
+    if (l->grid_identity) return cell_of_position(l, g);
     n = rdi32(l->grid_to_cell.at + 4 * g);
     if (l->cell_kind == 0) return n;
     while (n >= 0) { /* children come after their parent (checked): this ends */
@@ -1043,7 +1098,7 @@ int pvsr_cell_bounds(const pvsr_level* l, uint32_t cell, float box[6]) {
         return 1;
     }
     {
-        const uint32_t g = l->grid_identity ? cell : rd32(l->cell_grid.at + 4 * (uint64_t)cell);
+        const uint32_t g = cell_position(l, cell);
         const uint32_t idx[3] = {g % (uint32_t)l->dims[0], g / (uint32_t)l->dims[0] % (uint32_t)l->dims[1],
                                  g / ((uint32_t)l->dims[0] * (uint32_t)l->dims[1])};
         for (a = 0; a < 3; ++a) {

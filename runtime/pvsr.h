@@ -85,7 +85,7 @@ typedef struct pvsr_level {
     uint32_t version_major, version_minor;
     uint32_t flags, mask_flags;
     uint32_t object_count, cell_count, cell_kind, node_count, row_count, occluder_box_count;
-    uint32_t grid_identity; /* 2.0: a grid whose position g is cell g, stored without GRID and CGRD */
+    uint32_t grid_identity; /* 2.0: a grid whose cells are its (occupied) positions in order: no GRID, CGRD */
     float origin[3], cell_size_m;
     int32_t dims[3];
     float mask_origin[3], mask_voxel_m;
@@ -93,7 +93,8 @@ typedef struct pvsr_level {
     pvsr_array grid_to_cell, nodes, cell_grid, cell_boxes, view_tiles, eye_tiles, mask_refs, mask_bits,
         cell_row, row_offsets, code, object_boxes, object_triangles, object_flags, name_offsets, names,
         occluder_boxes, ranked_offsets, ranked_boxes, ranked_measures, strings, occluder_polygons,
-        polygon_corners, ranked_polygon_offsets, ranked_polygons, palette_blocks, palette;
+        polygon_corners, ranked_polygon_offsets, ranked_polygons, palette_blocks, palette, occupancy,
+        occupancy_ranks;
     uint64_t code_bytes; /* the code without its padding */
     uint64_t total_triangles;
 } pvsr_level;

@@ -78,8 +78,8 @@ TEST(RuntimeFile, AGridOfEveryPositionIsStoredWithoutItsPositions) {
             EXPECT_EQ(status, PVSR_CORRUPT);
         }
     test::TempDir dir;
-    const std::string h5 = dir.file("sparse.h5");
-    write_bake_file(h5, test::coherent_bake(50, {4, 2, 3}, false, true, 4));
+    const std::string h5 = dir.file("octree.h5");  // an octree keeps its root grid (GRID) and cell boxes
+    write_bake_file(h5, test::coherent_bake(50, {4, 2, 3}, true, true, 4));
     Bytes bytes(runtime_file_bytes(h5));
     const uint16_t old_version[2] = {1, 1};
     std::memcpy(bytes.bytes() + 8, old_version, sizeof old_version);
@@ -109,6 +109,7 @@ TEST(RuntimeFile, BlocksOfCellsShareAPaletteOfRankedBoxes) {
         ASSERT_EQ(pvsr_open(&l, good.data(), good.size, message, sizeof message), PVSR_OK) << message;
         ASSERT_NE(l.palette.at, nullptr);
         EXPECT_EQ(l.ranked_boxes.item_bytes, 1u);
+        EXPECT_EQ(l.occupancy.at != nullptr, kind == 0);  // a grid with empty positions: an occupancy mask
         if (kind != 0) continue;
         const auto offset = [&](const uint8_t* at) {
             return size_t(at - static_cast<const uint8_t*>(good.data()));
@@ -118,6 +119,13 @@ TEST(RuntimeFile, BlocksOfCellsShareAPaletteOfRankedBoxes) {
         for (uint64_t k = 0; k + 1 < l.palette_blocks.count; ++k)
             largest = std::max(largest, blocks[k + 1] - blocks[k]);
         pvsr_status status;
+        {
+            Bytes b(good);  // an occupancy count that disagrees with the bits before it
+            const uint32_t bad = reinterpret_cast<const uint32_t*>(l.occupancy_ranks.at)[1] + 1;
+            std::memcpy(b.bytes() + offset(l.occupancy_ranks.at) + 4, &bad, 4);
+            rechecksum(b);
+            EXPECT_EQ(opened_message(b, &status), "the occupancy's counts disagree with its bits");
+        }
         {
             Bytes b(good);  // a palette entry past the boxes
             const uint32_t bad = l.occluder_box_count;
