@@ -644,7 +644,7 @@ static const char* check_row_sections(pvsr_level* l) {
     const uint32_t n = l->object_count;
     uint64_t code_size, padding;
     pvsr_array grid;
-    /* 2.0: a grid of every position (no GRID) without CROW gives every cell its own row, in block order. */
+    /* 2.0: a grid without GRID and without CROW gives every grid position its own row, in block order. */
     const int implicit = l->version_major >= 2 && l->cell_kind == 0 &&
                          !section(l, PVSR_TAG('G', 'R', 'I', 'D'), &grid) &&
                          !section(l, PVSR_TAG('C', 'R', 'O', 'W'), &l->cell_row);

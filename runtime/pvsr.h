@@ -184,9 +184,9 @@ typedef struct pvsr_ranked_occluder {
     float hidden_triangle_share;
 } pvsr_ranked_occluder;
 uint32_t pvsr_occluder_count(const pvsr_level* level, uint32_t cell);
-/* The occluder of that rank (0 = best) into *out: 1, or 0 (out untouched) out of range (or, in a file made to
- * pass the checksum, an entry past its block's palette: pvsr_occluder_boxes gives an empty box). Its measures
- * are NaN when the file does not hold them (pvsr_has_occluder_measures: `pvsbake export
+/* The occluder of that rank (0 = best) into *out: 1, or 0 (out untouched) out of range (or, in a file made
+ * to pass the checksum, an entry past its block's palette: pvsr_occluder_boxes gives an empty box). Its
+ * measures are NaN when the file does not hold them (pvsr_has_occluder_measures: `pvsbake export
  * --occluder-measures`). */
 int pvsr_occluder(const pvsr_level* level, uint32_t cell, uint32_t rank, pvsr_ranked_occluder* out);
 /* The boxes of the best min(count, capacity) occluders of the cell into boxes (6 floats each), best first;
