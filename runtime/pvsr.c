@@ -2105,11 +2105,10 @@ static int hidden_by_faces(const pvsr_culler* c, const float box[6]) {
         }
     }
     if (f.p < 0) return 0;
-    for (a = 0; a < 9; ++a) { /* the centre and the corners: one that nothing hides shows the box */
+    for (a = 0; a < 8; ++a) { /* the corners (classify tried the centre): one nothing hides shows the box */
         double x[3];
         int b;
-        for (b = 0; b < 3; ++b)
-            x[b] = a == 0 ? 0.5 * (q[b] + q[3 + b]) : ((a - 1) >> b & 1) ? q[3 + b] : q[b];
+        for (b = 0; b < 3; ++b) x[b] = (a >> b & 1) ? q[3 + b] : q[b];
         if (!point_behind_a_face(c, x)) return 0;
     }
     f.u = (f.p + 1) % 3;
