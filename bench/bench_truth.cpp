@@ -3,7 +3,7 @@
 // every listed object (the truth bench).
 //
 //   bench_truth WORLD.glb BAKE.h5 [--cells N] [--eyes E] [--rays R] [--seed S] [--vis V.json]
-//               [--lower-bound-eyes L] [--allow-few-rays]
+//               [--lower-bound-eyes L] [--allow-few-rays] [--extreme-rays]
 //
 // Cells: N (default 30) distinct cells drawn at random (seed S, default 1) among the bake's cells (grid or
 // octree) that have eye space: some voxel of the bake's eye mask (cells.eyes) meets the cell's box with
@@ -11,25 +11,30 @@
 // eye voxels clipped to the cell's box (a voxel by its clipped volume, then a uniform point in it; a bake
 // with no eye mask: the whole box). Truth: for every object the cell's row lists (objects with triangles),
 // up to R rays (default 65536; at least 16384, the least the definition allows, fewer only with
-// --allow-few-rays, for smoke tests), each from the next eye (cycling from a random one) to a random point on the object
-// (a triangle of the object picked by area, then a uniform point in it). The object is VISIBLE from the cell
-// as soon as one ray reaches its point: no opaque triangle of the world, other than the one the point lies
-// on, meets the segment from the eye to 1 - 1e-5 of the way to the point (see-through triangles never
-// block; docs/ALGORITHMS.md#words). Rays are traced with Embree against the world's triangles alone:
+// --allow-few-rays, for smoke tests), each from the next eye (cycling from a random one) to a random point on
+// the object (a triangle of the object picked by area, then a uniform point in it). The object is VISIBLE
+// from the cell as soon as one ray reaches its point: no opaque triangle of the world, other than the one the
+// point lies on, meets the segment from the eye to 1 - 1e-5 of the way to the point (see-through triangles
+// never block; docs/ALGORITHMS.md#words). Rays are traced with Embree against the world's triangles alone:
 // nothing of the solver (pvs/) decides. Visible objects are a lower bound of what the cell sees (R rays per
 // object sample it), and with a conservative bake every one of them is listed.
-// Figures: listed and visible objects and triangles summed over the cells; listed / visible by triangles
-// (the headline: sum of listed triangles / sum of visible triangles) and by objects; the listed and visible
-// shares of the world's triangles (mean over cells); the median over cells of the per-cell ratio.
-// Beside them: (a) the map compiler (WORLD.vis.json beside the world, or --vis): at every eye point the
-// compiler's BSP calls playable, the share of the world's triangles its cluster PVS lets through
-// (bench_util.h CompilerVis); bake share / compiler share and visible share / compiler share, ratios of the
-// means over those eye points; (b) the lower bound (L eyes per cell, default 64, 0 = off): the AGGRESSIVE
-// sampled PVS of the same cells, exactly the rows bake_sampled_pvs (rays/ray_sampler.h) gives them with
-// eyes_per_cell = L in the whole bake (as in bench_vis_compare), its triangle share and bake / lower bound.
-// Deterministic for a seed at any thread count: eyes from (seed, cell), rays from (seed, cell, object).
-// Prints JSON on stdout, progress on stderr. Exit status 2 on bad input (the message names the file or
-// option).
+// With --extreme-rays, a listed object no aimed ray reached gets rays from the eye space's 26 extreme points
+// (per direction of the 3 x 3 x 3 block, the farthest corner of an eye voxel piece, a hair inside it) to a
+// point near each corner of (up to 256 of) its triangles, inside the triangle by at least 1% of the way to
+// its centre and 100 times the ray's end margin (1 - 1e-6 of the way): sight that passes an occluder's edge
+// only from the rim of the eye space to the rim of an object, which random points rarely hit. What they reach
+// is visible by the same definition; `visible_found_by_extreme_rays` counts it. Figures: listed and visible
+// objects and triangles summed over the cells; listed / visible by triangles (the headline: sum of listed
+// triangles / sum of visible triangles) and by objects; the listed and visible shares of the world's
+// triangles (mean over cells); the median over cells of the per-cell ratio. Beside them: (a) the map compiler
+// (WORLD.vis.json beside the world, or --vis): at every eye point the compiler's BSP calls playable, the
+// share of the world's triangles its cluster PVS lets through (bench_util.h CompilerVis); bake share /
+// compiler share and visible share / compiler share, ratios of the means over those eye points; (b) the lower
+// bound (L eyes per cell, default 64, 0 = off): the AGGRESSIVE sampled PVS of the same cells, exactly the
+// rows bake_sampled_pvs (rays/ray_sampler.h) gives them with eyes_per_cell = L in the whole bake (as in
+// bench_vis_compare), its triangle share and bake / lower bound. Deterministic for a seed at any thread
+// count: eyes from (seed, cell), rays from (seed, cell, object). Prints JSON on stdout, progress on stderr.
+// Exit status 2 on bad input (the message names the file or option).
 #include "bench/aimed_rays.h"
 #include "bench/bench_util.h"
 #include "core/error.h"
@@ -130,6 +135,7 @@ glm::vec3 random_eye(const EyeSpace& space, pvs::Rng& rng) {
 struct CellFigures {
     uint32_t cell = 0;
     std::vector<glm::vec3> eyes;
+    std::vector<glm::vec3> extremes;  // with --extreme-rays: the eye space's extreme corners
     std::vector<uint32_t> listed;  // listed objects with triangles (and area)
     uint64_t listed_objects = 0, listed_triangles = 0;
     uint64_t listed_without_area = 0;  // listed objects with no triangle area: never visible
@@ -142,6 +148,41 @@ struct CellFigures {
     uint64_t bound_unlisted = 0;          // objects the lower bound's rays touched that the row leaves out
     uint64_t bound_seen_not_visible = 0;  // listed objects its rays touched that the aimed rays did not reach
 };
+
+// --extreme-rays: at most this many triangles of an object (every k-th), each corner pulled at least this
+// share of the way to the triangle's centre (a point of the triangle itself).
+constexpr uint32_t kExtremeTriangles = 256;
+constexpr float kExtremeInset = 0.01f;
+constexpr float kExtremeEnd = 1.0f - 1e-6f;   // an extreme ray stops this far along to its point (the point
+                                              // is on the aimed-at triangle, which never blocks it)
+constexpr float kExtremeEndMargins = 100.0f;  // the inset is at least this many end margins of the segment
+
+// The eye space's extreme points: for each of the 26 directions of the 3 x 3 x 3 block, the corner of a piece
+// farthest along it, pulled a hair towards its piece's centre (into the closed eye space).
+std::vector<glm::vec3> extreme_eyes(const EyeSpace& space) {
+    std::vector<glm::vec3> out;
+    for (int dz = -1; dz <= 1; ++dz)
+        for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx) {
+                if (dx == 0 && dy == 0 && dz == 0) continue;
+                const glm::vec3 d{float(dx), float(dy), float(dz)};
+                float best = -INFINITY;
+                glm::vec3 pick(0.0f);
+                for (const pvs::Aabb& piece : space.pieces)
+                    for (int c = 0; c < 8; ++c) {
+                        const glm::vec3 q((c & 1) ? piece.max.x : piece.min.x,
+                                          (c & 2) ? piece.max.y : piece.min.y,
+                                          (c & 4) ? piece.max.z : piece.min.z);
+                        const float v = glm::dot(d, q);
+                        if (v > best) {
+                            best = v;
+                            pick = q + 1e-4f * (piece.center() - q);
+                        }
+                    }
+                if (std::find(out.begin(), out.end(), pick) == out.end()) out.push_back(pick);
+            }
+    return out;
+}
 
 [[noreturn]] void bad_option(const std::string& message) {
     throw pvs::bad_input("bench_truth: " + message);
@@ -156,7 +197,7 @@ uint64_t parse_count(const char* option, const char* text, uint64_t min, uint64_
 int main(int argc, char** argv) {
     const char* usage =
         "usage: bench_truth WORLD.glb BAKE.h5 [--cells N] [--eyes E] [--rays R] [--seed S] [--vis V.json]\n"
-        "                   [--lower-bound-eyes L] [--allow-few-rays]\n";
+        "                   [--lower-bound-eyes L] [--allow-few-rays] [--extreme-rays]\n";
     if (argc < 3 || argv[1][0] == '-' || argv[2][0] == '-') {
         std::fputs(usage, stderr);
         return 2;
@@ -164,7 +205,7 @@ int main(int argc, char** argv) {
     const auto t_start = std::chrono::steady_clock::now();
     const std::string world_path = argv[1], bake_path = argv[2];
     std::string vis_path = world_path.substr(0, world_path.rfind('.')) + ".vis.json";
-    bool vis_given = false, allow_few_rays = false;
+    bool vis_given = false, allow_few_rays = false, extreme_rays = false;
     uint32_t n_cells = 30, n_eyes = 4096, n_rays = kDefaultRays, lower_bound_eyes = 64;
     uint64_t seed = 1;
     try {
@@ -172,6 +213,10 @@ int main(int argc, char** argv) {
             const std::string k = argv[a];
             if (k == "--allow-few-rays") {
                 allow_few_rays = true;
+                continue;
+            }
+            if (k == "--extreme-rays") {
+                extreme_rays = true;
                 continue;
             }
             if (k != "--cells" && k != "--eyes" && k != "--rays" && k != "--seed" && k != "--vis" &&
@@ -284,6 +329,7 @@ int main(int argc, char** argv) {
             pvs::Rng rng(pvs::mix64(seed ^ 0x4559455300000000ULL), f.cell);
             f.eyes.reserve(n_eyes);
             for (uint32_t e = 0; e < n_eyes; ++e) f.eyes.push_back(random_eye(spaces[size_t(i)], rng));
+            if (extreme_rays) f.extremes = extreme_eyes(spaces[size_t(i)]);
             for (uint32_t o = 0; o < n_objects; ++o) {
                 if (!bake.pvs.test(f.cell, o) || world.objects[o].triangle_count == 0) continue;
                 const pvs::WorldObject& obj = world.objects[o];
@@ -346,6 +392,82 @@ int main(int argc, char** argv) {
             _mm_setcsr(csr);
         }
         ctx.progress_end();
+        // (a') Extreme rays at the pairs no aimed ray reached: from each extreme corner of the cell's eye
+        // space to a point just inside each corner of the object's triangles. Sight that passes an occluder's
+        // edge only from the eye space's rim to an object's rim (a sliver of its lines) is found here.
+        uint64_t extreme_found = 0, extreme_traced = 0;
+        if (extreme_rays) {
+            ctx.progress_begin("extreme rays", pairs.size(), "pairs");
+#pragma omp parallel reduction(+ : extreme_found, extreme_traced)
+            {
+                const unsigned csr = _mm_getcsr();
+                _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
+                _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
+                std::vector<RTCRay> rays;
+                std::vector<uint32_t> target;
+#pragma omp for schedule(dynamic, 1)
+                for (int64_t p = 0; p < int64_t(pairs.size()); ++p) {
+                    ctx.progress_advance();
+                    if (first_reach[size_t(p)] >= 0) continue;
+                    const CellFigures& f = figs[pairs[size_t(p)].fig];
+                    const pvs::WorldObject& obj = world.objects[pairs[size_t(p)].object];
+                    const uint32_t step = std::max<uint32_t>(1, obj.triangle_count / kExtremeTriangles);
+                    rays.clear();
+                    target.clear();
+                    for (uint32_t t = obj.first_triangle; t < obj.first_triangle + obj.triangle_count;
+                         t += step) {
+                        const uint32_t prim = scene.prim_of(t);
+                        if (prim == pvs::bench::kNoTarget) continue;
+                        const pvs::Triangle& tri = world.triangles[t];
+                        const glm::vec3 c = (world.positions[tri.v[0]] + world.positions[tri.v[1]] +
+                                             world.positions[tri.v[2]]) /
+                                            3.0f;
+                        for (int k = 0; k < 3; ++k) {
+                            const glm::vec3 v = world.positions[tri.v[k]];
+                            const float to_centre = glm::length(c - v);
+                            if (!(to_centre > 0.0f)) continue;
+                            for (const glm::vec3& eye : f.extremes) {
+                                // Far enough inside the triangle that the segment's end margin (kSegmentEnd)
+                                // cannot let it pass a neighbouring face at the corner.
+                                const float inset = std::min(
+                                    0.5f, std::max(kExtremeInset, kExtremeEndMargins * (1.0f - kExtremeEnd) *
+                                                                      glm::length(v - eye) / to_centre));
+                                const glm::vec3 point = v + inset * (c - v);
+                                const glm::vec3 d = point - eye;
+                                if (d == glm::vec3(0.0f)) continue;
+                                RTCRay r{};
+                                r.org_x = eye.x;
+                                r.org_y = eye.y;
+                                r.org_z = eye.z;
+                                r.dir_x = d.x;
+                                r.dir_y = d.y;
+                                r.dir_z = d.z;
+                                r.tnear = 0.0f;
+                                r.tfar = kExtremeEnd;
+                                r.mask = 0xffffffffu;
+                                r.id = uint32_t(rays.size());
+                                rays.push_back(r);
+                                target.push_back(prim);
+                            }
+                        }
+                    }
+                    bool reached = false;
+                    for (size_t b = 0; b < rays.size() && !reached; b += 2048) {
+                        const uint32_t n = uint32_t(std::min<size_t>(2048, rays.size() - b));
+                        for (uint32_t k = 0; k < n; ++k) rays[b + k].id = k;
+                        scene.occluded(rays.data() + b, target.data() + b, n);
+                        extreme_traced += n;
+                        for (uint32_t k = 0; k < n && !reached; ++k) reached = rays[b + k].tfar >= 0.0f;
+                    }
+                    if (reached) {
+                        first_reach[size_t(p)] = int64_t(pair_rays[size_t(p)]);
+                        ++extreme_found;
+                    }
+                }
+                _mm_setcsr(csr);
+            }
+            ctx.progress_end();
+        }
         const double aim_seconds = seconds_since(t_aim);
         uint64_t rays_traced = 0, late_finds = 0, quarter_finds = 0;
         std::vector<double> find_index;
@@ -462,6 +584,9 @@ int main(int argc, char** argv) {
         out["listed_over_visible_objects_cell_median"] = median(ratio_obj);
         out["listed_objects_without_area"] = without_area;
         out["rays_traced"] = rays_traced;
+        out["extreme_rays"] = extreme_rays;
+        out["extreme_rays_traced"] = extreme_traced;
+        out["visible_found_by_extreme_rays"] = extreme_found;
         out["first_reaching_ray_median"] = median(find_index);
         out["visible_found_after_quarter_of_rays"] = quarter_finds;
         out["visible_found_after_half_of_rays"] = late_finds;
