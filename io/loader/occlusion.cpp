@@ -913,10 +913,9 @@ bool OcclusionCuller::hidden_by_faces(const Box& box) const noexcept {
         }
     }
     if (f.p < 0) return false;
-    for (int k = 0; k < 9; ++k) {  // the centre and the corners: one that nothing hides shows the box
+    for (int k = 0; k < 8; ++k) {  // the corners (classify tried the centre): one nothing hides shows the box
         double x[3];
-        for (int b = 0; b < 3; ++b)
-            x[b] = k == 0 ? 0.5 * (q[b] + q[3 + b]) : ((k - 1) >> b & 1) ? q[3 + b] : q[b];
+        for (int b = 0; b < 3; ++b) x[b] = (k >> b & 1) ? q[3 + b] : q[b];
         if (!point_behind_a_face(x)) return false;
     }
     f.u = (f.p + 1) % 3;
