@@ -117,6 +117,25 @@ uint32_t random_point_on(const World& world, const std::vector<double>& cum_area
 }
 
 // Reused buffers of aim_at_object (one per thread).
+// The ray from `eye` along `d` (unnormalized: t in [0, 1] spans the segment) up to t = tfar, with id `id`,
+// for OpaqueScene::occluded().
+inline RTCRay segment_ray(glm::vec3 eye, glm::vec3 d, float tfar, uint32_t id) {
+    RTCRay r{};
+    r.org_x = eye.x;
+    r.org_y = eye.y;
+    r.org_z = eye.z;
+    r.dir_x = d.x;
+    r.dir_y = d.y;
+    r.dir_z = d.z;
+    r.tnear = 0.0f;
+    r.tfar = tfar;
+    r.time = 0.0f;
+    r.mask = 0xffffffffu;
+    r.id = id;
+    r.flags = 0;
+    return r;
+}
+
 struct AimScratch {
     static constexpr uint32_t kFirstBatch = 32, kMaxBatch = 2048;  // rays per Embree stream, doubling
     std::vector<RTCRay> rays = std::vector<RTCRay>(kMaxBatch);
@@ -145,19 +164,8 @@ inline Aim aim_at_object(const OpaqueScene& scene, const World& world, const std
             const uint32_t t = random_point_on(world, cum_area, object, rng, point);
             const glm::vec3 d = point - eye;
             if (at_eye < 0 && d == glm::vec3(0.0f)) at_eye = done + k;
-            RTCRay& r = scratch.rays[k];
-            r.org_x = eye.x;
-            r.org_y = eye.y;
-            r.org_z = eye.z;
-            r.dir_x = d.x;
-            r.dir_y = d.y;
-            r.dir_z = d.z;
-            r.tnear = 0.0f;
-            r.tfar = d == glm::vec3(0.0f) ? -1.0f : kSegmentEnd;  // unnormalized: t in [0, 1]
-            r.time = 0.0f;
-            r.mask = 0xffffffffu;
-            r.id = k;
-            r.flags = 0;
+            // Unnormalized: t in [0, 1]; a point at the eye is marked by a ray that never runs.
+            scratch.rays[k] = segment_ray(eye, d, d == glm::vec3(0.0f) ? -1.0f : kSegmentEnd, k);
             scratch.target[k] = scene.prim_of(t);
         }
         scene.occluded(scratch.rays.data(), scratch.target.data(), n);

@@ -427,7 +427,7 @@ int main(int argc, char** argv) {
                             const float to_centre = glm::length(c - v);
                             if (!(to_centre > 0.0f)) continue;
                             for (const glm::vec3& eye : f.extremes) {
-                                // Far enough inside the triangle that the segment's end margin (kSegmentEnd)
+                                // Far enough inside the triangle that the segment's end margin (kExtremeEnd)
                                 // cannot let it pass a neighbouring face at the corner.
                                 const float inset = std::min(
                                     0.5f, std::max(kExtremeInset, kExtremeEndMargins * (1.0f - kExtremeEnd) *
@@ -435,25 +435,15 @@ int main(int argc, char** argv) {
                                 const glm::vec3 point = v + inset * (c - v);
                                 const glm::vec3 d = point - eye;
                                 if (d == glm::vec3(0.0f)) continue;
-                                RTCRay r{};
-                                r.org_x = eye.x;
-                                r.org_y = eye.y;
-                                r.org_z = eye.z;
-                                r.dir_x = d.x;
-                                r.dir_y = d.y;
-                                r.dir_z = d.z;
-                                r.tnear = 0.0f;
-                                r.tfar = kExtremeEnd;
-                                r.mask = 0xffffffffu;
-                                r.id = uint32_t(rays.size());
-                                rays.push_back(r);
+                                rays.push_back(pvs::bench::segment_ray(eye, d, kExtremeEnd, 0));
                                 target.push_back(prim);
                             }
                         }
                     }
                     bool reached = false;
-                    for (size_t b = 0; b < rays.size() && !reached; b += 2048) {
-                        const uint32_t n = uint32_t(std::min<size_t>(2048, rays.size() - b));
+                    constexpr size_t kBatch = pvs::bench::AimScratch::kMaxBatch;
+                    for (size_t b = 0; b < rays.size() && !reached; b += kBatch) {
+                        const uint32_t n = uint32_t(std::min(kBatch, rays.size() - b));
                         for (uint32_t k = 0; k < n; ++k) rays[b + k].id = k;
                         scene.occluded(rays.data() + b, target.data() + b, n);
                         extreme_traced += n;
