@@ -4,6 +4,7 @@
 
 #include "occluders/panels.h"
 #include "pvs/region_hiding.h"
+#include "voxels/voxels.h"
 
 #include <algorithm>
 #include <cmath>
@@ -176,7 +177,8 @@ ShaftFlood::ShaftFlood(const std::vector<Aabb>& panels, const VoxelMask& solid) 
     tree_ = BoxTree::build(bounds_);
 }
 
-bool ShaftFlood::separates(const Aabb& region, const Aabb& target, FloodFigures& figures) const {
+bool ShaftFlood::separates(const Aabb& region, const Aabb& target, FloodFigures& figures,
+                           const std::vector<glm::vec3>* triangles) const {
     ++figures.tries;
     thread_local FloodScratch sc;
     const double tol = kHideToleranceM;
@@ -298,6 +300,21 @@ bool ShaftFlood::separates(const Aabb& region, const Aabb& target, FloodFigures&
         lo = glm::dvec3(planes[0][size_t(x)], planes[1][size_t(y)], planes[2][size_t(z)]);
         hi = glm::dvec3(planes[0][size_t(x) + 1], planes[1][size_t(y) + 1], planes[2][size_t(z) + 1]);
     };
+    // Does the closed cell [lo, hi] meet the target: its box grown by the tolerance, or, given triangles, one
+    // of them inside that box? The cell's part in the box is rounded outward to float and grown by the
+    // tolerance again, so that the float overlap test (exact separating axes) only ever says yes more often.
+    const auto meets_target = [&](const glm::dvec3& lo, const glm::dvec3& hi) {
+        if (!boxes_meet(lo, hi, hull.xlo, hull.xhi)) return false;
+        if (triangles == nullptr) return true;
+        const glm::dvec3 blo = glm::max(lo, hull.xlo), bhi = glm::min(hi, hull.xhi);
+        const glm::vec3 flo(float_at_most(blo.x), float_at_most(blo.y), float_at_most(blo.z)),
+            fhi(float_at_least(bhi.x), float_at_least(bhi.y), float_at_least(bhi.z));
+        const glm::vec3 centre = 0.5f * (flo + fhi), half = 0.5f * (fhi - flo) + float(tol);
+        for (size_t t = 0; t + 2 < triangles->size(); t += 3)
+            if (triangle_box_overlap(centre, half, (*triangles)[t], (*triangles)[t + 1], (*triangles)[t + 2]))
+                return true;
+        return false;
+    };
     // A cell meets the hull when the spans of l of its three indices overlap (Hull::meets, axis by axis).
     for (int a = 0; a < 3; ++a) {
         std::vector<glm::dvec2>& span = sc.span[size_t(a)];
@@ -315,29 +332,45 @@ bool ShaftFlood::separates(const Aabb& region, const Aabb& target, FloodFigures&
                          &z = sc.span[2][size_t(at.z)];
         return std::max({x[0], y[0], z[0]}) <= std::min({x[1], y[1], z[1]});
     };
-    // Seeds: the open cells meeting the region; none may meet the target.
-    sc.queue.clear();
+    // Every segment from the region to the target moves one way along each axis: along an axis where the
+    // two boxes are apart, towards the target; along another, either way, the same all along. So the flood
+    // runs once per choice of ways on the axes where they overlap, each stepping only those ways.
+    std::array<int, 3> forced{};
+    int free_axes = 0;
+    for (int a = 0; a < 3; ++a) {
+        forced[size_t(a)] = hull.qhi[a] < hull.xlo[a] ? 1 : (hull.xhi[a] < hull.qlo[a] ? -1 : 0);
+        free_axes += forced[size_t(a)] == 0 ? 1 : 0;
+    }
     glm::ivec3 first, end;
     for (int a = 0; a < 3; ++a) meeting(a, hull.qlo[a], hull.qhi[a], first[a], end[a]);
-    for (int z = first.z; z < end.z; ++z)
-        for (int y = first.y; y < end.y; ++y)
-            for (int x = first.x; x < end.x; ++x) {
-                const size_t c = cell(x, y, z);
-                if (sc.state[c] != 0) continue;
-                glm::dvec3 lo, hi;
-                box_of(x, y, z, lo, hi);
-                if (boxes_meet(lo, hi, hull.xlo, hull.xhi)) return false;
-                sc.state[c] = kSeen;
-                sc.queue.push_back(uint32_t(c));
-            }
-    // The flood, through faces no panel covers, into cells not solid that meet the hull.
-    for (size_t head = 0; head < sc.queue.size(); ++head) {
-        const size_t c = sc.queue[head];
-        const int x = int(c % size_t(n.x)), y = int((c / size_t(n.x)) % size_t(n.y)),
-                  z = int(c / (size_t(n.x) * size_t(n.y)));
-        const glm::ivec3 at(x, y, z);
-        for (int a = 0; a < 3; ++a)
-            for (int dir = -1; dir <= 1; dir += 2) {
+    for (int way = 0; way < (1 << free_axes); ++way) {
+        std::array<int, 3> step{};
+        for (int a = 0, f = 0; a < 3; ++a)
+            step[size_t(a)] = forced[size_t(a)] != 0 ? forced[size_t(a)] : ((way >> f++) & 1 ? 1 : -1);
+        if (way > 0)
+            for (uint8_t& st : sc.state) st &= kSolid;
+        // Seeds: the open cells meeting the region; none may meet the target.
+        sc.queue.clear();
+        for (int z = first.z; z < end.z; ++z)
+            for (int y = first.y; y < end.y; ++y)
+                for (int x = first.x; x < end.x; ++x) {
+                    const size_t c = cell(x, y, z);
+                    if (sc.state[c] != 0) continue;
+                    glm::dvec3 lo, hi;
+                    box_of(x, y, z, lo, hi);
+                    if (meets_target(lo, hi)) return false;
+                    sc.state[c] = kSeen;
+                    sc.queue.push_back(uint32_t(c));
+                }
+        // The flood, the chosen way on each axis, through faces no panel covers, into cells not solid that
+        // meet the hull.
+        for (size_t head = 0; head < sc.queue.size(); ++head) {
+            const size_t c = sc.queue[head];
+            const int x = int(c % size_t(n.x)), y = int((c / size_t(n.x)) % size_t(n.y)),
+                      z = int(c / (size_t(n.x) * size_t(n.y)));
+            const glm::ivec3 at(x, y, z);
+            for (int a = 0; a < 3; ++a) {
+                const int dir = step[size_t(a)];
                 glm::ivec3 to = at;
                 to[a] += dir;
                 if (to[a] < 0 || to[a] >= n[a]) continue;
@@ -348,9 +381,10 @@ bool ShaftFlood::separates(const Aabb& region, const Aabb& target, FloodFigures&
                 if (!meets_hull(to)) continue;
                 glm::dvec3 lo, hi;
                 box_of(to.x, to.y, to.z, lo, hi);
-                if (boxes_meet(lo, hi, hull.xlo, hull.xhi)) return false;
+                if (meets_target(lo, hi)) return false;
                 sc.queue.push_back(uint32_t(t));
             }
+        }
     }
     ++figures.separated;
     return true;
