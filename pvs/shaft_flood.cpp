@@ -4,7 +4,6 @@
 
 #include "occluders/panels.h"
 #include "pvs/region_hiding.h"
-#include "voxels/voxels.h"
 
 #include <algorithm>
 #include <cmath>
@@ -177,8 +176,7 @@ ShaftFlood::ShaftFlood(const std::vector<Aabb>& panels, const VoxelMask& solid) 
     tree_ = BoxTree::build(bounds_);
 }
 
-bool ShaftFlood::separates(const Aabb& region, const Aabb& target, FloodFigures& figures,
-                           const std::vector<glm::vec3>* triangles) const {
+bool ShaftFlood::separates(const Aabb& region, const Aabb& target, FloodFigures& figures) const {
     ++figures.tries;
     thread_local FloodScratch sc;
     const double tol = kHideToleranceM;
@@ -300,21 +298,6 @@ bool ShaftFlood::separates(const Aabb& region, const Aabb& target, FloodFigures&
         lo = glm::dvec3(planes[0][size_t(x)], planes[1][size_t(y)], planes[2][size_t(z)]);
         hi = glm::dvec3(planes[0][size_t(x) + 1], planes[1][size_t(y) + 1], planes[2][size_t(z) + 1]);
     };
-    // Does the closed cell [lo, hi] meet the target: its box grown by the tolerance, or, given triangles, one
-    // of them inside that box? The cell's part in the box is rounded outward to float and grown by the
-    // tolerance again, so that the float overlap test (exact separating axes) only ever says yes more often.
-    const auto meets_target = [&](const glm::dvec3& lo, const glm::dvec3& hi) {
-        if (!boxes_meet(lo, hi, hull.xlo, hull.xhi)) return false;
-        if (triangles == nullptr) return true;
-        const glm::dvec3 blo = glm::max(lo, hull.xlo), bhi = glm::min(hi, hull.xhi);
-        const glm::vec3 flo(float_at_most(blo.x), float_at_most(blo.y), float_at_most(blo.z)),
-            fhi(float_at_least(bhi.x), float_at_least(bhi.y), float_at_least(bhi.z));
-        const glm::vec3 centre = 0.5f * (flo + fhi), half = 0.5f * (fhi - flo) + float(tol);
-        for (size_t t = 0; t + 2 < triangles->size(); t += 3)
-            if (triangle_box_overlap(centre, half, (*triangles)[t], (*triangles)[t + 1], (*triangles)[t + 2]))
-                return true;
-        return false;
-    };
     // A cell meets the hull when the spans of l of its three indices overlap (Hull::meets, axis by axis).
     for (int a = 0; a < 3; ++a) {
         std::vector<glm::dvec2>& span = sc.span[size_t(a)];
@@ -358,7 +341,7 @@ bool ShaftFlood::separates(const Aabb& region, const Aabb& target, FloodFigures&
                     if (sc.state[c] != 0) continue;
                     glm::dvec3 lo, hi;
                     box_of(x, y, z, lo, hi);
-                    if (meets_target(lo, hi)) return false;
+                    if (boxes_meet(lo, hi, hull.xlo, hull.xhi)) return false;
                     sc.state[c] = kSeen;
                     sc.queue.push_back(uint32_t(c));
                 }
@@ -381,7 +364,7 @@ bool ShaftFlood::separates(const Aabb& region, const Aabb& target, FloodFigures&
                 if (!meets_hull(to)) continue;
                 glm::dvec3 lo, hi;
                 box_of(to.x, to.y, to.z, lo, hi);
-                if (meets_target(lo, hi)) return false;
+                if (boxes_meet(lo, hi, hull.xlo, hull.xhi)) return false;
                 sc.queue.push_back(uint32_t(t));
             }
         }

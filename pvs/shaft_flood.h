@@ -5,16 +5,13 @@
 // (docs/ALGORITHMS.md#shaft-flood).
 //
 // Contract: ShaftFlood::separates() is true only if every segment from a point of the box `region` to a
-// point of the box `target` (given `triangles`: to a point of one of them inside `target`), both boxes grown
-// by kHideToleranceM, meets a panel or the proven solid at a point other than its end. The test is exact: a
-// grid whose planes hold every occluder it uses, so that each cell is wholly inside the solid or not and
-// each cell face wholly inside a panel or not, flooded from the cells meeting `region` through faces no
-// panel covers, over cells that are not solid and meet the hull, stepping one way along each axis as a
-// segment does (once per choice of ways on the axes where the boxes overlap, docs/ALGORITHMS.md#shaft-flood);
-// false (not proven) when the flood reaches
-// a cell meeting `target` (given `triangles`: a cell whose part in `target` meets one of them, so that the
-// flood crosses the empty parts of the target's box). Occluders beyond the grid's budget of planes are left
-// out, which only ever leaves a pair unproven.
+// point of the box `target`, both grown by kHideToleranceM, meets a panel or the proven solid at a point
+// other than its end. The test is exact: a grid whose planes hold every occluder it uses, so that each cell
+// is wholly inside the solid or not and each cell face wholly inside a panel or not, flooded from the cells
+// meeting `region` through faces no panel covers, over cells that are not solid and meet the hull, stepping
+// one way along each axis as a segment does (once per choice of ways on the axes where the boxes overlap,
+// docs/ALGORITHMS.md#shaft-flood); false (not proven) when the flood reaches a cell meeting `target`.
+// Occluders beyond the grid's budget of planes are left out, which only ever leaves a pair unproven.
 #pragma once
 
 #include "core/box_tree.h"
@@ -62,9 +59,8 @@ public:
     // The axis panels of `panels` (those flat on one axis) and the tiles of `solid`.
     ShaftFlood(const std::vector<Aabb>& panels, const VoxelMask& solid);
 
-    // See the contract above; `triangles` holds three corners a triangle, or is null. Thread-safe.
-    bool separates(const Aabb& region, const Aabb& target, FloodFigures& figures,
-                   const std::vector<glm::vec3>* triangles = nullptr) const;
+    // See the contract above. Thread-safe.
+    bool separates(const Aabb& region, const Aabb& target, FloodFigures& figures) const;
 
     size_t occluders() const { return boxes_.size(); }
 

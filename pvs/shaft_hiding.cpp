@@ -407,7 +407,6 @@ struct ShaftProver::Scratch {
     std::vector<glm::dvec3> poly, tmp;
     std::vector<RayTouch> touches;
     std::vector<glm::ivec3> run;
-    std::vector<glm::vec3> flood_tris;  // the corners of a piece pair's triangles, for the flood
     // Per side (region, object), axis and direction, the planes of a cup's candidate faces.
     std::array<std::array<std::vector<float>, 6>, 2> cup_faces;
 };
@@ -1294,11 +1293,7 @@ bool ShaftProver::hides(const World& world, const VoxelMask& eyes, const ShaftRe
         // Separation in the shaft, on the same pieces as cups and on pieces at the depth cap.
         if (blocked && flood_ && (pair.depth % kFloodDepthStep == 0 || pair.depth >= max_halvings)) {
             const auto start = std::chrono::steady_clock::now();
-            sc.flood_tris.clear();
-            for (uint32_t k = pair.tris_first; k < pair.tris_first + pair.tris_count; ++k)
-                for (const uint32_t v : world.triangles[sc.tri_arena[k]].v)
-                    sc.flood_tris.push_back(world.positions[v]);
-            const bool separated = flood_->separates(pair.region, pair.target, figures.flood, &sc.flood_tris);
+            const bool separated = flood_->separates(pair.region, pair.target, figures.flood);
             figures.flood.seconds +=
                 std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
             if (separated) continue;

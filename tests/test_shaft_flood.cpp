@@ -2,7 +2,7 @@
 // Separation in the shaft (pvs/shaft_flood.h): the solid's tiles against the voxels; the flood held to a slow
 // reference (many segments between the two boxes against every panel and every solid voxel) on stepped walls
 // of panels in three planes, closed and with holes; walls whose holes no line passes in turn (the flood's
-// one-way steps); targets given as triangles; and, in the shaft pass, pairs at junctions that the flood
+// one-way steps); and, in the shaft pass, pairs at junctions that the flood
 // proves in one piece pair where one plane's covers, umbrae, caps and cups need many or none.
 #include "core/random.h"
 #include "pvs/shaft_flood.h"
@@ -229,83 +229,6 @@ TEST(ShaftFlood, APathThatTurnsBackIsNoSightLine) {
         EXPECT_EQ(flood.separates(region, target, fig), !aligned) << "aligned " << aligned;
         EXPECT_EQ(segments_blocked(w, region, target, Rng(5, 5), 100000), !aligned) << "aligned " << aligned;
     }
-}
-
-// The slow reference for a target given as triangles: do all of `n` segments from the region (its corners,
-// then random points) to random points of the triangles inside `target` meet a panel or a block of the solid?
-bool segments_to_triangles_blocked(const SteppedWall& w, const Aabb& from, const std::vector<glm::vec3>& tris,
-                                   const Aabb& target, Rng rng, int n) {
-    int tried = 0;
-    for (int s = 0; tried < n && s < 50 * n; ++s) {
-        const size_t t = 3 * size_t(rng.below(uint32_t(tris.size() / 3)));
-        double u = rng.uniform(), v = rng.uniform();
-        if (u + v > 1.0) u = 1.0 - u, v = 1.0 - v;
-        const glm::dvec3 a(tris[t]), b(tris[t + 1]), c(tris[t + 2]);
-        const glm::dvec3 x = a + u * (b - a) + v * (c - a);
-        if (!target.contains(glm::vec3(x))) continue;
-        glm::dvec3 q;
-        for (int k = 0; k < 3; ++k) q[k] = tried < 8 ? ((tried >> k) & 1 ? from.max[k] : from.min[k]) : 0.0;
-        if (tried >= 8) q = glm::dvec3(point_in(from, rng));
-        ++tried;
-        bool blocked = false;
-        for (const Aabb& p : w.occ.panels) blocked = blocked || segment_meets_closed_box(p, q, x);
-        for (const Aabb& bx : w.solid_boxes) blocked = blocked || segment_meets_closed_box(bx, q, x);
-        if (!blocked) return false;
-    }
-    return true;
-}
-
-// Given the target's triangles, the flood stops only at cells that meet one of them, so it crosses the empty
-// parts of the target's box: a box reaching in front of a wall whose triangles all lie behind it is proven
-// by its triangles, not by its box. Behind stepped walls with holes, the triangles never lose a proof the box
-// has, and whatever they prove holds on dense segments to them.
-TEST(ShaftFlood, ATargetsTrianglesProveWhatItsBoxDoesNot) {
-    {
-        SteppedWall w;
-        w.occ.panels.push_back(Aabb::of({2.0f, -2.0f, -2.0f}, {2.0f, 3.0f, 3.0f}));
-        const ShaftFlood flood(w.occ.panels, w.occ.solid);
-        const Aabb region = Aabb::of({0.0f, 0.0f, 0.0f}, {1.0f, 1.0f, 1.0f});
-        const Aabb target = Aabb::of({1.5f, 0.0f, 0.0f}, {3.0f, 1.0f, 1.0f});
-        const std::vector<glm::vec3> tris = {{2.5f, 0.0f, 0.0f}, {3.0f, 1.0f, 0.0f}, {2.75f, 0.5f, 1.0f}};
-        FloodFigures fig;
-        EXPECT_FALSE(flood.separates(region, target, fig)) << "the box reaches in front of the wall";
-        EXPECT_TRUE(flood.separates(region, target, fig, &tris));
-        EXPECT_TRUE(segments_to_triangles_blocked(w, region, tris, target, Rng(2, 2), 100000));
-    }
-    Rng rng(23, 4);
-    const int walls = test::in_ci() ? 8 : 20;
-    int proven = 0;
-    for (int wi = 0; wi < walls; ++wi) {
-        const SteppedWall w = stepped_wall(rng, true);
-        const ShaftFlood flood(w.occ.panels, w.occ.solid);
-        for (int p = 0; p < 20; ++p) {
-            const Aabb region = random_box(rng, {0.5f, -1.0f, -1.0f}, {3.0f, 5.0f, 5.0f}, 0.8f);
-            const Aabb target = random_box(rng, {7.0f, -1.0f, -1.0f}, {10.0f, 5.0f, 5.0f}, 1.2f);
-            // Two thin slanted triangles across the target's box, corner to corner.
-            std::vector<glm::vec3> tris;
-            for (int k = 0; k < 2; ++k) {
-                const glm::vec3 a = point_in(target, rng), b = point_in(target, rng);
-                tris.insert(tris.end(), {a, b, 0.5f * (a + b) + glm::vec3(0.0f, 0.02f, -0.02f)});
-            }
-            Aabb bounds = Aabb::empty();
-            for (const glm::vec3& v : tris) bounds.extend(v);
-            bounds.min = glm::max(bounds.min, target.min);
-            bounds.max = glm::min(bounds.max, target.max);
-            FloodFigures fig;
-            const bool by_box = flood.separates(region, bounds, fig);
-            const bool by_triangles = flood.separates(region, bounds, fig, &tris);
-            if (by_box) {
-                EXPECT_TRUE(by_triangles) << "wall " << wi << " pair " << p << ": the triangles lost a proof";
-            }
-            if (by_triangles) {
-                ASSERT_TRUE(
-                    segments_to_triangles_blocked(w, region, tris, bounds, Rng(wi, uint64_t(p)), 3000))
-                    << "wall " << wi << " pair " << p << ": a segment to a triangle passes the flood's proof";
-            }
-            proven += by_triangles ? 1 : 0;
-        }
-    }
-    EXPECT_GT(proven, 0) << "no pair proven: the test is not telling";
 }
 
 // Panels that come within 2 cm of meeting leave a slit: the flood does not separate what lies behind it.
