@@ -2,8 +2,8 @@
 // Separation in the shaft (pvs/shaft_flood.h): the solid's tiles against the voxels; the flood held to a slow
 // reference (many segments between the two boxes against every panel and every solid voxel) on stepped walls
 // of panels in three planes, closed and with holes; walls whose holes no line passes in turn (the flood's
-// one-way steps); and, in the shaft pass, pairs at junctions that the flood
-// proves in one piece pair where one plane's covers, umbrae, caps and cups need many or none.
+// one-way steps); and, in the shaft pass, pairs at junctions that the flood proves in one piece pair where
+// one plane's covers, umbrae, caps and cups need many or none.
 #include "core/random.h"
 #include "pvs/shaft_flood.h"
 #include "pvs/shaft_hiding.h"
