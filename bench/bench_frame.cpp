@@ -6,7 +6,8 @@
 //                                    [--resolution N] [--seed S] [--bake BAKE.h5] [--split M]
 //                                    [--eye-occluders E] [--eye-panels 0|1] [--eye-select
 //                                    solid-angle|first-hit]
-//                                    [--parts 0|1]
+//                                    [--parts 0|1] [--eye-polygons P] [--horizon N]
+//                                    [--horizon-faces M]
 //
 // Frames: F (default 200) eyes, each uniform in the eye space of a cell drawn at random (seed S, default 1):
 // a cell uniform among the level's cells, then a point uniform in its box kept when pvsr_in_eye_space() holds
@@ -34,7 +35,11 @@
 // the first of them to meet, an oracle of what blocks this eye's sight); --parts 1: an object
 // is also culled when the culler hides each of its M (--split, default 8) part boxes (its triangles split at
 // the median of their centres on the longest axis, recursively): a finer test of the object. Both make the
-// bench walk the PVS itself (the timing is then not the runtime's).
+// bench walk the PVS itself (the timing is then not the runtime's). --horizon N (with --bake): after the
+// culler, an occlusion horizon of N columns a side frame around the eye (bench/horizon.h), built from every
+// proven box of the bake and every panel and slanted panel of the world (--horizon-faces M: only the nearest
+// M of their faces), culls what it hides of the drawn objects; its time per frame is `horizon_us_median`,
+// apart from the frame's (it is no runtime's code).
 // Where the drawn but invisible triangles go (the "waste" object, of the full frames' drawn objects no ray
 // reached): split_culls: the culler hides each of the object's M part boxes; given_boxes: each of
 // kOracleRays segments from the eye to random points of the object meets one of the frame's occluder boxes
@@ -46,6 +51,7 @@
 // solid cannot cull its bounds).
 #include "bench/aimed_rays.h"
 #include "bench/bench_util.h"
+#include "bench/horizon.h"
 #include "core/context.h"
 #include "core/error.h"
 #include "core/random.h"
@@ -245,7 +251,8 @@ struct Frame {
     glm::vec3 eye{0.0f};
     std::vector<uint32_t> listed, drawn;
     std::vector<float> boxes;  // the occluder boxes the frame began with
-    double frame_us = 0.0, walk_us = 0.0;
+    double frame_us = 0.0, walk_us = 0.0, horizon_us = 0.0;
+    uint32_t horizon_culled = 0;
     uint32_t occluders = 0;  // boxes and polygons given
     uint32_t polygons = 0;   // of them polygons (the cell's, pvsr_culler_begin_cell)
     bool full = true;  // truth for every listed object; else for the culled ones only
@@ -277,7 +284,7 @@ int main(int argc, char** argv) {
         "usage: bench_frame WORLD.glb LEVEL.pvsr [--frames F] [--check-frames C] [--rays R] [--occluders K]\n"
         "                   [--resolution N] [--seed S] [--split M] [--bake BAKE.h5] [--eye-occluders E]\n"
         "                   [--eye-panels 0|1] [--eye-select solid-angle|first-hit] [--parts 0|1]\n"
-        "                   [--eye-polygons P]\n";
+        "                   [--eye-polygons P] [--horizon N] [--horizon-faces M]\n";
     if (argc < 3 || argv[1][0] == '-' || argv[2][0] == '-') {
         std::fputs(usage, stderr);
         return 2;
@@ -286,7 +293,7 @@ int main(int argc, char** argv) {
     const std::string world_path = argv[1], level_path = argv[2];
     uint32_t n_frames = 200, n_check = 0, n_rays = 4096, max_occluders = PVSR_CULLER_MAX_OCCLUDERS,
              n_split = 8;
-    uint32_t eye_occluders = 0, eye_polygons = 0;
+    uint32_t eye_occluders = 0, eye_polygons = 0, horizon_columns = 0, horizon_faces = 0;
     bool parts_drawn = false, eye_panels = false, eye_select_first_hit = false;
     std::string bake_path;
     int resolution = 32;
@@ -297,7 +304,7 @@ int main(int argc, char** argv) {
             if (k != "--frames" && k != "--check-frames" && k != "--rays" && k != "--occluders" &&
                 k != "--resolution" && k != "--seed" && k != "--split" && k != "--bake" &&
                 k != "--eye-occluders" && k != "--parts" && k != "--eye-panels" && k != "--eye-select" &&
-                k != "--eye-polygons")
+                k != "--eye-polygons" && k != "--horizon" && k != "--horizon-faces")
                 bad_option("unknown option " + k + " (run it with no arguments for the usage)");
             if (a + 1 >= argc) bad_option(k + " wants a value");
             const char* v = argv[++a];
@@ -319,6 +326,10 @@ int main(int argc, char** argv) {
                 eye_occluders = uint32_t(parse_count("--eye-occluders", v, 0, PVSR_CULLER_MAX_OCCLUDERS));
             else if (k == "--eye-polygons")
                 eye_polygons = uint32_t(parse_count("--eye-polygons", v, 0, PVSR_CULLER_MAX_POLYGONS));
+            else if (k == "--horizon")
+                horizon_columns = uint32_t(parse_count("--horizon", v, 0, 65536));
+            else if (k == "--horizon-faces")
+                horizon_faces = uint32_t(parse_count("--horizon-faces", v, 0, 100'000'000));
             else if (k == "--parts")
                 parts_drawn = parse_count("--parts", v, 0, 1) == 1;
             else if (k == "--eye-panels")
@@ -382,6 +393,19 @@ int main(int argc, char** argv) {
         }
         if (eye_occluders > 0 && bake_path.empty()) bad_option("--eye-occluders wants --bake");
         if (eye_polygons > 0 && bake_path.empty()) bad_option("--eye-polygons wants --bake");
+        if (horizon_columns > 0 && bake_path.empty()) bad_option("--horizon wants --bake");
+        // --horizon: every proven box of the bake, every panel and slanted panel of the world, around the
+        // eye.
+        std::vector<pvs::Aabb> horizon_boxes, horizon_panels;
+        std::vector<pvs::SlantedPanel> horizon_slanted;
+        if (horizon_columns > 0) {
+            horizon_boxes = proven;
+            horizon_panels = pvs::find_panels(world);
+            horizon_slanted = pvs::find_slanted_panels(world, 1e-4, 0.25);
+            std::fprintf(stderr, "bench_frame: horizon of %zu boxes, %zu panels, %zu slanted panels\n",
+                         horizon_boxes.size(), horizon_panels.size(), horizon_slanted.size());
+        }
+        pvs::bench::OcclusionHorizon horizon(int(std::max<uint32_t>(horizon_columns, 1)), horizon_faces);
         // --eye-polygons: up to P of the bake's polygons with the largest solid angle from the eye (area
         // times the cosine over the squared distance, at the centre), added to the cell's occluders.
         const auto add_eye_polygons = [&](const glm::vec3& eye) {
@@ -526,6 +550,25 @@ int main(int argc, char** argv) {
                 f.frame_us = micros(t2, t3);
             }
         }
+
+        if (horizon_columns > 0)  // measurement only: the horizon culls what the culler drew
+            for (Frame& f : frames) {
+                const auto h0 = std::chrono::steady_clock::now();
+                horizon.build(glm::dvec3(f.eye), horizon_boxes, horizon_panels, horizon_slanted);
+                std::vector<uint32_t> kept;
+                for (const uint32_t o : f.drawn) {
+                    float b[6];
+                    pvsr_object_bounds(&level, o, b);
+                    const bool hidden = (pvsr_object_flags(&level, o) & PVSR_OBJECT_ALWAYS_VISIBLE) == 0 &&
+                                        horizon.hides(pvs::Aabb::of({b[0], b[1], b[2]}, {b[3], b[4], b[5]}));
+                    if (hidden)
+                        ++f.horizon_culled;
+                    else
+                        kept.push_back(o);
+                }
+                f.drawn = std::move(kept);
+                f.horizon_us = micros(h0, std::chrono::steady_clock::now());
+            }
 
         // Truth: rays from each frame's eye at its listed objects (the culled ones only in check frames).
         struct Pair {
@@ -689,7 +732,8 @@ int main(int argc, char** argv) {
         uint64_t listed_objects = 0, drawn_objects = 0, visible_objects = 0, wrong_culls = 0,
                  culled_objects = 0;
         uint64_t occluders_given = 0, polygons_given = 0;
-        std::vector<double> frame_us, walk_us;
+        std::vector<double> frame_us, walk_us, horizon_us;
+        double horizon_culled = 0.0;
         nlohmann::ordered_json wrong = nlohmann::ordered_json::array();
         for (size_t p = 0; p < pairs.size(); ++p) {
             const Pair& pair = pairs[p];
@@ -718,6 +762,8 @@ int main(int argc, char** argv) {
             if (!f.full) continue;
             frame_us.push_back(f.frame_us);
             walk_us.push_back(f.walk_us);
+            horizon_us.push_back(f.horizon_us);
+            horizon_culled += f.horizon_culled;
             listed_objects += f.listed.size();
             drawn_objects += f.drawn.size();
             occluders_given += f.occluders;
@@ -759,6 +805,12 @@ int main(int argc, char** argv) {
         out["frame_us_median"] = median(frame_us);
         out["frame_us_p90"] = percentile90(frame_us);
         out["walk_us_median"] = median(walk_us);
+        if (horizon_columns > 0) {
+            out["horizon_columns"] = horizon_columns;
+            out["horizon_faces"] = horizon_faces;
+            out["horizon_us_median"] = median(horizon_us);
+            out["horizon_culled_objects_mean"] = horizon_culled / double(frame_us.size());
+        }
         out["culled_objects_all_frames"] = culled_objects;
         out["wrong_culls"] = wrong_culls;
         out["wrong_cull_examples"] = wrong;
