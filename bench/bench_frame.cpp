@@ -7,7 +7,7 @@
 //                                    [--eye-occluders E] [--eye-panels 0|1] [--eye-select
 //                                    solid-angle|first-hit]
 //                                    [--parts 0|1] [--eye-polygons P] [--horizon N]
-//                                    [--horizon-faces M]
+//                                    [--horizon-faces M] [--horizon-cell-eyes K]
 //
 // Frames: F (default 200) eyes, each uniform in the eye space of a cell drawn at random (seed S, default 1):
 // a cell uniform among the level's cells, then a point uniform in its box kept when pvsr_in_eye_space() holds
@@ -38,7 +38,10 @@
 // bench walk the PVS itself (the timing is then not the runtime's). --horizon N (with --bake): after the
 // culler, an occlusion horizon of N columns a side frame around the eye (bench/horizon.h), built from every
 // proven box of the bake and every panel and slanted panel of the world (--horizon-faces M: only the nearest
-// M of their faces), culls what it hides of the drawn objects; its time per frame is `horizon_us_median`,
+// M of their faces), culls what it hides of the drawn objects (with --parts 1, also an object all of whose
+// part boxes it hides; --horizon-cell-eyes K: the horizon takes only the occluders whose pieces proved
+// some cull from K other eyes of the frame's cell, drawn there as the frame's is, `horizon_used_mean` of
+// them: what a list of occluders per cell would hold); its time per frame is `horizon_us_median`,
 // apart from the frame's (it is no runtime's code).
 // Where the drawn but invisible triangles go (the "waste" object, of the full frames' drawn objects no ray
 // reached): split_culls: the culler hides each of the object's M part boxes; given_boxes: each of
@@ -252,7 +255,7 @@ struct Frame {
     std::vector<uint32_t> listed, drawn;
     std::vector<float> boxes;  // the occluder boxes the frame began with
     double frame_us = 0.0, walk_us = 0.0, horizon_us = 0.0;
-    uint32_t horizon_culled = 0;
+    uint32_t horizon_culled = 0, horizon_used = 0;
     uint32_t occluders = 0;  // boxes and polygons given
     uint32_t polygons = 0;   // of them polygons (the cell's, pvsr_culler_begin_cell)
     bool full = true;  // truth for every listed object; else for the culled ones only
@@ -284,7 +287,8 @@ int main(int argc, char** argv) {
         "usage: bench_frame WORLD.glb LEVEL.pvsr [--frames F] [--check-frames C] [--rays R] [--occluders K]\n"
         "                   [--resolution N] [--seed S] [--split M] [--bake BAKE.h5] [--eye-occluders E]\n"
         "                   [--eye-panels 0|1] [--eye-select solid-angle|first-hit] [--parts 0|1]\n"
-        "                   [--eye-polygons P] [--horizon N] [--horizon-faces M]\n";
+        "                   [--eye-polygons P] [--horizon N] [--horizon-faces M]\n"
+        "                   [--horizon-cell-eyes K]\n";
     if (argc < 3 || argv[1][0] == '-' || argv[2][0] == '-') {
         std::fputs(usage, stderr);
         return 2;
@@ -293,7 +297,8 @@ int main(int argc, char** argv) {
     const std::string world_path = argv[1], level_path = argv[2];
     uint32_t n_frames = 200, n_check = 0, n_rays = 4096, max_occluders = PVSR_CULLER_MAX_OCCLUDERS,
              n_split = 8;
-    uint32_t eye_occluders = 0, eye_polygons = 0, horizon_columns = 0, horizon_faces = 0;
+    uint32_t eye_occluders = 0, eye_polygons = 0, horizon_columns = 0, horizon_faces = 0,
+             horizon_cell_eyes = 0;
     bool parts_drawn = false, eye_panels = false, eye_select_first_hit = false;
     std::string bake_path;
     int resolution = 32;
@@ -304,7 +309,8 @@ int main(int argc, char** argv) {
             if (k != "--frames" && k != "--check-frames" && k != "--rays" && k != "--occluders" &&
                 k != "--resolution" && k != "--seed" && k != "--split" && k != "--bake" &&
                 k != "--eye-occluders" && k != "--parts" && k != "--eye-panels" && k != "--eye-select" &&
-                k != "--eye-polygons" && k != "--horizon" && k != "--horizon-faces")
+                k != "--eye-polygons" && k != "--horizon" && k != "--horizon-faces" &&
+                k != "--horizon-cell-eyes")
                 bad_option("unknown option " + k + " (run it with no arguments for the usage)");
             if (a + 1 >= argc) bad_option(k + " wants a value");
             const char* v = argv[++a];
@@ -328,6 +334,8 @@ int main(int argc, char** argv) {
                 eye_polygons = uint32_t(parse_count("--eye-polygons", v, 0, PVSR_CULLER_MAX_POLYGONS));
             else if (k == "--horizon")
                 horizon_columns = uint32_t(parse_count("--horizon", v, 0, 65536));
+            else if (k == "--horizon-cell-eyes")
+                horizon_cell_eyes = uint32_t(parse_count("--horizon-cell-eyes", v, 0, 4096));
             else if (k == "--horizon-faces")
                 horizon_faces = uint32_t(parse_count("--horizon-faces", v, 0, 100'000'000));
             else if (k == "--parts")
@@ -553,14 +561,47 @@ int main(int argc, char** argv) {
 
         if (horizon_columns > 0)  // measurement only: the horizon culls what the culler drew
             for (Frame& f : frames) {
+                const uint32_t cell_eyes = horizon_cell_eyes;
+                std::vector<uint8_t> used;
+                if (cell_eyes > 0) {  // only the occluders that the horizons of other eyes of the cell used
+                    used.assign(horizon_boxes.size() + horizon_panels.size() + horizon_slanted.size(), 0);
+                    pvs::Rng erng(seed ^ 0x43454c4cULL, uint64_t(&f - frames.data()));
+                    float box[6];
+                    pvsr_cell_bounds(&level, f.cell, box);
+                    uint32_t got = 0;
+                    for (uint32_t d = 0; d < 4096 && got < cell_eyes; ++d) {
+                        const glm::vec3 p(box[0] + erng.uniform() * (box[3] - box[0]),
+                                          box[1] + erng.uniform() * (box[4] - box[1]),
+                                          box[2] + erng.uniform() * (box[5] - box[2]));
+                        if (!pvsr_in_eye_space(&level, p.x, p.y, p.z) ||
+                            pvsr_find_cell(&level, p.x, p.y, p.z) != int32_t(f.cell))
+                            continue;
+                        ++got;
+                        horizon.build(glm::dvec3(p), horizon_boxes, horizon_panels, horizon_slanted);
+                        for (const uint32_t o : f.listed) {
+                            float b[6];
+                            pvsr_object_bounds(&level, o, b);
+                            if (!horizon.hides(pvs::Aabb::of({b[0], b[1], b[2]}, {b[3], b[4], b[5]}),
+                                               &used) &&
+                                parts_drawn)
+                                for (const pvs::Aabb& part : parts[o]) horizon.hides(part, &used);
+                        }
+                    }
+                    f.horizon_used = uint32_t(std::count(used.begin(), used.end(), uint8_t(1)));
+                }
                 const auto h0 = std::chrono::steady_clock::now();
-                horizon.build(glm::dvec3(f.eye), horizon_boxes, horizon_panels, horizon_slanted);
+                horizon.build(glm::dvec3(f.eye), horizon_boxes, horizon_panels, horizon_slanted,
+                              cell_eyes > 0 ? &used : nullptr);
                 std::vector<uint32_t> kept;
                 for (const uint32_t o : f.drawn) {
                     float b[6];
                     pvsr_object_bounds(&level, o, b);
-                    const bool hidden = (pvsr_object_flags(&level, o) & PVSR_OBJECT_ALWAYS_VISIBLE) == 0 &&
-                                        horizon.hides(pvs::Aabb::of({b[0], b[1], b[2]}, {b[3], b[4], b[5]}));
+                    bool hidden = (pvsr_object_flags(&level, o) & PVSR_OBJECT_ALWAYS_VISIBLE) == 0 &&
+                                  horizon.hides(pvs::Aabb::of({b[0], b[1], b[2]}, {b[3], b[4], b[5]}));
+                    if (!hidden && parts_drawn && !parts[o].empty() &&
+                        (pvsr_object_flags(&level, o) & PVSR_OBJECT_ALWAYS_VISIBLE) == 0)
+                        hidden = std::all_of(parts[o].begin(), parts[o].end(),
+                                             [&](const pvs::Aabb& part) { return horizon.hides(part); });
                     if (hidden)
                         ++f.horizon_culled;
                     else
@@ -733,7 +774,7 @@ int main(int argc, char** argv) {
                  culled_objects = 0;
         uint64_t occluders_given = 0, polygons_given = 0;
         std::vector<double> frame_us, walk_us, horizon_us;
-        double horizon_culled = 0.0;
+        double horizon_culled = 0.0, horizon_used_sum = 0.0;
         nlohmann::ordered_json wrong = nlohmann::ordered_json::array();
         for (size_t p = 0; p < pairs.size(); ++p) {
             const Pair& pair = pairs[p];
@@ -764,6 +805,7 @@ int main(int argc, char** argv) {
             walk_us.push_back(f.walk_us);
             horizon_us.push_back(f.horizon_us);
             horizon_culled += f.horizon_culled;
+            horizon_used_sum += f.horizon_used;
             listed_objects += f.listed.size();
             drawn_objects += f.drawn.size();
             occluders_given += f.occluders;
@@ -808,8 +850,10 @@ int main(int argc, char** argv) {
         if (horizon_columns > 0) {
             out["horizon_columns"] = horizon_columns;
             out["horizon_faces"] = horizon_faces;
+            out["horizon_cell_eyes"] = horizon_cell_eyes;
             out["horizon_us_median"] = median(horizon_us);
             out["horizon_culled_objects_mean"] = horizon_culled / double(frame_us.size());
+            out["horizon_used_mean"] = horizon_used_sum / double(frame_us.size());
         }
         out["culled_objects_all_frames"] = culled_objects;
         out["wrong_culls"] = wrong_culls;

@@ -26,6 +26,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <vector>
 
 namespace pvs::bench {
@@ -35,12 +36,15 @@ public:
     // columns: per side frame; max_faces: only the nearest so many faces (0: all).
     OcclusionHorizon(int columns, size_t max_faces) : columns_(columns), max_faces_(max_faces) {}
 
+    // Occluder k is boxes[k], then panels[k - boxes], then slanted[k - boxes - panels]; with `only`, just
+    // those k with only[k] != 0.
     void build(const glm::dvec3& eye, const std::vector<Aabb>& boxes, const std::vector<Aabb>& panels,
-               const std::vector<SlantedPanel>& slanted) {
+               const std::vector<SlantedPanel>& slanted, const std::vector<uint8_t>* only = nullptr) {
         eye_ = eye;
         faces_.clear();
         const double scale = 1.0 + std::max({std::abs(eye.x), std::abs(eye.y), std::abs(eye.z)});
         const double delta = 1e-5 + 1e-6 * scale, grow = 1e-9 * scale;
+        uint32_t source = 0;
         const auto rect = [&](int axis, double plane, const glm::dvec3& lo, const glm::dvec3& hi) {
             const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
             Face f;
@@ -57,9 +61,13 @@ public:
             f.n[axis] = 1.0;
             f.c = plane - eye_[axis];
             f.key = dist_key(lo, hi);
+            f.source = source;
             faces_.push_back(std::move(f));
         };
-        for (const Aabb& p : panels) {
+        for (size_t i = 0; i < panels.size(); ++i) {
+            const Aabb& p = panels[i];
+            source = uint32_t(boxes.size() + i);
+            if (only && !(*only)[source]) continue;
             int axis = -1;
             for (int k = 0; k < 3; ++k)
                 if (p.min[k] == p.max[k]) axis = axis < 0 ? k : 3;
@@ -67,7 +75,10 @@ public:
             if (std::abs(eye[axis] - double(p.min[axis])) <= delta) continue;
             rect(axis, p.min[axis], glm::dvec3(p.min), glm::dvec3(p.max));
         }
-        for (const Aabb& b : boxes) {
+        for (size_t i = 0; i < boxes.size(); ++i) {
+            const Aabb& b = boxes[i];
+            source = uint32_t(i);
+            if (only && !(*only)[source]) continue;
             for (int axis = 0; axis < 3; ++axis) {
                 if (!(b.min[axis] < b.max[axis])) continue;
                 if (eye[axis] < double(b.min[axis]) - delta)
@@ -76,7 +87,10 @@ public:
                     rect(axis, b.max[axis], glm::dvec3(b.min), glm::dvec3(b.max));
             }
         }
-        for (const SlantedPanel& sp : slanted) {
+        for (size_t i = 0; i < slanted.size(); ++i) {
+            const SlantedPanel& sp = slanted[i];
+            source = uint32_t(boxes.size() + panels.size() + i);
+            if (only && !(*only)[source]) continue;
             const double s = glm::dot(sp.normal, eye) - sp.offset;
             if (std::abs(s) <= sp.thickness + delta) continue;
             const double side = s > 0.0 ? 1.0 : -1.0;
@@ -88,6 +102,7 @@ public:
             f.n = sp.normal;
             f.c = sp.offset - side * sp.thickness - glm::dot(sp.normal, eye_);
             f.key = dist_key(glm::dvec3(sp.bounds.min), glm::dvec3(sp.bounds.max));
+            f.source = source;
             faces_.push_back(std::move(f));
         }
         std::sort(faces_.begin(), faces_.end(), [](const Face& x, const Face& y) { return x.key < y.key; });
@@ -100,8 +115,10 @@ public:
         }
     }
 
-    // Is every point of the box behind the horizon (see above)?
-    bool hides(const Aabb& box) const {
+    // Is every point of the box behind the horizon (see above)? With `used`, marks the occluders whose
+    // pieces the proof took (when it holds).
+    bool hides(const Aabb& box, std::vector<uint8_t>* used = nullptr) const {
+        taken_.clear();
         const glm::dvec3 lo = glm::dvec3(box.min) - eye_, hi = glm::dvec3(box.max) - eye_;
         for (int fr = 0; fr < 4; ++fr) {
             const int p = fr < 2 ? 0 : 2, hax = fr < 2 ? 2 : 0;
@@ -126,7 +143,10 @@ public:
                 for (const Piece& pc : frames_[fr][size_t(k)].pieces) {
                     if (!(d_lo > pc.depth * (1.0 + 1e-9) + 1e-9)) continue;
                     if (pc.lo > cur + 1e-9 * (1.0 + std::abs(cur))) break;  // a gap at cur
-                    if (pc.hi > cur) cur = pc.hi;
+                    if (pc.hi > cur) {
+                        cur = pc.hi;
+                        if (used) taken_.push_back(pc.source);
+                    }
                     if (cur > v_max + 1e-12 * (1.0 + std::abs(v_max))) {
                         covered = true;
                         break;
@@ -135,6 +155,8 @@ public:
                 if (!covered) return false;
             }
         }
+        if (used)
+            for (const uint32_t k : taken_) (*used)[k] = 1;
         return true;
     }
 
@@ -146,9 +168,11 @@ private:
         glm::dvec3 n{0.0};
         double c = 0.0;  // the plane of depth: n . x = c (x less the eye)
         double key = 0.0;
+        uint32_t source = 0;
     };
     struct Piece {
         double lo, hi, depth;  // every direction of the column with v in [lo, hi] meets a face by depth
+        uint32_t source;
     };
     struct Column {
         std::vector<Piece> pieces;  // by lo
@@ -273,11 +297,12 @@ private:
                         deepest = std::max(deepest, t);
                     }
                 if (!ok) continue;
-                c.pieces.push_back({lo + r, hi - r, deepest * (1.0 + 1e-9)});
+                c.pieces.push_back({lo + r, hi - r, deepest * (1.0 + 1e-9), f.source});
             }
         }
     }
 
+    mutable std::vector<uint32_t> taken_;
     int columns_;
     size_t max_faces_;
     glm::dvec3 eye_{0.0};
