@@ -82,6 +82,7 @@
 #include <iterator>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -255,7 +256,7 @@ struct Frame {
     std::vector<uint32_t> listed, drawn;
     std::vector<float> boxes;  // the occluder boxes the frame began with
     double frame_us = 0.0, walk_us = 0.0, horizon_us = 0.0;
-    uint32_t horizon_culled = 0, horizon_used = 0;
+    uint32_t horizon_culled = 0, horizon_used = 0, horizon_pieces = 0;
     uint32_t occluders = 0;  // boxes and polygons given
     uint32_t polygons = 0;   // of them polygons (the cell's, pvsr_culler_begin_cell)
     bool full = true;  // truth for every listed object; else for the culled ones only
@@ -414,6 +415,21 @@ int main(int argc, char** argv) {
                          horizon_boxes.size(), horizon_panels.size(), horizon_slanted.size());
         }
         pvs::bench::OcclusionHorizon horizon(int(std::max<uint32_t>(horizon_columns, 1)), horizon_faces);
+        // The runtime's horizon (pvsr_horizon) culls each frame; the one above only chooses the occluders of
+        // --horizon-cell-eyes and --horizon-faces. The slanted panels go to it in their runtime form.
+        std::vector<std::optional<pvs::OccluderPolygon>> horizon_polygons;
+        for (const pvs::SlantedPanel& sp : horizon_slanted) {
+            std::vector<pvs::OccluderPolygon> q = pvs::runtime_polygons({sp}, 0.0);
+            horizon_polygons.push_back(q.empty() ? std::nullopt : std::optional(q.front()));
+        }
+        constexpr size_t kHorizonPieces = size_t(1) << 20;
+        const int runtime_columns = int(std::max<uint32_t>(horizon_columns, 1));
+        std::vector<uint64_t> horizon_memory(
+            horizon_columns > 0 ? pvsr_horizon_memory_bytes(runtime_columns, kHorizonPieces) / 8 + 1 : 1);
+        pvsr_horizon runtime_horizon;
+        if (horizon_columns > 0 && !pvsr_horizon_init(&runtime_horizon, runtime_columns, kHorizonPieces,
+                                                      horizon_memory.data(), horizon_memory.size() * 8))
+            throw pvs::internal_error("bench_frame: the horizon did not take its memory");
         // --eye-polygons: up to P of the bake's polygons with the largest solid angle from the eye (area
         // times the cosine over the squared distance, at the centre), added to the cell's occluders.
         const auto add_eye_polygons = [&](const glm::vec3& eye) {
@@ -589,19 +605,50 @@ int main(int argc, char** argv) {
                     }
                     f.horizon_used = uint32_t(std::count(used.begin(), used.end(), uint8_t(1)));
                 }
+                std::vector<uint8_t> nearest;  // --horizon-faces: the occluders of the nearest faces
+                if (horizon_faces > 0 && cell_eyes == 0) {
+                    horizon.build(glm::dvec3(f.eye), horizon_boxes, horizon_panels, horizon_slanted);
+                    nearest = horizon.sources();
+                }
+                const std::vector<uint8_t>* only = cell_eyes > 0       ? &used
+                                                   : horizon_faces > 0 ? &nearest
+                                                                       : nullptr;
                 const auto h0 = std::chrono::steady_clock::now();
-                horizon.build(glm::dvec3(f.eye), horizon_boxes, horizon_panels, horizon_slanted,
-                              cell_eyes > 0 ? &used : nullptr);
+                const float eye[3] = {f.eye.x, f.eye.y, f.eye.z};
+                pvsr_horizon_begin(&runtime_horizon, eye);
+                uint32_t source = 0;
+                for (const std::vector<pvs::Aabb>* set : {&horizon_boxes, &horizon_panels})
+                    for (const pvs::Aabb& b : *set) {
+                        if (!only || (*only)[source]) {
+                            const float fb[6] = {b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z};
+                            pvsr_horizon_add_box(&runtime_horizon, fb);
+                        }
+                        ++source;
+                    }
+                for (const std::optional<pvs::OccluderPolygon>& q : horizon_polygons) {
+                    if (q && (!only || (*only)[source])) {
+                        const float plane[5] = {q->normal.x, q->normal.y, q->normal.z, q->offset,
+                                                q->thickness};
+                        pvsr_horizon_add_polygon(&runtime_horizon, plane, &q->corners[0].x,
+                                                 uint32_t(q->corners.size()));
+                    }
+                    ++source;
+                }
+                pvsr_horizon_end(&runtime_horizon);
+                f.horizon_pieces = uint32_t(runtime_horizon.count);
                 std::vector<uint32_t> kept;
                 for (const uint32_t o : f.drawn) {
                     float b[6];
                     pvsr_object_bounds(&level, o, b);
                     bool hidden = (pvsr_object_flags(&level, o) & PVSR_OBJECT_ALWAYS_VISIBLE) == 0 &&
-                                  horizon.hides(pvs::Aabb::of({b[0], b[1], b[2]}, {b[3], b[4], b[5]}));
+                                  pvsr_horizon_is_hidden(&runtime_horizon, b);
                     if (!hidden && parts_drawn && !parts[o].empty() &&
                         (pvsr_object_flags(&level, o) & PVSR_OBJECT_ALWAYS_VISIBLE) == 0)
-                        hidden = std::all_of(parts[o].begin(), parts[o].end(),
-                                             [&](const pvs::Aabb& part) { return horizon.hides(part); });
+                        hidden = std::all_of(parts[o].begin(), parts[o].end(), [&](const pvs::Aabb& part) {
+                            const float pb[6] = {part.min.x, part.min.y, part.min.z,
+                                                 part.max.x, part.max.y, part.max.z};
+                            return pvsr_horizon_is_hidden(&runtime_horizon, pb) != 0;
+                        });
                     if (hidden)
                         ++f.horizon_culled;
                     else
@@ -774,7 +821,7 @@ int main(int argc, char** argv) {
                  culled_objects = 0;
         uint64_t occluders_given = 0, polygons_given = 0;
         std::vector<double> frame_us, walk_us, horizon_us;
-        double horizon_culled = 0.0, horizon_used_sum = 0.0;
+        double horizon_culled = 0.0, horizon_used_sum = 0.0, horizon_pieces_sum = 0.0;
         nlohmann::ordered_json wrong = nlohmann::ordered_json::array();
         for (size_t p = 0; p < pairs.size(); ++p) {
             const Pair& pair = pairs[p];
@@ -806,6 +853,7 @@ int main(int argc, char** argv) {
             horizon_us.push_back(f.horizon_us);
             horizon_culled += f.horizon_culled;
             horizon_used_sum += f.horizon_used;
+            horizon_pieces_sum += f.horizon_pieces;
             listed_objects += f.listed.size();
             drawn_objects += f.drawn.size();
             occluders_given += f.occluders;
@@ -854,6 +902,7 @@ int main(int argc, char** argv) {
             out["horizon_us_median"] = median(horizon_us);
             out["horizon_culled_objects_mean"] = horizon_culled / double(frame_us.size());
             out["horizon_used_mean"] = horizon_used_sum / double(frame_us.size());
+            out["horizon_pieces_mean"] = horizon_pieces_sum / double(frame_us.size());
         }
         out["culled_objects_all_frames"] = culled_objects;
         out["wrong_culls"] = wrong_culls;

@@ -1,9 +1,11 @@
 // SPDX-License-Identifier: MIT
-// A measurement of bench_frame (--horizon N), not a culler a game gets: an OCCLUSION HORIZON around one eye
-// (after Downs, Moller and Sequin, Occlusion Horizons for Driving through Urban Scenery, I3D 2001), built
-// from every proven occluder the bench is given: boxes of the proven solid (their faces towards the eye),
-// panels (rectangles covered by opaque triangles) and slanted panels (convex polygons whose prism across a
-// thin slab stops every segment that crosses the slab inside it).
+// A measurement of bench_frame (--horizon-cell-eyes, --horizon-faces), not a culler a game gets: the
+// occlusion horizon of the C99 runtime (pvsr_horizon, docs/ALGORITHMS.md#runtime-horizon) in plain C++, which
+// also tells which occluders each proof used and takes the world's slanted panels exactly as found (the
+// runtime takes polygon occluders in their float form), so that the bench can choose the occluders a list per
+// cell would hold. Built from every proven box of the bake (their faces towards the eye), panels (rectangles
+// covered by opaque triangles) and slanted panels (convex polygons whose prism across a thin slab stops every
+// segment that crosses the slab inside it).
 //
 // Four side frames (+x, -x, +z, -z; y is up): a point x (less the eye) with depth d = s x_p > 0 has the
 // direction (u, v) = (x_h / d, x_y / d). Each frame's u in [-1, 1] is cut into N columns. A face (a convex
@@ -45,6 +47,7 @@ public:
         const double scale = 1.0 + std::max({std::abs(eye.x), std::abs(eye.y), std::abs(eye.z)});
         const double delta = 1e-5 + 1e-6 * scale, grow = 1e-9 * scale;
         uint32_t source = 0;
+        n_sources_ = boxes.size() + panels.size() + slanted.size();
         const auto rect = [&](int axis, double plane, const glm::dvec3& lo, const glm::dvec3& hi) {
             const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
             Face f;
@@ -113,6 +116,13 @@ public:
                 std::sort(c.pieces.begin(), c.pieces.end(),
                           [](const Piece& x, const Piece& y) { return x.lo < y.lo; });
         }
+    }
+
+    // The occluders (as `only` counts them) of the faces the last build() took.
+    std::vector<uint8_t> sources() const {
+        std::vector<uint8_t> out(n_sources_, 0);
+        for (const Face& f : faces_) out[f.source] = 1;
+        return out;
     }
 
     // Is every point of the box behind the horizon (see above)? With `used`, marks the occluders whose
@@ -303,6 +313,7 @@ private:
     }
 
     mutable std::vector<uint32_t> taken_;
+    size_t n_sources_ = 0;
     int columns_;
     size_t max_faces_;
     glm::dvec3 eye_{0.0};

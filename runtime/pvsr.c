@@ -26,6 +26,7 @@
 #include "pvsr.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #if defined(_MSC_VER)
@@ -2375,27 +2376,36 @@ void pvsr_culler_begin_frame(pvsr_culler* c, const float eye[3], const float* bo
     face_directions(c);
 }
 
-int pvsr_culler_add_polygon(pvsr_culler* c, const float plane[5], const float* corners, uint32_t count) {
-    pvsr_culler_polygon* pg;
-    double n[3], len, o, t, scale = 0.0, s_e, sign, grow, area = 0.0;
-    uint32_t i, j;
+/* A polygon occluder's slab from its arguments (pvsr_culler_add_polygon): 3 to PVSR_POLYGON_MAX_CORNERS
+ * corners, every value finite, a normal and a thickness >= 0. Its unit normal n, offset o and thickness t
+ * along n, and in *scale the larger of *scale and the largest |corner coordinate|; 0 when refused. */
+static int polygon_slab(const float plane[5], const float* corners, uint32_t count, double n[3], double* o,
+                        double* t, double* scale) {
+    double len;
+    uint32_t i;
     int a;
-    if (c == NULL || !c->eye_ok || plane == NULL || corners == NULL || count < 3 ||
-        count > PVSR_POLYGON_MAX_CORNERS || c->polygon_count >= PVSR_CULLER_MAX_POLYGONS)
-        return 0;
+    if (plane == NULL || corners == NULL || count < 3 || count > PVSR_POLYGON_MAX_CORNERS) return 0;
     for (i = 0; i < 5; ++i)
         if (!isfinite(plane[i])) return 0;
     for (i = 0; i < 3 * count; ++i)
         if (!isfinite(corners[i])) return 0;
     len = sqrt((double)plane[0] * plane[0] + (double)plane[1] * plane[1] + (double)plane[2] * plane[2]);
     if (!(len > 0.0) || !isfinite(len) || !(plane[4] >= 0.0f)) return 0;
-    for (a = 0; a < 3; ++a) {
-        n[a] = (double)plane[a] / len;
-        scale = maxd(scale, fabs(c->eye_d[a]));
-    }
-    o = (double)plane[3] / len;
-    t = (double)plane[4] / len;
-    for (i = 0; i < 3 * count; ++i) scale = maxd(scale, fabs((double)corners[i]));
+    for (a = 0; a < 3; ++a) n[a] = (double)plane[a] / len;
+    *o = (double)plane[3] / len;
+    *t = (double)plane[4] / len;
+    for (i = 0; i < 3 * count; ++i) *scale = maxd(*scale, fabs((double)corners[i]));
+    return 1;
+}
+
+int pvsr_culler_add_polygon(pvsr_culler* c, const float plane[5], const float* corners, uint32_t count) {
+    pvsr_culler_polygon* pg;
+    double n[3], o, t, scale = 0.0, s_e, sign, grow, area = 0.0;
+    uint32_t i, j;
+    int a;
+    if (c == NULL || !c->eye_ok || c->polygon_count >= PVSR_CULLER_MAX_POLYGONS) return 0;
+    for (a = 0; a < 3; ++a) scale = maxd(scale, fabs(c->eye_d[a]));
+    if (!polygon_slab(plane, corners, count, n, &o, &t, &scale)) return 0;
     pg = &c->polygons[c->polygon_count];
     pg->delta = CULL_MARGIN_M + CULL_MARGIN_REL * scale;
     grow = FUSE_GROW_REL * (1.0 + scale);
@@ -2457,4 +2467,405 @@ uint32_t pvsr_culler_begin_cell(pvsr_culler* c, const pvsr_level* l, uint32_t ce
         n += (uint32_t)pvsr_culler_add_polygon(c, plane, corners, m);
     }
     return n;
+}
+
+/* ---- The occlusion horizon (docs/ALGORITHMS.md#runtime-horizon). Frame fr: depth d = s x_p along axis p
+ * (x for frames 0 and 1, z for 2 and 3; s = +1 for even frames), direction (u, v) = (x_h / d, x_y / d) with
+ * h the other horizontal axis; u in [-1, 1] cut into `columns` columns. */
+#define HZ_NEAR 1e-3    /* the near plane: a face's part at a smaller depth is clipped away */
+#define HZ_ROUND 1e-12  /* relative: a piece is shrunk by this on both ends, for double rounding */
+#define HZ_TOUCH 1e-9   /* relative: pieces whose ends are this close count as meeting */
+#define HZ_DEPTH 1e-9   /* relative: depths are made larger by this */
+#define HZ_MAX_VERTS 40 /* of a projected polygon: a face of up to 8 corners clipped, then by another */
+#define HZ_MAX_PIECES (1u << 26)
+
+static double hz_min(double a, double b) {
+    return b < a ? b : a;
+}
+static double hz_max(double a, double b) {
+    return a < b ? b : a;
+}
+static int hz_columns(int columns) {
+    return columns < PVSR_HORIZON_MIN_COLUMNS   ? PVSR_HORIZON_MIN_COLUMNS
+           : columns > PVSR_HORIZON_MAX_COLUMNS ? PVSR_HORIZON_MAX_COLUMNS
+                                                : columns;
+}
+
+size_t pvsr_horizon_memory_bytes(int columns, size_t max_pieces) {
+    const size_t c = (size_t)hz_columns(columns);
+    if (max_pieces > HZ_MAX_PIECES) max_pieces = HZ_MAX_PIECES;
+    return 2 * max_pieces * sizeof(pvsr_horizon_piece) + (4 * c + 1) * sizeof(uint32_t);
+}
+
+int pvsr_horizon_init(pvsr_horizon* h, int columns, size_t max_pieces, void* memory, size_t memory_bytes) {
+    if (h == NULL) return 0;
+    memset(h, 0, sizeof *h);
+    h->columns = hz_columns(columns);
+    if (memory == NULL || ((uintptr_t)memory & 7u) != 0 || max_pieces == 0 || max_pieces > HZ_MAX_PIECES ||
+        memory_bytes < pvsr_horizon_memory_bytes(columns, max_pieces))
+        return 0;
+    h->pieces = (pvsr_horizon_piece*)memory;
+    h->sorted = h->pieces + max_pieces;
+    h->first = (uint32_t*)(void*)(h->sorted + max_pieces);
+    h->capacity = max_pieces;
+    h->ok = 1;
+    return 1;
+}
+
+void pvsr_horizon_begin(pvsr_horizon* h, const float eye[3]) {
+    int a;
+    if (h == NULL) return;
+    h->eye_ok = h->ready = 0;
+    h->count = h->dropped = 0;
+    h->scale = 0.0;
+    if (!h->ok || eye == NULL) return;
+    for (a = 0; a < 3; ++a) {
+        if (!isfinite(eye[a])) return;
+        h->eye[a] = (double)eye[a];
+        h->scale = hz_max(h->scale, fabs(h->eye[a]));
+    }
+    h->eye_ok = 1;
+}
+
+static void hz_frame(int fr, int* p, int* hx, double* s) {
+    *p = fr < 2 ? 0 : 2;
+    *hx = fr < 2 ? 2 : 0;
+    *s = (fr & 1) ? -1.0 : 1.0;
+}
+
+/* The directions of the polygon's part at depth >= HZ_NEAR in frame fr (its corners less the eye): a convex
+ * polygon of the returned number of corners (u, v). */
+static int hz_project(int fr, const double (*pts)[3], int n, double* u, double* v) {
+    int p, hx, i, m = 0;
+    double s;
+    hz_frame(fr, &p, &hx, &s);
+    for (i = 0; i < n && m + 2 <= HZ_MAX_VERTS; ++i) {
+        const double* a = pts[i];
+        const double* b = pts[(i + 1) % n];
+        const double da = s * a[p], db = s * b[p];
+        if (da >= HZ_NEAR) {
+            u[m] = a[hx] / da;
+            v[m] = a[1] / da;
+            ++m;
+        }
+        if ((da >= HZ_NEAR) != (db >= HZ_NEAR)) {
+            const double t = (HZ_NEAR - da) / (db - da);
+            u[m] = (a[hx] + (b[hx] - a[hx]) * t) / HZ_NEAR;
+            v[m] = (a[1] + (b[1] - a[1]) * t) / HZ_NEAR;
+            ++m;
+        }
+    }
+    return m;
+}
+
+/* The convex polygon (u, v) of n corners clipped by the convex polygon (bu, bv) of nb (either orientation),
+ * in place; returns its corner count. */
+static int hz_clip(double* u, double* v, int n, const double* bu, const double* bv, int nb) {
+    double area = 0.0, orient, tu[HZ_MAX_VERTS], tv[HZ_MAX_VERTS];
+    int i, j, m;
+    for (i = 0; i < nb; ++i) area += bu[i] * bv[(i + 1) % nb] - bu[(i + 1) % nb] * bv[i];
+    orient = area >= 0.0 ? 1.0 : -1.0;
+    for (i = 0; i < nb && n > 0; ++i) {
+        const double pu = bu[i], pv = bv[i], qu = bu[(i + 1) % nb], qv = bv[(i + 1) % nb];
+        m = 0;
+        for (j = 0; j < n && m + 2 <= HZ_MAX_VERTS; ++j) {
+            const int k = (j + 1) % n;
+            const double sj = orient * ((qu - pu) * (v[j] - pv) - (qv - pv) * (u[j] - pu));
+            const double sk = orient * ((qu - pu) * (v[k] - pv) - (qv - pv) * (u[k] - pu));
+            if (sj >= 0.0) {
+                tu[m] = u[j];
+                tv[m] = v[j];
+                ++m;
+            }
+            if ((sj >= 0.0) != (sk >= 0.0)) {
+                const double t = sj / (sj - sk);
+                tu[m] = u[j] + (u[k] - u[j]) * t;
+                tv[m] = v[j] + (v[k] - v[j]) * t;
+                ++m;
+            }
+        }
+        memcpy(u, tu, (size_t)m * sizeof(double));
+        memcpy(v, tv, (size_t)m * sizeof(double));
+        n = m;
+    }
+    return n;
+}
+
+/* The v range of the convex polygon on the line u = x; 0 when the line misses it. */
+static int hz_span(const double* u, const double* v, int n, double x, double* lo, double* hi) {
+    int i;
+    *lo = HUGE_VAL;
+    *hi = -HUGE_VAL;
+    for (i = 0; i < n; ++i) {
+        const int k = (i + 1) % n;
+        if ((u[i] - x) * (u[k] - x) > 0.0) continue;
+        if (u[i] == u[k]) {
+            *lo = hz_min(*lo, hz_min(v[i], v[k]));
+            *hi = hz_max(*hi, hz_max(v[i], v[k]));
+        } else {
+            const double y = v[i] + (v[k] - v[i]) * ((x - u[i]) / (u[k] - u[i]));
+            *lo = hz_min(*lo, y);
+            *hi = hz_max(*hi, y);
+        }
+    }
+    return *lo <= *hi;
+}
+
+/* Adds the pieces of a face: the directions of polygon a (and of polygon b too, when given) meet an occluder
+ * by the plane n . x = c (x less the eye; c / (n . direction) > 0 towards it), in every frame. Returns
+ * whether it added one. */
+static int hz_add_face(pvsr_horizon* h, const double (*a)[3], int na, const double (*b)[3], int nb,
+                       const double n[3], double c) {
+    const int cols = h->columns;
+    int fr, added = 0;
+    for (fr = 0; fr < 4; ++fr) {
+        double pu[HZ_MAX_VERTS], pv[HZ_MAX_VERTS], umin = HUGE_VAL, umax = -HUGE_VAL, margin, s, k0d, k1d;
+        double lo0, hi0, lo1, hi1;
+        int m = hz_project(fr, a, na, pu, pv), i, k, k0, k1, p, hx, ok0;
+        if (m < 3) continue;
+        if (b != NULL) {
+            double qu[HZ_MAX_VERTS], qv[HZ_MAX_VERTS];
+            const int mb = hz_project(fr, b, nb, qu, qv);
+            if (mb < 3) continue;
+            m = hz_clip(pu, pv, m, qu, qv, mb);
+            if (m < 3) continue;
+        }
+        for (i = 0; i < m; ++i) {
+            umin = hz_min(umin, pu[i]);
+            umax = hz_max(umax, pu[i]);
+        }
+        /* The columns wholly inside [umin, umax], less a rounding margin. */
+        margin = HZ_ROUND * (1.0 + hz_max(fabs(umin), fabs(umax)));
+        k0d = ceil((umin + margin + 1.0) * 0.5 * cols);
+        k1d = floor((umax - margin + 1.0) * 0.5 * cols) - 1.0;
+        if (!(k0d <= k1d) || k1d < 0.0 || k0d > (double)(cols - 1)) continue;
+        k0 = k0d < 0.0 ? 0 : (int)k0d;
+        k1 = k1d > (double)(cols - 1) ? cols - 1 : (int)k1d;
+        hz_frame(fr, &p, &hx, &s);
+        ok0 = hz_span(pu, pv, m, -1.0 + 2.0 * k0 / cols, &lo0, &hi0);
+        for (k = k0; k <= k1; ++k) {
+            const double u0 = -1.0 + 2.0 * k / cols, u1 = -1.0 + 2.0 * (k + 1) / cols;
+            const int ok1 = hz_span(pu, pv, m, u1, &lo1, &hi1);
+            if (ok0 && ok1) {
+                const double lo = hz_max(lo0, lo1), hi = hz_min(hi0, hi1);
+                const double r = HZ_ROUND * (1.0 + fabs(lo) + fabs(hi));
+                if (hi - r > lo + r) {
+                    /* The deepest point over the column's [lo, hi]: 1 / depth is linear in (u, v), so it is
+                     * least at a corner. */
+                    const double g0 = (n[p] * s + n[hx] * u0) / c, g1 = (n[p] * s + n[hx] * u1) / c;
+                    const double gv = n[1] / c;
+                    const double g =
+                        hz_min(hz_min(g0 + gv * lo, g0 + gv * hi), hz_min(g1 + gv * lo, g1 + gv * hi));
+                    if (g > 0.0 && isfinite(g)) {
+                        if (h->count < h->capacity) {
+                            pvsr_horizon_piece* pc = &h->pieces[h->count++];
+                            pc->lo = lo + r;
+                            pc->hi = hi - r;
+                            pc->depth = (1.0 / g) * (1.0 + HZ_DEPTH);
+                            pc->column = (uint32_t)(fr * cols + k);
+                            pc->reserved = 0;
+                            added = 1;
+                        } else
+                            ++h->dropped;
+                    }
+                }
+            }
+            ok0 = ok1;
+            lo0 = lo1;
+            hi0 = hi1;
+        }
+    }
+    return added;
+}
+
+int pvsr_horizon_add_box(pvsr_horizon* h, const float box[6]) {
+    double lo[3], hi[3], scale, delta, grow, q[4][3], n[3];
+    int a, flat = -1, flats = 0, added = 0;
+    if (h == NULL || !h->ok || !h->eye_ok || box == NULL) return 0;
+    scale = h->scale;
+    for (a = 0; a < 3; ++a) {
+        if (!isfinite(box[a]) || !isfinite(box[3 + a]) || box[a] > box[3 + a]) return 0;
+        lo[a] = (double)box[a] - h->eye[a];
+        hi[a] = (double)box[3 + a] - h->eye[a];
+        scale = hz_max(scale, hz_max(fabs((double)box[a]), fabs((double)box[3 + a])));
+        if (box[a] == box[3 + a]) {
+            flat = a;
+            ++flats;
+        }
+    }
+    if (flats > 1) return 0;
+    delta = CULL_MARGIN_M + CULL_MARGIN_REL * scale;
+    grow = FUSE_GROW_REL * (1.0 + scale);
+    if (flats == 0 && lo[0] <= delta && hi[0] >= -delta && lo[1] <= delta && hi[1] >= -delta &&
+        lo[2] <= delta && hi[2] >= -delta)
+        return 0; /* holding the eye */
+    for (a = 0; a < 3; ++a) {
+        const int a1 = (a + 1) % 3, a2 = (a + 2) % 3;
+        double plane;
+        if (flats == 1 && a != flat) continue;
+        if (flats == 1) {
+            if (fabs(lo[a]) <= delta) return 0; /* a panel seen edge-on */
+            plane = lo[a];
+        } else if (lo[a] > delta) /* the eye before the box's min face on this axis */
+            plane = lo[a];
+        else if (hi[a] < -delta)
+            plane = hi[a];
+        else
+            continue;
+        q[0][a] = q[1][a] = q[2][a] = q[3][a] = plane;
+        q[0][a1] = q[3][a1] = lo[a1] - grow;
+        q[1][a1] = q[2][a1] = hi[a1] + grow;
+        q[0][a2] = q[1][a2] = lo[a2] - grow;
+        q[2][a2] = q[3][a2] = hi[a2] + grow;
+        n[0] = n[1] = n[2] = 0.0;
+        n[a] = 1.0;
+        added |= hz_add_face(h, (const double(*)[3])q, 4, NULL, 0, n, plane);
+    }
+    h->ready = 0;
+    return added;
+}
+
+int pvsr_horizon_add_polygon(pvsr_horizon* h, const float plane[5], const float* corners, uint32_t count) {
+    double n[3], o, t, scale, s_e, w_near, w_far, area = 0.0, grow;
+    double c[PVSR_POLYGON_MAX_CORNERS][3], near_s[PVSR_POLYGON_MAX_CORNERS][3],
+        far_s[PVSR_POLYGON_MAX_CORNERS][3];
+    uint32_t i, j;
+    int a, added;
+    if (h == NULL || !h->ok || !h->eye_ok) return 0;
+    scale = h->scale;
+    if (!polygon_slab(plane, corners, count, n, &o, &t, &scale)) return 0;
+    o -= n[0] * h->eye[0] + n[1] * h->eye[1] + n[2] * h->eye[2]; /* less the eye */
+    grow = FUSE_GROW_REL * (1.0 + scale);
+    s_e = -o; /* the eye's height above the slab's middle plane */
+    if (s_e > t + CULL_MARGIN_M + CULL_MARGIN_REL * scale) {
+        w_near = o + t;
+        w_far = o - t;
+    } else if (s_e < -(t + CULL_MARGIN_M + CULL_MARGIN_REL * scale)) {
+        w_near = o - t;
+        w_far = o + t;
+    } else
+        return 0; /* the eye within the slab and its margin */
+    for (i = 0; i < count; ++i)
+        for (a = 0; a < 3; ++a) c[i][a] = (double)corners[3 * i + (uint32_t)a] - h->eye[a];
+    for (i = 0; i < count; ++i) { /* convex and counter-clockwise seen from +n, as for the culler */
+        const double* p0 = c[i];
+        const double* p1 = c[(i + 1) % count];
+        const double d[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
+        double m[3], ml, k;
+        m[0] = n[1] * d[2] - n[2] * d[1];
+        m[1] = n[2] * d[0] - n[0] * d[2];
+        m[2] = n[0] * d[1] - n[1] * d[0];
+        ml = sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
+        if (!(ml > 0.0) || !isfinite(ml)) return 0;
+        k = (m[0] * p0[0] + m[1] * p0[1] + m[2] * p0[2]) / ml;
+        for (j = 0; j < count; ++j)
+            if (!((m[0] * c[j][0] + m[1] * c[j][1] + m[2] * c[j][2]) / ml >= k - grow)) return 0;
+        area += n[0] * (p0[1] * p1[2] - p0[2] * p1[1]) + n[1] * (p0[2] * p1[0] - p0[0] * p1[2]) +
+                n[2] * (p0[0] * p1[1] - p0[1] * p1[0]);
+    }
+    if (!(area > 0.0)) return 0;
+    /* The prism's cross-sections at the slab's near and far planes: the corners moved along n. */
+    for (i = 0; i < count; ++i) {
+        const double w = n[0] * c[i][0] + n[1] * c[i][1] + n[2] * c[i][2];
+        for (a = 0; a < 3; ++a) {
+            near_s[i][a] = c[i][a] + n[a] * (w_near - w);
+            far_s[i][a] = c[i][a] + n[a] * (w_far - w);
+        }
+    }
+    added = hz_add_face(h, (const double(*)[3])near_s, (int)count, (const double(*)[3])far_s, (int)count, n,
+                        w_far);
+    h->ready = 0;
+    return added;
+}
+
+static int hz_piece_order(const void* x, const void* y) {
+    const pvsr_horizon_piece* a = (const pvsr_horizon_piece*)x;
+    const pvsr_horizon_piece* b = (const pvsr_horizon_piece*)y;
+    if (a->lo != b->lo) return a->lo < b->lo ? -1 : 1;
+    if (a->hi != b->hi) return a->hi < b->hi ? -1 : 1;
+    if (a->depth != b->depth) return a->depth < b->depth ? -1 : 1;
+    return 0;
+}
+
+void pvsr_horizon_end(pvsr_horizon* h) {
+    const uint32_t n = h != NULL ? 4u * (uint32_t)h->columns : 0u;
+    uint32_t j;
+    size_t i;
+    if (h == NULL || !h->ok) return;
+    h->ready = 0;
+    if (!h->eye_ok) return;
+    memset(h->first, 0, (n + 1) * sizeof(uint32_t));
+    for (i = 0; i < h->count; ++i) ++h->first[h->pieces[i].column + 1];
+    for (j = 0; j < n; ++j) h->first[j + 1] += h->first[j];
+    for (i = 0; i < h->count; ++i) h->sorted[h->first[h->pieces[i].column]++] = h->pieces[i];
+    for (j = n; j > 0; --j) h->first[j] = h->first[j - 1];
+    h->first[0] = 0;
+    for (j = 0; j < n; ++j) {
+        pvsr_horizon_piece* run = h->sorted + h->first[j];
+        const uint32_t len = h->first[j + 1] - h->first[j];
+        if (len > 32)
+            qsort(run, len, sizeof(pvsr_horizon_piece), hz_piece_order);
+        else { /* insertion: most columns hold a few pieces */
+            uint32_t a, b;
+            for (a = 1; a < len; ++a) {
+                const pvsr_horizon_piece x = run[a];
+                for (b = a; b > 0 && hz_piece_order(&x, &run[b - 1]) < 0; --b) run[b] = run[b - 1];
+                run[b] = x;
+            }
+        }
+    }
+    h->ready = 1;
+}
+
+int pvsr_horizon_is_hidden(const pvsr_horizon* h, const float box[6]) {
+    double lo[3], hi[3];
+    int fr, a;
+    if (h == NULL || !h->ok || !h->eye_ok || !h->ready || box == NULL) return 0;
+    for (a = 0; a < 3; ++a) {
+        if (!isfinite(box[a]) || !isfinite(box[3 + a]) || box[a] > box[3 + a]) return 0;
+        lo[a] = (double)box[a] - h->eye[a];
+        hi[a] = (double)box[3 + a] - h->eye[a];
+    }
+    for (fr = 0; fr < 4; ++fr) {
+        int p, hx, k, k0, k1;
+        double s, d_lo, d_hi, h_lo, h_hi, near_h, u_min, u_max, v_min, v_max;
+        hz_frame(fr, &p, &hx, &s);
+        d_lo = s > 0.0 ? lo[p] : -hi[p];
+        d_hi = s > 0.0 ? hi[p] : -lo[p];
+        h_lo = lo[hx];
+        h_hi = hi[hx];
+        /* The box's part in the frame's wedge d >= |x_h|: its depths, directions and heights bounded from
+         * the box's ranges. */
+        near_h = (h_lo <= 0.0 && h_hi >= 0.0) ? 0.0 : hz_min(fabs(h_lo), fabs(h_hi));
+        d_lo = hz_max(d_lo, near_h);
+        if (d_lo > d_hi) continue; /* no point of the box in this frame */
+        if (!(d_lo > HZ_NEAR)) return 0;
+        u_min = hz_max(-1.0, hz_min(h_lo / d_lo, h_lo / d_hi));
+        u_max = hz_min(1.0, hz_max(h_hi / d_lo, h_hi / d_hi));
+        v_min = hz_min(lo[1] / d_lo, lo[1] / d_hi);
+        v_max = hz_max(hi[1] / d_lo, hi[1] / d_hi);
+        k0 = (int)floor((u_min + 1.0) * 0.5 * h->columns);
+        k1 = (int)floor((u_max + 1.0) * 0.5 * h->columns);
+        if (k0 < 0) k0 = 0;
+        if (k1 > h->columns - 1) k1 = h->columns - 1;
+        for (k = k0; k <= k1; ++k) {
+            /* [v_min, v_max] covered by the pieces that lie wholly before the box, taken by their lo. */
+            const uint32_t col = (uint32_t)(fr * h->columns + k);
+            uint32_t e;
+            double cur = v_min;
+            int covered = 0;
+            for (e = h->first[col]; e < h->first[col + 1]; ++e) {
+                const pvsr_horizon_piece* pc = &h->sorted[e];
+                if (!(d_lo > pc->depth)) continue;
+                if (pc->lo > cur + HZ_TOUCH * (1.0 + fabs(cur))) break; /* a gap at cur */
+                if (pc->hi > cur) cur = pc->hi;
+                if (cur > v_max + HZ_ROUND * (1.0 + fabs(v_max))) {
+                    covered = 1;
+                    break;
+                }
+            }
+            if (!covered) return 0;
+        }
+    }
+    return 1;
 }

@@ -327,6 +327,63 @@ int pvsr_culler_is_hidden(const pvsr_culler* culler, const float box[6]);
 /* Which test proved it (pvsr_cull_path). */
 int pvsr_culler_classify(const pvsr_culler* culler, const float box[6]);
 
+/* ---- The occlusion horizon: MANY occluders fused exactly where they meet, whatever their planes
+ * (docs/ALGORITHMS.md#runtime-horizon). Around the eye, four side frames (+x, -x, +z, -z; y is up) are cut
+ * into `columns` columns of directions each; every occluder face adds, per column it spans whole, the range
+ * of heights (v) over which each direction of the column meets it, with its depth there. A box is hidden when
+ * in every column its directions fall in, the pieces lying wholly before it cover its whole height range:
+ * an exact union in v, so a wall on a floor, terrain polygons sharing an edge and a roof over walls hide
+ * together what none hides alone. The occluders are those of the culler: solid boxes (faces towards the
+ * eye), panels (a box flat along one axis) and polygon occluders, in any order and any number up to the
+ * pieces the memory holds (past them, the rest are dropped: fewer pieces only cull less). "Hidden" means, as
+ * for the culler's faces test, that every segment from the eye to the box meets an occluder or passes within
+ * about 1e-9 of the coordinates' scale of one. No allocation: the pieces live in memory the caller gives.
+ *
+ *   static pvsr_horizon h;
+ *   pvsr_horizon_init(&h, 256, 65536, memory, pvsr_horizon_memory_bytes(256, 65536));
+ *   each frame: pvsr_horizon_begin(&h, eye);
+ *               pvsr_horizon_add_box(&h, box) / pvsr_horizon_add_polygon(&h, plane, corners, n) for each;
+ *               pvsr_horizon_end(&h);
+ *               if (!pvsr_horizon_is_hidden(&h, bounds)) draw(object);   (any number of threads)
+ */
+#define PVSR_HORIZON_MIN_COLUMNS 4
+#define PVSR_HORIZON_MAX_COLUMNS 8192
+
+typedef struct pvsr_horizon_piece {
+    double lo, hi, depth; /* every direction of the column with v in [lo, hi] meets an occluder by depth */
+    uint32_t column;      /* frame * columns + column */
+    uint32_t reserved;
+} pvsr_horizon_piece;
+
+/* A horizon: its fields are the runtime's (their layout may change between versions). */
+typedef struct pvsr_horizon {
+    int ok, eye_ok, ready, columns;
+    double eye[3], scale;
+    size_t capacity, count, dropped; /* pieces the memory holds, added this frame, dropped for want of room */
+    pvsr_horizon_piece *pieces, *sorted;
+    uint32_t*
+        first; /* after pvsr_horizon_end(): column j's pieces are sorted[first[j]] .. sorted[first[j+1]) */
+} pvsr_horizon;
+
+/* Bytes of memory a horizon of that many columns a frame and pieces needs (columns clamped to
+ * [PVSR_HORIZON_MIN_COLUMNS, PVSR_HORIZON_MAX_COLUMNS]). */
+size_t pvsr_horizon_memory_bytes(int columns, size_t max_pieces);
+/* Sets the horizon up on `memory` (8-byte aligned, at least pvsr_horizon_memory_bytes() bytes, kept while
+ * the horizon is used). 1, or 0 when the memory is missing or too small: then it hides nothing. */
+int pvsr_horizon_init(pvsr_horizon* h, int columns, size_t max_pieces, void* memory, size_t memory_bytes);
+/* Starts a frame at the eye (float[3]); nothing is hidden until pvsr_horizon_end(). */
+void pvsr_horizon_begin(pvsr_horizon* h, const float eye[3]);
+/* Adds an occluder box (float[6]): solid, or a panel when flat along exactly one axis. 1 when it added a
+ * face; 0 when it adds nothing (not finite, empty, flat along two axes, holding the eye, a panel seen
+ * edge-on, or no face of it towards the eye). */
+int pvsr_horizon_add_box(pvsr_horizon* h, const float box[6]);
+/* Adds a polygon occluder, with the promise and the arguments of pvsr_culler_add_polygon(); 1 when added. */
+int pvsr_horizon_add_polygon(pvsr_horizon* h, const float plane[5], const float* corners, uint32_t count);
+/* Ends the frame's occluders (sorts the pieces by column); then boxes may be tested. */
+void pvsr_horizon_end(pvsr_horizon* h);
+/* 1 only if the box (float[6]) is certainly hidden from this frame's eye by the horizon. */
+int pvsr_horizon_is_hidden(const pvsr_horizon* h, const float box[6]);
+
 /* ---- The file's layout (docs/FORMAT.md, "The runtime file"), for writers and tools. Little-endian.
  * A 64-byte header, then the section table (PVSR_ENTRY_BYTES an entry), then the sections, each at an offset
  * that is a multiple of 64, in any order. */

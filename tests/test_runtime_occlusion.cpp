@@ -13,6 +13,8 @@
 #include <pvsbake/occlusion.h>
 #include <pvsbake/occlusion_c.h>
 
+#include "runtime/pvsr.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -619,6 +621,63 @@ bool segment_meets_grown_box(const float e[3], const double p[3], const Box& b, 
     return t0 <= t1 && t0 < 1.0;
 }
 
+// 3 to 14 random boxes within 12 m of the origin, half-sizes 1 to 6 m, thin on one axis: every other one a
+// panel (flat there).
+std::vector<Box> random_boxes_and_panels(std::mt19937& rng) {
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    const auto range = [&](float a, float b) { return a + (b - a) * u(rng); };
+    std::vector<Box> occ;
+    const int k = 3 + int(rng() % 12);
+    for (int i = 0; i < k; ++i) {
+        float c[3], half[3];
+        for (int a = 0; a < 3; ++a) {
+            c[a] = range(-12.0f, 12.0f);
+            half[a] = range(1.0f, 6.0f);
+        }
+        const int thin = int(rng() % 3);
+        half[thin] = i % 2 == 0 ? 0.0f : range(0.1f, 0.8f);
+        occ.push_back(box(c[0] - half[0], c[1] - half[1], c[2] - half[2], c[0] + half[0], c[1] + half[1],
+                          c[2] + half[2]));
+    }
+    return occ;
+}
+
+// An eye within 15 m of the origin, 5 cm or more outside every box; false when 100 draws found none.
+bool eye_outside(const std::vector<Box>& occ, std::mt19937& rng, float eye[3]) {
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    for (int tries = 0; tries < 100; ++tries) {
+        for (int a = 0; a < 3; ++a) eye[a] = -15.0f + 30.0f * u(rng);
+        if (std::none_of(occ.begin(), occ.end(), [&](const Box& b) { return inside(b, eye, 0.05f); }))
+            return true;
+    }
+    return false;
+}
+
+// A query box past a random point of a random occluder, 1.05 to 3 times as far from the eye, half-sizes
+// 5 cm to 1.5 m.
+Box query_behind(const std::vector<Box>& occ, const float eye[3], std::mt19937& rng) {
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    const auto range = [&](float a, float b) { return a + (b - a) * u(rng); };
+    const Box& b = occ[rng() % occ.size()];
+    const float s = range(1.05f, 3.0f);
+    float c[3], half[3];
+    for (int a = 0; a < 3; ++a) {
+        c[a] = eye[a] + s * (range(b.min[a], b.max[a]) - eye[a]);
+        half[a] = range(0.05f, 1.5f);
+    }
+    return box(c[0] - half[0], c[1] - half[1], c[2] - half[2], c[0] + half[0], c[1] + half[1],
+               c[2] + half[2]);
+}
+
+// Point n of a box's 64 sampled points: its 8 corners, its centre, then random points in it.
+void sample_point(const Box& qb, int n, std::mt19937& rng, double p[3]) {
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    for (int a = 0; a < 3; ++a) {
+        const double lo = qb.min[a], hi = qb.max[a];
+        p[a] = n < 8 ? ((n >> a) & 1 ? hi : lo) : n == 8 ? 0.5 * (lo + hi) : lo + (hi - lo) * u(rng);
+    }
+}
+
 // The faces' union against a slow reference without rays: every box the faces hide has each of its sampled
 // points (corners, centre and random ones) behind some occluder, by an exact segment test in double against
 // the occluders grown by 1e-6 m (the faces grow by 1e-9 of the scale); and the union is tight: of the boxes
@@ -626,53 +685,21 @@ bool segment_meets_grown_box(const float e[3], const double p[3], const Box& b, 
 // panels, random eyes, query boxes behind them.
 TEST(RuntimeOcclusionProperty, TheFacesHideWhatSegmentsToEveryPointMeetAndLittleElse) {
     std::mt19937 rng(20261205u);
-    std::uniform_real_distribution<float> u(0.0f, 1.0f);
-    const auto range = [&](float a, float b) { return a + (b - a) * u(rng); };
     const bool ci = test::in_ci();
     uint64_t hidden = 0, points = 0, all_points_hidden = 0, of_them_hidden = 0;
     for (int world = 0; world < (ci ? 60 : 300); ++world) {
-        std::vector<Box> occ;
-        const int k = 3 + int(rng() % 12);
-        for (int i = 0; i < k; ++i) {
-            float c[3], half[3];
-            for (int a = 0; a < 3; ++a) {
-                c[a] = range(-12.0f, 12.0f);
-                half[a] = range(1.0f, 6.0f);
-            }
-            const int thin = int(rng() % 3);
-            half[thin] = i % 2 == 0 ? 0.0f : range(0.1f, 0.8f);  // half of them panels
-            occ.push_back(box(c[0] - half[0], c[1] - half[1], c[2] - half[2], c[0] + half[0], c[1] + half[1],
-                              c[2] + half[2]));
-        }
+        const std::vector<Box> occ = random_boxes_and_panels(rng);
         float eye[3];
-        bool ok = false;
-        for (int tries = 0; tries < 100 && !ok; ++tries) {
-            for (float& x : eye) x = range(-15.0f, 15.0f);
-            ok = std::none_of(occ.begin(), occ.end(), [&](const Box& b) { return inside(b, eye, 0.05f); });
-        }
-        if (!ok) continue;
+        if (!eye_outside(occ, rng, eye)) continue;
         Culler culler(0);
         culler.begin_frame(eye, occ);
         for (int q = 0; q < 60; ++q) {
-            const Box& b = occ[rng() % occ.size()];
-            const float s = range(1.05f, 3.0f);
-            float c[3], half[3];
-            for (int a = 0; a < 3; ++a) {
-                c[a] = eye[a] + s * (range(b.min[a], b.max[a]) - eye[a]);
-                half[a] = range(0.05f, 1.5f);
-            }
-            const Box qb = box(c[0] - half[0], c[1] - half[1], c[2] - half[2], c[0] + half[0], c[1] + half[1],
-                               c[2] + half[2]);
+            const Box qb = query_behind(occ, eye, rng);
             const bool by_faces = culler.hidden_by_faces(qb);
             bool all = true;
             for (int n = 0; n < 64; ++n) {
                 double p[3];
-                for (int a = 0; a < 3; ++a) {
-                    const double lo = qb.min[a], hi = qb.max[a];
-                    p[a] = n < 8    ? ((n >> a) & 1 ? hi : lo)
-                           : n == 8 ? 0.5 * (lo + hi)
-                                    : lo + (hi - lo) * u(rng);
-                }
+                sample_point(qb, n, rng, p);
                 const bool grown = std::any_of(occ.begin(), occ.end(), [&](const Box& o) {
                     return segment_meets_grown_box(eye, p, o, 1e-6);
                 });
@@ -846,6 +873,207 @@ TEST(RuntimeOcclusionProperty, ShadowFrustaAgreeWithCornerSegments) {
     }
     EXPECT_GT(hidden, 1000u);
     std::printf("shadow frusta: %llu hidden, all confirmed by corner segments\n", (unsigned long long)hidden);
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// The occlusion horizon of the C99 runtime (pvsr_horizon, docs/ALGORITHMS.md#runtime-horizon).
+
+// A horizon with its own memory; begin() .. end() take one frame's occluders.
+class Horizon {
+public:
+    explicit Horizon(int columns = 256, size_t pieces = 1 << 16)
+        : memory_(pvsr_horizon_memory_bytes(columns, pieces) / 8 + 1) {
+        ok_ = pvsr_horizon_init(&h_, columns, pieces, memory_.data(), memory_.size() * 8) != 0;
+    }
+    bool ok() const { return ok_; }
+    void frame(const float eye[3], const std::vector<Box>& boxes,
+               const std::vector<test::TestPolygon>& polys = {}) {
+        pvsr_horizon_begin(&h_, eye);
+        for (const Box& b : boxes) {
+            const float f[6] = {b.min[0], b.min[1], b.min[2], b.max[0], b.max[1], b.max[2]};
+            pvsr_horizon_add_box(&h_, f);
+        }
+        for (const test::TestPolygon& p : polys)
+            pvsr_horizon_add_polygon(&h_, p.plane, p.corners.data(), p.count());
+        pvsr_horizon_end(&h_);
+    }
+    bool hidden(const Box& b) const {
+        const float f[6] = {b.min[0], b.min[1], b.min[2], b.max[0], b.max[1], b.max[2]};
+        return pvsr_horizon_is_hidden(&h_, f) != 0;
+    }
+    pvsr_horizon& raw() { return h_; }
+
+private:
+    std::vector<uint64_t> memory_;
+    pvsr_horizon h_;
+    bool ok_ = false;
+};
+
+// The floor and the wall of the culler's junction test, as panels, solid boxes, or a panel over a box's
+// foot: together they hide the box behind the wall that reaches below the floor, neither alone does, and
+// boxes over the wall's top or in front of it stay visible.
+TEST(RuntimeHorizon, AFloorAndAWallMeetingAtAJunctionHideWhatNeitherHidesAlone) {
+    const Box target = box(-1, -1, 6, 1, 1, 7);
+    const std::vector<std::vector<Box>> scenes = {
+        {box(-5, 0, 0, 5, 0, 5), box(-5, 0, 5, 5, 4, 5)},
+        {box(-5, -0.5f, 0, 5, 0, 5), box(-5, 0, 5, 5, 4, 5.5f)},
+        {box(-5, 0, 0, 5, 0, 5.25f), box(-5, -0.5f, 5, 5, 4, 5.5f)}};
+    for (size_t s = 0; s < scenes.size(); ++s) {
+        for (int columns : {16, 256, 2048}) {
+            Horizon h(columns);
+            ASSERT_TRUE(h.ok());
+            h.frame(kEye, scenes[s]);
+            EXPECT_TRUE(h.hidden(target)) << "scene " << s << " columns " << columns;
+            EXPECT_FALSE(h.hidden(box(-1, -1, 6, 1, 4.5f, 7))) << s << " " << columns;  // over the wall's top
+            EXPECT_FALSE(h.hidden(box(-1, -1, 3, 1, 1, 4))) << s << " " << columns;  // in front of the wall
+            EXPECT_FALSE(h.hidden(box(-12, -1, 6, -10, 1, 7))) << s << " " << columns;  // past its side
+        }
+        for (const Box& one : scenes[s]) {
+            Horizon h;
+            h.frame(kEye, {one});
+            EXPECT_FALSE(h.hidden(target)) << s;
+        }
+    }
+}
+
+// The slope of the culler's test cut in two flat polygons (no slab) that share the edge at z = 4: together
+// they hide the box behind the crest, which neither hides alone (its directions cross both); over the crest,
+// in front and past the side stay visible. (Polygons with a slab meet only where the directions through both
+// of each one's cross-sections meet, which leaves a seam as wide as the slab's parallax: they fuse when
+// thin.)
+TEST(RuntimeHorizon, TwoPolygonsSharingAnEdgeHideWhatNeitherHidesAlone) {
+    const float n[3] = {0.0f, 0.707106781f, -0.707106781f};
+    const float plane[5] = {n[0], n[1], n[2], n[2] * 2.0f, 0.0f};
+    test::TestPolygon lower, upper;
+    std::copy_n(plane, 5, lower.plane);
+    std::copy_n(plane, 5, upper.plane);
+    lower.corners = {-5, 0, 2, -5, 2, 4, 5, 2, 4, 5, 0, 2};  // counter-clockwise seen from +n
+    upper.corners = {-5, 2, 4, -5, 4, 6, 5, 4, 6, 5, 2, 4};
+    const float eye[3] = {0.0f, 1.0f, -2.0f};
+    const Box behind = box(-1, 1, 8, 1, 3, 9);
+    Horizon both, low, up;
+    both.frame(eye, {}, {lower, upper});
+    low.frame(eye, {}, {lower});
+    up.frame(eye, {}, {upper});
+    EXPECT_TRUE(both.hidden(behind));
+    EXPECT_FALSE(low.hidden(behind));
+    EXPECT_FALSE(up.hidden(behind));
+    EXPECT_FALSE(both.hidden(box(-1, 1, 8, 1, 6.5f, 9)));  // over the crest
+    EXPECT_FALSE(both.hidden(box(-1, 2, 0, 1, 3, 1)));     // in front of the slope
+    EXPECT_FALSE(both.hidden(box(12, 1, 8, 13, 3, 9)));    // past its side
+    // Refused: the eye within the slab, a clockwise polygon, too few corners, a value that is not finite.
+    const float in_slab[3] = {0.0f, 2.0f, 4.0f};
+    pvsr_horizon_begin(&both.raw(), in_slab);
+    EXPECT_EQ(pvsr_horizon_add_polygon(&both.raw(), plane, lower.corners.data(), 4), 0);
+    pvsr_horizon_begin(&both.raw(), eye);
+    const float clockwise[12] = {-5, 0, 2, 5, 0, 2, 5, 2, 4, -5, 2, 4};
+    EXPECT_EQ(pvsr_horizon_add_polygon(&both.raw(), plane, clockwise, 4), 0);
+    EXPECT_EQ(pvsr_horizon_add_polygon(&both.raw(), plane, lower.corners.data(), 2), 0);
+    const float nan_plane[5] = {n[0], n[1], n[2], kNaN, 0.0f};
+    EXPECT_EQ(pvsr_horizon_add_polygon(&both.raw(), nan_plane, lower.corners.data(), 4), 0);
+    EXPECT_EQ(pvsr_horizon_add_polygon(&both.raw(), plane, lower.corners.data(), 4), 1);
+}
+
+// Memory missing, misaligned or short: nothing is hidden. A box holding the eye, a panel seen edge-on, a box
+// flat along two axes, empty or non-finite boxes add nothing; a non-finite eye hides nothing; nothing is
+// hidden before end(); pieces past the memory are dropped (fewer pieces, never a wrong cull).
+TEST(RuntimeHorizon, AwkwardInputs) {
+    pvsr_horizon h;
+    std::vector<uint64_t> memory(pvsr_horizon_memory_bytes(64, 1024) / 8 + 1);
+    EXPECT_EQ(pvsr_horizon_init(&h, 64, 1024, nullptr, 0), 0);
+    EXPECT_EQ(
+        pvsr_horizon_init(&h, 64, 1024, reinterpret_cast<char*>(memory.data()) + 4, memory.size() * 8 - 4),
+        0);
+    EXPECT_EQ(pvsr_horizon_init(&h, 64, 1024, memory.data(), pvsr_horizon_memory_bytes(64, 1024) - 1), 0);
+    const float wall[6] = {-5, 0, 5, 5, 4, 5.5f}, target[6] = {-1, 0.5f, 8, 1, 1.5f, 9};
+    pvsr_horizon_begin(&h, kEye);
+    EXPECT_EQ(pvsr_horizon_add_box(&h, wall), 0);
+    pvsr_horizon_end(&h);
+    EXPECT_EQ(pvsr_horizon_is_hidden(&h, target), 0);
+    ASSERT_EQ(pvsr_horizon_init(&h, 64, 1024, memory.data(), memory.size() * 8), 1);
+    pvsr_horizon_begin(&h, kEye);
+    EXPECT_EQ(pvsr_horizon_add_box(&h, wall), 1);
+    EXPECT_EQ(pvsr_horizon_is_hidden(&h, target), 0);  // before end()
+    const float holding[6] = {-1, 0, -1, 1, 3, 1}, edge_on[6] = {-3, 1.7f, 1, 3, 1.7f, 4},
+                two_flat[6] = {-3, 1, 2, 3, 1, 2}, empty[6] = {1, 1, 3, 0, 2, 4},
+                not_finite[6] = {-1, 0, 3, 1, kInf, 4};
+    EXPECT_EQ(pvsr_horizon_add_box(&h, holding), 0);
+    EXPECT_EQ(pvsr_horizon_add_box(&h, edge_on), 0);
+    EXPECT_EQ(pvsr_horizon_add_box(&h, two_flat), 0);
+    EXPECT_EQ(pvsr_horizon_add_box(&h, empty), 0);
+    EXPECT_EQ(pvsr_horizon_add_box(&h, not_finite), 0);
+    pvsr_horizon_end(&h);
+    EXPECT_EQ(pvsr_horizon_is_hidden(&h, target), 1);
+    EXPECT_EQ(pvsr_horizon_is_hidden(&h, empty), 0);
+    EXPECT_EQ(pvsr_horizon_is_hidden(&h, not_finite), 0);
+    const float nan_eye[3] = {kNaN, 1.7f, 0.0f};
+    pvsr_horizon_begin(&h, nan_eye);
+    EXPECT_EQ(pvsr_horizon_add_box(&h, wall), 0);
+    pvsr_horizon_end(&h);
+    EXPECT_EQ(pvsr_horizon_is_hidden(&h, target), 0);
+    Horizon tiny(64, 1);  // room for one piece: the wall's others are dropped
+    tiny.frame(kEye, {kWall});
+    EXPECT_GT(tiny.raw().dropped, 0u);
+    EXPECT_FALSE(tiny.hidden(box(-1, 0.5f, 8, 1, 1.5f, 9)));
+}
+
+// Random boxes, panels and slanted polygons, random eyes, query boxes behind them, at several column counts:
+// every box the horizon hides has each of its sampled points behind some occluder by the slow references (a
+// segment meeting a box, or crossing a polygon's slab inside its prism, each grown by 1e-6 m), and it hides
+// many, some of them hidden by no one occluder alone.
+TEST(RuntimeHorizonProperty, HidesOnlyWhatSegmentsToEveryPointMeet) {
+    std::mt19937 rng(20261207u);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    const auto range = [&](float a, float b) { return a + (b - a) * u(rng); };
+    const bool ci = test::in_ci();
+    uint64_t hidden = 0, points = 0, fused = 0, queries = 0;
+    for (int world = 0; world < (ci ? 60 : 300); ++world) {
+        const std::vector<Box> occ = random_boxes_and_panels(rng);
+        std::vector<test::TestPolygon> polys;
+        for (int i = 0, k = int(rng() % 5); i < k; ++i) {
+            const float centre[3] = {range(-10.0f, 10.0f), range(-10.0f, 10.0f), range(-10.0f, 10.0f)};
+            polys.push_back(test::random_polygon(rng, centre, 7.0f, 0.05f));
+        }
+        float eye[3];
+        if (!eye_outside(occ, rng, eye)) continue;
+        const int columns = world % 3 == 0 ? 16 : world % 3 == 1 ? 128 : 1024;
+        Horizon h(columns, 1 << 18);
+        h.frame(eye, occ, polys);
+        const auto behind = [&](const double p[3], double grow) {
+            return std::any_of(occ.begin(), occ.end(),
+                               [&](const Box& o) { return segment_meets_grown_box(eye, p, o, grow); }) ||
+                   std::any_of(polys.begin(), polys.end(), [&](const test::TestPolygon& t) {
+                       return test::segment_crosses_polygon(eye, p, t, grow);
+                   });
+        };
+        for (int q = 0; q < 60; ++q) {
+            const Box qb = query_behind(occ, eye, rng);
+            ++queries;
+            if (!h.hidden(qb)) continue;
+            ++hidden;
+            for (int n = 0; n < 64; ++n) {
+                double p[3];
+                sample_point(qb, n, rng, p);
+                ++points;
+                ASSERT_TRUE(behind(p, 1e-6)) << "world " << world << " box " << q << " point " << n;
+            }
+            bool one_alone = false;  // hidden by a single occluder's horizon too?
+            for (const Box& o : occ) {
+                Horizon single(columns);
+                single.frame(eye, {o});
+                if (single.hidden(qb)) {
+                    one_alone = true;
+                    break;
+                }
+            }
+            fused += !one_alone;
+        }
+    }
+    std::printf("horizon: %llu of %llu boxes hidden (%llu points checked), %llu by no single box\n",
+                (unsigned long long)hidden, (unsigned long long)queries, (unsigned long long)points,
+                (unsigned long long)fused);
+    EXPECT_GT(hidden, queries / 10);
+    EXPECT_GT(fused, 0u);
 }
 
 }  // namespace
