@@ -26,7 +26,6 @@
 #include "pvsr.h"
 
 #include <math.h>
-#include <stdlib.h>
 #include <string.h>
 
 #if defined(_MSC_VER)
@@ -2778,13 +2777,38 @@ int pvsr_horizon_add_polygon(pvsr_horizon* h, const float plane[5], const float*
     return added;
 }
 
-static int hz_piece_order(const void* x, const void* y) {
-    const pvsr_horizon_piece* a = (const pvsr_horizon_piece*)x;
-    const pvsr_horizon_piece* b = (const pvsr_horizon_piece*)y;
-    if (a->lo != b->lo) return a->lo < b->lo ? -1 : 1;
-    if (a->hi != b->hi) return a->hi < b->hi ? -1 : 1;
-    if (a->depth != b->depth) return a->depth < b->depth ? -1 : 1;
-    return 0;
+static int hz_before(const pvsr_horizon_piece* a, const pvsr_horizon_piece* b) {
+    if (a->lo != b->lo) return a->lo < b->lo;
+    if (a->hi != b->hi) return a->hi < b->hi;
+    return a->depth < b->depth;
+}
+
+/* Sorts run[0 .. len) by (lo, hi, depth): runs of 16 by insertion, then merged bottom-up through tmp. */
+static void hz_sort(pvsr_horizon_piece* run, pvsr_horizon_piece* tmp, uint32_t len) {
+    uint32_t a, b, width;
+    pvsr_horizon_piece *src = run, *dst = tmp, *swap;
+    for (a = 0; a < len; a += 16) {
+        const uint32_t end = a + 16 < len ? a + 16 : len;
+        for (b = a + 1; b < end; ++b) {
+            const pvsr_horizon_piece x = run[b];
+            uint32_t c = b;
+            for (; c > a && hz_before(&x, &run[c - 1]); --c) run[c] = run[c - 1];
+            run[c] = x;
+        }
+    }
+    for (width = 16; width < len; width *= 2) {
+        for (a = 0; a < len; a += 2 * width) {
+            const uint32_t mid = a + width < len ? a + width : len, end = a + 2 * width < len ? a + 2 * width : len;
+            uint32_t i = a, k = mid, o = a;
+            while (i < mid && k < end) dst[o++] = hz_before(&src[k], &src[i]) ? src[k++] : src[i++];
+            while (i < mid) dst[o++] = src[i++];
+            while (k < end) dst[o++] = src[k++];
+        }
+        swap = src;
+        src = dst;
+        dst = swap;
+    }
+    if (src != run) memcpy(run, src, (size_t)len * sizeof(pvsr_horizon_piece));
 }
 
 void pvsr_horizon_end(pvsr_horizon* h) {
@@ -2800,20 +2824,8 @@ void pvsr_horizon_end(pvsr_horizon* h) {
     for (i = 0; i < h->count; ++i) h->sorted[h->first[h->pieces[i].column]++] = h->pieces[i];
     for (j = n; j > 0; --j) h->first[j] = h->first[j - 1];
     h->first[0] = 0;
-    for (j = 0; j < n; ++j) {
-        pvsr_horizon_piece* run = h->sorted + h->first[j];
-        const uint32_t len = h->first[j + 1] - h->first[j];
-        if (len > 32)
-            qsort(run, len, sizeof(pvsr_horizon_piece), hz_piece_order);
-        else { /* insertion: most columns hold a few pieces */
-            uint32_t a, b;
-            for (a = 1; a < len; ++a) {
-                const pvsr_horizon_piece x = run[a];
-                for (b = a; b > 0 && hz_piece_order(&x, &run[b - 1]) < 0; --b) run[b] = run[b - 1];
-                run[b] = x;
-            }
-        }
-    }
+    for (j = 0; j < n; ++j) /* each column by lo, with the (now free) pieces as scratch */
+        hz_sort(h->sorted + h->first[j], h->pieces + h->first[j], h->first[j + 1] - h->first[j]);
     h->ready = 1;
 }
 
