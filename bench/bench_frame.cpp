@@ -8,6 +8,7 @@
 //                                    solid-angle|first-hit]
 //                                    [--parts 0|1] [--eye-polygons P] [--horizon N]
 //                                    [--horizon-faces M] [--horizon-cell-eyes K]
+//                                    [--horizon-exact-polygons 0|1]
 //
 // Frames: F (default 200) eyes, each uniform in the eye space of a cell drawn at random (seed S, default 1):
 // a cell uniform among the level's cells, then a point uniform in its box kept when pvsr_in_eye_space() holds
@@ -41,7 +42,9 @@
 // M of their faces), culls what it hides of the drawn objects (with --parts 1, also an object all of whose
 // part boxes it hides; --horizon-cell-eyes K: the horizon takes only the occluders whose pieces proved
 // some cull from K other eyes of the frame's cell, drawn there as the frame's is, `horizon_used_mean` of
-// them: what a list of occluders per cell would hold); its time per frame is `horizon_us_median`,
+// them: what a list of occluders per cell would hold; --horizon-exact-polygons 1: the slanted panels go to
+// the runtime's horizon as found, only rounded to floats, not in their runtime form: what polygons that
+// tile would give, with no float margin); its time per frame is `horizon_us_median`,
 // apart from the frame's (it is no runtime's code).
 // Where the drawn but invisible triangles go (the "waste" object, of the full frames' drawn objects no ray
 // reached): split_culls: the culler hides each of the object's M part boxes; given_boxes: each of
@@ -289,7 +292,8 @@ int main(int argc, char** argv) {
         "                   [--resolution N] [--seed S] [--split M] [--bake BAKE.h5] [--eye-occluders E]\n"
         "                   [--eye-panels 0|1] [--eye-select solid-angle|first-hit] [--parts 0|1]\n"
         "                   [--eye-polygons P] [--horizon N] [--horizon-faces M]\n"
-        "                   [--horizon-cell-eyes K]\n";
+        "                   [--horizon-cell-eyes K]\n"
+        "                   [--horizon-exact-polygons 0|1]\n";
     if (argc < 3 || argv[1][0] == '-' || argv[2][0] == '-') {
         std::fputs(usage, stderr);
         return 2;
@@ -299,7 +303,8 @@ int main(int argc, char** argv) {
     uint32_t n_frames = 200, n_check = 0, n_rays = 4096, max_occluders = PVSR_CULLER_MAX_OCCLUDERS,
              n_split = 8;
     uint32_t eye_occluders = 0, eye_polygons = 0, horizon_columns = 0, horizon_faces = 0,
-             horizon_cell_eyes = 0;
+             horizon_cell_eyes = 0,
+             horizon_exact_polygons = 0;
     bool parts_drawn = false, eye_panels = false, eye_select_first_hit = false;
     std::string bake_path;
     int resolution = 32;
@@ -311,7 +316,7 @@ int main(int argc, char** argv) {
                 k != "--resolution" && k != "--seed" && k != "--split" && k != "--bake" &&
                 k != "--eye-occluders" && k != "--parts" && k != "--eye-panels" && k != "--eye-select" &&
                 k != "--eye-polygons" && k != "--horizon" && k != "--horizon-faces" &&
-                k != "--horizon-cell-eyes")
+                k != "--horizon-cell-eyes" && k != "--horizon-exact-polygons")
                 bad_option("unknown option " + k + " (run it with no arguments for the usage)");
             if (a + 1 >= argc) bad_option(k + " wants a value");
             const char* v = argv[++a];
@@ -335,6 +340,8 @@ int main(int argc, char** argv) {
                 eye_polygons = uint32_t(parse_count("--eye-polygons", v, 0, PVSR_CULLER_MAX_POLYGONS));
             else if (k == "--horizon")
                 horizon_columns = uint32_t(parse_count("--horizon", v, 0, 65536));
+            else if (k == "--horizon-exact-polygons")
+                horizon_exact_polygons = uint32_t(parse_count("--horizon-exact-polygons", v, 0, 1));
             else if (k == "--horizon-cell-eyes")
                 horizon_cell_eyes = uint32_t(parse_count("--horizon-cell-eyes", v, 0, 4096));
             else if (k == "--horizon-faces")
@@ -419,6 +426,16 @@ int main(int argc, char** argv) {
         // --horizon-cell-eyes and --horizon-faces. The slanted panels go to it in their runtime form.
         std::vector<std::optional<pvs::OccluderPolygon>> horizon_polygons;
         for (const pvs::SlantedPanel& sp : horizon_slanted) {
+            if (horizon_exact_polygons) {  // as found, only rounded to floats: what polygons that tile give
+                pvs::OccluderPolygon q;
+                q.normal = glm::vec3(sp.normal);
+                q.offset = float(sp.offset);
+                q.thickness = float(sp.thickness);
+                for (const glm::dvec3& c : sp.corners) q.corners.push_back(glm::vec3(c));
+                horizon_polygons.push_back(q.corners.size() <= PVSR_HORIZON_MAX_CORNERS ? std::optional(q)
+                                                                                        : std::nullopt);
+                continue;
+            }
             std::vector<pvs::OccluderPolygon> q = pvs::runtime_polygons({sp}, 0.0);
             horizon_polygons.push_back(q.empty() ? std::nullopt : std::optional(q.front()));
         }

@@ -2378,12 +2378,12 @@ void pvsr_culler_begin_frame(pvsr_culler* c, const float eye[3], const float* bo
 /* A polygon occluder's slab from its arguments (pvsr_culler_add_polygon): 3 to PVSR_POLYGON_MAX_CORNERS
  * corners, every value finite, a normal and a thickness >= 0. Its unit normal n, offset o and thickness t
  * along n, and in *scale the larger of *scale and the largest |corner coordinate|; 0 when refused. */
-static int polygon_slab(const float plane[5], const float* corners, uint32_t count, double n[3], double* o,
-                        double* t, double* scale) {
+static int polygon_slab(const float plane[5], const float* corners, uint32_t count, uint32_t max_count,
+                        double n[3], double* o, double* t, double* scale) {
     double len;
     uint32_t i;
     int a;
-    if (plane == NULL || corners == NULL || count < 3 || count > PVSR_POLYGON_MAX_CORNERS) return 0;
+    if (plane == NULL || corners == NULL || count < 3 || count > max_count) return 0;
     for (i = 0; i < 5; ++i)
         if (!isfinite(plane[i])) return 0;
     for (i = 0; i < 3 * count; ++i)
@@ -2404,7 +2404,7 @@ int pvsr_culler_add_polygon(pvsr_culler* c, const float plane[5], const float* c
     int a;
     if (c == NULL || !c->eye_ok || c->polygon_count >= PVSR_CULLER_MAX_POLYGONS) return 0;
     for (a = 0; a < 3; ++a) scale = maxd(scale, fabs(c->eye_d[a]));
-    if (!polygon_slab(plane, corners, count, n, &o, &t, &scale)) return 0;
+    if (!polygon_slab(plane, corners, count, PVSR_POLYGON_MAX_CORNERS, n, &o, &t, &scale)) return 0;
     pg = &c->polygons[c->polygon_count];
     pg->delta = CULL_MARGIN_M + CULL_MARGIN_REL * scale;
     grow = FUSE_GROW_REL * (1.0 + scale);
@@ -2475,7 +2475,7 @@ uint32_t pvsr_culler_begin_cell(pvsr_culler* c, const pvsr_level* l, uint32_t ce
 #define HZ_ROUND 1e-12  /* relative: a piece is shrunk by this on both ends, for double rounding */
 #define HZ_TOUCH 1e-9   /* relative: pieces whose ends are this close count as meeting */
 #define HZ_DEPTH 1e-9   /* relative: depths are made larger by this */
-#define HZ_MAX_VERTS 40 /* of a projected polygon: a face of up to 8 corners clipped, then by another */
+#define HZ_MAX_VERTS (2 * PVSR_HORIZON_MAX_CORNERS + 8) /* a projected face, clipped, then by another */
 #define HZ_MAX_PIECES (1u << 26)
 
 static double hz_min(double a, double b) {
@@ -2726,13 +2726,13 @@ int pvsr_horizon_add_box(pvsr_horizon* h, const float box[6]) {
 
 int pvsr_horizon_add_polygon(pvsr_horizon* h, const float plane[5], const float* corners, uint32_t count) {
     double n[3], o, t, scale, s_e, w_near, w_far, area = 0.0, grow;
-    double c[PVSR_POLYGON_MAX_CORNERS][3], near_s[PVSR_POLYGON_MAX_CORNERS][3],
-        far_s[PVSR_POLYGON_MAX_CORNERS][3];
+    double c[PVSR_HORIZON_MAX_CORNERS][3], near_s[PVSR_HORIZON_MAX_CORNERS][3],
+        far_s[PVSR_HORIZON_MAX_CORNERS][3];
     uint32_t i, j;
     int a, added;
     if (h == NULL || !h->ok || !h->eye_ok) return 0;
     scale = h->scale;
-    if (!polygon_slab(plane, corners, count, n, &o, &t, &scale)) return 0;
+    if (!polygon_slab(plane, corners, count, PVSR_HORIZON_MAX_CORNERS, n, &o, &t, &scale)) return 0;
     o -= n[0] * h->eye[0] + n[1] * h->eye[1] + n[2] * h->eye[2]; /* less the eye */
     grow = FUSE_GROW_REL * (1.0 + scale);
     s_e = -o; /* the eye's height above the slab's middle plane */

@@ -348,6 +348,7 @@ int pvsr_culler_classify(const pvsr_culler* culler, const float box[6]);
  */
 #define PVSR_HORIZON_MIN_COLUMNS 4
 #define PVSR_HORIZON_MAX_COLUMNS 8192
+#define PVSR_HORIZON_MAX_CORNERS 32 /* of a polygon occluder given to the horizon */
 
 typedef struct pvsr_horizon_piece {
     double lo, hi, depth; /* every direction of the column with v in [lo, hi] meets an occluder by depth */
@@ -377,7 +378,8 @@ void pvsr_horizon_begin(pvsr_horizon* h, const float eye[3]);
  * face; 0 when it adds nothing (not finite, empty, flat along two axes, holding the eye, a panel seen
  * edge-on, or no face of it towards the eye). */
 int pvsr_horizon_add_box(pvsr_horizon* h, const float box[6]);
-/* Adds a polygon occluder, with the promise and the arguments of pvsr_culler_add_polygon(); 1 when added. */
+/* Adds a polygon occluder, with the promise and the arguments of pvsr_culler_add_polygon() but up to
+ * PVSR_HORIZON_MAX_CORNERS corners; 1 when added. */
 int pvsr_horizon_add_polygon(pvsr_horizon* h, const float plane[5], const float* corners, uint32_t count);
 /* Ends the frame's occluders (sorts the pieces by column); then boxes may be tested. */
 void pvsr_horizon_end(pvsr_horizon* h);
