@@ -8,7 +8,7 @@
 //                                    solid-angle|first-hit]
 //                                    [--parts 0|1] [--eye-polygons P] [--horizon N]
 //                                    [--horizon-faces M] [--horizon-cell-eyes K]
-//                                    [--horizon-exact-polygons 0|1]
+//                                    [--horizon-exact-polygons 0|1] [--horizon-list-cells B]
 //
 // Frames: F (default 200) eyes, each uniform in the eye space of a cell drawn at random (seed S, default 1):
 // a cell uniform among the level's cells, then a point uniform in its box kept when pvsr_in_eye_space() holds
@@ -42,7 +42,9 @@
 // M of their faces), culls what it hides of the drawn objects (with --parts 1, also an object all of whose
 // part boxes it hides; --horizon-cell-eyes K: the horizon takes only the occluders whose pieces proved
 // some cull from K other eyes of the frame's cell, drawn there as the frame's is, `horizon_used_mean` of
-// them: what a list of occluders per cell would hold; --horizon-exact-polygons 1: the slanted panels go to
+// them: what a list of occluders per cell would hold; --horizon-list-cells B: those K eyes drawn in the
+// block of B x B x B grid positions holding the cell instead, the frame's PVS tried from each: a list per
+// block; --horizon-exact-polygons 1: the slanted panels go to
 // the runtime's horizon as found, only rounded to floats, not in their runtime form: what polygons that
 // tile would give, with no float margin); its time per frame is `horizon_us_median`,
 // apart from the frame's (it is no runtime's code).
@@ -293,7 +295,7 @@ int main(int argc, char** argv) {
         "                   [--eye-panels 0|1] [--eye-select solid-angle|first-hit] [--parts 0|1]\n"
         "                   [--eye-polygons P] [--horizon N] [--horizon-faces M]\n"
         "                   [--horizon-cell-eyes K]\n"
-        "                   [--horizon-exact-polygons 0|1]\n";
+        "                   [--horizon-exact-polygons 0|1] [--horizon-list-cells B]\n";
     if (argc < 3 || argv[1][0] == '-' || argv[2][0] == '-') {
         std::fputs(usage, stderr);
         return 2;
@@ -304,7 +306,7 @@ int main(int argc, char** argv) {
              n_split = 8;
     uint32_t eye_occluders = 0, eye_polygons = 0, horizon_columns = 0, horizon_faces = 0,
              horizon_cell_eyes = 0,
-             horizon_exact_polygons = 0;
+             horizon_exact_polygons = 0, horizon_list_cells = 1;
     bool parts_drawn = false, eye_panels = false, eye_select_first_hit = false;
     std::string bake_path;
     int resolution = 32;
@@ -316,7 +318,8 @@ int main(int argc, char** argv) {
                 k != "--resolution" && k != "--seed" && k != "--split" && k != "--bake" &&
                 k != "--eye-occluders" && k != "--parts" && k != "--eye-panels" && k != "--eye-select" &&
                 k != "--eye-polygons" && k != "--horizon" && k != "--horizon-faces" &&
-                k != "--horizon-cell-eyes" && k != "--horizon-exact-polygons")
+                k != "--horizon-cell-eyes" && k != "--horizon-exact-polygons" &&
+                k != "--horizon-list-cells")
                 bad_option("unknown option " + k + " (run it with no arguments for the usage)");
             if (a + 1 >= argc) bad_option(k + " wants a value");
             const char* v = argv[++a];
@@ -340,6 +343,8 @@ int main(int argc, char** argv) {
                 eye_polygons = uint32_t(parse_count("--eye-polygons", v, 0, PVSR_CULLER_MAX_POLYGONS));
             else if (k == "--horizon")
                 horizon_columns = uint32_t(parse_count("--horizon", v, 0, 65536));
+            else if (k == "--horizon-list-cells")
+                horizon_list_cells = uint32_t(parse_count("--horizon-list-cells", v, 1, 64));
             else if (k == "--horizon-exact-polygons")
                 horizon_exact_polygons = uint32_t(parse_count("--horizon-exact-polygons", v, 0, 1));
             else if (k == "--horizon-cell-eyes")
@@ -601,13 +606,22 @@ int main(int argc, char** argv) {
                     pvs::Rng erng(seed ^ 0x43454c4cULL, uint64_t(&f - frames.data()));
                     float box[6];
                     pvsr_cell_bounds(&level, f.cell, box);
+                    if (horizon_list_cells > 1) {  // the block of B x B x B grid positions holding the cell
+                        const float edge = level.cell_size_m * float(horizon_list_cells);
+                        for (int a = 0; a < 3; ++a) {
+                            const float c = 0.5f * (box[a] + box[3 + a]);
+                            const float lo = level.origin[a] + edge * std::floor((c - level.origin[a]) / edge);
+                            box[a] = lo;
+                            box[3 + a] = lo + edge;
+                        }
+                    }
                     uint32_t got = 0;
                     for (uint32_t d = 0; d < 4096 && got < cell_eyes; ++d) {
                         const glm::vec3 p(box[0] + erng.uniform() * (box[3] - box[0]),
                                           box[1] + erng.uniform() * (box[4] - box[1]),
                                           box[2] + erng.uniform() * (box[5] - box[2]));
                         if (!pvsr_in_eye_space(&level, p.x, p.y, p.z) ||
-                            pvsr_find_cell(&level, p.x, p.y, p.z) != int32_t(f.cell))
+                            (horizon_list_cells <= 1 && pvsr_find_cell(&level, p.x, p.y, p.z) != int32_t(f.cell)))
                             continue;
                         ++got;
                         horizon.build(glm::dvec3(p), horizon_boxes, horizon_panels, horizon_slanted);
