@@ -2680,7 +2680,7 @@ static int hz_add_face(pvsr_horizon* h, const double (*a)[3], int na, const doub
 int pvsr_horizon_add_box(pvsr_horizon* h, const float box[6]) {
     double lo[3], hi[3], scale, delta, grow, q[4][3], n[3];
     int a, flat = -1, flats = 0, added = 0;
-    if (h == NULL || !h->ok || !h->eye_ok || box == NULL) return 0;
+    if (h == NULL || !h->ok || !h->eye_ok || h->ready || box == NULL) return 0;
     scale = h->scale;
     for (a = 0; a < 3; ++a) {
         if (!isfinite(box[a]) || !isfinite(box[3 + a]) || box[a] > box[3 + a]) return 0;
@@ -2720,7 +2720,6 @@ int pvsr_horizon_add_box(pvsr_horizon* h, const float box[6]) {
         n[a] = 1.0;
         added |= hz_add_face(h, (const double(*)[3])q, 4, NULL, 0, n, plane);
     }
-    h->ready = 0;
     return added;
 }
 
@@ -2730,7 +2729,7 @@ int pvsr_horizon_add_polygon(pvsr_horizon* h, const float plane[5], const float*
         far_s[PVSR_HORIZON_MAX_CORNERS][3];
     uint32_t i, j;
     int a, added;
-    if (h == NULL || !h->ok || !h->eye_ok) return 0;
+    if (h == NULL || !h->ok || !h->eye_ok || h->ready) return 0;
     scale = h->scale;
     if (!polygon_slab(plane, corners, count, PVSR_HORIZON_MAX_CORNERS, n, &o, &t, &scale)) return 0;
     o -= n[0] * h->eye[0] + n[1] * h->eye[1] + n[2] * h->eye[2]; /* less the eye */
@@ -2773,7 +2772,6 @@ int pvsr_horizon_add_polygon(pvsr_horizon* h, const float plane[5], const float*
     }
     added = hz_add_face(h, (const double(*)[3])near_s, (int)count, (const double(*)[3])far_s, (int)count, n,
                         w_far);
-    h->ready = 0;
     return added;
 }
 
@@ -2815,9 +2813,8 @@ void pvsr_horizon_end(pvsr_horizon* h) {
     const uint32_t n = h != NULL ? 4u * (uint32_t)h->columns : 0u;
     uint32_t j;
     size_t i;
-    if (h == NULL || !h->ok) return;
-    h->ready = 0;
-    if (!h->eye_ok) return;
+    /* Once: the sort takes the unsorted pieces as its scratch. */
+    if (h == NULL || !h->ok || !h->eye_ok || h->ready) return;
     memset(h->first, 0, (n + 1) * sizeof(uint32_t));
     for (i = 0; i < h->count; ++i) ++h->first[h->pieces[i].column + 1];
     for (j = 0; j < n; ++j) h->first[j + 1] += h->first[j];

@@ -381,7 +381,8 @@ int pvsr_horizon_add_box(pvsr_horizon* h, const float box[6]);
 /* Adds a polygon occluder, with the promise and the arguments of pvsr_culler_add_polygon() but up to
  * PVSR_HORIZON_MAX_CORNERS corners; 1 when added. */
 int pvsr_horizon_add_polygon(pvsr_horizon* h, const float plane[5], const float* corners, uint32_t count);
-/* Ends the frame's occluders (sorts the pieces by column); then boxes may be tested. */
+/* Ends the frame's occluders (sorts the pieces by column); then boxes may be tested, and nothing more is
+ * added until the next pvsr_horizon_begin() (the adds return 0). */
 void pvsr_horizon_end(pvsr_horizon* h);
 /* 1 only if the box (float[6]) is certainly hidden from this frame's eye by the horizon. */
 int pvsr_horizon_is_hidden(const pvsr_horizon* h, const float box[6]);

@@ -976,7 +976,8 @@ TEST(RuntimeHorizon, TwoPolygonsSharingAnEdgeHideWhatNeitherHidesAlone) {
 
 // Memory missing, misaligned or short: nothing is hidden. A box holding the eye, a panel seen edge-on, a box
 // flat along two axes, empty or non-finite boxes add nothing; a non-finite eye hides nothing; nothing is
-// hidden before end(); pieces past the memory are dropped (fewer pieces, never a wrong cull).
+// hidden before end(), and nothing is added after it; pieces past the memory are dropped (fewer pieces, never
+// a wrong cull).
 TEST(RuntimeHorizon, AwkwardInputs) {
     pvsr_horizon h;
     std::vector<uint64_t> memory(pvsr_horizon_memory_bytes(64, 1024) / 8 + 1);
@@ -1003,6 +1004,9 @@ TEST(RuntimeHorizon, AwkwardInputs) {
     EXPECT_EQ(pvsr_horizon_add_box(&h, empty), 0);
     EXPECT_EQ(pvsr_horizon_add_box(&h, not_finite), 0);
     pvsr_horizon_end(&h);
+    EXPECT_EQ(pvsr_horizon_is_hidden(&h, target), 1);
+    EXPECT_EQ(pvsr_horizon_add_box(&h, wall), 0);  // the frame is ended: nothing more until begin
+    pvsr_horizon_end(&h);                          // a second end changes nothing
     EXPECT_EQ(pvsr_horizon_is_hidden(&h, target), 1);
     EXPECT_EQ(pvsr_horizon_is_hidden(&h, empty), 0);
     EXPECT_EQ(pvsr_horizon_is_hidden(&h, not_finite), 0);
