@@ -9,6 +9,7 @@
 //                                    [--parts 0|1] [--eye-polygons P] [--horizon N]
 //                                    [--horizon-faces M] [--horizon-cell-eyes K]
 //                                    [--horizon-exact-polygons 0|1] [--horizon-list-cells B]
+//                                    [--horizon-record FILE]
 //
 // Frames: F (default 200) eyes, each uniform in the eye space of a cell drawn at random (seed S, default 1):
 // a cell uniform among the level's cells, then a point uniform in its box kept when pvsr_in_eye_space() holds
@@ -47,7 +48,8 @@
 // block; --horizon-exact-polygons 1: the slanted panels go to
 // the runtime's horizon as found, only rounded to floats, not in their runtime form: what polygons that
 // tile would give, with no float margin); its time per frame is `horizon_us_median`,
-// apart from the frame's (it is no runtime's code).
+// apart from the frame's (it is no runtime's code); --horizon-record FILE: each frame's eye, the occluders
+// given to the runtime's horizon and the bounds it tests, written for bench_horizon to replay (format there).
 // Where the drawn but invisible triangles go (the "waste" object, of the full frames' drawn objects no ray
 // reached): split_culls: the culler hides each of the object's M part boxes; given_boxes: each of
 // kOracleRays segments from the eye to random points of the object meets one of the frame's occluder boxes
@@ -295,7 +297,8 @@ int main(int argc, char** argv) {
         "                   [--eye-panels 0|1] [--eye-select solid-angle|first-hit] [--parts 0|1]\n"
         "                   [--eye-polygons P] [--horizon N] [--horizon-faces M]\n"
         "                   [--horizon-cell-eyes K]\n"
-        "                   [--horizon-exact-polygons 0|1] [--horizon-list-cells B]\n";
+        "                   [--horizon-exact-polygons 0|1] [--horizon-list-cells B]\n"
+        "                   [--horizon-record FILE]\n";
     if (argc < 3 || argv[1][0] == '-' || argv[2][0] == '-') {
         std::fputs(usage, stderr);
         return 2;
@@ -308,7 +311,7 @@ int main(int argc, char** argv) {
              horizon_cell_eyes = 0,
              horizon_exact_polygons = 0, horizon_list_cells = 1;
     bool parts_drawn = false, eye_panels = false, eye_select_first_hit = false;
-    std::string bake_path;
+    std::string bake_path, horizon_record;
     int resolution = 32;
     uint64_t seed = 1;
     try {
@@ -319,7 +322,7 @@ int main(int argc, char** argv) {
                 k != "--eye-occluders" && k != "--parts" && k != "--eye-panels" && k != "--eye-select" &&
                 k != "--eye-polygons" && k != "--horizon" && k != "--horizon-faces" &&
                 k != "--horizon-cell-eyes" && k != "--horizon-exact-polygons" &&
-                k != "--horizon-list-cells")
+                k != "--horizon-list-cells" && k != "--horizon-record")
                 bad_option("unknown option " + k + " (run it with no arguments for the usage)");
             if (a + 1 >= argc) bad_option(k + " wants a value");
             const char* v = argv[++a];
@@ -337,6 +340,8 @@ int main(int argc, char** argv) {
                 n_split = uint32_t(parse_count("--split", v, 1, 4096));
             else if (k == "--bake")
                 bake_path = v;
+            else if (k == "--horizon-record")
+                horizon_record = v;
             else if (k == "--eye-occluders")
                 eye_occluders = uint32_t(parse_count("--eye-occluders", v, 0, PVSR_CULLER_MAX_OCCLUDERS));
             else if (k == "--eye-polygons")
@@ -415,6 +420,17 @@ int main(int argc, char** argv) {
         if (eye_occluders > 0 && bake_path.empty()) bad_option("--eye-occluders wants --bake");
         if (eye_polygons > 0 && bake_path.empty()) bad_option("--eye-polygons wants --bake");
         if (horizon_columns > 0 && bake_path.empty()) bad_option("--horizon wants --bake");
+        if (!horizon_record.empty() && horizon_columns == 0) bad_option("--horizon-record wants --horizon");
+        std::vector<char> record;  // --horizon-record: the bytes of bench_horizon's input
+        const auto put = [&record](const void* p, size_t n) {
+            record.insert(record.end(), static_cast<const char*>(p), static_cast<const char*>(p) + n);
+        };
+        const auto put_u32 = [&put](uint32_t x) { put(&x, 4); };
+        if (!horizon_record.empty()) {
+            put("PVHZ", 4);
+            put_u32(1);
+            put_u32(n_frames + n_check);
+        }
         // --horizon: every proven box of the bake, every panel and slanted panel of the world, around the
         // eye.
         std::vector<pvs::Aabb> horizon_boxes, horizon_panels;
@@ -644,8 +660,45 @@ int main(int argc, char** argv) {
                 const std::vector<uint8_t>* only = cell_eyes > 0       ? &used
                                                    : horizon_faces > 0 ? &nearest
                                                                        : nullptr;
-                const auto h0 = std::chrono::steady_clock::now();
                 const float eye[3] = {f.eye.x, f.eye.y, f.eye.z};
+                if (!horizon_record.empty()) {  // the same inputs in the same order as below
+                    put(eye, sizeof eye);
+                    uint32_t boxes = 0, source = 0;
+                    for (const std::vector<pvs::Aabb>* set : {&horizon_boxes, &horizon_panels})
+                        for (size_t i = 0; i < set->size(); ++i) boxes += !only || (*only)[source++];
+                    put_u32(boxes);
+                    source = 0;
+                    for (const std::vector<pvs::Aabb>* set : {&horizon_boxes, &horizon_panels})
+                        for (const pvs::Aabb& b : *set)
+                            if (!only || (*only)[source++]) {
+                                const float fb[6] = {b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z};
+                                put(fb, sizeof fb);
+                            }
+                    uint32_t polys = 0;
+                    for (size_t i = 0; i < horizon_polygons.size(); ++i)
+                        polys += horizon_polygons[i] && (!only || (*only)[source + i]);
+                    put_u32(polys);
+                    for (size_t i = 0; i < horizon_polygons.size(); ++i) {
+                        const std::optional<pvs::OccluderPolygon>& q = horizon_polygons[i];
+                        if (!q || (only && !(*only)[source + i])) continue;
+                        const float plane[5] = {q->normal.x, q->normal.y, q->normal.z, q->offset,
+                                                q->thickness};
+                        put(plane, sizeof plane);
+                        put_u32(uint32_t(q->corners.size()));
+                        put(&q->corners[0].x, q->corners.size() * sizeof(glm::vec3));
+                    }
+                    uint32_t tested = 0;
+                    for (const uint32_t o : f.drawn)
+                        tested += (pvsr_object_flags(&level, o) & PVSR_OBJECT_ALWAYS_VISIBLE) == 0;
+                    put_u32(tested);
+                    for (const uint32_t o : f.drawn) {
+                        if (pvsr_object_flags(&level, o) & PVSR_OBJECT_ALWAYS_VISIBLE) continue;
+                        float b[6];
+                        pvsr_object_bounds(&level, o, b);
+                        put(b, sizeof b);
+                    }
+                }
+                const auto h0 = std::chrono::steady_clock::now();
                 pvsr_horizon_begin(&runtime_horizon, eye);
                 uint32_t source = 0;
                 for (const std::vector<pvs::Aabb>* set : {&horizon_boxes, &horizon_panels})
@@ -688,6 +741,12 @@ int main(int argc, char** argv) {
                 f.drawn = std::move(kept);
                 f.horizon_us = micros(h0, std::chrono::steady_clock::now());
             }
+
+        if (!horizon_record.empty()) {
+            std::ofstream out(horizon_record, std::ios::binary);
+            out.write(record.data(), std::streamsize(record.size()));
+            if (!out) throw pvs::bad_input(horizon_record + ": cannot write the horizon record");
+        }
 
         // Truth: rays from each frame's eye at its listed objects (the culled ones only in check frames).
         struct Pair {

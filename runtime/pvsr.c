@@ -25,6 +25,7 @@
  * check made here: docs/FORMAT.md, "The runtime file". */
 #include "pvsr.h"
 
+#include <float.h>
 #include <math.h>
 #include <string.h>
 
@@ -2477,6 +2478,8 @@ uint32_t pvsr_culler_begin_cell(pvsr_culler* c, const pvsr_level* l, uint32_t ce
 #define HZ_DEPTH 1e-9   /* relative: depths are made larger by this */
 #define HZ_MAX_VERTS (2 * PVSR_HORIZON_MAX_CORNERS + 8) /* a projected face, clipped, then by another */
 #define HZ_MAX_PIECES (1u << 26)
+#define HZ_FRONT 4  /* lines a column's test keeps reached at once */
+#define HZ_PASSES 3 /* walks of a column's pieces a test makes at most */
 
 static double hz_min(double a, double b) {
     return b < a ? b : a;
@@ -2515,7 +2518,7 @@ void pvsr_horizon_begin(pvsr_horizon* h, const float eye[3]) {
     int a;
     if (h == NULL) return;
     h->eye_ok = h->ready = 0;
-    h->count = h->dropped = 0;
+    h->count = h->dropped = h->kept = 0;
     h->scale = 0.0;
     if (!h->ok || eye == NULL) return;
     for (a = 0; a < 3; ++a) {
@@ -2646,23 +2649,28 @@ static int hz_add_face(pvsr_horizon* h, const double (*a)[3], int na, const doub
             const double u0 = -1.0 + 2.0 * k / cols, u1 = -1.0 + 2.0 * (k + 1) / cols;
             const int ok1 = hz_span(pu, pv, m, u1, &lo1, &hi1);
             if (ok0 && ok1) {
-                const double lo = hz_max(lo0, lo1), hi = hz_min(hi0, hi1);
-                const double r = HZ_ROUND * (1.0 + fabs(lo) + fabs(hi));
-                if (hi - r > lo + r) {
-                    /* The deepest point over the column's [lo, hi]: 1 / depth is linear in (u, v), so it is
-                     * least at a corner. */
+                /* The trapezoid between the chords of the lower (convex) and upper (concave) boundaries at
+                 * the column's sides lies in the face's directions; each end shrunk for rounding. */
+                const double r0 = HZ_ROUND * (1.0 + fabs(lo0) + fabs(hi0)),
+                             r1 = HZ_ROUND * (1.0 + fabs(lo1) + fabs(hi1));
+                const double l0 = lo0 + r0, h0 = hi0 - r0, l1 = lo1 + r1, h1 = hi1 - r1;
+                if (h0 >= l0 && h1 >= l1 && (h0 > l0 || h1 > l1)) {
+                    /* The deepest point over the trapezoid: 1 / depth is linear in (u, v), so it is least at
+                     * a corner. */
                     const double g0 = (n[p] * s + n[hx] * u0) / c, g1 = (n[p] * s + n[hx] * u1) / c;
                     const double gv = n[1] / c;
                     const double g =
-                        hz_min(hz_min(g0 + gv * lo, g0 + gv * hi), hz_min(g1 + gv * lo, g1 + gv * hi));
+                        hz_min(hz_min(g0 + gv * l0, g0 + gv * h0), hz_min(g1 + gv * l1, g1 + gv * h1));
                     if (g > 0.0 && isfinite(g)) {
                         if (h->count < h->capacity) {
                             pvsr_horizon_piece* pc = &h->pieces[h->count++];
-                            pc->lo = lo + r;
-                            pc->hi = hi - r;
+                            pc->lo[0] = l0;
+                            pc->lo[1] = l1;
+                            pc->hi[0] = h0;
+                            pc->hi[1] = h1;
                             pc->depth = (1.0 / g) * (1.0 + HZ_DEPTH);
                             pc->column = (uint32_t)(fr * cols + k);
-                            pc->reserved = 0;
+                            pc->reach = 0.0f;
                             added = 1;
                         } else
                             ++h->dropped;
@@ -2775,14 +2783,22 @@ int pvsr_horizon_add_polygon(pvsr_horizon* h, const float plane[5], const float*
     return added;
 }
 
-static int hz_before(const pvsr_horizon_piece* a, const pvsr_horizon_piece* b) {
-    if (a->lo != b->lo) return a->lo < b->lo;
-    if (a->hi != b->hi) return a->hi < b->hi;
+/* A piece's lowest point in its column: the sort key, and a bound below its lower chord anywhere in it. */
+static double hz_bottom(const pvsr_horizon_piece* a) {
+    return hz_min(a->lo[0], a->lo[1]);
+}
+
+/* The orders of a column's pieces: by depth (then bottom), or by bottom (then top, then depth). */
+static int hz_before(const pvsr_horizon_piece* a, const pvsr_horizon_piece* b, int by_depth) {
+    const double ka = hz_bottom(a), kb = hz_bottom(b);
+    if (by_depth && a->depth != b->depth) return a->depth < b->depth;
+    if (ka != kb) return ka < kb;
+    if (a->hi[0] + a->hi[1] != b->hi[0] + b->hi[1]) return a->hi[0] + a->hi[1] < b->hi[0] + b->hi[1];
     return a->depth < b->depth;
 }
 
-/* Sorts run[0 .. len) by (lo, hi, depth): runs of 16 by insertion, then merged bottom-up through tmp. */
-static void hz_sort(pvsr_horizon_piece* run, pvsr_horizon_piece* tmp, uint32_t len) {
+/* Sorts run[0 .. len) in that order: runs of 16 by insertion, then merged bottom-up through tmp. */
+static void hz_sort(pvsr_horizon_piece* run, pvsr_horizon_piece* tmp, uint32_t len, int by_depth) {
     uint32_t a, b, width;
     pvsr_horizon_piece *src = run, *dst = tmp, *swap;
     for (a = 0; a < len; a += 16) {
@@ -2790,7 +2806,7 @@ static void hz_sort(pvsr_horizon_piece* run, pvsr_horizon_piece* tmp, uint32_t l
         for (b = a + 1; b < end; ++b) {
             const pvsr_horizon_piece x = run[b];
             uint32_t c = b;
-            for (; c > a && hz_before(&x, &run[c - 1]); --c) run[c] = run[c - 1];
+            for (; c > a && hz_before(&x, &run[c - 1], by_depth); --c) run[c] = run[c - 1];
             run[c] = x;
         }
     }
@@ -2798,7 +2814,7 @@ static void hz_sort(pvsr_horizon_piece* run, pvsr_horizon_piece* tmp, uint32_t l
         for (a = 0; a < len; a += 2 * width) {
             const uint32_t mid = a + width < len ? a + width : len, end = a + 2 * width < len ? a + 2 * width : len;
             uint32_t i = a, k = mid, o = a;
-            while (i < mid && k < end) dst[o++] = hz_before(&src[k], &src[i]) ? src[k++] : src[i++];
+            while (i < mid && k < end) dst[o++] = hz_before(&src[k], &src[i], by_depth) ? src[k++] : src[i++];
             while (i < mid) dst[o++] = src[i++];
             while (k < end) dst[o++] = src[k++];
         }
@@ -2809,11 +2825,60 @@ static void hz_sort(pvsr_horizon_piece* run, pvsr_horizon_piece* tmp, uint32_t l
     if (src != run) memcpy(run, src, (size_t)len * sizeof(pvsr_horizon_piece));
 }
 
+/* Drops from a column's run (sorted by depth) every piece whose range in v lies in one interval of the union
+ * of the nearer kept pieces' inner ranges (iv: scratch for up to len intervals, as lo, hi pairs): it lies in
+ * their union, so every box it could hide they hide. Returns the pieces kept, at the front in depth order. */
+static uint32_t hz_prune(pvsr_horizon_piece* run, uint32_t len, double* iv) {
+    uint32_t i, m = 0, ni = 0;
+    for (i = 0; i < len; ++i) {
+        const pvsr_horizon_piece* pc = &run[i];
+        const double outer_lo = hz_bottom(pc), outer_hi = hz_max(pc->hi[0], pc->hi[1]);
+        const double inner_lo = hz_max(pc->lo[0], pc->lo[1]), inner_hi = hz_min(pc->hi[0], pc->hi[1]);
+        uint32_t a = 0, b;
+        double lo = inner_lo, hi = inner_hi;
+        while (a < ni && iv[2 * a + 1] < outer_lo) ++a;
+        if (a < ni && iv[2 * a] <= outer_lo && iv[2 * a + 1] >= outer_hi) continue; /* inside the union */
+        run[m++] = *pc;
+        if (!(inner_hi > inner_lo)) continue;
+        /* Unite [inner_lo, inner_hi] with the intervals it meets. */
+        for (a = 0; a < ni && iv[2 * a + 1] < lo; ++a) {
+        }
+        for (b = a; b < ni && iv[2 * b] <= hi; ++b) {
+            lo = hz_min(lo, iv[2 * b]);
+            hi = hz_max(hi, iv[2 * b + 1]);
+        }
+        if (b == a) { /* none met: make room at a */
+            memmove(iv + 2 * (a + 1), iv + 2 * a, (size_t)(ni - a) * 2 * sizeof(double));
+            ++ni;
+        } else if (b > a + 1) { /* several met: they become one */
+            memmove(iv + 2 * (a + 1), iv + 2 * b, (size_t)(ni - b) * 2 * sizeof(double));
+            ni -= b - a - 1;
+        }
+        iv[2 * a] = lo;
+        iv[2 * a + 1] = hi;
+    }
+    return m;
+}
+
+/* Each piece's reach: the highest top of it and the pieces before it in the run, rounded up to a float, so
+ * that a test skips at once the pieces that all lie below its range (and only those). */
+static void hz_reach(pvsr_horizon_piece* run, uint32_t len) {
+    double top = -HUGE_VAL;
+    uint32_t i;
+    for (i = 0; i < len; ++i) {
+        float r;
+        top = hz_max(top, hz_max(run[i].hi[0], run[i].hi[1]));
+        r = top > FLT_MAX ? FLT_MAX : top < -FLT_MAX ? -FLT_MAX : (float)top;
+        if ((double)r < top) r = nextafterf(r, FLT_MAX);
+        run[i].reach = r;
+    }
+}
+
 void pvsr_horizon_end(pvsr_horizon* h) {
     const uint32_t n = h != NULL ? 4u * (uint32_t)h->columns : 0u;
-    uint32_t j;
+    uint32_t j, at = 0;
     size_t i;
-    /* Once: the sort takes the unsorted pieces as its scratch. */
+    /* Once: the sorts take the unsorted pieces as their scratch. */
     if (h == NULL || !h->ok || !h->eye_ok || h->ready) return;
     memset(h->first, 0, (n + 1) * sizeof(uint32_t));
     for (i = 0; i < h->count; ++i) ++h->first[h->pieces[i].column + 1];
@@ -2821,8 +2886,22 @@ void pvsr_horizon_end(pvsr_horizon* h) {
     for (i = 0; i < h->count; ++i) h->sorted[h->first[h->pieces[i].column]++] = h->pieces[i];
     for (j = n; j > 0; --j) h->first[j] = h->first[j - 1];
     h->first[0] = 0;
-    for (j = 0; j < n; ++j) /* each column by lo, with the (now free) pieces as scratch */
-        hz_sort(h->sorted + h->first[j], h->pieces + h->first[j], h->first[j + 1] - h->first[j]);
+    /* Each column: nearest first, the pieces the nearer ones cover dropped, the rest by bottom; the runs then
+     * close up, so that first[] bounds them. */
+    for (j = 0; j < n; ++j) {
+        const uint32_t start = h->first[j], len = h->first[j + 1] - start;
+        pvsr_horizon_piece* run = h->sorted + start;
+        uint32_t kept;
+        hz_sort(run, h->pieces + start, len, 1);
+        kept = hz_prune(run, len, (double*)(void*)(h->pieces + start));
+        hz_sort(run, h->pieces + start, kept, 0);
+        hz_reach(run, kept);
+        if (at != start) memmove(h->sorted + at, run, (size_t)kept * sizeof(pvsr_horizon_piece));
+        h->first[j] = at;
+        at += kept;
+    }
+    h->first[n] = at;
+    h->kept = at;
     h->ready = 1;
 }
 
@@ -2858,19 +2937,67 @@ int pvsr_horizon_is_hidden(const pvsr_horizon* h, const float box[6]) {
         if (k0 < 0) k0 = 0;
         if (k1 > h->columns - 1) k1 = h->columns - 1;
         for (k = k0; k <= k1; ++k) {
-            /* [v_min, v_max] covered by the pieces that lie wholly before the box, taken by their lo. */
+            /* In this column the box's directions lie in [a, b] x [v_min, v_max], a and b at the fractions
+             * ta, tb of its width. Covered up to a frontier of lines (their values at a and at b), each
+             * reached from v_min by a chain of pieces that lie wholly before the box, taken by their bottom:
+             * a chain that holds at a and at b holds between them, every chord being linear. */
             const uint32_t col = (uint32_t)(fr * h->columns + k);
-            uint32_t e;
-            double cur = v_min;
-            int covered = 0;
-            for (e = h->first[col]; e < h->first[col + 1]; ++e) {
-                const pvsr_horizon_piece* pc = &h->sorted[e];
-                if (!(d_lo > pc->depth)) continue;
-                if (pc->lo > cur + HZ_TOUCH * (1.0 + fabs(cur))) break; /* a gap at cur */
-                if (pc->hi > cur) cur = pc->hi;
-                if (cur > v_max + HZ_ROUND * (1.0 + fabs(v_max))) {
-                    covered = 1;
-                    break;
+            const double u0 = -1.0 + 2.0 * k / h->columns, w = 2.0 / h->columns;
+            const double goal = v_max + HZ_ROUND * (1.0 + fabs(v_max));
+            double ta = (u_min - u0) / w, tb = (u_max - u0) / w, sa[HZ_FRONT], sb[HZ_FRONT], top = v_min;
+            uint32_t e, start;
+            int covered = 0, ns = 1, i, pass, again;
+            ta = hz_min(1.0, hz_max(0.0, ta));
+            tb = hz_min(1.0, hz_max(ta, tb));
+            sa[0] = sb[0] = v_min;
+            { /* the first piece whose reach is not below v_min: those before it all lie below the box */
+                uint32_t lo_e = h->first[col], hi_e = h->first[col + 1];
+                while (lo_e < hi_e) {
+                    const uint32_t mid = lo_e + (hi_e - lo_e) / 2;
+                    if ((double)h->sorted[mid].reach < v_min)
+                        lo_e = mid + 1;
+                    else
+                        hi_e = mid;
+                }
+                start = lo_e;
+            }
+            /* Walks again (up to HZ_PASSES in all) when a piece was passed over before a line that it would
+             * have met was reached. */
+            for (pass = 0, again = 1; pass < HZ_PASSES && again && !covered; ++pass) {
+                int passed_over = 0;
+                again = 0;
+                for (e = start; e < h->first[col + 1] && !covered; ++e) {
+                    const pvsr_horizon_piece* pc = &h->sorted[e];
+                    double la, lb, ha, hb;
+                    int usable = 0, m;
+                    if (!(d_lo > pc->depth)) continue;
+                    if (hz_bottom(pc) > top + HZ_TOUCH * (1.0 + fabs(top)))
+                        break; /* a gap under every line */
+                    la = pc->lo[0] + (pc->lo[1] - pc->lo[0]) * ta;
+                    lb = pc->lo[0] + (pc->lo[1] - pc->lo[0]) * tb;
+                    for (i = 0; i < ns && !usable; ++i)
+                        usable = la <= sa[i] + HZ_TOUCH * (1.0 + fabs(sa[i])) &&
+                                 lb <= sb[i] + HZ_TOUCH * (1.0 + fabs(sb[i]));
+                    if (!usable) {
+                        passed_over = 1;
+                        continue;
+                    }
+                    ha = pc->hi[0] + (pc->hi[1] - pc->hi[0]) * ta;
+                    hb = pc->hi[0] + (pc->hi[1] - pc->hi[0]) * tb;
+                    if (ha > goal && hb > goal) covered = 1;
+                    for (i = 0; i < ns && usable; ++i) usable = !(sa[i] >= ha && sb[i] >= hb);
+                    if (!usable) continue;       /* no higher than a line already reached */
+                    for (i = m = 0; i < ns; ++i) /* keep the lines it does not pass at both ends */
+                        if (!(ha >= sa[i] && hb >= sb[i])) {
+                            sa[m] = sa[i];
+                            sb[m++] = sb[i];
+                        }
+                    if (m == HZ_FRONT) --m; /* full: the newest line replaces the last */
+                    sa[m] = ha;
+                    sb[m] = hb;
+                    ns = m + 1;
+                    top = hz_max(top, hz_max(ha, hb));
+                    again |= passed_over;
                 }
             }
             if (!covered) return 0;

@@ -329,15 +329,16 @@ int pvsr_culler_classify(const pvsr_culler* culler, const float box[6]);
 
 /* ---- The occlusion horizon: MANY occluders fused exactly where they meet, whatever their planes
  * (docs/ALGORITHMS.md#runtime-horizon). Around the eye, four side frames (+x, -x, +z, -z; y is up) are cut
- * into `columns` columns of directions each; every occluder face adds, per column it spans whole, the range
- * of heights (v) over which each direction of the column meets it, with its depth there. A box is hidden when
- * in every column its directions fall in, the pieces lying wholly before it cover its whole height range:
- * an exact union in v, so a wall on a floor, terrain polygons sharing an edge and a roof over walls hide
- * together what none hides alone. The occluders are those of the culler: solid boxes (faces towards the
- * eye), panels (a box flat along one axis) and polygon occluders, in any order and any number up to the
- * pieces the memory holds (past them, the rest are dropped: fewer pieces only cull less). "Hidden" means, as
- * for the culler's faces test, that every segment from the eye to the box meets an occluder or passes within
- * about 1e-9 of the coordinates' scale of one. No allocation: the pieces live in memory the caller gives.
+ * into `columns` columns of directions each; every occluder face adds, per column it spans whole, the
+ * trapezoid of directions between its chords at the column's two sides (within its directions there), with
+ * its depth. A box is hidden when in every column its directions fall in, the pieces lying wholly before it
+ * cover its whole height range: an exact union in v, along chords at any slope, so a wall on a floor,
+ * terrain polygons sharing an edge and a roof over walls hide together what none hides alone. The occluders
+ * are those of the culler: solid boxes (faces towards the eye), panels (a box flat along one axis) and
+ * polygon occluders, in any order and any number up to the pieces the memory holds (past them, the rest are
+ * dropped: fewer pieces only cull less). "Hidden" means, as for the culler's faces test, that every segment
+ * from the eye to the box meets an occluder or passes within about 1e-9 of the coordinates' scale of one. No
+ * allocation: the pieces live in memory the caller gives.
  *
  *   static pvsr_horizon h;
  *   pvsr_horizon_init(&h, 256, 65536, memory, pvsr_horizon_memory_bytes(256, 65536));
@@ -351,9 +352,12 @@ int pvsr_culler_classify(const pvsr_culler* culler, const float box[6]);
 #define PVSR_HORIZON_MAX_CORNERS 32 /* of a polygon occluder given to the horizon */
 
 typedef struct pvsr_horizon_piece {
-    double lo, hi, depth; /* every direction of the column with v in [lo, hi] meets an occluder by depth */
-    uint32_t column;      /* frame * columns + column */
-    uint32_t reserved;
+    /* Every direction (u, v) of the column with v between the line through (u0, lo[0]) and (u1, lo[1]) and
+     * the line through (u0, hi[0]) and (u1, hi[1]), u0 and u1 the column's sides, meets an occluder by depth
+     * (a trapezoid; docs/ALGORITHMS.md#runtime-horizon). */
+    double lo[2], hi[2], depth;
+    uint32_t column; /* frame * columns + column */
+    float reach; /* after pvsr_horizon_end(): at least the highest top of this piece and those before it */
 } pvsr_horizon_piece;
 
 /* A horizon: its fields are the runtime's (their layout may change between versions). */
@@ -361,6 +365,7 @@ typedef struct pvsr_horizon {
     int ok, eye_ok, ready, columns;
     double eye[3], scale;
     size_t capacity, count, dropped; /* pieces the memory holds, added this frame, dropped for want of room */
+    size_t kept;                     /* after pvsr_horizon_end(): pieces not covered by nearer ones */
     pvsr_horizon_piece *pieces, *sorted;
     uint32_t*
         first; /* after pvsr_horizon_end(): column j's pieces are sorted[first[j]] .. sorted[first[j+1]) */

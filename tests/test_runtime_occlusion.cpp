@@ -974,6 +974,45 @@ TEST(RuntimeHorizon, TwoPolygonsSharingAnEdgeHideWhatNeitherHidesAlone) {
     EXPECT_EQ(pvsr_horizon_add_polygon(&both.raw(), plane, lower.corners.data(), 4), 1);
 }
 
+// A wall made of two triangles split along its diagonal: the seam is slanted in every column it crosses, and
+// the pieces meet along it (their chords are the same line), so the two hide together what neither hides
+// alone; a slit along the seam keeps it visible.
+TEST(RuntimeHorizon, TrianglesMeetingAlongASlantedSeamHideTogether) {
+    test::TestPolygon a, b, a_slit;
+    const float plane[5] = {0.0f, 0.0f, -1.0f, -5.0f, 0.0f};  // z = 5, the normal towards the eye
+    for (test::TestPolygon* p : {&a, &b, &a_slit}) std::copy_n(plane, 5, p->plane);
+    a.corners = {-4, -2, 5, 4, 4, 5, 4, -2, 5};  // counter-clockwise seen from +n
+    b.corners = {-4, -2, 5, -4, 4, 5, 4, 4, 5};
+    a_slit.corners = {-4, -2.05f, 5, 4, 3.95f, 5, 4, -2.05f, 5};  // a 5 cm slit under the seam
+    const float eye[3] = {0.0f, 1.0f, 0.0f};
+    const Box behind = box(-1, 0, 8, 1, 2, 9);
+    for (const int columns : {16, 64, 256}) {
+        Horizon both(columns), alone_a(columns), alone_b(columns), slit(columns);
+        both.frame(eye, {}, {a, b});
+        alone_a.frame(eye, {}, {a});
+        alone_b.frame(eye, {}, {b});
+        slit.frame(eye, {}, {a_slit, b});
+        EXPECT_TRUE(both.hidden(behind)) << columns << " columns";
+        EXPECT_FALSE(alone_a.hidden(behind)) << columns << " columns";
+        EXPECT_FALSE(alone_b.hidden(behind)) << columns << " columns";
+        EXPECT_FALSE(slit.hidden(behind)) << columns << " columns";
+        EXPECT_FALSE(both.hidden(box(-1, 0, 2, 1, 2, 3))) << "in front of the wall";
+        EXPECT_FALSE(both.hidden(box(-1, 5.5f, 8, 1, 6.5f, 9))) << "over the wall";
+    }
+}
+
+// A wall behind a nearer, larger wall adds pieces the nearer one covers: the end drops them, and what the
+// walls hide stays hidden; a box between the walls stays hidden by the nearer one only.
+TEST(RuntimeHorizon, PiecesBehindNearerOnesAreDropped) {
+    Horizon h(64);
+    h.frame(kEye, {box(-6, -1, 5, 6, 5, 5.5f), box(-3, 0, 9, 3, 3, 9.5f)});
+    EXPECT_GT(h.raw().count, h.raw().kept);
+    EXPECT_GT(h.raw().kept, 0u);
+    EXPECT_TRUE(h.hidden(box(-1, 0.5f, 12, 1, 1.5f, 13)));
+    EXPECT_TRUE(h.hidden(box(-1, 0.5f, 7, 1, 1.5f, 8)));
+    EXPECT_FALSE(h.hidden(box(-1, 0.5f, 2, 1, 1.5f, 3)));
+}
+
 // Memory missing, misaligned or short: nothing is hidden. A box holding the eye, a panel seen edge-on, a box
 // flat along two axes, empty or non-finite boxes add nothing; a non-finite eye hides nothing; nothing is
 // hidden before end(), and nothing is added after it; pieces past the memory are dropped (fewer pieces, never
