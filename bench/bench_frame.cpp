@@ -8,7 +8,7 @@
 //                                    solid-angle|first-hit]
 //                                    [--parts 0|1] [--eye-polygons P] [--horizon N]
 //                                    [--horizon-faces M] [--horizon-cell-eyes K]
-//                                    [--horizon-exact-polygons 0|1] [--horizon-list-cells B]
+//                                    [--horizon-exact-polygons 0|1|2] [--horizon-list-cells B]
 //                                    [--horizon-record FILE]
 //
 // Frames: F (default 200) eyes, each uniform in the eye space of a cell drawn at random (seed S, default 1):
@@ -47,7 +47,8 @@
 // block of B x B x B grid positions holding the cell instead, the frame's PVS tried from each: a list per
 // block; --horizon-exact-polygons 1: the slanted panels go to
 // the runtime's horizon as found, only rounded to floats, not in their runtime form: what polygons that
-// tile would give, with no float margin); its time per frame is `horizon_us_median`,
+// tile would give, with no float margin; 2: as tiles, pvsr_horizon_add_tile, occluders/slanted_panels.h's
+// runtime_tiles); its time per frame is `horizon_us_median`,
 // apart from the frame's (it is no runtime's code); --horizon-record FILE: each frame's eye, the occluders
 // given to the runtime's horizon and the bounds it tests, written for bench_horizon to replay (format there).
 // Where the drawn but invisible triangles go (the "waste" object, of the full frames' drawn objects no ray
@@ -297,7 +298,7 @@ int main(int argc, char** argv) {
         "                   [--eye-panels 0|1] [--eye-select solid-angle|first-hit] [--parts 0|1]\n"
         "                   [--eye-polygons P] [--horizon N] [--horizon-faces M]\n"
         "                   [--horizon-cell-eyes K]\n"
-        "                   [--horizon-exact-polygons 0|1] [--horizon-list-cells B]\n"
+        "                   [--horizon-exact-polygons 0|1|2] [--horizon-list-cells B]\n"
         "                   [--horizon-record FILE]\n";
     if (argc < 3 || argv[1][0] == '-' || argv[2][0] == '-') {
         std::fputs(usage, stderr);
@@ -351,7 +352,7 @@ int main(int argc, char** argv) {
             else if (k == "--horizon-list-cells")
                 horizon_list_cells = uint32_t(parse_count("--horizon-list-cells", v, 1, 64));
             else if (k == "--horizon-exact-polygons")
-                horizon_exact_polygons = uint32_t(parse_count("--horizon-exact-polygons", v, 0, 1));
+                horizon_exact_polygons = uint32_t(parse_count("--horizon-exact-polygons", v, 0, 2));
             else if (k == "--horizon-cell-eyes")
                 horizon_cell_eyes = uint32_t(parse_count("--horizon-cell-eyes", v, 0, 4096));
             else if (k == "--horizon-faces")
@@ -428,7 +429,7 @@ int main(int argc, char** argv) {
         const auto put_u32 = [&put](uint32_t x) { put(&x, 4); };
         if (!horizon_record.empty()) {
             put("PVHZ", 4);
-            put_u32(1);
+            put_u32(2);
             put_u32(n_frames + n_check);
         }
         // --horizon: every proven box of the bake, every panel and slanted panel of the world, around the
@@ -447,6 +448,11 @@ int main(int argc, char** argv) {
         // --horizon-cell-eyes and --horizon-faces. The slanted panels go to it in their runtime form.
         std::vector<std::optional<pvs::OccluderPolygon>> horizon_polygons;
         for (const pvs::SlantedPanel& sp : horizon_slanted) {
+            if (horizon_exact_polygons == 2) {  // tiles: the panels whole (occluders/slanted_panels.h)
+                const std::vector<pvs::OccluderPolygon> q = pvs::runtime_tiles({sp}, 0.0);
+                horizon_polygons.push_back(q.empty() ? std::nullopt : std::optional(q.front()));
+                continue;
+            }
             if (horizon_exact_polygons) {  // as found, only rounded to floats: what polygons that tile give
                 pvs::OccluderPolygon q;
                 q.normal = glm::vec3(sp.normal);
@@ -684,6 +690,7 @@ int main(int argc, char** argv) {
                         const float plane[5] = {q->normal.x, q->normal.y, q->normal.z, q->offset,
                                                 q->thickness};
                         put(plane, sizeof plane);
+                        put_u32(q->tile ? 1u : 0u);
                         put_u32(uint32_t(q->corners.size()));
                         put(&q->corners[0].x, q->corners.size() * sizeof(glm::vec3));
                     }
@@ -713,8 +720,12 @@ int main(int argc, char** argv) {
                     if (q && (!only || (*only)[source])) {
                         const float plane[5] = {q->normal.x, q->normal.y, q->normal.z, q->offset,
                                                 q->thickness};
-                        pvsr_horizon_add_polygon(&runtime_horizon, plane, &q->corners[0].x,
-                                                 uint32_t(q->corners.size()));
+                        if (q->tile)
+                            pvsr_horizon_add_tile(&runtime_horizon, plane, &q->corners[0].x,
+                                                  uint32_t(q->corners.size()));
+                        else
+                            pvsr_horizon_add_polygon(&runtime_horizon, plane, &q->corners[0].x,
+                                                     uint32_t(q->corners.size()));
                     }
                     ++source;
                 }

@@ -4,9 +4,9 @@
 //
 //   bench_horizon RECORD [--columns N] [--repeats R] [--pieces P]
 //
-// RECORD (little-endian): "PVHZ", uint32 version 1, uint32 frames; per frame: float eye[3]; uint32 boxes,
-// float box[6] each; uint32 polygons, each float plane[5], uint32 corners, float corner[3] each; uint32
-// tests, float bounds[6] each (the objects the frame's culler drew).
+// RECORD (little-endian): "PVHZ", uint32 version 2, uint32 frames; per frame: float eye[3]; uint32 boxes,
+// float box[6] each; uint32 polygons, each float plane[5], uint32 tile (1: added as a tile), uint32
+// corners, float corner[3] each; uint32 tests, float bounds[6] each (the objects the frame's culler drew).
 // Per frame, R times (default 5), on one thread: begin, every box and polygon added, end (the build), then
 // every test box (the tests); a frame's time is the median of its R. Figures: medians and 90th percentiles
 // over frames of the build (and the median of its end alone), the tests and both, in microseconds; pieces a
@@ -29,6 +29,7 @@ namespace {
 
 struct Polygon {
     float plane[5];
+    uint32_t tile = 0;
     std::vector<float> corners;
 };
 
@@ -113,8 +114,8 @@ int main(int argc, char** argv) {
         Reader r(std::vector<char>((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>()));
         char magic[4];
         r.get(magic, 4);
-        if (std::memcmp(magic, "PVHZ", 4) != 0 || r.u32(1) != 1)
-            throw std::runtime_error("not a horizon record of version 1");
+        if (std::memcmp(magic, "PVHZ", 4) != 0 || r.u32(2) != 2)
+            throw std::runtime_error("not a horizon record of version 2");
         frames.resize(r.u32(1u << 24));
         for (Frame& f : frames) {
             r.get(f.eye, sizeof f.eye);
@@ -122,6 +123,7 @@ int main(int argc, char** argv) {
             f.polygons.resize(r.u32(1u << 24));
             for (Polygon& p : f.polygons) {
                 r.get(p.plane, sizeof p.plane);
+                p.tile = r.u32(1);
                 r.floats(p.corners, 3 * size_t(r.u32(PVSR_HORIZON_MAX_CORNERS)));
             }
             r.floats(f.tests, 6 * size_t(r.u32(1u << 24)));
@@ -154,7 +156,8 @@ int main(int argc, char** argv) {
             pvsr_horizon_begin(&h, f.eye);
             for (size_t i = 0; i < f.boxes.size(); i += 6) pvsr_horizon_add_box(&h, &f.boxes[i]);
             for (const Polygon& p : f.polygons)
-                pvsr_horizon_add_polygon(&h, p.plane, p.corners.data(), uint32_t(p.corners.size() / 3));
+                (p.tile ? pvsr_horizon_add_tile : pvsr_horizon_add_polygon)(&h, p.plane, p.corners.data(),
+                                                                            uint32_t(p.corners.size() / 3));
             const auto te = Clock::now();
             pvsr_horizon_end(&h);
             const auto t1 = Clock::now();

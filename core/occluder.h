@@ -58,7 +58,11 @@ struct OccluderPolygon {
     float offset = 0.0f;
     float thickness = 0.0f;
     std::vector<glm::vec3> corners;  // convex, counter-clockwise seen from the side normal points to; 3 to 8
+                                     // (to 32 for a tile)
     Aabb bounds;                     // of the corners
+    // A TILE: its corners, in order, bound a disk of opaque surface lying within its slab (a slanted panel
+    // kept whole; docs/ALGORITHMS.md#runtime-horizon), so tiles sharing corners fuse exactly.
+    bool tile = false;
 };
 
 // The ranked occluders of every cell: cell c has entries[offsets[c] .. offsets[c + 1]), best first.

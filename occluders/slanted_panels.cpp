@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <numeric>
 #include <optional>
@@ -242,6 +243,61 @@ std::optional<OccluderPolygon> runtime_polygon(const SlantedPanel& panel) {
 }
 
 }  // namespace
+
+namespace {
+
+// The tile of one panel, or nothing when it has too many corners or its float form does not turn one way.
+std::optional<OccluderPolygon> runtime_tile(const SlantedPanel& panel) {
+    if (panel.corners.size() < 3 || panel.corners.size() > kTileMaxCorners) return std::nullopt;
+    OccluderPolygon out;
+    out.tile = true;
+    out.normal = glm::vec3(panel.normal);
+    out.offset = float(panel.offset);
+    for (const glm::dvec3& c : panel.corners) {
+        out.corners.push_back(glm::vec3(c));  // the float vertices the panel was grown from, exactly
+        out.bounds.extend(out.corners.back());
+    }
+    // The plane as the runtime reads it: normal and offset divided by the float normal's length.
+    const glm::dvec3 nf(out.normal);
+    const double len = glm::length(nf);
+    if (!(len > 0.0) || !std::isfinite(len)) return std::nullopt;
+    const glm::dvec3 n = nf / len;
+    const double o = double(out.offset) / len;
+    double t = 0.0, scale = 0.0;
+    for (const glm::vec3& c : out.corners) {
+        t = std::max(t, std::abs(glm::dot(n, glm::dvec3(c)) - o));
+        scale = std::max({scale, double(std::abs(c.x)), double(std::abs(c.y)), double(std::abs(c.z))});
+    }
+    // Grown past double rounding (1e-12 of the scale) and rounded up, so that t' / len >= t.
+    const double want = (t + kTileSlabGrowM + 1e-12 * (1.0 + scale)) * len;
+    float tf = float(want);
+    if (double(tf) < want) tf = std::nextafter(tf, std::numeric_limits<float>::infinity());
+    out.thickness = tf;
+    // Every corner on the inner side of every edge about the float normal, up to a tenth of what the runtime
+    // allows (a straight run of edges turns either way by rounding).
+    const size_t k = out.corners.size();
+    const double allow = 1e-10 * (1.0 + scale);
+    for (size_t i = 0; i < k; ++i) {
+        const glm::dvec3 p0(out.corners[i]), p1(out.corners[(i + 1) % k]);
+        const glm::dvec3 m = glm::cross(n, p1 - p0);
+        const double ml = glm::length(m);
+        if (!(ml > 0.0)) return std::nullopt;
+        for (size_t j = 0; j < k; ++j)
+            if (!(glm::dot(m, glm::dvec3(out.corners[j]) - p0) / ml >= -allow)) return std::nullopt;
+    }
+    return out;
+}
+
+}  // namespace
+
+std::vector<OccluderPolygon> runtime_tiles(const std::vector<SlantedPanel>& panels, double min_area_m2) {
+    std::vector<OccluderPolygon> out;
+    for (const SlantedPanel& p : panels) {
+        if (p.area_m2 < min_area_m2) continue;
+        if (std::optional<OccluderPolygon> q = runtime_tile(p)) out.push_back(std::move(*q));
+    }
+    return out;
+}
 
 std::vector<OccluderPolygon> runtime_polygons(const std::vector<SlantedPanel>& panels, double min_area_m2) {
     std::vector<OccluderPolygon> out;

@@ -52,4 +52,14 @@ constexpr double kPolygonSlabGrowM = 1e-3;
 constexpr size_t kPolygonMaxCorners = 8;
 std::vector<OccluderPolygon> runtime_polygons(const std::vector<SlantedPanel>& panels, double min_area_m2);
 
+// The run-time horizon's TILES (docs/ALGORITHMS.md#runtime-horizon) of the panels of at least min_area_m2
+// and at most kTileMaxCorners corners: each panel whole, its corners the float vertices they are (so
+// neighbouring panels share them exactly), its plane rounded to floats and its slab the corners' largest
+// distance from that plane as the runtime reads it (in double), grown by kTileSlabGrowM and rounded up. A
+// panel's triangles are the hulls of some of its corners, so they lie in that slab and bound, with the
+// corners, a disk: the tile's promise. Kept only when its corners turn one way about the float normal.
+constexpr double kTileSlabGrowM = 1e-6;
+constexpr size_t kTileMaxCorners = 32;
+std::vector<OccluderPolygon> runtime_tiles(const std::vector<SlantedPanel>& panels, double min_area_m2);
+
 }  // namespace pvs

@@ -2480,6 +2480,7 @@ uint32_t pvsr_culler_begin_cell(pvsr_culler* c, const pvsr_level* l, uint32_t ce
 #define HZ_MAX_PIECES (1u << 26)
 #define HZ_FRONT 4  /* lines a column's test keeps reached at once */
 #define HZ_PASSES 3 /* walks of a column's pieces a test makes at most */
+#define HZ_DENT 1e-6 /* relative: the deepest dent a tile's directions may have */
 
 static double hz_min(double a, double b) {
     return b < a ? b : a;
@@ -2613,19 +2614,66 @@ static int hz_span(const double* u, const double* v, int n, double x, double* lo
     return *lo <= *hi;
 }
 
+/* The directions of a tile in frame fr: its corners moved along their rays onto a plane parallel to its own
+ * (pts: those points, a planar polygon), clipped at depth HZ_NEAR, when they turn nearly one way, once
+ * around. Every direction inside the polygon meets the tile's disk of surface (docs/ALGORITHMS.md#runtime-
+ * horizon). A corner that turns the wrong way by a rounding's worth gets its DENT: how far its neighbours'
+ * chord passes outside it, along v (0 at the other corners), which the pieces of its column give up. Returns
+ * the corner count; 0 when the polygon is not nearly convex or a dent is past HZ_DENT of the scale. */
+static int hz_tile_directions(int fr, const double (*pts)[3], int n, double* u, double* v, double* dent) {
+    double area = 0.0, scale = 0.0, orient;
+    int m = hz_project(fr, pts, n, u, v), i, changes = 0, du_sign = 0, first_du = 0;
+    if (m < 3) return 0;
+    for (i = 0; i < m; ++i) {
+        const int j = (i + 1) % m;
+        area += u[i] * v[j] - u[j] * v[i];
+        scale = hz_max(scale, hz_max(fabs(u[i]), fabs(v[i])));
+    }
+    if (!(area != 0.0) || !isfinite(area)) return 0;
+    orient = area > 0.0 ? 1.0 : -1.0;
+    for (i = 0; i < m; ++i) {
+        const int a = (i + m - 1) % m, b = (i + 1) % m;
+        const double eu = u[i] - u[a], ev = v[i] - v[a], fu = u[b] - u[i], fv = v[b] - v[i];
+        const double turn = orient * (eu * fv - ev * fu);
+        const double len = sqrt((eu * eu + ev * ev) * (fu * fu + fv * fv));
+        const double bound = HZ_ROUND * (fabs(u[i]) + fabs(u[b]) + fabs(fv));
+        const int ds = fu > bound ? 1 : fu < -bound ? -1 : 0;
+        dent[i] = 0.0;
+        if (!(turn > HZ_ROUND * len) && !(eu == 0.0 && fu == 0.0 && ev * fv > 0.0)) {
+            /* straight or the wrong way (but not straight up or down): onwards only, by a dent */
+            const double cu = u[b] - u[a];
+            if (!(eu * fu + ev * fv > 0.0) || !(fabs(cu) > 0.0)) return 0;
+            dent[i] = fabs(v[i] - (v[a] + (v[b] - v[a]) * ((u[i] - u[a]) / cu))) +
+                      HZ_ROUND * (1.0 + fabs(v[i]) + fabs(v[a]) + fabs(v[b]));
+            if (!(dent[i] <= HZ_DENT * (1.0 + scale))) return 0;
+        }
+        if (ds != 0) { /* once around: u turns back at most twice (edges vertical to rounding aside) */
+            if (du_sign != 0 && ds != du_sign) ++changes;
+            if (du_sign == 0) first_du = ds;
+            du_sign = ds;
+        }
+    }
+    if (du_sign != 0 && du_sign != first_du) ++changes;
+    return changes <= 2 ? m : 0;
+}
+
 /* Adds the pieces of a face: the directions of polygon a (and of polygon b too, when given) meet an occluder
  * by the plane n . x = c (x less the eye; c / (n . direction) > 0 towards it), in every frame. Returns
  * whether it added one. */
 static int hz_add_face(pvsr_horizon* h, const double (*a)[3], int na, const double (*b)[3], int nb,
-                       const double n[3], double c) {
+                       const double (*tile)[3], int nt, const double n[3], double c) {
     const int cols = h->columns;
     int fr, added = 0;
     for (fr = 0; fr < 4; ++fr) {
         double pu[HZ_MAX_VERTS], pv[HZ_MAX_VERTS], umin = HUGE_VAL, umax = -HUGE_VAL, margin, s, k0d, k1d;
         double lo0, hi0, lo1, hi1;
-        int m = hz_project(fr, a, na, pu, pv), i, k, k0, k1, p, hx, ok0;
-        if (m < 3) continue;
-        if (b != NULL) {
+        double dent[HZ_MAX_VERTS];
+        int m = 0, i, k, k0, k1, p, hx, ok0, dents = 0;
+        if (tile != NULL && (m = hz_tile_directions(fr, tile, nt, pu, pv, dent)) >= 3) {
+            for (i = 0; i < m; ++i) dents |= dent[i] > 0.0;
+        } else if ((m = hz_project(fr, a, na, pu, pv)) < 3)
+            continue;
+        else if (b != NULL) {
             double qu[HZ_MAX_VERTS], qv[HZ_MAX_VERTS];
             const int mb = hz_project(fr, b, nb, qu, qv);
             if (mb < 3) continue;
@@ -2651,9 +2699,19 @@ static int hz_add_face(pvsr_horizon* h, const double (*a)[3], int na, const doub
             if (ok0 && ok1) {
                 /* The trapezoid between the chords of the lower (convex) and upper (concave) boundaries at
                  * the column's sides lies in the face's directions; each end shrunk for rounding. */
-                const double r0 = HZ_ROUND * (1.0 + fabs(lo0) + fabs(hi0)),
-                             r1 = HZ_ROUND * (1.0 + fabs(lo1) + fabs(hi1));
-                const double l0 = lo0 + r0, h0 = hi0 - r0, l1 = lo1 + r1, h1 = hi1 - r1;
+                double r0 = HZ_ROUND * (1.0 + fabs(lo0) + fabs(hi0)),
+                       r1 = HZ_ROUND * (1.0 + fabs(lo1) + fabs(hi1));
+                double l0, h0, l1, h1;
+                if (dents) /* the dents of the corners in this column: the chords may pass outside by them */
+                    for (i = 0; i < m; ++i)
+                        if (dent[i] > 0.0 && pu[i] >= u0 && pu[i] <= u1) {
+                            r0 += dent[i];
+                            r1 += dent[i];
+                        }
+                l0 = lo0 + r0;
+                h0 = hi0 - r0;
+                l1 = lo1 + r1;
+                h1 = hi1 - r1;
                 if (h0 >= l0 && h1 >= l1 && (h0 > l0 || h1 > l1)) {
                     /* The deepest point over the trapezoid: 1 / depth is linear in (u, v), so it is least at
                      * a corner. */
@@ -2726,15 +2784,16 @@ int pvsr_horizon_add_box(pvsr_horizon* h, const float box[6]) {
         q[2][a2] = q[3][a2] = hi[a2] + grow;
         n[0] = n[1] = n[2] = 0.0;
         n[a] = 1.0;
-        added |= hz_add_face(h, (const double(*)[3])q, 4, NULL, 0, n, plane);
+        added |= hz_add_face(h, (const double(*)[3])q, 4, NULL, 0, NULL, 0, n, plane);
     }
     return added;
 }
 
-int pvsr_horizon_add_polygon(pvsr_horizon* h, const float plane[5], const float* corners, uint32_t count) {
+static int hz_add_slab(pvsr_horizon* h, const float plane[5], const float* corners, uint32_t count,
+                       int tile) {
     double n[3], o, t, scale, s_e, w_near, w_far, area = 0.0, grow;
     double c[PVSR_HORIZON_MAX_CORNERS][3], near_s[PVSR_HORIZON_MAX_CORNERS][3],
-        far_s[PVSR_HORIZON_MAX_CORNERS][3];
+        far_s[PVSR_HORIZON_MAX_CORNERS][3], on_plane[PVSR_HORIZON_MAX_CORNERS][3];
     uint32_t i, j;
     int a, added;
     if (h == NULL || !h->ok || !h->eye_ok || h->ready) return 0;
@@ -2770,17 +2829,30 @@ int pvsr_horizon_add_polygon(pvsr_horizon* h, const float plane[5], const float*
                 n[2] * (p0[0] * p1[1] - p0[1] * p1[0]);
     }
     if (!(area > 0.0)) return 0;
-    /* The prism's cross-sections at the slab's near and far planes: the corners moved along n. */
+    /* The prism's cross-sections at the slab's near and far planes: the corners moved along n. A tile's
+     * corners also move along their rays onto the plane n . x = w_near (so that clipping them at the near
+     * plane of a frame is exact); a corner outside the slab's side away from the eye makes it no tile. */
     for (i = 0; i < count; ++i) {
         const double w = n[0] * c[i][0] + n[1] * c[i][1] + n[2] * c[i][2];
+        const double ray = w / w_near;
         for (a = 0; a < 3; ++a) {
             near_s[i][a] = c[i][a] + n[a] * (w_near - w);
             far_s[i][a] = c[i][a] + n[a] * (w_far - w);
+            on_plane[i][a] = c[i][a] / ray;
         }
+        if (!(ray > 0.0) || !isfinite(ray)) tile = 0;
     }
-    added = hz_add_face(h, (const double(*)[3])near_s, (int)count, (const double(*)[3])far_s, (int)count, n,
-                        w_far);
+    added = hz_add_face(h, (const double(*)[3])near_s, (int)count, (const double(*)[3])far_s, (int)count,
+                        tile ? (const double(*)[3])on_plane : NULL, (int)count, n, w_far);
     return added;
+}
+
+int pvsr_horizon_add_polygon(pvsr_horizon* h, const float plane[5], const float* corners, uint32_t count) {
+    return hz_add_slab(h, plane, corners, count, 0);
+}
+
+int pvsr_horizon_add_tile(pvsr_horizon* h, const float plane[5], const float* corners, uint32_t count) {
+    return hz_add_slab(h, plane, corners, count, 1);
 }
 
 /* A piece's lowest point in its column: the sort key, and a bound below its lower chord anywhere in it. */

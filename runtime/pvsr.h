@@ -343,7 +343,8 @@ int pvsr_culler_classify(const pvsr_culler* culler, const float box[6]);
  *   static pvsr_horizon h;
  *   pvsr_horizon_init(&h, 256, 65536, memory, pvsr_horizon_memory_bytes(256, 65536));
  *   each frame: pvsr_horizon_begin(&h, eye);
- *               pvsr_horizon_add_box(&h, box) / pvsr_horizon_add_polygon(&h, plane, corners, n) for each;
+ *               pvsr_horizon_add_box(&h, box) / pvsr_horizon_add_polygon(&h, plane, corners, n) /
+ *               pvsr_horizon_add_tile(&h, plane, corners, n) for each;
  *               pvsr_horizon_end(&h);
  *               if (!pvsr_horizon_is_hidden(&h, bounds)) draw(object);   (any number of threads)
  */
@@ -386,6 +387,14 @@ int pvsr_horizon_add_box(pvsr_horizon* h, const float box[6]);
 /* Adds a polygon occluder, with the promise and the arguments of pvsr_culler_add_polygon() but up to
  * PVSR_HORIZON_MAX_CORNERS corners; 1 when added. */
 int pvsr_horizon_add_polygon(pvsr_horizon* h, const float plane[5], const float* corners, uint32_t count);
+/* Adds a TILE: a polygon occluder (the arguments of pvsr_horizon_add_polygon()) with a stronger promise: its
+ * corners, in order, are the boundary of a disk of opaque surface lying within the slab, such as a mesh's
+ * triangles whose vertices are all among the corners (the bake's slanted panels, kept whole). Then every
+ * direction from an eye outside the slab inside the corners' projection meets the surface, so tiles sharing
+ * an edge (the same corners) fuse exactly there, with no seam for the slab's thickness. A tile also keeps
+ * pvsr_horizon_add_polygon()'s promise, and any polygon of a subset of its corners keeps that one. 1 when
+ * added. */
+int pvsr_horizon_add_tile(pvsr_horizon* h, const float plane[5], const float* corners, uint32_t count);
 /* Ends the frame's occluders (sorts the pieces by column); then boxes may be tested, and nothing more is
  * added until the next pvsr_horizon_begin() (the adds return 0). */
 void pvsr_horizon_end(pvsr_horizon* h);

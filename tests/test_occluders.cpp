@@ -975,6 +975,49 @@ TEST(SlantedPanels, AxisPlanesGlassHalfEdgesAndSmallPiecesAreLeftOut) {
     EXPECT_EQ(find_slanted_panels(w, 1e-4, 1.5).size(), 0u);  // each piece is 1 m2
 }
 
+// Tiles (the horizon's form of the panels): each keeps its panel's corners as the float vertices they are, so
+// panels sharing an edge share those corners exactly; every corner lies within the slab as the runtime reads
+// it (the float plane divided by its normal's length); a panel of more than kTileMaxCorners corners is left
+// out. On random tilted sheets of quads, some lifted off the plane.
+TEST(SlantedPanelsProperty, TilesKeepTheCornersExactlyAndHoldThemInTheirSlab) {
+    Rng rng(43, 1);
+    size_t tiles = 0, shared = 0;
+    for (int trial = 0; trial < (test::in_ci() ? 20 : 100); ++trial) {
+        World w;
+        const int nu = 1 + int(rng.uniform() * 5), nv = 1 + int(rng.uniform() * 5);
+        for (int i = 0; i < nu; ++i)
+            for (int j = 0; j < nv; ++j) {
+                const float u = float(i), v = float(j), lift = rng.uniform() < 0.3 ? 2e-5f : 0.0f;
+                add_triangle(w, tilted(u, v), tilted(u + 1, v), tilted(u + 1, v + 1, lift));
+                add_triangle(w, tilted(u, v), tilted(u + 1, v + 1, lift), tilted(u, v + 1));
+            }
+        const std::vector<SlantedPanel> panels = find_slanted_panels(w, 1e-4, 0.0);
+        const std::vector<OccluderPolygon> t = runtime_tiles(panels, 0.0);
+        size_t want = 0;
+        for (const SlantedPanel& p : panels) want += p.corners.size() <= kTileMaxCorners;
+        EXPECT_EQ(t.size(), want) << "trial " << trial;
+        std::vector<glm::vec3> vertices(w.positions.begin(), w.positions.end());
+        for (const OccluderPolygon& q : t) {
+            ++tiles;
+            EXPECT_TRUE(q.tile);
+            const glm::dvec3 nf(q.normal);
+            const double len = glm::length(nf);
+            for (const glm::vec3& c : q.corners) {
+                EXPECT_NE(std::find(vertices.begin(), vertices.end(), c), vertices.end())
+                    << "a corner that is no vertex of the world";
+                EXPECT_LE(std::abs(glm::dot(nf / len, glm::dvec3(c)) - double(q.offset) / len),
+                          double(q.thickness) / len - kTileSlabGrowM * 0.5);
+            }
+        }
+        for (size_t a = 0; a < t.size(); ++a)  // neighbours share corners exactly
+            for (size_t b = a + 1; b < t.size(); ++b)
+                for (const glm::vec3& c : t[a].corners)
+                    shared += std::find(t[b].corners.begin(), t[b].corners.end(), c) != t[b].corners.end();
+    }
+    EXPECT_GT(tiles, 0u);
+    EXPECT_GT(shared, 0u);
+}
+
 // Random tilted sheets of quads, each split along a random diagonal, some lifted off the plane: the panels
 // are convex, no triangle is in two, together they hold exactly the triangles' area, and every point of a
 // panel lies in one of its plane's triangles.

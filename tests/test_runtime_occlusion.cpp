@@ -886,17 +886,20 @@ public:
         ok_ = pvsr_horizon_init(&h_, columns, pieces, memory_.data(), memory_.size() * 8) != 0;
     }
     bool ok() const { return ok_; }
+    // The polygons go in as polygon occluders, or as tiles (`tiles`: their promise is the caller's).
     void frame(const float eye[3], const std::vector<Box>& boxes,
-               const std::vector<test::TestPolygon>& polys = {}) {
+               const std::vector<test::TestPolygon>& polys = {}, bool tiles = false) {
         pvsr_horizon_begin(&h_, eye);
         for (const Box& b : boxes) {
             const float f[6] = {b.min[0], b.min[1], b.min[2], b.max[0], b.max[1], b.max[2]};
             pvsr_horizon_add_box(&h_, f);
         }
         for (const test::TestPolygon& p : polys)
-            pvsr_horizon_add_polygon(&h_, p.plane, p.corners.data(), p.count());
+            added_ += tiles ? pvsr_horizon_add_tile(&h_, p.plane, p.corners.data(), p.count())
+                            : pvsr_horizon_add_polygon(&h_, p.plane, p.corners.data(), p.count());
         pvsr_horizon_end(&h_);
     }
+    int added() const { return added_; }
     bool hidden(const Box& b) const {
         const float f[6] = {b.min[0], b.min[1], b.min[2], b.max[0], b.max[1], b.max[2]};
         return pvsr_horizon_is_hidden(&h_, f) != 0;
@@ -907,6 +910,7 @@ private:
     std::vector<uint64_t> memory_;
     pvsr_horizon h_;
     bool ok_ = false;
+    int added_ = 0;
 };
 
 // The floor and the wall of the culler's junction test, as panels, solid boxes, or a panel over a box's
@@ -1001,6 +1005,41 @@ TEST(RuntimeHorizon, TrianglesMeetingAlongASlantedSeamHideTogether) {
     }
 }
 
+// Two slopes meeting at a crease, each declared with a 1 cm slab: as polygon occluders their slabs' two
+// cross-sections leave a seam at the crease, so what lies behind it in their union stays drawn; as tiles
+// (each a disk of surface bounded by its corners) they meet exactly there and hide it. Apart by 5 cm, they
+// hide it in neither form.
+TEST(RuntimeHorizon, TilesMeetingAtACreaseHideWhatTheirSlabsLeaveOpen) {
+    const double na = std::sqrt(17.0), nb = std::sqrt(5.0);
+    test::TestPolygon a, b, b_apart;
+    const float plane_a[5] = {0.0f, float(4.0 / na), float(-1.0 / na), float(-2.0 / na), 0.01f};
+    const float plane_b[5] = {0.0f, float(2.0 / nb), float(-1.0 / nb), float(-4.0 / nb), 0.01f};
+    std::copy_n(plane_a, 5, a.plane);
+    std::copy_n(plane_b, 5, b.plane);
+    std::copy_n(plane_b, 5, b_apart.plane);
+    b_apart.plane[3] = float(-4.1 / nb);                   // the plane 2 y - z = -4.1: 5 cm further along z
+    a.corners = {-5, 0, 2, -5, 1, 6, 5, 1, 6, 5, 0, 2};    // y = (z - 2) / 4, counter-clockwise seen from +n
+    b.corners = {-5, 1, 6, -5, 3, 10, 5, 3, 10, 5, 1, 6};  // y = 1 + (z - 6) / 2
+    b_apart.corners = {-5, 1, 6.1f, -5, 3, 10.1f, 5, 3, 10.1f, 5, 1, 6.1f};
+    const float eye[3] = {0.0f, 3.0f, 0.0f};
+    const Box behind = box(-1, -3, 14, 1, -1, 15);
+    for (const int columns : {16, 256}) {
+        Horizon tiles(columns), polygons(columns), alone(columns), apart(columns);
+        tiles.frame(eye, {}, {a, b}, true);
+        polygons.frame(eye, {}, {a, b}, false);
+        alone.frame(eye, {}, {b}, true);
+        apart.frame(eye, {}, {a, b_apart}, true);
+        EXPECT_EQ(tiles.added(), 2);
+        EXPECT_EQ(apart.added(), 2);
+        EXPECT_TRUE(tiles.hidden(behind)) << columns << " columns";
+        EXPECT_FALSE(polygons.hidden(behind)) << columns << " columns";
+        EXPECT_FALSE(alone.hidden(behind)) << columns << " columns";
+        EXPECT_FALSE(apart.hidden(behind)) << columns << " columns";
+        EXPECT_FALSE(tiles.hidden(box(-1, 4, 14, 1, 6, 15))) << "over the crest";
+        EXPECT_FALSE(tiles.hidden(box(-1, 2, 3, 1, 2.5f, 4))) << "in front of the slope";
+    }
+}
+
 // A wall behind a nearer, larger wall adds pieces the nearer one covers: the end drops them, and what the
 // walls hide stays hidden; a box between the walls stays hidden by the nearer one only.
 TEST(RuntimeHorizon, PiecesBehindNearerOnesAreDropped) {
@@ -1058,6 +1097,152 @@ TEST(RuntimeHorizon, AwkwardInputs) {
     tiny.frame(kEye, {kWall});
     EXPECT_GT(tiny.raw().dropped, 0u);
     EXPECT_FALSE(tiny.hidden(box(-1, 0.5f, 8, 1, 1.5f, 9)));
+}
+
+// Does the segment from e to x meet the triangle (a, b, c) grown by `grow` metres in its plane? Exact enough
+// in double for a slow reference.
+bool segment_meets_triangle(const float e[3], const double x[3], const double a[3], const double b[3],
+                            const double c[3], double grow) {
+    double ab[3], ac[3], n[3], d[3];
+    for (int k = 0; k < 3; ++k) {
+        ab[k] = b[k] - a[k];
+        ac[k] = c[k] - a[k];
+        d[k] = x[k] - double(e[k]);
+    }
+    n[0] = ab[1] * ac[2] - ab[2] * ac[1];
+    n[1] = ab[2] * ac[0] - ab[0] * ac[2];
+    n[2] = ab[0] * ac[1] - ab[1] * ac[0];
+    const double nl = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    const double denom = n[0] * d[0] + n[1] * d[1] + n[2] * d[2];
+    if (!(nl > 0.0) || denom == 0.0) return false;
+    const double t =
+        (n[0] * (a[0] - double(e[0])) + n[1] * (a[1] - double(e[1])) + n[2] * (a[2] - double(e[2]))) / denom;
+    if (t < 0.0 || t > 1.0) return false;
+    double p[3];
+    for (int k = 0; k < 3; ++k) p[k] = double(e[k]) + t * d[k];
+    const double* v[3] = {a, b, c};
+    for (int k = 0; k < 3; ++k) {  // inside every edge, grown
+        const double* p0 = v[k];
+        const double* p1 = v[(k + 1) % 3];
+        const double ed[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
+        const double m[3] = {n[1] * ed[2] - n[2] * ed[1], n[2] * ed[0] - n[0] * ed[2],
+                             n[0] * ed[1] - n[1] * ed[0]};
+        const double ml = std::sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
+        if (!(ml > 0.0)) return false;
+        if ((m[0] * (p[0] - p0[0]) + m[1] * (p[1] - p0[1]) + m[2] * (p[2] - p0[2])) / ml < -grow)
+            return false;
+    }
+    return true;
+}
+
+// Random terrains: a height field of 6 x 6 float vertices 2 m apart, each quad two triangles, given to the
+// horizon as tiles (a quad's four corners with its slab over both triangles, or each triangle alone). Every
+// sampled point of every box the horizon hides has its segment from the eye meet a triangle grown by 1e-6 m,
+// and the tiles hide more than the same polygons given as polygon occluders.
+TEST(RuntimeHorizonProperty, TilesHideOnlyWhatSegmentsToTheSurfaceMeet) {
+    std::mt19937 rng(20261205u);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    const bool ci = test::in_ci();
+    uint64_t hidden = 0, hidden_as_polygons = 0, points = 0, queries = 0, tiles_added = 0;
+    for (int world = 0; world < (ci ? 40 : 200); ++world) {
+        const int n = 6;
+        const double step = 2.0, x0 = -5.0 + 10.0 * u(rng), z0 = -5.0 + 10.0 * u(rng);
+        std::vector<double> height(size_t(n * n));
+        for (double& y : height) y = double(float(3.0 * u(rng)));
+        const auto vertex = [&](int i, int k, double out[3]) {
+            out[0] = double(float(x0 + step * i));
+            out[1] = height[size_t(k * n + i)];
+            out[2] = double(float(z0 + step * k));
+        };
+        struct Tri {
+            double v[3][3];
+        };
+        std::vector<Tri> tris;
+        std::vector<test::TestPolygon> tiles;
+        // A tile of corners (in order, counter-clockwise seen from above): its plane through the corners'
+        // mean with the normal of Newell's method, its slab the corners' largest distance, plus 1 um.
+        const auto add_tile = [&](const std::vector<const double*>& corners) {
+            double nn[3] = {0, 0, 0}, g[3] = {0, 0, 0};
+            const size_t m = corners.size();
+            for (size_t q = 0; q < m; ++q) {
+                const double* p0 = corners[q];
+                const double* p1 = corners[(q + 1) % m];
+                nn[0] += (p0[1] - p1[1]) * (p0[2] + p1[2]);
+                nn[1] += (p0[2] - p1[2]) * (p0[0] + p1[0]);
+                nn[2] += (p0[0] - p1[0]) * (p0[1] + p1[1]);
+                for (int k = 0; k < 3; ++k) g[k] += p0[k] / double(m);
+            }
+            const double len = std::sqrt(nn[0] * nn[0] + nn[1] * nn[1] + nn[2] * nn[2]);
+            test::TestPolygon t;
+            for (int k = 0; k < 3; ++k) t.plane[k] = float(nn[k] / len);
+            const double fn[3] = {t.plane[0], t.plane[1], t.plane[2]};
+            const double fl = std::sqrt(fn[0] * fn[0] + fn[1] * fn[1] + fn[2] * fn[2]);
+            const double o = (fn[0] * g[0] + fn[1] * g[1] + fn[2] * g[2]) / fl;
+            double thick = 0.0;
+            for (const double* c : corners) {
+                thick = std::max(thick, std::abs((fn[0] * c[0] + fn[1] * c[1] + fn[2] * c[2]) / fl - o));
+                for (int k = 0; k < 3; ++k) t.corners.push_back(float(c[k]));
+            }
+            t.plane[3] = float(o * fl);
+            t.plane[4] = float((thick + 1e-6) * fl);
+            tiles.push_back(t);
+        };
+        for (int k = 0; k + 1 < n; ++k)
+            for (int i = 0; i + 1 < n; ++i) {
+                double p00[3], p10[3], p01[3], p11[3];
+                vertex(i, k, p00);
+                vertex(i + 1, k, p10);
+                vertex(i, k + 1, p01);
+                vertex(i + 1, k + 1, p11);
+                Tri t1, t2;  // split along p00 - p11; counter-clockwise seen from above (+y)
+                std::copy_n(p00, 3, t1.v[0]);
+                std::copy_n(p01, 3, t1.v[1]);
+                std::copy_n(p11, 3, t1.v[2]);
+                std::copy_n(p00, 3, t2.v[0]);
+                std::copy_n(p11, 3, t2.v[1]);
+                std::copy_n(p10, 3, t2.v[2]);
+                tris.push_back(t1);
+                tris.push_back(t2);
+                if (rng() % 2)
+                    add_tile({p00, p01, p11, p10});
+                else {
+                    add_tile({p00, p01, p11});
+                    add_tile({p00, p11, p10});
+                }
+            }
+        const float eye[3] = {float(x0 + 10.0 * u(rng) - 2.0), float(4.0 + 6.0 * u(rng)),
+                              float(z0 + 10.0 * u(rng) - 2.0)};
+        const int columns = world % 2 == 0 ? 64 : 512;
+        Horizon h(columns, 1 << 18), as_polygons(columns, 1 << 18);
+        h.frame(eye, {}, tiles, true);
+        as_polygons.frame(eye, {}, tiles, false);
+        tiles_added += uint64_t(h.added());
+        for (int q = 0; q < 200; ++q) {
+            const double c[3] = {x0 - 4.0 + 18.0 * u(rng), -3.0 + 5.0 * u(rng), z0 - 4.0 + 18.0 * u(rng)};
+            const double half = 0.1 + 0.6 * u(rng);
+            const Box qb = box(float(c[0] - half), float(c[1] - half), float(c[2] - half), float(c[0] + half),
+                               float(c[1] + half), float(c[2] + half));
+            ++queries;
+            hidden_as_polygons += as_polygons.hidden(qb);
+            if (!h.hidden(qb)) continue;
+            ++hidden;
+            for (int s = 0; s < 64; ++s) {
+                double p[3];
+                sample_point(qb, s, rng, p);
+                ++points;
+                const bool met = std::any_of(tris.begin(), tris.end(), [&](const Tri& t) {
+                    return segment_meets_triangle(eye, p, t.v[0], t.v[1], t.v[2], 1e-6);
+                });
+                ASSERT_TRUE(met) << "world " << world << " box " << q << " point " << s;
+            }
+        }
+    }
+    std::printf(
+        "tiles: %llu of %llu boxes hidden (%llu points checked; as polygon occluders %llu), %llu tiles\n",
+        (unsigned long long)hidden, (unsigned long long)queries, (unsigned long long)points,
+        (unsigned long long)hidden_as_polygons, (unsigned long long)tiles_added);
+    EXPECT_GT(hidden, queries / 10);
+    EXPECT_GT(hidden, hidden_as_polygons);
 }
 
 // Random boxes, panels and slanted polygons, random eyes, query boxes behind them, at several column counts:
