@@ -2481,6 +2481,8 @@ uint32_t pvsr_culler_begin_cell(pvsr_culler* c, const pvsr_level* l, uint32_t ce
 #define HZ_FRONT 4  /* lines a column's test keeps reached at once */
 #define HZ_PASSES 3 /* walks of a column's pieces a test makes at most */
 #define HZ_DENT 1e-6 /* relative: the deepest dent a tile's directions may have */
+#define HZ_CANDIDATES 256 /* pieces a node's test takes at most */
+#define HZ_STACK 64       /* nodes a test keeps to try */
 
 static double hz_min(double a, double b) {
     return b < a ? b : a;
@@ -2488,16 +2490,18 @@ static double hz_min(double a, double b) {
 static double hz_max(double a, double b) {
     return a < b ? b : a;
 }
+/* Columns a side frame: the request clamped to [PVSR_HORIZON_MIN_COLUMNS, PVSR_HORIZON_MAX_COLUMNS] and
+ * rounded down to a power of two (the columns are the leaves of a binary tree). */
 static int hz_columns(int columns) {
-    return columns < PVSR_HORIZON_MIN_COLUMNS   ? PVSR_HORIZON_MIN_COLUMNS
-           : columns > PVSR_HORIZON_MAX_COLUMNS ? PVSR_HORIZON_MAX_COLUMNS
-                                                : columns;
+    int c = PVSR_HORIZON_MIN_COLUMNS;
+    while (c * 2 <= columns && c * 2 <= PVSR_HORIZON_MAX_COLUMNS) c *= 2;
+    return c;
 }
 
 size_t pvsr_horizon_memory_bytes(int columns, size_t max_pieces) {
     const size_t c = (size_t)hz_columns(columns);
     if (max_pieces > HZ_MAX_PIECES) max_pieces = HZ_MAX_PIECES;
-    return 2 * max_pieces * sizeof(pvsr_horizon_piece) + (4 * c + 1) * sizeof(uint32_t);
+    return 2 * max_pieces * sizeof(pvsr_horizon_piece) + (8 * c + 1) * sizeof(uint32_t);
 }
 
 int pvsr_horizon_init(pvsr_horizon* h, int columns, size_t max_pieces, void* memory, size_t memory_bytes) {
@@ -2657,6 +2661,66 @@ static int hz_tile_directions(int fr, const double (*pts)[3], int n, double* u, 
     return changes <= 2 ? m : 0;
 }
 
+/* The piece of a face over columns [k, k + w) of frame fr, as node `node` of the frame's tree: the trapezoid
+ * between the chords of its boundaries at the two sides, each end shrunk for rounding and by `extra` (the
+ * dents in it), with the deepest point of the plane n . x = c over it. 1 when it was added. */
+static int hz_emit(pvsr_horizon* h, int fr, uint32_t node, int k, int w, const double* pu, const double* pv,
+                   int m, const double n[3], double c, int p, int hx, double s, double extra) {
+    const int cols = h->columns;
+    const double u0 = -1.0 + 2.0 * k / cols, u1 = -1.0 + 2.0 * (k + w) / cols;
+    double lo0, hi0, lo1, hi1, r0, r1, l0, h0, l1, h1;
+    if (!hz_span(pu, pv, m, u0, &lo0, &hi0) || !hz_span(pu, pv, m, u1, &lo1, &hi1)) return 0;
+    r0 = HZ_ROUND * (1.0 + fabs(lo0) + fabs(hi0)) + extra;
+    r1 = HZ_ROUND * (1.0 + fabs(lo1) + fabs(hi1)) + extra;
+    l0 = lo0 + r0;
+    h0 = hi0 - r0;
+    l1 = lo1 + r1;
+    h1 = hi1 - r1;
+    if (h0 >= l0 && h1 >= l1 && (h0 > l0 || h1 > l1)) {
+        /* The deepest point over the trapezoid: 1 / depth is linear in (u, v), so it is least at a corner. */
+        const double g0 = (n[p] * s + n[hx] * u0) / c, g1 = (n[p] * s + n[hx] * u1) / c, gv = n[1] / c;
+        const double g = hz_min(hz_min(g0 + gv * l0, g0 + gv * h0), hz_min(g1 + gv * l1, g1 + gv * h1));
+        if (g > 0.0 && isfinite(g)) {
+            if (h->count < h->capacity) {
+                pvsr_horizon_piece* pc = &h->pieces[h->count++];
+                pc->lo[0] = l0;
+                pc->lo[1] = l1;
+                pc->hi[0] = h0;
+                pc->hi[1] = h1;
+                pc->depth = (1.0 / g) * (1.0 + HZ_DEPTH);
+                pc->plane[0] = n[p] * s / c;
+                pc->plane[1] = n[hx] / c;
+                pc->plane[2] = gv;
+                pc->column = (uint32_t)(fr * 2 * cols) + node;
+                pc->reach = 0.0f;
+                return 1;
+            }
+            ++h->dropped;
+        }
+    }
+    return 0;
+}
+
+/* The pieces of a face over the run of columns [k0, k1]: the largest aligned blocks of the tree that tile it
+ * (node (cols + k) >> L holds columns [k, k + 2^L) when k is a multiple of 2^L). With `single`, the run is
+ * one column with bends inside, given `extra` to shrink. */
+static int hz_run(pvsr_horizon* h, int fr, int k0, int k1, const double* pu, const double* pv, int m,
+                  const double n[3], double c, int p, int hx, double s, const double* extra, int single) {
+    const int cols = h->columns;
+    int added = 0;
+    if (single) return hz_emit(h, fr, (uint32_t)(cols + k0), k0, 1, pu, pv, m, n, c, p, hx, s, *extra);
+    while (k0 <= k1) {
+        int w = 1, level = 0;
+        while ((k0 & (2 * w - 1)) == 0 && k0 + 2 * w - 1 <= k1 && 2 * w <= cols) {
+            w *= 2;
+            ++level;
+        }
+        added |= hz_emit(h, fr, (uint32_t)(cols + k0) >> level, k0, w, pu, pv, m, n, c, p, hx, s, 0.0);
+        k0 += w;
+    }
+    return added;
+}
+
 /* Adds the pieces of a face: the directions of polygon a (and of polygon b too, when given) meet an occluder
  * by the plane n . x = c (x less the eye; c / (n . direction) > 0 towards it), in every frame. Returns
  * whether it added one. */
@@ -2666,9 +2730,8 @@ static int hz_add_face(pvsr_horizon* h, const double (*a)[3], int na, const doub
     int fr, added = 0;
     for (fr = 0; fr < 4; ++fr) {
         double pu[HZ_MAX_VERTS], pv[HZ_MAX_VERTS], umin = HUGE_VAL, umax = -HUGE_VAL, margin, s, k0d, k1d;
-        double lo0, hi0, lo1, hi1;
         double dent[HZ_MAX_VERTS];
-        int m = 0, i, k, k0, k1, p, hx, ok0, dents = 0;
+        int m = 0, i, k0, k1, p, hx, dents = 0;
         if (tile != NULL && (m = hz_tile_directions(fr, tile, nt, pu, pv, dent)) >= 3) {
             for (i = 0; i < m; ++i) dents |= dent[i] > 0.0;
         } else if ((m = hz_project(fr, a, na, pu, pv)) < 3)
@@ -2692,52 +2755,38 @@ static int hz_add_face(pvsr_horizon* h, const double (*a)[3], int na, const doub
         k0 = k0d < 0.0 ? 0 : (int)k0d;
         k1 = k1d > (double)(cols - 1) ? cols - 1 : (int)k1d;
         hz_frame(fr, &p, &hx, &s);
-        ok0 = hz_span(pu, pv, m, -1.0 + 2.0 * k0 / cols, &lo0, &hi0);
-        for (k = k0; k <= k1; ++k) {
-            const double u0 = -1.0 + 2.0 * k / cols, u1 = -1.0 + 2.0 * (k + 1) / cols;
-            const int ok1 = hz_span(pu, pv, m, u1, &lo1, &hi1);
-            if (ok0 && ok1) {
-                /* The trapezoid between the chords of the lower (convex) and upper (concave) boundaries at
-                 * the column's sides lies in the face's directions; each end shrunk for rounding. */
-                double r0 = HZ_ROUND * (1.0 + fabs(lo0) + fabs(hi0)),
-                       r1 = HZ_ROUND * (1.0 + fabs(lo1) + fabs(hi1));
-                double l0, h0, l1, h1;
-                if (dents) /* the dents of the corners in this column: the chords may pass outside by them */
-                    for (i = 0; i < m; ++i)
-                        if (dent[i] > 0.0 && pu[i] >= u0 && pu[i] <= u1) {
-                            r0 += dent[i];
-                            r1 += dent[i];
-                        }
-                l0 = lo0 + r0;
-                h0 = hi0 - r0;
-                l1 = lo1 + r1;
-                h1 = hi1 - r1;
-                if (h0 >= l0 && h1 >= l1 && (h0 > l0 || h1 > l1)) {
-                    /* The deepest point over the trapezoid: 1 / depth is linear in (u, v), so it is least at
-                     * a corner. */
-                    const double g0 = (n[p] * s + n[hx] * u0) / c, g1 = (n[p] * s + n[hx] * u1) / c;
-                    const double gv = n[1] / c;
-                    const double g =
-                        hz_min(hz_min(g0 + gv * l0, g0 + gv * h0), hz_min(g1 + gv * l1, g1 + gv * h1));
-                    if (g > 0.0 && isfinite(g)) {
-                        if (h->count < h->capacity) {
-                            pvsr_horizon_piece* pc = &h->pieces[h->count++];
-                            pc->lo[0] = l0;
-                            pc->lo[1] = l1;
-                            pc->hi[0] = h0;
-                            pc->hi[1] = h1;
-                            pc->depth = (1.0 / g) * (1.0 + HZ_DEPTH);
-                            pc->column = (uint32_t)(fr * cols + k);
-                            pc->reach = 0.0f;
-                            added = 1;
-                        } else
-                            ++h->dropped;
-                    }
-                }
+        {
+            /* Where the face's boundaries bend: its corners' positions in columns (x = k + f: in column k
+             * at fraction f of it), sorted. Between them both boundaries are straight. */
+            double bend[HZ_MAX_VERTS];
+            int nb_ = 0, q, rs = k0;
+            for (i = 0; i < m; ++i) {
+                const double x = (pu[i] + 1.0) * 0.5 * cols;
+                int at;
+                if (!(x > (double)k0) || !(x < (double)(k1 + 1))) continue;
+                for (at = nb_; at > 0 && bend[at - 1] > x; --at) bend[at] = bend[at - 1];
+                bend[at] = x;
+                ++nb_;
             }
-            ok0 = ok1;
-            lo0 = lo1;
-            hi0 = hi1;
+            /* Runs of whole columns with no bend inside go to the tree as the largest aligned blocks; a
+             * column with a bend inside gets its own piece (the chords of the bent boundaries, less the
+             * dents of the corners in it). */
+            for (q = 0; q < nb_; ++q) {
+                const int kb = (int)floor(bend[q]);
+                if (rs <= kb - 1) added |= hz_run(h, fr, rs, kb - 1, pu, pv, m, n, c, p, hx, s, NULL, 0);
+                if (bend[q] > (double)kb && rs <= kb) { /* inside column kb */
+                    double extra = 0.0;
+                    if (dents)
+                        for (i = 0; i < m; ++i) {
+                            const double xi = (pu[i] + 1.0) * 0.5 * cols;
+                            if (dent[i] > 0.0 && xi >= (double)kb && xi <= (double)(kb + 1)) extra += dent[i];
+                        }
+                    added |= hz_run(h, fr, kb, kb, pu, pv, m, n, c, p, hx, s, &extra, 1);
+                    rs = kb + 1;
+                } else if (rs < kb)
+                    rs = kb;
+            }
+            if (rs <= k1) added |= hz_run(h, fr, rs, k1, pu, pv, m, n, c, p, hx, s, NULL, 0);
         }
     }
     return added;
@@ -2947,7 +2996,7 @@ static void hz_reach(pvsr_horizon_piece* run, uint32_t len) {
 }
 
 void pvsr_horizon_end(pvsr_horizon* h) {
-    const uint32_t n = h != NULL ? 4u * (uint32_t)h->columns : 0u;
+    const uint32_t n = h != NULL ? 8u * (uint32_t)h->columns : 0u; /* nodes: 2 * columns a frame */
     uint32_t j, at = 0;
     size_t i;
     /* Once: the sorts take the unsorted pieces as their scratch. */
@@ -2977,7 +3026,121 @@ void pvsr_horizon_end(pvsr_horizon* h) {
     h->ready = 1;
 }
 
+/* A piece on the path of a test down the tree, with its node's first side and width in u. */
+typedef struct hz_ref {
+    const pvsr_horizon_piece* piece;
+    double u0, per_width; /* per_width: 1 / the node's width in u */
+} hz_ref;
+
+/* Appends to refs the pieces of frame fr's node that reach v_min somewhere in it (up to HZ_CANDIDATES in
+ * all); returns the new count. */
+static int hz_gather(const pvsr_horizon* h, int fr, uint32_t node, double v_min, hz_ref* refs, int n) {
+    const int cols = h->columns;
+    uint32_t level = 0, x, lo_e = h->first[(uint32_t)(fr * 2 * cols) + node],
+             hi_e = h->first[(uint32_t)(fr * 2 * cols) + node + 1], end = hi_e;
+    int w, k;
+    double u0, width;
+    for (x = node; x > 1; x >>= 1) ++level;
+    w = cols >> level;
+    k = (int)(node - (1u << level)) * w;
+    u0 = -1.0 + 2.0 * k / cols;
+    width = 2.0 * w / cols;
+    while (lo_e < end) { /* the first piece whose reach is not below v_min: those before it lie below */
+        const uint32_t mid = lo_e + (end - lo_e) / 2;
+        if ((double)h->sorted[mid].reach < v_min)
+            lo_e = mid + 1;
+        else
+            end = mid;
+    }
+    for (; lo_e < hi_e && n < HZ_CANDIDATES; ++lo_e) {
+        const pvsr_horizon_piece* pc = &h->sorted[lo_e];
+        if (pc->hi[0] < v_min && pc->hi[1] < v_min) continue;
+        refs[n].piece = pc;
+        refs[n].u0 = u0;
+        refs[n].per_width = 1.0 / width;
+        ++n;
+    }
+    return n;
+}
+
+/* Is [a, b] x [v_min, v_max] covered by the pieces of refs[0 .. n) (a node's and its ancestors', whose
+ * columns hold [a, b]) that lie wholly before d_lo there? Each piece's chords are taken at a and b; the
+ * candidates, sorted by their bottom on [a, b], are chained from v_min as docs/ALGORITHMS.md#runtime-horizon
+ * says: a chain that holds at a and at b holds between them, every chord being linear. */
+static int hz_covered(const hz_ref* refs, int n, double a, double b, double d_lo, double v_min,
+                      double v_max) {
+    const double goal = v_max + HZ_ROUND * (1.0 + fabs(v_max));
+    double la[HZ_CANDIDATES], lb[HZ_CANDIDATES], ha[HZ_CANDIDATES], hb[HZ_CANDIDATES], key[HZ_CANDIDATES];
+    double sa[HZ_FRONT], sb[HZ_FRONT], top = v_min;
+    uint16_t order[HZ_CANDIDATES]; /* the candidates by key */
+    int nc = 0, ns = 1, covered = 0, pass, again, i, o, r;
+    for (r = 0; r < n; ++r) {
+        const pvsr_horizon_piece* pc = refs[r].piece;
+        const double ta = hz_min(1.0, hz_max(0.0, (a - refs[r].u0) * refs[r].per_width));
+        const double tb = hz_min(1.0, hz_max(ta, (b - refs[r].u0) * refs[r].per_width));
+        const double qa = pc->hi[0] + (pc->hi[1] - pc->hi[0]) * ta,
+                     qb = pc->hi[0] + (pc->hi[1] - pc->hi[0]) * tb;
+        double pa, pb, kk;
+        int at;
+        if (qa < v_min && qb < v_min) continue; /* below the box here */
+        pa = pc->lo[0] + (pc->lo[1] - pc->lo[0]) * ta;
+        pb = pc->lo[0] + (pc->lo[1] - pc->lo[0]) * tb;
+        if (!(d_lo > pc->depth)) { /* deeper than the box somewhere in its node: over [a, b] alone? */
+            const double* g = pc->plane;
+            const double ga = g[0] + g[1] * a, gb = g[0] + g[1] * b;
+            const double gmin =
+                hz_min(hz_min(ga + g[2] * pa, ga + g[2] * qa), hz_min(gb + g[2] * pb, gb + g[2] * qb));
+            if (!(gmin > 0.0) || !(d_lo * gmin > 1.0 + HZ_DEPTH))
+                continue; /* d_lo > (1 / gmin)(1 + HZ_DEPTH) */
+        }
+        kk = hz_min(pa, pb);
+        la[nc] = pa;
+        lb[nc] = pb;
+        ha[nc] = qa;
+        hb[nc] = qb;
+        key[nc] = kk;
+        for (at = nc; at > 0 && key[order[at - 1]] > kk; --at) order[at] = order[at - 1];
+        order[at] = (uint16_t)nc;
+        ++nc;
+    }
+    sa[0] = sb[0] = v_min;
+    /* Walks again (up to HZ_PASSES in all) when a piece was passed over before a line that it would have met
+     * was reached. */
+    for (pass = 0, again = 1; pass < HZ_PASSES && again && !covered; ++pass) {
+        int passed_over = 0;
+        again = 0;
+        for (o = 0; o < nc && !covered; ++o) {
+            const int e = order[o];
+            int usable = 0, m;
+            if (key[e] > top + HZ_TOUCH * (1.0 + fabs(top))) break; /* a gap under every line */
+            for (i = 0; i < ns && !usable; ++i)
+                usable = la[e] <= sa[i] + HZ_TOUCH * (1.0 + fabs(sa[i])) &&
+                         lb[e] <= sb[i] + HZ_TOUCH * (1.0 + fabs(sb[i]));
+            if (!usable) {
+                passed_over = 1;
+                continue;
+            }
+            if (ha[e] > goal && hb[e] > goal) covered = 1;
+            for (i = 0; i < ns && usable; ++i) usable = !(sa[i] >= ha[e] && sb[i] >= hb[e]);
+            if (!usable) continue;       /* no higher than a line already reached */
+            for (i = m = 0; i < ns; ++i) /* keep the lines it does not pass at both ends */
+                if (!(ha[e] >= sa[i] && hb[e] >= sb[i])) {
+                    sa[m] = sa[i];
+                    sb[m++] = sb[i];
+                }
+            if (m == HZ_FRONT) --m; /* full: the newest line replaces the last */
+            sa[m] = ha[e];
+            sb[m] = hb[e];
+            ns = m + 1;
+            top = hz_max(top, hz_max(ha[e], hb[e]));
+            again |= passed_over;
+        }
+    }
+    return covered;
+}
+
 int pvsr_horizon_is_hidden(const pvsr_horizon* h, const float box[6]) {
+    hz_ref path[HZ_CANDIDATES];
     double lo[3], hi[3];
     int fr, a;
     if (h == NULL || !h->ok || !h->eye_ok || !h->ready || box == NULL) return 0;
@@ -2987,7 +3150,9 @@ int pvsr_horizon_is_hidden(const pvsr_horizon* h, const float box[6]) {
         hi[a] = (double)box[3 + a] - h->eye[a];
     }
     for (fr = 0; fr < 4; ++fr) {
-        int p, hx, k, k0, k1;
+        const int cols = h->columns;
+        int p, hx, k0, k1, depth = 0, n_path = 0, path_len[HZ_STACK];
+        uint32_t x, y, t, stack[HZ_STACK];
         double s, d_lo, d_hi, h_lo, h_hi, near_h, u_min, u_max, v_min, v_max;
         hz_frame(fr, &p, &hx, &s);
         d_lo = s > 0.0 ? lo[p] : -hi[p];
@@ -3004,75 +3169,43 @@ int pvsr_horizon_is_hidden(const pvsr_horizon* h, const float box[6]) {
         u_max = hz_min(1.0, hz_max(h_hi / d_lo, h_hi / d_hi));
         v_min = hz_min(lo[1] / d_lo, lo[1] / d_hi);
         v_max = hz_max(hi[1] / d_lo, hi[1] / d_hi);
-        k0 = (int)floor((u_min + 1.0) * 0.5 * h->columns);
-        k1 = (int)floor((u_max + 1.0) * 0.5 * h->columns);
+        k0 = (int)floor((u_min + 1.0) * 0.5 * cols);
+        k1 = (int)floor((u_max + 1.0) * 0.5 * cols);
         if (k0 < 0) k0 = 0;
-        if (k1 > h->columns - 1) k1 = h->columns - 1;
-        for (k = k0; k <= k1; ++k) {
-            /* In this column the box's directions lie in [a, b] x [v_min, v_max], a and b at the fractions
-             * ta, tb of its width. Covered up to a frontier of lines (their values at a and at b), each
-             * reached from v_min by a chain of pieces that lie wholly before the box, taken by their bottom:
-             * a chain that holds at a and at b holds between them, every chord being linear. */
-            const uint32_t col = (uint32_t)(fr * h->columns + k);
-            const double u0 = -1.0 + 2.0 * k / h->columns, w = 2.0 / h->columns;
-            const double goal = v_max + HZ_ROUND * (1.0 + fabs(v_max));
-            double ta = (u_min - u0) / w, tb = (u_max - u0) / w, sa[HZ_FRONT], sb[HZ_FRONT], top = v_min;
-            uint32_t e, start;
-            int covered = 0, ns = 1, i, pass, again;
-            ta = hz_min(1.0, hz_max(0.0, ta));
-            tb = hz_min(1.0, hz_max(ta, tb));
-            sa[0] = sb[0] = v_min;
-            { /* the first piece whose reach is not below v_min: those before it all lie below the box */
-                uint32_t lo_e = h->first[col], hi_e = h->first[col + 1];
-                while (lo_e < hi_e) {
-                    const uint32_t mid = lo_e + (hi_e - lo_e) / 2;
-                    if ((double)h->sorted[mid].reach < v_min)
-                        lo_e = mid + 1;
-                    else
-                        hi_e = mid;
-                }
-                start = lo_e;
-            }
-            /* Walks again (up to HZ_PASSES in all) when a piece was passed over before a line that it would
-             * have met was reached. */
-            for (pass = 0, again = 1; pass < HZ_PASSES && again && !covered; ++pass) {
-                int passed_over = 0;
-                again = 0;
-                for (e = start; e < h->first[col + 1] && !covered; ++e) {
-                    const pvsr_horizon_piece* pc = &h->sorted[e];
-                    double la, lb, ha, hb;
-                    int usable = 0, m;
-                    if (!(d_lo > pc->depth)) continue;
-                    if (hz_bottom(pc) > top + HZ_TOUCH * (1.0 + fabs(top)))
-                        break; /* a gap under every line */
-                    la = pc->lo[0] + (pc->lo[1] - pc->lo[0]) * ta;
-                    lb = pc->lo[0] + (pc->lo[1] - pc->lo[0]) * tb;
-                    for (i = 0; i < ns && !usable; ++i)
-                        usable = la <= sa[i] + HZ_TOUCH * (1.0 + fabs(sa[i])) &&
-                                 lb <= sb[i] + HZ_TOUCH * (1.0 + fabs(sb[i]));
-                    if (!usable) {
-                        passed_over = 1;
-                        continue;
-                    }
-                    ha = pc->hi[0] + (pc->hi[1] - pc->hi[0]) * ta;
-                    hb = pc->hi[0] + (pc->hi[1] - pc->hi[0]) * tb;
-                    if (ha > goal && hb > goal) covered = 1;
-                    for (i = 0; i < ns && usable; ++i) usable = !(sa[i] >= ha && sb[i] >= hb);
-                    if (!usable) continue;       /* no higher than a line already reached */
-                    for (i = m = 0; i < ns; ++i) /* keep the lines it does not pass at both ends */
-                        if (!(ha >= sa[i] && hb >= sb[i])) {
-                            sa[m] = sa[i];
-                            sb[m++] = sb[i];
-                        }
-                    if (m == HZ_FRONT) --m; /* full: the newest line replaces the last */
-                    sa[m] = ha;
-                    sb[m] = hb;
-                    ns = m + 1;
-                    top = hz_max(top, hz_max(ha, hb));
-                    again |= passed_over;
+        if (k1 > cols - 1) k1 = cols - 1;
+        if (k0 > k1) k0 = k1;
+        /* From the smallest node holding columns k0 .. k1 down: a node whose pieces (with its ancestors')
+         * cover the box's part of its columns settles them; else its children that the box reaches are
+         * tried; a column (a leaf) left uncovered leaves the box visible. */
+        x = (uint32_t)(cols + k0);
+        y = (uint32_t)(cols + k1);
+        while (x != y) {
+            x >>= 1;
+            y >>= 1;
+        }
+        /* The pieces of the path: the ancestors' first, then each node's own after its ancestors'. */
+        for (t = x >> 1; t >= 1; t >>= 1) n_path = hz_gather(h, fr, t, v_min, path, n_path);
+        stack[depth] = x;
+        path_len[depth++] = n_path;
+        while (depth > 0) {
+            const uint32_t node = stack[--depth];
+            uint32_t level = 0;
+            int w, k, c, n;
+            for (t = node; t > 1; t >>= 1) ++level;
+            w = cols >> level;
+            k = (int)(node - (1u << level)) * w;
+            n = hz_gather(h, fr, node, v_min, path, path_len[depth]);
+            if (hz_covered(path, n, hz_max(u_min, -1.0 + 2.0 * k / cols),
+                           hz_min(u_max, -1.0 + 2.0 * (k + w) / cols), d_lo, v_min, v_max))
+                continue;
+            if (w == 1 || depth + 2 > HZ_STACK) return 0;
+            for (c = 1; c >= 0; --c) { /* the children the box's columns reach */
+                const int ck = k + c * (w / 2);
+                if (ck <= k1 && ck + w / 2 - 1 >= k0) {
+                    stack[depth] = 2 * node + (uint32_t)c;
+                    path_len[depth++] = n;
                 }
             }
-            if (!covered) return 0;
         }
     }
     return 1;

@@ -329,16 +329,16 @@ int pvsr_culler_classify(const pvsr_culler* culler, const float box[6]);
 
 /* ---- The occlusion horizon: MANY occluders fused exactly where they meet, whatever their planes
  * (docs/ALGORITHMS.md#runtime-horizon). Around the eye, four side frames (+x, -x, +z, -z; y is up) are cut
- * into `columns` columns of directions each; every occluder face adds, per column it spans whole, the
- * trapezoid of directions between its chords at the column's two sides (within its directions there), with
- * its depth. A box is hidden when in every column its directions fall in, the pieces lying wholly before it
- * cover its whole height range: an exact union in v, along chords at any slope, so a wall on a floor,
- * terrain polygons sharing an edge and a roof over walls hide together what none hides alone. The occluders
- * are those of the culler: solid boxes (faces towards the eye), panels (a box flat along one axis) and
- * polygon occluders, in any order and any number up to the pieces the memory holds (past them, the rest are
- * dropped: fewer pieces only cull less). "Hidden" means, as for the culler's faces test, that every segment
- * from the eye to the box meets an occluder or passes within about 1e-9 of the coordinates' scale of one. No
- * allocation: the pieces live in memory the caller gives.
+ * into `columns` columns of directions each (a power of two: the leaves of a binary tree); every occluder
+ * face adds, over the columns it spans whole, trapezoids of directions between its chords (within its
+ * directions there), each over a node of the tree, with its depth. A box is hidden when in every column its
+ * directions fall in, the pieces lying wholly before it cover its whole height range: an exact union in v,
+ * along chords at any slope, so a wall on a floor, terrain polygons sharing an edge and a roof over walls
+ * hide together what none hides alone. The occluders are those of the culler: solid boxes (faces towards the
+ * eye), panels (a box flat along one axis) and polygon occluders, in any order and any number up to the
+ * pieces the memory holds (past them, the rest are dropped: fewer pieces only cull less). "Hidden" means, as
+ * for the culler's faces test, that every segment from the eye to the box meets an occluder or passes within
+ * about 1e-9 of the coordinates' scale of one. No allocation: the pieces live in memory the caller gives.
  *
  *   static pvsr_horizon h;
  *   pvsr_horizon_init(&h, 256, 65536, memory, pvsr_horizon_memory_bytes(256, 65536));
@@ -356,8 +356,10 @@ typedef struct pvsr_horizon_piece {
     /* Every direction (u, v) of the column with v between the line through (u0, lo[0]) and (u1, lo[1]) and
      * the line through (u0, hi[0]) and (u1, hi[1]), u0 and u1 the column's sides, meets an occluder by depth
      * (a trapezoid; docs/ALGORITHMS.md#runtime-horizon). */
-    double lo[2], hi[2], depth;
-    uint32_t column; /* frame * columns + column */
+    double lo[2], hi[2];
+    double depth;    /* at least the depth of the occluder anywhere over the trapezoid */
+    double plane[3]; /* 1 / the occluder's depth at direction (u, v): plane[0] + plane[1] u + plane[2] v */
+    uint32_t column; /* frame * 2 * columns + the node of the frame's tree (docs/ALGORITHMS.md) */
     float reach; /* after pvsr_horizon_end(): at least the highest top of this piece and those before it */
 } pvsr_horizon_piece;
 
@@ -373,7 +375,7 @@ typedef struct pvsr_horizon {
 } pvsr_horizon;
 
 /* Bytes of memory a horizon of that many columns a frame and pieces needs (columns clamped to
- * [PVSR_HORIZON_MIN_COLUMNS, PVSR_HORIZON_MAX_COLUMNS]). */
+ * [PVSR_HORIZON_MIN_COLUMNS, PVSR_HORIZON_MAX_COLUMNS] and rounded down to a power of two). */
 size_t pvsr_horizon_memory_bytes(int columns, size_t max_pieces);
 /* Sets the horizon up on `memory` (8-byte aligned, at least pvsr_horizon_memory_bytes() bytes, kept while
  * the horizon is used). 1, or 0 when the memory is missing or too small: then it hides nothing. */

@@ -1040,16 +1040,36 @@ TEST(RuntimeHorizon, TilesMeetingAtACreaseHideWhatTheirSlabsLeaveOpen) {
     }
 }
 
+// A wall receding in depth across the view: its pieces over wide blocks of columns reach deeper than a box
+// behind its near part, so the test takes each piece's depth over the box's own directions. A box past the
+// wall's far end in depth, or beside its end, stays visible.
+TEST(RuntimeHorizon, ARecedingWallHidesWhatLiesBehindItsNearPart) {
+    const double r = std::sqrt(0.5);
+    test::TestPolygon wall;  // the plane z - x = 12
+    const float plane[5] = {float(-r), 0.0f, float(r), float(12.0 * r), 0.0f};
+    std::copy_n(plane, 5, wall.plane);
+    wall.corners = {-10, -5, 2, 10, -5, 22, 10, 10, 22, -10, 10, 2};  // counter-clockwise seen from +n
+    for (const int columns : {16, 256}) {
+        Horizon h(columns);
+        h.frame(kEye, {}, {wall}, true);
+        ASSERT_EQ(h.added(), 1);
+        EXPECT_TRUE(h.hidden(box(-3, 0, 11, -2, 1, 12))) << columns << " columns";
+        EXPECT_FALSE(h.hidden(box(-3, 0, 8, -2, 1, 8.5f))) << "before the wall";
+        EXPECT_FALSE(h.hidden(box(16, 0, 30, 17, 1, 31))) << "past its end";
+    }
+}
+
 // A wall behind a nearer, larger wall adds pieces the nearer one covers: the end drops them, and what the
 // walls hide stays hidden; a box between the walls stays hidden by the nearer one only.
 TEST(RuntimeHorizon, PiecesBehindNearerOnesAreDropped) {
-    Horizon h(64);
-    h.frame(kEye, {box(-6, -1, 5, 6, 5, 5.5f), box(-3, 0, 9, 3, 3, 9.5f)});
+    Horizon h(64);  // the two walls' faces span the same directions across, so the same columns
+    h.frame(kEye, {box(-2, -1, 5, 2, 5, 5.5f), box(-4, 0, 10, 4, 3, 10.5f)});
     EXPECT_GT(h.raw().count, h.raw().kept);
     EXPECT_GT(h.raw().kept, 0u);
     EXPECT_TRUE(h.hidden(box(-1, 0.5f, 12, 1, 1.5f, 13)));
     EXPECT_TRUE(h.hidden(box(-1, 0.5f, 7, 1, 1.5f, 8)));
     EXPECT_FALSE(h.hidden(box(-1, 0.5f, 2, 1, 1.5f, 3)));
+    EXPECT_FALSE(h.hidden(box(-1, 12, 12, 1, 13, 13)));  // over both
 }
 
 // Memory missing, misaligned or short: nothing is hidden. A box holding the eye, a panel seen edge-on, a box
@@ -1093,10 +1113,11 @@ TEST(RuntimeHorizon, AwkwardInputs) {
     EXPECT_EQ(pvsr_horizon_add_box(&h, wall), 0);
     pvsr_horizon_end(&h);
     EXPECT_EQ(pvsr_horizon_is_hidden(&h, target), 0);
-    Horizon tiny(64, 1);  // room for one piece: the wall's others are dropped
-    tiny.frame(kEye, {kWall});
+    Horizon tiny(64, 1);  // room for one piece: the left half of the wall fills it, the right is dropped
+    tiny.frame(kEye, {box(-5, 0, 5, 0, 4, 5.5f), box(0, 0, 5, 5, 4, 5.5f)});
     EXPECT_GT(tiny.raw().dropped, 0u);
-    EXPECT_FALSE(tiny.hidden(box(-1, 0.5f, 8, 1, 1.5f, 9)));
+    EXPECT_TRUE(tiny.hidden(box(-2, 0.5f, 8, -1, 1.5f, 9)));
+    EXPECT_FALSE(tiny.hidden(box(1, 0.5f, 8, 2, 1.5f, 9)));
 }
 
 // Does the segment from e to x meet the triangle (a, b, c) grown by `grow` metres in its plane? Exact enough
