@@ -3032,14 +3032,16 @@ typedef struct hz_ref {
     double u0, per_width; /* per_width: 1 / the node's width in u */
 } hz_ref;
 
-/* Appends to refs the pieces of frame fr's node that reach v_min somewhere in it (up to HZ_CANDIDATES in
- * all); returns the new count. */
-static int hz_gather(const pvsr_horizon* h, int fr, uint32_t node, double v_min, hz_ref* refs, int n) {
+/* Appends to refs the pieces of frame fr's node that reach v_min and start below v_max somewhere in it (up
+ * to HZ_CANDIDATES in all); returns the new count. */
+static int hz_gather(const pvsr_horizon* h, int fr, uint32_t node, double v_min, double v_max, hz_ref* refs,
+                     int n) {
     const int cols = h->columns;
     uint32_t level = 0, x, lo_e = h->first[(uint32_t)(fr * 2 * cols) + node],
              hi_e = h->first[(uint32_t)(fr * 2 * cols) + node + 1], end = hi_e;
     int w, k;
     double u0, width;
+    const double above = v_max + HZ_TOUCH * (1.0 + fabs(v_max));
     for (x = node; x > 1; x >>= 1) ++level;
     w = cols >> level;
     k = (int)(node - (1u << level)) * w;
@@ -3054,6 +3056,7 @@ static int hz_gather(const pvsr_horizon* h, int fr, uint32_t node, double v_min,
     }
     for (; lo_e < hi_e && n < HZ_CANDIDATES; ++lo_e) {
         const pvsr_horizon_piece* pc = &h->sorted[lo_e];
+        if (hz_bottom(pc) > above) break; /* it and the rest lie above the box: a chain never needs them */
         if (pc->hi[0] < v_min && pc->hi[1] < v_min) continue;
         refs[n].piece = pc;
         refs[n].u0 = u0;
@@ -3184,7 +3187,7 @@ int pvsr_horizon_is_hidden(const pvsr_horizon* h, const float box[6]) {
             y >>= 1;
         }
         /* The pieces of the path: the ancestors' first, then each node's own after its ancestors'. */
-        for (t = x >> 1; t >= 1; t >>= 1) n_path = hz_gather(h, fr, t, v_min, path, n_path);
+        for (t = x >> 1; t >= 1; t >>= 1) n_path = hz_gather(h, fr, t, v_min, v_max, path, n_path);
         stack[depth] = x;
         path_len[depth++] = n_path;
         while (depth > 0) {
@@ -3194,8 +3197,10 @@ int pvsr_horizon_is_hidden(const pvsr_horizon* h, const float box[6]) {
             for (t = node; t > 1; t >>= 1) ++level;
             w = cols >> level;
             k = (int)(node - (1u << level)) * w;
-            n = hz_gather(h, fr, node, v_min, path, path_len[depth]);
-            if (hz_covered(path, n, hz_max(u_min, -1.0 + 2.0 * k / cols),
+            n = hz_gather(h, fr, node, v_min, v_max, path, path_len[depth]);
+            /* A node of none of its own pieces is left to its children (what covers it covers them). */
+            if ((n > path_len[depth] || w == 1) &&
+                hz_covered(path, n, hz_max(u_min, -1.0 + 2.0 * k / cols),
                            hz_min(u_max, -1.0 + 2.0 * (k + w) / cols), d_lo, v_min, v_max))
                 continue;
             if (w == 1 || depth + 2 > HZ_STACK) return 0;
