@@ -9,7 +9,7 @@
 //                                    [--parts 0|1] [--eye-polygons P] [--horizon N]
 //                                    [--horizon-faces M] [--horizon-cell-eyes K]
 //                                    [--horizon-exact-polygons 0|1|2] [--horizon-list-cells B]
-//                                    [--horizon-record FILE]
+//                                    [--horizon-record FILE] [--horizon-min-uses U]
 //
 // Frames: F (default 200) eyes, each uniform in the eye space of a cell drawn at random (seed S, default 1):
 // a cell uniform among the level's cells, then a point uniform in its box kept when pvsr_in_eye_space() holds
@@ -43,7 +43,8 @@
 // M of their faces), culls what it hides of the drawn objects (with --parts 1, also an object all of whose
 // part boxes it hides; --horizon-cell-eyes K: the horizon takes only the occluders whose pieces proved
 // some cull from K other eyes of the frame's cell, drawn there as the frame's is, `horizon_used_mean` of
-// them: what a list of occluders per cell would hold; --horizon-list-cells B: those K eyes drawn in the
+// them: what a list of occluders per cell would hold (--horizon-min-uses U: only those used in U proofs or
+// more); --horizon-list-cells B: those K eyes drawn in the
 // block of B x B x B grid positions holding the cell instead, the frame's PVS tried from each: a list per
 // block; --horizon-exact-polygons 1: the slanted panels go to
 // the runtime's horizon as found, only rounded to floats, not in their runtime form: what polygons that
@@ -299,7 +300,7 @@ int main(int argc, char** argv) {
         "                   [--eye-polygons P] [--horizon N] [--horizon-faces M]\n"
         "                   [--horizon-cell-eyes K]\n"
         "                   [--horizon-exact-polygons 0|1|2] [--horizon-list-cells B]\n"
-        "                   [--horizon-record FILE]\n";
+        "                   [--horizon-record FILE] [--horizon-min-uses U]\n";
     if (argc < 3 || argv[1][0] == '-' || argv[2][0] == '-') {
         std::fputs(usage, stderr);
         return 2;
@@ -309,8 +310,7 @@ int main(int argc, char** argv) {
     uint32_t n_frames = 200, n_check = 0, n_rays = 4096, max_occluders = PVSR_CULLER_MAX_OCCLUDERS,
              n_split = 8;
     uint32_t eye_occluders = 0, eye_polygons = 0, horizon_columns = 0, horizon_faces = 0,
-             horizon_cell_eyes = 0,
-             horizon_exact_polygons = 0, horizon_list_cells = 1;
+             horizon_cell_eyes = 0, horizon_exact_polygons = 0, horizon_list_cells = 1, horizon_min_uses = 1;
     bool parts_drawn = false, eye_panels = false, eye_select_first_hit = false;
     std::string bake_path, horizon_record;
     int resolution = 32;
@@ -323,7 +323,7 @@ int main(int argc, char** argv) {
                 k != "--eye-occluders" && k != "--parts" && k != "--eye-panels" && k != "--eye-select" &&
                 k != "--eye-polygons" && k != "--horizon" && k != "--horizon-faces" &&
                 k != "--horizon-cell-eyes" && k != "--horizon-exact-polygons" &&
-                k != "--horizon-list-cells" && k != "--horizon-record")
+                k != "--horizon-list-cells" && k != "--horizon-record" && k != "--horizon-min-uses")
                 bad_option("unknown option " + k + " (run it with no arguments for the usage)");
             if (a + 1 >= argc) bad_option(k + " wants a value");
             const char* v = argv[++a];
@@ -349,6 +349,8 @@ int main(int argc, char** argv) {
                 eye_polygons = uint32_t(parse_count("--eye-polygons", v, 0, PVSR_CULLER_MAX_POLYGONS));
             else if (k == "--horizon")
                 horizon_columns = uint32_t(parse_count("--horizon", v, 0, 65536));
+            else if (k == "--horizon-min-uses")
+                horizon_min_uses = uint32_t(parse_count("--horizon-min-uses", v, 1, 255));
             else if (k == "--horizon-list-cells")
                 horizon_list_cells = uint32_t(parse_count("--horizon-list-cells", v, 1, 64));
             else if (k == "--horizon-exact-polygons")
@@ -656,6 +658,7 @@ int main(int argc, char** argv) {
                                 for (const pvs::Aabb& part : parts[o]) horizon.hides(part, &used);
                         }
                     }
+                    for (uint8_t& u : used) u = u >= horizon_min_uses ? 1 : 0;  // --horizon-min-uses
                     f.horizon_used = uint32_t(std::count(used.begin(), used.end(), uint8_t(1)));
                 }
                 std::vector<uint8_t> nearest;  // --horizon-faces: the occluders of the nearest faces

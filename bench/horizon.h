@@ -125,8 +125,8 @@ public:
         return out;
     }
 
-    // Is every point of the box behind the horizon (see above)? With `used`, marks the occluders whose
-    // pieces the proof took (when it holds).
+    // Is every point of the box behind the horizon (see above)? With `used`, counts (to 255) for the
+    // occluders whose pieces the proof took (when it holds).
     bool hides(const Aabb& box, std::vector<uint8_t>* used = nullptr) const {
         taken_.clear();
         const glm::dvec3 lo = glm::dvec3(box.min) - eye_, hi = glm::dvec3(box.max) - eye_;
@@ -166,7 +166,7 @@ public:
             }
         }
         if (used)
-            for (const uint32_t k : taken_) (*used)[k] = 1;
+            for (const uint32_t k : taken_) (*used)[k] = uint8_t(std::min(255, (*used)[k] + 1));
         return true;
     }
 
