@@ -2523,7 +2523,7 @@ void pvsr_horizon_begin(pvsr_horizon* h, const float eye[3]) {
     int a;
     if (h == NULL) return;
     h->eye_ok = h->ready = 0;
-    h->count = h->dropped = h->kept = 0;
+    h->count = h->dropped = 0;
     h->scale = 0.0;
     if (!h->ok || eye == NULL) return;
     for (a = 0; a < 3; ++a) {
@@ -2665,11 +2665,26 @@ static int hz_tile_directions(int fr, const double (*pts)[3], int n, double* u, 
  * between the chords of its boundaries at the two sides, each end shrunk for rounding and by `extra` (the
  * dents in it), with the deepest point of the plane n . x = c over it. 1 when it was added. */
 static int hz_emit(pvsr_horizon* h, int fr, uint32_t node, int k, int w, const double* pu, const double* pv,
-                   int m, const double n[3], double c, int p, int hx, double s, double extra) {
+                   int m, const double n[3], double c, int p, int hx, double s, double extra,
+                   double side[3]) {
     const int cols = h->columns;
     const double u0 = -1.0 + 2.0 * k / cols, u1 = -1.0 + 2.0 * (k + w) / cols;
     double lo0, hi0, lo1, hi1, r0, r1, l0, h0, l1, h1;
-    if (!hz_span(pu, pv, m, u0, &lo0, &hi0) || !hz_span(pu, pv, m, u1, &lo1, &hi1)) return 0;
+    int ok1;
+    /* side: the span at u0 when side[2] says it is known (1 found, -1 missed), set to the span at u1 */
+    if (side[2] == 0.0) side[2] = hz_span(pu, pv, m, u0, &side[0], &side[1]) ? 1.0 : -1.0;
+    lo0 = side[0];
+    hi0 = side[1];
+    ok1 = hz_span(pu, pv, m, u1, &lo1, &hi1);
+    if (side[2] < 0.0 || !ok1) {
+        side[0] = lo1;
+        side[1] = hi1;
+        side[2] = ok1 ? 1.0 : -1.0;
+        return 0;
+    }
+    side[0] = lo1;
+    side[1] = hi1;
+    side[2] = 1.0;
     r0 = HZ_ROUND * (1.0 + fabs(lo0) + fabs(hi0)) + extra;
     r1 = HZ_ROUND * (1.0 + fabs(lo1) + fabs(hi1)) + extra;
     l0 = lo0 + r0;
@@ -2708,14 +2723,15 @@ static int hz_run(pvsr_horizon* h, int fr, int k0, int k1, const double* pu, con
                   const double n[3], double c, int p, int hx, double s, const double* extra, int single) {
     const int cols = h->columns;
     int added = 0;
-    if (single) return hz_emit(h, fr, (uint32_t)(cols + k0), k0, 1, pu, pv, m, n, c, p, hx, s, *extra);
+    double side[3] = {0.0, 0.0, 0.0}; /* the span at the next block's first side, once known */
+    if (single) return hz_emit(h, fr, (uint32_t)(cols + k0), k0, 1, pu, pv, m, n, c, p, hx, s, *extra, side);
     while (k0 <= k1) {
         int w = 1, level = 0;
         while ((k0 & (2 * w - 1)) == 0 && k0 + 2 * w - 1 <= k1 && 2 * w <= cols) {
             w *= 2;
             ++level;
         }
-        added |= hz_emit(h, fr, (uint32_t)(cols + k0) >> level, k0, w, pu, pv, m, n, c, p, hx, s, 0.0);
+        added |= hz_emit(h, fr, (uint32_t)(cols + k0) >> level, k0, w, pu, pv, m, n, c, p, hx, s, 0.0, side);
         k0 += w;
     }
     return added;
@@ -2909,17 +2925,16 @@ static double hz_bottom(const pvsr_horizon_piece* a) {
     return hz_min(a->lo[0], a->lo[1]);
 }
 
-/* The orders of a column's pieces: by depth (then bottom), or by bottom (then top, then depth). */
-static int hz_before(const pvsr_horizon_piece* a, const pvsr_horizon_piece* b, int by_depth) {
+/* The order of a node's pieces: by bottom, then top, then depth. */
+static int hz_before(const pvsr_horizon_piece* a, const pvsr_horizon_piece* b) {
     const double ka = hz_bottom(a), kb = hz_bottom(b);
-    if (by_depth && a->depth != b->depth) return a->depth < b->depth;
     if (ka != kb) return ka < kb;
     if (a->hi[0] + a->hi[1] != b->hi[0] + b->hi[1]) return a->hi[0] + a->hi[1] < b->hi[0] + b->hi[1];
     return a->depth < b->depth;
 }
 
-/* Sorts run[0 .. len) in that order: runs of 16 by insertion, then merged bottom-up through tmp. */
-static void hz_sort(pvsr_horizon_piece* run, pvsr_horizon_piece* tmp, uint32_t len, int by_depth) {
+/* Sorts run[0 .. len) by hz_before: runs of 16 by insertion, then merged bottom-up through tmp. */
+static void hz_sort(pvsr_horizon_piece* run, pvsr_horizon_piece* tmp, uint32_t len) {
     uint32_t a, b, width;
     pvsr_horizon_piece *src = run, *dst = tmp, *swap;
     for (a = 0; a < len; a += 16) {
@@ -2927,7 +2942,7 @@ static void hz_sort(pvsr_horizon_piece* run, pvsr_horizon_piece* tmp, uint32_t l
         for (b = a + 1; b < end; ++b) {
             const pvsr_horizon_piece x = run[b];
             uint32_t c = b;
-            for (; c > a && hz_before(&x, &run[c - 1], by_depth); --c) run[c] = run[c - 1];
+            for (; c > a && hz_before(&x, &run[c - 1]); --c) run[c] = run[c - 1];
             run[c] = x;
         }
     }
@@ -2935,7 +2950,7 @@ static void hz_sort(pvsr_horizon_piece* run, pvsr_horizon_piece* tmp, uint32_t l
         for (a = 0; a < len; a += 2 * width) {
             const uint32_t mid = a + width < len ? a + width : len, end = a + 2 * width < len ? a + 2 * width : len;
             uint32_t i = a, k = mid, o = a;
-            while (i < mid && k < end) dst[o++] = hz_before(&src[k], &src[i], by_depth) ? src[k++] : src[i++];
+            while (i < mid && k < end) dst[o++] = hz_before(&src[k], &src[i]) ? src[k++] : src[i++];
             while (i < mid) dst[o++] = src[i++];
             while (k < end) dst[o++] = src[k++];
         }
@@ -2944,41 +2959,6 @@ static void hz_sort(pvsr_horizon_piece* run, pvsr_horizon_piece* tmp, uint32_t l
         dst = swap;
     }
     if (src != run) memcpy(run, src, (size_t)len * sizeof(pvsr_horizon_piece));
-}
-
-/* Drops from a column's run (sorted by depth) every piece whose range in v lies in one interval of the union
- * of the nearer kept pieces' inner ranges (iv: scratch for up to len intervals, as lo, hi pairs): it lies in
- * their union, so every box it could hide they hide. Returns the pieces kept, at the front in depth order. */
-static uint32_t hz_prune(pvsr_horizon_piece* run, uint32_t len, double* iv) {
-    uint32_t i, m = 0, ni = 0;
-    for (i = 0; i < len; ++i) {
-        const pvsr_horizon_piece* pc = &run[i];
-        const double outer_lo = hz_bottom(pc), outer_hi = hz_max(pc->hi[0], pc->hi[1]);
-        const double inner_lo = hz_max(pc->lo[0], pc->lo[1]), inner_hi = hz_min(pc->hi[0], pc->hi[1]);
-        uint32_t a = 0, b;
-        double lo = inner_lo, hi = inner_hi;
-        while (a < ni && iv[2 * a + 1] < outer_lo) ++a;
-        if (a < ni && iv[2 * a] <= outer_lo && iv[2 * a + 1] >= outer_hi) continue; /* inside the union */
-        run[m++] = *pc;
-        if (!(inner_hi > inner_lo)) continue;
-        /* Unite [inner_lo, inner_hi] with the intervals it meets. */
-        for (a = 0; a < ni && iv[2 * a + 1] < lo; ++a) {
-        }
-        for (b = a; b < ni && iv[2 * b] <= hi; ++b) {
-            lo = hz_min(lo, iv[2 * b]);
-            hi = hz_max(hi, iv[2 * b + 1]);
-        }
-        if (b == a) { /* none met: make room at a */
-            memmove(iv + 2 * (a + 1), iv + 2 * a, (size_t)(ni - a) * 2 * sizeof(double));
-            ++ni;
-        } else if (b > a + 1) { /* several met: they become one */
-            memmove(iv + 2 * (a + 1), iv + 2 * b, (size_t)(ni - b) * 2 * sizeof(double));
-            ni -= b - a - 1;
-        }
-        iv[2 * a] = lo;
-        iv[2 * a + 1] = hi;
-    }
-    return m;
 }
 
 /* Each piece's reach: the highest top of it and the pieces before it in the run, rounded up to a float, so
@@ -2997,7 +2977,7 @@ static void hz_reach(pvsr_horizon_piece* run, uint32_t len) {
 
 void pvsr_horizon_end(pvsr_horizon* h) {
     const uint32_t n = h != NULL ? 8u * (uint32_t)h->columns : 0u; /* nodes: 2 * columns a frame */
-    uint32_t j, at = 0;
+    uint32_t j;
     size_t i;
     /* Once: the sorts take the unsorted pieces as their scratch. */
     if (h == NULL || !h->ok || !h->eye_ok || h->ready) return;
@@ -3007,22 +2987,12 @@ void pvsr_horizon_end(pvsr_horizon* h) {
     for (i = 0; i < h->count; ++i) h->sorted[h->first[h->pieces[i].column]++] = h->pieces[i];
     for (j = n; j > 0; --j) h->first[j] = h->first[j - 1];
     h->first[0] = 0;
-    /* Each column: nearest first, the pieces the nearer ones cover dropped, the rest by bottom; the runs then
-     * close up, so that first[] bounds them. */
-    for (j = 0; j < n; ++j) {
+    for (j = 0; j < n; ++j) { /* each node's pieces by bottom, with their reach */
         const uint32_t start = h->first[j], len = h->first[j + 1] - start;
         pvsr_horizon_piece* run = h->sorted + start;
-        uint32_t kept;
-        hz_sort(run, h->pieces + start, len, 1);
-        kept = hz_prune(run, len, (double*)(void*)(h->pieces + start));
-        hz_sort(run, h->pieces + start, kept, 0);
-        hz_reach(run, kept);
-        if (at != start) memmove(h->sorted + at, run, (size_t)kept * sizeof(pvsr_horizon_piece));
-        h->first[j] = at;
-        at += kept;
+        hz_sort(run, h->pieces + start, len);
+        hz_reach(run, len);
     }
-    h->first[n] = at;
-    h->kept = at;
     h->ready = 1;
 }
 
@@ -3040,13 +3010,14 @@ static int hz_gather(const pvsr_horizon* h, int fr, uint32_t node, double v_min,
     uint32_t level = 0, x, lo_e = h->first[(uint32_t)(fr * 2 * cols) + node],
              hi_e = h->first[(uint32_t)(fr * 2 * cols) + node + 1], end = hi_e;
     int w, k;
-    double u0, width;
-    const double above = v_max + HZ_TOUCH * (1.0 + fabs(v_max));
+    double u0, per_width, above;
+    if (lo_e == hi_e) return n;
+    above = v_max + HZ_TOUCH * (1.0 + fabs(v_max));
     for (x = node; x > 1; x >>= 1) ++level;
     w = cols >> level;
     k = (int)(node - (1u << level)) * w;
     u0 = -1.0 + 2.0 * k / cols;
-    width = 2.0 * w / cols;
+    per_width = cols / (2.0 * w);
     while (lo_e < end) { /* the first piece whose reach is not below v_min: those before it lie below */
         const uint32_t mid = lo_e + (end - lo_e) / 2;
         if ((double)h->sorted[mid].reach < v_min)
@@ -3060,7 +3031,7 @@ static int hz_gather(const pvsr_horizon* h, int fr, uint32_t node, double v_min,
         if (pc->hi[0] < v_min && pc->hi[1] < v_min) continue;
         refs[n].piece = pc;
         refs[n].u0 = u0;
-        refs[n].per_width = 1.0 / width;
+        refs[n].per_width = per_width;
         ++n;
     }
     return n;

@@ -368,7 +368,6 @@ typedef struct pvsr_horizon {
     int ok, eye_ok, ready, columns;
     double eye[3], scale;
     size_t capacity, count, dropped; /* pieces the memory holds, added this frame, dropped for want of room */
-    size_t kept;                     /* after pvsr_horizon_end(): pieces not covered by nearer ones */
     pvsr_horizon_piece *pieces, *sorted;
     uint32_t*
         first; /* after pvsr_horizon_end(): column j's pieces are sorted[first[j]] .. sorted[first[j+1]) */

