@@ -332,13 +332,14 @@ int pvsr_culler_classify(const pvsr_culler* culler, const float box[6]);
  * into `columns` columns of directions each (a power of two: the leaves of a binary tree); every occluder
  * face adds, over the columns it spans whole, trapezoids of directions between its chords (within its
  * directions there), each over a node of the tree, with its depth. A box is hidden when in every column its
- * directions fall in, the pieces lying wholly before it cover its whole height range: an exact union in v,
- * along chords at any slope, so a wall on a floor, terrain polygons sharing an edge and a roof over walls
- * hide together what none hides alone. The occluders are those of the culler: solid boxes (faces towards the
- * eye), panels (a box flat along one axis) and polygon occluders, in any order and any number up to the
- * pieces the memory holds (past them, the rest are dropped: fewer pieces only cull less). "Hidden" means, as
- * for the culler's faces test, that every segment from the eye to the box meets an occluder or passes within
- * about 1e-9 of the coordinates' scale of one. No allocation: the pieces live in memory the caller gives.
+ * directions fall in, the pieces over it lying wholly before it cover its whole height range: an exact union
+ * in v, along chords at any slope, so a wall on a floor, terrain polygons sharing an edge and a roof over
+ * walls hide together what none hides alone. The occluders are those of the culler: solid boxes (faces
+ * towards the eye), panels (a box flat along one axis) and polygon occluders, in any order and any number up
+ * to the pieces the memory holds (past them, the rest are dropped: fewer pieces only cull less). "Hidden"
+ * means, as for the culler's faces test, that every segment from the eye to the box meets an occluder or
+ * passes within about 1e-9 of the coordinates' scale of one. No allocation: the pieces live in memory the
+ * caller gives.
  *
  *   static pvsr_horizon h;
  *   pvsr_horizon_init(&h, 256, 65536, memory, pvsr_horizon_memory_bytes(256, 65536));
@@ -353,9 +354,9 @@ int pvsr_culler_classify(const pvsr_culler* culler, const float box[6]);
 #define PVSR_HORIZON_MAX_CORNERS 32 /* of a polygon occluder given to the horizon */
 
 typedef struct pvsr_horizon_piece {
-    /* Every direction (u, v) of the column with v between the line through (u0, lo[0]) and (u1, lo[1]) and
-     * the line through (u0, hi[0]) and (u1, hi[1]), u0 and u1 the column's sides, meets an occluder by depth
-     * (a trapezoid; docs/ALGORITHMS.md#runtime-horizon). */
+    /* Every direction (u, v) of its node's columns with v between the line through (u0, lo[0]) and
+     * (u1, lo[1]) and the line through (u0, hi[0]) and (u1, hi[1]), u0 and u1 the sides of those columns,
+     * meets an occluder (a trapezoid; docs/ALGORITHMS.md#runtime-horizon). */
     double lo[2], hi[2];
     double depth;    /* at least the depth of the occluder anywhere over the trapezoid */
     double plane[3]; /* 1 / the occluder's depth at direction (u, v): plane[0] + plane[1] u + plane[2] v */
@@ -370,7 +371,7 @@ typedef struct pvsr_horizon {
     size_t capacity, count, dropped; /* pieces the memory holds, added this frame, dropped for want of room */
     pvsr_horizon_piece *pieces, *sorted;
     uint32_t*
-        first; /* after pvsr_horizon_end(): column j's pieces are sorted[first[j]] .. sorted[first[j+1]) */
+        first; /* after pvsr_horizon_end(): node j's pieces are sorted[first[j]] .. sorted[first[j+1]) */
 } pvsr_horizon;
 
 /* Bytes of memory a horizon of that many columns a frame and pieces needs (columns clamped to
@@ -396,7 +397,7 @@ int pvsr_horizon_add_polygon(pvsr_horizon* h, const float plane[5], const float*
  * pvsr_horizon_add_polygon()'s promise, and any polygon of a subset of its corners keeps that one. 1 when
  * added. */
 int pvsr_horizon_add_tile(pvsr_horizon* h, const float plane[5], const float* corners, uint32_t count);
-/* Ends the frame's occluders (sorts the pieces by column); then boxes may be tested, and nothing more is
+/* Ends the frame's occluders (sorts the pieces by node); then boxes may be tested, and nothing more is
  * added until the next pvsr_horizon_begin() (the adds return 0). */
 void pvsr_horizon_end(pvsr_horizon* h);
 /* 1 only if the box (float[6]) is certainly hidden from this frame's eye by the horizon. */
