@@ -7,7 +7,7 @@
 //                                    [--eye-occluders E] [--eye-panels 0|1] [--eye-select
 //                                    solid-angle|first-hit]
 //                                    [--parts 0|1] [--eye-polygons P] [--horizon N]
-//                                    [--horizon-faces M] [--horizon-cell-eyes K]
+//                                    [--horizon-cell-eyes K]
 //                                    [--horizon-exact-polygons 0|1|2] [--horizon-list-cells B]
 //                                    [--horizon-record FILE] [--horizon-min-uses U]
 //
@@ -38,20 +38,18 @@
 // is also culled when the culler hides each of its M (--split, default 8) part boxes (its triangles split at
 // the median of their centres on the longest axis, recursively): a finer test of the object. Both make the
 // bench walk the PVS itself (the timing is then not the runtime's). --horizon N (with --bake): after the
-// culler, an occlusion horizon of N columns a side frame around the eye (bench/horizon.h), built from every
-// proven box of the bake and every panel and slanted panel of the world (--horizon-faces M: only the nearest
-// M of their faces), culls what it hides of the drawn objects (with --parts 1, also an object all of whose
-// part boxes it hides; --horizon-cell-eyes K: the horizon takes only the occluders whose pieces proved
-// some cull from K other eyes of the frame's cell, drawn there as the frame's is, `horizon_used_mean` of
-// them: what a list of occluders per cell would hold (--horizon-min-uses U: only those used in U proofs or
-// more); --horizon-list-cells B: those K eyes drawn in the
-// block of B x B x B grid positions holding the cell instead, the frame's PVS tried from each: a list per
-// block; --horizon-exact-polygons 1: the slanted panels go to
-// the runtime's horizon as found, only rounded to floats, not in their runtime form: what polygons that
-// tile would give, with no float margin; 2: as tiles, pvsr_horizon_add_tile, occluders/slanted_panels.h's
-// runtime_tiles); its time per frame is `horizon_us_median`,
-// apart from the frame's (it is no runtime's code); --horizon-record FILE: each frame's eye, the occluders
-// given to the runtime's horizon and the bounds it tests, written for bench_horizon to replay (format there).
+// culler, the runtime's occlusion horizon (pvsr_horizon) of N columns a side frame around the eye, built from
+// every proven box of the bake and every panel and slanted panel of the world, culls what it hides of the
+// drawn objects (with --parts 1, also an object all of whose part boxes it hides); its time per frame is
+// `horizon_us_median`, apart from the frame's. --horizon-cell-eyes K: the horizon takes only the occluders
+// whose pieces proved some cull (pvsr_horizon_hidden_by, every occluder given, tagged) from K other eyes of
+// the frame's cell, drawn there as the frame's is, `horizon_used_mean` of them: what a list of occluders per
+// cell would hold (--horizon-min-uses U: only those used in U proofs or more; --horizon-list-cells B: those K
+// eyes drawn in the block of B x B x B grid positions holding the cell instead, the frame's PVS tried from
+// each: a list per block). --horizon-exact-polygons 1: the slanted panels go to the horizon as found, only
+// rounded to floats (no float margin); 2: as tiles (pvsr_horizon_add_tile, occluders/slanted_panels.h's
+// runtime_tiles); 0: in the culler's polygon form. --horizon-record FILE: each frame's eye, the occluders
+// given to the horizon and the bounds it tests, written for bench_horizon to replay (format there).
 // Where the drawn but invisible triangles go (the "waste" object, of the full frames' drawn objects no ray
 // reached): split_culls: the culler hides each of the object's M part boxes; given_boxes: each of
 // kOracleRays segments from the eye to random points of the object meets one of the frame's occluder boxes
@@ -63,7 +61,6 @@
 // solid cannot cull its bounds).
 #include "bench/aimed_rays.h"
 #include "bench/bench_util.h"
-#include "bench/horizon.h"
 #include "core/context.h"
 #include "core/error.h"
 #include "core/random.h"
@@ -297,7 +294,7 @@ int main(int argc, char** argv) {
         "usage: bench_frame WORLD.glb LEVEL.pvsr [--frames F] [--check-frames C] [--rays R] [--occluders K]\n"
         "                   [--resolution N] [--seed S] [--split M] [--bake BAKE.h5] [--eye-occluders E]\n"
         "                   [--eye-panels 0|1] [--eye-select solid-angle|first-hit] [--parts 0|1]\n"
-        "                   [--eye-polygons P] [--horizon N] [--horizon-faces M]\n"
+        "                   [--eye-polygons P] [--horizon N]\n"
         "                   [--horizon-cell-eyes K]\n"
         "                   [--horizon-exact-polygons 0|1|2] [--horizon-list-cells B]\n"
         "                   [--horizon-record FILE] [--horizon-min-uses U]\n";
@@ -309,8 +306,8 @@ int main(int argc, char** argv) {
     const std::string world_path = argv[1], level_path = argv[2];
     uint32_t n_frames = 200, n_check = 0, n_rays = 4096, max_occluders = PVSR_CULLER_MAX_OCCLUDERS,
              n_split = 8;
-    uint32_t eye_occluders = 0, eye_polygons = 0, horizon_columns = 0, horizon_faces = 0,
-             horizon_cell_eyes = 0, horizon_exact_polygons = 0, horizon_list_cells = 1, horizon_min_uses = 1;
+    uint32_t eye_occluders = 0, eye_polygons = 0, horizon_columns = 0, horizon_cell_eyes = 0,
+             horizon_exact_polygons = 0, horizon_list_cells = 1, horizon_min_uses = 1;
     bool parts_drawn = false, eye_panels = false, eye_select_first_hit = false;
     std::string bake_path, horizon_record;
     int resolution = 32;
@@ -321,9 +318,9 @@ int main(int argc, char** argv) {
             if (k != "--frames" && k != "--check-frames" && k != "--rays" && k != "--occluders" &&
                 k != "--resolution" && k != "--seed" && k != "--split" && k != "--bake" &&
                 k != "--eye-occluders" && k != "--parts" && k != "--eye-panels" && k != "--eye-select" &&
-                k != "--eye-polygons" && k != "--horizon" && k != "--horizon-faces" &&
-                k != "--horizon-cell-eyes" && k != "--horizon-exact-polygons" &&
-                k != "--horizon-list-cells" && k != "--horizon-record" && k != "--horizon-min-uses")
+                k != "--eye-polygons" && k != "--horizon" && k != "--horizon-cell-eyes" &&
+                k != "--horizon-exact-polygons" && k != "--horizon-list-cells" && k != "--horizon-record" &&
+                k != "--horizon-min-uses")
                 bad_option("unknown option " + k + " (run it with no arguments for the usage)");
             if (a + 1 >= argc) bad_option(k + " wants a value");
             const char* v = argv[++a];
@@ -357,8 +354,6 @@ int main(int argc, char** argv) {
                 horizon_exact_polygons = uint32_t(parse_count("--horizon-exact-polygons", v, 0, 2));
             else if (k == "--horizon-cell-eyes")
                 horizon_cell_eyes = uint32_t(parse_count("--horizon-cell-eyes", v, 0, 4096));
-            else if (k == "--horizon-faces")
-                horizon_faces = uint32_t(parse_count("--horizon-faces", v, 0, 100'000'000));
             else if (k == "--parts")
                 parts_drawn = parse_count("--parts", v, 0, 1) == 1;
             else if (k == "--eye-panels")
@@ -445,9 +440,6 @@ int main(int argc, char** argv) {
             std::fprintf(stderr, "bench_frame: horizon of %zu boxes, %zu panels, %zu slanted panels\n",
                          horizon_boxes.size(), horizon_panels.size(), horizon_slanted.size());
         }
-        pvs::bench::OcclusionHorizon horizon(int(std::max<uint32_t>(horizon_columns, 1)), horizon_faces);
-        // The runtime's horizon (pvsr_horizon) culls each frame; the one above only chooses the occluders of
-        // --horizon-cell-eyes and --horizon-faces. The slanted panels go to it in their runtime form.
         std::vector<std::optional<pvs::OccluderPolygon>> horizon_polygons;
         for (const pvs::SlantedPanel& sp : horizon_slanted) {
             if (horizon_exact_polygons == 2) {  // tiles: the panels whole (occluders/slanted_panels.h)
@@ -472,10 +464,41 @@ int main(int argc, char** argv) {
         const int runtime_columns = int(std::max<uint32_t>(horizon_columns, 1));
         std::vector<uint64_t> horizon_memory(
             horizon_columns > 0 ? pvsr_horizon_memory_bytes(runtime_columns, kHorizonPieces) / 8 + 1 : 1);
-        pvsr_horizon runtime_horizon;
-        if (horizon_columns > 0 && !pvsr_horizon_init(&runtime_horizon, runtime_columns, kHorizonPieces,
-                                                      horizon_memory.data(), horizon_memory.size() * 8))
+        pvsr_horizon runtime_horizon, select_horizon;  // the frame's; the one that chooses the lists
+        std::vector<uint64_t> select_memory(horizon_memory.size());
+        if (horizon_columns > 0 && (!pvsr_horizon_init(&runtime_horizon, runtime_columns, kHorizonPieces,
+                                                       horizon_memory.data(), horizon_memory.size() * 8) ||
+                                    !pvsr_horizon_init(&select_horizon, runtime_columns, kHorizonPieces,
+                                                       select_memory.data(), select_memory.size() * 8)))
             throw pvs::internal_error("bench_frame: the horizon did not take its memory");
+        // A frame of a horizon at the eye: every occluder (only those `only` marks, when given), each tagged
+        // with its source index (boxes, then panels, then polygons).
+        const auto build_horizon = [&](pvsr_horizon* hz, const float eye[3],
+                                       const std::vector<uint8_t>* only) {
+            pvsr_horizon_begin(hz, eye);
+            uint32_t source = 0;
+            for (const std::vector<pvs::Aabb>* set : {&horizon_boxes, &horizon_panels})
+                for (const pvs::Aabb& b : *set) {
+                    if (!only || (*only)[source]) {
+                        const float fb[6] = {b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z};
+                        pvsr_horizon_set_tag(hz, source);
+                        pvsr_horizon_add_box(hz, fb);
+                    }
+                    ++source;
+                }
+            for (const std::optional<pvs::OccluderPolygon>& q : horizon_polygons) {
+                if (q && (!only || (*only)[source])) {
+                    const float plane[5] = {q->normal.x, q->normal.y, q->normal.z, q->offset, q->thickness};
+                    pvsr_horizon_set_tag(hz, source);
+                    if (q->tile)
+                        pvsr_horizon_add_tile(hz, plane, &q->corners[0].x, uint32_t(q->corners.size()));
+                    else
+                        pvsr_horizon_add_polygon(hz, plane, &q->corners[0].x, uint32_t(q->corners.size()));
+                }
+                ++source;
+            }
+            pvsr_horizon_end(hz);
+        };
         // --eye-polygons: up to P of the bake's polygons with the largest solid angle from the eye (area
         // times the cosine over the squared distance, at the centre), added to the cell's occluders.
         const auto add_eye_polygons = [&](const glm::vec3& eye) {
@@ -648,27 +671,27 @@ int main(int argc, char** argv) {
                             (horizon_list_cells <= 1 && pvsr_find_cell(&level, p.x, p.y, p.z) != int32_t(f.cell)))
                             continue;
                         ++got;
-                        horizon.build(glm::dvec3(p), horizon_boxes, horizon_panels, horizon_slanted);
+                        const float pe[3] = {p.x, p.y, p.z};
+                        build_horizon(&select_horizon, pe, nullptr);
+                        const pvsr_horizon_use_fn count = [](void* user, uint32_t tag) {
+                            uint8_t& u = (*static_cast<std::vector<uint8_t>*>(user))[tag];
+                            u = uint8_t(std::min(255, u + 1));
+                        };
                         for (const uint32_t o : f.listed) {
                             float b[6];
                             pvsr_object_bounds(&level, o, b);
-                            if (!horizon.hides(pvs::Aabb::of({b[0], b[1], b[2]}, {b[3], b[4], b[5]}),
-                                               &used) &&
-                                parts_drawn)
-                                for (const pvs::Aabb& part : parts[o]) horizon.hides(part, &used);
+                            if (!pvsr_horizon_hidden_by(&select_horizon, b, count, &used) && parts_drawn)
+                                for (const pvs::Aabb& part : parts[o]) {
+                                    const float pb[6] = {part.min.x, part.min.y, part.min.z,
+                                                         part.max.x, part.max.y, part.max.z};
+                                    pvsr_horizon_hidden_by(&select_horizon, pb, count, &used);
+                                }
                         }
                     }
                     for (uint8_t& u : used) u = u >= horizon_min_uses ? 1 : 0;  // --horizon-min-uses
                     f.horizon_used = uint32_t(std::count(used.begin(), used.end(), uint8_t(1)));
                 }
-                std::vector<uint8_t> nearest;  // --horizon-faces: the occluders of the nearest faces
-                if (horizon_faces > 0 && cell_eyes == 0) {
-                    horizon.build(glm::dvec3(f.eye), horizon_boxes, horizon_panels, horizon_slanted);
-                    nearest = horizon.sources();
-                }
-                const std::vector<uint8_t>* only = cell_eyes > 0       ? &used
-                                                   : horizon_faces > 0 ? &nearest
-                                                                       : nullptr;
+                const std::vector<uint8_t>* only = cell_eyes > 0 ? &used : nullptr;
                 const float eye[3] = {f.eye.x, f.eye.y, f.eye.z};
                 if (!horizon_record.empty()) {  // the same inputs in the same order as below
                     put(eye, sizeof eye);
@@ -709,30 +732,7 @@ int main(int argc, char** argv) {
                     }
                 }
                 const auto h0 = std::chrono::steady_clock::now();
-                pvsr_horizon_begin(&runtime_horizon, eye);
-                uint32_t source = 0;
-                for (const std::vector<pvs::Aabb>* set : {&horizon_boxes, &horizon_panels})
-                    for (const pvs::Aabb& b : *set) {
-                        if (!only || (*only)[source]) {
-                            const float fb[6] = {b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z};
-                            pvsr_horizon_add_box(&runtime_horizon, fb);
-                        }
-                        ++source;
-                    }
-                for (const std::optional<pvs::OccluderPolygon>& q : horizon_polygons) {
-                    if (q && (!only || (*only)[source])) {
-                        const float plane[5] = {q->normal.x, q->normal.y, q->normal.z, q->offset,
-                                                q->thickness};
-                        if (q->tile)
-                            pvsr_horizon_add_tile(&runtime_horizon, plane, &q->corners[0].x,
-                                                  uint32_t(q->corners.size()));
-                        else
-                            pvsr_horizon_add_polygon(&runtime_horizon, plane, &q->corners[0].x,
-                                                     uint32_t(q->corners.size()));
-                    }
-                    ++source;
-                }
-                pvsr_horizon_end(&runtime_horizon);
+                build_horizon(&runtime_horizon, eye, only);
                 f.horizon_pieces = uint32_t(runtime_horizon.count);
                 std::vector<uint32_t> kept;
                 for (const uint32_t o : f.drawn) {
@@ -1001,7 +1001,6 @@ int main(int argc, char** argv) {
         out["walk_us_median"] = median(walk_us);
         if (horizon_columns > 0) {
             out["horizon_columns"] = horizon_columns;
-            out["horizon_faces"] = horizon_faces;
             out["horizon_cell_eyes"] = horizon_cell_eyes;
             out["horizon_us_median"] = median(horizon_us);
             out["horizon_culled_objects_mean"] = horizon_culled / double(frame_us.size());

@@ -2483,6 +2483,7 @@ uint32_t pvsr_culler_begin_cell(pvsr_culler* c, const pvsr_level* l, uint32_t ce
 #define HZ_DENT 1e-6 /* relative: the deepest dent a tile's directions may have */
 #define HZ_CANDIDATES 256 /* pieces a node's test takes at most */
 #define HZ_STACK 64       /* nodes a test keeps to try */
+#define HZ_USES 1024      /* tags pvsr_horizon_hidden_by reports at most */
 
 static double hz_min(double a, double b) {
     return b < a ? b : a;
@@ -2524,6 +2525,7 @@ void pvsr_horizon_begin(pvsr_horizon* h, const float eye[3]) {
     if (h == NULL) return;
     h->eye_ok = h->ready = 0;
     h->count = h->dropped = 0;
+    h->tag = 0;
     h->scale = 0.0;
     if (!h->ok || eye == NULL) return;
     for (a = 0; a < 3; ++a) {
@@ -2707,6 +2709,7 @@ static int hz_emit(pvsr_horizon* h, int fr, uint32_t node, int k, int w, const d
                 pc->plane[1] = n[hx] / c;
                 pc->plane[2] = gv;
                 pc->column = (uint32_t)(fr * 2 * cols) + node;
+                pc->tag = h->tag;
                 pc->reach = 0.0f;
                 return 1;
             }
@@ -2996,6 +2999,14 @@ void pvsr_horizon_end(pvsr_horizon* h) {
     h->ready = 1;
 }
 
+/* The tags of the pieces of the chains a test found (up to HZ_USES), and scratch for one node's candidates.
+ */
+typedef struct hz_uses {
+    uint32_t tag[HZ_USES];
+    int count;
+    int16_t ref[HZ_CANDIDATES];
+} hz_uses;
+
 /* A piece on the path of a test down the tree, with its node's first side and width in u. */
 typedef struct hz_ref {
     const pvsr_horizon_piece* piece;
@@ -3041,13 +3052,14 @@ static int hz_gather(const pvsr_horizon* h, int fr, uint32_t node, double v_min,
  * columns hold [a, b]) that lie wholly before d_lo there? Each piece's chords are taken at a and b; the
  * candidates, sorted by their bottom on [a, b], are chained from v_min as docs/ALGORITHMS.md#runtime-horizon
  * says: a chain that holds at a and at b holds between them, every chord being linear. */
-static int hz_covered(const hz_ref* refs, int n, double a, double b, double d_lo, double v_min,
-                      double v_max) {
+static int hz_covered(const hz_ref* refs, int n, double a, double b, double d_lo, double v_min, double v_max,
+                      hz_uses* uses) {
     const double goal = v_max + HZ_ROUND * (1.0 + fabs(v_max));
     double la[HZ_CANDIDATES], lb[HZ_CANDIDATES], ha[HZ_CANDIDATES], hb[HZ_CANDIDATES], key[HZ_CANDIDATES];
     double sa[HZ_FRONT], sb[HZ_FRONT], top = v_min;
     uint16_t order[HZ_CANDIDATES]; /* the candidates by key */
-    int nc = 0, ns = 1, covered = 0, pass, again, i, o, r;
+    int16_t from[HZ_CANDIDATES], line[HZ_FRONT]; /* with uses: the chains, back to v_min (-1) */
+    int nc = 0, ns = 1, covered = -1, pass, again, i, o, r;
     for (r = 0; r < n; ++r) {
         const pvsr_horizon_piece* pc = refs[r].piece;
         const double ta = hz_min(1.0, hz_max(0.0, (a - refs[r].u0) * refs[r].per_width));
@@ -3073,47 +3085,67 @@ static int hz_covered(const hz_ref* refs, int n, double a, double b, double d_lo
         ha[nc] = qa;
         hb[nc] = qb;
         key[nc] = kk;
+        from[nc] = (int16_t)r; /* the candidate's ref, until the chains are walked */
         for (at = nc; at > 0 && key[order[at - 1]] > kk; --at) order[at] = order[at - 1];
         order[at] = (uint16_t)nc;
         ++nc;
     }
+    if (uses != NULL) /* keep each candidate's ref apart; from[] then holds where its chain came from */
+        for (i = 0; i < nc; ++i) {
+            uses->ref[i] = from[i];
+            from[i] = -1;
+        }
+    line[0] = -1;
     sa[0] = sb[0] = v_min;
     /* Walks again (up to HZ_PASSES in all) when a piece was passed over before a line that it would have met
      * was reached. */
-    for (pass = 0, again = 1; pass < HZ_PASSES && again && !covered; ++pass) {
+    for (pass = 0, again = 1; pass < HZ_PASSES && again && covered < 0; ++pass) {
         int passed_over = 0;
         again = 0;
-        for (o = 0; o < nc && !covered; ++o) {
+        for (o = 0; o < nc && covered < 0; ++o) {
             const int e = order[o];
-            int usable = 0, m;
+            int usable = 0, m, via = 0;
             if (key[e] > top + HZ_TOUCH * (1.0 + fabs(top))) break; /* a gap under every line */
             for (i = 0; i < ns && !usable; ++i)
-                usable = la[e] <= sa[i] + HZ_TOUCH * (1.0 + fabs(sa[i])) &&
-                         lb[e] <= sb[i] + HZ_TOUCH * (1.0 + fabs(sb[i]));
+                if (la[e] <= sa[i] + HZ_TOUCH * (1.0 + fabs(sa[i])) &&
+                    lb[e] <= sb[i] + HZ_TOUCH * (1.0 + fabs(sb[i]))) {
+                    usable = 1;
+                    via = i;
+                }
             if (!usable) {
                 passed_over = 1;
                 continue;
             }
-            if (ha[e] > goal && hb[e] > goal) covered = 1;
+            if (ha[e] > goal && hb[e] > goal) { /* covered: the chain ends here */
+                covered = e;
+                from[e] = line[via];
+                break;
+            }
             for (i = 0; i < ns && usable; ++i) usable = !(sa[i] >= ha[e] && sb[i] >= hb[e]);
-            if (!usable) continue;       /* no higher than a line already reached */
+            if (!usable) continue; /* no higher than a line already reached */
+            from[e] = line[via];
             for (i = m = 0; i < ns; ++i) /* keep the lines it does not pass at both ends */
                 if (!(ha[e] >= sa[i] && hb[e] >= sb[i])) {
                     sa[m] = sa[i];
-                    sb[m++] = sb[i];
+                    sb[m] = sb[i];
+                    line[m++] = line[i];
                 }
             if (m == HZ_FRONT) --m; /* full: the newest line replaces the last */
             sa[m] = ha[e];
             sb[m] = hb[e];
+            line[m] = (int16_t)e;
             ns = m + 1;
             top = hz_max(top, hz_max(ha[e], hb[e]));
             again |= passed_over;
         }
     }
-    return covered;
+    if (covered >= 0 && uses != NULL) /* the chain's pieces, back from the one that reached v_max */
+        for (i = covered; i >= 0 && uses->count < HZ_USES; i = from[i])
+            uses->tag[uses->count++] = refs[uses->ref[i]].piece->tag;
+    return covered >= 0;
 }
 
-int pvsr_horizon_is_hidden(const pvsr_horizon* h, const float box[6]) {
+static int hz_hidden(const pvsr_horizon* h, const float box[6], hz_uses* uses) {
     hz_ref path[HZ_CANDIDATES];
     double lo[3], hi[3];
     int fr, a;
@@ -3172,7 +3204,7 @@ int pvsr_horizon_is_hidden(const pvsr_horizon* h, const float box[6]) {
             /* A node of none of its own pieces is left to its children (what covers it covers them). */
             if ((n > path_len[depth] || w == 1) &&
                 hz_covered(path, n, hz_max(u_min, -1.0 + 2.0 * k / cols),
-                           hz_min(u_max, -1.0 + 2.0 * (k + w) / cols), d_lo, v_min, v_max))
+                           hz_min(u_max, -1.0 + 2.0 * (k + w) / cols), d_lo, v_min, v_max, uses))
                 continue;
             if (w == 1 || depth + 2 > HZ_STACK) return 0;
             for (c = 1; c >= 0; --c) { /* the children the box's columns reach */
@@ -3185,4 +3217,22 @@ int pvsr_horizon_is_hidden(const pvsr_horizon* h, const float box[6]) {
         }
     }
     return 1;
+}
+
+int pvsr_horizon_is_hidden(const pvsr_horizon* h, const float box[6]) {
+    return hz_hidden(h, box, NULL);
+}
+
+int pvsr_horizon_hidden_by(const pvsr_horizon* h, const float box[6], pvsr_horizon_use_fn use, void* user) {
+    hz_uses uses;
+    int i;
+    uses.count = 0;
+    if (!hz_hidden(h, box, &uses)) return 0;
+    if (use != NULL)
+        for (i = 0; i < uses.count; ++i) use(user, uses.tag[i]);
+    return 1;
+}
+
+void pvsr_horizon_set_tag(pvsr_horizon* h, uint32_t tag) {
+    if (h != NULL) h->tag = tag;
 }

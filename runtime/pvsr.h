@@ -361,6 +361,7 @@ typedef struct pvsr_horizon_piece {
     double depth;    /* at least the depth of the occluder anywhere over the trapezoid */
     double plane[3]; /* 1 / the occluder's depth at direction (u, v): plane[0] + plane[1] u + plane[2] v */
     uint32_t column; /* frame * 2 * columns + the node of the frame's tree (docs/ALGORITHMS.md) */
+    uint32_t tag;    /* the caller's tag of its occluder (pvsr_horizon_set_tag) */
     float reach; /* after pvsr_horizon_end(): at least the highest top of this piece and those before it */
 } pvsr_horizon_piece;
 
@@ -369,6 +370,7 @@ typedef struct pvsr_horizon {
     int ok, eye_ok, ready, columns;
     double eye[3], scale;
     size_t capacity, count, dropped; /* pieces the memory holds, added this frame, dropped for want of room */
+    uint32_t tag;                    /* the tag of the pieces the adds make */
     pvsr_horizon_piece *pieces, *sorted;
     uint32_t*
         first; /* after pvsr_horizon_end(): node j's pieces are sorted[first[j]] .. sorted[first[j+1]) */
@@ -402,6 +404,13 @@ int pvsr_horizon_add_tile(pvsr_horizon* h, const float plane[5], const float* co
 void pvsr_horizon_end(pvsr_horizon* h);
 /* 1 only if the box (float[6]) is certainly hidden from this frame's eye by the horizon. */
 int pvsr_horizon_is_hidden(const pvsr_horizon* h, const float box[6]);
+/* Which occluders hide what: the tag the next adds give their pieces (0 after pvsr_horizon_begin()), and
+ * pvsr_horizon_is_hidden() that, when the box is hidden, calls use(user, tag) for the pieces of the chains
+ * that proved it (a tag may come more than once; up to 1024 calls). For a bake or a tool choosing which
+ * occluders a cell's list should hold. */
+typedef void (*pvsr_horizon_use_fn)(void* user, uint32_t tag);
+void pvsr_horizon_set_tag(pvsr_horizon* h, uint32_t tag);
+int pvsr_horizon_hidden_by(const pvsr_horizon* h, const float box[6], pvsr_horizon_use_fn use, void* user);
 
 /* ---- The file's layout (docs/FORMAT.md, "The runtime file"), for writers and tools. Little-endian.
  * A 64-byte header, then the section table (PVSR_ENTRY_BYTES an entry), then the sections, each at an offset

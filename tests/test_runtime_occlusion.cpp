@@ -940,6 +940,46 @@ TEST(RuntimeHorizon, AFloorAndAWallMeetingAtAJunctionHideWhatNeitherHidesAlone) 
     }
 }
 
+// Which occluders hide what: the floor and the wall of the scene above, tagged, and a far wall nothing needs.
+// A box they hide together reports both tags (and no other); a box over the floor's edge, hidden by the wall
+// alone, reports the wall; a visible box reports nothing. The answers are pvsr_horizon_is_hidden's.
+TEST(RuntimeHorizon, HiddenByReportsTheTagsOfTheOccludersThatHideTheBox) {
+    Horizon h(64);
+    const float eye[3] = {kEye[0], kEye[1], kEye[2]};
+    const float floor_[6] = {-5, 0, 0, 5, 0, 5}, wall[6] = {-5, 0, 5, 5, 4, 5},
+                far_wall[6] = {-20, 0, 30, 20, 9, 31};
+    pvsr_horizon_begin(&h.raw(), eye);
+    pvsr_horizon_set_tag(&h.raw(), 7);
+    pvsr_horizon_add_box(&h.raw(), floor_);
+    pvsr_horizon_set_tag(&h.raw(), 9);
+    pvsr_horizon_add_box(&h.raw(), wall);
+    pvsr_horizon_set_tag(&h.raw(), 11);
+    pvsr_horizon_add_box(&h.raw(), far_wall);
+    pvsr_horizon_end(&h.raw());
+    const auto tags = [&](const float b[6], int* hidden) {
+        std::vector<uint32_t> out;
+        *hidden = pvsr_horizon_hidden_by(
+            &h.raw(), b,
+            [](void* user, uint32_t tag) { static_cast<std::vector<uint32_t>*>(user)->push_back(tag); },
+            &out);
+        std::sort(out.begin(), out.end());
+        out.erase(std::unique(out.begin(), out.end()), out.end());
+        return out;
+    };
+    int hidden = 0;
+    const float together[6] = {-1, -1, 6, 1, 1, 7}, behind_wall[6] = {-1, 2, 6, 1, 3, 7},
+                over[6] = {-1, -1, 6, 1, 4.5f, 7};
+    EXPECT_EQ(tags(together, &hidden), (std::vector<uint32_t>{7, 9}));
+    EXPECT_EQ(hidden, 1);
+    EXPECT_EQ(hidden, pvsr_horizon_is_hidden(&h.raw(), together));
+    EXPECT_EQ(tags(behind_wall, &hidden), (std::vector<uint32_t>{9}));
+    EXPECT_EQ(hidden, 1);
+    EXPECT_TRUE(tags(over, &hidden).empty());
+    EXPECT_EQ(hidden, 0);
+    EXPECT_EQ(pvsr_horizon_is_hidden(&h.raw(), over), 0);
+    EXPECT_EQ(pvsr_horizon_hidden_by(&h.raw(), together, nullptr, nullptr), 1);  // no callback: the answer
+}
+
 // The slope of the culler's test cut in two flat polygons (no slab) that share the edge at z = 4: together
 // they hide the box behind the crest, which neither hides alone (its directions cross both); over the crest,
 // in front and past the side stay visible. (Polygons with a slab meet only where the directions through both
