@@ -3071,11 +3071,14 @@ static int hz_covered(const hz_ref* refs, int n, double a, double b, double d_lo
         if (qa < v_min && qb < v_min) continue; /* below the box here */
         pa = pc->lo[0] + (pc->lo[1] - pc->lo[0]) * ta;
         pb = pc->lo[0] + (pc->lo[1] - pc->lo[0]) * tb;
-        if (!(d_lo > pc->depth)) { /* deeper than the box somewhere in its node: over [a, b] alone? */
+        if (!(d_lo > pc->depth)) {
+            /* Deeper than the box somewhere in its node: over the part that can serve the box alone? That
+             * part lies in [a, b] x [vlo, vhi], the piece's range over [a, b] within the box's. */
             const double* g = pc->plane;
             const double ga = g[0] + g[1] * a, gb = g[0] + g[1] * b;
+            const double vlo = hz_max(hz_min(pa, pb), v_min), vhi = hz_min(hz_max(qa, qb), v_max);
             const double gmin =
-                hz_min(hz_min(ga + g[2] * pa, ga + g[2] * qa), hz_min(gb + g[2] * pb, gb + g[2] * qb));
+                hz_min(hz_min(ga + g[2] * vlo, ga + g[2] * vhi), hz_min(gb + g[2] * vlo, gb + g[2] * vhi));
             if (!(gmin > 0.0) || !(d_lo * gmin > 1.0 + HZ_DEPTH))
                 continue; /* d_lo > (1 / gmin)(1 + HZ_DEPTH) */
         }
@@ -3106,12 +3109,16 @@ static int hz_covered(const hz_ref* refs, int n, double a, double b, double d_lo
             const int e = order[o];
             int usable = 0, m, via = 0;
             if (key[e] > top + HZ_TOUCH * (1.0 + fabs(top))) break; /* a gap under every line */
-            for (i = 0; i < ns && !usable; ++i)
-                if (la[e] <= sa[i] + HZ_TOUCH * (1.0 + fabs(sa[i])) &&
-                    lb[e] <= sb[i] + HZ_TOUCH * (1.0 + fabs(sb[i]))) {
+            for (i = 0; i < ns && !usable; ++i) {
+                /* Pieces meet within HZ_TOUCH (their ends, rounded); the first one must reach v_min itself.
+                 */
+                const double ta = line[i] < 0 ? 0.0 : HZ_TOUCH * (1.0 + fabs(sa[i]));
+                const double tb = line[i] < 0 ? 0.0 : HZ_TOUCH * (1.0 + fabs(sb[i]));
+                if (la[e] <= sa[i] + ta && lb[e] <= sb[i] + tb) {
                     usable = 1;
                     via = i;
                 }
+            }
             if (!usable) {
                 passed_over = 1;
                 continue;

@@ -1099,6 +1099,24 @@ TEST(RuntimeHorizon, ARecedingWallHidesWhatLiesBehindItsNearPart) {
     }
 }
 
+// A ceiling seen from below, and a flat light standing on its far edge (a case from ctf_inyard, floats as
+// found): the light's lowest edge is seen along the ceiling (a sight line meets the ceiling only at its end),
+// so it stays drawn; every sight line to the light lifted by 1 cm crosses the ceiling first. The tolerance
+// of meeting pieces does not hold at the box's own lowest direction.
+TEST(RuntimeHorizon, ABoxOnAnOccludersEdgeIsSeenAlongIt) {
+    const float eye[3] = {-55.43578338623047f, -8.999100685119629f, 7.689573764801025f};
+    const Box ceiling = box(-61.7728004f, -6.09600019f, 4.87680006f, -55.270401f, -6.09600019f, 17.8815994f);
+    for (const int columns : {16, 256}) {
+        Horizon h(columns);
+        h.frame(eye, {ceiling});
+        EXPECT_FALSE(
+            h.hidden(box(-60.0f, -6.09600019f, 17.8815994f, -58.5215988f, -5.68959999f, 17.8815994f)))
+            << columns << " columns";
+        EXPECT_TRUE(h.hidden(box(-60.0f, -6.08600019f, 17.8f, -58.5215988f, -5.68959999f, 17.8f)))
+            << columns << " columns";
+    }
+}
+
 // A wall behind a nearer, larger wall spanning the same directions across: what the walls hide stays hidden,
 // and a box between them is hidden by the nearer one only.
 TEST(RuntimeHorizon, AWallBehindANearerOneAddsNothingWrong) {
