@@ -465,38 +465,49 @@ int main(int argc, char** argv) {
         std::vector<uint64_t> horizon_memory(
             horizon_columns > 0 ? pvsr_horizon_memory_bytes(runtime_columns, kHorizonPieces) / 8 + 1 : 1);
         pvsr_horizon runtime_horizon, select_horizon;  // the frame's; the one that chooses the lists
-        std::vector<uint64_t> select_memory(horizon_memory.size());
-        if (horizon_columns > 0 && (!pvsr_horizon_init(&runtime_horizon, runtime_columns, kHorizonPieces,
-                                                       horizon_memory.data(), horizon_memory.size() * 8) ||
-                                    !pvsr_horizon_init(&select_horizon, runtime_columns, kHorizonPieces,
-                                                       select_memory.data(), select_memory.size() * 8)))
+        std::vector<uint64_t> select_memory(horizon_cell_eyes > 0 ? horizon_memory.size() : 1);
+        if (horizon_columns > 0 &&
+            (!pvsr_horizon_init(&runtime_horizon, runtime_columns, kHorizonPieces, horizon_memory.data(),
+                                horizon_memory.size() * 8) ||
+             (horizon_cell_eyes > 0 && !pvsr_horizon_init(&select_horizon, runtime_columns, kHorizonPieces,
+                                                          select_memory.data(), select_memory.size() * 8))))
             throw pvs::internal_error("bench_frame: the horizon did not take its memory");
-        // A frame of a horizon at the eye: every occluder (only those `only` marks, when given), each tagged
-        // with its source index (boxes, then panels, then polygons).
-        const auto build_horizon = [&](pvsr_horizon* hz, const float eye[3],
-                                       const std::vector<uint8_t>* only) {
-            pvsr_horizon_begin(hz, eye);
+        // Every occluder the horizon takes (only those `only` marks, when given), with its source index
+        // (boxes, then panels, then polygons): box(source, float[6]), polygon(source, plane[5], polygon).
+        const auto visit_occluders = [&](const std::vector<uint8_t>* only, const auto& box,
+                                         const auto& polygon) {
             uint32_t source = 0;
             for (const std::vector<pvs::Aabb>* set : {&horizon_boxes, &horizon_panels})
                 for (const pvs::Aabb& b : *set) {
                     if (!only || (*only)[source]) {
                         const float fb[6] = {b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z};
-                        pvsr_horizon_set_tag(hz, source);
-                        pvsr_horizon_add_box(hz, fb);
+                        box(source, fb);
                     }
                     ++source;
                 }
             for (const std::optional<pvs::OccluderPolygon>& q : horizon_polygons) {
                 if (q && (!only || (*only)[source])) {
                     const float plane[5] = {q->normal.x, q->normal.y, q->normal.z, q->offset, q->thickness};
-                    pvsr_horizon_set_tag(hz, source);
-                    if (q->tile)
-                        pvsr_horizon_add_tile(hz, plane, &q->corners[0].x, uint32_t(q->corners.size()));
-                    else
-                        pvsr_horizon_add_polygon(hz, plane, &q->corners[0].x, uint32_t(q->corners.size()));
+                    polygon(source, plane, *q);
                 }
                 ++source;
             }
+        };
+        // A frame of a horizon at the eye, each occluder tagged with its source index.
+        const auto build_horizon = [&](pvsr_horizon* hz, const float eye[3],
+                                       const std::vector<uint8_t>* only) {
+            pvsr_horizon_begin(hz, eye);
+            visit_occluders(
+                only,
+                [&](uint32_t source, const float fb[6]) {
+                    pvsr_horizon_set_tag(hz, source);
+                    pvsr_horizon_add_box(hz, fb);
+                },
+                [&](uint32_t source, const float plane[5], const pvs::OccluderPolygon& q) {
+                    pvsr_horizon_set_tag(hz, source);
+                    (q.tile ? pvsr_horizon_add_tile : pvsr_horizon_add_polygon)(hz, plane, &q.corners[0].x,
+                                                                                uint32_t(q.corners.size()));
+                });
             pvsr_horizon_end(hz);
         };
         // --eye-polygons: up to P of the bake's polygons with the largest solid angle from the eye (area
@@ -693,26 +704,17 @@ int main(int argc, char** argv) {
                 }
                 const std::vector<uint8_t>* only = cell_eyes > 0 ? &used : nullptr;
                 const float eye[3] = {f.eye.x, f.eye.y, f.eye.z};
-                if (!horizon_record.empty()) {  // the same inputs in the same order as below
+                if (!horizon_record.empty()) {  // the same inputs in the same order as build_horizon's
+                    std::vector<float> boxes;
+                    std::vector<const pvs::OccluderPolygon*> polys;
+                    visit_occluders(
+                        only, [&](uint32_t, const float fb[6]) { boxes.insert(boxes.end(), fb, fb + 6); },
+                        [&](uint32_t, const float*, const pvs::OccluderPolygon& q) { polys.push_back(&q); });
                     put(eye, sizeof eye);
-                    uint32_t boxes = 0, source = 0;
-                    for (const std::vector<pvs::Aabb>* set : {&horizon_boxes, &horizon_panels})
-                        for (size_t i = 0; i < set->size(); ++i) boxes += !only || (*only)[source++];
-                    put_u32(boxes);
-                    source = 0;
-                    for (const std::vector<pvs::Aabb>* set : {&horizon_boxes, &horizon_panels})
-                        for (const pvs::Aabb& b : *set)
-                            if (!only || (*only)[source++]) {
-                                const float fb[6] = {b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z};
-                                put(fb, sizeof fb);
-                            }
-                    uint32_t polys = 0;
-                    for (size_t i = 0; i < horizon_polygons.size(); ++i)
-                        polys += horizon_polygons[i] && (!only || (*only)[source + i]);
-                    put_u32(polys);
-                    for (size_t i = 0; i < horizon_polygons.size(); ++i) {
-                        const std::optional<pvs::OccluderPolygon>& q = horizon_polygons[i];
-                        if (!q || (only && !(*only)[source + i])) continue;
+                    put_u32(uint32_t(boxes.size() / 6));
+                    put(boxes.data(), boxes.size() * sizeof(float));
+                    put_u32(uint32_t(polys.size()));
+                    for (const pvs::OccluderPolygon* q : polys) {
                         const float plane[5] = {q->normal.x, q->normal.y, q->normal.z, q->offset,
                                                 q->thickness};
                         put(plane, sizeof plane);

@@ -290,22 +290,28 @@ std::optional<OccluderPolygon> runtime_tile(const SlantedPanel& panel) {
 
 }  // namespace
 
-std::vector<OccluderPolygon> runtime_tiles(const std::vector<SlantedPanel>& panels, double min_area_m2) {
+namespace {
+
+// The runtime forms `form` gives of the panels of at least min_area_m2, where it gives one.
+template <typename Form>
+std::vector<OccluderPolygon> runtime_forms(const std::vector<SlantedPanel>& panels, double min_area_m2,
+                                           Form form) {
     std::vector<OccluderPolygon> out;
     for (const SlantedPanel& p : panels) {
         if (p.area_m2 < min_area_m2) continue;
-        if (std::optional<OccluderPolygon> q = runtime_tile(p)) out.push_back(std::move(*q));
+        if (std::optional<OccluderPolygon> q = form(p)) out.push_back(std::move(*q));
     }
     return out;
 }
 
+}  // namespace
+
+std::vector<OccluderPolygon> runtime_tiles(const std::vector<SlantedPanel>& panels, double min_area_m2) {
+    return runtime_forms(panels, min_area_m2, runtime_tile);
+}
+
 std::vector<OccluderPolygon> runtime_polygons(const std::vector<SlantedPanel>& panels, double min_area_m2) {
-    std::vector<OccluderPolygon> out;
-    for (const SlantedPanel& p : panels) {
-        if (p.area_m2 < min_area_m2) continue;
-        if (std::optional<OccluderPolygon> q = runtime_polygon(p)) out.push_back(std::move(*q));
-    }
-    return out;
+    return runtime_forms(panels, min_area_m2, runtime_polygon);
 }
 
 }  // namespace pvs

@@ -1081,8 +1081,8 @@ TEST(RuntimeHorizon, TilesMeetingAtACreaseHideWhatTheirSlabsLeaveOpen) {
 }
 
 // A wall receding in depth across the view: its pieces over wide blocks of columns reach deeper than a box
-// behind its near part, so the test takes each piece's depth over the box's own directions. A box past the
-// wall's far end in depth, or beside its end, stays visible.
+// behind its near part, so the test takes each piece's depth over the box's own directions. A box before the
+// wall, or past its end, stays visible.
 TEST(RuntimeHorizon, ARecedingWallHidesWhatLiesBehindItsNearPart) {
     const double r = std::sqrt(0.5);
     test::TestPolygon wall;  // the plane z - x = 12
