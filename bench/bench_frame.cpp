@@ -10,6 +10,7 @@
 //                                    [--horizon-cell-eyes K]
 //                                    [--horizon-exact-polygons 0|1|2] [--horizon-list-cells B]
 //                                    [--horizon-record FILE] [--horizon-min-uses U]
+//                                    [--horizon-lists file|bench]
 //
 // Frames: F (default 200) eyes, each uniform in the eye space of a cell drawn at random (seed S, default 1):
 // a cell uniform among the level's cells, then a point uniform in its box kept when pvsr_in_eye_space() holds
@@ -48,7 +49,9 @@
 // eyes drawn in the block of B x B x B grid positions holding the cell instead, the frame's PVS tried from
 // each: a list per block). --horizon-exact-polygons 1: the slanted panels go to the horizon as found, only
 // rounded to floats (no float margin); 2: as tiles (pvsr_horizon_add_tile, occluders/slanted_panels.h's
-// runtime_tiles); 0: in the culler's polygon form. --horizon-record FILE: each frame's eye, the occluders
+// runtime_tiles); 0: in the culler's polygon form. --horizon-lists file: the horizon takes the cell's list of
+// the runtime file (pvsr_horizon_begin_cell, as a game does; no --bake needed), `horizon_used_mean` occluders
+// a frame; bench (the default): the occluders above. --horizon-record FILE: each frame's eye, the occluders
 // given to the horizon and the bounds it tests, written for bench_horizon to replay (format there).
 // Where the drawn but invisible triangles go (the "waste" object, of the full frames' drawn objects no ray
 // reached): split_culls: the culler hides each of the object's M part boxes; given_boxes: each of
@@ -297,7 +300,7 @@ int main(int argc, char** argv) {
         "                   [--eye-polygons P] [--horizon N]\n"
         "                   [--horizon-cell-eyes K]\n"
         "                   [--horizon-exact-polygons 0|1|2] [--horizon-list-cells B]\n"
-        "                   [--horizon-record FILE] [--horizon-min-uses U]\n";
+        "                   [--horizon-record FILE] [--horizon-min-uses U] [--horizon-lists file|bench]\n";
     if (argc < 3 || argv[1][0] == '-' || argv[2][0] == '-') {
         std::fputs(usage, stderr);
         return 2;
@@ -308,7 +311,7 @@ int main(int argc, char** argv) {
              n_split = 8;
     uint32_t eye_occluders = 0, eye_polygons = 0, horizon_columns = 0, horizon_cell_eyes = 0,
              horizon_exact_polygons = 0, horizon_list_cells = 1, horizon_min_uses = 1;
-    bool parts_drawn = false, eye_panels = false, eye_select_first_hit = false;
+    bool parts_drawn = false, eye_panels = false, eye_select_first_hit = false, horizon_file_lists = false;
     std::string bake_path, horizon_record;
     int resolution = 32;
     uint64_t seed = 1;
@@ -320,7 +323,7 @@ int main(int argc, char** argv) {
                 k != "--eye-occluders" && k != "--parts" && k != "--eye-panels" && k != "--eye-select" &&
                 k != "--eye-polygons" && k != "--horizon" && k != "--horizon-cell-eyes" &&
                 k != "--horizon-exact-polygons" && k != "--horizon-list-cells" && k != "--horizon-record" &&
-                k != "--horizon-min-uses")
+                k != "--horizon-min-uses" && k != "--horizon-lists")
                 bad_option("unknown option " + k + " (run it with no arguments for the usage)");
             if (a + 1 >= argc) bad_option(k + " wants a value");
             const char* v = argv[++a];
@@ -340,7 +343,11 @@ int main(int argc, char** argv) {
                 bake_path = v;
             else if (k == "--horizon-record")
                 horizon_record = v;
-            else if (k == "--eye-occluders")
+            else if (k == "--horizon-lists") {
+                if (std::string(v) != "file" && std::string(v) != "bench")
+                    bad_option(std::string("--horizon-lists ") + v + ": wants file or bench");
+                horizon_file_lists = std::string(v) == "file";
+            } else if (k == "--eye-occluders")
                 eye_occluders = uint32_t(parse_count("--eye-occluders", v, 0, PVSR_CULLER_MAX_OCCLUDERS));
             else if (k == "--eye-polygons")
                 eye_polygons = uint32_t(parse_count("--eye-polygons", v, 0, PVSR_CULLER_MAX_POLYGONS));
@@ -417,7 +424,13 @@ int main(int argc, char** argv) {
         }
         if (eye_occluders > 0 && bake_path.empty()) bad_option("--eye-occluders wants --bake");
         if (eye_polygons > 0 && bake_path.empty()) bad_option("--eye-polygons wants --bake");
-        if (horizon_columns > 0 && bake_path.empty()) bad_option("--horizon wants --bake");
+        if (horizon_columns > 0 && bake_path.empty() && !horizon_file_lists)
+            bad_option("--horizon wants --bake (or --horizon-lists file)");
+        if (horizon_file_lists && (horizon_columns == 0 || horizon_cell_eyes > 0 || !horizon_record.empty()))
+            bad_option(
+                "--horizon-lists file wants --horizon, and neither --horizon-cell-eyes nor --horizon-record");
+        if (horizon_file_lists && pvsr_horizon_occluder_count(&level) == 0)
+            bad_option("--horizon-lists file: " + level_path + " holds no horizon lists");
         if (!horizon_record.empty() && horizon_columns == 0) bad_option("--horizon-record wants --horizon");
         std::vector<char> record;  // --horizon-record: the bytes of bench_horizon's input
         const auto put = [&record](const void* p, size_t n) {
@@ -433,7 +446,7 @@ int main(int argc, char** argv) {
         // eye.
         std::vector<pvs::Aabb> horizon_boxes, horizon_panels;
         std::vector<pvs::SlantedPanel> horizon_slanted;
-        if (horizon_columns > 0) {
+        if (horizon_columns > 0 && !horizon_file_lists) {
             horizon_boxes = proven;
             horizon_panels = pvs::find_panels(world);
             horizon_slanted = pvs::find_slanted_panels(world, 1e-4, 0.25);
@@ -734,7 +747,10 @@ int main(int argc, char** argv) {
                     }
                 }
                 const auto h0 = std::chrono::steady_clock::now();
-                build_horizon(&runtime_horizon, eye, only);
+                if (horizon_file_lists)  // the cell's list from the file, as a game builds its frame
+                    f.horizon_used = pvsr_horizon_begin_cell(&runtime_horizon, &level, f.cell, eye);
+                else
+                    build_horizon(&runtime_horizon, eye, only);
                 f.horizon_pieces = uint32_t(runtime_horizon.count);
                 std::vector<uint32_t> kept;
                 for (const uint32_t o : f.drawn) {
@@ -1004,6 +1020,7 @@ int main(int argc, char** argv) {
         if (horizon_columns > 0) {
             out["horizon_columns"] = horizon_columns;
             out["horizon_cell_eyes"] = horizon_cell_eyes;
+            out["horizon_lists"] = horizon_file_lists ? "file" : "bench";
             out["horizon_us_median"] = median(horizon_us);
             out["horizon_culled_objects_mean"] = horizon_culled / double(frame_us.size());
             out["horizon_used_mean"] = horizon_used_sum / double(frame_us.size());

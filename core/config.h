@@ -149,6 +149,10 @@ struct RankingConfig {
     bool polygons = false;  // by sight, the slanted panels this large are candidates too, as the run-time
                             // culler's polygon occluders (docs/ALGORITHMS.md#runtime-polygons); opt-in (what
                             // they gain and cost: docs/RESULTS.md, "What a game draws per frame")
+    uint32_t horizon_eyes = 32;  // [Limit: 0..4096] seeded eyes per block of cells whose run-time horizons
+                                 // choose the block's list of horizon occluders (occluders/horizon_lists.h,
+                                 // docs/ALGORITHMS.md#horizon-lists); 0 = no lists
+    uint32_t horizon_columns = 256;  // [Limit: 4..8192] columns a side of those horizons (runtime/pvsr.h)
 };
 
 // The conservative solver (pvs/conservative.h).
@@ -445,6 +449,16 @@ void visit_options(Config& c, Visitor&& v) {
             "by sight, slanted panels (convex polygons off the axis planes) at least --ranking-panel-area "
             "large are candidates too, stored as polygon occluders for the run-time culler"},
         c.ranking.polygons);
+    v(
+        OptionSpec{
+            OptionGroup::kRanking, "--horizon-eyes", "ranking.horizon_eyes", "eyes",
+            "seeded eyes per block of 4 x 4 x 4 cells whose run-time horizons choose the block's list of "
+            "proven occluders (boxes, panels, slanted panels) for the runtime's horizon; 0 = no lists",
+            0, 4096},
+        c.ranking.horizon_eyes);
+    v(OptionSpec{OptionGroup::kRanking, "--horizon-columns", "ranking.horizon_columns", "columns",
+                 "columns a side of the horizons that choose the lists", 4, 8192},
+      c.ranking.horizon_columns);
     v(OptionSpec{OptionGroup::kConservative, "--epsilon", "conservative.epsilon_m", "m",
                  "occluders shrink by this and cell faces are sampled within it", 0.01, 100},
       c.conservative.epsilon_m);

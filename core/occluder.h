@@ -77,6 +77,22 @@ struct RankedOccluders {
     }
 };
 
+// The run-time horizon's occluders and the list each block of cells gives it (occluders/horizon_lists.h,
+// docs/ALGORITHMS.md#horizon-lists). List l is entries[offsets[l] .. offsets[l + 1]), ascending; an entry
+// below boxes.size() names a box (solid, or a panel flat along one axis), entry boxes.size() + t the tile
+// tiles[t]. Every occluder is proven; cell c's list is cell_list[c]. Empty offsets: no lists.
+struct HorizonLists {
+    std::vector<Aabb> boxes;
+    std::vector<OccluderPolygon> tiles;  // each with tile = true
+    std::vector<uint32_t> cell_list;     // per cell
+    std::vector<uint32_t> offsets;       // lists + 1, from 0, never decreasing
+    std::vector<uint32_t> entries;
+
+    bool empty() const { return offsets.empty(); }
+    size_t lists() const { return offsets.empty() ? 0 : offsets.size() - 1; }
+    size_t occluders() const { return boxes.size() + tiles.size(); }
+};
+
 // The occluders of the conservative solver (pvs/conservative.h): the proven solid, and boxes of it shrunk
 // by each epsilon of a ladder (every point of a box of level k has its whole epsilon_m[k]-cube, the ball in
 // the Chebyshev metric, inside the proven solid: docs/ALGORITHMS.md#shrunk-occluders).

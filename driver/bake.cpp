@@ -330,6 +330,19 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
         bake.ranked = rank_occluders(ctx, config.ranking, world, bake.cells, bake.occluders, figures.ranking,
                                      share, &bake.pvs, &bake.polygons);
     }
+    // 5b. The run-time horizon's list of proven occluders per block of cells, chosen by the runtime's own
+    //     horizon from seeded eyes (docs/ALGORITHMS.md#horizon-lists): the proven boxes, every panel, and the
+    //     slanted panels as tiles are the candidates.
+    if (config.ranking.horizon_eyes > 0 && (config.occluders.enabled || conservative)) {
+        std::vector<Aabb> candidates;
+        for (const Occluder& o : bake.occluders) {
+            const glm::vec3 s = o.box.size();
+            if (o.proven && s.x > 0.0f && s.y > 0.0f && s.z > 0.0f) candidates.push_back(o.box);
+        }
+        candidates.insert(candidates.end(), shrunk.panels.begin(), shrunk.panels.end());
+        bake.horizon = choose_horizon_lists(ctx, config.ranking, world, bake.cells, bake.pvs, candidates,
+                                            runtime_tiles(shrunk.slanted, 0.0), figures.horizon, share);
+    }
     // 6. The figures of the bake (driver/report.h).
     figures.shrunk_boxes = shrunk.boxes.empty() ? 0 : shrunk.boxes[0].size();
     figures.epsilon_levels = shrunk.epsilon_m.size();

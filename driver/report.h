@@ -15,6 +15,7 @@
 #include "core/world.h"
 #include "io/bake_file.h"
 #include "occluders/cell_ranking.h"
+#include "occluders/horizon_lists.h"
 #include "occluders/synthesis.h"
 #include "pvs/conservative.h"
 
@@ -42,6 +43,7 @@ struct StageFigures {
     ConservativeFigures conservative;
     SampledFigures sampled;
     RankingFigures ranking;
+    HorizonListFigures horizon;
     ReuseFigures reuse;  // an incremental re-bake (pvs/reuse.h); zero without --reuse
 };
 

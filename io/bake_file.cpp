@@ -202,6 +202,28 @@ void check_writable(const std::string& path, const BakeData& bake) {
         for (const glm::vec3& c : p.corners) ok = ok && is_finite(c);
         if (!ok) bad(fmt::format("polygon occluder {} is not 3 to 8 finite corners on a finite plane", i));
     }
+    const HorizonLists& hz = bake.horizon;  // as the reader checks it (io/loader/bake_reader.h, read_horizon)
+    if (!hz.empty()) {
+        if (hz.cell_list.size() != cells || hz.offsets[0] != 0 || hz.offsets.back() != hz.entries.size())
+            bad("the horizon lists' cell lists or offsets do not match the cells and entries");
+        for (const uint32_t l : hz.cell_list)
+            if (l >= hz.lists()) bad(fmt::format("a cell names horizon list {} of {}", l, hz.lists()));
+        for (size_t l = 0; l < hz.lists(); ++l)
+            for (uint32_t k = hz.offsets[l]; k < hz.offsets[l + 1]; ++k)
+                if (hz.offsets[l + 1] < hz.offsets[l] || hz.entries[k] >= hz.occluders() ||
+                    (k > hz.offsets[l] && hz.entries[k] <= hz.entries[k - 1]))
+                    bad(fmt::format("horizon list {} is not ascending occluders in range", l));
+        for (const Aabb& b : hz.boxes)
+            if (!is_finite(b.min) || !is_finite(b.max) || b.is_empty())
+                bad("a horizon box is not a finite box");
+        for (const OccluderPolygon& t : hz.tiles) {
+            bool ok = t.corners.size() >= 3 && t.corners.size() <= pvsbake::detail::kHorizonTileMaxCorners &&
+                      is_finite(t.normal) && std::isfinite(t.offset) && std::isfinite(t.thickness) &&
+                      t.thickness >= 0.0f && t.normal != glm::vec3(0.0f);
+            for (const glm::vec3& c : t.corners) ok = ok && is_finite(c);
+            if (!ok) bad("a horizon tile is not 3 to 32 finite corners on a finite plane");
+        }
+    }
     const VerificationRecord& v = bake.verification;
     if (!v.cell_sampled_visible.empty() && v.cell_sampled_visible.size() != cells) {
         bad("verification cell_sampled_visible does not have one entry per cell");
@@ -611,6 +633,37 @@ void write_occluders(Writer& w, hid_t root, bool by_sight, const std::vector<Occ
               poly_score.data());
 }
 
+// Format 1.8: the run-time horizon's occluders and lists (docs/FORMAT.md, /horizon).
+void write_horizon(Writer& w, hid_t root, const HorizonLists& h) {
+    if (h.empty()) return;
+    Handle g = w.group(root, "/", "horizon");
+    std::vector<float> boxes, corners, planes;
+    for (const Aabb& b : h.boxes)
+        boxes.insert(boxes.end(), {b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z});
+    std::vector<uint32_t> tile_offsets = {0};
+    for (const OccluderPolygon& t : h.tiles) {
+        for (const glm::vec3& c : t.corners) corners.insert(corners.end(), {c.x, c.y, c.z});
+        tile_offsets.push_back(uint32_t(corners.size() / 3));
+        planes.insert(planes.end(), {t.normal.x, t.normal.y, t.normal.z, t.offset, t.thickness});
+    }
+    Handle b = w.dataset(g.get(), "/horizon", "boxes", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, {h.boxes.size(), 6},
+                         boxes.data());
+    w.string_attr(b.get(), "columns", "min x, min y, min z, max x, max y, max z");
+    w.dataset(g.get(), "/horizon", "tile_offsets", H5T_STD_U32LE, H5T_NATIVE_UINT32, {tile_offsets.size()},
+              tile_offsets.data());
+    w.dataset(g.get(), "/horizon", "tile_corners", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, {corners.size() / 3, 3},
+              corners.data());
+    Handle pl = w.dataset(g.get(), "/horizon", "tile_planes", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT,
+                          {h.tiles.size(), 5}, planes.data());
+    w.string_attr(pl.get(), "columns", "normal x, normal y, normal z, offset, thickness");
+    w.dataset(g.get(), "/horizon", "cell_list", H5T_STD_U32LE, H5T_NATIVE_UINT32, {h.cell_list.size()},
+              h.cell_list.data(), true);
+    w.dataset(g.get(), "/horizon", "list_offsets", H5T_STD_U32LE, H5T_NATIVE_UINT32, {h.offsets.size()},
+              h.offsets.data(), true);
+    w.dataset(g.get(), "/horizon", "list_entries", H5T_STD_U32LE, H5T_NATIVE_UINT32, {h.entries.size()},
+              h.entries.data(), true);
+}
+
 void write_verification(Writer& w, hid_t root, const VerificationRecord& v) {
     Handle g = w.group(root, "/", "verification");
     w.int_attr(g.get(), "ran", v.ran ? 1 : 0);
@@ -784,6 +837,30 @@ void read_occluders(const Reader& r, hid_t root, BakeData& bake) {
     }
 }
 
+void read_horizon(const Reader& r, hid_t root, BakeData& bake) {
+    const pvsbake::detail::FileHorizon f =
+        pvsbake::detail::read_horizon(r, root, uint32_t(bake.cells.size()));
+    if (!f.present) return;
+    HorizonLists& h = bake.horizon;
+    for (size_t i = 0; i < f.box_count(); ++i) h.boxes.push_back(box_at(f.boxes, i));
+    for (size_t i = 0; i < f.tile_count(); ++i) {
+        OccluderPolygon t;
+        t.tile = true;
+        t.normal = glm::vec3(f.tile_planes[5 * i], f.tile_planes[5 * i + 1], f.tile_planes[5 * i + 2]);
+        t.offset = f.tile_planes[5 * i + 3];
+        t.thickness = f.tile_planes[5 * i + 4];
+        for (uint32_t k = f.tile_offsets[i]; k < f.tile_offsets[i + 1]; ++k) {
+            t.corners.emplace_back(f.tile_corners[3 * k], f.tile_corners[3 * k + 1],
+                                   f.tile_corners[3 * k + 2]);
+            t.bounds.extend(t.corners.back());
+        }
+        h.tiles.push_back(std::move(t));
+    }
+    h.cell_list = f.cell_list;
+    h.offsets = f.list_offsets;
+    h.entries = f.list_entries;
+}
+
 void read_verification(const Reader& r, hid_t root, BakeData& bake) {
     const std::string where = "/verification";
     Handle g = r.open_group(root, where);
@@ -865,6 +942,7 @@ void write_bake_file(const std::string& path, const BakeData& bake) {
                                             [](const auto& p) { return p.first == "ranking.sight_lines"; });
             const bool by_sight = lines != bake.parameters.end() && lines->second != "0";
             write_occluders(w, root.get(), by_sight, bake.occluders, bake.polygons, bake.ranked);
+            write_horizon(w, root.get(), bake.horizon);
             w.named_values(root.get(), "/", "figures", bake.figures, nullptr);
             write_verification(w, root.get(), bake.verification);
             write_print(w, root.get(), bake.print);
@@ -888,6 +966,7 @@ BakeData read_bake_file(const std::string& path) {
         read_pvs(r, root, bake);
         read_leak_path(r, root, bake);
         read_occluders(r, root, bake);
+        read_horizon(r, root, bake);
         bake.figures = r.named_values(root, "/figures");
         read_verification(r, root, bake);
         read_print(r, root, bake);

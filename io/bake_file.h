@@ -24,10 +24,11 @@
 namespace pvs {
 
 constexpr int kBakeFormatMajor = 1;
-constexpr int kBakeFormatMinor = 7;  // 1.1 added the PVS code (/pvs/code), 1.2 ranked occluders per cell,
+constexpr int kBakeFormatMinor = 8;  // 1.1 added the PVS code (/pvs/code), 1.2 ranked occluders per cell,
                                      // 1.3 the opening width of each verification miss, 1.4 the voxel
                                      // masks as bricks, 1.5 the run's own record (/run), 1.6 the geometry
-                                     // print (/reuse), 1.7 polygon occluders ranked per cell
+                                     // print (/reuse), 1.7 polygon occluders ranked per cell,
+                                     // 1.8 the run-time horizon's occluders and lists (/horizon)
 
 struct ObjectRecord {
     std::string name;
@@ -94,6 +95,7 @@ struct BakeData {
     std::vector<OccluderPolygon> polygons;  // 1.7: the polygon occluders the ranking may name
     RankedOccluders
         ranked;  // per cell, indices into `occluders`, then `polygons` (empty: none, or a file < 1.2)
+    HorizonLists horizon;  // 1.8: the run-time horizon's occluders and lists (empty: none, or a file < 1.8)
     VerificationRecord verification;
     GeometryPrint print;  // conservative bakes from 1.6: what a re-bake after an edit compares (/reuse)
     RunRecord run;

@@ -24,6 +24,7 @@ namespace pvs {
 namespace {
 
 using pvsbake::detail::FileCells;
+using pvsbake::detail::FileHorizon;
 using pvsbake::detail::FileMask;
 using pvsbake::detail::FileObjects;
 using pvsbake::detail::FileOccluders;
@@ -153,6 +154,7 @@ struct Bake {
     FileCells cells;
     FilePvs pvs;
     FileOccluders occluders;
+    FileHorizon horizon;
 };
 
 // 2.0: the ranked entries as indices into the palette of each cell's block (runtime/pvsr.c, palette_block:
@@ -171,20 +173,40 @@ struct PaletteLists {
     }
 };
 
-PaletteLists palette_lists(const FileCells& cells, const std::vector<uint32_t>& cell_grid,
-                           const std::vector<uint32_t>& ranked_offsets,
-                           const std::vector<uint32_t>& entry_box) {
+// The block of each cell (runtime/pvsr.c, palette_block): the 4 x 4 x 4 block of grid positions holding it
+// when cells have positions (cell_grid, a grid), else 64 cells in turn. Palettes and horizon lists are per
+// block.
+struct CellBlocks {
+    uint32_t count = 0;
+    std::vector<uint32_t> of;  // per cell
+};
+
+CellBlocks cell_blocks(const FileCells& cells, const std::vector<uint32_t>& cell_grid) {
     constexpr uint32_t kSide = 4, kCells = 64;
-    const uint32_t count = cells.count;
     const bool positions = !cell_grid.empty();
     uint32_t n[3] = {0, 0, 0};
     for (int a = 0; a < 3; ++a) n[a] = (uint32_t(cells.dims[a]) + kSide - 1) / kSide;
-    const uint32_t blocks = positions ? n[0] * n[1] * n[2] : (count + kCells - 1) / kCells;
-    const auto block_of = [&](uint32_t c) {
-        if (!positions) return c / kCells;
+    CellBlocks out;
+    out.count = positions ? n[0] * n[1] * n[2] : (cells.count + kCells - 1) / kCells;
+    out.of.resize(cells.count);
+    for (uint32_t c = 0; c < cells.count; ++c) {
+        if (!positions) {
+            out.of[c] = c / kCells;
+            continue;
+        }
         const uint32_t g = cell_grid[c], d0 = uint32_t(cells.dims[0]), d1 = uint32_t(cells.dims[1]);
-        return g % d0 / kSide + n[0] * (g / d0 % d1 / kSide + n[1] * (g / (d0 * d1) / kSide));
-    };
+        out.of[c] = g % d0 / kSide + n[0] * (g / d0 % d1 / kSide + n[1] * (g / (d0 * d1) / kSide));
+    }
+    return out;
+}
+
+PaletteLists palette_lists(const FileCells& cells, const std::vector<uint32_t>& cell_grid,
+                           const std::vector<uint32_t>& ranked_offsets,
+                           const std::vector<uint32_t>& entry_box) {
+    const uint32_t count = cells.count;
+    const CellBlocks cb = cell_blocks(cells, cell_grid);
+    const uint32_t blocks = cb.count;
+    const auto block_of = [&](uint32_t c) { return cb.of[c]; };
     std::vector<std::vector<uint32_t>> palette(blocks);
     std::vector<std::unordered_map<uint32_t, uint32_t>> index(blocks);
     PaletteLists out;
@@ -577,6 +599,74 @@ std::string assemble(const std::string& path, Bake& b, const RuntimeFileOptions&
         sections.push_back(std::move(list));
     }
 
+    // 2.1: the horizon's occluders that some list names ('HBOX', then 'HTIL' and 'HTCO' in the 'OPLN' layout,
+    // renumbered in order), and per block of cells (the palettes' blocks) the union of its cells' lists, each
+    // as the gaps between its ascending indices, less one, in LEB128 varints ('HLOF' byte offsets, 'HLST').
+    if (b.horizon.present) {
+        const FileHorizon& h = b.horizon;
+        const CellBlocks cb = cell_blocks(b.cells, cell_grid);
+        const uint64_t occluders = h.box_count() + h.tile_count();
+        std::vector<std::vector<uint32_t>> lists(cb.count);
+        std::vector<uint32_t> last_list(cb.count, UINT32_MAX);
+        for (uint32_t c = 0; c < cells; ++c) {
+            const uint32_t l = h.cell_list[c], blk = cb.of[c];
+            if (last_list[blk] == l) continue;  // the cells of a block mostly share one list
+            last_list[blk] = l;
+            lists[blk].insert(lists[blk].end(), h.list_entries.begin() + h.list_offsets[l],
+                              h.list_entries.begin() + h.list_offsets[size_t(l) + 1]);
+        }
+        std::vector<uint8_t> named(occluders, 0);
+        for (std::vector<uint32_t>& list : lists) {
+            std::sort(list.begin(), list.end());
+            list.erase(std::unique(list.begin(), list.end()), list.end());
+            for (const uint32_t o : list) named[o] = 1;
+        }
+        std::vector<uint32_t> renumber(occluders, UINT32_MAX);
+        Section hboxes{PVSR_TAG('H', 'B', 'O', 'X'), 24, 0, {}};
+        Section htiles{PVSR_TAG('H', 'T', 'I', 'L'), PVSR_POLYGON_BYTES, 0, {}};
+        Section hcorners{PVSR_TAG('H', 'T', 'C', 'O'), 12, 0, {}};
+        for (uint64_t o = 0; o < h.box_count(); ++o) {
+            if (!named[o]) continue;
+            renumber[o] = uint32_t(hboxes.count++);
+            for (int a = 0; a < 6; ++a) put(hboxes.bytes, h.boxes[6 * o + uint64_t(a)]);
+        }
+        for (uint64_t t = 0; t < h.tile_count(); ++t) {
+            if (!named[h.box_count() + t]) continue;
+            renumber[h.box_count() + t] = uint32_t(hboxes.count + htiles.count++);
+            for (int k = 0; k < 5; ++k) put(htiles.bytes, h.tile_planes[5 * t + uint64_t(k)]);
+            put(htiles.bytes, uint32_t(hcorners.count));
+            put(htiles.bytes, h.tile_offsets[t + 1] - h.tile_offsets[t]);
+            put(htiles.bytes, uint32_t(0));
+            for (uint32_t k = h.tile_offsets[t]; k < h.tile_offsets[t + 1]; ++k) {
+                for (int a = 0; a < 3; ++a) put(hcorners.bytes, h.tile_corners[3 * size_t(k) + size_t(a)]);
+                ++hcorners.count;
+            }
+        }
+        std::vector<uint32_t> offsets = {0};
+        Section hlist{PVSR_TAG('H', 'L', 'S', 'T'), 1, 0, {}};
+        for (const std::vector<uint32_t>& list : lists) {
+            uint64_t next = 0;  // renumbering keeps the order, so the list stays ascending
+            for (const uint32_t o : list) {
+                uint64_t gap = renumber[o] - next;
+                next = uint64_t(renumber[o]) + 1;
+                do {
+                    const uint8_t byte = uint8_t(gap & 0x7f);
+                    gap >>= 7;
+                    hlist.bytes.push_back(char(gap ? byte | 0x80 : byte));
+                } while (gap);
+            }
+            if (hlist.bytes.size() > UINT32_MAX)
+                throw bad_input(fmt::format("{}: the horizon lists pass 4 GiB", path));
+            offsets.push_back(uint32_t(hlist.bytes.size()));
+        }
+        hlist.count = hlist.bytes.size();
+        sections.push_back(std::move(hboxes));
+        sections.push_back(std::move(htiles));
+        sections.push_back(std::move(hcorners));
+        sections.push_back(array_section(PVSR_TAG('H', 'L', 'O', 'F'), 4, offsets));
+        sections.push_back(std::move(hlist));
+    }
+
     // The header, the table, the sections at multiples of 64.
     const auto aligned = [](uint64_t n) { return (n + PVSR_ALIGN - 1) / PVSR_ALIGN * PVSR_ALIGN; };
     std::string out(PVSR_HEADER_BYTES, '\0');
@@ -632,6 +722,7 @@ std::string runtime_file_bytes(const std::string& bake_path, const RuntimeFileOp
         const uint32_t objects = uint32_t(bake.objects.names.size());
         bake.pvs = pvsbake::detail::read_pvs(r, root, objects, bake.cells.count, /*want_rows=*/true);
         bake.occluders = pvsbake::detail::read_occluders(r, root, objects, bake.cells.count, /*want_boxes=*/false);
+        bake.horizon = pvsbake::detail::read_horizon(r, root, bake.cells.count);
         return bake;
     });
     std::string bytes = assemble(bake_path, b, options);

@@ -893,6 +893,54 @@ static const char* check_polygons(pvsr_level* l) {
     return NULL;
 }
 
+/* File version 2.1: the horizon's occluders ('HBOX' boxes, 'HTIL' tiles in the 'OPLN' layout, 'HTCO' their
+ * corners) and a list per block of cells ('HLOF' byte offsets, blocks + 1, into 'HLST': per list the gaps
+ * between its ascending occluder indices, less one, as LEB128 varints): all five or none. Boxes finite with
+ * min <= max; tiles 3 to PVSR_HORIZON_MAX_CORNERS finite corners in range on a finite plane; offsets from 0,
+ * never decreasing, within the lists' bytes. A list's varints are bounded where they are read
+ * (pvsr_horizon_begin_cell), not here: a damaged list ends early. */
+static const char* check_horizon(pvsr_level* l) {
+    uint64_t e;
+    const char* bad;
+    if (!section(l, PVSR_TAG('H', 'L', 'O', 'F'), &l->horizon_list_offsets)) return NULL; /* none */
+    bad = need(l, PVSR_TAG('H', 'L', 'O', 'F'), 4, (uint64_t)palette_block_count(l) + 1, 1,
+               &l->horizon_list_offsets);
+    if (!bad) bad = need(l, PVSR_TAG('H', 'L', 'S', 'T'), 1, UINT64_MAX, 1, &l->horizon_lists);
+    if (!bad) bad = need(l, PVSR_TAG('H', 'B', 'O', 'X'), 24, UINT64_MAX, 1, &l->horizon_boxes);
+    if (!bad)
+        bad = need(l, PVSR_TAG('H', 'T', 'I', 'L'), PVSR_POLYGON_BYTES, UINT64_MAX, 1, &l->horizon_tiles);
+    if (!bad) bad = need(l, PVSR_TAG('H', 'T', 'C', 'O'), 12, UINT64_MAX, 1, &l->horizon_corners);
+    if (bad) return bad;
+    if (l->horizon_boxes.count + l->horizon_tiles.count > 0xffffffffu) return "too many horizon occluders";
+    for (e = 0; e < l->horizon_boxes.count; ++e) {
+        const uint8_t* p = l->horizon_boxes.at + 24 * e;
+        int a;
+        if (!finite_box(p)) return "a horizon box is not finite";
+        for (a = 0; a < 3; ++a)
+            if (rdf(p + 4 * a) > rdf(p + 12 + 4 * a)) return "a horizon box's min is above its max";
+    }
+    for (e = 0; e < l->horizon_tiles.count; ++e) {
+        const uint8_t* p = l->horizon_tiles.at + PVSR_POLYGON_BYTES * e;
+        const uint64_t first = rd32(p + 20), n = rd32(p + 24);
+        int k;
+        for (k = 0; k < 5; ++k)
+            if (!isfinite(rdf(p + 4 * k))) return "a horizon tile's plane is not finite";
+        if (!(rdf(p + 16) >= 0.0f)) return "a horizon tile's thickness is negative";
+        if (n < 3 || n > PVSR_HORIZON_MAX_CORNERS || first + n > l->horizon_corners.count)
+            return "a horizon tile's corners are out of range";
+    }
+    for (e = 0; e < 3 * l->horizon_corners.count; ++e)
+        if (!isfinite(rdf(l->horizon_corners.at + 4 * e))) return "a horizon tile's corner is not finite";
+    if (rd32(l->horizon_list_offsets.at) != 0) return "the horizon lists do not start at 0";
+    for (e = 0; e + 1 < l->horizon_list_offsets.count; ++e) {
+        const uint32_t a = rd32(l->horizon_list_offsets.at + 4 * e),
+                       b = rd32(l->horizon_list_offsets.at + 4 * e + 4);
+        if (b < a || b > l->horizon_lists.count)
+            return "the horizon lists' offsets decrease or pass their bytes";
+    }
+    return NULL;
+}
+
 static const char* check_strings(pvsr_level* l) {
     uint64_t i, fields = 0;
     const char* bad = need(l, PVSR_TAG('S', 'T', 'R', 'S'), 1, UINT64_MAX, 1, &l->strings);
@@ -981,6 +1029,7 @@ pvsr_status pvsr_open(pvsr_level* level, const void* data, size_t size, char* me
     if (!bad) bad = check_objects(level);
     if (!bad) bad = check_ranked(level, &ps);
     if (!bad) bad = check_polygons(level);
+    if (!bad) bad = check_horizon(level);
     if (!bad) bad = check_strings(level);
     if (bad) return fail(&o, PVSR_CORRUPT, bad);
     if (message != NULL && message_size > 0) message[0] = '\0';
@@ -1126,15 +1175,18 @@ typedef struct sink {
     uint32_t* list;
     size_t capacity;
     const pvsr_culler* culler;
+    const pvsr_horizon* horizon;
+    int cull; /* culler or horizon given */
 } sink;
 
-/* 1 when the walk with a culler gives the object on: an object the bake marks always visible, one without
- * bounds, or bounds the culler does not prove hidden. */
+/* 1 when the walk with a culler or horizon gives the object on: an object the bake marks always visible, one
+ * without bounds, or bounds neither proves hidden. */
 static int drawn(const pvsr_level* l, const sink* s, uint32_t object) {
     float box[6];
     if ((pvsr_object_flags(l, object) & PVSR_OBJECT_ALWAYS_VISIBLE) != 0) return 1;
     if (!pvsr_object_bounds(l, object, box)) return 1;
-    return !pvsr_culler_is_hidden(s->culler, box);
+    if (s->culler != NULL && pvsr_culler_is_hidden(s->culler, box)) return 0;
+    return s->horizon == NULL || !pvsr_horizon_is_hidden(s->horizon, box);
 }
 
 /* Walks the cell's row: gives each visible object to the sink in increasing order; returns how many. */
@@ -1147,7 +1199,7 @@ static uint32_t walk(const pvsr_level* l, uint32_t cell, const sink* s) {
 #define PVSR_GIVE(object)                                 \
     do {                                                  \
         const uint32_t o_ = (object);                     \
-        if (s->culler != NULL && !drawn(l, s, o_)) break; \
+        if (s->cull && !drawn(l, s, o_)) break;           \
         if (s->list != NULL) {                            \
             if (count < s->capacity) s->list[count] = o_; \
         } else if (s->visit != NULL) {                    \
@@ -1203,6 +1255,8 @@ uint32_t pvsr_visit_drawn(const pvsr_level* l, uint32_t cell, const pvsr_culler*
     s.list = NULL;
     s.capacity = 0;
     s.culler = culler;
+    s.horizon = NULL;
+    s.cull = culler != NULL;
     return walk(l, cell, &s);
 }
 
@@ -1223,6 +1277,35 @@ uint32_t pvsr_drawn_objects(const pvsr_level* l, uint32_t cell, const pvsr_culle
     s.list = objects != NULL ? objects : &none; /* a list of no room: counts */
     s.capacity = objects != NULL ? capacity : 0;
     s.culler = culler;
+    s.horizon = NULL;
+    s.cull = culler != NULL;
+    return walk(l, cell, &s);
+}
+
+uint32_t pvsr_visit_drawn_horizon(const pvsr_level* l, uint32_t cell, const pvsr_culler* culler,
+                                  const pvsr_horizon* horizon, pvsr_visit_fn visit, void* user) {
+    sink s;
+    s.visit = visit;
+    s.user = user;
+    s.list = NULL;
+    s.capacity = 0;
+    s.culler = culler;
+    s.horizon = horizon;
+    s.cull = culler != NULL || horizon != NULL;
+    return walk(l, cell, &s);
+}
+
+uint32_t pvsr_drawn_objects_horizon(const pvsr_level* l, uint32_t cell, const pvsr_culler* culler,
+                                    const pvsr_horizon* horizon, uint32_t* objects, size_t capacity) {
+    static uint32_t none;
+    sink s;
+    s.visit = NULL;
+    s.user = NULL;
+    s.list = objects != NULL ? objects : &none;
+    s.capacity = objects != NULL ? capacity : 0;
+    s.culler = culler;
+    s.horizon = horizon;
+    s.cull = culler != NULL || horizon != NULL;
     return walk(l, cell, &s);
 }
 
@@ -3242,4 +3325,78 @@ int pvsr_horizon_hidden_by(const pvsr_horizon* h, const float box[6], pvsr_horiz
 
 void pvsr_horizon_set_tag(pvsr_horizon* h, uint32_t tag) {
     if (h != NULL) h->tag = tag;
+}
+
+/* ---- The cell's horizon occluders (file 2.1) ---- */
+
+/* The bytes of the cell's list: [*begin, *end) of 'HLST'; 0 when the file has no lists. */
+static int hz_list_bytes(const pvsr_level* l, uint32_t cell, const uint8_t** begin, const uint8_t** end) {
+    uint32_t b;
+    if (l == NULL || l->horizon_list_offsets.at == NULL || cell >= l->cell_count) return 0;
+    b = palette_block(l, cell);
+    *begin = l->horizon_lists.at + rd32(l->horizon_list_offsets.at + 4 * (uint64_t)b);
+    *end = l->horizon_lists.at + rd32(l->horizon_list_offsets.at + 4 * (uint64_t)b + 4);
+    return 1;
+}
+
+/* The next occluder of a list, or UINT32_MAX at its end (or where a damaged list leaves the occluders). */
+static uint32_t hz_list_next(const pvsr_level* l, const uint8_t** p, const uint8_t* end, uint64_t* next) {
+    uint64_t gap = 0;
+    int shift = 0;
+    for (;;) {
+        uint8_t byte;
+        if (*p >= end || shift > 28) return UINT32_MAX;
+        byte = *(*p)++;
+        gap |= (uint64_t)(byte & 0x7fu) << shift;
+        shift += 7;
+        if ((byte & 0x80u) == 0) break;
+    }
+    *next += gap;
+    if (*next >= l->horizon_boxes.count + l->horizon_tiles.count) return UINT32_MAX;
+    return (uint32_t)(*next)++;
+}
+
+uint32_t pvsr_horizon_occluder_count(const pvsr_level* l) {
+    return l == NULL ? 0 : (uint32_t)(l->horizon_boxes.count + l->horizon_tiles.count);
+}
+
+uint32_t pvsr_horizon_list_count(const pvsr_level* l, uint32_t cell) {
+    const uint8_t *p, *end;
+    uint64_t next = 0;
+    uint32_t n = 0;
+    if (!hz_list_bytes(l, cell, &p, &end)) return 0;
+    while (hz_list_next(l, &p, end, &next) != UINT32_MAX) ++n;
+    return n;
+}
+
+uint32_t pvsr_horizon_begin_cell(pvsr_horizon* h, const pvsr_level* l, uint32_t cell, const float eye[3]) {
+    const uint8_t *p, *end;
+    uint64_t next = 0;
+    uint32_t n = 0, o;
+    if (h == NULL) return 0;
+    pvsr_horizon_begin(h, eye);
+    if (hz_list_bytes(l, cell, &p, &end))
+        while ((o = hz_list_next(l, &p, end, &next)) != UINT32_MAX) {
+            pvsr_horizon_set_tag(h, o);
+            if (o < l->horizon_boxes.count) {
+                const uint8_t* b = l->horizon_boxes.at + 24 * (uint64_t)o;
+                float box[6];
+                int a;
+                for (a = 0; a < 6; ++a) box[a] = rdf(b + 4 * a);
+                pvsr_horizon_add_box(h, box);
+            } else {
+                const uint8_t* t =
+                    l->horizon_tiles.at + PVSR_POLYGON_BYTES * (uint64_t)(o - l->horizon_boxes.count);
+                float plane[5], corners[3 * PVSR_HORIZON_MAX_CORNERS];
+                const uint32_t first = rd32(t + 20), count = rd32(t + 24);
+                uint32_t k;
+                for (k = 0; k < 5; ++k) plane[k] = rdf(t + 4 * k);
+                for (k = 0; k < 3 * count; ++k)
+                    corners[k] = rdf(l->horizon_corners.at + 12 * (uint64_t)first + 4 * k);
+                pvsr_horizon_add_tile(h, plane, corners, count);
+            }
+            ++n;
+        }
+    pvsr_horizon_end(h);
+    return n;
 }

@@ -56,7 +56,7 @@ extern "C" {
 #endif
 
 #define PVSR_VERSION_MAJOR 2 /* the newest file version this runtime reads: 1.x and 2.x */
-#define PVSR_VERSION_MINOR 0
+#define PVSR_VERSION_MINOR 1
 
 typedef enum pvsr_status {
     PVSR_OK = 0,
@@ -94,7 +94,7 @@ typedef struct pvsr_level {
         cell_row, row_offsets, code, object_boxes, object_triangles, object_flags, name_offsets, names,
         occluder_boxes, ranked_offsets, ranked_boxes, ranked_measures, strings, occluder_polygons,
         polygon_corners, ranked_polygon_offsets, ranked_polygons, palette_blocks, palette, occupancy,
-        occupancy_ranks;
+        occupancy_ranks, horizon_boxes, horizon_tiles, horizon_corners, horizon_list_offsets, horizon_lists;
     uint64_t code_bytes; /* the code without its padding */
     uint64_t total_triangles;
 } pvsr_level;
@@ -411,6 +411,32 @@ int pvsr_horizon_is_hidden(const pvsr_horizon* h, const float box[6]);
 typedef void (*pvsr_horizon_use_fn)(void* user, uint32_t tag);
 void pvsr_horizon_set_tag(pvsr_horizon* h, uint32_t tag);
 int pvsr_horizon_hidden_by(const pvsr_horizon* h, const float box[6], pvsr_horizon_use_fn use, void* user);
+
+/* ---- The cell's horizon occluders (file 2.1; docs/ALGORITHMS.md#horizon-lists): the proven boxes, panels
+ * and tiles (the slanted panels kept whole) that the bake chose for the block of cells holding the cell, by
+ * the use this horizon made of them from eyes of the block. A frame:
+ *
+ *   pvsr_horizon_begin_cell(&h, &level, cell, eye);
+ *   pvsr_visit_drawn_horizon(&level, cell, &culler, &h, draw_object, scene);   (culler may be NULL)
+ *
+ * Every listed occluder is proven, so any frame's answers are safe; the lists only decide which occluders
+ * are worth the frame's time. */
+/* Occluders of the cell's list (0 when the file has no lists or the cell is out of range). */
+uint32_t pvsr_horizon_list_count(const pvsr_level* level, uint32_t cell);
+/* Occluders in the file's horizon set (boxes, then tiles); a list's entries index them. */
+uint32_t pvsr_horizon_occluder_count(const pvsr_level* level);
+/* A frame of the horizon at the eye with the cell's list: pvsr_horizon_begin(), each occluder added (tagged
+ * with its index in the file's set, for pvsr_horizon_hidden_by()), pvsr_horizon_end(). Returns the occluders
+ * given (those that add no face from this eye count too); with no list the horizon hides nothing. */
+uint32_t pvsr_horizon_begin_cell(pvsr_horizon* h, const pvsr_level* level, uint32_t cell, const float eye[3]);
+/* pvsr_visit_drawn() culled by the horizon as well: an object is drawn unless the culler (when given) or the
+ * horizon (when given, after its pvsr_horizon_end()) proves its bounds hidden. Both are only read: threads
+ * may walk cells with them. */
+uint32_t pvsr_visit_drawn_horizon(const pvsr_level* level, uint32_t cell, const struct pvsr_culler* culler,
+                                  const pvsr_horizon* horizon, pvsr_visit_fn visit, void* user);
+/* The same objects into a list, as pvsr_drawn_objects(). */
+uint32_t pvsr_drawn_objects_horizon(const pvsr_level* level, uint32_t cell, const struct pvsr_culler* culler,
+                                    const pvsr_horizon* horizon, uint32_t* objects, size_t capacity);
 
 /* ---- The file's layout (docs/FORMAT.md, "The runtime file"), for writers and tools. Little-endian.
  * A 64-byte header, then the section table (PVSR_ENTRY_BYTES an entry), then the sections, each at an offset

@@ -408,6 +408,71 @@ void read_polygons(const Reader& r, hid_t g, uint32_t cells, FileOccluders& o) {
 
 }  // namespace
 
+FileHorizon read_horizon(const Reader& r, hid_t root, uint32_t cells) {
+    FileHorizon h;
+    if (!r.has_link(root, "horizon")) return h;  // older than 1.8, or a bake without lists
+    h.present = true;
+    const std::string where = "/horizon";
+    Handle g = r.open_group(root, where);
+    std::vector<int64_t> box_shape = {-1, 6};
+    h.boxes = r.numeric_dataset<float>(g.get(), where, "boxes", H5T_NATIVE_FLOAT, box_shape, H5T_FLOAT);
+    for (size_t i = 0; i < h.box_count(); ++i) {
+        const float* b = &h.boxes[6 * i];
+        bool ok = true;
+        for (int a = 0; a < 3; ++a)
+            ok = ok && std::isfinite(b[a]) && std::isfinite(b[a + 3]) && b[a] <= b[a + 3];
+        if (!ok) r.fail(cat("/horizon/boxes[", i, "] is not a finite box with min <= max"));
+    }
+    std::vector<int64_t> shape = {-1};
+    h.tile_offsets =
+        r.numeric_dataset<uint32_t>(g.get(), where, "tile_offsets", H5T_NATIVE_UINT32, shape, H5T_INTEGER);
+    const int64_t tiles = shape[0] - 1;
+    std::vector<int64_t> corner_shape = {-1, 3};
+    h.tile_corners =
+        r.numeric_dataset<float>(g.get(), where, "tile_corners", H5T_NATIVE_FLOAT, corner_shape, H5T_FLOAT);
+    h.tile_planes = r.numeric_dataset<float>(g.get(), where, "tile_planes", H5T_NATIVE_FLOAT,
+                                             {std::max<int64_t>(tiles, 0), 5}, H5T_FLOAT);
+    if (tiles < 0 || h.tile_offsets[0] != 0 || int64_t(h.tile_offsets.back()) != corner_shape[0])
+        r.fail("/horizon/tile_offsets does not start at 0 and end at the rows of /horizon/tile_corners");
+    for (int64_t i = 0; i < tiles; ++i) {
+        const uint32_t a = h.tile_offsets[size_t(i)], b = h.tile_offsets[size_t(i) + 1];
+        if (b < a || b - a < 3 || b - a > kHorizonTileMaxCorners)
+            r.fail(cat("/horizon/tile_offsets: tile ", i, " does not have 3 to ", kHorizonTileMaxCorners,
+                       " corners"));
+        const float* pl = &h.tile_planes[5 * size_t(i)];
+        bool ok = pl[4] >= 0.0f && (pl[0] != 0.0f || pl[1] != 0.0f || pl[2] != 0.0f);
+        for (int k = 0; k < 5; ++k) ok = ok && std::isfinite(pl[k]);
+        if (!ok) r.fail(cat("/horizon/tile_planes[", i, "] is not a finite plane with thickness >= 0"));
+    }
+    for (size_t k = 0; k < h.tile_corners.size(); ++k)
+        if (!std::isfinite(h.tile_corners[k]))
+            r.fail(cat("/horizon/tile_corners[", k / 3, "] is not finite"));
+    h.list_offsets = r.numeric_dataset<uint32_t>(g.get(), where, "list_offsets", H5T_NATIVE_UINT32,
+                                                 shape = {-1}, H5T_INTEGER);
+    const int64_t lists = int64_t(h.list_offsets.size()) - 1;
+    h.list_entries = r.numeric_dataset<uint32_t>(g.get(), where, "list_entries", H5T_NATIVE_UINT32,
+                                                 shape = {-1}, H5T_INTEGER);
+    h.cell_list = r.numeric_dataset<uint32_t>(g.get(), where, "cell_list", H5T_NATIVE_UINT32,
+                                              {int64_t(cells)}, H5T_INTEGER);
+    if (lists < 0 || h.list_offsets[0] != 0 || h.list_offsets.back() != h.list_entries.size())
+        r.fail(cat("/horizon/list_offsets does not start at 0 and end at the ", h.list_entries.size(),
+                   " entries of /horizon/list_entries"));
+    const uint64_t occluders = h.box_count() + h.tile_count();
+    for (int64_t l = 0; l < lists; ++l) {
+        const uint32_t a = h.list_offsets[size_t(l)], b = h.list_offsets[size_t(l) + 1];
+        if (b < a) r.fail(cat("/horizon/list_offsets[", l + 1, "] decreases"));
+        for (uint32_t k = a; k < b; ++k)
+            if (h.list_entries[k] >= occluders || (k > a && h.list_entries[k] <= h.list_entries[k - 1]))
+                r.fail(cat("/horizon/list_entries[", k, "] is not an occluder below ", occluders,
+                           " after the one before it in its list"));
+    }
+    for (uint32_t c = 0; c < cells; ++c)
+        if (int64_t(h.cell_list[c]) >= lists)
+            r.fail(
+                cat("/horizon/cell_list[", c, "] = ", h.cell_list[c], " is not below the ", lists, " lists"));
+    return h;
+}
+
 FileOccluders read_occluders(const Reader& r, hid_t root, uint32_t objects, uint32_t cells, bool want_boxes) {
     FileOccluders o;
     if (!r.has_link(root, "occluders")) return o;  // a bake made without occluders

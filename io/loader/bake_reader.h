@@ -19,7 +19,8 @@ namespace pvsbake::detail {
 
 constexpr const char* kFormatName = "pvsbake";
 constexpr int kFormatMajor = 1;
-constexpr int kFormatMinor = 7;
+constexpr int kFormatMinor = 8;
+constexpr uint32_t kHorizonTileMaxCorners = 32;  // runtime/pvsr.h PVSR_HORIZON_MAX_CORNERS
 
 // The root attributes. Throws kNotBakeFile without format = "pvsbake", kVersionTooNew for a newer major.
 BakeInfo read_header(const Reader& r, hid_t root);
@@ -116,6 +117,25 @@ struct FileOccluders {
     std::vector<float> ranked_polygon_score;
 };
 FileOccluders read_occluders(const Reader& r, hid_t root, uint32_t objects, uint32_t cells, bool want_boxes);
+
+// /horizon (format 1.8, docs/FORMAT.md): the run-time horizon's occluders and the list each block of cells
+// gives it; `present` is false in older files and bakes without lists. Validated: boxes finite with
+// min <= max; tiles of 3 to 32 finite corners on a finite plane with thickness >= 0; cell_list has one entry
+// per cell, each below the lists; list_offsets from 0, never decreasing, ending at the entries; each list's
+// entries ascending and below boxes + tiles.
+struct FileHorizon {
+    bool present = false;
+    std::vector<float> boxes;            // 6 floats a box
+    std::vector<uint32_t> tile_offsets;  // tiles + 1, into tile_corners' corners
+    std::vector<float> tile_corners;     // 3 floats a corner
+    std::vector<float> tile_planes;      // 5 floats a tile: normal, offset, thickness
+    std::vector<uint32_t> cell_list;     // per cell
+    std::vector<uint32_t> list_offsets;  // lists + 1
+    std::vector<uint32_t> list_entries;
+    uint64_t box_count() const { return boxes.size() / 6; }
+    uint64_t tile_count() const { return tile_offsets.empty() ? 0 : tile_offsets.size() - 1; }
+};
+FileHorizon read_horizon(const Reader& r, hid_t root, uint32_t cells);
 
 // Opens path for reading: kFileMissing, kIoError, kNotBakeFile (not HDF5, a folder) or kCorrupt (HDF5
 // cannot open it). The returned handle is the file; `file_bytes` receives its size.

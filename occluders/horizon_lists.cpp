@@ -1,0 +1,236 @@
+// SPDX-License-Identifier: MIT
+// The run-time horizon's lists per block of cells (occluders/horizon_lists.h;
+// docs/ALGORITHMS.md#horizon-lists): the runtime's own horizon (runtime/pvsr.c) from seeded eyes of each
+// block's cells, every candidate given and tagged, names the occluders that proved some object of the eye's
+// PVS hidden. Blocks are dealt to the threads and processes of the bake (core/work_share.h); each block's
+// result is a bit set of its own, united over the processes, so the lists do not depend on who chose which
+// block.
+#include "occluders/horizon_lists.h"
+
+#include "cells/eyes.h"
+#include "core/error.h"
+#include "runtime/pvsr.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <memory>
+
+namespace pvs {
+
+namespace {
+
+// Pieces an eye's horizon holds (past them the rest of its candidates are dropped: fewer chosen, never
+// unsafe; counted in the figures).
+constexpr size_t kMaxPieces = size_t(1) << 19;
+constexpr uint64_t kEyeSeedMix = 0x686f72697a6f6eULL;  // the horizon's eyes differ from the ranking's
+
+// The candidates as the runtime takes them.
+struct Candidates {
+    std::vector<float> boxes;     // 6 floats a box
+    std::vector<float> planes;    // 5 floats a tile
+    std::vector<uint32_t> first;  // a tile's first corner in `corners` (3 floats a corner)
+    std::vector<uint32_t> count;
+    std::vector<float> corners;
+    uint32_t box_count() const { return uint32_t(boxes.size() / 6); }
+    uint32_t size() const { return box_count() + uint32_t(first.size()); }
+};
+
+Candidates candidates_of(const std::vector<Aabb>& boxes, const std::vector<OccluderPolygon>& tiles) {
+    Candidates c;
+    for (const Aabb& b : boxes)
+        c.boxes.insert(c.boxes.end(), {b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z});
+    for (const OccluderPolygon& t : tiles) {
+        c.planes.insert(c.planes.end(), {t.normal.x, t.normal.y, t.normal.z, t.offset, t.thickness});
+        c.first.push_back(uint32_t(c.corners.size() / 3));
+        c.count.push_back(uint32_t(t.corners.size()));
+        for (const glm::vec3& p : t.corners) c.corners.insert(c.corners.end(), {p.x, p.y, p.z});
+    }
+    return c;
+}
+
+void build(pvsr_horizon* h, const Candidates& c, const glm::vec3& eye) {
+    const float e[3] = {eye.x, eye.y, eye.z};
+    pvsr_horizon_begin(h, e);
+    const uint32_t nb = c.box_count();
+    for (uint32_t i = 0; i < nb; ++i) {
+        pvsr_horizon_set_tag(h, i);
+        pvsr_horizon_add_box(h, &c.boxes[6 * size_t(i)]);
+    }
+    for (uint32_t t = 0; t < c.first.size(); ++t) {
+        pvsr_horizon_set_tag(h, nb + t);
+        pvsr_horizon_add_tile(h, &c.planes[5 * size_t(t)], &c.corners[3 * size_t(c.first[t])], c.count[t]);
+    }
+    pvsr_horizon_end(h);
+}
+
+struct Marks {
+    uint64_t* words;
+};
+
+void mark(void* user, uint32_t tag) {
+    uint64_t* words = static_cast<Marks*>(user)->words;
+    words[tag >> 6] |= uint64_t(1) << (tag & 63);
+}
+
+}  // namespace
+
+uint32_t horizon_block_count(const CellSet& cells) {
+    if (cells.kind != CellSet::Kind::kGrid)
+        return uint32_t((uint64_t(cells.size()) + kHorizonBlockCells - 1) / kHorizonBlockCells);
+    uint32_t n = 1;
+    for (int a = 0; a < 3; ++a)
+        n *= (uint32_t(std::max(cells.dims[a], 0)) + kHorizonBlockSide - 1) / kHorizonBlockSide;
+    return n;
+}
+
+std::vector<uint32_t> horizon_blocks(const CellSet& cells) {
+    std::vector<uint32_t> block(cells.size(), 0);
+    if (cells.kind != CellSet::Kind::kGrid) {
+        for (uint32_t c = 0; c < block.size(); ++c) block[c] = c / kHorizonBlockCells;
+        return block;
+    }
+    const uint32_t d0 = uint32_t(cells.dims.x), d1 = uint32_t(cells.dims.y);
+    const uint32_t n0 = (d0 + kHorizonBlockSide - 1) / kHorizonBlockSide;
+    const uint32_t n1 = (d1 + kHorizonBlockSide - 1) / kHorizonBlockSide;
+    for (uint32_t g = 0; g < cells.grid_to_cell.size(); ++g) {
+        const int32_t c = cells.grid_to_cell[g];
+        if (c < 0 || size_t(c) >= block.size()) continue;
+        block[size_t(c)] = g % d0 / kHorizonBlockSide +
+                           n0 * (g / d0 % d1 / kHorizonBlockSide + n1 * (g / (d0 * d1) / kHorizonBlockSide));
+    }
+    return block;
+}
+
+HorizonLists choose_horizon_lists(Context& ctx, const RankingConfig& config, const World& world,
+                                  const CellSet& cells, const PvsSet& pvs, const std::vector<Aabb>& boxes,
+                                  const std::vector<OccluderPolygon>& tiles, HorizonListFigures& figures,
+                                  WorkShare* share) {
+    figures = HorizonListFigures{};
+    HorizonLists out;
+    const Candidates cand = candidates_of(boxes, tiles);
+    figures.candidates = cand.size();
+    if (config.horizon_eyes == 0 || cand.size() == 0 || cells.size() == 0) return out;
+    if (pvs.cell_count != cells.size() || pvs.object_count != world.objects.size())
+        throw internal_error("horizon lists: the PVS does not match the cells and objects");
+    ScopedTimer timer(ctx, "horizon_lists");
+    const auto start = std::chrono::steady_clock::now();
+
+    const std::vector<uint32_t> block_of = horizon_blocks(cells);
+    const uint32_t blocks = horizon_block_count(cells);
+    std::vector<std::vector<uint32_t>> block_cells(blocks);
+    for (uint32_t c = 0; c < cells.size(); ++c) block_cells[block_of[c]].push_back(c);
+    const size_t words = (size_t(cand.size()) + 63) / 64;
+    std::vector<uint64_t> used(size_t(blocks) * words, 0);  // per block, the candidates its eyes used
+    std::vector<uint64_t> counts(2, 0);                     // eyes, pieces dropped (this process's)
+    std::vector<float> bounds(6 * world.objects.size());
+    std::vector<uint8_t> testable(world.objects.size(), 0);
+    for (size_t o = 0; o < world.objects.size(); ++o) {
+        const Aabb& b = world.objects[o].bounds;
+        const float f[6] = {b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z};
+        std::copy(f, f + 6, &bounds[6 * o]);
+        testable[o] = (world.objects[o].flags & kObjectAlwaysVisible) == 0 && !b.is_empty();
+    }
+
+    WorkShare alone;
+    WorkShare& deal = share ? *share : alone;
+    ctx.progress_begin("horizon lists", blocks, "blocks");
+    deal.begin(blocks);
+    const int columns = int(config.horizon_columns);
+    const size_t memory_bytes = pvsr_horizon_memory_bytes(columns, kMaxPieces);
+    bool memory_failed = false;
+#pragma omp parallel
+    {
+        std::vector<uint64_t> memory(memory_bytes / 8 + 1);
+        pvsr_horizon h;
+        const bool ok = pvsr_horizon_init(&h, columns, kMaxPieces, memory.data(), memory.size() * 8) != 0;
+        uint64_t eyes_done = 0, dropped = 0;
+        std::vector<glm::vec3> eyes;
+        for_each_dealt(deal, ctx, 1, [&](uint64_t b) {
+            if (!ok) return;
+            const std::vector<uint32_t>& mine = block_cells[size_t(b)];
+            Marks marks{used.data() + size_t(b) * words};
+            const uint32_t n = uint32_t(mine.size());
+            for (uint32_t k = 0; k < n; ++k) {
+                // horizon_eyes spread evenly over the block's cells (in cell order).
+                const uint32_t share_of = uint32_t((uint64_t(k + 1) * config.horizon_eyes) / n -
+                                                   (uint64_t(k) * config.horizon_eyes) / n);
+                if (share_of == 0) continue;
+                const uint32_t c = mine[k];
+                eyes.clear();
+                sample_eye_points(cells, c, share_of, config.seed ^ kEyeSeedMix, eyes);
+                const uint64_t* row = pvs.row(c);
+                for (const glm::vec3& eye : eyes) {
+                    build(&h, cand, eye);
+                    ++eyes_done;
+                    dropped += h.dropped;
+                    for (uint32_t w = 0; w < pvs.words_per_row; ++w)
+                        for (uint64_t bits = row[w]; bits != 0; bits &= bits - 1) {
+                            const uint32_t o = 64 * w + uint32_t(__builtin_ctzll(bits));
+                            if (o < testable.size() && testable[o])
+                                pvsr_horizon_hidden_by(&h, &bounds[6 * size_t(o)], mark, &marks);
+                        }
+                }
+            }
+        });
+#pragma omp critical(horizon_lists_counts)
+        {
+            counts[0] += eyes_done;
+            counts[1] += dropped;
+            memory_failed |= !ok;
+        }
+    }
+    if (memory_failed) throw internal_error("horizon lists: a horizon did not take its memory");
+    deal.unite(used.data(), used.size());
+    deal.add(counts.data(), counts.size());
+    ctx.progress_end();
+
+    // Keep the candidates some list names, in their order; the lists in the kept indices.
+    std::vector<uint64_t> any(words, 0);
+    for (uint32_t b = 0; b < blocks; ++b)
+        for (size_t w = 0; w < words; ++w) any[w] |= used[size_t(b) * words + w];
+    std::vector<uint32_t> index(cand.size(), UINT32_MAX);
+    for (uint32_t i = 0; i < cand.size(); ++i) {
+        if (((any[i >> 6] >> (i & 63)) & 1u) == 0) continue;
+        if (i < cand.box_count()) {
+            index[i] = uint32_t(out.boxes.size());
+            out.boxes.push_back(boxes[i]);
+        }
+    }
+    for (uint32_t i = cand.box_count(); i < cand.size(); ++i) {
+        if (((any[i >> 6] >> (i & 63)) & 1u) == 0) continue;
+        index[i] = uint32_t(out.boxes.size() + out.tiles.size());
+        out.tiles.push_back(tiles[i - cand.box_count()]);
+    }
+    out.offsets.reserve(size_t(blocks) + 1);
+    out.offsets.push_back(0);
+    for (uint32_t b = 0; b < blocks; ++b) {
+        const uint64_t* u = used.data() + size_t(b) * words;
+        for (size_t w = 0; w < words; ++w)
+            for (uint64_t bits = u[w]; bits != 0; bits &= bits - 1)
+                out.entries.push_back(index[64 * w + size_t(__builtin_ctzll(bits))]);
+        out.offsets.push_back(uint32_t(out.entries.size()));
+        figures.largest_list = std::max(figures.largest_list, out.offsets[b + 1] - out.offsets[b]);
+    }
+    out.cell_list = block_of;
+    figures.kept = uint32_t(out.occluders());
+    figures.lists = blocks;
+    figures.entries = out.entries.size();
+    figures.eyes = counts[0];
+    figures.pieces_dropped = counts[1];
+    figures.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    ctx.info(fmt::format(
+        "horizon lists: {} of {} candidate occluders kept, {} lists of {:.1f} on average "
+        "(the longest {}), from {} eyes, {:.2f} s",
+        figures.kept, figures.candidates, blocks, blocks > 0 ? double(figures.entries) / double(blocks) : 0.0,
+        figures.largest_list, figures.eyes, figures.seconds));
+    if (figures.pieces_dropped > 0)
+        ctx.info(
+            fmt::format("horizon lists: {} pieces found no room in an eye's horizon (fewer occluders "
+                        "chosen)",
+                        figures.pieces_dropped));
+    return out;
+}
+
+}  // namespace pvs

@@ -1,0 +1,56 @@
+// SPDX-License-Identifier: MIT
+// pvsbake occluders: the run-time horizon's occluders and the list of them that each block of cells gives the
+// runtime (runtime/pvsr.h, pvsr_horizon; docs/ALGORITHMS.md#horizon-lists).
+//
+// The candidates are every proven occluder the bake knows: its proven boxes, the world's panels (exact
+// rectangles of opaque surface, as flat boxes) and its slanted panels as tiles (occluders/slanted_panels.h,
+// runtime_tiles). A block's list holds those whose pieces the runtime's own horizon used to prove some object
+// of a PVS hidden, from seeded eyes in the block's cells: every candidate is given, each tagged, and
+// pvsr_horizon_hidden_by() names the tags of the chains that proved each hidden object. Any list is safe
+// (every candidate is proven); the eyes only decide which occluders are worth a frame's time.
+//
+// Blocks follow the runtime file's rule (runtime/pvsr.c, palette_block): on a grid, the 4 x 4 x 4 block of
+// grid positions holding the cell (x fastest, then y, then z); on an octree, cells 64 b .. 64 b + 63. The
+// result depends only on the inputs and the seed, not on threads or processes.
+#pragma once
+
+#include "core/cell_set.h"
+#include "core/config.h"
+#include "core/context.h"
+#include "core/occluder.h"
+#include "core/pvs_set.h"
+#include "core/work_share.h"
+#include "core/world.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace pvs {
+
+struct HorizonListFigures {
+    uint32_t candidates = 0;      // occluders offered to the eyes' horizons
+    uint32_t kept = 0;            // occluders some list names (the file's)
+    uint32_t lists = 0;           // blocks
+    uint64_t entries = 0;         // over every list
+    uint32_t largest_list = 0;    // entries of the longest list
+    uint64_t eyes = 0;            // eyes whose horizons chose
+    uint64_t pieces_dropped = 0;  // pieces an eye's horizon had no room for (fewer chosen, never unsafe)
+    double seconds = 0.0;
+};
+
+// The grid positions' blocks and cells' blocks of the runtime file's rule (above).
+constexpr uint32_t kHorizonBlockSide = 4;
+constexpr uint32_t kHorizonBlockCells = 64;
+uint32_t horizon_block_count(const CellSet& cells);
+// Per cell, its block.
+std::vector<uint32_t> horizon_blocks(const CellSet& cells);
+
+// The candidates: `boxes` (proven boxes and panels, solid or flat along one axis) and `tiles`. With
+// config.horizon_eyes == 0, or no candidate, an empty result. With `share`, the blocks are dealt over its
+// processes (collective: every process calls it, and every one gets the whole result).
+HorizonLists choose_horizon_lists(Context& ctx, const RankingConfig& config, const World& world,
+                                  const CellSet& cells, const PvsSet& pvs, const std::vector<Aabb>& boxes,
+                                  const std::vector<OccluderPolygon>& tiles, HorizonListFigures& figures,
+                                  WorkShare* share = nullptr);
+
+}  // namespace pvs
