@@ -153,6 +153,10 @@ struct RankingConfig {
                                  // choose the block's list of horizon occluders (occluders/horizon_lists.h,
                                  // docs/ALGORITHMS.md#horizon-lists); 0 = no lists
     uint32_t horizon_columns = 256;  // [Limit: 4..8192] columns a side of those horizons (runtime/pvsr.h)
+    uint32_t horizon_min_uses = 1;   // [Limit: 1..1e9] a list keeps the occluders that served in this many of
+                                     // its eyes' proofs
+    uint32_t horizon_list_max = 0;   // [Limit: 0..1e6] and at most this many of them, the most used first;
+                                     // 0 = no limit
 };
 
 // The conservative solver (pvs/conservative.h).
@@ -459,6 +463,15 @@ void visit_options(Config& c, Visitor&& v) {
     v(OptionSpec{OptionGroup::kRanking, "--horizon-columns", "ranking.horizon_columns", "columns",
                  "columns a side of the horizons that choose the lists", 4, 8192},
       c.ranking.horizon_columns);
+    v(OptionSpec{OptionGroup::kRanking, "--horizon-min-uses", "ranking.horizon_min_uses", "proofs",
+                 "a block's list keeps the occluders that served in at least this many of its eyes' proofs",
+                 1, 1e9},
+      c.ranking.horizon_min_uses);
+    v(OptionSpec{OptionGroup::kRanking, "--horizon-list-max", "ranking.horizon_list_max", "occluders",
+                 "a block's list keeps at most this many occluders, the most used first (fewer: a cheaper "
+                 "frame, less culled); 0 = no limit",
+                 0, 1e6},
+      c.ranking.horizon_list_max);
     v(OptionSpec{OptionGroup::kConservative, "--epsilon", "conservative.epsilon_m", "m",
                  "occluders shrink by this and cell faces are sampled within it", 0.01, 100},
       c.conservative.epsilon_m);

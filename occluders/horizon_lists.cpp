@@ -65,13 +65,10 @@ void build(pvsr_horizon* h, const Candidates& c, const glm::vec3& eye) {
     pvsr_horizon_end(h);
 }
 
-struct Marks {
-    uint64_t* words;
-};
-
-void mark(void* user, uint32_t tag) {
-    uint64_t* words = static_cast<Marks*>(user)->words;
-    words[tag >> 6] |= uint64_t(1) << (tag & 63);
+// Per candidate, the proofs of the block's eyes it served in (saturating).
+void count_use(void* user, uint32_t tag) {
+    uint32_t& n = (*static_cast<std::vector<uint32_t>*>(user))[tag];
+    n += n < UINT32_MAX ? 1u : 0u;
 }
 
 }  // namespace
@@ -147,10 +144,12 @@ HorizonLists choose_horizon_lists(Context& ctx, const RankingConfig& config, con
         const bool ok = pvsr_horizon_init(&h, columns, kMaxPieces, memory.data(), memory.size() * 8) != 0;
         uint64_t eyes_done = 0, dropped = 0;
         std::vector<glm::vec3> eyes;
+        std::vector<uint32_t> uses(cand.size(), 0);
+        std::vector<std::pair<uint32_t, uint32_t>> ranked;  // (uses, candidate)
         for_each_dealt(deal, ctx, 1, [&](uint64_t b) {
             if (!ok) return;
             const std::vector<uint32_t>& mine = block_cells[size_t(b)];
-            Marks marks{used.data() + size_t(b) * words};
+            std::fill(uses.begin(), uses.end(), 0u);
             const uint32_t n = uint32_t(mine.size());
             for (uint32_t k = 0; k < n; ++k) {
                 // horizon_eyes spread evenly over the block's cells (in cell order).
@@ -169,10 +168,26 @@ HorizonLists choose_horizon_lists(Context& ctx, const RankingConfig& config, con
                         for (uint64_t bits = row[w]; bits != 0; bits &= bits - 1) {
                             const uint32_t o = 64 * w + uint32_t(__builtin_ctzll(bits));
                             if (o < testable.size() && testable[o])
-                                pvsr_horizon_hidden_by(&h, &bounds[6 * size_t(o)], mark, &marks);
+                                pvsr_horizon_hidden_by(&h, &bounds[6 * size_t(o)], count_use, &uses);
                         }
                 }
             }
+            // The list: the candidates used in at least horizon_min_uses proofs, the most used first, at most
+            // horizon_list_max of them (0: no limit).
+            ranked.clear();
+            for (uint32_t i = 0; i < cand.size(); ++i)
+                if (uses[i] >= std::max<uint32_t>(config.horizon_min_uses, 1)) ranked.push_back({uses[i], i});
+            size_t keep = ranked.size();
+            if (config.horizon_list_max > 0 && keep > config.horizon_list_max) {
+                keep = config.horizon_list_max;
+                std::partial_sort(ranked.begin(), ranked.begin() + long(keep), ranked.end(),
+                                  [](const auto& x, const auto& y) {
+                                      return x.first != y.first ? x.first > y.first : x.second < y.second;
+                                  });
+            }
+            uint64_t* bits = used.data() + size_t(b) * words;
+            for (size_t r = 0; r < keep; ++r)
+                bits[ranked[r].second >> 6] |= uint64_t(1) << (ranked[r].second & 63);
         });
 #pragma omp critical(horizon_lists_counts)
         {

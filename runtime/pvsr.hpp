@@ -42,6 +42,7 @@
 namespace pvsr {
 
 class Culler;
+class Horizon;
 
 class Level {
 public:
@@ -93,6 +94,14 @@ public:
     uint32_t for_each_drawn(uint32_t cell, const Culler& culler, F&& visit) const;
     uint32_t drawn_objects(uint32_t cell, const Culler& culler, uint32_t* objects,
                            size_t capacity) const noexcept;
+    // The same, culled by the cell's horizon as well (Horizon::begin_cell; pvsr_visit_drawn_horizon); a null
+    // culler leaves it to the horizon.
+    template <class F>
+    uint32_t for_each_drawn(uint32_t cell, const Culler* culler, const Horizon& horizon, F&& visit) const;
+    // The cell's list of horizon occluders (file 2.1): how many (0 without lists).
+    uint32_t horizon_list_count(uint32_t cell) const noexcept {
+        return pvsr_horizon_list_count(&level_, cell);
+    }
     uint32_t visible_count(uint32_t cell) const noexcept { return pvsr_visible_count(&level_, cell); }
     uint32_t visible_objects(uint32_t cell, uint32_t* objects, size_t capacity) const noexcept {
         return pvsr_visible_objects(&level_, cell, objects, capacity);
@@ -191,6 +200,52 @@ private:
     pvsr_culler culler_{};
     bool ok_ = false;
 };
+
+// The occlusion horizon (pvsr_horizon in pvsr.h) with its memory: allocated once here, never per frame.
+class Horizon {
+public:
+    // columns a side (a power of two, PVSR_HORIZON_MIN_COLUMNS to PVSR_HORIZON_MAX_COLUMNS) and the pieces
+    // a frame may hold (past them occluders are dropped: fewer culls). ok() is false when the memory could
+    // not be allocated: then it hides nothing.
+    explicit Horizon(int columns = 256, size_t max_pieces = 65536) noexcept {
+        try {
+            memory_.resize(pvsr_horizon_memory_bytes(columns, max_pieces) / sizeof(uint64_t) + 1);
+            ok_ = pvsr_horizon_init(&horizon_, columns, max_pieces, memory_.data(),
+                                    memory_.size() * sizeof(uint64_t)) != 0;
+        } catch (...) {
+            pvsr_horizon_init(&horizon_, columns, max_pieces, nullptr, 0);
+        }
+    }
+    Horizon(const Horizon&) = delete;  // it points into its own memory
+    Horizon& operator=(const Horizon&) = delete;
+
+    bool ok() const noexcept { return ok_; }
+    // A frame at the eye (float[3]) with the cell's list of horizon occluders; returns how many were given
+    // (pvsr_horizon_begin_cell).
+    uint32_t begin_cell(const Level& level, uint32_t cell, const float eye[3]) noexcept {
+        return pvsr_horizon_begin_cell(&horizon_, &level.c_level(), cell, eye);
+    }
+    bool is_hidden(const float box[6]) const noexcept { return pvsr_horizon_is_hidden(&horizon_, box) != 0; }
+    // Pieces this frame holds, and those dropped for want of room.
+    size_t pieces() const noexcept { return horizon_.count; }
+    size_t dropped() const noexcept { return horizon_.dropped; }
+
+    const pvsr_horizon& c_horizon() const noexcept { return horizon_; }
+
+private:
+    std::vector<uint64_t> memory_;
+    pvsr_horizon horizon_{};
+    bool ok_ = false;
+};
+
+template <class F>
+uint32_t Level::for_each_drawn(uint32_t cell, const Culler* culler, const Horizon& horizon, F&& visit) const {
+    using Fn = std::remove_reference_t<F>;
+    return pvsr_visit_drawn_horizon(
+        &level_, cell, culler != nullptr ? &culler->c_culler() : nullptr, &horizon.c_horizon(),
+        [](void* user, uint32_t object) { (*static_cast<Fn*>(user))(object); },
+        const_cast<void*>(static_cast<const void*>(&visit)));
+}
 
 template <class F>
 uint32_t Level::for_each_drawn(uint32_t cell, const Culler& culler, F&& visit) const {

@@ -5,6 +5,7 @@
 #pragma once
 
 #include "io/bake_file.h"
+#include "tests/horizon_fixture.h"
 #include "tests/test_util.h"
 
 #include <pvsbake/loader.h>

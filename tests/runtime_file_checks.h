@@ -283,6 +283,15 @@ inline void round_trip(const BakeData& bake, uint32_t seed, uint64_t* culled = n
         EXPECT_EQ(pvsr_has_occluder_measures(&level.c_level()) != 0, measures && !bake.ranked.offsets.empty());
         expect_same_as_loader(level, loaded, seed);
         expect_same_drawn(level, loaded, c_bake, seed, culled_here);
+        // The horizon lists (file 2.1): each cell's list holds the occluders of the bake's list of its cell
+        // (the bake's blocks are the file's, and every occluder some list names is kept), ascending.
+        EXPECT_EQ(pvsr_horizon_occluder_count(&level.c_level()) > 0, !bake.horizon.empty());
+        for (uint32_t c = 0; c < bake.cells.size() && !bake.horizon.empty(); ++c) {
+            const uint32_t l = bake.horizon.cell_list[c];
+            ASSERT_EQ(level.horizon_list_count(c), bake.horizon.offsets[l + 1] - bake.horizon.offsets[l])
+                << "cell " << c;
+        }
+        EXPECT_EQ(level.horizon_list_count(uint32_t(bake.cells.size())), 0u);
     }
     pvsbake_free(c_bake);
     if (culled != nullptr) *culled += culled_here;

@@ -6,6 +6,7 @@
 #include "io/bake_file.h"
 
 #include "core/error.h"
+#include "tests/horizon_fixture.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
@@ -302,8 +303,8 @@ void patch_int_attr(const std::string& path, const std::string& object, const st
     ASSERT_GE(H5Awrite(a.id(), H5T_NATIVE_INT, &value), 0);
 }
 
-// Writes one element of a 1-D dataset (mem_type: the element type in memory; for a compound, a type with
-// only the members to change).
+// Writes one element of a 1-D or 2-D dataset, `index` counted in row-major order (mem_type: the element
+// type in memory; for a compound, a type with only the members to change).
 void patch_element(const std::string& path, const std::string& dataset, hsize_t index, hid_t mem_type,
                    const void* value) {
     H5File f(path, true);
@@ -312,7 +313,12 @@ void patch_element(const std::string& path, const std::string& dataset, hsize_t 
     ASSERT_GE(ds, 0) << dataset;
     const hid_t space = H5Dget_space(ds);
     const hsize_t one = 1;
-    ASSERT_GE(H5Sselect_hyperslab(space, H5S_SELECT_SET, &index, nullptr, &one, nullptr), 0);
+    hsize_t dims[2] = {0, 0};
+    const int rank = H5Sget_simple_extent_dims(space, dims, nullptr);
+    ASSERT_TRUE(rank == 1 || rank == 2) << dataset;
+    const hsize_t start[2] = {rank == 2 ? index / dims[1] : index, rank == 2 ? index % dims[1] : 0};
+    const hsize_t count[2] = {1, 1};
+    ASSERT_GE(H5Sselect_hyperslab(space, H5S_SELECT_SET, start, nullptr, count, nullptr), 0);
     const hid_t mem_space = H5Screate_simple(1, &one, nullptr);
     ASSERT_GE(H5Dwrite(ds, mem_type, mem_space, space, H5P_DEFAULT, value), 0);
     H5Sclose(mem_space);
@@ -1056,6 +1062,63 @@ TEST(BakeFileBad, PolygonOccludersOutOfRangeOrDamaged) {
     patched("/occluders/polygon_offsets", 1, H5T_NATIVE_UINT32, &two, {"/occluders/polygon_offsets"});
     patched("/occluders/ranked_polygon_offsets", 2, H5T_NATIVE_UINT32, &zero,
             {"/occluders/ranked_polygon_offsets[2] decreases"});
+}
+
+// The ranked bake with horizon lists (format 1.8): two boxes (a solid one and a panel) and a tile, two lists
+// over its cells. They come back as written, and a damaged list, tile or cell entry is refused by name.
+BakeData horizon_bake() {
+    BakeData bake = ranked_bake();
+    test::add_horizon_lists(bake);
+    bake.horizon.cell_list.back() = 1;
+    bake.horizon.offsets = {0, 2, 3};
+    bake.horizon.entries = {0, 2, 1};
+    return bake;
+}
+
+TEST(BakeFile, HorizonListsRoundTrip) {
+    test::TempDir dir;
+    const BakeData bake = horizon_bake();
+    const std::string path = dir.file("horizon.h5");
+    write_bake_file(path, bake);
+    const BakeData back = read_bake_file(path);
+    expect_same(bake, back);
+    EXPECT_EQ(back.horizon.boxes, bake.horizon.boxes);
+    ASSERT_EQ(back.horizon.tiles.size(), 1u);
+    EXPECT_TRUE(back.horizon.tiles[0].tile);
+    EXPECT_EQ(back.horizon.tiles[0].corners, bake.horizon.tiles[0].corners);
+    EXPECT_EQ(back.horizon.tiles[0].normal, bake.horizon.tiles[0].normal);
+    EXPECT_EQ(back.horizon.tiles[0].thickness, bake.horizon.tiles[0].thickness);
+    EXPECT_EQ(back.horizon.cell_list, bake.horizon.cell_list);
+    EXPECT_EQ(back.horizon.offsets, bake.horizon.offsets);
+    EXPECT_EQ(back.horizon.entries, bake.horizon.entries);
+    write_bake_file(dir.file("again.h5"), back);
+    EXPECT_EQ(test::read_file(dir.file("again.h5")), test::read_file(path));
+    // Without lists, no /horizon group, and nothing comes back.
+    BakeData none = bake;
+    none.horizon = HorizonLists{};
+    write_bake_file(dir.file("none.h5"), none);
+    EXPECT_TRUE(read_bake_file(dir.file("none.h5")).horizon.empty());
+}
+
+TEST(BakeFileBad, HorizonListsOutOfRangeOrDamaged) {
+    test::TempDir dir;
+    const std::string good = dir.file("good.h5");
+    write_bake_file(good, horizon_bake());
+    const std::string path = dir.file("bad.h5");
+    auto patched = [&](const char* dataset, hsize_t index, hid_t type, const void* value,
+                       std::vector<std::string> needles) {
+        expect_patch_refused(good, path, dataset, index, type, value, needles);
+    };
+    const uint32_t big = 99, zero = 0;
+    const float nan = std::nanf(""), negative = -1.0f;
+    patched("/horizon/list_entries", 1, H5T_NATIVE_UINT32, &big, {"/horizon/list_entries[1]"});
+    patched("/horizon/list_entries", 1, H5T_NATIVE_UINT32, &zero, {"/horizon/list_entries[1]"});
+    patched("/horizon/cell_list", 0, H5T_NATIVE_UINT32, &big, {"/horizon/cell_list[0]"});
+    patched("/horizon/list_offsets", 1, H5T_NATIVE_UINT32, &big, {"/horizon/list_offsets"});
+    patched("/horizon/boxes", 3, H5T_NATIVE_FLOAT, &nan, {"/horizon/boxes[0]"});
+    patched("/horizon/tile_planes", 4, H5T_NATIVE_FLOAT, &negative, {"/horizon/tile_planes[0]"});
+    patched("/horizon/tile_corners", 2, H5T_NATIVE_FLOAT, &nan, {"/horizon/tile_corners[0]"});
+    patched("/horizon/tile_offsets", 1, H5T_NATIVE_UINT32, &zero, {"/horizon/tile_offsets"});
 }
 
 // A bake without a ranking (ranking off, or read from an older file) writes no ranked datasets, and a file

@@ -82,12 +82,15 @@ TEST(RuntimeExport, TheSampleWorldAnswersAsTheHdf5Loader) {
 }
 
 // What a game draws, against rays: random worlds baked with their ranked occluders (proven boxes of the
-// solid, panels, and the turned walls' sides as polygon occluders), exported; from random eyes in random
+// solid, panels, and the turned walls' sides as polygon occluders) and their horizon lists, exported; the
+// walk culled by the cell's culler and its horizon (pvsr_visit_drawn_horizon) is the PVS less exactly the
+// objects whose bounds either hides; from random eyes in random
 // cells' eye space, every object the culled walk leaves out of the cell's PVS is checked with segments from
 // the eye to points of its triangles (vertices pulled in a hair, centroids and random points): none may reach
 // one (a wrong cull). Not vacuous: some are culled.
 TEST(RuntimeExport, TheDrawnWalkCullsNothingARayReaches) {
-    uint64_t culled = 0, segments = 0, wrong = 0, frames = 0, polygons = 0;
+    uint64_t culled = 0, segments = 0, wrong = 0, frames = 0, polygons = 0, horizon_given = 0,
+             horizon_culled = 0;
     for (const uint64_t seed : {3u, 5u}) {
         SCOPED_TRACE("world seed " + std::to_string(seed));
         const RandomWorld random = make_random_world(seed, 0);
@@ -105,6 +108,9 @@ TEST(RuntimeExport, TheDrawnWalkCullsNothingARayReaches) {
         pvsr::Level level;
         ASSERT_EQ(level.open(bytes.data(), bytes.size), PVSR_OK);
         pvsr::Culler culler(32);
+        pvsr::Horizon horizon(256, 1 << 16);
+        ASSERT_TRUE(horizon.ok());
+        ASSERT_FALSE(bake.horizon.empty());
         const RayScene scene(ctx, w, BuildQuality::kMedium, 1);
         std::mt19937 rng{uint32_t(seed)};
         std::uniform_real_distribution<float> u(0.0f, 1.0f);
@@ -122,9 +128,20 @@ TEST(RuntimeExport, TheDrawnWalkCullsNothingARayReaches) {
             ++frames;
             culler.begin_cell(level, cell, eye);
             polygons += culler.c_culler().polygon_count;
-            std::vector<uint32_t> listed, drawn;
+            horizon_given += horizon.begin_cell(level, cell, eye);
+            std::vector<uint32_t> listed, drawn, culler_drawn, expected;
             level.for_each_visible(cell, [&](uint32_t o) { listed.push_back(o); });
-            level.for_each_drawn(cell, culler, [&](uint32_t o) { drawn.push_back(o); });
+            level.for_each_drawn(cell, culler, [&](uint32_t o) { culler_drawn.push_back(o); });
+            // Culled by both: the PVS less exactly the objects whose bounds the culler or the horizon hides.
+            level.for_each_drawn(cell, &culler, horizon, [&](uint32_t o) { drawn.push_back(o); });
+            for (const uint32_t o : listed) {
+                float b[6];
+                const bool always = (level.object_flags(o) & PVSR_OBJECT_ALWAYS_VISIBLE) != 0;
+                if (always || !level.object_bounds(o, b) || (!culler.is_hidden(b) && !horizon.is_hidden(b)))
+                    expected.push_back(o);
+            }
+            ASSERT_EQ(drawn, expected);
+            horizon_culled += culler_drawn.size() - drawn.size();
             std::vector<uint32_t> gone;
             std::set_difference(listed.begin(), listed.end(), drawn.begin(), drawn.end(),
                                 std::back_inserter(gone));
@@ -165,9 +182,13 @@ TEST(RuntimeExport, TheDrawnWalkCullsNothingARayReaches) {
         }
     }
     std::printf(
-        "drawn walks: %llu frames (%llu polygons given), %llu objects culled, %llu segments, %llu wrong\n",
-        (unsigned long long)frames, (unsigned long long)polygons, (unsigned long long)culled,
-        (unsigned long long)segments, (unsigned long long)wrong);
+        "drawn walks: %llu frames (%llu polygons, %llu horizon occluders given), %llu objects culled (%llu "
+        "by the "
+        "horizon alone), %llu segments, %llu wrong\n",
+        (unsigned long long)frames, (unsigned long long)polygons, (unsigned long long)horizon_given,
+        (unsigned long long)culled, (unsigned long long)horizon_culled, (unsigned long long)segments,
+        (unsigned long long)wrong);
+    EXPECT_GT(horizon_culled, 0u) << "the cells' horizons should cull some object the culler draws";
     EXPECT_GT(frames, 0u);
     EXPECT_GT(polygons, 0u) << "the frames should use some polygon occluder";
     EXPECT_GT(culled, 0u) << "the ranked occluders should cull some object of the PVS";

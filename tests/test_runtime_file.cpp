@@ -255,11 +255,67 @@ protected:
     void SetUp() override {
         test::TempDir dir;
         const std::string h5 = dir.file("d.h5");
-        write_bake_file(h5, test::coherent_bake(70, {4, 2, 3}, true, true, 8));
+        BakeData bake = test::coherent_bake(70, {4, 2, 3}, true, true, 8);
+        test::add_horizon_lists(bake);  // the horizon sections (file 2.1) too
+        write_bake_file(h5, bake);
         file_ = runtime_file_bytes(h5);
     }
     std::string file_;
 };
+
+// The horizon sections: each cell lists the three occluders; a damaged section is refused with its reason,
+// and a list whose varints run past its bytes or past the occluders ends early.
+TEST_F(RuntimeFileDamage, HorizonListsReadAndRefuseDamage) {
+    Bytes good(file_);
+    pvsr_level l;
+    ASSERT_EQ(pvsr_open(&l, good.data(), good.size, nullptr, 0), PVSR_OK);
+    ASSERT_EQ(pvsr_horizon_occluder_count(&l), 3u);
+    for (uint32_t c = 0; c < pvsr_cell_count(&l); ++c) EXPECT_EQ(pvsr_horizon_list_count(&l, c), 3u);
+    EXPECT_EQ(pvsr_horizon_list_count(&l, pvsr_cell_count(&l)), 0u);
+    const auto offset_of = [&](const pvsr_array& a) {
+        return size_t(a.at - static_cast<const uint8_t*>(good.data()));
+    };
+    pvsr_status s;
+    {
+        Bytes b(file_);
+        const float nan = std::nanf("");
+        std::memcpy(b.bytes() + offset_of(l.horizon_boxes) + 4, &nan, 4);
+        rechecksum(b);
+        EXPECT_NE(opened_message(b, &s).find("a horizon box is not finite"), std::string::npos);
+    }
+    {
+        Bytes b(file_);
+        const uint32_t many = PVSR_HORIZON_MAX_CORNERS + 1;
+        std::memcpy(b.bytes() + offset_of(l.horizon_tiles) + 24, &many, 4);
+        rechecksum(b);
+        EXPECT_NE(opened_message(b, &s).find("a horizon tile's corners are out of range"), std::string::npos);
+    }
+    {
+        Bytes b(file_);
+        const uint32_t past = uint32_t(l.horizon_lists.count + 1);
+        std::memcpy(b.bytes() + offset_of(l.horizon_list_offsets) + 4, &past, 4);
+        rechecksum(b);
+        EXPECT_NE(opened_message(b, &s).find("the horizon lists' offsets"), std::string::npos);
+    }
+    {
+        // A gap past the occluders: the list ends there.
+        Bytes b(file_);
+        b.bytes()[offset_of(l.horizon_lists) + 1] = 0x7f;
+        rechecksum(b);
+        pvsr_level d;
+        ASSERT_EQ(pvsr_open(&d, b.data(), b.size, nullptr, 0), PVSR_OK);
+        EXPECT_EQ(pvsr_horizon_list_count(&d, 0), 1u);
+    }
+    {
+        // A varint that never ends: the list ends at its bytes.
+        Bytes b(file_);
+        for (uint64_t k = 0; k < l.horizon_lists.count; ++k) b.bytes()[offset_of(l.horizon_lists) + k] = 0x80;
+        rechecksum(b);
+        pvsr_level d;
+        ASSERT_EQ(pvsr_open(&d, b.data(), b.size, nullptr, 0), PVSR_OK);
+        EXPECT_EQ(pvsr_horizon_list_count(&d, 0), 0u);
+    }
+}
 
 TEST_F(RuntimeFileDamage, EachDamageIsRefusedWithItsReason) {
     pvsr_status s;
@@ -353,6 +409,9 @@ TEST_F(RuntimeFileDamage, EachDamageIsRefusedWithItsReason) {
 TEST_F(RuntimeFileDamage, HostileBytesAreRefusedOrStayInRange) {
     std::mt19937 rng(20261127u);
     const int trials = test::in_ci() ? 3000 : 30000;
+    std::vector<uint64_t> horizon_memory(pvsr_horizon_memory_bytes(16, 4096) / 8 + 1);
+    pvsr_horizon horizon;
+    ASSERT_TRUE(pvsr_horizon_init(&horizon, 16, 4096, horizon_memory.data(), horizon_memory.size() * 8));
     int refused = 0;
     for (int t = 0; t < trials; ++t) {
         Bytes b(file_);
@@ -379,6 +438,9 @@ TEST_F(RuntimeFileDamage, HostileBytesAreRefusedOrStayInRange) {
                 pvsr_ranked_occluder o;
                 pvsr_occluder(&l, c, k, &o);
             }
+            const float eye[3] = {box[0], box[1], box[2]};
+            pvsr_horizon_begin_cell(&horizon, &l, c, eye);
+            pvsr_horizon_is_hidden(&horizon, box);
         }
         for (uint32_t o = 0; o < objects; ++o) (void)std::strlen(pvsr_object_name(&l, o));
         for (int p = 0; p < 50; ++p) {

@@ -460,7 +460,8 @@ FileHorizon read_horizon(const Reader& r, hid_t root, uint32_t cells) {
     const uint64_t occluders = h.box_count() + h.tile_count();
     for (int64_t l = 0; l < lists; ++l) {
         const uint32_t a = h.list_offsets[size_t(l)], b = h.list_offsets[size_t(l) + 1];
-        if (b < a) r.fail(cat("/horizon/list_offsets[", l + 1, "] decreases"));
+        if (b < a || b > h.list_entries.size())
+            r.fail(cat("/horizon/list_offsets[", l + 1, "] decreases or passes the entries"));
         for (uint32_t k = a; k < b; ++k)
             if (h.list_entries[k] >= occluders || (k > a && h.list_entries[k] <= h.list_entries[k - 1]))
                 r.fail(cat("/horizon/list_entries[", k, "] is not an occluder below ", occluders,

@@ -54,6 +54,18 @@ int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
                 (void)pvsr_culler_begin_cell(&cell_culler, &level, c, eye, PVSR_CULLER_MAX_OCCLUDERS);
                 (void)pvsr_culler_classify(&cell_culler, box);
             }
+            if (c < 64 && pvsr_horizon_occluder_count(&level) > 0) { /* the cell's horizon list (2.1) */
+                static pvsr_horizon horizon;
+                static uint64_t horizon_memory[8192];
+                static int horizon_ready;
+                const float eye[3] = {box[3], box[4], box[5]};
+                if (!horizon_ready)
+                    horizon_ready =
+                        pvsr_horizon_init(&horizon, 16, 256, horizon_memory, sizeof horizon_memory);
+                (void)pvsr_horizon_list_count(&level, c);
+                (void)pvsr_horizon_begin_cell(&horizon, &level, c, eye);
+                (void)pvsr_horizon_is_hidden(&horizon, box);
+            }
         }
         for (k = 0; k < objects && k < 4096; ++k) (void)strlen(pvsr_object_name(&level, k));
         (void)strlen(pvsr_string(&level, "mode"));
