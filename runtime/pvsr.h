@@ -51,7 +51,9 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#ifdef __cplusplus
+/* PVSR_CXX_LINKAGE: compiled as C++ into a namespace of its own (the HDF5 loader's horizon does), so that a
+ * game's own copy of the runtime cannot clash with it. */
+#if defined(__cplusplus) && !defined(PVSR_CXX_LINKAGE)
 extern "C" {
 #endif
 
@@ -465,7 +467,7 @@ uint32_t pvsr_drawn_objects_horizon(const pvsr_level* level, uint32_t cell, cons
 /* ---- The checksum of the file (docs/FORMAT.md): XXH64 with seed 0, exposed for tools and tests. */
 uint64_t pvsr_xxh64(const void* data, size_t size, uint64_t seed);
 
-#ifdef __cplusplus
+#if defined(__cplusplus) && !defined(PVSR_CXX_LINKAGE)
 }
 #endif
 

@@ -57,8 +57,13 @@ inline std::string opened_message(const Bytes& b, pvsr_status* status) {
 // loader (C++ and C calls) give the same objects, and they are the cell's PVS less exactly the objects
 // whose bounds the culler hides, objects flagged always visible kept. Adds how many were culled to culled.
 inline void expect_same_drawn(const pvsr::Level& got, const pvsbake::Bake& want, const pvsbake_bake* c_bake,
-                              uint32_t seed, uint64_t& culled) {
+                              uint32_t seed, uint64_t& culled, uint64_t* horizon_culled_out = nullptr) {
     std::mt19937 rng(seed ^ 0xd7a3u);
+    pvsr::Horizon horizon(64, 1 << 14);
+    pvsbake::Horizon want_horizon(64, 1 << 14);
+    pvsbake_horizon* c_horizon = pvsbake_horizon_create(64, 1 << 14);
+    EXPECT_TRUE(horizon.ok() && want_horizon.ok() && c_horizon != nullptr);
+    uint64_t horizon_culled = 0;
     std::uniform_real_distribution<float> u(0.0f, 1.0f);
     pvsr::Culler culler(32);
     pvsbake::OcclusionCuller want_culler(32);
@@ -106,7 +111,57 @@ inline void expect_same_drawn(const pvsr::Level& got, const pvsbake::Bake& want,
         }
         // No culler: the whole PVS.
         EXPECT_EQ(pvsr_visit_drawn(&got.c_level(), c, nullptr, nullptr, nullptr), want.visible_count(c));
+        // The horizon of the cell's list (file 2.1, bake file 1.8), after the culler of all the cell's ranked
+        // occluders and alone: the runtime's and the loader's (C++ and C) draw the same objects, the PVS less
+        // exactly those whose bounds the culler or the horizon hides.
+        if (horizon.ok() && want_horizon.ok()) {
+            SCOPED_TRACE("cell " + std::to_string(c) + ", the horizon");
+            EXPECT_EQ(got.horizon_list_count(c), want.horizon_list_count(c));
+            const uint32_t given = horizon.begin_cell(got, c, eye);
+            EXPECT_EQ(want_horizon.begin_cell(want, c, eye), given);
+            if (c_horizon != nullptr && c_bake != nullptr) {
+                EXPECT_EQ(pvsbake_horizon_begin_cell(c_horizon, c_bake, c, eye), given);
+                EXPECT_EQ(pvsbake_horizon_list_count(c_bake, c), given);
+            }
+            culler.begin_cell(got, c, eye);
+            want_culler.begin_cell(want, c, eye);
+            if (c_culler != nullptr && c_bake != nullptr)
+                pvsbake_culler_begin_cell(c_culler, c_bake, c, eye, 64);
+            for (const bool with_culler : {true, false}) {
+                std::vector<uint32_t> expected, walked, want_walked;
+                want.for_each_visible(c, [&](uint32_t o) {
+                    float box[6];
+                    got.object_bounds(o, box);
+                    if ((got.object_flags(o) & PVSR_OBJECT_ALWAYS_VISIBLE) ||
+                        (!(with_culler && culler.is_hidden(box)) && !horizon.is_hidden(box)))
+                        expected.push_back(o);
+                });
+                horizon_culled += with_culler ? 0 : want.visible_count(c) - expected.size();
+                got.for_each_drawn(c, with_culler ? &culler : nullptr, horizon,
+                                   [&](uint32_t o) { walked.push_back(o); });
+                ASSERT_EQ(walked, expected);
+                pvsbake::for_each_drawn(want, c, with_culler ? &want_culler : nullptr, want_horizon,
+                                        [&](uint32_t o) { want_walked.push_back(o); });
+                ASSERT_EQ(want_walked, expected);
+                if (c_horizon != nullptr && c_bake != nullptr && c_culler != nullptr) {
+                    const pvsbake_culler* cc = with_culler ? c_culler : nullptr;
+                    EXPECT_EQ(
+                        pvsbake_drawn_objects_horizon(c_bake, c, cc, c_horizon, list.data(), list.size()),
+                        expected.size());
+                    EXPECT_TRUE(std::equal(expected.begin(), expected.end(), list.begin()));
+                    EXPECT_EQ(pvsbake_visit_drawn_horizon(c_bake, c, cc, c_horizon, nullptr, nullptr),
+                              expected.size());
+                }
+                EXPECT_EQ(
+                    pvsr_drawn_objects_horizon(&got.c_level(), c, with_culler ? &culler.c_culler() : nullptr,
+                                               &horizon.c_horizon(), list.data(), list.size()),
+                    expected.size());
+                EXPECT_TRUE(std::equal(expected.begin(), expected.end(), list.begin()));
+            }
+        }
     }
+    if (horizon_culled_out != nullptr) *horizon_culled_out += horizon_culled;
+    pvsbake_horizon_free(c_horizon);
     // Out of range, or no bake: nothing.
     EXPECT_EQ(got.for_each_drawn(want.cell_count(), culler, [](uint32_t) {}), 0u);
     if (c_culler != nullptr) {
@@ -257,8 +312,9 @@ inline void expect_same_as_loader(const pvsr::Level& got, const pvsbake::Bake& w
 // Writes the bake as HDF5, exports it (without the ranked occluders' measures and every row whole, with them
 // and chains of up to 8 rows, and with the defaults), and checks the runtime against the HDF5 loader.
 // Adds to *culled (when given) the objects the drawn walks culled (expect_same_drawn).
-inline void round_trip(const BakeData& bake, uint32_t seed, uint64_t* culled = nullptr) {
-    uint64_t culled_here = 0;
+inline void round_trip(const BakeData& bake, uint32_t seed, uint64_t* culled = nullptr,
+                       uint64_t* horizon_culled = nullptr) {
+    uint64_t culled_here = 0, horizon_culled_here = 0;
     TempDir dir;
     const std::string h5 = dir.file("bake.h5");
     pvsbake::Bake loaded;
@@ -282,7 +338,7 @@ inline void round_trip(const BakeData& bake, uint32_t seed, uint64_t* culled = n
         EXPECT_EQ(why, "");
         EXPECT_EQ(pvsr_has_occluder_measures(&level.c_level()) != 0, measures && !bake.ranked.offsets.empty());
         expect_same_as_loader(level, loaded, seed);
-        expect_same_drawn(level, loaded, c_bake, seed, culled_here);
+        expect_same_drawn(level, loaded, c_bake, seed, culled_here, &horizon_culled_here);
         // The horizon lists (file 2.1): each cell's list holds the occluders of the bake's list of its cell
         // (the bake's blocks are the file's, and every occluder some list names is kept), ascending.
         EXPECT_EQ(pvsr_horizon_occluder_count(&level.c_level()) > 0, !bake.horizon.empty());
@@ -295,6 +351,7 @@ inline void round_trip(const BakeData& bake, uint32_t seed, uint64_t* culled = n
     }
     pvsbake_free(c_bake);
     if (culled != nullptr) *culled += culled_here;
+    if (horizon_culled != nullptr) *horizon_culled += horizon_culled_here;
 }
 
 }  // namespace pvs::test

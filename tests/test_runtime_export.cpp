@@ -61,7 +61,10 @@ TEST(RuntimeExport, ARealBakeAnswersAsTheHdf5Loader) {
             EXPECT_TRUE(std::any_of(bake.ranked.entries.begin(), bake.ranked.entries.end(),
                                     [&](const RankedOccluder& e) { return e.box >= bake.occluders.size(); }));
         }
-        round_trip(bake, 13);
+        uint64_t horizon_culled = 0;
+        ASSERT_FALSE(bake.horizon.empty());
+        round_trip(bake, 13, nullptr, &horizon_culled);
+        EXPECT_GT(horizon_culled, 0u) << "the cells' horizons should cull some object of the PVS";
     }
 }
 

@@ -14,3 +14,8 @@ struct pvsbake_culler {
     pvsbake::OcclusionCuller culler;
     explicit pvsbake_culler(int resolution) : culler(resolution) {}
 };
+
+struct pvsbake_horizon {
+    pvsbake::Horizon horizon;
+    pvsbake_horizon(int columns, size_t max_pieces) : horizon(columns, max_pieces) {}
+};

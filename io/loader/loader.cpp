@@ -73,6 +73,7 @@ public:
         cells(std::move(file_cells), b);
         pvs(detail::read_pvs(r, root.get(), b.object_count_, cell_count, /*want_rows=*/false), b);
         ranked(detail::read_occluders(r, root.get(), b.object_count_, cell_count, /*want_boxes=*/false), b);
+        horizon(detail::read_horizon(r, root.get(), cell_count), b);
         b.figures_ = r.named_values(root.get(), "/figures");
         detail::Handle v = r.open_group(root.get(), "/verification");
         const int64_t ran = r.int_attr(v.get(), "/verification", "ran");
@@ -215,6 +216,17 @@ private:
         b.ranked_polygon_score_ = std::move(f.ranked_polygon_score);
     }
 
+    static void horizon(detail::FileHorizon f, Bake& b) {
+        if (!f.present) return;
+        b.horizon_boxes_ = std::move(f.boxes);
+        b.horizon_tile_planes_ = std::move(f.tile_planes);
+        b.horizon_tile_corners_ = std::move(f.tile_corners);
+        b.horizon_tile_offset_ = std::move(f.tile_offsets);
+        b.horizon_cell_list_ = std::move(f.cell_list);
+        b.horizon_list_offset_ = std::move(f.list_offsets);
+        b.horizon_list_entry_ = std::move(f.list_entries);
+    }
+
     template <class T>
     static uint64_t bytes(const std::vector<T>& v) {
         return uint64_t(v.capacity()) * sizeof(T);
@@ -234,7 +246,10 @@ private:
                bytes(b.ranked_solid_angle_sr_) + bytes(b.ranked_hidden_objects_) +
                bytes(b.ranked_hidden_triangle_share_) + bytes(b.polygon_offset_) +
                bytes(b.ranked_polygon_offset_) + bytes(b.ranked_polygon_) + bytes(b.ranked_polygon_place_) +
-               bytes(b.polygon_corners_) + bytes(b.polygon_planes_) + bytes(b.ranked_polygon_score_);
+               bytes(b.polygon_corners_) + bytes(b.polygon_planes_) + bytes(b.ranked_polygon_score_) +
+               bytes(b.horizon_boxes_) + bytes(b.horizon_tile_planes_) + bytes(b.horizon_tile_corners_) +
+               bytes(b.horizon_tile_offset_) + bytes(b.horizon_cell_list_) + bytes(b.horizon_list_offset_) +
+               bytes(b.horizon_list_entry_);
     }
 };
 

@@ -91,4 +91,55 @@ uint32_t pvsbake_drawn_objects(const pvsbake_bake* bake, uint32_t cell, const pv
     return n;
 }
 
+pvsbake_horizon* pvsbake_horizon_create(int columns, size_t max_pieces) {
+    pvsbake_horizon* h = new (std::nothrow) pvsbake_horizon(columns, max_pieces);
+    if (h != nullptr && !h->horizon.ok()) {
+        delete h;
+        return nullptr;
+    }
+    return h;
+}
+
+void pvsbake_horizon_free(pvsbake_horizon* horizon) {
+    delete horizon;
+}
+
+uint32_t pvsbake_horizon_list_count(const pvsbake_bake* bake, uint32_t cell) {
+    return bake != nullptr ? bake->bake.horizon_list_count(cell) : 0;
+}
+
+uint32_t pvsbake_horizon_begin_cell(pvsbake_horizon* horizon, const pvsbake_bake* bake, uint32_t cell,
+                                    const float eye[3]) {
+    if (horizon == nullptr) return 0;
+    static const pvsbake::Bake kNone;
+    return horizon->horizon.begin_cell(bake != nullptr ? bake->bake : kNone, cell, eye);
+}
+
+int pvsbake_horizon_is_hidden(const pvsbake_horizon* horizon, const float box[6]) {
+    return horizon != nullptr && box != nullptr && horizon->horizon.is_hidden(to_box(box)) ? 1 : 0;
+}
+
+uint32_t pvsbake_visit_drawn_horizon(const pvsbake_bake* bake, uint32_t cell, const pvsbake_culler* culler,
+                                     const pvsbake_horizon* horizon, pvsbake_visit_fn visit, void* user) {
+    if (horizon == nullptr) return pvsbake_visit_drawn(bake, cell, culler, visit, user);
+    if (bake == nullptr) return 0;
+    return pvsbake::for_each_drawn(bake->bake, cell, culler != nullptr ? &culler->culler : nullptr,
+                                   horizon->horizon, [&](uint32_t o) {
+                                       if (visit != nullptr) visit(user, o);
+                                   });
+}
+
+uint32_t pvsbake_drawn_objects_horizon(const pvsbake_bake* bake, uint32_t cell, const pvsbake_culler* culler,
+                                       const pvsbake_horizon* horizon, uint32_t* objects, size_t capacity) {
+    if (horizon == nullptr) return pvsbake_drawn_objects(bake, cell, culler, objects, capacity);
+    if (bake == nullptr) return 0;
+    uint32_t n = 0;
+    pvsbake::for_each_drawn(bake->bake, cell, culler != nullptr ? &culler->culler : nullptr, horizon->horizon,
+                            [&](uint32_t o) {
+                                if (objects != nullptr && n < capacity) objects[n] = o;
+                                ++n;
+                            });
+    return n;
+}
+
 }  // extern "C"

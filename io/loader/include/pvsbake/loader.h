@@ -378,6 +378,13 @@ public:
     uint32_t occluder_polygon_count(uint32_t c) const noexcept;
     // The polygon of rank k among the cell's polygons; false (out untouched) out of range.
     bool occluder_polygon(uint32_t c, uint32_t k, RankedPolygon& out) const noexcept;
+    // The cell's list of the run-time horizon's occluders (format 1.8; pvsbake::Horizon builds a frame from
+    // it): how many; 0 without lists or out of range.
+    uint32_t horizon_list_count(uint32_t c) const noexcept {
+        const uint32_t l = c < horizon_cell_list_.size() ? horizon_cell_list_[c] : UINT32_MAX;
+        return l + 1 < horizon_list_offset_.size() ? horizon_list_offset_[l + 1] - horizon_list_offset_[l]
+                                                   : 0;
+    }
 
     // ---- What the bake is
     const BakeInfo& info() const { return info_; }
@@ -469,6 +476,10 @@ private:
     // Ranked occluders, as the file stores them: cell c has entries ranked_offset_[c] ..
     // ranked_offset_[c + 1] (empty offsets: none); entry k is the box ranked_boxes_[ranked_box_[k]] and
     // four measures.
+    // The run-time horizon's occluders and lists, as the file stores them (validated by read_horizon).
+    friend class Horizon;
+    std::vector<float> horizon_boxes_, horizon_tile_planes_, horizon_tile_corners_;
+    std::vector<uint32_t> horizon_tile_offset_, horizon_cell_list_, horizon_list_offset_, horizon_list_entry_;
     friend class OccluderList;
     RankedOccluder ranked_entry(uint32_t k) const noexcept {
         return RankedOccluder{ranked_boxes_[ranked_box_[k]], ranked_score_[k], ranked_solid_angle_sr_[k],

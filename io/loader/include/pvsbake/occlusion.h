@@ -76,6 +76,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace pvsbake {
@@ -248,6 +249,51 @@ uint32_t for_each_drawn(const Bake& bake, uint32_t c, const OcclusionCuller& cul
     uint32_t drawn = 0;
     bake.for_each_visible(c, [&](uint32_t o) {
         if (!is_culled(bake, culler, o)) {
+            visit(o);
+            ++drawn;
+        }
+    });
+    return drawn;
+}
+
+// The occlusion horizon of a frame built from the cell's list of horizon occluders (format 1.8): the C99
+// runtime's own code (runtime/pvsr.h, pvsr_horizon; docs/ALGORITHMS.md#horizon-lists), compiled into this
+// library in a namespace of its own, so its answers are the runtime's. Its memory is allocated once, here.
+class Horizon {
+public:
+    // columns a side (a power of two, 4 to 8192) and the pieces a frame may hold (past them occluders are
+    // dropped: fewer culls). ok() is false when the memory could not be allocated: then it hides nothing.
+    explicit Horizon(int columns = 256, size_t max_pieces = 65536) noexcept;
+    ~Horizon();
+    Horizon(Horizon&&) noexcept;
+    Horizon& operator=(Horizon&&) noexcept;
+    Horizon(const Horizon&) = delete;
+    Horizon& operator=(const Horizon&) = delete;
+
+    bool ok() const noexcept;
+    // A frame at the eye with cell c's list (in the file's order); returns how many occluders were given.
+    // Allocates nothing.
+    uint32_t begin_cell(const Bake& bake, uint32_t c, const float eye[3]) noexcept;
+    // True only if the box is certainly hidden from this frame's eye by the horizon. Only reads the horizon.
+    bool is_hidden(const Box& box) const noexcept;
+
+private:
+    struct State;
+    std::unique_ptr<State> state_;
+};
+
+// What a game draws of cell c, culled by the culler (when given) and the horizon: its PVS less the objects
+// whose bounds either proves hidden (objects flagged always visible, and those without bounds, never).
+template <class F>
+uint32_t for_each_drawn(const Bake& bake, uint32_t c, const OcclusionCuller* culler, const Horizon& horizon,
+                        F&& visit) {
+    constexpr uint32_t kAlwaysVisible = 4;  // object_flags bit 2
+    uint32_t drawn = 0;
+    bake.for_each_visible(c, [&](uint32_t o) {
+        const bool culled = (bake.object_flags(o) & kAlwaysVisible) == 0 &&
+                            ((culler != nullptr && culler->is_hidden(bake.object_bounds(o))) ||
+                             horizon.is_hidden(bake.object_bounds(o)));
+        if (!culled) {
             visit(o);
             ++drawn;
         }

@@ -64,6 +64,35 @@ PVSBAKE_API int pvsbake_culler_is_hidden(const pvsbake_culler* culler, const flo
 /* Which test proved it (pvsbake_cull_path). */
 PVSBAKE_API int pvsbake_culler_classify(const pvsbake_culler* culler, const float box[6]);
 
+/* ---- The occlusion horizon of a cell's list (format 1.8; pvsbake::Horizon in pvsbake/occlusion.h, the C99
+ * runtime's pvsr_horizon):
+ *   pvsbake_horizon* horizon = pvsbake_horizon_create(256, 65536);
+ *   each frame: pvsbake_horizon_begin_cell(horizon, bake, cell, eye);
+ *               pvsbake_visit_drawn_horizon(bake, cell, culler, horizon, draw_object, &scene);
+ */
+typedef struct pvsbake_horizon pvsbake_horizon;
+/* A new horizon of that many columns a side (a power of two, 4 to 8192) holding up to max_pieces pieces a
+ * frame (free it with pvsbake_horizon_free). NULL when out of memory. */
+PVSBAKE_API pvsbake_horizon* pvsbake_horizon_create(int columns, size_t max_pieces);
+PVSBAKE_API void pvsbake_horizon_free(pvsbake_horizon* horizon);
+/* The cell's list of horizon occluders: how many (0 without lists, or a NULL bake). */
+PVSBAKE_API uint32_t pvsbake_horizon_list_count(const pvsbake_bake* bake, uint32_t cell);
+/* A frame at the eye (float[3]) with the cell's list; returns how many occluders were given. */
+PVSBAKE_API uint32_t pvsbake_horizon_begin_cell(pvsbake_horizon* horizon, const pvsbake_bake* bake,
+                                                uint32_t cell, const float eye[3]);
+/* 1 only if box (float[6]) is certainly hidden from this frame's eye by the horizon. */
+PVSBAKE_API int pvsbake_horizon_is_hidden(const pvsbake_horizon* horizon, const float box[6]);
+/* What a game draws of the cell culled by the culler (may be NULL) and the horizon (may be NULL): the PVS
+ * less the objects whose bounds either proves hidden, in increasing order; returns how many. */
+PVSBAKE_API uint32_t pvsbake_visit_drawn_horizon(const pvsbake_bake* bake, uint32_t cell,
+                                                 const pvsbake_culler* culler, const pvsbake_horizon* horizon,
+                                                 pvsbake_visit_fn visit, void* user);
+/* The same objects into a list: up to capacity of them; returns how many there are (may be more). */
+PVSBAKE_API uint32_t pvsbake_drawn_objects_horizon(const pvsbake_bake* bake, uint32_t cell,
+                                                   const pvsbake_culler* culler,
+                                                   const pvsbake_horizon* horizon, uint32_t* objects,
+                                                   size_t capacity);
+
 #ifdef __cplusplus
 }
 #endif
