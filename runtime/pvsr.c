@@ -1058,6 +1058,10 @@ size_t pvsr_culler_bytes(void) {
     return sizeof(pvsr_culler);
 }
 
+size_t pvsr_horizon_bytes(void) {
+    return sizeof(pvsr_horizon);
+}
+
 uint32_t pvsr_cell_count(const pvsr_level* l) {
     return l ? l->cell_count : 0;
 }

@@ -108,10 +108,11 @@ typedef struct pvsr_level {
  * and objects; allocates nothing (about 4 KiB of stack). */
 pvsr_status pvsr_open(pvsr_level* level, const void* data, size_t size, char* message, size_t message_size);
 
-/* sizeof(pvsr_level) and sizeof(pvsr_culler), for languages that reach the runtime through a C FFI (Python's
- * ctypes, C#, Rust) and allocate its structs themselves. */
+/* sizeof(pvsr_level), sizeof(pvsr_culler) and sizeof(pvsr_horizon), for languages that reach the runtime
+ * through a C FFI (Python's ctypes, C#, Rust) and allocate its structs themselves. */
 size_t pvsr_level_bytes(void);
 size_t pvsr_culler_bytes(void);
+size_t pvsr_horizon_bytes(void);
 
 uint32_t pvsr_cell_count(const pvsr_level* level);
 uint32_t pvsr_object_count(const pvsr_level* level);

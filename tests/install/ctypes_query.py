@@ -53,6 +53,13 @@ def bind(lib):
                                                         ctypes.POINTER(ctypes.c_float), ctypes.c_size_t]),
         "pvsbake_drawn_objects": (ctypes.c_uint32, [bake_p, ctypes.c_uint32, ctypes.c_void_p,
                                                     ctypes.POINTER(ctypes.c_uint32), ctypes.c_size_t]),
+        "pvsbake_horizon_create": (ctypes.c_void_p, [ctypes.c_int, ctypes.c_size_t]),
+        "pvsbake_horizon_free": (None, [ctypes.c_void_p]),
+        "pvsbake_horizon_begin_cell": (ctypes.c_uint32, [ctypes.c_void_p, bake_p, ctypes.c_uint32,
+                                                         ctypes.POINTER(ctypes.c_float)]),
+        "pvsbake_drawn_objects_horizon": (ctypes.c_uint32, [bake_p, ctypes.c_uint32, ctypes.c_void_p,
+                                                            ctypes.c_void_p, ctypes.POINTER(ctypes.c_uint32),
+                                                            ctypes.c_size_t]),
     }
     for name, (restype, argtypes) in sigs.items():
         fn = getattr(lib, name)
@@ -91,6 +98,15 @@ class Runtime:
                                                          ctypes.POINTER(ctypes.c_float), ctypes.c_uint32]),
             "pvsr_drawn_objects": (ctypes.c_uint32, [level_p, ctypes.c_uint32, ctypes.c_void_p,
                                                      ctypes.POINTER(ctypes.c_uint32), ctypes.c_size_t]),
+            "pvsr_horizon_bytes": (ctypes.c_size_t, []),
+            "pvsr_horizon_memory_bytes": (ctypes.c_size_t, [ctypes.c_int, ctypes.c_size_t]),
+            "pvsr_horizon_init": (ctypes.c_int, [ctypes.c_void_p, ctypes.c_int, ctypes.c_size_t, ctypes.c_void_p,
+                                                 ctypes.c_size_t]),
+            "pvsr_horizon_begin_cell": (ctypes.c_uint32, [ctypes.c_void_p, level_p, ctypes.c_uint32,
+                                                          ctypes.POINTER(ctypes.c_float)]),
+            "pvsr_drawn_objects_horizon": (ctypes.c_uint32, [level_p, ctypes.c_uint32, ctypes.c_void_p,
+                                                             ctypes.c_void_p, ctypes.POINTER(ctypes.c_uint32),
+                                                             ctypes.c_size_t]),
         }
         for name, (restype, argtypes) in sigs.items():
             fn = getattr(lib, name)
@@ -115,13 +131,21 @@ class Runtime:
         self.culler_memory = (ctypes.c_float * (lib.pvsr_culler_memory_bytes(32) // 4 + 1))()
         if not lib.pvsr_culler_init(self.culler, 32, self.culler_memory, ctypes.sizeof(self.culler_memory)):
             fail("the runtime's culler did not take its memory")
+        # The horizon (64 columns a side, 16,384 pieces), its struct and memory allocated here once.
+        self.horizon = ctypes.create_string_buffer(lib.pvsr_horizon_bytes())
+        self.horizon_memory = (ctypes.c_uint64 * (lib.pvsr_horizon_memory_bytes(64, 16384) // 8 + 1))()
+        if not lib.pvsr_horizon_init(self.horizon, 64, 16384, self.horizon_memory,
+                                     ctypes.sizeof(self.horizon_memory)):
+            fail("the runtime's horizon did not take its memory")
 
     def drawn(self, cell, eye, objects):
-        """What a game draws of the cell from the eye: its PVS less what its ranked occluders hide."""
+        """What a game draws of the cell from the eye: its PVS less what its ranked occluders and its horizon
+        hide."""
         lib = self.lib
         lib.pvsr_culler_begin_cell(self.culler, self.level, cell, eye, 64)
+        lib.pvsr_horizon_begin_cell(self.horizon, self.level, cell, eye)
         listed = (ctypes.c_uint32 * max(objects, 1))()
-        n = lib.pvsr_drawn_objects(self.level, cell, self.culler, listed, objects)
+        n = lib.pvsr_drawn_objects_horizon(self.level, cell, self.culler, self.horizon, listed, objects)
         return list(listed[:n])
 
     def check(self, cell, objects, words, names, expect, where):
@@ -176,6 +200,9 @@ def main():
     culler = lib.pvsbake_culler_create(0)
     if not culler:
         fail("pvsbake_culler_create gave NULL")
+    horizon = lib.pvsbake_horizon_create(64, 16384)
+    if not horizon:
+        fail("pvsbake_horizon_create gave NULL")
     drawn = (ctypes.c_uint32 * max(objects, 1))()
     culled = 0
     listed = (ctypes.c_uint32 * max(objects, 1))()
@@ -223,10 +250,12 @@ def main():
                  % (where, cell, n, expect["visible_count"]))
         if runtime is not None:
             runtime.check(cell, objects, words, names, expect, where)
-        # What a game draws from this point as its eye: the PVS less what the cell's ranked occluders hide.
+        # What a game draws from this point as its eye: the PVS less what the cell's ranked occluders and its
+        # horizon hide.
         eye = (ctypes.c_float * 3)(*p)
         lib.pvsbake_culler_begin_cell(culler, bake, cell, eye, 64)
-        d = lib.pvsbake_drawn_objects(bake, cell, culler, drawn, objects)
+        lib.pvsbake_horizon_begin_cell(horizon, bake, cell, eye)
+        d = lib.pvsbake_drawn_objects_horizon(bake, cell, culler, horizon, drawn, objects)
         if not set(drawn[:d]) <= set(walked) or list(drawn[:d]) != sorted(drawn[:d]):
             fail("%s: cell %d draws objects out of order or outside its PVS" % (where, cell))
         culled += n - d
@@ -234,10 +263,11 @@ def main():
             fail("%s: cell %d: the runtime draws other objects than the library" % (where, cell))
     kind = "octree" if lib.pvsbake_cell_kind(bake) == 1 else "grid"
     lib.pvsbake_culler_free(culler)
+    lib.pvsbake_horizon_free(horizon)
     lib.pvsbake_free(bake)
     if inside == 0:
         fail("no random point fell in a cell")
-    print("ctypes_query: %s: %d %s cells, %d points, %d in a cell (their ranked occluders culled %d objects of "
+    print("ctypes_query: %s: %d %s cells, %d points, %d in a cell (their ranked occluders and horizons culled %d objects of "
           "the PVS from them), all as pvsbake query%s"
           % (bake_path, cells, kind, int(points), inside, culled,
              ", and the same through the runtime file" if runtime is not None else ""))

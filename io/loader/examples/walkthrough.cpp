@@ -2,12 +2,12 @@
 // pvsbake example: a game loop over a bake. Loads the bake at "level load", then every frame moves a
 // camera along a smooth path through the world's cells (a Catmull-Rom spline through the centres of
 // neighbouring cells, going straight where it can), looks up the camera's cell, sets the occlusion culler
-// (pvsbake/occlusion.h) up with the cell's ranked occluders, and walks what to draw: the cell's PVS less what
-// those occluders hide from the eye. It prints how many objects and triangles it would draw against the PVS
-// and all of them. Outside the view volume a game draws everything; outside the eye space (the rim around
-// it, up to and into thin walls) it draws the whole PVS. Moving objects (people and vehicles, which no PVS
-// can list) walk through the view volume, and the same culler tests their boxes; the example prints how many
-// it culled and what the culling cost.
+// (pvsbake/occlusion.h) up with the cell's ranked occluders and the horizon with the cell's list of horizon
+// occluders, and walks what to draw: the cell's PVS less what either hides from the eye. It prints how many
+// objects and triangles it would draw against the PVS and all of them. Outside the view volume a game draws
+// everything; outside the eye space (the rim around it, up to and into thin walls) it draws the whole PVS.
+// Moving objects (people and vehicles, which no PVS can list) walk through the view volume, and the same
+// culler tests their boxes; the example prints how many it culled and what the culling cost.
 //
 //   pvsbake_walkthrough BAKE.h5|LEVEL.pvsr [--frames N] [--objects M] [--seed S] [--quiet]
 //
@@ -59,17 +59,28 @@ struct RuntimeLevel {
     }
 };
 
+// The culler of the cell's ranked occluders, and the horizon of its list of horizon occluders (when the file
+// has lists): an object is drawn unless either proves its box hidden.
 struct RuntimeCuller {
     pvsr::Culler culler;
+    pvsr::Horizon horizon{256};
+    uint32_t horizon_given = 0;
     void begin_cell(const RuntimeLevel& l, uint32_t c, const float eye[3]) {
         culler.begin_cell(l.level, c, eye);
+        horizon_given = horizon.begin_cell(l.level, c, eye);
     }
-    void begin_empty(const float eye[3]) { culler.begin_frame(eye, nullptr, 0); }
+    void begin_empty(const RuntimeLevel& l, const float eye[3]) {
+        culler.begin_frame(eye, nullptr, 0);
+        horizon_given = horizon.begin_cell(l.level, l.cell_count(), eye);  // no cell: an empty horizon
+    }
     template <class F>
     uint32_t for_each_drawn(const RuntimeLevel& l, uint32_t c, F&& visit) const {
-        return l.level.for_each_drawn(c, culler, visit);
+        return l.level.for_each_drawn(c, &culler, horizon, visit);
     }
-    int classify(const pvsbake::Box& box) const { return int(culler.classify(&box.min[0])); }
+    int classify(const pvsbake::Box& box) const {
+        const int path = int(culler.classify(&box.min[0]));
+        return path != 0 ? path : horizon.is_hidden(&box.min[0]) ? 4 : 0;
+    }
     size_t occluders_used() const { return culler.occluders_used(); }
 };
 
@@ -80,13 +91,24 @@ struct LoaderLevel {
 
 struct LoaderCuller {
     pvsbake::OcclusionCuller culler;
-    void begin_cell(const pvsbake::Bake& b, uint32_t c, const float eye[3]) { culler.begin_cell(b, c, eye); }
-    void begin_empty(const float eye[3]) { culler.begin_frame(eye, nullptr, 0); }
+    pvsbake::Horizon horizon{256};
+    uint32_t horizon_given = 0;
+    void begin_cell(const pvsbake::Bake& b, uint32_t c, const float eye[3]) {
+        culler.begin_cell(b, c, eye);
+        horizon_given = horizon.begin_cell(b, c, eye);
+    }
+    void begin_empty(const pvsbake::Bake& b, const float eye[3]) {
+        culler.begin_frame(eye, nullptr, 0);
+        horizon_given = horizon.begin_cell(b, b.cell_count(), eye);  // no cell: an empty horizon
+    }
     template <class F>
     uint32_t for_each_drawn(const pvsbake::Bake& b, uint32_t c, F&& visit) const {
-        return pvsbake::for_each_drawn(b, c, culler, visit);
+        return pvsbake::for_each_drawn(b, c, &culler, horizon, visit);
     }
-    int classify(const pvsbake::Box& box) const { return int(culler.classify(box)); }
+    int classify(const pvsbake::Box& box) const {
+        const int path = int(culler.classify(box));
+        return path != 0 ? path : horizon.is_hidden(box) ? 4 : 0;
+    }
     size_t occluders_used() const { return culler.occluders_used(); }
 };
 
@@ -173,8 +195,8 @@ int play(const Level& bake, Culler& culler, int frames, int movers_wanted, unsig
     std::vector<pvsbake::walk::Mover> movers =
         pvsbake::walk::spawn_movers(bake, uint32_t(movers_wanted), rng);
     uint64_t drawn_objects = 0, drawn_triangles = 0, pvs_triangles = 0, outside = 0;
-    uint64_t moving_tested = 0, moving_culled = 0, culled_by_frusta = 0, occluders_used = 0,
-             frames_culling = 0;
+    uint64_t moving_tested = 0, moving_culled = 0, culled_by_frusta = 0, culled_by_horizon = 0,
+             occluders_used = 0, horizon_given = 0, frames_culling = 0;
     double cull_us = 0.0;
     for (int f = 0; f < frames && !way.empty(); ++f) {
         const Vec3 eye = pvsbake::walk::camera_eye(way, f);
@@ -191,7 +213,7 @@ int play(const Level& bake, Culler& culler, int frames, int movers_wanted, unsig
         if (can_cull)
             culler.begin_cell(bake, uint32_t(cell), eye_m);
         else
-            culler.begin_empty(eye_m);
+            culler.begin_empty(bake, eye_m);
         uint32_t n = objects, pvs = objects;
         uint64_t tris = triangles, pvs_tris = triangles;
         if (cell >= 0) {
@@ -210,6 +232,7 @@ int play(const Level& bake, Culler& culler, int frames, int movers_wanted, unsig
             const int path = culler.classify(pvsbake::walk::mover_box(m));
             culled += path != 0;
             culled_by_frusta += path == 1;
+            culled_by_horizon += path == 4;
         }
         cull_us += std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - c0).count();
         if (cell >= 0) {  // the PVS, for the printout
@@ -226,6 +249,7 @@ int play(const Level& bake, Culler& culler, int frames, int movers_wanted, unsig
         moving_tested += movers.size();
         moving_culled += culled;
         occluders_used += culler.occluders_used();
+        horizon_given += culler.horizon_given;
         if (!quiet) {
             std::printf(
                 "frame %4d  eye (%8.2f %8.2f %8.2f)  cell %7d  draws %5u of the PVS's %5u / %u objects, "
@@ -245,13 +269,16 @@ int play(const Level& bake, Culler& culler, int frames, int movers_wanted, unsig
         frames, (unsigned long long)outside, 100.0 * fo, 100.0 * ft, 100.0 * fp);
     std::printf(
         "moving objects: %zu; the occluders culled %llu of %llu boxes tested (%.1f%%; %llu by single shadow "
-        "frusta, %llu by the fused depth cube) with %.1f occluders a frame; the culling (the level's objects "
-        "and the moving ones) at %.1f us a frame; %llu frames in the eye space culled, the others drew the "
-        "whole PVS and every moving object\n",
+        "frusta, %llu by the culler's depth cube or faces, %llu by the horizon alone) with %.1f occluders "
+        "and "
+        "%.1f horizon occluders a frame; the culling (the level's objects and the moving ones) at %.1f us a "
+        "frame; %llu frames in the eye space culled, the others drew the whole PVS and every moving object\n",
         movers.size(), (unsigned long long)moving_culled, (unsigned long long)moving_tested,
         100.0 * double(moving_culled) / std::max(1.0, double(moving_tested)),
-        (unsigned long long)culled_by_frusta, (unsigned long long)(moving_culled - culled_by_frusta),
-        double(occluders_used) / std::max(1, frames), cull_us / std::max(1, frames),
+        (unsigned long long)culled_by_frusta,
+        (unsigned long long)(moving_culled - culled_by_frusta - culled_by_horizon),
+        (unsigned long long)culled_by_horizon, double(occluders_used) / std::max(1, frames),
+        double(horizon_given) / std::max(1, frames), cull_us / std::max(1, frames),
         (unsigned long long)frames_culling);
     return 0;
 }
