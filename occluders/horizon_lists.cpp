@@ -23,7 +23,7 @@ namespace {
 
 // Pieces an eye's horizon holds (past them the rest of its candidates are dropped: fewer chosen, never
 // unsafe; counted in the figures).
-constexpr size_t kMaxPieces = size_t(1) << 19;
+constexpr size_t kMaxPieces = size_t(1) << 17;  // about 21 MB a thread
 constexpr uint64_t kEyeSeedMix = 0x686f72697a6f6eULL;  // the horizon's eyes differ from the ranking's
 
 // The candidates as the runtime takes them.
