@@ -348,6 +348,8 @@ inline void round_trip(const BakeData& bake, uint32_t seed, uint64_t* culled = n
                 << "cell " << c;
         }
         EXPECT_EQ(level.horizon_list_count(uint32_t(bake.cells.size())), 0u);
+        EXPECT_EQ(loaded.horizon_list_count(uint32_t(bake.cells.size())), 0u);  // out of range: none
+        EXPECT_EQ(loaded.horizon_list_count(UINT32_MAX), 0u);
     }
     pvsbake_free(c_bake);
     if (culled != nullptr) *culled += culled_here;

@@ -37,6 +37,18 @@ TEST(RuntimeFile, GridsAndOctreesAnswerAsTheHdf5Loader) {
         }
 }
 
+// Horizon lists (bake file 1.8, runtime file 2.1): the C99 runtime's and the HDF5 loader's horizons are
+// built from the same lists and draw the same objects, and a cell out of range has no list in either.
+TEST(RuntimeFile, HorizonListsAnswerAsTheHdf5Loader) {
+    for (const bool octree : {false, true}) {
+        SCOPED_TRACE(octree ? "octree" : "grid");
+        BakeData bake = test::coherent_bake(133, {7, 3, 6}, octree, true, 5, true);
+        test::add_horizon_lists(bake);
+        uint64_t horizon_culled = 0;
+        round_trip(bake, 7, nullptr, &horizon_culled);
+    }
+}
+
 // The file's bytes with its version set to 1.1 and the checksum made right again.
 Bytes labelled_1_1(Bytes bytes) {
     const uint16_t old_version[2] = {1, 1};

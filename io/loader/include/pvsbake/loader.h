@@ -381,7 +381,8 @@ public:
     // The cell's list of the run-time horizon's occluders (format 1.8; pvsbake::Horizon builds a frame from
     // it): how many; 0 without lists or out of range.
     uint32_t horizon_list_count(uint32_t c) const noexcept {
-        const uint32_t l = c < horizon_cell_list_.size() ? horizon_cell_list_[c] : UINT32_MAX;
+        if (c >= horizon_cell_list_.size()) return 0;
+        const size_t l = horizon_cell_list_[c];  // validated: below the lists
         return l + 1 < horizon_list_offset_.size() ? horizon_list_offset_[l + 1] - horizon_list_offset_[l]
                                                    : 0;
     }
