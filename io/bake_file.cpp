@@ -533,6 +533,23 @@ void write_leak_path(Writer& w, hid_t root, const std::vector<glm::vec3>& path) 
                   "view volume flood from a seed to the outside, when the level leaks; empty = sealed");
 }
 
+// Polygons as the file keeps them (/occluders/polygon_*, /horizon/tile_*): corner offsets (polygons + 1),
+// corners (3 floats each) and planes (normal, offset, thickness).
+struct FlatPolygons {
+    std::vector<uint32_t> offsets = {0};
+    std::vector<float> corners, planes;
+};
+
+FlatPolygons flat_polygons(const std::vector<OccluderPolygon>& polygons) {
+    FlatPolygons f;
+    for (const OccluderPolygon& p : polygons) {
+        for (const glm::vec3& c : p.corners) f.corners.insert(f.corners.end(), {c.x, c.y, c.z});
+        f.offsets.push_back(uint32_t(f.corners.size() / 3));
+        f.planes.insert(f.planes.end(), {p.normal.x, p.normal.y, p.normal.z, p.offset, p.thickness});
+    }
+    return f;
+}
+
 void write_occluders(Writer& w, hid_t root, bool by_sight, const std::vector<Occluder>& occluders,
                      const std::vector<OccluderPolygon>& polygons, const RankedOccluders& ranked) {
     Handle g = w.group(root, "/", "occluders");
@@ -609,13 +626,9 @@ void write_occluders(Writer& w, hid_t root, bool by_sight, const std::vector<Occ
               share.data());
     if (polygons.empty()) return;
     // Format 1.7: the polygon occluders (docs/ALGORITHMS.md#runtime-polygons) and the cells' ranked polygons.
-    std::vector<uint32_t> corner_offsets = {0};
-    std::vector<float> corners, planes;
-    for (const OccluderPolygon& p : polygons) {
-        for (const glm::vec3& c : p.corners) corners.insert(corners.end(), {c.x, c.y, c.z});
-        corner_offsets.push_back(uint32_t(corners.size() / 3));
-        planes.insert(planes.end(), {p.normal.x, p.normal.y, p.normal.z, p.offset, p.thickness});
-    }
+    const FlatPolygons flat = flat_polygons(polygons);
+    const std::vector<uint32_t>& corner_offsets = flat.offsets;
+    const std::vector<float>&corners = flat.corners, &planes = flat.planes;
     w.dataset(g.get(), "/occluders", "polygon_offsets", H5T_STD_U32LE, H5T_NATIVE_UINT32,
               {corner_offsets.size()}, corner_offsets.data());
     w.dataset(g.get(), "/occluders", "polygon_corners", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT,
@@ -637,15 +650,12 @@ void write_occluders(Writer& w, hid_t root, bool by_sight, const std::vector<Occ
 void write_horizon(Writer& w, hid_t root, const HorizonLists& h) {
     if (h.empty()) return;
     Handle g = w.group(root, "/", "horizon");
-    std::vector<float> boxes, corners, planes;
+    std::vector<float> boxes;
     for (const Aabb& b : h.boxes)
         boxes.insert(boxes.end(), {b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z});
-    std::vector<uint32_t> tile_offsets = {0};
-    for (const OccluderPolygon& t : h.tiles) {
-        for (const glm::vec3& c : t.corners) corners.insert(corners.end(), {c.x, c.y, c.z});
-        tile_offsets.push_back(uint32_t(corners.size() / 3));
-        planes.insert(planes.end(), {t.normal.x, t.normal.y, t.normal.z, t.offset, t.thickness});
-    }
+    const FlatPolygons flat = flat_polygons(h.tiles);
+    const std::vector<uint32_t>& tile_offsets = flat.offsets;
+    const std::vector<float>&corners = flat.corners, &planes = flat.planes;
     Handle b = w.dataset(g.get(), "/horizon", "boxes", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, {h.boxes.size(), 6},
                          boxes.data());
     w.string_attr(b.get(), "columns", "min x, min y, min z, max x, max y, max z");
@@ -786,6 +796,26 @@ void read_leak_path(const Reader& r, hid_t root, BakeData& bake) {
         bake.leak_path.emplace_back(flat[i], flat[i + 1], flat[i + 2]);
 }
 
+// The inverse of flat_polygons (offsets validated by the reader).
+std::vector<OccluderPolygon> polygons_of(const std::vector<uint32_t>& offsets,
+                                         const std::vector<float>& corners, const std::vector<float>& planes,
+                                         bool tiles) {
+    std::vector<OccluderPolygon> out;
+    for (size_t i = 0; i + 1 < offsets.size(); ++i) {
+        OccluderPolygon p;
+        p.tile = tiles;
+        p.normal = glm::vec3(planes[5 * i], planes[5 * i + 1], planes[5 * i + 2]);
+        p.offset = planes[5 * i + 3];
+        p.thickness = planes[5 * i + 4];
+        for (uint32_t k = offsets[i]; k < offsets[i + 1]; ++k) {
+            p.corners.emplace_back(corners[3 * k], corners[3 * k + 1], corners[3 * k + 2]);
+            p.bounds.extend(p.corners.back());
+        }
+        out.push_back(std::move(p));
+    }
+    return out;
+}
+
 void read_occluders(const Reader& r, hid_t root, BakeData& bake) {
     const pvsbake::detail::FileOccluders f = pvsbake::detail::read_occluders(
         r, root, uint32_t(bake.objects.size()), uint32_t(bake.cells.size()), /*want_boxes=*/true);
@@ -799,19 +829,7 @@ void read_occluders(const Reader& r, hid_t root, BakeData& bake) {
                          f.objects.begin() + f.object_offsets[i + 1]);
         bake.occluders.push_back(std::move(o));
     }
-    for (size_t i = 0; i + 1 < f.polygon_offsets.size(); ++i) {
-        OccluderPolygon p;
-        p.normal =
-            glm::vec3(f.polygon_planes[5 * i], f.polygon_planes[5 * i + 1], f.polygon_planes[5 * i + 2]);
-        p.offset = f.polygon_planes[5 * i + 3];
-        p.thickness = f.polygon_planes[5 * i + 4];
-        for (uint32_t k = f.polygon_offsets[i]; k < f.polygon_offsets[i + 1]; ++k) {
-            p.corners.emplace_back(f.polygon_corners[3 * k], f.polygon_corners[3 * k + 1],
-                                   f.polygon_corners[3 * k + 2]);
-            p.bounds.extend(p.corners.back());
-        }
-        bake.polygons.push_back(std::move(p));
-    }
+    bake.polygons = polygons_of(f.polygon_offsets, f.polygon_corners, f.polygon_planes, false);
     if (f.ranked_offsets.empty()) return;  // older than format 1.2, or ranking was off
     // The boxes and (1.7) the polygons of each cell in one list, each polygon at its place.
     const size_t cells = f.ranked_offsets.size() - 1;
@@ -843,19 +861,7 @@ void read_horizon(const Reader& r, hid_t root, BakeData& bake) {
     if (!f.present) return;
     HorizonLists& h = bake.horizon;
     for (size_t i = 0; i < f.box_count(); ++i) h.boxes.push_back(box_at(f.boxes, i));
-    for (size_t i = 0; i < f.tile_count(); ++i) {
-        OccluderPolygon t;
-        t.tile = true;
-        t.normal = glm::vec3(f.tile_planes[5 * i], f.tile_planes[5 * i + 1], f.tile_planes[5 * i + 2]);
-        t.offset = f.tile_planes[5 * i + 3];
-        t.thickness = f.tile_planes[5 * i + 4];
-        for (uint32_t k = f.tile_offsets[i]; k < f.tile_offsets[i + 1]; ++k) {
-            t.corners.emplace_back(f.tile_corners[3 * k], f.tile_corners[3 * k + 1],
-                                   f.tile_corners[3 * k + 2]);
-            t.bounds.extend(t.corners.back());
-        }
-        h.tiles.push_back(std::move(t));
-    }
+    h.tiles = polygons_of(f.tile_offsets, f.tile_corners, f.tile_planes, true);
     h.cell_list = f.cell_list;
     h.offsets = f.list_offsets;
     h.entries = f.list_entries;

@@ -847,6 +847,25 @@ static const char* check_ranked(pvsr_level* l, const prescan* ps) {
     return NULL;
 }
 
+/* Polygon records in the 'OPLN' layout (polygon occluders, horizon tiles) and their corners: 0 when every
+ * plane is finite with thickness >= 0, every record has 3 to max_corners corners within `corners`, and every
+ * corner is finite; else 1 (plane), 2 (thickness), 3 (corner range) or 4 (corner not finite). */
+static int check_polygon_records(const pvsr_array* records, const pvsr_array* corners, uint64_t max_corners) {
+    uint64_t e;
+    for (e = 0; e < records->count; ++e) {
+        const uint8_t* p = records->at + PVSR_POLYGON_BYTES * e;
+        const uint64_t first = rd32(p + 20), n = rd32(p + 24);
+        int k;
+        for (k = 0; k < 5; ++k)
+            if (!isfinite(rdf(p + 4 * k))) return 1;
+        if (!(rdf(p + 16) >= 0.0f)) return 2;
+        if (n < 3 || n > max_corners || first + n > corners->count) return 3;
+    }
+    for (e = 0; e < 3 * corners->count; ++e)
+        if (!isfinite(rdf(corners->at + 4 * e))) return 4;
+    return 0;
+}
+
 /* File version 1.1: the polygon occluders ('OPLN', 'OPCO') and the cells' ranked polygons ('RPOF', 'RPLS'):
  * all four or none; each polygon 3 to PVSR_POLYGON_MAX_CORNERS finite corners in range on a finite plane;
  * each cell's polygons in range, at places increasing and within its whole list. */
@@ -862,18 +881,18 @@ static const char* check_polygons(pvsr_level* l) {
     if (!bad) bad = need(l, PVSR_TAG('O', 'P', 'C', 'O'), 12, UINT64_MAX, 1, &l->polygon_corners);
     if (!bad) bad = need(l, PVSR_TAG('R', 'P', 'L', 'S'), 8, UINT64_MAX, 1, &l->ranked_polygons);
     if (bad) return bad;
-    for (e = 0; e < l->occluder_polygons.count; ++e) {
-        const uint8_t* p = l->occluder_polygons.at + PVSR_POLYGON_BYTES * e;
-        const uint64_t first = rd32(p + 20), n = rd32(p + 24);
-        int k;
-        for (k = 0; k < 5; ++k)
-            if (!isfinite(rdf(p + 4 * k))) return "a polygon occluder's plane is not finite";
-        if (!(rdf(p + 16) >= 0.0f)) return "a polygon occluder's thickness is negative";
-        if (n < 3 || n > PVSR_POLYGON_MAX_CORNERS || first + n > l->polygon_corners.count)
+    switch (check_polygon_records(&l->occluder_polygons, &l->polygon_corners, PVSR_POLYGON_MAX_CORNERS)) {
+        case 1:
+            return "a polygon occluder's plane is not finite";
+        case 2:
+            return "a polygon occluder's thickness is negative";
+        case 3:
             return "a polygon occluder's corners are out of range";
+        case 4:
+            return "a polygon occluder's corner is not finite";
+        default:
+            break;
     }
-    for (e = 0; e < 3 * l->polygon_corners.count; ++e)
-        if (!isfinite(rdf(l->polygon_corners.at + 4 * e))) return "a polygon occluder's corner is not finite";
     if (rd32(l->ranked_polygon_offsets.at) != 0 ||
         rd32(l->ranked_polygon_offsets.at + 4 * (uint64_t)l->cell_count) != l->ranked_polygons.count)
         return "the ranked polygon offsets do not start at 0 and end at the entries' count";
@@ -919,18 +938,18 @@ static const char* check_horizon(pvsr_level* l) {
         for (a = 0; a < 3; ++a)
             if (rdf(p + 4 * a) > rdf(p + 12 + 4 * a)) return "a horizon box's min is above its max";
     }
-    for (e = 0; e < l->horizon_tiles.count; ++e) {
-        const uint8_t* p = l->horizon_tiles.at + PVSR_POLYGON_BYTES * e;
-        const uint64_t first = rd32(p + 20), n = rd32(p + 24);
-        int k;
-        for (k = 0; k < 5; ++k)
-            if (!isfinite(rdf(p + 4 * k))) return "a horizon tile's plane is not finite";
-        if (!(rdf(p + 16) >= 0.0f)) return "a horizon tile's thickness is negative";
-        if (n < 3 || n > PVSR_HORIZON_MAX_CORNERS || first + n > l->horizon_corners.count)
+    switch (check_polygon_records(&l->horizon_tiles, &l->horizon_corners, PVSR_HORIZON_MAX_CORNERS)) {
+        case 1:
+            return "a horizon tile's plane is not finite";
+        case 2:
+            return "a horizon tile's thickness is negative";
+        case 3:
             return "a horizon tile's corners are out of range";
+        case 4:
+            return "a horizon tile's corner is not finite";
+        default:
+            break;
     }
-    for (e = 0; e < 3 * l->horizon_corners.count; ++e)
-        if (!isfinite(rdf(l->horizon_corners.at + 4 * e))) return "a horizon tile's corner is not finite";
     if (rd32(l->horizon_list_offsets.at) != 0) return "the horizon lists do not start at 0";
     for (e = 0; e + 1 < l->horizon_list_offsets.count; ++e) {
         const uint32_t a = rd32(l->horizon_list_offsets.at + 4 * e),
