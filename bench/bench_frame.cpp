@@ -51,7 +51,9 @@
 // rounded to floats (no float margin); 2: as tiles (pvsr_horizon_add_tile, occluders/slanted_panels.h's
 // runtime_tiles); 0: in the culler's polygon form. --horizon-lists file: the horizon takes the cell's list of
 // the runtime file (pvsr_horizon_begin_cell, as a game does; no --bake needed), `horizon_used_mean` occluders
-// a frame; bench (the default): the occluders above. --horizon-record FILE: each frame's eye, the occluders
+// a frame, and the frame is the game's: the cell's culler and horizon set up and the walk culled by both
+// (pvsr_drawn_objects_horizon, with the file's object parts), all of it in `horizon_us_median`; bench (the
+// default): the occluders above. --horizon-record FILE: each frame's eye, the occluders
 // given to the horizon and the bounds it tests, written for bench_horizon to replay (format there).
 // Where the drawn but invisible triangles go (the "waste" object, of the full frames' drawn objects no ray
 // reached): split_culls: the culler hides each of the object's M part boxes; given_boxes: each of
@@ -747,6 +749,22 @@ int main(int argc, char** argv) {
                     }
                 }
                 const auto h0 = std::chrono::steady_clock::now();
+                if (horizon_file_lists && eye_occluders == 0 && !parts_drawn) {
+                    // The game's frame: the cell's culler and its horizon list from the file, then the walk
+                    // culled by both (bounds, then the file's object parts)
+                    const size_t before = f.drawn.size();
+                    f.horizon_used = pvsr_horizon_begin_cell(&runtime_horizon, &level, f.cell, eye);
+                    if (max_occluders > 0)
+                        pvsr_culler_begin_cell(&culler, &level, f.cell, eye, max_occluders);
+                    const uint32_t drawn =
+                        pvsr_drawn_objects_horizon(&level, f.cell, max_occluders > 0 ? &culler : nullptr,
+                                                   &runtime_horizon, scratch.data(), scratch.size());
+                    f.horizon_us = micros(h0, std::chrono::steady_clock::now());
+                    f.horizon_pieces = uint32_t(runtime_horizon.count);
+                    f.drawn.assign(scratch.begin(), scratch.begin() + drawn);
+                    f.horizon_culled = uint32_t(before - std::min(before, f.drawn.size()));
+                    continue;
+                }
                 if (horizon_file_lists)  // the cell's list from the file, as a game builds its frame
                     f.horizon_used = pvsr_horizon_begin_cell(&runtime_horizon, &level, f.cell, eye);
                 else

@@ -7,6 +7,7 @@
 #include "cells/view_volume.h"
 #include "cells/world_extent.h"
 #include "core/error.h"
+#include "core/object_parts.h"
 #include "driver/memory_plan.h"
 #include "driver/report.h"
 #include "driver/verify_boxes.h"
@@ -330,7 +331,9 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
         bake.ranked = rank_occluders(ctx, config.ranking, world, bake.cells, bake.occluders, figures.ranking,
                                      share, &bake.pvs, &bake.polygons);
     }
-    // 5b. The run-time horizon's list of proven occluders per block of cells, chosen by the runtime's own
+    // 5b. The objects' part boxes for the run-time tests (docs/ALGORITHMS.md#object-parts).
+    bake.object_parts = object_parts(world, config.ranking.object_parts);
+    // 5c. The run-time horizon's list of proven occluders per block of cells, chosen by the runtime's own
     //     horizon from seeded eyes (docs/ALGORITHMS.md#horizon-lists): the proven boxes, every panel, and the
     //     slanted panels as tiles are the candidates.
     if (config.ranking.horizon_eyes > 0 && (config.occluders.enabled || conservative)) {
@@ -341,7 +344,8 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
         }
         candidates.insert(candidates.end(), shrunk.panels.begin(), shrunk.panels.end());
         bake.horizon = choose_horizon_lists(ctx, config.ranking, world, bake.cells, bake.pvs, candidates,
-                                            runtime_tiles(shrunk.slanted, 0.0), figures.horizon, share);
+                                            runtime_tiles(shrunk.slanted, 0.0), figures.horizon, share,
+                                            &bake.object_parts);
     }
     // 6. The figures of the bake (driver/report.h).
     figures.shrunk_boxes = shrunk.boxes.empty() ? 0 : shrunk.boxes[0].size();

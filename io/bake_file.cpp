@@ -224,6 +224,21 @@ void check_writable(const std::string& path, const BakeData& bake) {
             if (!ok) bad("a horizon tile is not 3 to 32 finite corners on a finite plane");
         }
     }
+    const ObjectParts& parts = bake.object_parts;  // as the reader checks them (bake_reader.h, read_objects)
+    if (!parts.offsets.empty()) {
+        if (parts.offsets.size() != objects + 1 || parts.offsets[0] != 0 ||
+            parts.offsets.back() != parts.boxes.size())
+            bad("the objects' part offsets do not match the objects and part boxes");
+        for (size_t i = 0; i < objects; ++i)
+            for (uint32_t k = parts.offsets[i]; k < parts.offsets[i + 1]; ++k) {
+                const Aabb& p = parts.boxes[k];
+                const Aabb& b = bake.objects[i].bounds;
+                if (parts.offsets[i + 1] < parts.offsets[i] || !is_finite(p.min) || !is_finite(p.max) ||
+                    p.is_empty() || !glm::all(glm::greaterThanEqual(p.min, b.min)) ||
+                    !glm::all(glm::lessThanEqual(p.max, b.max)))
+                    bad(fmt::format("part box {} of object {} is not a finite box inside its bounds", k, i));
+            }
+    }
     const VerificationRecord& v = bake.verification;
     if (!v.cell_sampled_visible.empty() && v.cell_sampled_visible.size() != cells) {
         bad("verification cell_sampled_visible does not have one entry per cell");
@@ -354,7 +369,8 @@ void read_print(const Reader& r, hid_t root, BakeData& bake) {
     p.dims = {dims[0], dims[1], dims[2]};
 }
 
-void write_objects(Writer& w, hid_t root, const std::vector<ObjectRecord>& objects) {
+void write_objects(Writer& w, hid_t root, const std::vector<ObjectRecord>& objects,
+                   const ObjectParts& parts) {
     Handle g = w.group(root, "/", "objects");
     std::vector<std::string> names;
     std::vector<Aabb> bounds;
@@ -370,6 +386,15 @@ void write_objects(Writer& w, hid_t root, const std::vector<ObjectRecord>& objec
     w.dataset(g.get(), "/objects", "triangle_count", H5T_STD_U32LE, H5T_NATIVE_UINT32, {objects.size()},
               triangles.data());
     w.dataset(g.get(), "/objects", "flags", H5T_STD_U32LE, H5T_NATIVE_UINT32, {objects.size()}, flags.data());
+    if (!parts.offsets.empty()) {  // 1.9: the part boxes (core/object_parts.h)
+        w.dataset(g.get(), "/objects", "part_offsets", H5T_STD_U32LE, H5T_NATIVE_UINT32,
+                  {parts.offsets.size()}, parts.offsets.data());
+        std::vector<float> boxes;
+        for (const Aabb& b : parts.boxes)
+            boxes.insert(boxes.end(), {b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z});
+        w.dataset(g.get(), "/objects", "part_boxes", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT,
+                  {parts.boxes.size(), 6}, boxes.data(), true);
+    }
 }
 
 const char* kind_name(CellSet::Kind kind) {
@@ -755,6 +780,10 @@ void read_objects(const Reader& r, hid_t root, BakeData& bake) {
     for (size_t i = 0; i < o.names.size(); ++i) {
         bake.objects[i] = ObjectRecord{o.names[i], box_at(o.bounds, i), o.triangle_count[i], o.flags[i]};
     }
+    bake.object_parts.offsets = o.part_offsets;
+    bake.object_parts.boxes.clear();
+    for (size_t k = 0; k < o.part_boxes.size() / 6; ++k)
+        bake.object_parts.boxes.push_back(box_at(o.part_boxes, k));
 }
 
 void read_cells(const Reader& r, hid_t root, BakeData& bake) {
@@ -940,7 +969,7 @@ void write_bake_file(const std::string& path, const BakeData& bake) {
             Handle root = site.handle(H5Gopen2(file.get(), "/", H5P_DEFAULT), H5Gclose, "cannot open /");
             write_root(w, root.get(), bake);
             write_string_pairs(w, root.get(), "/", "parameters", bake.parameters);
-            write_objects(w, root.get(), bake.objects);
+            write_objects(w, root.get(), bake.objects, bake.object_parts);
             write_cells(w, root.get(), bake.cells);
             write_pvs(w, root.get(), bake);
             write_leak_path(w, root.get(), bake.leak_path);

@@ -13,6 +13,7 @@
 #include "core/cell_set.h"
 #include "core/geometry_print.h"
 #include "core/math.h"
+#include "core/object_parts.h"
 #include "core/occluder.h"
 #include "core/pvs_set.h"
 
@@ -24,11 +25,12 @@
 namespace pvs {
 
 constexpr int kBakeFormatMajor = 1;
-constexpr int kBakeFormatMinor = 8;  // 1.1 added the PVS code (/pvs/code), 1.2 ranked occluders per cell,
+constexpr int kBakeFormatMinor = 9;  // 1.1 added the PVS code (/pvs/code), 1.2 ranked occluders per cell,
                                      // 1.3 the opening width of each verification miss, 1.4 the voxel
                                      // masks as bricks, 1.5 the run's own record (/run), 1.6 the geometry
                                      // print (/reuse), 1.7 polygon occluders ranked per cell,
-                                     // 1.8 the run-time horizon's occluders and lists (/horizon)
+                                     // 1.8 the run-time horizon's occluders and lists (/horizon),
+                                     // 1.9 the objects' part boxes (/objects/part_*)
 
 struct ObjectRecord {
     std::string name;
@@ -96,6 +98,7 @@ struct BakeData {
     RankedOccluders
         ranked;  // per cell, indices into `occluders`, then `polygons` (empty: none, or a file < 1.2)
     HorizonLists horizon;  // 1.8: the run-time horizon's occluders and lists (empty: none, or a file < 1.8)
+    ObjectParts object_parts;  // 1.9: the objects' part boxes (core/object_parts.h; empty: none, or < 1.9)
     VerificationRecord verification;
     GeometryPrint print;  // conservative bakes from 1.6: what a re-bake after an edit compares (/reuse)
     RunRecord run;

@@ -667,6 +667,12 @@ std::string assemble(const std::string& path, Bake& b, const RuntimeFileOptions&
         sections.push_back(std::move(hlist));
     }
 
+    // 2.2: the objects' part boxes ('OPOF' offsets, objects + 1, into 'OPBX'), when some object has parts.
+    if (!b.objects.part_offsets.empty() && b.objects.part_offsets.back() > 0) {
+        sections.push_back(array_section(PVSR_TAG('O', 'P', 'O', 'F'), 4, b.objects.part_offsets));
+        sections.push_back(array_section(PVSR_TAG('O', 'P', 'B', 'X'), 24, b.objects.part_boxes));
+    }
+
     // The header, the table, the sections at multiples of 64.
     const auto aligned = [](uint64_t n) { return (n + PVSR_ALIGN - 1) / PVSR_ALIGN * PVSR_ALIGN; };
     std::string out(PVSR_HEADER_BYTES, '\0');

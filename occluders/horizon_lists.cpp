@@ -71,6 +71,11 @@ void count_use(void* user, uint32_t tag) {
     n += n < UINT32_MAX ? 1u : 0u;
 }
 
+// The tags of a proof, kept until every part of the object is known hidden.
+void keep_tag(void* user, uint32_t tag) {
+    static_cast<std::vector<uint32_t>*>(user)->push_back(tag);
+}
+
 }  // namespace
 
 uint32_t horizon_block_count(const CellSet& cells) {
@@ -103,7 +108,7 @@ std::vector<uint32_t> horizon_blocks(const CellSet& cells) {
 HorizonLists choose_horizon_lists(Context& ctx, const RankingConfig& config, const World& world,
                                   const CellSet& cells, const PvsSet& pvs, const std::vector<Aabb>& boxes,
                                   const std::vector<OccluderPolygon>& tiles, HorizonListFigures& figures,
-                                  WorkShare* share) {
+                                  WorkShare* share, const ObjectParts* parts) {
     figures = HorizonListFigures{};
     HorizonLists out;
     const Candidates cand = candidates_of(boxes, tiles);
@@ -144,7 +149,7 @@ HorizonLists choose_horizon_lists(Context& ctx, const RankingConfig& config, con
         const bool ok = pvsr_horizon_init(&h, columns, kMaxPieces, memory.data(), memory.size() * 8) != 0;
         uint64_t eyes_done = 0, dropped = 0;
         std::vector<glm::vec3> eyes;
-        std::vector<uint32_t> uses(cand.size(), 0);
+        std::vector<uint32_t> uses(cand.size(), 0), part_tags;
         std::vector<std::pair<uint32_t, uint32_t>> ranked;  // (uses, candidate)
         for_each_dealt(deal, ctx, 1, [&](uint64_t b) {
             if (!ok) return;
@@ -167,8 +172,21 @@ HorizonLists choose_horizon_lists(Context& ctx, const RankingConfig& config, con
                     for (uint32_t w = 0; w < pvs.words_per_row; ++w)
                         for (uint64_t bits = row[w]; bits != 0; bits &= bits - 1) {
                             const uint32_t o = 64 * w + uint32_t(__builtin_ctzll(bits));
-                            if (o < testable.size() && testable[o])
-                                pvsr_horizon_hidden_by(&h, &bounds[6 * size_t(o)], count_use, &uses);
+                            if (o >= testable.size() || !testable[o] ||
+                                pvsr_horizon_hidden_by(&h, &bounds[6 * size_t(o)], count_use, &uses))
+                                continue;
+                            // Bounds not hidden: its parts (core/object_parts.h), whose proofs count when
+                            // they hide every part, as the runtime's walk then culls the object.
+                            const uint32_t n_parts = parts ? parts->count(o) : 0;
+                            part_tags.clear();
+                            bool all = n_parts > 0;
+                            for (uint32_t k = 0; k < n_parts && all; ++k) {
+                                const Aabb& p = parts->boxes[parts->offsets[o] + k];
+                                const float pb[6] = {p.min.x, p.min.y, p.min.z, p.max.x, p.max.y, p.max.z};
+                                all = pvsr_horizon_hidden_by(&h, pb, keep_tag, &part_tags) != 0;
+                            }
+                            if (all)
+                                for (const uint32_t t : part_tags) count_use(&uses, t);
                         }
                 }
             }

@@ -17,6 +17,7 @@
 #include "core/cell_set.h"
 #include "core/config.h"
 #include "core/context.h"
+#include "core/object_parts.h"
 #include "core/occluder.h"
 #include "core/pvs_set.h"
 #include "core/work_share.h"
@@ -47,10 +48,12 @@ std::vector<uint32_t> horizon_blocks(const CellSet& cells);
 
 // The candidates: `boxes` (proven boxes and panels, solid or flat along one axis) and `tiles`. With
 // config.horizon_eyes == 0, or no candidate, an empty result. With `share`, the blocks are dealt over its
-// processes (collective: every process calls it, and every one gets the whole result).
+// processes (collective: every process calls it, and every one gets the whole result). With `parts`, an
+// object whose bounds an eye's horizon does not hide counts the proofs of its parts when they hide every
+// part, as the runtime's walk then culls it (docs/ALGORITHMS.md#object-parts).
 HorizonLists choose_horizon_lists(Context& ctx, const RankingConfig& config, const World& world,
                                   const CellSet& cells, const PvsSet& pvs, const std::vector<Aabb>& boxes,
                                   const std::vector<OccluderPolygon>& tiles, HorizonListFigures& figures,
-                                  WorkShare* share = nullptr);
+                                  WorkShare* share = nullptr, const ObjectParts* parts = nullptr);
 
 }  // namespace pvs

@@ -960,6 +960,38 @@ static const char* check_horizon(pvsr_level* l) {
     return NULL;
 }
 
+/* File version 2.2: the objects' part boxes ('OPOF' offsets, objects + 1, into 'OPBX' boxes): both or none.
+ * Offsets from 0, never decreasing, ending at the boxes' count; each box finite with min <= max, inside its
+ * object's bounds. */
+static const char* check_object_parts(pvsr_level* l) {
+    uint64_t o, e;
+    const char* bad;
+    if (!section(l, PVSR_TAG('O', 'P', 'O', 'F'), &l->object_part_offsets)) return NULL; /* none */
+    bad = need(l, PVSR_TAG('O', 'P', 'O', 'F'), 4, (uint64_t)l->object_count + 1, 1, &l->object_part_offsets);
+    if (!bad) bad = need(l, PVSR_TAG('O', 'P', 'B', 'X'), 24, UINT64_MAX, 1, &l->object_parts);
+    if (bad) return bad;
+    if (rd32(l->object_part_offsets.at) != 0 ||
+        rd32(l->object_part_offsets.at + 4 * (uint64_t)l->object_count) != l->object_parts.count)
+        return "the object parts' offsets do not start at 0 and end at their boxes";
+    for (o = 0; o < l->object_count; ++o) {
+        const uint32_t a = rd32(l->object_part_offsets.at + 4 * o),
+                       b = rd32(l->object_part_offsets.at + 4 * o + 4);
+        const uint8_t* bounds = l->object_boxes.at + 24 * o;
+        if (b < a || b > l->object_parts.count)
+            return "the object parts' offsets decrease or pass their boxes";
+        for (e = a; e < b; ++e) {
+            const uint8_t* p = l->object_parts.at + 24 * e;
+            int k;
+            if (!finite_box(p)) return "an object part box is not finite";
+            for (k = 0; k < 3; ++k)
+                if (rdf(p + 4 * k) > rdf(p + 12 + 4 * k) || !(rdf(p + 4 * k) >= rdf(bounds + 4 * k)) ||
+                    !(rdf(p + 12 + 4 * k) <= rdf(bounds + 12 + 4 * k)))
+                    return "an object part box is not inside its object's bounds";
+        }
+    }
+    return NULL;
+}
+
 static const char* check_strings(pvsr_level* l) {
     uint64_t i, fields = 0;
     const char* bad = need(l, PVSR_TAG('S', 'T', 'R', 'S'), 1, UINT64_MAX, 1, &l->strings);
@@ -1049,6 +1081,7 @@ pvsr_status pvsr_open(pvsr_level* level, const void* data, size_t size, char* me
     if (!bad) bad = check_ranked(level, &ps);
     if (!bad) bad = check_polygons(level);
     if (!bad) bad = check_horizon(level);
+    if (!bad) bad = check_object_parts(level);
     if (!bad) bad = check_strings(level);
     if (bad) return fail(&o, PVSR_CORRUPT, bad);
     if (message != NULL && message_size > 0) message[0] = '\0';
@@ -1204,12 +1237,23 @@ typedef struct sink {
 
 /* 1 when the walk with a culler or horizon gives the object on: an object the bake marks always visible, one
  * without bounds, or bounds neither proves hidden. */
+static int hidden_box(const sink* s, const float box[6]) {
+    return (s->culler != NULL && pvsr_culler_is_hidden(s->culler, box)) ||
+           (s->horizon != NULL && pvsr_horizon_is_hidden(s->horizon, box));
+}
+
+/* 1 when the walk with a culler or horizon gives the object on: an object the bake marks always visible, one
+ * without bounds, or one neither proves hidden by its bounds nor, where it has parts, by every part. */
 static int drawn(const pvsr_level* l, const sink* s, uint32_t object) {
     float box[6];
+    uint32_t k, parts;
     if ((pvsr_object_flags(l, object) & PVSR_OBJECT_ALWAYS_VISIBLE) != 0) return 1;
     if (!pvsr_object_bounds(l, object, box)) return 1;
-    if (s->culler != NULL && pvsr_culler_is_hidden(s->culler, box)) return 0;
-    return s->horizon == NULL || !pvsr_horizon_is_hidden(s->horizon, box);
+    if (hidden_box(s, box)) return 0;
+    parts = pvsr_object_part_count(l, object);
+    for (k = 0; k < parts; ++k)
+        if (!pvsr_object_part(l, object, k, box) || !hidden_box(s, box)) return 1;
+    return parts == 0;
 }
 
 /* Walks the cell's row: gives each visible object to the sink in increasing order; returns how many. */
@@ -1366,6 +1410,21 @@ int pvsr_object_bounds(const pvsr_level* l, uint32_t object, float box[6]) {
     int a;
     if (l == NULL || box == NULL || object >= l->object_count) return 0;
     for (a = 0; a < 6; ++a) box[a] = rdf(l->object_boxes.at + 24 * (uint64_t)object + 4 * a);
+    return 1;
+}
+
+uint32_t pvsr_object_part_count(const pvsr_level* l, uint32_t object) {
+    if (l == NULL || object >= l->object_count || l->object_part_offsets.at == NULL) return 0;
+    return rd32(l->object_part_offsets.at + 4 * (uint64_t)object + 4) -
+           rd32(l->object_part_offsets.at + 4 * (uint64_t)object);
+}
+
+int pvsr_object_part(const pvsr_level* l, uint32_t object, uint32_t part, float box[6]) {
+    int a;
+    if (box == NULL || part >= pvsr_object_part_count(l, object)) return 0;
+    for (a = 0; a < 6; ++a)
+        box[a] = rdf(l->object_parts.at +
+                     24 * ((uint64_t)rd32(l->object_part_offsets.at + 4 * (uint64_t)object) + part) + 4 * a);
     return 1;
 }
 

@@ -58,7 +58,7 @@ extern "C" {
 #endif
 
 #define PVSR_VERSION_MAJOR 2 /* the newest file version this runtime reads: 1.x and 2.x */
-#define PVSR_VERSION_MINOR 1
+#define PVSR_VERSION_MINOR 2
 
 typedef enum pvsr_status {
     PVSR_OK = 0,
@@ -96,7 +96,8 @@ typedef struct pvsr_level {
         cell_row, row_offsets, code, object_boxes, object_triangles, object_flags, name_offsets, names,
         occluder_boxes, ranked_offsets, ranked_boxes, ranked_measures, strings, occluder_polygons,
         polygon_corners, ranked_polygon_offsets, ranked_polygons, palette_blocks, palette, occupancy,
-        occupancy_ranks, horizon_boxes, horizon_tiles, horizon_corners, horizon_list_offsets, horizon_lists;
+        occupancy_ranks, horizon_boxes, horizon_tiles, horizon_corners, horizon_list_offsets, horizon_lists,
+        object_part_offsets, object_parts;
     uint64_t code_bytes; /* the code without its padding */
     uint64_t total_triangles;
 } pvsr_level;
@@ -174,6 +175,12 @@ int pvsr_object_bounds(const pvsr_level* level, uint32_t object, float box[6]);
 uint32_t pvsr_object_triangles(const pvsr_level* level, uint32_t object);
 uint32_t pvsr_object_flags(const pvsr_level* level, uint32_t object);
 uint64_t pvsr_total_triangles(const pvsr_level* level);
+/* File 2.2: an object's part boxes (docs/ALGORITHMS.md#object-parts): its triangles split into a few groups,
+ * each inside one part box, every part inside the object's bounds. The walks with a culler or horizon cull an
+ * object whose bounds they do not hide when they hide every part. Count 0 when it has none (or an older
+ * file); pvsr_object_part writes part `part` (float[6]), 0 when out of range. */
+uint32_t pvsr_object_part_count(const pvsr_level* level, uint32_t object);
+int pvsr_object_part(const pvsr_level* level, uint32_t object, uint32_t part, float box[6]);
 
 /* ---- Ranked occluders of a cell, best first (docs/FORMAT.md, "Ranked occluders"): boxes inside the
  * opaque solid worth testing at run time to cull moving objects. box is float[6]; score higher is better;

@@ -117,6 +117,13 @@ public:
     }
     uint32_t object_triangles(uint32_t object) const noexcept { return pvsr_object_triangles(&level_, object); }
     uint32_t object_flags(uint32_t object) const noexcept { return pvsr_object_flags(&level_, object); }
+    // File 2.2: the object's part boxes (pvsr_object_part_count, pvsr_object_part).
+    uint32_t object_part_count(uint32_t object) const noexcept {
+        return pvsr_object_part_count(&level_, object);
+    }
+    bool object_part(uint32_t object, uint32_t part, float box[6]) const noexcept {
+        return pvsr_object_part(&level_, object, part, box) != 0;
+    }
     uint64_t total_triangles() const noexcept { return pvsr_total_triangles(&level_); }
 
     uint32_t occluder_count(uint32_t cell) const noexcept { return pvsr_occluder_count(&level_, cell); }

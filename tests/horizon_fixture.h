@@ -27,4 +27,30 @@ inline void add_horizon_lists(BakeData& bake) {
     h.entries = {0, 1, 2};
 }
 
+// Object parts (bake file 1.9, runtime file 2.2) on any bake: every object with a box for bounds gets the
+// two halves of it along x, and each third object the four quarters along x and z.
+inline void add_object_parts(BakeData& bake) {
+    ObjectParts& p = bake.object_parts;
+    p = ObjectParts{};
+    p.offsets.push_back(0);
+    for (size_t o = 0; o < bake.objects.size(); ++o) {
+        const Aabb& b = bake.objects[o].bounds;
+        if (!b.is_empty()) {
+            const float mx = 0.5f * (b.min.x + b.max.x), mz = 0.5f * (b.min.z + b.max.z);
+            if (o % 3 == 0) {
+                for (int i = 0; i < 4; ++i) {
+                    Aabb q = b;
+                    ((i & 1) ? q.min.x : q.max.x) = mx;
+                    ((i & 2) ? q.min.z : q.max.z) = mz;
+                    p.boxes.push_back(q);
+                }
+            } else {
+                p.boxes.push_back(Aabb::of(b.min, {mx, b.max.y, b.max.z}));
+                p.boxes.push_back(Aabb::of({mx, b.min.y, b.min.z}, b.max));
+            }
+        }
+        p.offsets.push_back(uint32_t(p.boxes.size()));
+    }
+}
+
 }  // namespace pvs::test

@@ -56,8 +56,25 @@ inline std::string opened_message(const Bytes& b, pvsr_status* status) {
 // of the cell's ranked occluders and with the best 2: the C99 runtime (C and C++ calls) and the HDF5
 // loader (C++ and C calls) give the same objects, and they are the cell's PVS less exactly the objects
 // whose bounds the culler hides, objects flagged always visible kept. Adds how many were culled to culled.
+// Whether the walks cull object o of the runtime level by `hidden` (a box test): its bounds, or every one of
+// its parts (file 2.2); never an object flagged always visible. Counts in *by_parts those only its parts hid.
+template <class Hidden>
+bool culled_by_rule(const pvsr::Level& l, uint32_t o, Hidden&& hidden, uint64_t* by_parts = nullptr) {
+    if (l.object_flags(o) & PVSR_OBJECT_ALWAYS_VISIBLE) return false;
+    float box[6];
+    l.object_bounds(o, box);
+    if (hidden(box)) return true;
+    const uint32_t n = l.object_part_count(o);
+    for (uint32_t k = 0; k < n; ++k)
+        if (!l.object_part(o, k, box) || !hidden(box)) return false;
+    if (n > 0 && by_parts != nullptr) ++*by_parts;
+    return n > 0;
+}
+
 inline void expect_same_drawn(const pvsr::Level& got, const pvsbake::Bake& want, const pvsbake_bake* c_bake,
-                              uint32_t seed, uint64_t& culled, uint64_t* horizon_culled_out = nullptr) {
+                              uint32_t seed, uint64_t& culled, uint64_t* horizon_culled_out = nullptr,
+                              uint64_t* part_culled_out = nullptr) {
+    uint64_t part_culled = 0;
     std::mt19937 rng(seed ^ 0xd7a3u);
     pvsr::Horizon horizon(64, 1 << 14);
     pvsbake::Horizon want_horizon(64, 1 << 14);
@@ -83,9 +100,8 @@ inline void expect_same_drawn(const pvsr::Level& got, const pvsbake::Bake& want,
             EXPECT_EQ(want_culler.begin_cell(want, c, eye, max), given);
             std::vector<uint32_t> expected, walked, want_walked;
             want.for_each_visible(c, [&](uint32_t o) {
-                float box[6];
-                got.object_bounds(o, box);
-                if ((got.object_flags(o) & PVSR_OBJECT_ALWAYS_VISIBLE) || !culler.is_hidden(box))
+                if (!culled_by_rule(
+                        got, o, [&](const float* b) { return culler.is_hidden(b); }, &part_culled))
                     expected.push_back(o);
             });
             culled += want.visible_count(c) - expected.size();
@@ -130,11 +146,10 @@ inline void expect_same_drawn(const pvsr::Level& got, const pvsbake::Bake& want,
             for (const bool with_culler : {true, false}) {
                 std::vector<uint32_t> expected, walked, want_walked;
                 want.for_each_visible(c, [&](uint32_t o) {
-                    float box[6];
-                    got.object_bounds(o, box);
-                    if ((got.object_flags(o) & PVSR_OBJECT_ALWAYS_VISIBLE) ||
-                        (!(with_culler && culler.is_hidden(box)) && !horizon.is_hidden(box)))
-                        expected.push_back(o);
+                    const auto hidden = [&](const float* b) {
+                        return (with_culler && culler.is_hidden(b)) || horizon.is_hidden(b);
+                    };
+                    if (!culled_by_rule(got, o, hidden, &part_culled)) expected.push_back(o);
                 });
                 horizon_culled += with_culler ? 0 : want.visible_count(c) - expected.size();
                 got.for_each_drawn(c, with_culler ? &culler : nullptr, horizon,
@@ -161,6 +176,7 @@ inline void expect_same_drawn(const pvsr::Level& got, const pvsbake::Bake& want,
         }
     }
     if (horizon_culled_out != nullptr) *horizon_culled_out += horizon_culled;
+    if (part_culled_out != nullptr) *part_culled_out += part_culled;
     pvsbake_horizon_free(c_horizon);
     // Out of range, or no bake: nothing.
     EXPECT_EQ(got.for_each_drawn(want.cell_count(), culler, [](uint32_t) {}), 0u);
@@ -313,8 +329,8 @@ inline void expect_same_as_loader(const pvsr::Level& got, const pvsbake::Bake& w
 // and chains of up to 8 rows, and with the defaults), and checks the runtime against the HDF5 loader.
 // Adds to *culled (when given) the objects the drawn walks culled (expect_same_drawn).
 inline void round_trip(const BakeData& bake, uint32_t seed, uint64_t* culled = nullptr,
-                       uint64_t* horizon_culled = nullptr) {
-    uint64_t culled_here = 0, horizon_culled_here = 0;
+                       uint64_t* horizon_culled = nullptr, uint64_t* part_culled = nullptr) {
+    uint64_t culled_here = 0, horizon_culled_here = 0, part_culled_here = 0;
     TempDir dir;
     const std::string h5 = dir.file("bake.h5");
     pvsbake::Bake loaded;
@@ -338,7 +354,29 @@ inline void round_trip(const BakeData& bake, uint32_t seed, uint64_t* culled = n
         EXPECT_EQ(why, "");
         EXPECT_EQ(pvsr_has_occluder_measures(&level.c_level()) != 0, measures && !bake.ranked.offsets.empty());
         expect_same_as_loader(level, loaded, seed);
-        expect_same_drawn(level, loaded, c_bake, seed, culled_here, &horizon_culled_here);
+        expect_same_drawn(level, loaded, c_bake, seed, culled_here, &horizon_culled_here, &part_culled_here);
+        // The objects' part boxes (file 2.2, bake file 1.9): as the bake holds them, in both.
+        for (uint32_t o = 0; o < loaded.object_count(); ++o) {
+            const uint32_t n = bake.object_parts.count(o);
+            ASSERT_EQ(level.object_part_count(o), n) << "object " << o;
+            ASSERT_EQ(loaded.object_part_count(o), n) << "object " << o;
+            for (uint32_t k = 0; k < n; ++k) {
+                float box[6];
+                ASSERT_TRUE(level.object_part(o, k, box));
+                const Aabb& p = bake.object_parts.boxes[bake.object_parts.offsets[o] + k];
+                const pvsbake::Box lb = loaded.object_part(o, k);
+                for (int a = 0; a < 3; ++a) {
+                    EXPECT_EQ(box[a], p.min[a]);
+                    EXPECT_EQ(box[3 + a], p.max[a]);
+                    EXPECT_EQ(lb.min[a], p.min[a]);
+                    EXPECT_EQ(lb.max[a], p.max[a]);
+                }
+            }
+            float box[6];
+            EXPECT_FALSE(level.object_part(o, n, box));
+            EXPECT_EQ(pvsbake_object_part_count(c_bake, o), n);
+            EXPECT_EQ(pvsbake_object_part(c_bake, o, n, box), 0);
+        }
         // The horizon lists (file 2.1): each cell's list holds the occluders of the bake's list of its cell
         // (the bake's blocks are the file's, and every occluder some list names is kept), ascending.
         EXPECT_EQ(pvsr_horizon_occluder_count(&level.c_level()) > 0, !bake.horizon.empty());
@@ -354,6 +392,7 @@ inline void round_trip(const BakeData& bake, uint32_t seed, uint64_t* culled = n
     pvsbake_free(c_bake);
     if (culled != nullptr) *culled += culled_here;
     if (horizon_culled != nullptr) *horizon_culled += horizon_culled_here;
+    if (part_culled != nullptr) *part_culled += part_culled_here;
 }
 
 }  // namespace pvs::test

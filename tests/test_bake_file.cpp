@@ -1121,6 +1121,60 @@ TEST(BakeFileBad, HorizonListsOutOfRangeOrDamaged) {
     patched("/horizon/tile_offsets", 1, H5T_NATIVE_UINT32, &zero, {"/horizon/tile_offsets"});
 }
 
+// Format 1.9: the objects' part boxes come back as written; without parts no datasets and none come back;
+// a part outside its object's bounds, a NaN or offsets that decrease are refused by name.
+BakeData parts_bake() {
+    BakeData bake = make_bake(6, glm::ivec3(2, 1, 1), 0, 2, 3);
+    ObjectParts& p = bake.object_parts;
+    p.offsets = {0, 2, 2, 2, 5, 5, 5};
+    const Aabb& a = bake.objects[0].bounds;
+    const glm::vec3 mid = 0.5f * (a.min + a.max);
+    p.boxes = {Aabb::of(a.min, mid), Aabb::of(mid, a.max)};
+    const Aabb& d = bake.objects[3].bounds;
+    for (int k = 0; k < 3; ++k)
+        p.boxes.push_back(Aabb::of(d.min + 0.25f * float(k) * (d.max - d.min), d.max));
+    return bake;
+}
+
+TEST(BakeFile, ObjectPartsRoundTrip) {
+    test::TempDir dir;
+    const BakeData bake = parts_bake();
+    const std::string path = dir.file("parts.h5");
+    write_bake_file(path, bake);
+    const BakeData back = read_bake_file(path);
+    expect_same(bake, back);
+    EXPECT_EQ(back.object_parts.offsets, bake.object_parts.offsets);
+    EXPECT_EQ(back.object_parts.boxes, bake.object_parts.boxes);
+    EXPECT_EQ(back.object_parts.count(3), 3u);
+    write_bake_file(dir.file("again.h5"), back);
+    EXPECT_EQ(test::read_file(dir.file("again.h5")), test::read_file(path));
+    BakeData none = bake;
+    none.object_parts = ObjectParts{};
+    write_bake_file(dir.file("none.h5"), none);
+    EXPECT_TRUE(read_bake_file(dir.file("none.h5")).object_parts.offsets.empty());
+    // The writer refuses a part outside its object's bounds (the reader would).
+    BakeData outside = bake;
+    outside.object_parts.boxes[1].max.x += 1.0f;
+    EXPECT_THROW(write_bake_file(dir.file("outside.h5"), outside), std::exception);
+}
+
+TEST(BakeFileBad, ObjectPartsOutsideOrDamaged) {
+    test::TempDir dir;
+    const std::string good = dir.file("good.h5");
+    write_bake_file(good, parts_bake());
+    const std::string path = dir.file("bad.h5");
+    auto patched = [&](const char* dataset, hsize_t index, hid_t type, const void* value,
+                       std::vector<std::string> needles) {
+        expect_patch_refused(good, path, dataset, index, type, value, needles);
+    };
+    const uint32_t zero = 0, big = 99;
+    const float nan = std::nanf(""), far = 1e6f;
+    patched("/objects/part_boxes", 3, H5T_NATIVE_FLOAT, &far, {"/objects/part_boxes[0]", "inside"});
+    patched("/objects/part_boxes", 7, H5T_NATIVE_FLOAT, &nan, {"/objects/part_boxes[1]"});
+    patched("/objects/part_offsets", 4, H5T_NATIVE_UINT32, &zero, {"/objects/part_offsets", "ascending"});
+    patched("/objects/part_offsets", 6, H5T_NATIVE_UINT32, &big, {"/objects/part_offsets"});
+}
+
 // A bake without a ranking (ranking off, or read from an older file) writes no ranked datasets, and a file
 // of format 1.1 (which has none) still reads, with no ranked occluders.
 TEST(BakeFile, Format11FilesWithoutRankingRead) {

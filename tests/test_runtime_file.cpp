@@ -49,6 +49,20 @@ TEST(RuntimeFile, HorizonListsAnswerAsTheHdf5Loader) {
     }
 }
 
+// Object parts (bake file 1.9, runtime file 2.2): the runtime and the loader hold the same part boxes, and
+// their walks (culler, horizon, both) cull an object whose bounds are not hidden when every part is, alike.
+TEST(RuntimeFile, ObjectPartsAnswerAsTheHdf5Loader) {
+    uint64_t part_culled = 0;
+    for (const bool octree : {false, true}) {
+        SCOPED_TRACE(octree ? "octree" : "grid");
+        BakeData bake = test::coherent_bake(133, {7, 3, 6}, octree, true, 5, true);
+        test::add_horizon_lists(bake);
+        test::add_object_parts(bake);
+        round_trip(bake, 9, nullptr, nullptr, &part_culled);
+    }
+    EXPECT_GT(part_culled, 0u);  // some object culled by its parts alone
+}
+
 // The file's bytes with its version set to 1.1 and the checksum made right again.
 Bytes labelled_1_1(Bytes bytes) {
     const uint16_t old_version[2] = {1, 1};
@@ -269,6 +283,7 @@ protected:
         const std::string h5 = dir.file("d.h5");
         BakeData bake = test::coherent_bake(70, {4, 2, 3}, true, true, 8);
         test::add_horizon_lists(bake);  // the horizon sections (file 2.1) too
+        test::add_object_parts(bake);   // and the objects' parts (file 2.2)
         write_bake_file(h5, bake);
         file_ = runtime_file_bytes(h5);
     }
@@ -326,6 +341,50 @@ TEST_F(RuntimeFileDamage, HorizonListsReadAndRefuseDamage) {
         pvsr_level d;
         ASSERT_EQ(pvsr_open(&d, b.data(), b.size, nullptr, 0), PVSR_OK);
         EXPECT_EQ(pvsr_horizon_list_count(&d, 0), 0u);
+    }
+}
+
+// The object parts' sections: each object of the bake has its halves (or quarters); a damaged offset or box
+// is refused with its reason.
+TEST_F(RuntimeFileDamage, ObjectPartsReadAndRefuseDamage) {
+    Bytes good(file_);
+    pvsr_level l;
+    ASSERT_EQ(pvsr_open(&l, good.data(), good.size, nullptr, 0), PVSR_OK);
+    ASSERT_GT(l.object_parts.count, 0u);
+    EXPECT_EQ(pvsr_object_part_count(&l, pvsr_object_count(&l)), 0u);
+    const auto offset_of = [&](const pvsr_array& a) {
+        return size_t(a.at - static_cast<const uint8_t*>(good.data()));
+    };
+    pvsr_status s;
+    {
+        Bytes b(file_);
+        const float nan = std::nanf("");
+        std::memcpy(b.bytes() + offset_of(l.object_parts) + 8, &nan, 4);
+        rechecksum(b);
+        EXPECT_NE(opened_message(b, &s).find("an object part box is not finite"), std::string::npos);
+    }
+    {
+        Bytes b(file_);
+        float x;
+        std::memcpy(&x, b.bytes() + offset_of(l.object_parts) + 12, 4);
+        x += 100.0f;  // past its object's bounds
+        std::memcpy(b.bytes() + offset_of(l.object_parts) + 12, &x, 4);
+        rechecksum(b);
+        EXPECT_NE(opened_message(b, &s).find("not inside its object's bounds"), std::string::npos);
+    }
+    {
+        Bytes b(file_);
+        const uint32_t past = uint32_t(l.object_parts.count + 1);
+        std::memcpy(b.bytes() + offset_of(l.object_part_offsets) + 4, &past, 4);
+        rechecksum(b);
+        EXPECT_NE(opened_message(b, &s).find("the object parts' offsets"), std::string::npos);
+    }
+    {
+        Bytes b(file_);
+        const uint32_t one = 1;
+        std::memcpy(b.bytes() + offset_of(l.object_part_offsets), &one, 4);
+        rechecksum(b);
+        EXPECT_NE(opened_message(b, &s).find("the object parts' offsets"), std::string::npos);
     }
 }
 

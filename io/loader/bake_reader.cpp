@@ -216,6 +216,30 @@ FileObjects read_objects(const Reader& r, hid_t root) {
     o.triangle_count = r.numeric_dataset<uint32_t>(g.get(), "/objects", "triangle_count", H5T_NATIVE_UINT32,
                                                    {n}, H5T_INTEGER);
     o.flags = r.numeric_dataset<uint32_t>(g.get(), "/objects", "flags", H5T_NATIVE_UINT32, {n}, H5T_INTEGER);
+    if (r.has_link(g.get(), "part_offsets")) {  // 1.9
+        o.part_offsets = r.numeric_dataset<uint32_t>(g.get(), "/objects", "part_offsets", H5T_NATIVE_UINT32,
+                                                     {n + 1}, H5T_INTEGER);
+        std::vector<int64_t> shape = {-1, 6};
+        o.part_boxes =
+            r.numeric_dataset<float>(g.get(), "/objects", "part_boxes", H5T_NATIVE_FLOAT, shape, H5T_FLOAT);
+        if (o.part_offsets[0] != 0 || int64_t(o.part_offsets.back()) != shape[0])
+            r.fail("/objects/part_offsets does not start at 0 and end at the rows of /objects/part_boxes");
+        for (int64_t i = 0; i < n; ++i) {
+            const uint32_t a = o.part_offsets[size_t(i)], b = o.part_offsets[size_t(i) + 1];
+            if (b < a) r.fail(cat("/objects/part_offsets is not ascending at object ", i));
+            const float* bounds = &o.bounds[6 * size_t(i)];
+            for (uint32_t k = a; k < b; ++k) {
+                const float* p = &o.part_boxes[6 * size_t(k)];
+                bool ok = true;
+                for (int c = 0; c < 3; ++c)
+                    ok = ok && std::isfinite(p[c]) && std::isfinite(p[c + 3]) && p[c] <= p[c + 3] &&
+                         p[c] >= bounds[c] && p[c + 3] <= bounds[c + 3];
+                if (!ok)
+                    r.fail(cat("/objects/part_boxes[", k, "] (object ", i,
+                               ") is not a finite box inside the object's bounds"));
+            }
+        }
+    }
     return o;
 }
 

@@ -19,7 +19,7 @@ namespace pvsbake::detail {
 
 constexpr const char* kFormatName = "pvsbake";
 constexpr int kFormatMajor = 1;
-constexpr int kFormatMinor = 8;
+constexpr int kFormatMinor = 9;
 constexpr uint32_t kHorizonTileMaxCorners = 32;  // runtime/pvsr.h PVSR_HORIZON_MAX_CORNERS
 
 // The root attributes. Throws kNotBakeFile without format = "pvsbake", kVersionTooNew for a newer major.
@@ -37,6 +37,10 @@ struct FileObjects {
     std::vector<std::string> names;
     std::vector<float> bounds;  // 6 per object: min xyz, max xyz
     std::vector<uint32_t> triangle_count, flags;
+    // 1.9: object o's part boxes are part_boxes[6 part_offsets[o] ..] up to part_offsets[o + 1] (both empty:
+    // no parts); each inside the object's bounds (checked).
+    std::vector<uint32_t> part_offsets;
+    std::vector<float> part_boxes;
 };
 FileObjects read_objects(const Reader& r, hid_t root);
 

@@ -100,6 +100,9 @@ private:
         for (size_t i = 0; i < o.names.size(); ++i) b.object_bounds_[i] = box_at(o.bounds, i);
         b.object_triangles_ = std::move(o.triangle_count);
         b.object_flags_ = std::move(o.flags);
+        b.part_offsets_ = std::move(o.part_offsets);
+        b.part_boxes_.resize(o.part_boxes.size() / 6);
+        for (size_t i = 0; i < b.part_boxes_.size(); ++i) b.part_boxes_[i] = box_at(o.part_boxes, i);
         for (uint32_t t : b.object_triangles_) b.total_triangles_ += t;
     }
 
@@ -238,12 +241,12 @@ private:
         for (const auto& [k, v] : b.figures_) n += sizeof(k) + sizeof(v) + k.capacity();
         for (const auto& [k, v] : b.verification_figures_) n += sizeof(k) + sizeof(v) + k.capacity();
         return n + bytes(b.names_) + bytes(b.name_offset_) + bytes(b.object_bounds_) +
-               bytes(b.object_triangles_) + bytes(b.object_flags_) + bytes(b.grid_to_cell_) +
-               bytes(b.nodes_) + bytes(b.cell_bounds_) + bytes(b.cell_grid_) + bytes(b.brick_) +
-               bytes(b.brick_bytes_) + bytes(b.eye_brick_) + bytes(b.eye_brick_bytes_) + bytes(b.code_) +
-               b.row_offset_.bytes() + b.cell_row_.bytes() + b.ranked_offset_.bytes() +
-               bytes(b.ranked_boxes_) + bytes(b.ranked_box_) + bytes(b.ranked_score_) +
-               bytes(b.ranked_solid_angle_sr_) + bytes(b.ranked_hidden_objects_) +
+               bytes(b.part_offsets_) + bytes(b.part_boxes_) + bytes(b.object_triangles_) +
+               bytes(b.object_flags_) + bytes(b.grid_to_cell_) + bytes(b.nodes_) + bytes(b.cell_bounds_) +
+               bytes(b.cell_grid_) + bytes(b.brick_) + bytes(b.brick_bytes_) + bytes(b.eye_brick_) +
+               bytes(b.eye_brick_bytes_) + bytes(b.code_) + b.row_offset_.bytes() + b.cell_row_.bytes() +
+               b.ranked_offset_.bytes() + bytes(b.ranked_boxes_) + bytes(b.ranked_box_) +
+               bytes(b.ranked_score_) + bytes(b.ranked_solid_angle_sr_) + bytes(b.ranked_hidden_objects_) +
                bytes(b.ranked_hidden_triangle_share_) + bytes(b.polygon_offset_) +
                bytes(b.ranked_polygon_offset_) + bytes(b.ranked_polygon_) + bytes(b.ranked_polygon_place_) +
                bytes(b.polygon_corners_) + bytes(b.polygon_planes_) + bytes(b.ranked_polygon_score_) +
@@ -399,6 +402,14 @@ std::string_view Bake::object_name(uint32_t o) const noexcept {
 
 const char* Bake::object_name_c(uint32_t o) const noexcept {
     return o < object_count_ ? names_.data() + name_offset_[o] : "";
+}
+
+uint32_t Bake::object_part_count(uint32_t o) const noexcept {
+    return o < object_count_ && !part_offsets_.empty() ? part_offsets_[o + 1] - part_offsets_[o] : 0;
+}
+
+Box Bake::object_part(uint32_t o, uint32_t k) const noexcept {
+    return k < object_part_count(o) ? part_boxes_[part_offsets_[o] + k] : empty_box();
 }
 
 Box Bake::object_bounds(uint32_t o) const noexcept {

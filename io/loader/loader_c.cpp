@@ -123,6 +123,14 @@ const char* pvsbake_object_name(const pvsbake_bake* b, uint32_t object) {
 int pvsbake_object_bounds(const pvsbake_bake* b, uint32_t object, float box[6]) {
     return b != nullptr && object < b->bake.object_count() ? copy_box(b->bake.object_bounds(object), box) : 0;
 }
+uint32_t pvsbake_object_part_count(const pvsbake_bake* b, uint32_t object) {
+    return b != nullptr ? b->bake.object_part_count(object) : 0;
+}
+int pvsbake_object_part(const pvsbake_bake* b, uint32_t object, uint32_t part, float box[6]) {
+    return b != nullptr && part < b->bake.object_part_count(object)
+               ? copy_box(b->bake.object_part(object, part), box)
+               : 0;
+}
 uint32_t pvsbake_object_triangles(const pvsbake_bake* b, uint32_t object) {
     return b != nullptr ? b->bake.object_triangles(object) : 0;
 }

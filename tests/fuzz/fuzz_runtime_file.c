@@ -65,9 +65,18 @@ int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
                 (void)pvsr_horizon_list_count(&level, c);
                 (void)pvsr_horizon_begin_cell(&horizon, &level, c, eye);
                 (void)pvsr_horizon_is_hidden(&horizon, box);
+                /* the walk culled by the horizon, with the objects' parts (2.2) */
+                (void)pvsr_visit_drawn_horizon(&level, c, NULL, &horizon, visit, &objects);
             }
         }
-        for (k = 0; k < objects && k < 4096; ++k) (void)strlen(pvsr_object_name(&level, k));
+        for (k = 0; k < objects && k < 4096; ++k) {
+            float part[6];
+            uint32_t p;
+            (void)strlen(pvsr_object_name(&level, k));
+            for (p = 0; p < pvsr_object_part_count(&level, k) && p < 64; ++p)
+                if (!pvsr_object_part(&level, k, p, part) || !(part[0] <= part[3]))
+                    abort(); /* checked at open */
+        }
         (void)strlen(pvsr_string(&level, "mode"));
         for (i = 0; i + 12 <= size && i < 12 * 64; i += 12) {
             float p[3];

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // make_runtime_seeds OUT_DIR: a few small runtime files for the fuzz target's corpus (grid and octree, with
-// and without masks, ranked occluders, polygon occluders and horizon lists), exported from the loader tests'
-// synthetic bakes.
+// and without masks, ranked occluders, polygon occluders, horizon lists and object parts), exported from the
+// loader tests' synthetic bakes.
 #include "io/bake_file.h"
 #include "io/runtime_file.h"
 #include "tests/bake_fixtures.h"
@@ -40,10 +40,11 @@ int main(int argc, char** argv) {
                 std::ofstream((out / ("seed_" + std::to_string(n++) + ".pvsr")).string(), std::ios::binary) << bytes;
                 std::filesystem::remove(h5);
             }
-    {  // ranked boxes through palettes (2.0), and horizon lists (2.1)
+    {  // ranked boxes through palettes (2.0), horizon lists (2.1) and object parts (2.2)
         pvs::BakeData bake = pvs::test::coherent_bake(12, {13, 2, 13}, false, false, 29);
         pvs::test::rank_many_boxes(bake, 600, 24, 3);
         pvs::test::add_horizon_lists(bake);
+        pvs::test::add_object_parts(bake);
         const std::string h5 = (out / ("seed.h5")).string();
         pvs::write_bake_file(h5, bake);
         const std::string bytes = pvs::runtime_file_bytes(h5);

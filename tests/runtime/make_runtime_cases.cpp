@@ -177,8 +177,14 @@ int main(int argc, char** argv) {
     std::filesystem::create_directories(dir);
     std::FILE* out = std::fopen((dir / "cases.txt").string().c_str(), "w");
     if (!out) return 1;
-    write_case(out, dir, "grid", pvs::test::coherent_bake(133, {7, 3, 6}, false, true, 4, true), 1, true);
-    write_case(out, dir, "octree", pvs::test::coherent_bake(70, {4, 2, 3}, true, true, 8, true), 2, false);
+    {  // with the objects' parts (file 2.2): the culled walks test them on every platform
+        pvs::BakeData grid = pvs::test::coherent_bake(133, {7, 3, 6}, false, true, 4, true);
+        pvs::test::add_object_parts(grid);
+        write_case(out, dir, "grid", grid, 1, true);
+        pvs::BakeData octree = pvs::test::coherent_bake(70, {4, 2, 3}, true, true, 8, true);
+        pvs::test::add_object_parts(octree);
+        write_case(out, dir, "octree", octree, 2, false);
+    }
     write_case(out, dir, "sampled_grid_without_masks", pvs::test::coherent_bake(64, {3, 2, 4}, false, false, 5), 3, true);
     write_case(out, dir, "no_objects", pvs::test::coherent_bake(0, {2, 2, 2}, false, true, 6), 4, false);
     write_case(out, dir, "many_objects", pvs::test::coherent_bake(16400, {3, 1, 2}, true, false, 7), 5, false);

@@ -361,6 +361,11 @@ public:
     uint32_t object_flags(
         uint32_t o) const noexcept;  // bit 0 opaque, 1 see-through, 2 always visible, 3 never occludes
     uint64_t total_triangles() const { return total_triangles_; }
+    // Format 1.9: object o's part boxes (its triangles split into a few groups, each inside one part, every
+    // part inside its bounds; docs/ALGORITHMS.md#object-parts): none (0) or a few; out of range: an empty
+    // box.
+    uint32_t object_part_count(uint32_t o) const noexcept;
+    Box object_part(uint32_t o, uint32_t k) const noexcept;
 
     // ---- Ranked occluders of a cell (format 1.2): the few occluder boxes worth testing at run time from
     // anywhere in cell c, best first (score = sqrt(mean solid angle / 4 pi * mean hidden share), see
@@ -452,6 +457,8 @@ private:
     std::vector<uint32_t> name_offset_;  // object_count + 1
     std::vector<Box> object_bounds_;
     std::vector<uint32_t> object_triangles_, object_flags_;
+    std::vector<uint32_t> part_offsets_;  // object_count + 1, or empty: no parts
+    std::vector<Box> part_boxes_;
     // Cells and lookup.
     CellKind kind_ = CellKind::kGrid;
     float origin_[3] = {0, 0, 0};

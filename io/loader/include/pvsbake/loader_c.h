@@ -80,6 +80,10 @@ PVSBAKE_API int pvsbake_object_bounds(const pvsbake_bake* bake, uint32_t object,
 PVSBAKE_API uint32_t pvsbake_object_triangles(const pvsbake_bake* bake, uint32_t object);
 PVSBAKE_API uint32_t pvsbake_object_flags(const pvsbake_bake* bake, uint32_t object);
 PVSBAKE_API uint64_t pvsbake_total_triangles(const pvsbake_bake* bake);
+/* Format 1.9: an object's part boxes (docs/ALGORITHMS.md#object-parts); 0 parts when it has none.
+ * pvsbake_object_part writes part `part` (float[6]); 0 when out of range. */
+PVSBAKE_API uint32_t pvsbake_object_part_count(const pvsbake_bake* bake, uint32_t object);
+PVSBAKE_API int pvsbake_object_part(const pvsbake_bake* bake, uint32_t object, uint32_t part, float box[6]);
 
 /* Ranked occluders of a cell (format 1.2), best first: as pvsbake::RankedOccluder. box is float[6]
  * (min x, y, z, max x, y, z), world metres; score higher is better; solid_angle_sr the largest solid angle

@@ -233,17 +233,29 @@ private:
     std::vector<float> col_enter_, col_exit_, row_enter_, row_exit_, corner_prev_, corner_cur_;
 };
 
-// Whether the culler culls object o of the bake from this frame's eye: the test for_each_drawn makes.
-inline bool is_culled(const Bake& bake, const OcclusionCuller& culler, uint32_t o) noexcept {
+// Whether object o of the bake is culled by `hidden` (a test of a box from this frame's eye): its bounds are
+// hidden or, where it has parts (format 1.9), every part is; objects flagged always visible never are.
+template <class Hidden>
+bool culled_by(const Bake& bake, uint32_t o, Hidden&& hidden) noexcept {
     constexpr uint32_t kAlwaysVisible = 4;  // object_flags bit 2
     if ((bake.object_flags(o) & kAlwaysVisible) != 0) return false;
-    return culler.is_hidden(bake.object_bounds(o));  // an empty box is never hidden
+    if (hidden(bake.object_bounds(o))) return true;  // an empty box is never hidden
+    const uint32_t parts = bake.object_part_count(o);
+    for (uint32_t k = 0; k < parts; ++k)
+        if (!hidden(bake.object_part(o, k))) return false;
+    return parts > 0;
+}
+
+// Whether the culler culls object o of the bake from this frame's eye: the test for_each_drawn makes.
+inline bool is_culled(const Bake& bake, const OcclusionCuller& culler, uint32_t o) noexcept {
+    return culled_by(bake, o, [&](const Box& b) { return culler.is_hidden(b); });
 }
 
 // What a game draws of cell c from this frame's eye: its PVS less what the culler (set up by begin_cell, or
-// begin_frame with any occluders) proves hidden by the object's bounds; objects flagged always visible, and
-// those without bounds, are never culled. Calls visit(object) in increasing order; returns how many.
-// Allocates nothing; the culler is only read, so threads may walk cells with one culler between frames.
+// begin_frame with any occluders) proves hidden by the object's bounds or every one of its parts; objects
+// flagged always visible, and those without bounds, are never culled. Calls visit(object) in increasing
+// order; returns how many. Allocates nothing; the culler is only read, so threads may walk cells with one
+// culler between frames.
 template <class F>
 uint32_t for_each_drawn(const Bake& bake, uint32_t c, const OcclusionCuller& culler, F&& visit) {
     uint32_t drawn = 0;
@@ -283,16 +295,16 @@ private:
 };
 
 // What a game draws of cell c, culled by the culler (when given) and the horizon: its PVS less the objects
-// whose bounds either proves hidden (objects flagged always visible, and those without bounds, never).
+// whose bounds, or every one of whose parts, either proves hidden (objects flagged always visible, and those
+// without bounds, never).
 template <class F>
 uint32_t for_each_drawn(const Bake& bake, uint32_t c, const OcclusionCuller* culler, const Horizon& horizon,
                         F&& visit) {
-    constexpr uint32_t kAlwaysVisible = 4;  // object_flags bit 2
     uint32_t drawn = 0;
     bake.for_each_visible(c, [&](uint32_t o) {
-        const bool culled = (bake.object_flags(o) & kAlwaysVisible) == 0 &&
-                            ((culler != nullptr && culler->is_hidden(bake.object_bounds(o))) ||
-                             horizon.is_hidden(bake.object_bounds(o)));
+        const bool culled = culled_by(bake, o, [&](const Box& b) {
+            return (culler != nullptr && culler->is_hidden(b)) || horizon.is_hidden(b);
+        });
         if (!culled) {
             visit(o);
             ++drawn;
