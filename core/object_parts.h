@@ -5,7 +5,8 @@
 //
 // Contract: for every object o, every triangle of o lies wholly inside one of the boxes of its parts, and
 // each part box lies inside o's bounds; so when every part box of o is hidden from an eye, every point of o
-// is. An object keeps parts only when there are at least two and they are much smaller than its bounds.
+// is. An object keeps parts only when there are at least two and they hold less of the volume than its bounds
+// (object_parts() below).
 #pragma once
 
 #include "core/math.h"
