@@ -474,7 +474,7 @@ void visit_options(Config& c, Visitor&& v) {
     v(OptionSpec{OptionGroup::kRanking, "--object-parts", "ranking.object_parts", "parts",
                  "each object's triangles are split into up to this many part boxes for the run-time tests: "
                  "an object whose bounds the culler or horizon does not hide is culled when they hide every "
-                 "part (kept where the parts are less than half the bounds' volume); 0 = none",
+                 "part (kept where the parts hold less than 0.9 of the bounds' volume); 0 = none",
                  0, 64},
       c.ranking.object_parts);
     v(OptionSpec{OptionGroup::kRanking, "--horizon-list-max", "ranking.horizon_list_max", "occluders",

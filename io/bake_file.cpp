@@ -229,15 +229,17 @@ void check_writable(const std::string& path, const BakeData& bake) {
         if (parts.offsets.size() != objects + 1 || parts.offsets[0] != 0 ||
             parts.offsets.back() != parts.boxes.size())
             bad("the objects' part offsets do not match the objects and part boxes");
-        for (size_t i = 0; i < objects; ++i)
+        for (size_t i = 0; i < objects; ++i) {
+            if (parts.offsets[i + 1] < parts.offsets[i] || parts.offsets[i + 1] > parts.boxes.size())
+                bad(fmt::format("the part offsets of object {} decrease or pass the part boxes", i));
             for (uint32_t k = parts.offsets[i]; k < parts.offsets[i + 1]; ++k) {
                 const Aabb& p = parts.boxes[k];
                 const Aabb& b = bake.objects[i].bounds;
-                if (parts.offsets[i + 1] < parts.offsets[i] || !is_finite(p.min) || !is_finite(p.max) ||
-                    p.is_empty() || !glm::all(glm::greaterThanEqual(p.min, b.min)) ||
-                    !glm::all(glm::lessThanEqual(p.max, b.max)))
+                if (!is_finite(p.min) || !is_finite(p.max) || p.is_empty() ||
+                    !glm::all(glm::greaterThanEqual(p.min, b.min)) || !glm::all(glm::lessThanEqual(p.max, b.max)))
                     bad(fmt::format("part box {} of object {} is not a finite box inside its bounds", k, i));
             }
+        }
     }
     const VerificationRecord& v = bake.verification;
     if (!v.cell_sampled_visible.empty() && v.cell_sampled_visible.size() != cells) {

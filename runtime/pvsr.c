@@ -966,7 +966,9 @@ static const char* check_horizon(pvsr_level* l) {
 static const char* check_object_parts(pvsr_level* l) {
     uint64_t o, e;
     const char* bad;
-    if (!section(l, PVSR_TAG('O', 'P', 'O', 'F'), &l->object_part_offsets)) return NULL; /* none */
+    if (!section(l, PVSR_TAG('O', 'P', 'O', 'F'), &l->object_part_offsets)) /* none */
+        return section(l, PVSR_TAG('O', 'P', 'B', 'X'), &l->object_parts) ? "object part boxes without their offsets"
+                                                                            : NULL;
     bad = need(l, PVSR_TAG('O', 'P', 'O', 'F'), 4, (uint64_t)l->object_count + 1, 1, &l->object_part_offsets);
     if (!bad) bad = need(l, PVSR_TAG('O', 'P', 'B', 'X'), 24, UINT64_MAX, 1, &l->object_parts);
     if (bad) return bad;

@@ -1172,6 +1172,8 @@ TEST(BakeFileBad, ObjectPartsOutsideOrDamaged) {
     patched("/objects/part_boxes", 3, H5T_NATIVE_FLOAT, &far, {"/objects/part_boxes[0]", "inside"});
     patched("/objects/part_boxes", 7, H5T_NATIVE_FLOAT, &nan, {"/objects/part_boxes[1]"});
     patched("/objects/part_offsets", 4, H5T_NATIVE_UINT32, &zero, {"/objects/part_offsets", "ascending"});
+    // An offset past the boxes before a later one comes back down: refused before any box is read.
+    patched("/objects/part_offsets", 1, H5T_NATIVE_UINT32, &big, {"/objects/part_offsets", "object 0"});
     patched("/objects/part_offsets", 6, H5T_NATIVE_UINT32, &big, {"/objects/part_offsets"});
 }
 

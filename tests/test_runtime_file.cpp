@@ -386,6 +386,15 @@ TEST_F(RuntimeFileDamage, ObjectPartsReadAndRefuseDamage) {
         rechecksum(b);
         EXPECT_NE(opened_message(b, &s).find("the object parts' offsets"), std::string::npos);
     }
+    {
+        // The offsets' section renamed in the table (an unknown tag is skipped): boxes without offsets.
+        Bytes b(file_);
+        const size_t at = file_.find("OPOF");
+        ASSERT_LT(at, size_t(l.object_part_offsets.at - static_cast<const uint8_t*>(good.data())));
+        b.bytes()[at] = 'X';
+        rechecksum(b);
+        EXPECT_NE(opened_message(b, &s).find("object part boxes without their offsets"), std::string::npos);
+    }
 }
 
 TEST_F(RuntimeFileDamage, EachDamageIsRefusedWithItsReason) {

@@ -226,7 +226,8 @@ FileObjects read_objects(const Reader& r, hid_t root) {
             r.fail("/objects/part_offsets does not start at 0 and end at the rows of /objects/part_boxes");
         for (int64_t i = 0; i < n; ++i) {
             const uint32_t a = o.part_offsets[size_t(i)], b = o.part_offsets[size_t(i) + 1];
-            if (b < a) r.fail(cat("/objects/part_offsets is not ascending at object ", i));
+            if (b < a || int64_t(b) > shape[0])
+                r.fail(cat("/objects/part_offsets is not ascending within the part boxes at object ", i));
             const float* bounds = &o.bounds[6 * size_t(i)];
             for (uint32_t k = a; k < b; ++k) {
                 const float* p = &o.part_boxes[6 * size_t(k)];
