@@ -825,10 +825,12 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::FILE* log
     exporter->add_flag("--occluder-measures", runtime_options.occluder_measures,
                        "also each ranked occluder's score, solid angle and hidden shares (16 bytes an entry; a "
                        "culler needs only the boxes, in rank order)");
-    exporter->add_option("--max-chain", runtime_options.max_chain,
-                         "rows XORed to decode one PVS row: longer chains make the file smaller and a walk slower "
-                         "(1: every row whole)")
-        ->check(CLI::Range(1, 8))
+    exporter
+        ->add_option(
+            "--max-chain", runtime_options.max_chain,
+            "rows XORed to decode one PVS row: longer chains make the file smaller and a walk slower "
+            "(1: every row whole)")
+        ->check(CLI::Range(1, 16))
         ->capture_default_str();
     exporter->add_option("--merge-cells", runtime_options.merge_cells,
                          "K > 1 (grid bakes): each cell lists what its block of K x K x K cells lists, so the block "

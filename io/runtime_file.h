@@ -21,7 +21,7 @@ struct RuntimeFileOptions {
     bool occluder_measures = false;  // also each ranked occluder's score, solid angle and hidden shares
     // Rows XORed to decode one PVS row, 1 (every row whole) to PVSR_MAX_CHAIN: longer chains code rows
     // against more similar ones (smaller) and cost more to walk. Past PVSR_STACK_OBJECTS objects, at most 2.
-    uint32_t max_chain = 8;
+    uint32_t max_chain = 16;
     // 1: every cell keeps its row. K > 1 (a grid bake): each cell lists what its block of K x K x K cells
     // lists (the union of their rows): fewer distinct rows, a larger PVS, still conservative.
     uint32_t merge_cells = 1;

@@ -57,8 +57,8 @@
 extern "C" {
 #endif
 
-#define PVSR_VERSION_MAJOR 2 /* the newest file version this runtime reads: 1.x and 2.x */
-#define PVSR_VERSION_MINOR 2
+#define PVSR_VERSION_MAJOR 3 /* the newest file version this runtime reads: 1.x, 2.x and 3.x */
+#define PVSR_VERSION_MINOR 0
 
 typedef enum pvsr_status {
     PVSR_OK = 0,
@@ -465,7 +465,7 @@ uint32_t pvsr_drawn_objects_horizon(const pvsr_level* level, uint32_t cell, cons
 #define PVSR_POLYGON_BYTES \
     32 /* 'OPLN': float normal[3], offset, thickness; uint32 first corner, corners, 0 */
 #define PVSR_MAX_OBJECTS (1u << 27) /* the PVS code's limit */
-#define PVSR_MAX_CHAIN 8            /* rows XORed to decode one row: a key row and up to 7 coded against it */
+#define PVSR_MAX_CHAIN 16 /* rows XORed to decode one row: a key row and up to 15 coded against it */
 #define PVSR_STACK_OBJECTS 16384    /* objects of the bit set a walk keeps on the stack; past it, chains of 2 */
 #define PVSR_TILE_BRICKS 4          /* a mask tile is 4 x 4 x 4 bricks of 8 x 8 x 8 voxels */
 #define PVSR_BRICK_EMPTY 0u         /* a tile or brick reference: no voxel set */

@@ -326,7 +326,7 @@ inline void expect_same_as_loader(const pvsr::Level& got, const pvsbake::Bake& w
 }
 
 // Writes the bake as HDF5, exports it (without the ranked occluders' measures and every row whole, with them
-// and chains of up to 8 rows, and with the defaults), and checks the runtime against the HDF5 loader.
+// and chains of 2 rows, and with the defaults), and checks the runtime against the HDF5 loader.
 // Adds to *culled (when given) the objects the drawn walks culled (expect_same_drawn).
 inline void round_trip(const BakeData& bake, uint32_t seed, uint64_t* culled = nullptr,
                        uint64_t* horizon_culled = nullptr, uint64_t* part_culled = nullptr) {

@@ -397,6 +397,41 @@ TEST_F(RuntimeFileDamage, ObjectPartsReadAndRefuseDamage) {
     }
 }
 
+// A row's chain (docs/FORMAT.md, "The rows' code") holds at most PVSR_MAX_CHAIN rows (16 from file 3.0):
+// a file of whole rows made to code rows 1 .. n against the row before each (the checksum made right) opens
+// with a chain of 16 and is refused with one of 17.
+TEST(RuntimeFileChains, SixteenRowsOpenAndSeventeenAreRefused) {
+    static_assert(PVSR_MAX_CHAIN == 16);
+    test::TempDir dir;
+    const std::string h5 = dir.file("chain.h5");
+    write_bake_file(h5, test::coherent_bake(90, {7, 3, 6}, false, true, 9));
+    RuntimeFileOptions options;
+    options.max_chain = 1;  // every row whole: each row's code starts with the one-byte reference 0
+    const Bytes whole(runtime_file_bytes(h5, options));
+    pvsr_level l;
+    char message[256];
+    ASSERT_EQ(pvsr_open(&l, whole.data(), whole.size, message, sizeof message), PVSR_OK) << message;
+    ASSERT_GE(l.row_offsets.count, uint64_t(PVSR_MAX_CHAIN) + 2);
+    const auto row_start = [&](uint64_t r) {
+        const uint64_t at = l.row_offsets.item_bytes == 2
+                                ? reinterpret_cast<const uint16_t*>(l.row_offsets.at)[r]
+                                : reinterpret_cast<const uint32_t*>(l.row_offsets.at)[r];
+        return size_t(l.code.at - static_cast<const uint8_t*>(whole.data())) + size_t(at);
+    };
+    for (const uint32_t length : {uint32_t(PVSR_MAX_CHAIN), uint32_t(PVSR_MAX_CHAIN) + 1}) {
+        SCOPED_TRACE(length);
+        Bytes b(whole);
+        for (uint64_t r = 1; r < length; ++r) {
+            ASSERT_EQ(b.bytes()[row_start(r)], 0u);
+            b.bytes()[row_start(r)] = 1;  // coded against row r - 1
+        }
+        rechecksum(b);
+        pvsr_status status;
+        EXPECT_EQ(opened_message(b, &status),
+                  length <= PVSR_MAX_CHAIN ? "" : "a PVS row's chain of references is too long");
+    }
+}
+
 TEST_F(RuntimeFileDamage, EachDamageIsRefusedWithItsReason) {
     pvsr_status s;
     {
