@@ -3215,12 +3215,25 @@ static int hz_gather(const pvsr_horizon* h, int fr, uint32_t node, double v_min,
     return n;
 }
 
+/* The least depth d > 0 at which a point of direction coordinate w in [w0, w1] has its coordinate w d in
+ * [lo, hi] (the box's range along that axis, less the eye): 0 when [lo, hi] holds 0, HUGE_VAL when no
+ * direction of [w0, w1] reaches it. */
+static double hz_entry(double w0, double w1, double lo, double hi) {
+    if (lo > 0.0) return w1 > 0.0 ? lo / w1 : HUGE_VAL;
+    if (hi < 0.0) return w0 < 0.0 ? hi / w0 : HUGE_VAL;
+    return 0.0;
+}
+
 /* Is [a, b] x [v_min, v_max] covered by the pieces of refs[0 .. n) (a node's and its ancestors', whose
- * columns hold [a, b]) that lie wholly before d_lo there? Each piece's chords are taken at a and b; the
- * candidates, sorted by their bottom on [a, b], are chained from v_min as docs/ALGORITHMS.md#runtime-horizon
- * says: a chain that holds at a and at b holds between them, every chord being linear. */
-static int hz_covered(const hz_ref* refs, int n, double a, double b, double d_lo, double v_min, double v_max,
-                      hz_uses* uses) {
+ * columns hold [a, b]) that lie wholly before the box in the directions they serve? part: the box's part in
+ * the frame, its least depth d_lo and its ranges across (h) and up (v), less the eye; the box's least depth
+ * over a rectangle of directions is max(d_lo, hz_entry across, hz_entry up). Each piece's chords are taken at
+ * a and b; the candidates, sorted by their bottom on [a, b], are chained from v_min as
+ * docs/ALGORITHMS.md#runtime-horizon says: a chain that holds at a and at b holds between them, every chord
+ * being linear. */
+static int hz_covered(const hz_ref* refs, int n, double a, double b, const double part[5], double v_min,
+                      double v_max, hz_uses* uses) {
+    const double d_lo = part[0], d_u = hz_max(d_lo, hz_entry(a, b, part[1], part[2]));
     const double goal = v_max + HZ_ROUND * (1.0 + fabs(v_max));
     double la[HZ_CANDIDATES], lb[HZ_CANDIDATES], ha[HZ_CANDIDATES], hb[HZ_CANDIDATES], key[HZ_CANDIDATES];
     double sa[HZ_FRONT], sb[HZ_FRONT], top = v_min;
@@ -3238,16 +3251,18 @@ static int hz_covered(const hz_ref* refs, int n, double a, double b, double d_lo
         if (qa < v_min && qb < v_min) continue; /* below the box here */
         pa = pc->lo[0] + (pc->lo[1] - pc->lo[0]) * ta;
         pb = pc->lo[0] + (pc->lo[1] - pc->lo[0]) * tb;
-        if (!(d_lo > pc->depth)) {
+        if (!(d_u > pc->depth)) {
             /* Deeper than the box somewhere in its node: over the part that can serve the box alone? That
-             * part lies in [a, b] x [vlo, vhi], the piece's range over [a, b] within the box's. */
+             * part lies in [a, b] x [vlo, vhi], the piece's range over [a, b] within the box's, where the
+             * box's points lie at depth d_here or more. */
             const double* g = pc->plane;
             const double ga = g[0] + g[1] * a, gb = g[0] + g[1] * b;
             const double vlo = hz_max(hz_min(pa, pb), v_min), vhi = hz_min(hz_max(qa, qb), v_max);
+            const double d_here = hz_max(d_u, hz_entry(vlo, vhi, part[3], part[4]));
             const double gmin =
                 hz_min(hz_min(ga + g[2] * vlo, ga + g[2] * vhi), hz_min(gb + g[2] * vlo, gb + g[2] * vhi));
-            if (!(gmin > 0.0) || !(d_lo * gmin > 1.0 + HZ_DEPTH))
-                continue; /* d_lo > (1 / gmin)(1 + HZ_DEPTH) */
+            if (!(d_here > pc->depth) && (!(gmin > 0.0) || !(d_here * gmin > 1.0 + HZ_DEPTH)))
+                continue; /* d_here > (1 / gmin)(1 + HZ_DEPTH) */
         }
         kk = hz_min(pa, pb);
         la[nc] = pa;
@@ -3333,7 +3348,7 @@ static int hz_hidden(const pvsr_horizon* h, const float box[6], hz_uses* uses) {
         const int cols = h->columns;
         int p, hx, k0, k1, depth = 0, n_path = 0, path_len[HZ_STACK];
         uint32_t x, y, t, stack[HZ_STACK];
-        double s, d_lo, d_hi, h_lo, h_hi, near_h, u_min, u_max, v_min, v_max;
+        double s, d_lo, d_hi, h_lo, h_hi, near_h, u_min, u_max, v_min, v_max, part[5];
         hz_frame(fr, &p, &hx, &s);
         d_lo = s > 0.0 ? lo[p] : -hi[p];
         d_hi = s > 0.0 ? hi[p] : -lo[p];
@@ -3349,6 +3364,11 @@ static int hz_hidden(const pvsr_horizon* h, const float box[6], hz_uses* uses) {
         u_max = hz_min(1.0, hz_max(h_hi / d_lo, h_hi / d_hi));
         v_min = hz_min(lo[1] / d_lo, lo[1] / d_hi);
         v_max = hz_max(hi[1] / d_lo, hi[1] / d_hi);
+        part[0] = d_lo;
+        part[1] = h_lo;
+        part[2] = h_hi;
+        part[3] = lo[1];
+        part[4] = hi[1];
         k0 = (int)floor((u_min + 1.0) * 0.5 * cols);
         k1 = (int)floor((u_max + 1.0) * 0.5 * cols);
         if (k0 < 0) k0 = 0;
@@ -3378,7 +3398,7 @@ static int hz_hidden(const pvsr_horizon* h, const float box[6], hz_uses* uses) {
             /* A node of none of its own pieces is left to its children (what covers it covers them). */
             if ((n > path_len[depth] || w == 1) &&
                 hz_covered(path, n, hz_max(u_min, -1.0 + 2.0 * k / cols),
-                           hz_min(u_max, -1.0 + 2.0 * (k + w) / cols), d_lo, v_min, v_max, uses))
+                           hz_min(u_max, -1.0 + 2.0 * (k + w) / cols), part, v_min, v_max, uses))
                 continue;
             if (w == 1 || depth + 2 > HZ_STACK) return 0;
             for (c = 1; c >= 0; --c) { /* the children the box's columns reach */

@@ -1099,6 +1099,32 @@ TEST(RuntimeHorizon, ARecedingWallHidesWhatLiesBehindItsNearPart) {
     }
 }
 
+// A long box receding beside the line of sight (2 m to 20 m ahead, 1.2 m to the side): a near wall hides its
+// near part and the directions of its far end beside the near wall's edge meet a far wall, which lies before
+// the box only there (the box is 18 m away in those directions, nearer than the far wall elsewhere). Each
+// piece is judged against the box's depth in the directions it serves, so together they hide the box; with
+// the far wall narrower, those directions pass between the walls' edges and the box stays visible.
+TEST(RuntimeHorizon, AFarWallHidesTheFarEndOfALongBoxWhereItServesIt) {
+    const Box near_wall = box(0.1f, -2, 1.5f, 3, 5, 1.5f);
+    const Box far_wall = box(-1, -2, 9, 1, 5, 9);
+    const Box narrow_far_wall = box(-1, -2, 9, 0.5f, 5, 9);
+    const Box target = box(1.2f, 1.4f, 2, 1.5f, 2.0f, 20);
+    for (const int columns : {256, 1024}) {
+        Horizon h(columns);
+        h.frame(kEye, {near_wall, far_wall});
+        EXPECT_TRUE(h.hidden(target)) << columns << " columns";
+        EXPECT_FALSE(h.hidden(box(1.2f, 1.4f, 1, 1.5f, 2.0f, 20))) << "reaching before the near wall";
+        Horizon narrow(columns);
+        narrow.frame(kEye, {near_wall, narrow_far_wall});
+        EXPECT_FALSE(narrow.hidden(target)) << columns << " columns, between the walls' edges";
+        for (const Box& one : {near_wall, far_wall}) {
+            Horizon single(columns);
+            single.frame(kEye, {one});
+            EXPECT_FALSE(single.hidden(target)) << columns << " columns";
+        }
+    }
+}
+
 // A ceiling seen from below, and a flat light standing on its far edge (a case from ctf_inyard, floats as
 // found): the light's lowest edge is seen along the ceiling (a sight line meets the ceiling only at its end),
 // so it stays drawn; every sight line to the light lifted by 1 cm crosses the ceiling first. The tolerance
@@ -1352,7 +1378,13 @@ TEST(RuntimeHorizonProperty, HidesOnlyWhatSegmentsToEveryPointMeet) {
                    });
         };
         for (int q = 0; q < 60; ++q) {
-            const Box qb = query_behind(occ, eye, rng);
+            Box qb = query_behind(occ, eye, rng);
+            if (q % 2 == 1) {  // a long box, reaching across depths where different occluders serve it
+                const int a = int(rng() % 3);
+                const float len = range(2.0f, 12.0f);
+                (rng() % 2 ? qb.max[a] : qb.min[a]) += rng() % 2 ? len : -len;
+                if (qb.min[a] > qb.max[a]) std::swap(qb.min[a], qb.max[a]);
+            }
             ++queries;
             if (!h.hidden(qb)) continue;
             ++hidden;
