@@ -3224,6 +3224,14 @@ static double hz_entry(double w0, double w1, double lo, double hi) {
     return 0.0;
 }
 
+/* The greatest depth at which a point of direction coordinate w in [w0, w1] has its coordinate w d in
+ * [lo, hi]: HUGE_VAL when [w0, w1] holds 0, 0 when no direction of it reaches the range. */
+static double hz_exit(double w0, double w1, double lo, double hi) {
+    if (w0 > 0.0) return hi > 0.0 ? hi / w0 : 0.0;
+    if (w1 < 0.0) return lo < 0.0 ? lo / w1 : 0.0;
+    return HUGE_VAL;
+}
+
 /* Is [a, b] x [v_min, v_max] covered by the pieces of refs[0 .. n) (a node's and its ancestors', whose
  * columns hold [a, b]) that lie wholly before the box in the directions they serve? part: the box's part in
  * the frame, its least depth d_lo and its ranges across (h) and up (v), less the eye; the box's least depth
@@ -3348,7 +3356,7 @@ static int hz_hidden(const pvsr_horizon* h, const float box[6], hz_uses* uses) {
         const int cols = h->columns;
         int p, hx, k0, k1, depth = 0, n_path = 0, path_len[HZ_STACK];
         uint32_t x, y, t, stack[HZ_STACK];
-        double s, d_lo, d_hi, h_lo, h_hi, near_h, u_min, u_max, v_min, v_max, part[5];
+        double s, d_lo, d_hi, h_lo, h_hi, near_h, u_min, u_max, v_min, v_max;
         hz_frame(fr, &p, &hx, &s);
         d_lo = s > 0.0 ? lo[p] : -hi[p];
         d_hi = s > 0.0 ? hi[p] : -lo[p];
@@ -3364,11 +3372,6 @@ static int hz_hidden(const pvsr_horizon* h, const float box[6], hz_uses* uses) {
         u_max = hz_min(1.0, hz_max(h_hi / d_lo, h_hi / d_hi));
         v_min = hz_min(lo[1] / d_lo, lo[1] / d_hi);
         v_max = hz_max(hi[1] / d_lo, hi[1] / d_hi);
-        part[0] = d_lo;
-        part[1] = h_lo;
-        part[2] = h_hi;
-        part[3] = lo[1];
-        part[4] = hi[1];
         k0 = (int)floor((u_min + 1.0) * 0.5 * cols);
         k1 = (int)floor((u_max + 1.0) * 0.5 * cols);
         if (k0 < 0) k0 = 0;
@@ -3396,10 +3399,21 @@ static int hz_hidden(const pvsr_horizon* h, const float box[6], hz_uses* uses) {
             k = (int)(node - (1u << level)) * w;
             n = hz_gather(h, fr, node, v_min, v_max, path, path_len[depth]);
             /* A node of none of its own pieces is left to its children (what covers it covers them). */
-            if ((n > path_len[depth] || w == 1) &&
-                hz_covered(path, n, hz_max(u_min, -1.0 + 2.0 * k / cols),
-                           hz_min(u_max, -1.0 + 2.0 * (k + w) / cols), part, v_min, v_max, uses))
-                continue;
+            if (n > path_len[depth] || w == 1) {
+                /* The box's points in the node's columns lie at depths [d_in, d_out], so their directions
+                 * at v within the bounds below (widened for rounding). */
+                const double ua = hz_max(u_min, -1.0 + 2.0 * k / cols),
+                             ub = hz_min(u_max, -1.0 + 2.0 * (k + w) / cols);
+                const double d_in = hz_max(d_lo, hz_entry(ua, ub, h_lo, h_hi));
+                const double d_out = hz_max(d_in, hz_min(d_hi, hz_exit(ua, ub, h_lo, h_hi)));
+                const double lo_v = hz_min(lo[1] / d_in, lo[1] / d_out),
+                             hi_v = hz_max(hi[1] / d_in, hi[1] / d_out);
+                const double node_part[5] = {d_in, h_lo, h_hi, lo[1], hi[1]};
+                if (hz_covered(path, n, ua, ub, node_part,
+                               hz_max(v_min, lo_v - HZ_ROUND * (1.0 + fabs(lo_v))),
+                               hz_min(v_max, hi_v + HZ_ROUND * (1.0 + fabs(hi_v))), uses))
+                    continue;
+            }
             if (w == 1 || depth + 2 > HZ_STACK) return 0;
             for (c = 1; c >= 0; --c) { /* the children the box's columns reach */
                 const int ck = k + c * (w / 2);

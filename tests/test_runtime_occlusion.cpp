@@ -1125,6 +1125,23 @@ TEST(RuntimeHorizon, AFarWallHidesTheFarEndOfALongBoxWhereItServesIt) {
     }
 }
 
+// The same long box made tall (1.4 m, centred on the eye's height): in the columns of its far end its
+// directions span a few degrees up and down, not the tens of degrees of its near end, so a low far wall
+// (1 m tall, seen across 0.11 of a unit of direction) covers them there; a wall 0.2 m lower at the top
+// leaves the far end's upper directions open.
+TEST(RuntimeHorizon, ALowFarWallHidesTheFarEndOfATallLongBox) {
+    const Box near_wall = box(0.1f, -2, 1.5f, 3, 5, 1.5f);
+    const Box target = box(1.2f, 1.0f, 2, 1.5f, 2.4f, 20);
+    for (const int columns : {256, 1024}) {
+        Horizon h(columns);
+        h.frame(kEye, {near_wall, box(-1, 1.2f, 9, 1, 2.2f, 9)});
+        EXPECT_TRUE(h.hidden(target)) << columns << " columns";
+        Horizon lower(columns);
+        lower.frame(kEye, {near_wall, box(-1, 1.2f, 9, 1, 2.0f, 9)});
+        EXPECT_FALSE(lower.hidden(target)) << columns << " columns, over the lower wall";
+    }
+}
+
 // A ceiling seen from below, and a flat light standing on its far edge (a case from ctf_inyard, floats as
 // found): the light's lowest edge is seen along the ceiling (a sight line meets the ceiling only at its end),
 // so it stays drawn; every sight line to the light lifted by 1 cm crosses the ceiling first. The tolerance
