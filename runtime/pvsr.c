@@ -2650,6 +2650,7 @@ uint32_t pvsr_culler_begin_cell(pvsr_culler* c, const pvsr_level* l, uint32_t ce
 #define HZ_DENT 1e-6 /* relative: the deepest dent a tile's directions may have */
 #define HZ_CANDIDATES 256 /* pieces a node's test takes at most */
 #define HZ_STACK 64       /* nodes a test keeps to try */
+#define HZ_CUTS 16        /* cuts of a leaf at its faces' ends a test makes at most */
 #define HZ_USES 1024      /* tags pvsr_horizon_hidden_by reports at most */
 
 static double hz_min(double a, double b) {
@@ -2833,11 +2834,10 @@ static int hz_tile_directions(int fr, const double (*pts)[3], int n, double* u, 
 /* The piece of a face over columns [k, k + w) of frame fr, as node `node` of the frame's tree: the trapezoid
  * between the chords of its boundaries at the two sides, each end shrunk for rounding and by `extra` (the
  * dents in it), with the deepest point of the plane n . x = c over it. 1 when it was added. */
-static int hz_emit(pvsr_horizon* h, int fr, uint32_t node, int k, int w, const double* pu, const double* pv,
-                   int m, const double n[3], double c, int p, int hx, double s, double extra,
-                   double side[3]) {
+static int hz_emit(pvsr_horizon* h, int fr, uint32_t node, double u0, double u1, const double* pu,
+                   const double* pv, int m, const double n[3], double c, int p, int hx, double s,
+                   double extra, double side[3]) {
     const int cols = h->columns;
-    const double u0 = -1.0 + 2.0 * k / cols, u1 = -1.0 + 2.0 * (k + w) / cols;
     double lo0, hi0, lo1, hi1, r0, r1, l0, h0, l1, h1;
     int ok1;
     /* side: the span at u0 when side[2] says it is known (1 found, -1 missed), set to the span at u1 */
@@ -2876,6 +2876,8 @@ static int hz_emit(pvsr_horizon* h, int fr, uint32_t node, int k, int w, const d
                 pc->plane[1] = n[hx] / c;
                 pc->plane[2] = gv;
                 pc->column = (uint32_t)(fr * 2 * cols) + node;
+                pc->u[0] = (float)u0;
+                pc->u[1] = (float)u1;
                 pc->tag = h->tag;
                 pc->reach = 0.0f;
                 return 1;
@@ -2894,15 +2896,53 @@ static int hz_run(pvsr_horizon* h, int fr, int k0, int k1, const double* pu, con
     const int cols = h->columns;
     int added = 0;
     double side[3] = {0.0, 0.0, 0.0}; /* the span at the next block's first side, once known */
-    if (single) return hz_emit(h, fr, (uint32_t)(cols + k0), k0, 1, pu, pv, m, n, c, p, hx, s, *extra, side);
+    if (single)
+        return hz_emit(h, fr, (uint32_t)(cols + k0), -1.0 + 2.0 * k0 / cols, -1.0 + 2.0 * (k0 + 1) / cols, pu,
+                       pv, m, n, c, p, hx, s, *extra, side);
     while (k0 <= k1) {
         int w = 1, level = 0;
         while ((k0 & (2 * w - 1)) == 0 && k0 + 2 * w - 1 <= k1 && 2 * w <= cols) {
             w *= 2;
             ++level;
         }
-        added |= hz_emit(h, fr, (uint32_t)(cols + k0) >> level, k0, w, pu, pv, m, n, c, p, hx, s, 0.0, side);
+        added |= hz_emit(h, fr, (uint32_t)(cols + k0) >> level, -1.0 + 2.0 * k0 / cols,
+                         -1.0 + 2.0 * (k0 + w) / cols, pu, pv, m, n, c, p, hx, s, 0.0, side);
         k0 += w;
+    }
+    return added;
+}
+
+/* A float at or above (up = 1) or at or below (up = 0) x, for x in [-2, 2]. */
+static double hz_float_in(double x, int up) {
+    float f = (float)x;
+    if (up && (double)f < x) f = nextafterf(f, 2.0f);
+    if (!up && (double)f > x) f = nextafterf(f, -2.0f);
+    return (double)f;
+}
+
+/* The pieces of a face's two end columns, those holding its least and its greatest u (e0, e1, given with
+ * the rounding margin) and not wholly inside it (k0d .. k1d are): each a trapezoid over the face's part of
+ * the column, its sides floats within it, as a piece of the leaf (docs/ALGORITHMS.md#runtime-horizon: the
+ * faces' ends within a column). dent: the tile's dents by corner, or NULL. */
+static int hz_ends(pvsr_horizon* h, int fr, double k0d, double k1d, double e0, double e1, const double* pu,
+                   const double* pv, int m, const double n[3], double c, int p, int hx, double s,
+                   const double* dent) {
+    const int cols = h->columns;
+    int added = 0, end, i;
+    for (end = 0; end < 2; ++end) {
+        const double at = end == 0 ? e0 : e1;
+        const int k = (int)floor((at + 1.0) * 0.5 * cols);
+        double u0, u1, extra = 0.0, side[3] = {0.0, 0.0, 0.0};
+        if (!(at > -1.0) || !(at < 1.0) || k < 0 || k > cols - 1) continue;
+        if ((double)k >= k0d && (double)k <= k1d) continue; /* wholly inside: a full piece */
+        if (end == 1 && (int)floor((e0 + 1.0) * 0.5 * cols) == k && e0 > -1.0) continue; /* done at end 0 */
+        u0 = hz_float_in(hz_max(e0, -1.0 + 2.0 * k / cols), 1);
+        u1 = hz_float_in(hz_min(e1, -1.0 + 2.0 * (k + 1) / cols), 0);
+        if (!(u0 < u1)) continue;
+        if (dent != NULL)
+            for (i = 0; i < m; ++i)
+                if (dent[i] > 0.0 && pu[i] >= u0 && pu[i] <= u1) extra += dent[i];
+        added |= hz_emit(h, fr, (uint32_t)(cols + k), u0, u1, pu, pv, m, n, c, p, hx, s, extra, side);
     }
     return added;
 }
@@ -2937,10 +2977,14 @@ static int hz_add_face(pvsr_horizon* h, const double (*a)[3], int na, const doub
         margin = HZ_ROUND * (1.0 + hz_max(fabs(umin), fabs(umax)));
         k0d = ceil((umin + margin + 1.0) * 0.5 * cols);
         k1d = floor((umax - margin + 1.0) * 0.5 * cols) - 1.0;
-        if (!(k0d <= k1d) || k1d < 0.0 || k0d > (double)(cols - 1)) continue;
+        hz_frame(fr, &p, &hx, &s);
+        if (!(k0d <= k1d) || k1d < 0.0 || k0d > (double)(cols - 1)) {
+            added |= hz_ends(h, fr, k0d, k1d, umin + margin, umax - margin, pu, pv, m, n, c, p, hx, s,
+                             dents ? dent : NULL);
+            continue;
+        }
         k0 = k0d < 0.0 ? 0 : (int)k0d;
         k1 = k1d > (double)(cols - 1) ? cols - 1 : (int)k1d;
-        hz_frame(fr, &p, &hx, &s);
         {
             /* Where the face's boundaries bend: its corners' positions in columns (x = k + f: in column k
              * at fraction f of it), sorted. Between them both boundaries are straight. */
@@ -2974,6 +3018,8 @@ static int hz_add_face(pvsr_horizon* h, const double (*a)[3], int na, const doub
             }
             if (rs <= k1) added |= hz_run(h, fr, rs, k1, pu, pv, m, n, c, p, hx, s, NULL, 0);
         }
+        added |= hz_ends(h, fr, k0d, k1d, umin + margin, umax - margin, pu, pv, m, n, c, p, hx, s,
+                         dents ? dent : NULL);
     }
     return added;
 }
@@ -3177,7 +3223,7 @@ typedef struct hz_uses {
 /* A piece on the path of a test down the tree, with its node's first side and width in u. */
 typedef struct hz_ref {
     const pvsr_horizon_piece* piece;
-    double u0, per_width; /* per_width: 1 / the node's width in u */
+    double u0, u1, per_width; /* the piece's sides in u; per_width: 1 / (u1 - u0) */
 } hz_ref;
 
 /* Appends to refs the pieces of frame fr's node that reach v_min and start below v_max somewhere in it (up
@@ -3188,13 +3234,14 @@ static int hz_gather(const pvsr_horizon* h, int fr, uint32_t node, double v_min,
     uint32_t level = 0, x, lo_e = h->first[(uint32_t)(fr * 2 * cols) + node],
              hi_e = h->first[(uint32_t)(fr * 2 * cols) + node + 1], end = hi_e;
     int w, k;
-    double u0, per_width, above;
+    double u0, u1, per_width, above;
     if (lo_e == hi_e) return n;
     above = v_max + HZ_TOUCH * (1.0 + fabs(v_max));
     for (x = node; x > 1; x >>= 1) ++level;
     w = cols >> level;
     k = (int)(node - (1u << level)) * w;
     u0 = -1.0 + 2.0 * k / cols;
+    u1 = -1.0 + 2.0 * (k + w) / cols;
     per_width = cols / (2.0 * w);
     while (lo_e < end) { /* the first piece whose reach is not below v_min: those before it lie below */
         const uint32_t mid = lo_e + (end - lo_e) / 2;
@@ -3208,8 +3255,10 @@ static int hz_gather(const pvsr_horizon* h, int fr, uint32_t node, double v_min,
         if (hz_bottom(pc) > above) break; /* it and the rest lie above the box: a chain never needs them */
         if (pc->hi[0] < v_min && pc->hi[1] < v_min) continue;
         refs[n].piece = pc;
-        refs[n].u0 = u0;
-        refs[n].per_width = per_width;
+        refs[n].u0 = pc->u[0];
+        refs[n].u1 = pc->u[1];
+        refs[n].per_width =
+            pc->u[0] == u0 && pc->u[1] == u1 ? per_width : 1.0 / ((double)pc->u[1] - pc->u[0]);
         ++n;
     }
     return n;
@@ -3256,7 +3305,8 @@ static int hz_covered(const hz_ref* refs, int n, double a, double b, const doubl
                      qb = pc->hi[0] + (pc->hi[1] - pc->hi[0]) * tb;
         double pa, pb, kk;
         int at;
-        if (qa < v_min && qb < v_min) continue; /* below the box here */
+        if (a < refs[r].u0 || b > refs[r].u1) continue; /* a face's end: not across all of [a, b] */
+        if (qa < v_min && qb < v_min) continue;         /* below the box here */
         pa = pc->lo[0] + (pc->lo[1] - pc->lo[0]) * ta;
         pb = pc->lo[0] + (pc->lo[1] - pc->lo[0]) * tb;
         if (!(d_u > pc->depth)) {
@@ -3342,6 +3392,47 @@ static int hz_covered(const hz_ref* refs, int n, double a, double b, const doubl
     return covered >= 0;
 }
 
+/* A leaf's test cut at the ends of its faces' end pieces (refs[first .. n), those ending inside (a, b)):
+ * each part of [a, b] between two cuts is covered by its own chain, the pieces across it (the end pieces
+ * that span it with the full ones), against the box's part in those directions. 0 when there is no cut or
+ * a part is left open. */
+static int hz_split_covered(const hz_ref* refs, int first, int n, double a, double b, double d_lo,
+                            double d_hi, double h_lo, double h_hi, double y_lo, double y_hi, double v_min,
+                            double v_max, hz_uses* uses) {
+    double cut[HZ_CUTS + 2];
+    int nc = 1, i, j;
+    cut[0] = a;
+    for (i = first; i < n && nc < HZ_CUTS + 1; ++i)
+        for (j = 0; j < 2 && nc < HZ_CUTS + 1; ++j) {
+            const double x = j == 0 ? refs[i].u0 : refs[i].u1;
+            int at;
+            if (!(x > a && x < b)) continue;
+            for (at = nc; at > 1 && cut[at - 1] > x; --at) cut[at] = cut[at - 1];
+            cut[at] = x;
+            ++nc;
+        }
+    if (nc == 1) return 0;
+    cut[nc++] = b;
+    for (i = 0; i + 1 < nc; ++i) {
+        const double ua = cut[i], ub = cut[i + 1];
+        double d_in, d_out, lo_v, hi_v, part[5];
+        if (!(ub > ua)) continue;
+        d_in = hz_max(d_lo, hz_entry(ua, ub, h_lo, h_hi));
+        d_out = hz_max(d_in, hz_min(d_hi, hz_exit(ua, ub, h_lo, h_hi)));
+        lo_v = hz_min(y_lo / d_in, y_lo / d_out);
+        hi_v = hz_max(y_hi / d_in, y_hi / d_out);
+        part[0] = d_in;
+        part[1] = h_lo;
+        part[2] = h_hi;
+        part[3] = y_lo;
+        part[4] = y_hi;
+        if (!hz_covered(refs, n, ua, ub, part, hz_max(v_min, lo_v - HZ_ROUND * (1.0 + fabs(lo_v))),
+                        hz_min(v_max, hi_v + HZ_ROUND * (1.0 + fabs(hi_v))), uses))
+            return 0;
+    }
+    return 1;
+}
+
 static int hz_hidden(const pvsr_horizon* h, const float box[6], hz_uses* uses) {
     hz_ref path[HZ_CANDIDATES];
     double lo[3], hi[3];
@@ -3412,6 +3503,9 @@ static int hz_hidden(const pvsr_horizon* h, const float box[6], hz_uses* uses) {
                 if (hz_covered(path, n, ua, ub, node_part,
                                hz_max(v_min, lo_v - HZ_ROUND * (1.0 + fabs(lo_v))),
                                hz_min(v_max, hi_v + HZ_ROUND * (1.0 + fabs(hi_v))), uses))
+                    continue;
+                if (w == 1 && hz_split_covered(path, path_len[depth], n, ua, ub, d_lo, d_hi, h_lo, h_hi,
+                                               lo[1], hi[1], v_min, v_max, uses))
                     continue;
             }
             if (w == 1 || depth + 2 > HZ_STACK) return 0;

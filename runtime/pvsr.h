@@ -364,15 +364,17 @@ int pvsr_culler_classify(const pvsr_culler* culler, const float box[6]);
 #define PVSR_HORIZON_MAX_CORNERS 32 /* of a polygon occluder given to the horizon */
 
 typedef struct pvsr_horizon_piece {
-    /* Every direction (u, v) of its node's columns with v between the line through (u0, lo[0]) and
-     * (u1, lo[1]) and the line through (u0, hi[0]) and (u1, hi[1]), u0 and u1 the sides of those columns,
-     * meets an occluder (a trapezoid; docs/ALGORITHMS.md#runtime-horizon). */
+    /* Every direction (u, v) with u in [u[0], u[1]] and v between the line through (u[0], lo[0]) and
+     * (u[1], lo[1]) and the line through (u[0], hi[0]) and (u[1], hi[1]) meets an occluder (a trapezoid;
+     * docs/ALGORITHMS.md#runtime-horizon). u[0], u[1]: the sides of its node's columns, or, for a face's
+     * end within a column, of the face's part of that column. */
     double lo[2], hi[2];
     double depth;    /* at least the depth of the occluder anywhere over the trapezoid */
     double plane[3]; /* 1 / the occluder's depth at direction (u, v): plane[0] + plane[1] u + plane[2] v */
     uint32_t column; /* frame * 2 * columns + the node of the frame's tree (docs/ALGORITHMS.md) */
     uint32_t tag;    /* the caller's tag of its occluder (pvsr_horizon_set_tag) */
     float reach; /* after pvsr_horizon_end(): at least the highest top of this piece and those before it */
+    float u[2];
 } pvsr_horizon_piece;
 
 /* A horizon: its fields are the runtime's (their layout may change between versions). */

@@ -1142,6 +1142,28 @@ TEST(RuntimeHorizon, ALowFarWallHidesTheFarEndOfATallLongBox) {
     }
 }
 
+// Two walls side by side meeting along a vertical seam whose direction falls inside a column (at any
+// column count tried): each gives the seam's column a piece over its own part, so together they hide the
+// box behind the seam; with a 2 cm gap at the seam the box stays visible through it, and neither wall
+// hides it alone.
+TEST(RuntimeHorizon, WallsMeetingInsideAColumnHideWhatLiesBehindTheSeam) {
+    const Box target = box(-0.5f, 1, 8, 0.5f, 2, 9);
+    for (const int columns : {16, 256, 1024}) {
+        Horizon h(columns);
+        h.frame(kEye, {box(-3, 0, 5, 0.013f, 4, 5), box(0.013f, 0, 5, 3, 4, 5)});
+        EXPECT_TRUE(h.hidden(target)) << columns << " columns";
+        EXPECT_FALSE(h.hidden(box(-0.5f, 7, 8, 0.5f, 8, 9))) << columns << " columns, over the walls";
+        Horizon gap(columns);
+        gap.frame(kEye, {box(-3, 0, 5, 0.003f, 4, 5), box(0.023f, 0, 5, 3, 4, 5)});
+        EXPECT_FALSE(gap.hidden(target)) << columns << " columns, through the gap";
+        for (const Box& one : {box(-3, 0, 5, 0.013f, 4, 5), box(0.013f, 0, 5, 3, 4, 5)}) {
+            Horizon single(columns);
+            single.frame(kEye, {one});
+            EXPECT_FALSE(single.hidden(target)) << columns << " columns";
+        }
+    }
+}
+
 // A ceiling seen from below, and a flat light standing on its far edge (a case from ctf_inyard, floats as
 // found): the light's lowest edge is seen along the ceiling (a sight line meets the ceiling only at its end),
 // so it stays drawn; every sight line to the light lifted by 1 cm crosses the ceiling first. The tolerance
