@@ -100,7 +100,9 @@ private:
 };
 
 // A triangle of `object` picked by area, and a uniform point in it (as rays/surface_points.h does, keeping
-// the triangle). Returns the world triangle's index.
+// the triangle), computed in double and rounded to floats, so that it lies within the triangle's bounds (a
+// float sum of the corners can leave them by a few float steps, off the object's own bounds, where the
+// runtime's tests do not promise anything). Returns the world triangle's index.
 uint32_t random_point_on(const World& world, const std::vector<double>& cum_area, uint32_t object, Rng& rng,
                          glm::vec3& point) {
     const WorldObject& obj = world.objects[object];
@@ -111,8 +113,10 @@ uint32_t random_point_on(const World& world, const std::vector<double>& cum_area
     const uint32_t t = obj.first_triangle + uint32_t(it - first);
     const Triangle& tri = world.triangles[t];
     const float r = std::sqrt(rng.uniform()), v = rng.uniform();
-    point = (1.0f - r) * world.positions[tri.v[0]] + r * (1.0f - v) * world.positions[tri.v[1]] +
-            r * v * world.positions[tri.v[2]];
+    const double rd = r, vd = v;
+    point = glm::vec3((1.0 - rd) * glm::dvec3(world.positions[tri.v[0]]) +
+                      rd * (1.0 - vd) * glm::dvec3(world.positions[tri.v[1]]) +
+                      rd * vd * glm::dvec3(world.positions[tri.v[2]]));
     return t;
 }
 
