@@ -2650,7 +2650,7 @@ uint32_t pvsr_culler_begin_cell(pvsr_culler* c, const pvsr_level* l, uint32_t ce
 #define HZ_DENT 1e-6 /* relative: the deepest dent a tile's directions may have */
 #define HZ_CANDIDATES 256 /* pieces a node's test takes at most */
 #define HZ_STACK 64       /* nodes a test keeps to try */
-#define HZ_CUTS 64        /* cuts of a leaf at its pieces' sides a test makes at most */
+#define HZ_CUTS 16        /* cuts of a leaf at its faces' ends a test makes at most */
 #define HZ_USES 1024      /* tags pvsr_horizon_hidden_by reports at most */
 
 static double hz_min(double a, double b) {
@@ -2888,13 +2888,17 @@ static int hz_emit(pvsr_horizon* h, int fr, uint32_t node, double u0, double u1,
     return 0;
 }
 
-/* The pieces of a face over the run of columns [k0, k1], with no corner inside: the largest aligned blocks
- * of the tree that tile it (node (cols + k) >> L holds columns [k, k + 2^L) when k is a multiple of 2^L). */
+/* The pieces of a face over the run of columns [k0, k1]: the largest aligned blocks of the tree that tile it
+ * (node (cols + k) >> L holds columns [k, k + 2^L) when k is a multiple of 2^L). With `single`, the run is
+ * one column with bends inside, given `extra` to shrink. */
 static int hz_run(pvsr_horizon* h, int fr, int k0, int k1, const double* pu, const double* pv, int m,
-                  const double n[3], double c, int p, int hx, double s) {
+                  const double n[3], double c, int p, int hx, double s, const double* extra, int single) {
     const int cols = h->columns;
     int added = 0;
     double side[3] = {0.0, 0.0, 0.0}; /* the span at the next block's first side, once known */
+    if (single)
+        return hz_emit(h, fr, (uint32_t)(cols + k0), -1.0 + 2.0 * k0 / cols, -1.0 + 2.0 * (k0 + 1) / cols, pu,
+                       pv, m, n, c, p, hx, s, *extra, side);
     while (k0 <= k1) {
         int w = 1, level = 0;
         while ((k0 & (2 * w - 1)) == 0 && k0 + 2 * w - 1 <= k1 && 2 * w <= cols) {
@@ -2916,37 +2920,6 @@ static double hz_float_in(double x, int up) {
     return (double)f;
 }
 
-/* The pieces of a face over [u0, u1] within leaf column k (floats within the face): one trapezoid between
- * each two of u0, the corners inside, u1 (each corner's u rounded to a float), so that the face's
- * boundaries are straight over each; each shrunk by the dents of the corners at or near it. */
-static int hz_leaf_span(pvsr_horizon* h, int fr, int k, double u0, double u1, const double* pu,
-                        const double* pv, int m, const double n[3], double c, int p, int hx, double s,
-                        const double* dent) {
-    const int cols = h->columns;
-    double cut[HZ_MAX_VERTS + 2];
-    int nc = 1, i, j, added = 0;
-    cut[0] = u0;
-    for (i = 0; i < m; ++i) {
-        const double f = (double)(float)pu[i];
-        int at;
-        if (!(f > u0 && f < u1)) continue;
-        for (at = nc; at > 1 && cut[at - 1] > f; --at) cut[at] = cut[at - 1];
-        cut[at] = f;
-        ++nc;
-    }
-    cut[nc++] = u1;
-    for (j = 0; j + 1 < nc; ++j) {
-        double extra = 0.0, side[3] = {0.0, 0.0, 0.0};
-        if (!(cut[j + 1] > cut[j])) continue;
-        if (dent != NULL)
-            for (i = 0; i < m; ++i)
-                if (dent[i] > 0.0 && pu[i] >= cut[j] - 1e-6 && pu[i] <= cut[j + 1] + 1e-6) extra += dent[i];
-        added |=
-            hz_emit(h, fr, (uint32_t)(cols + k), cut[j], cut[j + 1], pu, pv, m, n, c, p, hx, s, extra, side);
-    }
-    return added;
-}
-
 /* The pieces of a face's two end columns, those holding its least and its greatest u (e0, e1, given with
  * the rounding margin) and not wholly inside it (k0d .. k1d are): each a trapezoid over the face's part of
  * the column, its sides floats within it, as a piece of the leaf (docs/ALGORITHMS.md#runtime-horizon: the
@@ -2955,18 +2928,21 @@ static int hz_ends(pvsr_horizon* h, int fr, double k0d, double k1d, double e0, d
                    const double* pv, int m, const double n[3], double c, int p, int hx, double s,
                    const double* dent) {
     const int cols = h->columns;
-    int added = 0, end;
+    int added = 0, end, i;
     for (end = 0; end < 2; ++end) {
         const double at = end == 0 ? e0 : e1;
         const int k = (int)floor((at + 1.0) * 0.5 * cols);
-        double u0, u1;
+        double u0, u1, extra = 0.0, side[3] = {0.0, 0.0, 0.0};
         if (!(at > -1.0) || !(at < 1.0) || k < 0 || k > cols - 1) continue;
         if ((double)k >= k0d && (double)k <= k1d) continue; /* wholly inside: a full piece */
         if (end == 1 && (int)floor((e0 + 1.0) * 0.5 * cols) == k && e0 > -1.0) continue; /* done at end 0 */
         u0 = hz_float_in(hz_max(e0, -1.0 + 2.0 * k / cols), 1);
         u1 = hz_float_in(hz_min(e1, -1.0 + 2.0 * (k + 1) / cols), 0);
         if (!(u0 < u1)) continue;
-        added |= hz_leaf_span(h, fr, k, u0, u1, pu, pv, m, n, c, p, hx, s, dent);
+        if (dent != NULL)
+            for (i = 0; i < m; ++i)
+                if (dent[i] > 0.0 && pu[i] >= u0 && pu[i] <= u1) extra += dent[i];
+        added |= hz_emit(h, fr, (uint32_t)(cols + k), u0, u1, pu, pv, m, n, c, p, hx, s, extra, side);
     }
     return added;
 }
@@ -3023,19 +2999,24 @@ static int hz_add_face(pvsr_horizon* h, const double (*a)[3], int na, const doub
                 ++nb_;
             }
             /* Runs of whole columns with no bend inside go to the tree as the largest aligned blocks; a
-             * column with a bend inside gets pieces of its leaf cut at its corners (less the dents of the
-             * corners at their sides). */
+             * column with a bend inside gets its own piece (the chords of the bent boundaries, less the
+             * dents of the corners in it). */
             for (q = 0; q < nb_; ++q) {
                 const int kb = (int)floor(bend[q]);
-                if (rs <= kb - 1) added |= hz_run(h, fr, rs, kb - 1, pu, pv, m, n, c, p, hx, s);
-                if (bend[q] > (double)kb && rs <= kb) { /* inside column kb: cut at its corners */
-                    added |= hz_leaf_span(h, fr, kb, -1.0 + 2.0 * kb / cols, -1.0 + 2.0 * (kb + 1) / cols, pu,
-                                          pv, m, n, c, p, hx, s, dents ? dent : NULL);
+                if (rs <= kb - 1) added |= hz_run(h, fr, rs, kb - 1, pu, pv, m, n, c, p, hx, s, NULL, 0);
+                if (bend[q] > (double)kb && rs <= kb) { /* inside column kb */
+                    double extra = 0.0;
+                    if (dents)
+                        for (i = 0; i < m; ++i) {
+                            const double xi = (pu[i] + 1.0) * 0.5 * cols;
+                            if (dent[i] > 0.0 && xi >= (double)kb && xi <= (double)(kb + 1)) extra += dent[i];
+                        }
+                    added |= hz_run(h, fr, kb, kb, pu, pv, m, n, c, p, hx, s, &extra, 1);
                     rs = kb + 1;
                 } else if (rs < kb)
                     rs = kb;
             }
-            if (rs <= k1) added |= hz_run(h, fr, rs, k1, pu, pv, m, n, c, p, hx, s);
+            if (rs <= k1) added |= hz_run(h, fr, rs, k1, pu, pv, m, n, c, p, hx, s, NULL, 0);
         }
         added |= hz_ends(h, fr, k0d, k1d, umin + margin, umax - margin, pu, pv, m, n, c, p, hx, s,
                          dents ? dent : NULL);
@@ -3411,7 +3392,7 @@ static int hz_covered(const hz_ref* refs, int n, double a, double b, const doubl
     return covered >= 0;
 }
 
-/* A leaf's test cut at the sides of its own pieces (refs[first .. n), those inside (a, b)):
+/* A leaf's test cut at the ends of its faces' end pieces (refs[first .. n), those ending inside (a, b)):
  * each part of [a, b] between two cuts is covered by its own chain, the pieces across it (the end pieces
  * that span it with the full ones), against the box's part in those directions. 0 when there is no cut or
  * a part is left open. */
