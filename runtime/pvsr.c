@@ -2931,11 +2931,13 @@ static int hz_ends(pvsr_horizon* h, int fr, double k0d, double k1d, double e0, d
     int added = 0, end, i;
     for (end = 0; end < 2; ++end) {
         const double at = end == 0 ? e0 : e1;
-        const int k = (int)floor((at + 1.0) * 0.5 * cols);
         double u0, u1, extra = 0.0, side[3] = {0.0, 0.0, 0.0};
-        if (!(at > -1.0) || !(at < 1.0) || k < 0 || k > cols - 1) continue;
+        int k;
+        if (!(at > -1.0) || !(at < 1.0)) continue; /* outside the frame's columns (or not a number) */
+        k = (int)floor((at + 1.0) * 0.5 * cols);
+        if (k < 0 || k > cols - 1) continue;
         if ((double)k >= k0d && (double)k <= k1d) continue; /* wholly inside: a full piece */
-        if (end == 1 && (int)floor((e0 + 1.0) * 0.5 * cols) == k && e0 > -1.0) continue; /* done at end 0 */
+        if (end == 1 && e0 > -1.0 && (int)floor((e0 + 1.0) * 0.5 * cols) == k) continue; /* done at end 0 */
         u0 = hz_float_in(hz_max(e0, -1.0 + 2.0 * k / cols), 1);
         u1 = hz_float_in(hz_min(e1, -1.0 + 2.0 * (k + 1) / cols), 0);
         if (!(u0 < u1)) continue;

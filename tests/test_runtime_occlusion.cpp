@@ -1222,6 +1222,9 @@ TEST(RuntimeHorizon, AwkwardInputs) {
     EXPECT_EQ(pvsr_horizon_add_box(&h, two_flat), 0);
     EXPECT_EQ(pvsr_horizon_add_box(&h, empty), 0);
     EXPECT_EQ(pvsr_horizon_add_box(&h, not_finite), 0);
+    // A panel just past the near plane and far to the side: its directions lie far outside every column.
+    const float far_side[6] = {1e18f, 1.0f, 0.0015f, 2e18f, 2.0f, 0.0015f};
+    pvsr_horizon_add_box(&h, far_side);
     pvsr_horizon_end(&h);
     EXPECT_EQ(pvsr_horizon_is_hidden(&h, target), 1);
     EXPECT_EQ(pvsr_horizon_add_box(&h, wall), 0);  // the frame is ended: nothing more until begin
