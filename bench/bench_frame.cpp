@@ -1005,6 +1005,10 @@ int main(int argc, char** argv) {
                     glm::vec3 point;
                     const uint32_t tri =
                         pvs::bench::random_point_on(world, cum_area, pair.object, pair_rng, point);
+                    if (point == f.eye) {  // a point at the eye is reached, as aim_at_object says
+                        open = true;
+                        break;
+                    }
                     RTCRay r = pvs::bench::segment_ray(f.eye, point - f.eye, pvs::bench::kSegmentEnd, 0);
                     uint32_t target = scene.prim_of(tri);
                     scene.occluded(&r, &target, 1);

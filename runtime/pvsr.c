@@ -3222,7 +3222,7 @@ typedef struct hz_uses {
     int16_t ref[HZ_CANDIDATES];
 } hz_uses;
 
-/* A piece on the path of a test down the tree, with its node's first side and width in u. */
+/* A piece on the path of a test down the tree, with its sides in u. */
 typedef struct hz_ref {
     const pvsr_horizon_piece* piece;
     double u0, u1, per_width; /* the piece's sides in u; per_width: 1 / (u1 - u0) */
@@ -3394,13 +3394,27 @@ static int hz_covered(const hz_ref* refs, int n, double a, double b, const doubl
     return covered >= 0;
 }
 
+/* Is the box's part with u in [ua, ub] covered by refs[0 .. n)? part: the box's part in the frame, its depths
+ * [d_lo, d_hi] and its ranges across (h) and up (y), less the eye. Its points there lie at depths
+ * [d_in, d_out], so their directions at v within the bounds those give (widened for rounding), met with
+ * [v_min, v_max] (docs/ALGORITHMS.md#runtime-horizon). */
+static int hz_range_covered(const hz_ref* refs, int n, double ua, double ub, const double part[6],
+                            double v_min, double v_max, hz_uses* uses) {
+    const double d_in = hz_max(part[0], hz_entry(ua, ub, part[2], part[3]));
+    const double d_out = hz_max(d_in, hz_min(part[1], hz_exit(ua, ub, part[2], part[3])));
+    const double lo_v = hz_min(part[4] / d_in, part[4] / d_out),
+                 hi_v = hz_max(part[5] / d_in, part[5] / d_out);
+    const double range_part[5] = {d_in, part[2], part[3], part[4], part[5]};
+    return hz_covered(refs, n, ua, ub, range_part, hz_max(v_min, lo_v - HZ_ROUND * (1.0 + fabs(lo_v))),
+                      hz_min(v_max, hi_v + HZ_ROUND * (1.0 + fabs(hi_v))), uses);
+}
+
 /* A leaf's test cut at the ends of its faces' end pieces (refs[first .. n), those ending inside (a, b)):
  * each part of [a, b] between two cuts is covered by its own chain, the pieces across it (the end pieces
  * that span it with the full ones), against the box's part in those directions. 0 when there is no cut or
  * a part is left open. */
-static int hz_split_covered(const hz_ref* refs, int first, int n, double a, double b, double d_lo,
-                            double d_hi, double h_lo, double h_hi, double y_lo, double y_hi, double v_min,
-                            double v_max, hz_uses* uses) {
+static int hz_split_covered(const hz_ref* refs, int first, int n, double a, double b, const double part[6],
+                            double v_min, double v_max, hz_uses* uses) {
     double cut[HZ_CUTS + 2];
     int nc = 1, i, j;
     cut[0] = a;
@@ -3415,23 +3429,9 @@ static int hz_split_covered(const hz_ref* refs, int first, int n, double a, doub
         }
     if (nc == 1) return 0;
     cut[nc++] = b;
-    for (i = 0; i + 1 < nc; ++i) {
-        const double ua = cut[i], ub = cut[i + 1];
-        double d_in, d_out, lo_v, hi_v, part[5];
-        if (!(ub > ua)) continue;
-        d_in = hz_max(d_lo, hz_entry(ua, ub, h_lo, h_hi));
-        d_out = hz_max(d_in, hz_min(d_hi, hz_exit(ua, ub, h_lo, h_hi)));
-        lo_v = hz_min(y_lo / d_in, y_lo / d_out);
-        hi_v = hz_max(y_hi / d_in, y_hi / d_out);
-        part[0] = d_in;
-        part[1] = h_lo;
-        part[2] = h_hi;
-        part[3] = y_lo;
-        part[4] = y_hi;
-        if (!hz_covered(refs, n, ua, ub, part, hz_max(v_min, lo_v - HZ_ROUND * (1.0 + fabs(lo_v))),
-                        hz_min(v_max, hi_v + HZ_ROUND * (1.0 + fabs(hi_v))), uses))
+    for (i = 0; i + 1 < nc; ++i)
+        if (cut[i + 1] > cut[i] && !hz_range_covered(refs, n, cut[i], cut[i + 1], part, v_min, v_max, uses))
             return 0;
-    }
     return 1;
 }
 
@@ -3492,22 +3492,12 @@ static int hz_hidden(const pvsr_horizon* h, const float box[6], hz_uses* uses) {
             k = (int)(node - (1u << level)) * w;
             n = hz_gather(h, fr, node, v_min, v_max, path, path_len[depth]);
             /* A node of none of its own pieces is left to its children (what covers it covers them). */
-            if (n > path_len[depth] || w == 1) {
-                /* The box's points in the node's columns lie at depths [d_in, d_out], so their directions
-                 * at v within the bounds below (widened for rounding). */
+            if (n > path_len[depth] || w == 1) { /* the box's part over the node's columns */
                 const double ua = hz_max(u_min, -1.0 + 2.0 * k / cols),
                              ub = hz_min(u_max, -1.0 + 2.0 * (k + w) / cols);
-                const double d_in = hz_max(d_lo, hz_entry(ua, ub, h_lo, h_hi));
-                const double d_out = hz_max(d_in, hz_min(d_hi, hz_exit(ua, ub, h_lo, h_hi)));
-                const double lo_v = hz_min(lo[1] / d_in, lo[1] / d_out),
-                             hi_v = hz_max(hi[1] / d_in, hi[1] / d_out);
-                const double node_part[5] = {d_in, h_lo, h_hi, lo[1], hi[1]};
-                if (hz_covered(path, n, ua, ub, node_part,
-                               hz_max(v_min, lo_v - HZ_ROUND * (1.0 + fabs(lo_v))),
-                               hz_min(v_max, hi_v + HZ_ROUND * (1.0 + fabs(hi_v))), uses))
-                    continue;
-                if (w == 1 && hz_split_covered(path, path_len[depth], n, ua, ub, d_lo, d_hi, h_lo, h_hi,
-                                               lo[1], hi[1], v_min, v_max, uses))
+                const double part[6] = {d_lo, d_hi, h_lo, h_hi, lo[1], hi[1]};
+                if (hz_range_covered(path, n, ua, ub, part, v_min, v_max, uses)) continue;
+                if (w == 1 && hz_split_covered(path, path_len[depth], n, ua, ub, part, v_min, v_max, uses))
                     continue;
             }
             if (w == 1 || depth + 2 > HZ_STACK) return 0;
