@@ -9,6 +9,7 @@
 #include "core/error.h"
 #include "core/random.h"
 #include "core/world.h"
+#include "rays/surface_points.h"
 
 #include <embree3/rtcore.h>
 
@@ -99,26 +100,8 @@ private:
     std::vector<uint32_t> prim_of_triangle_;
 };
 
-// A triangle of `object` picked by area, and a uniform point in it (as rays/surface_points.h does, keeping
-// the triangle), computed in double and rounded to floats, so that it lies within the triangle's bounds (a
-// float sum of the corners can leave them by a few float steps, off the object's own bounds, where the
-// runtime's tests do not promise anything). Returns the world triangle's index.
-uint32_t random_point_on(const World& world, const std::vector<double>& cum_area, uint32_t object, Rng& rng,
-                         glm::vec3& point) {
-    const WorldObject& obj = world.objects[object];
-    const auto first = cum_area.begin() + obj.first_triangle;
-    const auto last = first + obj.triangle_count;
-    const double pick = double(rng.uniform()) * *(last - 1);
-    const auto it = std::min(std::upper_bound(first, last, pick), last - 1);
-    const uint32_t t = obj.first_triangle + uint32_t(it - first);
-    const Triangle& tri = world.triangles[t];
-    const float r = std::sqrt(rng.uniform()), v = rng.uniform();
-    const double rd = r, vd = v;
-    point = glm::vec3((1.0 - rd) * glm::dvec3(world.positions[tri.v[0]]) +
-                      rd * (1.0 - vd) * glm::dvec3(world.positions[tri.v[1]]) +
-                      rd * vd * glm::dvec3(world.positions[tri.v[2]]));
-    return t;
-}
+// A triangle of `object` picked by area and a uniform point in it, in double (rays/surface_points.h).
+using pvs::random_point_on;
 
 // Reused buffers of aim_at_object (one per thread).
 // The ray from `eye` along `d` (unnormalized: t in [0, 1] spans the segment) up to t = tfar, with id `id`,

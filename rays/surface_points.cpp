@@ -23,18 +23,27 @@ std::vector<double> cumulative_areas(const World& world) {
     return out;
 }
 
-// A uniform random point on the object's surface: a triangle by area, then a uniform point in it.
-glm::vec3 random_point_on(const World& world, const std::vector<double>& cum_area, uint32_t object,
-                          Rng& rng) {
+uint32_t random_point_on(const World& world, const std::vector<double>& cum_area, uint32_t object, Rng& rng,
+                         glm::vec3& point) {
     const WorldObject& obj = world.objects[object];
     const auto first = cum_area.begin() + obj.first_triangle;
     const auto last = first + obj.triangle_count;
     const double pick = double(rng.uniform()) * *(last - 1);
     const auto it = std::min(std::upper_bound(first, last, pick), last - 1);
-    const Triangle& t = world.triangles[obj.first_triangle + uint32_t(it - first)];
-    const float r = std::sqrt(rng.uniform()), v = rng.uniform();
-    return (1.0f - r) * world.positions[t.v[0]] + r * (1.0f - v) * world.positions[t.v[1]] +
-           r * v * world.positions[t.v[2]];
+    const uint32_t t = obj.first_triangle + uint32_t(it - first);
+    const Triangle& tri = world.triangles[t];
+    const double r = std::sqrt(rng.uniform()), v = rng.uniform();
+    point = glm::vec3((1.0 - r) * glm::dvec3(world.positions[tri.v[0]]) +
+                      r * (1.0 - v) * glm::dvec3(world.positions[tri.v[1]]) +
+                      r * v * glm::dvec3(world.positions[tri.v[2]]));
+    return t;
+}
+
+glm::vec3 random_point_on(const World& world, const std::vector<double>& cum_area, uint32_t object,
+                          Rng& rng) {
+    glm::vec3 point;
+    random_point_on(world, cum_area, object, rng, point);
+    return point;
 }
 
 }  // namespace pvs
