@@ -76,7 +76,9 @@ TEST(ShaftFlood, TheSolidsTilesCoverEachSolidVoxelOnce) {
             solid += m.get(i) ? 1 : 0;
         }
         EXPECT_GT(solid, 0u);
-        if (fill == 1.0f) EXPECT_LT(tiles.size(), solid / 20) << "runs and rectangles are not merged";
+        if (fill == 1.0f) {
+            EXPECT_LT(tiles.size(), solid / 20) << "runs and rectangles are not merged";
+        }
     }
 }
 
