@@ -914,7 +914,8 @@ static const char* check_polygons(pvsr_level* l) {
 
 /* File version 2.1: the horizon's occluders ('HBOX' boxes, 'HTIL' tiles in the 'OPLN' layout, 'HTCO' their
  * corners) and a list per block of cells ('HLOF' byte offsets, blocks + 1, into 'HLST': per list the gaps
- * between its ascending occluder indices, less one, as LEB128 varints): all five or none. Boxes finite with
+ * between its ascending occluder indices, less one, as LEB128 varints; from 4.0 in a Rice code, hz_list):
+ * all five or none. Boxes finite with
  * min <= max; tiles 3 to PVSR_HORIZON_MAX_CORNERS finite corners in range on a finite plane; offsets from 0,
  * never decreasing, within the lists' bytes. A list's varints are bounded where they are read
  * (pvsr_horizon_begin_cell), not here: a damaged list ends early. */
@@ -3533,31 +3534,94 @@ void pvsr_horizon_set_tag(pvsr_horizon* h, uint32_t tag) {
 
 /* ---- The cell's horizon occluders (file 2.1) ---- */
 
-/* The bytes of the cell's list: [*begin, *end) of 'HLST'; 0 when the file has no lists. */
-static int hz_list_bytes(const pvsr_level* l, uint32_t cell, const uint8_t** begin, const uint8_t** end) {
+/* A reader of a cell's list in 'HLST': LEB128 gaps (files 2.1 to 3.x), or from 4.0 its entry count (LEB128),
+ * a byte k, then per entry its gap in a Rice code of parameter k (the quotient gap >> k as that many 1 bits
+ * and a 0 bit, then the k low bits; bits from the lowest of each byte). */
+typedef struct hz_list {
+    const uint8_t *p, *end;
+    uint64_t next;     /* the least index the next entry may have */
+    uint64_t bits;     /* Rice: bits read ahead, lowest first */
+    uint32_t left;     /* Rice: entries still to read */
+    int have, k, rice; /* Rice: how many bits `bits` holds; the parameter; 1 for the Rice code */
+} hz_list;
+
+/* A LEB128 varint of at most 5 bytes at *p (before end); 0 when it does not end there. */
+static int hz_varint(const uint8_t** p, const uint8_t* end, uint64_t* value) {
+    int shift = 0;
+    *value = 0;
+    for (;;) {
+        uint8_t byte;
+        if (*p >= end || shift > 28) return 0;
+        byte = *(*p)++;
+        *value |= (uint64_t)(byte & 0x7fu) << shift;
+        shift += 7;
+        if ((byte & 0x80u) == 0) return 1;
+    }
+}
+
+/* Opens the cell's list; 0 when the file has no lists (or the cell none). */
+static int hz_list_open(const pvsr_level* l, uint32_t cell, hz_list* r) {
     uint32_t b;
+    memset(r, 0, sizeof *r);
     if (l == NULL || l->horizon_list_offsets.at == NULL || cell >= l->cell_count) return 0;
     b = palette_block(l, cell);
-    *begin = l->horizon_lists.at + rd32(l->horizon_list_offsets.at + 4 * (uint64_t)b);
-    *end = l->horizon_lists.at + rd32(l->horizon_list_offsets.at + 4 * (uint64_t)b + 4);
+    r->p = l->horizon_lists.at + rd32(l->horizon_list_offsets.at + 4 * (uint64_t)b);
+    r->end = l->horizon_lists.at + rd32(l->horizon_list_offsets.at + 4 * (uint64_t)b + 4);
+    if (l->version_major >= 4) {
+        uint64_t count;
+        r->rice = 1;
+        if (r->p == r->end) return 1; /* an empty list */
+        if (!hz_varint(&r->p, r->end, &count) || r->p >= r->end || *r->p > 31) {
+            r->p = r->end; /* damaged: no entries */
+            return 1;
+        }
+        r->left = count > 0xffffffffu ? 0xffffffffu : (uint32_t)count;
+        r->k = *r->p++;
+    }
     return 1;
 }
 
-/* The next occluder of a list, or UINT32_MAX at its end (or where a damaged list leaves the occluders). */
-static uint32_t hz_list_next(const pvsr_level* l, const uint8_t** p, const uint8_t* end, uint64_t* next) {
-    uint64_t gap = 0;
-    int shift = 0;
-    for (;;) {
-        uint8_t byte;
-        if (*p >= end || shift > 28) return UINT32_MAX;
-        byte = *(*p)++;
-        gap |= (uint64_t)(byte & 0x7fu) << shift;
-        shift += 7;
-        if ((byte & 0x80u) == 0) break;
+/* The next bit of a Rice list, or -1 past its bytes. */
+static int hz_list_bit(hz_list* r) {
+    int bit;
+    if (r->have == 0) {
+        if (r->p >= r->end) return -1;
+        r->bits = *r->p++;
+        r->have = 8;
     }
-    *next += gap;
-    if (*next >= l->horizon_boxes.count + l->horizon_tiles.count) return UINT32_MAX;
-    return (uint32_t)(*next)++;
+    bit = (int)(r->bits & 1u);
+    r->bits >>= 1;
+    --r->have;
+    return bit;
+}
+
+/* The next occluder of a list, or UINT32_MAX at its end (or where a damaged list leaves its bytes or the
+ * occluders). */
+static uint32_t hz_list_next(const pvsr_level* l, hz_list* r) {
+    uint64_t gap = 0;
+    if (!r->rice) {
+        if (!hz_varint(&r->p, r->end, &gap)) return UINT32_MAX;
+    } else {
+        uint64_t q = 0, low = 0;
+        int i, bit;
+        if (r->left == 0) return UINT32_MAX;
+        --r->left;
+        while ((bit = hz_list_bit(r)) == 1)
+            if (++q > 0xffffffffu) return UINT32_MAX;
+        if (bit < 0) return UINT32_MAX;
+        for (i = 0; i < r->k; ++i) {
+            if ((bit = hz_list_bit(r)) < 0) return UINT32_MAX;
+            low |= (uint64_t)bit << i;
+        }
+        gap = (q << r->k) | low;
+    }
+    r->next += gap;
+    if (r->next >= l->horizon_boxes.count + l->horizon_tiles.count) {
+        r->left = 0;
+        r->p = r->end;
+        return UINT32_MAX;
+    }
+    return (uint32_t)(r->next)++;
 }
 
 uint32_t pvsr_horizon_occluder_count(const pvsr_level* l) {
@@ -3565,22 +3629,20 @@ uint32_t pvsr_horizon_occluder_count(const pvsr_level* l) {
 }
 
 uint32_t pvsr_horizon_list_count(const pvsr_level* l, uint32_t cell) {
-    const uint8_t *p, *end;
-    uint64_t next = 0;
+    hz_list r;
     uint32_t n = 0;
-    if (!hz_list_bytes(l, cell, &p, &end)) return 0;
-    while (hz_list_next(l, &p, end, &next) != UINT32_MAX) ++n;
+    if (!hz_list_open(l, cell, &r)) return 0;
+    while (hz_list_next(l, &r) != UINT32_MAX) ++n;
     return n;
 }
 
 uint32_t pvsr_horizon_begin_cell(pvsr_horizon* h, const pvsr_level* l, uint32_t cell, const float eye[3]) {
-    const uint8_t *p, *end;
-    uint64_t next = 0;
+    hz_list r;
     uint32_t n = 0, o;
     if (h == NULL) return 0;
     pvsr_horizon_begin(h, eye);
-    if (hz_list_bytes(l, cell, &p, &end))
-        while ((o = hz_list_next(l, &p, end, &next)) != UINT32_MAX) {
+    if (hz_list_open(l, cell, &r))
+        while ((o = hz_list_next(l, &r)) != UINT32_MAX) {
             pvsr_horizon_set_tag(h, o);
             if (o < l->horizon_boxes.count) {
                 const uint8_t* b = l->horizon_boxes.at + 24 * (uint64_t)o;

@@ -57,7 +57,7 @@
 extern "C" {
 #endif
 
-#define PVSR_VERSION_MAJOR 3 /* the newest file version this runtime reads: 1.x, 2.x and 3.x */
+#define PVSR_VERSION_MAJOR 4 /* the newest file version this runtime reads: 1.x to 4.x */
 #define PVSR_VERSION_MINOR 0
 
 typedef enum pvsr_status {

@@ -291,7 +291,7 @@ protected:
 };
 
 // The horizon sections: each cell lists the three occluders; a damaged section is refused with its reason,
-// and a list whose varints run past its bytes or past the occluders ends early.
+// and a list whose codes run past its bytes or past the occluders ends early (files 4.0 and 3.0).
 TEST_F(RuntimeFileDamage, HorizonListsReadAndRefuseDamage) {
     Bytes good(file_);
     pvsr_level l;
@@ -324,24 +324,32 @@ TEST_F(RuntimeFileDamage, HorizonListsReadAndRefuseDamage) {
         rechecksum(b);
         EXPECT_NE(opened_message(b, &s).find("the horizon lists' offsets"), std::string::npos);
     }
-    {
-        // A gap past the occluders: the list ends there.
+    // A list's bytes (file 4.0): its entry count, the Rice parameter k, then the gaps' bits; here each list
+    // is {0, 1, 2}, three zero gaps at k = 0: 03 00 00. Damage ends a list early (or, for a count past its
+    // entries, where its padding bits pass the occluders); it never reads past the list's bytes.
+    const size_t list0 = offset_of(l.horizon_lists);
+    ASSERT_EQ(l.horizon_lists.at[0], 3u);
+    ASSERT_EQ(l.horizon_lists.at[1], 0u);
+    const auto list0_count_with = [&](const std::vector<uint8_t>& bytes, uint16_t major) {
         Bytes b(file_);
-        b.bytes()[offset_of(l.horizon_lists) + 1] = 0x7f;
+        for (size_t k = 0; k < bytes.size(); ++k) b.bytes()[list0 + k] = bytes[k];
+        std::memcpy(b.bytes() + 8, &major, 2);  // the version lies before the checksummed bytes
         rechecksum(b);
         pvsr_level d;
-        ASSERT_EQ(pvsr_open(&d, b.data(), b.size, nullptr, 0), PVSR_OK);
-        EXPECT_EQ(pvsr_horizon_list_count(&d, 0), 1u);
-    }
-    {
-        // A varint that never ends: the list ends at its bytes.
-        Bytes b(file_);
-        for (uint64_t k = 0; k < l.horizon_lists.count; ++k) b.bytes()[offset_of(l.horizon_lists) + k] = 0x80;
-        rechecksum(b);
-        pvsr_level d;
-        ASSERT_EQ(pvsr_open(&d, b.data(), b.size, nullptr, 0), PVSR_OK);
-        EXPECT_EQ(pvsr_horizon_list_count(&d, 0), 0u);
-    }
+        EXPECT_EQ(pvsr_open(&d, b.data(), b.size, nullptr, 0), PVSR_OK);
+        return pvsr_horizon_list_count(&d, 0);
+    };
+    EXPECT_EQ(list0_count_with({3, 0, 0}, PVSR_VERSION_MAJOR), 3u);
+    EXPECT_EQ(list0_count_with({3, 32, 0}, PVSR_VERSION_MAJOR), 0u) << "a parameter past 31";
+    EXPECT_EQ(list0_count_with({3, 0, 0x0e}, PVSR_VERSION_MAJOR), 1u) << "a gap of 3 after index 0";
+    EXPECT_EQ(list0_count_with({3, 0, 0xff}, PVSR_VERSION_MAJOR), 0u) << "a quotient past the bytes";
+    EXPECT_EQ(list0_count_with({0x7f, 0, 0}, PVSR_VERSION_MAJOR), 3u) << "a count past the entries";
+    EXPECT_EQ(list0_count_with({0x80, 0x80, 0x80}, PVSR_VERSION_MAJOR), 0u) << "a count that never ends";
+    // Files before 4.0 code the gaps in LEB128 varints (03 00 00 is then the list {3, 4, 5}: past the
+    // occluders at once).
+    EXPECT_EQ(list0_count_with({0, 0, 0}, 3), 3u);
+    EXPECT_EQ(list0_count_with({0, 0x7f, 0}, 3), 1u) << "a gap past the occluders";
+    EXPECT_EQ(list0_count_with({0x80, 0x80, 0x80}, 3), 0u) << "a varint past the bytes";
 }
 
 // The object parts' sections: each object of the bake has its halves (or quarters); a damaged offset or box
