@@ -3581,18 +3581,12 @@ static int hz_list_open(const pvsr_level* l, uint32_t cell, hz_list* r) {
     return 1;
 }
 
-/* The next bit of a Rice list, or -1 past its bytes. */
-static int hz_list_bit(hz_list* r) {
-    int bit;
-    if (r->have == 0) {
-        if (r->p >= r->end) return -1;
-        r->bits = *r->p++;
-        r->have = 8;
+/* Reads bytes of a Rice list into its bit buffer while at least 8 bits are free and bytes remain. */
+static void hz_list_fill(hz_list* r) {
+    while (r->have <= 56 && r->p < r->end) {
+        r->bits |= (uint64_t)*r->p++ << r->have;
+        r->have += 8;
     }
-    bit = (int)(r->bits & 1u);
-    r->bits >>= 1;
-    --r->have;
-    return bit;
 }
 
 /* The next occluder of a list, or UINT32_MAX at its end (or where a damaged list leaves its bytes or the
@@ -3603,15 +3597,33 @@ static uint32_t hz_list_next(const pvsr_level* l, hz_list* r) {
         if (!hz_varint(&r->p, r->end, &gap)) return UINT32_MAX;
     } else {
         uint64_t q = 0, low = 0;
-        int i, bit;
         if (r->left == 0) return UINT32_MAX;
         --r->left;
-        while ((bit = hz_list_bit(r)) == 1)
-            if (++q > 0xffffffffu) return UINT32_MAX;
-        if (bit < 0) return UINT32_MAX;
-        for (i = 0; i < r->k; ++i) {
-            if ((bit = hz_list_bit(r)) < 0) return UINT32_MAX;
-            low |= (uint64_t)bit << i;
+        for (;;) { /* the quotient: 1 bits up to a 0 bit */
+            uint64_t zeros;
+            hz_list_fill(r);
+            if (r->have == 0) return UINT32_MAX;
+            zeros = ~r->bits & (r->have == 64 ? ~(uint64_t)0 : (((uint64_t)1 << r->have) - 1));
+            if (zeros == 0) {
+                q += (uint64_t)r->have;
+                r->bits = 0;
+                r->have = 0;
+            } else {
+                const unsigned z = ctz64(zeros);
+                q += z;
+                r->bits = (r->bits >> z) >> 1;
+                r->have -= (int)z + 1;
+                break;
+            }
+            if (q > 0xffffffffu) return UINT32_MAX;
+        }
+        if (q > 0xffffffffu) return UINT32_MAX;
+        if (r->k > 0) {
+            hz_list_fill(r);
+            if (r->have < r->k) return UINT32_MAX;
+            low = r->bits & (((uint64_t)1 << r->k) - 1);
+            r->bits >>= r->k;
+            r->have -= r->k;
         }
         gap = (q << r->k) | low;
     }
