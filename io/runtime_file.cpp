@@ -111,6 +111,31 @@ Section index_section(uint32_t tag, const std::vector<uint32_t>& values) {
     return s;
 }
 
+// Ascending offsets (ROFF): 16-bit items when they fit; else (4.0) when each fits 16 bits after the offset of
+// its 64 (every 64th item in `bases_tag`, u32), 16-bit items after those bases; else 32-bit items.
+std::vector<Section> offset_sections(uint32_t tag, uint32_t bases_tag, const std::vector<uint64_t>& offsets) {
+    const uint64_t top = offsets.empty() ? 0 : offsets.back();
+    Section s{tag, 2, offsets.size(), {}};
+    if (top <= std::numeric_limits<uint16_t>::max()) {
+        for (const uint64_t v : offsets) put(s.bytes, uint16_t(v));
+        return {std::move(s)};
+    }
+    bool relative = top <= std::numeric_limits<uint32_t>::max();
+    for (size_t i = 0; i < offsets.size() && relative; ++i)
+        relative = offsets[i] - offsets[i & ~size_t(63)] <= std::numeric_limits<uint16_t>::max();
+    if (!relative) {
+        s.item_bytes = 4;
+        for (const uint64_t v : offsets) put(s.bytes, uint32_t(v));
+        return {std::move(s)};
+    }
+    Section bases{bases_tag, 4, (offsets.size() + 63) / 64, {}};
+    for (size_t i = 0; i < offsets.size(); ++i) {
+        if ((i & 63) == 0) put(bases.bytes, uint32_t(offsets[i]));
+        put(s.bytes, uint16_t(offsets[i] - offsets[i & ~size_t(63)]));
+    }
+    return {std::move(s), std::move(bases)};
+}
+
 template <class T>
 Section array_section(uint32_t tag, uint32_t item_bytes, const std::vector<T>& values) {
     Section s{tag, item_bytes, uint64_t(values.size()) * sizeof(T) / item_bytes, {}};
@@ -541,7 +566,9 @@ std::string assemble(const std::string& path, Bake& b, const RuntimeFileOptions&
             b.pvs.rows.data(), b.pvs.unique_rows, b.pvs.row_bytes, max_chain, neighbours);
         const uint64_t code_size = code.offsets.back();
         if (!implicit_rows) sections.push_back(index_section(PVSR_TAG('C', 'R', 'O', 'W'), b.pvs.cell_row));
-        sections.push_back(index_section(PVSR_TAG('R', 'O', 'F', 'F'), code.offsets));
+        for (Section& o : offset_sections(PVSR_TAG('R', 'O', 'F', 'F'), PVSR_TAG('R', 'O', 'F', 'B'),
+                                          std::vector<uint64_t>(code.offsets.begin(), code.offsets.end())))
+            sections.push_back(std::move(o));
         Section s{PVSR_TAG('C', 'O', 'D', 'E'), 1, code_size, {}};
         s.bytes.assign(reinterpret_cast<const char*>(code.code.data()), size_t(code_size));
         s.bytes.append(pvsbake::detail::code_padding(objects), '\0');
@@ -600,7 +627,23 @@ std::string assemble(const std::string& path, Bake& b, const RuntimeFileOptions&
             list = index_section(PVSR_TAG('R', 'L', 'S', 'T'), entries);
         }
         sections.push_back(std::move(boxes));
-        sections.push_back(array_section(PVSR_TAG('R', 'O', 'F', 'S'), 4, b.occluders.ranked_offsets));
+        // 4.0: each cell's entry count in a byte ('RCNT') and the first entry of every 64th cell ('RCNB'),
+        // where every cell ranks at most 255; else the offsets ('ROFS').
+        const std::vector<uint32_t>& ro = b.occluders.ranked_offsets;
+        bool counts = true;
+        for (uint32_t c = 0; c < cells && counts; ++c) counts = ro[size_t(c) + 1] - ro[c] <= 255;
+        if (counts) {
+            Section n{PVSR_TAG('R', 'C', 'N', 'T'), 1, cells, {}},
+                base{PVSR_TAG('R', 'C', 'N', 'B'), 4, (uint64_t(cells) + 63) / 64, {}};
+            for (uint32_t c = 0; c < cells; ++c) {
+                if ((c & 63) == 0) put(base.bytes, ro[c]);
+                n.bytes.push_back(char(uint8_t(ro[size_t(c) + 1] - ro[c])));
+            }
+            sections.push_back(std::move(n));
+            sections.push_back(std::move(base));
+        } else {
+            sections.push_back(array_section(PVSR_TAG('R', 'O', 'F', 'S'), 4, ro));
+        }
         sections.push_back(std::move(list));
         if (use_palette) {
             sections.push_back(array_section(PVSR_TAG('R', 'P', 'B', 'K'), 4, palettes.offsets));

@@ -83,6 +83,31 @@ static uint32_t index_at(const pvsr_array* a, uint64_t i) {
     return a->item_bytes == 2 ? rd16(a->at + 2 * i) : rd32(a->at + 4 * i);
 }
 
+/* Where row i's code starts: ROFF's item, or from 4.0 with 'ROFB' its 16-bit item after the base of its 64.
+ */
+static uint64_t row_offset(const pvsr_level* l, uint64_t i) {
+    if (l->row_offset_bases.at != NULL)
+        return (uint64_t)rd32(l->row_offset_bases.at + 4 * (i >> 6)) + rd16(l->row_offsets.at + 2 * i);
+    return index_at(&l->row_offsets, i);
+}
+
+/* The cell's first entry in 'RLST': ROFS's item, or from 4.0 ('RCNT', 'RCNB') the entries of the cells of
+ * its 64 before it after their base. */
+static uint64_t ranked_first(const pvsr_level* l, uint64_t cell) {
+    uint64_t e, c;
+    if (l->ranked_offsets.at != NULL) return rd32(l->ranked_offsets.at + 4 * cell);
+    e = rd32(l->ranked_count_bases.at + 4 * (cell >> 6));
+    for (c = cell & ~(uint64_t)63; c < cell; ++c) e += l->ranked_counts.at[c];
+    return e;
+}
+
+/* The cell's entries in 'RLST' (ranked_first: the same sections). */
+static uint32_t ranked_count(const pvsr_level* l, uint64_t cell) {
+    if (l->ranked_offsets.at != NULL)
+        return rd32(l->ranked_offsets.at + 4 * cell + 4) - rd32(l->ranked_offsets.at + 4 * cell);
+    return l->ranked_counts.at[cell];
+}
+
 /* The largest item of an array of 1-, 2- or 4-byte unsigned integers (0 when empty): a range check of a
  * big index array as one pass of a loop with no exit, which compilers vectorize. */
 static uint32_t max_item(const pvsr_array* a) {
@@ -411,7 +436,7 @@ static uint32_t varint(const uint8_t** p) {
 static int row_chain(const pvsr_level* l, uint32_t r, gap_reader readers[PVSR_MAX_CHAIN]) {
     int n = 0;
     for (;;) {
-        const uint8_t* p = l->code.at + index_at(&l->row_offsets, r);
+        const uint8_t* p = l->code.at + row_offset(l, r);
         const uint32_t ref = varint(&p);
         const uint32_t head = varint(&p);
         gap_init(&readers[n++], p, head >> 5, head & 31, l->object_count);
@@ -655,6 +680,13 @@ static const char* check_row_sections(pvsr_level* l) {
     if (!bad) bad = need(l, PVSR_TAG('C', 'O', 'D', 'E'), 1, UINT64_MAX, 1, &l->code);
     if (bad) return bad;
     if (l->row_offsets.count < 1 || l->row_offsets.count - 1 > 0xffffffffu) return "the row offsets are empty";
+    /* 4.0: 'ROFB', the offset of every 64th row, and ROFF's 16-bit items after them */
+    if (section(l, PVSR_TAG('R', 'O', 'F', 'B'), &l->row_offset_bases)) {
+        if (l->row_offsets.item_bytes != 2) return "row offset bases with 32-bit row offsets";
+        bad = need(l, PVSR_TAG('R', 'O', 'F', 'B'), 4, (l->row_offsets.count + 63) / 64, 1,
+                   &l->row_offset_bases);
+        if (bad) return bad;
+    }
     l->row_count = (uint32_t)(l->row_offsets.count - 1);
     code_size = l->code.count;
     l->code_bytes = code_size;
@@ -669,7 +701,7 @@ static const char* check_row_sections(pvsr_level* l) {
 static const char* check_row_ends(const pvsr_level* l, const prescan* ps) {
     if (l->cell_row.at != NULL && l->cell_count > 0 && largest(ps, &l->cell_row) >= l->row_count)
         return "a cell's row is out of range";
-    if (index_at(&l->row_offsets, 0) != 0 || index_at(&l->row_offsets, l->row_count) != l->code.count)
+    if (row_offset(l, 0) != 0 || row_offset(l, l->row_count) != l->code.count)
         return "the row offsets do not start at 0 and end at the code's size";
     return NULL;
 }
@@ -712,7 +744,7 @@ static const char* check_row(const pvsr_level* l, uint64_t i, uint8_t depth[PVSR
     const uint32_t n = l->object_count;
     const uint32_t max_chain = n <= PVSR_STACK_OBJECTS ? PVSR_MAX_CHAIN : 2;
     const uint64_t code_size = l->code.count;
-    const uint64_t begin = index_at(&l->row_offsets, i), end = index_at(&l->row_offsets, i + 1);
+    const uint64_t begin = row_offset(l, i), end = row_offset(l, i + 1);
     const uint8_t* p = l->code.at + begin;
     const uint8_t* const stop = l->code.at + end;
     uint32_t fields[2];
@@ -742,7 +774,7 @@ static const char* check_row(const pvsr_level* l, uint64_t i, uint8_t depth[PVSR
         uint64_t at = i - fields[0];
         uint32_t length = 2;
         for (;;) {
-            const uint8_t* q = l->code.at + index_at(&l->row_offsets, at);
+            const uint8_t* q = l->code.at + row_offset(l, at);
             const uint32_t ref = varint(&q);
             if (ref == 0) break;
             if (++length > max_chain) return "a PVS row's chain of references is too long";
@@ -786,8 +818,17 @@ static const char* check_objects(pvsr_level* l) {
 static const char* check_ranked(pvsr_level* l, const prescan* ps) {
     uint64_t c, e;
     const char* bad;
-    if (!section(l, PVSR_TAG('R', 'O', 'F', 'S'), &l->ranked_offsets)) return NULL; /* no ranking */
-    bad = need(l, PVSR_TAG('R', 'O', 'F', 'S'), 4, (uint64_t)l->cell_count + 1, 1, &l->ranked_offsets);
+    if (section(l, PVSR_TAG('R', 'O', 'F', 'S'), &l->ranked_offsets)) {
+        bad = need(l, PVSR_TAG('R', 'O', 'F', 'S'), 4, (uint64_t)l->cell_count + 1, 1, &l->ranked_offsets);
+    } else if (section(l, PVSR_TAG('R', 'C', 'N', 'T'), &l->ranked_counts)) {
+        /* 4.0: each cell's entry count ('RCNT') and the first entry of every 64th cell ('RCNB') */
+        bad = need(l, PVSR_TAG('R', 'C', 'N', 'T'), 1, l->cell_count, 1, &l->ranked_counts);
+        if (!bad)
+            bad = need(l, PVSR_TAG('R', 'C', 'N', 'B'), 4, ((uint64_t)l->cell_count + 63) / 64, 1,
+                       &l->ranked_count_bases);
+    } else {
+        return NULL; /* no ranking */
+    }
     if (!bad) bad = need(l, PVSR_TAG('R', 'B', 'O', 'X'), 24, UINT64_MAX, 1, &l->occluder_boxes);
     if (!bad && !section(l, PVSR_TAG('R', 'L', 'S', 'T'), &l->ranked_boxes)) bad = "a required section is missing";
     if (!bad && l->ranked_boxes.item_bytes != 1 && l->ranked_boxes.item_bytes != 2 && l->ranked_boxes.item_bytes != 4)
@@ -824,16 +865,26 @@ static const char* check_ranked(pvsr_level* l, const prescan* ps) {
     } else if (l->ranked_boxes.count > 0 && largest(ps, &l->ranked_boxes) >= l->occluder_boxes.count) {
         return "a ranked occluder names a box out of range";
     }
-    if (rd32(l->ranked_offsets.at) != 0 || rd32(l->ranked_offsets.at + 4 * (uint64_t)l->cell_count) != l->ranked_boxes.count)
-        return "the ranked offsets do not start at 0 and end at the entries' count";
-    {
+    if (l->ranked_offsets.at != NULL) {
         uint32_t wrong = 0; /* one pass with no exit, which compilers vectorize */
+        if (rd32(l->ranked_offsets.at) != 0 ||
+            rd32(l->ranked_offsets.at + 4 * (uint64_t)l->cell_count) != l->ranked_boxes.count)
+            return "the ranked offsets do not start at 0 and end at the entries' count";
         for (c = 0; c < l->cell_count; ++c)
             wrong |= rd32(l->ranked_offsets.at + 4 * c + 4) < rd32(l->ranked_offsets.at + 4 * c);
         if (wrong) return "the ranked offsets decrease or pass the entries";
+    } else { /* each base the sum of the counts before it, and all of them the entries' count */
+        uint64_t sum = 0;
+        for (c = 0; c < l->cell_count; ++c) {
+            if ((c & 63) == 0 && rd32(l->ranked_count_bases.at + 4 * (c >> 6)) != sum)
+                return "a ranked entry base is not the sum of the counts before it";
+            sum += l->ranked_counts.at[c];
+        }
+        if (sum != l->ranked_boxes.count)
+            return "the ranked entry counts do not add up to the entries' count";
     }
     for (c = 0; c < l->cell_count && l->ranked_measures.at != NULL; ++c) {
-        const uint32_t a = rd32(l->ranked_offsets.at + 4 * c), b = rd32(l->ranked_offsets.at + 4 * c + 4);
+        const uint64_t a = ranked_first(l, c), b = a + ranked_count(l, c);
         for (e = a; e < b; ++e) {
             const uint8_t* r = l->ranked_measures.at + PVSR_MEASURE_BYTES * e;
             const float score = rdf(r), sa = rdf(r + 4), hidden = rdf(r + 8), share = rdf(r + 12);
@@ -873,7 +924,8 @@ static const char* check_polygons(pvsr_level* l) {
     uint64_t c, e;
     const char* bad;
     if (!section(l, PVSR_TAG('R', 'P', 'O', 'F'), &l->ranked_polygon_offsets)) return NULL; /* none */
-    if (l->ranked_offsets.at == NULL) return "ranked polygons without ranked occluders";
+    if (l->ranked_offsets.at == NULL && l->ranked_counts.at == NULL)
+        return "ranked polygons without ranked occluders";
     bad =
         need(l, PVSR_TAG('R', 'P', 'O', 'F'), 4, (uint64_t)l->cell_count + 1, 1, &l->ranked_polygon_offsets);
     if (!bad)
@@ -1063,7 +1115,7 @@ pvsr_status pvsr_open(pvsr_level* level, const void* data, size_t size, char* me
             if (table_bad) continue;
             prescan_upto(&ps, hash.p);
             while (code != NULL && hash.p >= code && rows < level->row_count && !row_bad &&
-                   index_at(&level->row_offsets, rows + 1) <= (uint64_t)(hash.p - code))
+                   row_offset(level, rows + 1) <= (uint64_t)(hash.p - code))
                 row_bad = check_row(level, rows++, depth);
         }
     }
@@ -1446,8 +1498,9 @@ uint64_t pvsr_total_triangles(const pvsr_level* l) {
 }
 
 uint32_t pvsr_occluder_count(const pvsr_level* l, uint32_t cell) {
-    if (l == NULL || cell >= l->cell_count || l->ranked_offsets.at == NULL) return 0;
-    return rd32(l->ranked_offsets.at + 4 * (uint64_t)cell + 4) - rd32(l->ranked_offsets.at + 4 * (uint64_t)cell);
+    if (l == NULL || cell >= l->cell_count || (l->ranked_offsets.at == NULL && l->ranked_counts.at == NULL))
+        return 0;
+    return ranked_count(l, cell);
 }
 
 int pvsr_occluder(const pvsr_level* l, uint32_t cell, uint32_t rank, pvsr_ranked_occluder* out) {
@@ -1455,7 +1508,7 @@ int pvsr_occluder(const pvsr_level* l, uint32_t cell, uint32_t rank, pvsr_ranked
     uint32_t box;
     int a;
     if (out == NULL || rank >= pvsr_occluder_count(l, cell)) return 0;
-    e = (uint64_t)rd32(l->ranked_offsets.at + 4 * (uint64_t)cell) + rank;
+    e = ranked_first(l, cell) + rank;
     box = ranked_box(l, cell, e);
     if (box == UINT32_MAX) return 0;
     for (a = 0; a < 6; ++a) out->box[a] = rdf(l->occluder_boxes.at + 24 * (uint64_t)box + 4 * a);

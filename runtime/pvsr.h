@@ -97,7 +97,7 @@ typedef struct pvsr_level {
         occluder_boxes, ranked_offsets, ranked_boxes, ranked_measures, strings, occluder_polygons,
         polygon_corners, ranked_polygon_offsets, ranked_polygons, palette_blocks, palette, occupancy,
         occupancy_ranks, horizon_boxes, horizon_tiles, horizon_corners, horizon_list_offsets, horizon_lists,
-        object_part_offsets, object_parts;
+        object_part_offsets, object_parts, row_offset_bases, ranked_counts, ranked_count_bases;
     uint64_t code_bytes; /* the code without its padding */
     uint64_t total_triangles;
 } pvsr_level;

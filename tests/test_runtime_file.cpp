@@ -115,6 +115,46 @@ TEST(RuntimeFile, AGridOfEveryPositionIsStoredWithoutItsPositions) {
     EXPECT_EQ(status, PVSR_OK);
 }
 
+// 4.0: a PVS code past 64 KiB keeps 16-bit row offsets after the offset of every 64th row ('ROFB'), and the
+// ranked entries each cell's count in a byte after the first entry of every 64th cell ('RCNT', 'RCNB'): the
+// same answers as the HDF5 loader; a base moved is refused by the rows' checks, a count changed by the sum.
+TEST(RuntimeFile, BigFilesKeepSixteenBitRowOffsetsAndEntryCounts) {
+    const BakeData bake = test::coherent_bake(600, {40, 8, 40}, false, true, 8);
+    round_trip(bake, 23);
+    test::TempDir dir;
+    const std::string h5 = dir.file("big.h5");
+    write_bake_file(h5, bake);
+    RuntimeFileOptions options;
+    options.max_chain = 1;  // every row whole: the most code
+    const Bytes good(runtime_file_bytes(h5, options));
+    pvsr_level l;
+    char message[256];
+    ASSERT_EQ(pvsr_open(&l, good.data(), good.size, message, sizeof message), PVSR_OK) << message;
+    ASSERT_GT(l.code_bytes, 65535u);
+    ASSERT_NE(l.row_offset_bases.at, nullptr);
+    EXPECT_EQ(l.row_offsets.item_bytes, 2u);
+    EXPECT_EQ(l.row_offset_bases.count, (uint64_t(l.row_count) + 1 + 63) / 64);
+    ASSERT_NE(l.ranked_counts.at, nullptr);
+    EXPECT_EQ(l.ranked_offsets.at, nullptr);
+    const auto at = [&](const uint8_t* p) { return size_t(p - static_cast<const uint8_t*>(good.data())); };
+    pvsr_status status;
+    {
+        Bytes b(good);
+        uint32_t base;
+        std::memcpy(&base, l.row_offset_bases.at + 4, 4);
+        base += 3;
+        std::memcpy(b.bytes() + at(l.row_offset_bases.at) + 4, &base, 4);
+        rechecksum(b);
+        EXPECT_NE(opened_message(b, &status).find("PVS row"), std::string::npos);
+    }
+    {
+        Bytes b(good);
+        b.bytes()[at(l.ranked_counts.at) + 5] ^= 1;
+        rechecksum(b);
+        EXPECT_NE(opened_message(b, &status).find("ranked entry"), std::string::npos);
+    }
+}
+
 // 2.0: with more ranked boxes than a byte indexes, each block of cells (4 x 4 x 4 grid positions, or 64
 // cells of an octree) gets a palette of the boxes its cells rank, and the entries index it in a byte: the
 // same answers as the HDF5 loader on grids with and without positions and on octrees. A damaged palette is
@@ -196,7 +236,14 @@ TEST(RuntimeFile, BlocksOfCellsShareAPaletteOfRankedBoxes) {
                 if (blocks[block + 1] - blocks[block] < largest) cell = c;
             }
             ASSERT_NE(cell, UINT32_MAX);
-            const uint32_t entry = reinterpret_cast<const uint32_t*>(l.ranked_offsets.at)[cell];
+            // The cell's first entry: the offsets (ROFS), or its 64's base and the counts before it (4.0).
+            uint32_t entry = 0;
+            if (l.ranked_offsets.at != nullptr) {
+                entry = reinterpret_cast<const uint32_t*>(l.ranked_offsets.at)[cell];
+            } else {
+                entry = reinterpret_cast<const uint32_t*>(l.ranked_count_bases.at)[cell / 64];
+                for (uint32_t c = cell & ~63u; c < cell; ++c) entry += l.ranked_counts.at[c];
+            }
             Bytes b(good);
             b.bytes()[offset(l.ranked_boxes.at) + entry] = uint8_t(largest - 1);
             rechecksum(b);
