@@ -969,7 +969,7 @@ static const char* check_polygons(pvsr_level* l) {
  * between its ascending occluder indices, less one, as LEB128 varints; from 4.0 in a Rice code, hz_list):
  * all five or none. Boxes finite with
  * min <= max; tiles 3 to PVSR_HORIZON_MAX_CORNERS finite corners in range on a finite plane; offsets from 0,
- * never decreasing, within the lists' bytes. A list's varints are bounded where they are read
+ * never decreasing, within the lists' bytes. A list's codes are bounded where they are read
  * (pvsr_horizon_begin_cell), not here: a damaged list ends early. */
 static const char* check_horizon(pvsr_level* l) {
     uint64_t e;
