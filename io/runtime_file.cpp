@@ -42,49 +42,6 @@ void put_all(std::string& out, const std::vector<T>& v) {
 }
 
 // A LEB128 varint.
-void put_varint(std::string& out, uint64_t v) {
-    do {
-        const uint8_t byte = uint8_t(v & 0x7f);
-        v >>= 7;
-        out.push_back(char(v ? byte | 0x80 : byte));
-    } while (v);
-}
-
-// A horizon list of the file 4.0 ('HLST', runtime/pvsr.c hz_list): its entry count, the Rice parameter k
-// that codes its gaps in the fewest bits, then each gap as gap >> k one bits, a zero bit and its k low bits,
-// from the lowest bit of each byte. An empty list is no bytes.
-void put_rice_list(std::string& out, const std::vector<uint64_t>& gaps) {
-    if (gaps.empty()) return;
-    int k = 0;
-    uint64_t best = UINT64_MAX;
-    for (int t = 0; t <= 31; ++t) {
-        uint64_t bits = 0;
-        for (const uint64_t g : gaps) bits += (g >> t) + 1 + uint64_t(t);
-        if (bits < best) {
-            best = bits;
-            k = t;
-        }
-    }
-    put_varint(out, gaps.size());
-    out.push_back(char(k));
-    uint32_t acc = 0;
-    int have = 0;
-    const auto bit = [&](uint32_t b) {
-        acc |= b << have;
-        if (++have == 8) {
-            out.push_back(char(acc));
-            acc = 0;
-            have = 0;
-        }
-    };
-    for (const uint64_t g : gaps) {
-        for (uint64_t q = g >> k; q > 0; --q) bit(1);
-        bit(0);
-        for (int i = 0; i < k; ++i) bit(uint32_t((g >> i) & 1u));
-    }
-    if (have > 0) out.push_back(char(acc));
-}
-
 struct Section {
     uint32_t tag = 0;
     uint32_t item_bytes = 1;
@@ -688,8 +645,8 @@ std::string assemble(const std::string& path, Bake& b, const RuntimeFileOptions&
 
     // 2.1: the horizon's occluders that some list names ('HBOX', then 'HTIL' and 'HTCO' in the 'OPLN' layout,
     // renumbered in order), and per block of cells (the palettes' blocks) the union of its cells' lists, each
-    // as the gaps between its ascending indices, less one, in a Rice code (4.0; put_rice_list: 'HLOF' byte
-    // offsets, 'HLST').
+    // in the PVS rows' code less the reference (5.0; row_code.h put_rice_indices: 'HLOF' byte offsets,
+    // 'HLST' and the padding its reader may read into).
     if (b.horizon.present) {
         const FileHorizon& h = b.horizon;
         const CellBlocks cb = cell_blocks(b.cells, cell_grid);
@@ -732,20 +689,18 @@ std::string assemble(const std::string& path, Bake& b, const RuntimeFileOptions&
         }
         std::vector<uint32_t> offsets = {0};
         Section hlist{PVSR_TAG('H', 'L', 'S', 'T'), 1, 0, {}};
-        std::vector<uint64_t> gaps;
-        for (const std::vector<uint32_t>& list : lists) {
-            gaps.clear();
-            uint64_t next = 0;  // renumbering keeps the order, so the list stays ascending
-            for (const uint32_t o : list) {
-                gaps.push_back(renumber[o] - next);
-                next = uint64_t(renumber[o]) + 1;
-            }
-            put_rice_list(hlist.bytes, gaps);
+        std::vector<uint8_t> code;
+        for (std::vector<uint32_t>& list : lists) {
+            for (uint32_t& o : list) o = renumber[o];  // renumbering keeps the order: still ascending
+            code.clear();
+            if (!list.empty()) pvsbake::detail::put_rice_indices(code, list);
+            hlist.bytes.append(reinterpret_cast<const char*>(code.data()), code.size());
             if (hlist.bytes.size() > UINT32_MAX)
                 throw bad_input(fmt::format("{}: the horizon lists pass 4 GiB", path));
             offsets.push_back(uint32_t(hlist.bytes.size()));
         }
         hlist.count = hlist.bytes.size();
+        hlist.bytes.append(size_t(PVSR_HORIZON_LIST_PADDING(hboxes.count + htiles.count)), '\0');
         sections.push_back(std::move(hboxes));
         sections.push_back(std::move(htiles));
         sections.push_back(std::move(hcorners));

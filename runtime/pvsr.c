@@ -355,6 +355,31 @@ uint64_t pvsr_xxh64(const void* data, size_t size, uint64_t seed) {
 
 #define PVSR_END 0xffffffffu
 
+/* A LEB128 varint of at most 5 bytes at *p (before end), into *value; 0 when it does not end there. */
+static int checked_varint(const uint8_t** p, const uint8_t* end, uint64_t* value) {
+    int shift = 0;
+    *value = 0;
+    for (;;) {
+        uint8_t byte;
+        if (*p >= end || shift > 28) return 0;
+        byte = *(*p)++;
+        *value |= (uint64_t)(byte & 0x7fu) << shift;
+        shift += 7;
+        if ((byte & 0x80u) == 0) return 1;
+    }
+}
+
+/* What is wrong with a Rice code's head (count << 5 | k) for indices below limit in `bits` bits: 0 nothing,
+ * 1 a parameter above 24, 2 more indices than limit, 3 codes that cannot fit the bits. A code whose head
+ * passes is read by gap_next within its bits plus the padding of FORMAT.md, whatever its bits. */
+static int rice_head_fault(uint64_t head, uint32_t limit, uint64_t bits) {
+    if (head > 0xffffffffu) return 2;
+    if ((head & 31) > 24) return 1;
+    if ((head >> 5) > limit) return 2;
+    if ((head >> 5) * (1 + (head & 31)) > bits) return 3;
+    return 0;
+}
+
 typedef struct gap_reader {
     const uint8_t* bits;
     uint64_t pos; /* bit position, bit 0 = the lowest bit of bits[0] */
@@ -747,22 +772,11 @@ static const char* check_row(const pvsr_level* l, uint64_t i, uint8_t depth[PVSR
     const uint64_t begin = row_offset(l, i), end = row_offset(l, i + 1);
     const uint8_t* p = l->code.at + begin;
     const uint8_t* const stop = l->code.at + end;
-    uint32_t fields[2];
-    int f;
+    uint64_t fields[2];
     if (end < begin + 2 || end > code_size) return "a PVS row's offsets decrease, pass the code or leave no room for it";
-    for (f = 0; f < 2; ++f) {
-        uint64_t v = 0;
-        int shift;
-        for (shift = 0;; shift += 7) {
-            uint8_t b;
-            if (p == stop || shift > 28) return "a PVS row's head is damaged";
-            b = *p++;
-            v |= (uint64_t)(b & 0x7f) << shift;
-            if ((b & 0x80) == 0) break;
-        }
-        if (v > 0xffffffffu) return "a PVS row's head is damaged";
-        fields[f] = (uint32_t)v;
-    }
+    if (!checked_varint(&p, stop, &fields[0]) || !checked_varint(&p, stop, &fields[1]) ||
+        fields[0] > 0xffffffffu || fields[1] > 0xffffffffu)
+        return "a PVS row's head is damaged";
     if (fields[0] > i) return "a PVS row refers to a row after it";
     if (fields[0] == 0) {
         depth[i & (PVSR_DEPTH_RING - 1)] = 1;
@@ -782,11 +796,16 @@ static const char* check_row(const pvsr_level* l, uint64_t i, uint8_t depth[PVSR
         }
         depth[i & (PVSR_DEPTH_RING - 1)] = (uint8_t)length;
     }
-    if ((fields[1] & 31) > 24) return "a PVS row's Rice parameter is above 24";
-    if ((fields[1] >> 5) > n) return "a PVS row has more indices than objects";
-    if ((uint64_t)(fields[1] >> 5) * (1 + (fields[1] & 31)) > (uint64_t)(stop - p) * 8)
-        return "a PVS row's code runs past the row";
-    return NULL;
+    switch (rice_head_fault(fields[1], n, (uint64_t)(stop - p) * 8)) {
+        case 1:
+            return "a PVS row's Rice parameter is above 24";
+        case 2:
+            return "a PVS row has more indices than objects";
+        case 3:
+            return "a PVS row's code runs past the row";
+        default:
+            return NULL;
+    }
 }
 
 /* Bytes of the code hashed between checks of the rows they hold (so that a row's head is checked while the
@@ -966,11 +985,13 @@ static const char* check_polygons(pvsr_level* l) {
 
 /* File version 2.1: the horizon's occluders ('HBOX' boxes, 'HTIL' tiles in the 'OPLN' layout, 'HTCO' their
  * corners) and a list per block of cells ('HLOF' byte offsets, blocks + 1, into 'HLST': per list the gaps
- * between its ascending occluder indices, less one, as LEB128 varints; from 4.0 in a Rice code, hz_list):
+ * between its ascending occluder indices, less one, as LEB128 varints; from 5.0 a key row of the PVS code
+ * less its reference, hz_list):
  * all five or none. Boxes finite with
  * min <= max; tiles 3 to PVSR_HORIZON_MAX_CORNERS finite corners in range on a finite plane; offsets from 0,
- * never decreasing, within the lists' bytes. A list's codes are bounded where they are read
- * (pvsr_horizon_begin_cell), not here: a damaged list ends early. */
+ * never decreasing, within the lists' bytes; from 5.0 each list's head as check_row checks a row's, and the
+ * padding after the lists. A list's codes are bounded where they are read (gap_next; the LEB128 lists:
+ * hz_list_next), not here: a damaged list ends early. */
 static const char* check_horizon(pvsr_level* l) {
     uint64_t e;
     const char* bad;
@@ -984,6 +1005,10 @@ static const char* check_horizon(pvsr_level* l) {
     if (!bad) bad = need(l, PVSR_TAG('H', 'T', 'C', 'O'), 12, UINT64_MAX, 1, &l->horizon_corners);
     if (bad) return bad;
     if (l->horizon_boxes.count + l->horizon_tiles.count > 0xffffffffu) return "too many horizon occluders";
+    if (l->version_major >= 5 &&
+        l->horizon_lists.bytes - l->horizon_lists.count <
+            PVSR_HORIZON_LIST_PADDING(l->horizon_boxes.count + l->horizon_tiles.count))
+        return "the horizon lists are not followed by their padding";
     for (e = 0; e < l->horizon_boxes.count; ++e) {
         const uint8_t* p = l->horizon_boxes.at + 24 * e;
         int a;
@@ -1009,6 +1034,23 @@ static const char* check_horizon(pvsr_level* l) {
                        b = rd32(l->horizon_list_offsets.at + 4 * e + 4);
         if (b < a || b > l->horizon_lists.count)
             return "the horizon lists' offsets decrease or pass their bytes";
+        if (l->version_major >= 5 && b > a) { /* a key row of the PVS code less its reference */
+            const uint8_t* p = l->horizon_lists.at + a;
+            const uint8_t* const end = l->horizon_lists.at + b;
+            uint64_t head;
+            if (!checked_varint(&p, end, &head)) return "a horizon list's head is damaged";
+            switch (rice_head_fault(head, (uint32_t)(l->horizon_boxes.count + l->horizon_tiles.count),
+                                    (uint64_t)(end - p) * 8)) {
+                case 1:
+                    return "a horizon list's Rice parameter is above 24";
+                case 2:
+                    return "a horizon list has more entries than occluders";
+                case 3:
+                    return "a horizon list's code runs past the list";
+                default:
+                    break;
+            }
+        }
     }
     return NULL;
 }
@@ -1083,6 +1125,10 @@ pvsr_status pvsr_open(pvsr_level* level, const void* data, size_t size, char* me
     if (level->version_major > PVSR_VERSION_MAJOR)
         return fail(&o, PVSR_VERSION_TOO_NEW, "a newer major version of the runtime file than this runtime reads");
     if (level->version_major < 1) return fail(&o, PVSR_CORRUPT, "version 0 is not a runtime file version");
+    if (level->version_major == 4)
+        return fail(
+            &o, PVSR_VERSION_TOO_NEW,
+            "a 4.x runtime file (a development format whose horizon lists 5.0 codes anew): export it again");
     if (rd32(b + 12) != PVSR_HEADER_BYTES) return fail(&o, PVSR_CORRUPT, "the header's size is wrong");
     if (rd64(b + 16) != (uint64_t)size)
         return fail(&o, PVSR_CORRUPT, "the file's size is not the size its header says (truncated or padded)");
@@ -3587,29 +3633,17 @@ void pvsr_horizon_set_tag(pvsr_horizon* h, uint32_t tag) {
 
 /* ---- The cell's horizon occluders (file 2.1) ---- */
 
-/* A reader of a cell's list in 'HLST': LEB128 gaps (files 2.1 to 3.x), or from 4.0 its entry count (LEB128),
- * a byte k, then per entry its gap in a Rice code of parameter k (the quotient gap >> k as that many 1 bits
- * and a 0 bit, then the k low bits; bits from the lowest of each byte). */
+/* A reader of a cell's list in 'HLST': LEB128 gaps (files 2.1 to 3.x), or from 5.0 a key row of the PVS code
+ * less its reference (its head and Rice codes, checked at open: check_horizon), read by gap_next. */
 typedef struct hz_list {
-    const uint8_t *p, *end;
-    uint64_t next;     /* the least index the next entry may have */
-    uint64_t bits;     /* Rice: bits read ahead, lowest first */
-    uint32_t left;     /* Rice: entries still to read */
-    int have, k, rice; /* Rice: how many bits `bits` holds; the parameter; 1 for the Rice code */
+    const uint8_t *p, *end; /* LEB128: the bytes left */
+    uint64_t next;          /* LEB128: the least index the next entry may have */
+    gap_reader rice;        /* 5.0 */
+    int is_rice;
 } hz_list;
 
-/* A LEB128 varint of at most 5 bytes at *p (before end); 0 when it does not end there. */
-static int hz_varint(const uint8_t** p, const uint8_t* end, uint64_t* value) {
-    int shift = 0;
-    *value = 0;
-    for (;;) {
-        uint8_t byte;
-        if (*p >= end || shift > 28) return 0;
-        byte = *(*p)++;
-        *value |= (uint64_t)(byte & 0x7fu) << shift;
-        shift += 7;
-        if ((byte & 0x80u) == 0) return 1;
-    }
+static uint32_t hz_limit(const pvsr_level* l) {
+    return (uint32_t)(l->horizon_boxes.count + l->horizon_tiles.count);
 }
 
 /* Opens the cell's list; 0 when the file has no lists (or the cell none). */
@@ -3620,69 +3654,23 @@ static int hz_list_open(const pvsr_level* l, uint32_t cell, hz_list* r) {
     b = palette_block(l, cell);
     r->p = l->horizon_lists.at + rd32(l->horizon_list_offsets.at + 4 * (uint64_t)b);
     r->end = l->horizon_lists.at + rd32(l->horizon_list_offsets.at + 4 * (uint64_t)b + 4);
-    if (l->version_major >= 4) {
-        uint64_t count;
-        r->rice = 1;
-        if (r->p == r->end) return 1; /* an empty list */
-        if (!hz_varint(&r->p, r->end, &count) || r->p >= r->end || *r->p > 31) {
-            r->p = r->end; /* damaged: no entries */
-            return 1;
-        }
-        r->left = count > 0xffffffffu ? 0xffffffffu : (uint32_t)count;
-        r->k = *r->p++;
+    if (l->version_major >= 5) {
+        uint64_t head = 0;
+        r->is_rice = 1;
+        if (r->p < r->end) checked_varint(&r->p, r->end, &head); /* whole: checked at open */
+        gap_init(&r->rice, r->p, (uint32_t)(head >> 5), (uint32_t)(head & 31), hz_limit(l));
     }
     return 1;
-}
-
-/* Reads bytes of a Rice list into its bit buffer while at least 8 bits are free and bytes remain. */
-static void hz_list_fill(hz_list* r) {
-    while (r->have <= 56 && r->p < r->end) {
-        r->bits |= (uint64_t)*r->p++ << r->have;
-        r->have += 8;
-    }
 }
 
 /* The next occluder of a list, or UINT32_MAX at its end (or where a damaged list leaves its bytes or the
  * occluders). */
 static uint32_t hz_list_next(const pvsr_level* l, hz_list* r) {
-    uint64_t gap = 0;
-    if (!r->rice) {
-        if (!hz_varint(&r->p, r->end, &gap)) return UINT32_MAX;
-    } else {
-        uint64_t q = 0, low = 0;
-        if (r->left == 0) return UINT32_MAX;
-        --r->left;
-        for (;;) { /* the quotient: 1 bits up to a 0 bit */
-            uint64_t zeros;
-            hz_list_fill(r);
-            if (r->have == 0) return UINT32_MAX;
-            zeros = ~r->bits & (r->have == 64 ? ~(uint64_t)0 : (((uint64_t)1 << r->have) - 1));
-            if (zeros == 0) {
-                q += (uint64_t)r->have;
-                r->bits = 0;
-                r->have = 0;
-            } else {
-                const unsigned z = ctz64(zeros);
-                q += z;
-                r->bits = (r->bits >> z) >> 1;
-                r->have -= (int)z + 1;
-                break;
-            }
-            if (q > 0xffffffffu) return UINT32_MAX;
-        }
-        if (q > 0xffffffffu) return UINT32_MAX;
-        if (r->k > 0) {
-            hz_list_fill(r);
-            if (r->have < r->k) return UINT32_MAX;
-            low = r->bits & (((uint64_t)1 << r->k) - 1);
-            r->bits >>= r->k;
-            r->have -= r->k;
-        }
-        gap = (q << r->k) | low;
-    }
+    uint64_t gap;
+    if (r->is_rice) return gap_next(&r->rice); /* PVSR_END is UINT32_MAX */
+    if (!checked_varint(&r->p, r->end, &gap)) return UINT32_MAX;
     r->next += gap;
-    if (r->next >= l->horizon_boxes.count + l->horizon_tiles.count) {
-        r->left = 0;
+    if (r->next >= hz_limit(l)) {
         r->p = r->end;
         return UINT32_MAX;
     }
@@ -3690,7 +3678,7 @@ static uint32_t hz_list_next(const pvsr_level* l, hz_list* r) {
 }
 
 uint32_t pvsr_horizon_occluder_count(const pvsr_level* l) {
-    return l == NULL ? 0 : (uint32_t)(l->horizon_boxes.count + l->horizon_tiles.count);
+    return l == NULL ? 0 : hz_limit(l);
 }
 
 uint32_t pvsr_horizon_list_count(const pvsr_level* l, uint32_t cell) {

@@ -57,7 +57,8 @@
 extern "C" {
 #endif
 
-#define PVSR_VERSION_MAJOR 4 /* the newest file version this runtime reads: 1.x to 4.x */
+#define PVSR_VERSION_MAJOR \
+    5 /* the newest file version this runtime reads: 1.x to 3.x and 5.x (4.x: refused) */
 #define PVSR_VERSION_MINOR 0
 
 typedef enum pvsr_status {
@@ -362,6 +363,8 @@ int pvsr_culler_classify(const pvsr_culler* culler, const float box[6]);
 #define PVSR_HORIZON_MIN_COLUMNS 4
 #define PVSR_HORIZON_MAX_COLUMNS 8192
 #define PVSR_HORIZON_MAX_CORNERS 32 /* of a polygon occluder given to the horizon */
+/* Bytes after the horizon lists ('HLST', 5.0) that their reader may read, for n occluders (FORMAT.md). */
+#define PVSR_HORIZON_LIST_PADDING(n) ((n) / 4 + 32)
 
 typedef struct pvsr_horizon_piece {
     /* Every direction (u, v) with u in [u[0], u[1]] and v between the line through (u[0], lo[0]) and

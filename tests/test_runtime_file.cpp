@@ -338,7 +338,7 @@ protected:
 };
 
 // The horizon sections: each cell lists the three occluders; a damaged section is refused with its reason,
-// and a list whose codes run past its bytes or past the occluders ends early (files 4.0 and 3.0).
+// and a list whose codes run past its bytes or past the occluders ends early (files 5.0 and 3.0).
 TEST_F(RuntimeFileDamage, HorizonListsReadAndRefuseDamage) {
     Bytes good(file_);
     pvsr_level l;
@@ -371,32 +371,47 @@ TEST_F(RuntimeFileDamage, HorizonListsReadAndRefuseDamage) {
         rechecksum(b);
         EXPECT_NE(opened_message(b, &s).find("the horizon lists' offsets"), std::string::npos);
     }
-    // A list's bytes (file 4.0): its entry count, the Rice parameter k, then the gaps' bits; here each list
-    // is {0, 1, 2}, three zero gaps at k = 0: 03 00 00. Damage ends a list early (or, for a count past its
-    // entries, where its padding bits pass the occluders); it never reads past the list's bytes.
+    // A list's bytes (file 5.0): a key row of the PVS code less its reference, the head count << 5 | k and
+    // the gaps' Rice codes; here each list is {0, 1, 2}, three zero gaps at k = 0: 60 07. A head that cannot
+    // hold is refused at open; damaged codes end a list early and never read past the list and its padding.
     const size_t list0 = offset_of(l.horizon_lists);
-    ASSERT_EQ(l.horizon_lists.at[0], 3u);
-    ASSERT_EQ(l.horizon_lists.at[1], 0u);
-    const auto list0_count_with = [&](const std::vector<uint8_t>& bytes, uint16_t major) {
+    ASSERT_EQ(l.horizon_lists.at[0], 0x60u);
+    ASSERT_EQ(l.horizon_lists.at[1], 0x07u);
+    const auto with_list0 = [&](const std::vector<uint8_t>& bytes, uint16_t major) {
         Bytes b(file_);
         for (size_t k = 0; k < bytes.size(); ++k) b.bytes()[list0 + k] = bytes[k];
         std::memcpy(b.bytes() + 8, &major, 2);  // the version lies before the checksummed bytes
         rechecksum(b);
+        return b;
+    };
+    const auto list0_count_with = [&](const std::vector<uint8_t>& bytes, uint16_t major) {
+        const Bytes b = with_list0(bytes, major);
         pvsr_level d;
         EXPECT_EQ(pvsr_open(&d, b.data(), b.size, nullptr, 0), PVSR_OK);
         return pvsr_horizon_list_count(&d, 0);
     };
-    EXPECT_EQ(list0_count_with({3, 0, 0}, PVSR_VERSION_MAJOR), 3u);
-    EXPECT_EQ(list0_count_with({3, 32, 0}, PVSR_VERSION_MAJOR), 0u) << "a parameter past 31";
-    EXPECT_EQ(list0_count_with({3, 0, 0x0e}, PVSR_VERSION_MAJOR), 1u) << "a gap of 3 after index 0";
-    EXPECT_EQ(list0_count_with({3, 0, 0xff}, PVSR_VERSION_MAJOR), 0u) << "a quotient past the bytes";
-    EXPECT_EQ(list0_count_with({0x7f, 0, 0}, PVSR_VERSION_MAJOR), 3u) << "a count past the entries";
-    EXPECT_EQ(list0_count_with({0x80, 0x80, 0x80}, PVSR_VERSION_MAJOR), 0u) << "a count that never ends";
-    // Files before 4.0 code the gaps in LEB128 varints (03 00 00 is then the list {3, 4, 5}: past the
-    // occluders at once).
-    EXPECT_EQ(list0_count_with({0, 0, 0}, 3), 3u);
-    EXPECT_EQ(list0_count_with({0, 0x7f, 0}, 3), 1u) << "a gap past the occluders";
-    EXPECT_EQ(list0_count_with({0x80, 0x80, 0x80}, 3), 0u) << "a varint past the bytes";
+    const auto refused_list0 = [&](const std::vector<uint8_t>& bytes) {
+        return opened_message(with_list0(bytes, PVSR_VERSION_MAJOR), &s);
+    };
+    EXPECT_EQ(list0_count_with({0x60, 0x07}, PVSR_VERSION_MAJOR), 3u);
+    EXPECT_EQ(list0_count_with({0x60, 0x0f}, PVSR_VERSION_MAJOR), 3u) << "bits past the count are not read";
+    EXPECT_EQ(list0_count_with({0x40, 0x07}, PVSR_VERSION_MAJOR), 2u) << "a smaller count";
+    EXPECT_EQ(list0_count_with({0x60, 0x31}, PVSR_VERSION_MAJOR), 1u) << "a gap of 3 after index 0";
+    EXPECT_EQ(list0_count_with({0x60, 0x00}, PVSR_VERSION_MAJOR), 0u) << "a quotient past the bytes";
+    EXPECT_NE(refused_list0({0x79, 0x07}).find("a horizon list's Rice parameter is above 24"),
+              std::string::npos);
+    EXPECT_NE(refused_list0({0x80, 0x01}).find("a horizon list has more entries than occluders"),
+              std::string::npos);
+    EXPECT_NE(refused_list0({0x63, 0x07}).find("a horizon list's code runs past the list"),
+              std::string::npos);
+    EXPECT_NE(refused_list0({0xe0, 0x87}).find("a horizon list's head is damaged"), std::string::npos);
+    // A 4.x file (a development format whose lists 5.0 codes anew) is refused, naming what to do.
+    EXPECT_NE(opened_message(with_list0({}, 4), &s).find("export it again"), std::string::npos);
+    EXPECT_EQ(s, PVSR_VERSION_TOO_NEW);
+    // Files before 4.0 code the gaps in LEB128 varints (here in the list's two bytes).
+    EXPECT_EQ(list0_count_with({0, 0}, 3), 2u);
+    EXPECT_EQ(list0_count_with({0, 0x7f}, 3), 1u) << "a gap past the occluders";
+    EXPECT_EQ(list0_count_with({0x80, 0x80}, 3), 0u) << "a varint past the bytes";
 }
 
 // The object parts' sections: each object of the bake has its halves (or quarters); a damaged offset or box

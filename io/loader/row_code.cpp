@@ -48,8 +48,8 @@ std::pair<uint32_t, uint64_t> best_rice(const std::vector<uint32_t>& idx) {
     return {best_k, best_bits};
 }
 
-void put_row(std::vector<uint8_t>& out, uint32_t ref, const std::vector<uint32_t>& idx, uint32_t k) {
-    put_varint(out, ref);
+// The head (count << 5 | k) and the Rice codes of idx (row_code.h).
+void put_indices(std::vector<uint8_t>& out, const std::vector<uint32_t>& idx, uint32_t k) {
     put_varint(out, uint32_t(idx.size()) << 5 | k);
     uint64_t acc = 0;
     int used = 0;
@@ -77,6 +77,11 @@ void put_row(std::vector<uint8_t>& out, uint32_t ref, const std::vector<uint32_t
     if (used > 0) out.push_back(uint8_t(acc));
 }
 
+void put_row(std::vector<uint8_t>& out, uint32_t ref, const std::vector<uint32_t>& idx, uint32_t k) {
+    put_varint(out, ref);
+    put_indices(out, idx, k);
+}
+
 void set_bits(const uint64_t* words, uint32_t word_count, std::vector<uint32_t>& idx) {
     idx.clear();
     for (uint32_t w = 0; w < word_count; ++w) {
@@ -85,6 +90,10 @@ void set_bits(const uint64_t* words, uint32_t word_count, std::vector<uint32_t>&
 }
 
 }  // namespace
+
+void put_rice_indices(std::vector<uint8_t>& out, const std::vector<uint32_t>& idx) {
+    put_indices(out, idx, best_rice(idx).first);
+}
 
 RowCode encode_rows(const uint8_t* rows, uint64_t row_count, uint32_t row_bytes, uint32_t objects) {
     const uint32_t words = (row_bytes + 7) / 8;

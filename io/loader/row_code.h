@@ -29,6 +29,10 @@ struct RowCode {
     std::vector<uint32_t> offsets;  // row_count + 1: row r is code[offsets[r] .. offsets[r + 1])
 };
 
+// Appends increasing indices (each below kMaxCodedObjects) as a row's code less its reference: the varint
+// head and the Rice codes, with the k of the fewest bits. The runtime file's horizon lists (5.0) use it.
+void put_rice_indices(std::vector<uint8_t>& out, const std::vector<uint32_t>& idx);
+
 // Codes row_count distinct rows of row_bytes bytes each (rows laid out one after the other). A row is
 // coded against the most similar of the last 32 key rows when that saves a fifth of its bits or more.
 // objects < kMaxCodedObjects; bits past `objects` in a row must be zero.
