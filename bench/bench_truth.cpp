@@ -26,7 +26,9 @@
 // is visible by the same definition; `visible_found_by_extreme_rays` counts it. Figures: listed and visible
 // objects and triangles summed over the cells; listed / visible by triangles (the headline: sum of listed
 // triangles / sum of visible triangles) and by objects; the listed and visible shares of the world's
-// triangles (mean over cells); the median over cells of the per-cell ratio. Beside them: (a) the map compiler
+// triangles (mean over cells); the median over cells of the per-cell ratio; the headline's 95% interval over
+// the draw of cells (2.5 and 97.5 percentiles of it over 2,000 draws of as many cells, with replacement, from
+// those measured: how much another seed may move it). Beside them: (a) the map compiler
 // (WORLD.vis.json beside the world, or --vis): at every eye point the compiler's BSP calls playable, the
 // share of the world's triangles its cluster PVS lets through (bench_util.h CompilerVis); bake share /
 // compiler share and visible share / compiler share, ratios of the means over those eye points; (b) the lower
@@ -120,6 +122,8 @@ EyeSpace eye_space_of(const pvs::VoxelMask& eyes, const pvs::Aabb& box) {
 }
 
 // A uniform point of the eye space (pieces by volume, then uniform in the piece).
+constexpr int kBootstrapDraws = 2000;  // draws of the cells for the headline's interval
+
 glm::vec3 random_eye(const EyeSpace& space, pvs::Rng& rng) {
     const double pick = double(rng.uniform()) * space.cum_volume.back();
     const size_t k =
@@ -565,6 +569,24 @@ int main(int argc, char** argv) {
         out["visible_triangles"] = visible_triangles;
         out["listed_over_visible_triangles"] = ratio(double(listed_triangles), double(visible_triangles));
         out["listed_over_visible_objects"] = ratio(double(listed_objects), double(visible_objects));
+        {  // how far the headline moves with the draw of cells: a bootstrap over them
+            pvs::Rng boot(pvs::mix64(seed ^ 0x424f4f5400000000ULL), figs.size());
+            std::vector<double> resampled;
+            for (int b = 0; b < kBootstrapDraws && !figs.empty(); ++b) {
+                double l = 0.0, v = 0.0;
+                for (size_t i = 0; i < figs.size(); ++i) {
+                    const CellFigures& f = figs[boot.below(uint32_t(figs.size()))];
+                    l += double(f.listed_triangles);
+                    v += double(f.visible_triangles);
+                }
+                resampled.push_back(ratio(l, v));
+            }
+            std::sort(resampled.begin(), resampled.end());
+            const auto at = [&](double q) {
+                return resampled.empty() ? 0.0 : resampled[size_t(q * double(resampled.size() - 1) + 0.5)];
+            };
+            out["listed_over_visible_triangles_interval95"] = {at(0.025), at(0.975)};
+        }
         out["listed_triangle_share_mean"] = mean(listed_share);
         out["visible_triangle_share_mean"] = mean(visible_share);
         out["listed_objects_mean"] = double(listed_objects) / double(figs.size());
