@@ -1635,8 +1635,9 @@ const char* pvsr_string(const pvsr_level* l, const char* key) {
     return kEmpty;
 }
 
-/* ---- The culler of moving objects: a port of pvsbake::OcclusionCuller (io/loader/occlusion.cpp, whose
- * conventions and constants it keeps; docs/ALGORITHMS.md#runtime-culler), the same answers. */
+/* ---- The culler of moving objects (docs/ALGORITHMS.md#runtime-culler; the conventions and constants of
+ * pvsbake/occlusion.h). The HDF5 loader's pvsbake::OcclusionCuller is this code, compiled into the loader
+ * (io/loader/occlusion.cpp). */
 
 #define CULL_NEAR_PLANE_M 1e-3f
 #define CULL_DEPTH_SLACK 1e-5f

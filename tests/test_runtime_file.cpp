@@ -640,9 +640,10 @@ TEST_F(RuntimeFileDamage, HostileBytesAreRefusedOrStayInRange) {
     EXPECT_GT(refused, trials / 4) << "the checks should refuse most changes";
 }
 
-// The C99 culler answers as pvsbake::OcclusionCuller (io/loader/occlusion.cpp, itself checked against rays by
-// test_runtime_occlusion) on random scenes: the same path for every box, the same occluders used and skipped,
-// at every resolution (0: shadow frusta and faces only), and a culler without its memory culls nothing.
+// The C99 culler compiled as C answers as pvsbake::OcclusionCuller, the same code compiled into the loader as
+// C++ (io/loader/occlusion.cpp; checked against rays by test_runtime_occlusion), on random scenes: the same
+// path for every box, the same occluders used and skipped, at every resolution (0: shadow frusta and faces
+// only), and a culler without its memory culls nothing.
 TEST(RuntimeFile, TheCullerAnswersAsTheLoadersCuller) {
     std::mt19937 rng(20261128u);
     std::uniform_real_distribution<float> u(-20.0f, 20.0f), size(0.2f, 6.0f), thin(0.05f, 0.6f);

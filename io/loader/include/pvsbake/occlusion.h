@@ -107,8 +107,9 @@ public:
     // kMaxResolution]; 0 turns the depth cube off (shadow frusta only). Allocates the buffers
     // (6 * resolution^2 floats); if that fails, ok() is false and nothing is ever culled.
     explicit OcclusionCuller(int resolution = kDefaultResolution) noexcept;
-    OcclusionCuller(OcclusionCuller&&) noexcept = default;
-    OcclusionCuller& operator=(OcclusionCuller&&) noexcept = default;
+    ~OcclusionCuller();
+    OcclusionCuller(OcclusionCuller&&) noexcept;
+    OcclusionCuller& operator=(OcclusionCuller&&) noexcept;
     OcclusionCuller(const OcclusionCuller&) =
         delete;  // a copy would allocate (and could throw): make another
     OcclusionCuller& operator=(const OcclusionCuller&) = delete;
@@ -140,7 +141,7 @@ public:
     // polygons (docs/ALGORITHMS.md#runtime-polygons). False when refused: the eye within the slab's margin, a
     // polygon that is not convex and counter-clockwise, a value that is not finite, or kMaxPolygons added.
     bool add_polygon(const float plane[5], const float* corners, uint32_t count) noexcept;
-    size_t polygons_used() const noexcept { return polygon_count_; }
+    size_t polygons_used() const noexcept;
 
     // True only if the box is certainly hidden from this frame's eye (see the conventions above).
     // Thread-safe between begin_frame() calls (const, no scratch).
@@ -152,85 +153,17 @@ public:
     bool hidden_by_shadow_frusta(const Box& box) const noexcept;
     bool hidden_by_faces(const Box& box) const noexcept;
 
-    bool ok() const noexcept { return ok_; }
-    int resolution() const noexcept { return resolution_; }
+    bool ok() const noexcept;
+    int resolution() const noexcept;
     // Occluders this frame uses (after skipping those that touch the eye and those the nearer ones already
     // hide), the redundant ones skipped, and the cube pixels the used ones cover.
-    size_t occluders_used() const noexcept { return used_; }
-    size_t occluders_redundant() const noexcept { return redundant_; }
+    size_t occluders_used() const noexcept;
+    size_t occluders_redundant() const noexcept;
     size_t covered_pixels() const noexcept;
 
 private:
-    struct Frustum {
-        // Behind the front faces: Q.min[a] >= lo[a] and Q.max[a] <= hi[a] (+-inf where B has no front face).
-        double lo[3], hi[3];
-        // Silhouette planes through the eye: n . x >= w for every x in Q.
-        double n[6][3];
-        double w[6];
-        int planes;
-        bool usable;  // false when B is too thin for the margins: then only the depth cube uses it
-    };
-    struct Rect {
-        int i0, i1, j0, j1;  // inclusive pixel range; empty when i0 > i1
-    };
-
-    struct Candidate {
-        Box box;
-        Box raster;    // what the depth cube draws: the box, or a panel's rectangle shrunk by its margin
-        int flat;      // a panel's flat axis, -1 for a solid box
-        double delta;  // its margin
-        double dist2;  // squared distance from the eye
-    };
-
-    // A face that hides what lies beyond its plane: a panel, or a solid box's face toward the eye, its
-    // rectangle shrunk by delta (docs/ALGORITHMS.md#runtime-faces).
-    struct Face {
-        double plane, lo[2], hi[2];  // x[axis] = plane; the rectangle on axes (axis + 1) % 3, (axis + 2) % 3
-        double delta;
-        double rel_plane, rel_lo[2], rel_hi[2];  // the same less the eye
-        int axis, axis1, axis2;                  // axis1, axis2: (axis + 1) % 3, (axis + 2) % 3
-        bool above;  // the eye is below the plane, and what lies above it is hidden
-    };
-
-    // A polygon occluder, relative to the eye (a point less the eye): pvsr.h's pvsr_culler_polygon.
-    struct Polygon {
-        double n[3];                      // unit, pointing away from the eye
-        double near_w, far_w, delta;      // the slab: near_w <= n.x <= far_w, 0 < near_w
-        double c[kMaxPolygonCorners][3];  // the corners
-        double m[kMaxPolygonCorners][3];  // the prism: m[i].x >= k[i] for every edge i
-        double k[kMaxPolygonCorners];
-        int count, axis;  // axis: the largest |n[axis]|
-    };
-
-    void rasterize(const Box& b, int flat) noexcept;
-    void add_faces(const Candidate& c) noexcept;
-    bool point_behind_a_face(const double x[3]) const noexcept;
-    void build_frustum(const Box& b, double delta, int flat, Frustum& fr) const noexcept;
-    bool inside_shadow(const Frustum& fr, const double q_min[3], const double q_max[3]) const noexcept;
-
-    bool ok_ = false;
-    bool eye_ok_ = false;
-    int resolution_ = 0;
-    float eye_[3] = {0, 0, 0};
-    double eye_d_[3] = {0, 0, 0};
-    size_t used_ = 0;
-    size_t redundant_ = 0;
-    std::vector<Candidate> candidates_;  // reserved for kMaxOccluders
-    std::vector<Frustum> frusta_;        // kMaxOccluders
-    size_t frustum_count_ = 0;
-    std::vector<Face> faces_;  // 3 * kMaxOccluders
-    size_t face_count_ = 0;
-    // Per face and per frame of the faces test (axis p, sign: 2 p + (sign < 0)), the bounds of its projection
-    // (u lo, v lo, u hi, v hi), rounded outward; lo > hi when it has none. 24 floats a face.
-    std::vector<float> face_directions_;
-    void face_directions() noexcept;
-    std::vector<Polygon> polygons_;  // kMaxPolygons
-    size_t polygon_count_ = 0;
-    std::vector<float> grid_;   // g(0 .. R)
-    std::vector<float> depth_;  // 6 * R * R, index face * R * R + j * R + i
-    Rect written_[6] = {};      // per face: bounding rectangle of written pixels
-    // Scratch of rasterize(): per grid vertex, slab intervals along u and v and corner depths of two rows.
-    std::vector<float> col_enter_, col_exit_, row_enter_, row_exit_, corner_prev_, corner_cur_;
+    struct State;  // the C99 runtime's culler (runtime/pvsr.c) and its memory
+    std::unique_ptr<State> state_;
 };
 
 // Whether object o of the bake is culled by `hidden` (a test of a box from this frame's eye): its bounds are
