@@ -1417,15 +1417,7 @@ uint32_t pvsr_visit_visible(const pvsr_level* l, uint32_t cell, pvsr_visit_fn vi
 
 uint32_t pvsr_visit_drawn(const pvsr_level* l, uint32_t cell, const pvsr_culler* culler, pvsr_visit_fn visit,
                           void* user) {
-    sink s;
-    s.visit = visit;
-    s.user = user;
-    s.list = NULL;
-    s.capacity = 0;
-    s.culler = culler;
-    s.horizon = NULL;
-    s.cull = culler != NULL;
-    return walk(l, cell, &s);
+    return pvsr_visit_drawn_horizon(l, cell, culler, NULL, visit, user);
 }
 
 uint32_t pvsr_visible_count(const pvsr_level* l, uint32_t cell) {
@@ -1438,16 +1430,7 @@ uint32_t pvsr_visible_objects(const pvsr_level* l, uint32_t cell, uint32_t* obje
 
 uint32_t pvsr_drawn_objects(const pvsr_level* l, uint32_t cell, const pvsr_culler* culler, uint32_t* objects,
                             size_t capacity) {
-    static uint32_t none;
-    sink s;
-    s.visit = NULL;
-    s.user = NULL;
-    s.list = objects != NULL ? objects : &none; /* a list of no room: counts */
-    s.capacity = objects != NULL ? capacity : 0;
-    s.culler = culler;
-    s.horizon = NULL;
-    s.cull = culler != NULL;
-    return walk(l, cell, &s);
+    return pvsr_drawn_objects_horizon(l, cell, culler, NULL, objects, capacity);
 }
 
 uint32_t pvsr_visit_drawn_horizon(const pvsr_level* l, uint32_t cell, const pvsr_culler* culler,
@@ -1469,7 +1452,7 @@ uint32_t pvsr_drawn_objects_horizon(const pvsr_level* l, uint32_t cell, const pv
     sink s;
     s.visit = NULL;
     s.user = NULL;
-    s.list = objects != NULL ? objects : &none;
+    s.list = objects != NULL ? objects : &none; /* a list of no room: counts */
     s.capacity = objects != NULL ? capacity : 0;
     s.culler = culler;
     s.horizon = horizon;
