@@ -983,6 +983,11 @@ static const char* check_polygons(pvsr_level* l) {
     return NULL;
 }
 
+/* The horizon's occluders: boxes, then tiles (at most 2^32 - 1: checked at open). */
+static uint32_t hz_limit(const pvsr_level* l) {
+    return (uint32_t)(l->horizon_boxes.count + l->horizon_tiles.count);
+}
+
 /* File version 2.1: the horizon's occluders ('HBOX' boxes, 'HTIL' tiles in the 'OPLN' layout, 'HTCO' their
  * corners) and a list per block of cells ('HLOF' byte offsets, blocks + 1, into 'HLST': per list the gaps
  * between its ascending occluder indices, less one, as LEB128 varints; from 5.0 a key row of the PVS code
@@ -1007,7 +1012,7 @@ static const char* check_horizon(pvsr_level* l) {
     if (l->horizon_boxes.count + l->horizon_tiles.count > 0xffffffffu) return "too many horizon occluders";
     if (l->version_major >= 5 &&
         l->horizon_lists.bytes - l->horizon_lists.count <
-            PVSR_HORIZON_LIST_PADDING(l->horizon_boxes.count + l->horizon_tiles.count))
+            PVSR_HORIZON_LIST_PADDING(hz_limit(l)))
         return "the horizon lists are not followed by their padding";
     for (e = 0; e < l->horizon_boxes.count; ++e) {
         const uint8_t* p = l->horizon_boxes.at + 24 * e;
@@ -1039,8 +1044,7 @@ static const char* check_horizon(pvsr_level* l) {
             const uint8_t* const end = l->horizon_lists.at + b;
             uint64_t head;
             if (!checked_varint(&p, end, &head)) return "a horizon list's head is damaged";
-            switch (rice_head_fault(head, (uint32_t)(l->horizon_boxes.count + l->horizon_tiles.count),
-                                    (uint64_t)(end - p) * 8)) {
+            switch (rice_head_fault(head, hz_limit(l), (uint64_t)(end - p) * 8)) {
                 case 1:
                     return "a horizon list's Rice parameter is above 24";
                 case 2:
@@ -3626,9 +3630,6 @@ typedef struct hz_list {
     int is_rice;
 } hz_list;
 
-static uint32_t hz_limit(const pvsr_level* l) {
-    return (uint32_t)(l->horizon_boxes.count + l->horizon_tiles.count);
-}
 
 /* Opens the cell's list; 0 when the file has no lists (or the cell none). */
 static int hz_list_open(const pvsr_level* l, uint32_t cell, hz_list* r) {

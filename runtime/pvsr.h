@@ -64,7 +64,7 @@ extern "C" {
 typedef enum pvsr_status {
     PVSR_OK = 0,
     PVSR_NOT_A_RUNTIME_FILE = 1, /* too short, or the magic bytes are not there */
-    PVSR_VERSION_TOO_NEW = 2,    /* a newer major version than this runtime reads */
+    PVSR_VERSION_TOO_NEW = 2,    /* a major version this runtime does not read: a newer one, or 4.x */
     PVSR_CORRUPT = 3,            /* damaged or inconsistent: the checksum, a size, an offset or an index */
     PVSR_UNSUPPORTED = 4,        /* a big-endian machine (the file is little-endian) */
     PVSR_INVALID_ARGUMENT = 5    /* a null pointer where one is required */
