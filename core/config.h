@@ -211,9 +211,6 @@ struct ConservativeConfig {
     bool shaft_flood = true;  // the shaft pass also covers piece pairs the axis panels and the proven solid
                               // separate in the hull of their boxes, whatever planes they lie in
                               // (docs/ALGORITHMS.md#shaft-flood); false for measurement
-    bool umbra_pass = false;  // beside the single-occluder pass, the space hidden from a cell's whole eye
-                              // region, grown front to back through the space already hidden, hides what
-                              // lies wholly in it (pvs/umbra_volume.h)
     bool single_occluder_pass = true;  // first, what ONE occluder hides from a cell's whole eye region is
                                        // proven exactly (pvs/region_hiding.h); the faces skip it
     int refine_levels = 4;  // [Limit: 0..8] adaptive refinement: patches of a face are first tested
@@ -504,13 +501,6 @@ void visit_options(Config& c, Visitor&& v) {
             "hides from a cell's whole eye region), to measure what it gives: the same safety, a looser "
             "PVS"},
         c.conservative.single_occluder_pass);
-    v(
-        OptionSpec{
-            OptionGroup::kConservative, "--umbra-pass", "conservative.umbra_pass", "",
-            "before the faces, the space hidden from each cell's whole eye region is grown front to back "
-            "(panels, slanted panels and boxes of the proven solid, each joined by the space hidden before "
-            "it): what lies wholly in it, no face tests; exact"},
-        c.conservative.umbra_pass);
     v(
         OptionSpec{
             OptionGroup::kConservative, "--slanted-cubes", "conservative.slanted_cubes", "",

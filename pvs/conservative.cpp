@@ -1002,9 +1002,6 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
     std::optional<RegionHiders> own_hiders;
     if (config.single_occluder_pass && !hiders) hiders = &own_hiders.emplace(ctx, occluders);
     if (!config.single_occluder_pass) hiders = nullptr;
-    std::optional<UmbraHider> umbra;
-    if (config.umbra_pass) umbra.emplace(ctx, world, occluders);
-    UmbraFigures umbra_figures;
     const bool shaft_runs = shaft_pass_runs(config, world, boxes.size());
     std::optional<ShaftProvers> own_provers;
     if (shaft_runs && !provers)
@@ -1048,12 +1045,6 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
                 skipped += leavable.size() - candidates.size();
                 std::fill(hidden.begin(), hidden.end(), 0);
                 if (hiders) region_hidden += hiders->of(set).hide(world, box, candidates, hidden.data());
-                if (umbra && set < 0) {
-                    UmbraFigures uf;
-                    umbra->hide(world, box, candidates, hidden.data(), &uf);
-#pragma omp critical
-                    umbra_figures += uf;
-                }
                 for (uint32_t o : candidates)
                     if (!world.objects[o].bounds.overlaps(box) && !row_lists(hidden.data(), o))
                         open.push_back(o);
@@ -1089,7 +1080,6 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
     share.unite(pvs.words.data(), pvs.words.size());  // each row was written by the process it was dealt to
     figures.shaft += shaft;
     figures.region_hidden += region_hidden;
-    figures.umbra += umbra_figures;
     figures.parent_hidden += skipped;
     add_counts(figures, total, start);
 }
@@ -1179,12 +1169,9 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
     PvsSet hidden =
         PvsSet::make(config.single_occluder_pass || early ? uint32_t(cells.size()) : 0, n_objects);
     std::optional<RegionHiders> hiders;
-    std::optional<UmbraHider> umbra;
-    if (config.umbra_pass && config.single_occluder_pass) umbra.emplace(ctx, world, occluders);
     if (config.single_occluder_pass) {
         const auto pass_start = std::chrono::steady_clock::now();
         hiders.emplace(ctx, occluders);
-        UmbraFigures umbra_figures;
         uint64_t n_hidden = 0;
         ctx.progress_begin("single-occluder pass", cells.size(), "cells");
         share.begin(cells.size());
@@ -1195,15 +1182,9 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
                 uint64_t* row = hidden.row(uint32_t(c));
                 if (!regions[size_t(c)].is_empty() &&
                     !(journal && journal->find("hidden", c, row, hidden.words_per_row))) {
-                    const int32_t set = occluders.set_for(regions[size_t(c)]);
-                    const std::vector<uint32_t>& candidates = unsettled(uint32_t(c), leavable, scratch);
-                    n_hidden += hiders->of(set).hide(world, regions[size_t(c)], candidates, row);
-                    if (umbra && set < 0) {
-                        UmbraFigures uf;
-                        n_hidden += umbra->hide(world, regions[size_t(c)], candidates, row, &uf);
-#pragma omp critical
-                        umbra_figures += uf;
-                    }
+                    n_hidden +=
+                        hiders->of(occluders.set_for(regions[size_t(c)]))
+                            .hide(world, regions[size_t(c)], unsettled(uint32_t(c), leavable, scratch), row);
                     if (journal) journal->record("hidden", c, row, hidden.words_per_row);
                 }
             });
@@ -1212,7 +1193,6 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
         ctx.progress_end();
         if (journal) journal->flush();
         figures.region_hidden += n_hidden;
-        figures.umbra += umbra_figures;
         figures.region_seconds +=
             std::chrono::duration<double>(std::chrono::steady_clock::now() - pass_start).count();
     }

@@ -42,11 +42,10 @@
 #include "core/row_journal.h"
 #include "core/work_share.h"
 #include "core/world.h"
+#include "rays/ray_scene.h"
 #include "pvs/region_hiding.h"
 #include "pvs/reuse.h"
 #include "pvs/shaft_hiding.h"
-#include "pvs/umbra_volume.h"
-#include "rays/ray_scene.h"
 
 #include <vector>
 
@@ -64,7 +63,6 @@ struct ConservativeFigures {
     uint64_t region_hidden = 0;     // (cell, object) pairs the single-occluder pass proved hidden
     double region_seconds = 0.0;    // its time (grid; on boxes it is part of `seconds`)
     uint64_t patch_hidden = 0;      // (patch, object) pairs it proved hidden, of what a patch's cubes left
-    UmbraFigures umbra;             // the umbra pass (pvs/umbra_volume.h)
     uint64_t parent_hidden = 0;     // (octree box, object) pairs left out untested: its parent left them out
     ShaftFigures shaft;             // the shaft pass (pvs/shaft_hiding.h)
     std::vector<uint64_t> samples_per_level;  // samples at each epsilon of the ladder

@@ -121,21 +121,9 @@ bool panel_hides(const Aabb& region, const Aabb& object, const Aabb& panel, int 
 }
 
 bool box_hides(const Aabb& region, const Aabb& object, const Aabb& box) {
-    return box_hides(glm::dvec3(region.min), glm::dvec3(region.max), glm::dvec3(object.min),
-                     glm::dvec3(object.max), glm::dvec3(box.min), glm::dvec3(box.max));
-}
-
-bool box_hides(const glm::dvec3& region_lo, const glm::dvec3& region_hi, const glm::dvec3& object_lo,
-               const glm::dvec3& object_hi, const glm::dvec3& box_lo, const glm::dvec3& box_hi) {
-    const glm::dvec3 lo = box_lo + kHideToleranceM, hi = box_hi - kHideToleranceM;
+    const glm::dvec3 lo = glm::dvec3(box.min) + kHideToleranceM, hi = glm::dvec3(box.max) - kHideToleranceM;
     if (!(lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z)) return false;
-    auto corners = [](const glm::dvec3& a, const glm::dvec3& b) {
-        std::array<glm::dvec3, 8> c;
-        for (int i = 0; i < 8; ++i)
-            c[size_t(i)] = glm::dvec3(i & 1 ? b.x : a.x, i & 2 ? b.y : a.y, i & 4 ? b.z : a.z);
-        return c;
-    };
-    const std::array<glm::dvec3, 8> rc = corners(region_lo, region_hi), oc = corners(object_lo, object_hi);
+    const std::array<glm::dvec3, 8> rc = box_corners(region), oc = box_corners(object);
     for (const glm::dvec3& q : rc)
         for (const glm::dvec3& x : oc)
             if (!segment_meets(q, x, lo, hi)) return false;

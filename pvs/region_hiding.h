@@ -48,10 +48,6 @@ bool panel_hides(const Aabb& region, const Aabb& object, const Aabb& panel, int 
 // Does every segment from the box `region` to the box `object` meet the box `box` shrunk by
 // kHideToleranceM?
 bool box_hides(const Aabb& region, const Aabb& object, const Aabb& box);
-// The same for boxes given in double ([lo, hi] each): the occluder [box_lo, box_hi] shrunk by
-// kHideToleranceM.
-bool box_hides(const glm::dvec3& region_lo, const glm::dvec3& region_hi, const glm::dvec3& object_lo,
-               const glm::dvec3& object_hi, const glm::dvec3& box_lo, const glm::dvec3& box_hi);
 
 // Does every segment from the box `region` to the box `object` meet the triangles of the slanted panel?
 // True only if the two boxes lie strictly on opposite sides of its slab (|n.x - offset| <= thickness, grown
