@@ -166,6 +166,18 @@ void grid_cells_and_pvs(Context& ctx, const BakeConfig& config, const World& wor
                                 ran ? "ran" : "did not run", runs ? "run it" : "not", regions,
                                 runs ? "are within" : "are over", config.conservative.shaft_max_pairs));
             }
+            // A small bake's pair budget follows its cells and objects too (docs/ALGORITHMS.md#shaft-small).
+            double old_budget = runs ? double(config.conservative.shaft_budget) : 0.0;
+            for (const auto& [name, value] : reuse->figures)
+                if (name == "conservative_shaft_pair_budget") old_budget = value;
+            const int budget = runs ? shaft_pair_budget(config.conservative, world, regions) : 0;
+            if (runs && old_budget != double(budget)) {
+                throw bad_input(fmt::format(
+                    "--reuse: the old bake's shaft pass gave each (cell, object) {} piece pairs and this one "
+                    "would "
+                    "give {} ({} cells x the objects, --shaft-small-spend {}); bake without --reuse",
+                    old_budget, budget, regions, config.conservative.shaft_small_spend));
+            }
             ScopedTimer t(ctx, "reuse_plan");
             plan = plan_reuse(ctx, config.conservative, world, bake.cells, bake.print,
                               ReuseSource{reuse->cells, reuse->pvs, reuse->print});
@@ -211,6 +223,7 @@ void octree_cells_and_pvs(Context& ctx, const BakeConfig& config, const World& w
             // (docs/ALGORITHMS.md#shaft-cap).
             ConservativeConfig level = config.conservative;
             const uint64_t reach = octree_shaft_regions(boxes, config.cells.min_cell_size_m);
+            level.shaft_budget = shaft_pair_budget(level, world, reach);  // docs/ALGORITHMS.md#shaft-small
             if (level.shaft_budget > 0 && !shaft_pass_runs(level, world, reach)) {
                 level.shaft_budget = 0;
                 const uint64_t candidates = shaft_candidates(world, reach);

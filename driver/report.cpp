@@ -86,6 +86,8 @@ NamedValues bake_figures(const BakeConfig& config, const World& world, const Vie
         {"conservative_epsilon_levels", double(stages.epsilon_levels)},
         // The shaft pass's cap (docs/ALGORITHMS.md#shaft-cap): regions x objects of the passes not run.
         {"conservative_shaft_skipped_candidates", double(stages.conservative.shaft.skipped_candidates)},
+        // A small bake's pair budget (docs/ALGORITHMS.md#shaft-small): the largest a pass gave a pair.
+        {"conservative_shaft_pair_budget", double(stages.conservative.shaft_pair_budget)},
         {"pvs_objects_mean", double(listed) / n_cells},
         {"pvs_objects_max", double(listed_max)},
         {"pvs_share_of_objects_mean",

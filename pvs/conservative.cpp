@@ -658,6 +658,22 @@ bool shaft_pass_runs(const ConservativeConfig& config, const World& world, uint6
     return config.shaft_max_pairs == 0 || shaft_candidates(world, regions) <= config.shaft_max_pairs;
 }
 
+int shaft_pair_budget(const ConservativeConfig& config, const World& world, uint64_t regions) {
+    constexpr int kShaftMostBudget = 4096;  // --shaft-budget's own limit
+    if (!shaft_pass_runs(config, world, regions) || config.shaft_small_spend <= 0.0)
+        return config.shaft_budget;
+    const double candidates = double(shaft_candidates(world, regions));
+    if (candidates <= 0.0) return config.shaft_budget;
+    // Doubled while the whole pass's piece pairs stay within the spend, at most six times: powers of two, so
+    // that a re-bake after a small edit mostly keeps the budget its old rows were made with.
+    int budget = config.shaft_budget;
+    for (int k = 0; k < 6 && budget * 2 <= kShaftMostBudget &&
+                    candidates * 2.0 * double(budget) <= config.shaft_small_spend;
+         ++k)
+        budget *= 2;
+    return budget;
+}
+
 uint64_t octree_shaft_regions(const std::vector<Aabb>& boxes, double min_cell_m) {
     uint64_t regions = 0;
     for (const Aabb& b : boxes) {
@@ -1003,6 +1019,7 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
     if (config.single_occluder_pass && !hiders) hiders = &own_hiders.emplace(ctx, occluders);
     if (!config.single_occluder_pass) hiders = nullptr;
     const bool shaft_runs = shaft_pass_runs(config, world, boxes.size());
+    if (shaft_runs) figures.shaft_pair_budget = std::max(figures.shaft_pair_budget, config.shaft_budget);
     std::optional<ShaftProvers> own_provers;
     if (shaft_runs && !provers)
         provers = &own_provers.emplace(ctx, occluders, config.shaft_fusion, config.shaft_caps,
@@ -1163,6 +1180,7 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
                                                           ? grid_shaft_blocks(cells, config.shaft_block)
                                                           : std::vector<std::vector<uint32_t>>{};
     const bool shaft_runs = shaft_pass_runs(config, world, grid_shaft_regions(config, cells));
+    if (shaft_runs) figures.shaft_pair_budget = std::max(figures.shaft_pair_budget, config.shaft_budget);
     // The blocks' proofs before the faces (docs/ALGORITHMS.md#shaft-early).
     const bool early = shaft_runs && config.shaft_early && config.shaft_block > 1;
     // The single-occluder pass: what one occluder hides from a cell's whole region, no face of it tests.
@@ -1618,13 +1636,18 @@ PvsSet bake_conservative_pvs(Context& ctx, const ConservativeConfig& config, con
     PvsSet pvs = PvsSet::make(uint32_t(cells.size()), uint32_t(world.objects.size()));
     if (cells.kind == CellSet::Kind::kGrid) {
         WorkShare alone;
-        conservative_grid_rows(ctx, config, world, cells, occluders, scene, pvs, figures, journal,
+        // A small bake's pass takes more piece pairs per pair (docs/ALGORITHMS.md#shaft-small).
+        ConservativeConfig grid = config;
+        grid.shaft_budget = shaft_pair_budget(config, world, grid_shaft_regions(config, cells));
+        conservative_grid_rows(ctx, grid, world, cells, occluders, scene, pvs, figures, journal,
                                shared_work ? *shared_work : alone, reuse);
     } else {
         std::vector<Aabb> boxes;
         for (const Cell& c : cells.cells) boxes.push_back(c.bounds);
         ctx.progress_begin("conservative PVS", cells.size(), "cells");
-        conservative_box_rows(ctx, config, world, boxes, cells.eyes, occluders, scene, pvs, figures);
+        ConservativeConfig box = config;
+        box.shaft_budget = shaft_pair_budget(config, world, boxes.size());
+        conservative_box_rows(ctx, box, world, boxes, cells.eyes, occluders, scene, pvs, figures);
         ctx.progress_end();
     }
     add_always_listed(world, cells, pvs);

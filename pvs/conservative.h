@@ -65,6 +65,7 @@ struct ConservativeFigures {
     uint64_t patch_hidden = 0;      // (patch, object) pairs it proved hidden, of what a patch's cubes left
     uint64_t parent_hidden = 0;     // (octree box, object) pairs left out untested: its parent left them out
     ShaftFigures shaft;             // the shaft pass (pvs/shaft_hiding.h)
+    int shaft_pair_budget = 0;      // the largest piece-pair budget a (region, object) of it was given
     std::vector<uint64_t> samples_per_level;  // samples at each epsilon of the ladder
     double seconds = 0.0;
 };
@@ -102,6 +103,11 @@ uint64_t grid_shaft_regions(const ConservativeConfig& config, const CellSet& cel
 // limit). A function of the config, the world and the count alone, so a bake decides it alike on every
 // process and in every run.
 bool shaft_pass_runs(const ConservativeConfig& config, const World& world, uint64_t regions);
+// The piece pairs the shaft pass gives each (region, object) over `regions` cells or boxes
+// (docs/ALGORITHMS.md#shaft-small): config.shaft_budget, doubled (at most six times, and to 4096 at most)
+// while the candidates (shaft_candidates) x the budget stay within config.shaft_small_spend. A function of
+// the config, the world and the count alone, as shaft_pass_runs().
+int shaft_pair_budget(const ConservativeConfig& config, const World& world, uint64_t regions);
 // The count that rule compares: regions x the objects a pass may leave out (all but always-visible ones).
 uint64_t shaft_candidates(const World& world, uint64_t regions);
 // The regions an octree level's `boxes` stand for in that rule: the cells of `min_cell_m` each box can still

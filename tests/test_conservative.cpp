@@ -525,6 +525,28 @@ TEST(Conservative, TheShaftPassRunsWithinItsCapAndIsSkippedOverIt) {
     }
 }
 
+// A small bake's pass doubles its pair budget while cells x objects x the budget stay within
+// --shaft-small-spend (docs/ALGORITHMS.md#shaft-small): at most six times and to 4096; never where the pass
+// does not run, and never with the spend off.
+TEST(Conservative, ASmallBakesShaftPassDoublesItsBudgetWithinItsSpend) {
+    World w;
+    w.objects.resize(100);
+    ConservativeConfig c;  // budget 64, spend 8 M piece pairs, cap 4 M pairs
+    EXPECT_EQ(shaft_pair_budget(c, w, 10), 4096) << "1,000 candidates";
+    EXPECT_EQ(shaft_pair_budget(c, w, 400), 128) << "40,000 candidates: 5.1 M at 128, 10.2 M at 256";
+    EXPECT_EQ(shaft_pair_budget(c, w, 1000), 64) << "100,000 candidates: 12.8 M at 128";
+    EXPECT_EQ(shaft_pair_budget(c, w, 100000), 64) << "over the cap: the pass does not run";
+    w.objects[0].flags |= kObjectAlwaysVisible;  // 99 candidates a cell
+    EXPECT_EQ(shaft_pair_budget(c, w, 640), 128) << "63,360 candidates: 8.1 M at 128";
+    c.shaft_budget = 1024;
+    EXPECT_EQ(shaft_pair_budget(c, w, 1), 4096) << "not past --shaft-budget's own limit";
+    c.shaft_budget = 0;
+    EXPECT_EQ(shaft_pair_budget(c, w, 1), 0) << "no pass";
+    c.shaft_budget = 64;
+    c.shaft_small_spend = 0.0;
+    EXPECT_EQ(shaft_pair_budget(c, w, 1), 64) << "the spend off";
+}
+
 // Every row of `fewer` lists at most what the same cell's row of `more` lists (the same grid); `why` says
 // what a pair listed only by `fewer` would mean.
 void expect_rows_within(const BakeData& fewer, const BakeData& more, const std::string& why) {

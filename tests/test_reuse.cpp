@@ -316,6 +316,34 @@ TEST(Reuse, AnOldBakeWhosePassTheShaftCapNowSkipsIsRefused) {
     EXPECT_FALSE(std::filesystem::exists(dir.file("new.h5"))) << "a refused bake writes nothing";
 }
 
+// The pair budget of a small bake's pass follows its cells and objects (docs/ALGORITHMS.md#shaft-small): an
+// old bake made with another budget holds rows this bake would not compute, so it is refused, naming the
+// budgets.
+TEST(Reuse, AnOldBakeWhosePassHadAnotherPairBudgetIsRefused) {
+    test::TempDir dir;
+    Context ctx(Context::Options{LogLevel::kWarning, true, nullptr});
+    const World sample = load_world(ctx, test::sample_world());
+    const std::string old_world = dir.file("old.glb"), new_world = dir.file("new.glb");
+    write_glb(edited_world(sample, {}), old_world);
+    write_glb(edited_world(sample, door_and_new_crate(sample)), new_world);  // four objects more
+    const std::string log = dir.file("log.txt"), report = dir.file("old.json");
+    ASSERT_EQ(run(bake_args(old_world, dir.file("probe.h5")) + " --report '" + report + "'", log), 0)
+        << test::read_file(log);
+    const nlohmann::json j = nlohmann::json::parse(test::read_file(report));
+    // A spend the old bake's candidates fit at 128 piece pairs each and the new one's do not.
+    const std::string spend = " --shaft-small-spend " + std::to_string(128 * j.at("cells").get<uint64_t>() *
+                                                                       j.at("objects").get<uint64_t>());
+    ASSERT_EQ(run(bake_args(old_world, dir.file("old.h5")) + spend + " --report '" + report + "'", log), 0)
+        << test::read_file(log);
+    const nlohmann::json k = nlohmann::json::parse(test::read_file(report));
+    EXPECT_EQ(k.at("figures").at("conservative_shaft_pair_budget").get<double>(), 128.0);
+    EXPECT_EQ(
+        run(bake_args(new_world, dir.file("new.h5")) + spend + " --reuse '" + dir.file("old.h5") + "'", log),
+        2);
+    EXPECT_NE(test::read_file(log).find("piece pairs"), std::string::npos) << test::read_file(log);
+    EXPECT_FALSE(std::filesystem::exists(dir.file("new.h5"))) << "a refused bake writes nothing";
+}
+
 // A 16 m cube of eye voxels of 0.25 m from the origin, every voxel an eye: the print tests' eye space.
 VoxelMask eye_cube() {
     VoxelMask eyes;
