@@ -18,6 +18,8 @@
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
+#include <functional>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -292,10 +294,11 @@ TEST(Reuse, AnOldBakeOfOtherParametersOrNoneIsRefusedBeforeAnyStage) {
     EXPECT_FALSE(std::filesystem::exists(dir.file("new.h5"))) << "a refused bake writes nothing";
 }
 
-// The shaft pass's cap is decided by cells x objects (docs/ALGORITHMS.md#shaft-cap): an old bake whose pass
-// ran, at a cap its world just meets, is refused for an edited world of more objects, whose bake would not
-// run it (the old rows hold what only the pass proved).
-TEST(Reuse, AnOldBakeWhosePassTheShaftCapNowSkipsIsRefused) {
+// The sample world baked with `option(cells, objects)` (built from its counts), then the world with a door
+// cut and a crate added (four objects more) re-baked from it with the same option: the re-bake is refused,
+// its log saying `says`, and writes nothing. Returns the old bake's report.
+nlohmann::json expect_refused_after_an_edit(const std::function<std::string(uint64_t, uint64_t)>& option,
+                                            const std::string& says) {
     test::TempDir dir;
     Context ctx(Context::Options{LogLevel::kWarning, true, nullptr});
     const World sample = load_world(ctx, test::sample_world());
@@ -303,45 +306,40 @@ TEST(Reuse, AnOldBakeWhosePassTheShaftCapNowSkipsIsRefused) {
     write_glb(edited_world(sample, {}), old_world);
     write_glb(edited_world(sample, door_and_new_crate(sample)), new_world);
     const std::string log = dir.file("log.txt"), report = dir.file("old.json");
-    ASSERT_EQ(run(bake_args(old_world, dir.file("probe.h5")) + " --report '" + report + "'", log), 0)
+    EXPECT_EQ(run(bake_args(old_world, dir.file("probe.h5")) + " --report '" + report + "'", log), 0)
         << test::read_file(log);
     const nlohmann::json j = nlohmann::json::parse(test::read_file(report));
-    const std::string cap = " --shaft-max-pairs " + std::to_string(j.at("cells").get<uint64_t>() *
-                                                                    j.at("objects").get<uint64_t>());
-    ASSERT_EQ(run(bake_args(old_world, dir.file("old.h5")) + cap, log), 0) << test::read_file(log);
-    EXPECT_EQ(run(bake_args(new_world, dir.file("new.h5")) + cap + " --reuse '" + dir.file("old.h5") + "'",
-                  log),
-              2);
-    EXPECT_NE(test::read_file(log).find("shaft pass"), std::string::npos) << test::read_file(log);
+    const std::string o = option(j.at("cells").get<uint64_t>(), j.at("objects").get<uint64_t>());
+    EXPECT_EQ(run(bake_args(old_world, dir.file("old.h5")) + o + " --report '" + report + "'", log), 0)
+        << test::read_file(log);
+    EXPECT_EQ(
+        run(bake_args(new_world, dir.file("new.h5")) + o + " --reuse '" + dir.file("old.h5") + "'", log), 2);
+    EXPECT_NE(test::read_file(log).find(says), std::string::npos) << test::read_file(log);
     EXPECT_FALSE(std::filesystem::exists(dir.file("new.h5"))) << "a refused bake writes nothing";
+    return nlohmann::json::parse(test::read_file(report));
+}
+
+// The shaft pass's cap is decided by cells x objects (docs/ALGORITHMS.md#shaft-cap): an old bake whose pass
+// ran, at a cap its world just meets, is refused for an edited world of more objects, whose bake would not
+// run it (the old rows hold what only the pass proved).
+TEST(Reuse, AnOldBakeWhosePassTheShaftCapNowSkipsIsRefused) {
+    expect_refused_after_an_edit(
+        [](uint64_t cells, uint64_t objects) {
+            return " --shaft-max-pairs " + std::to_string(cells * objects);
+        },
+        "shaft pass");
 }
 
 // The pair budget of a small bake's pass follows its cells and objects (docs/ALGORITHMS.md#shaft-small): an
 // old bake made with another budget holds rows this bake would not compute, so it is refused, naming the
-// budgets.
+// budgets. The spend: the old bake's candidates fit at 128 piece pairs each, the new one's do not.
 TEST(Reuse, AnOldBakeWhosePassHadAnotherPairBudgetIsRefused) {
-    test::TempDir dir;
-    Context ctx(Context::Options{LogLevel::kWarning, true, nullptr});
-    const World sample = load_world(ctx, test::sample_world());
-    const std::string old_world = dir.file("old.glb"), new_world = dir.file("new.glb");
-    write_glb(edited_world(sample, {}), old_world);
-    write_glb(edited_world(sample, door_and_new_crate(sample)), new_world);  // four objects more
-    const std::string log = dir.file("log.txt"), report = dir.file("old.json");
-    ASSERT_EQ(run(bake_args(old_world, dir.file("probe.h5")) + " --report '" + report + "'", log), 0)
-        << test::read_file(log);
-    const nlohmann::json j = nlohmann::json::parse(test::read_file(report));
-    // A spend the old bake's candidates fit at 128 piece pairs each and the new one's do not.
-    const std::string spend = " --shaft-small-spend " + std::to_string(128 * j.at("cells").get<uint64_t>() *
-                                                                       j.at("objects").get<uint64_t>());
-    ASSERT_EQ(run(bake_args(old_world, dir.file("old.h5")) + spend + " --report '" + report + "'", log), 0)
-        << test::read_file(log);
-    const nlohmann::json k = nlohmann::json::parse(test::read_file(report));
-    EXPECT_EQ(k.at("figures").at("conservative_shaft_pair_budget").get<double>(), 128.0);
-    EXPECT_EQ(
-        run(bake_args(new_world, dir.file("new.h5")) + spend + " --reuse '" + dir.file("old.h5") + "'", log),
-        2);
-    EXPECT_NE(test::read_file(log).find("piece pairs"), std::string::npos) << test::read_file(log);
-    EXPECT_FALSE(std::filesystem::exists(dir.file("new.h5"))) << "a refused bake writes nothing";
+    const nlohmann::json old = expect_refused_after_an_edit(
+        [](uint64_t cells, uint64_t objects) {
+            return " --shaft-small-spend " + std::to_string(128 * cells * objects);
+        },
+        "piece pairs");
+    EXPECT_EQ(old.at("figures").at("conservative_shaft_pair_budget").get<double>(), 128.0);
 }
 
 // A 16 m cube of eye voxels of 0.25 m from the origin, every voxel an eye: the print tests' eye space.
