@@ -202,9 +202,8 @@ struct ConservativeConfig {
                                 // object it would try, settle what they reach as visible
                                 // (docs/ALGORITHMS.md#shaft-probe); 0 = off
     double shaft_small_spend = 8388608.0;  // [Limit: 0..1e12] [Units: piece pairs] a small bake's shaft pass
-                                           // doubles its budget per (cell, object), at most six times
-                                           // and to 4096, while cells x objects x the budget stay within
-                                           // this
+                                           // doubles its budget per (cell, object), at most six times and
+                                           // to 4096, while cells x objects x the budget stay within this
                                            // (docs/ALGORITHMS.md#shaft-small); 0 = off
     bool shaft_fusion = true;  // the shaft pass's plane covers take in the umbrae of occluders in other
                                // planes (docs/ALGORITHMS.md#cross-plane-fusion); false for measurement
@@ -551,9 +550,8 @@ void visit_options(Config& c, Visitor&& v) {
     v(OptionSpec{OptionGroup::kConservative, "--shaft-small-spend", "conservative.shaft_small_spend",
                  "piece pairs",
                  "a small bake's shaft pass doubles --shaft-budget, at most six times and to 4096, while its "
-                 "cells x "
-                 "objects x the budget stay within this many piece pairs (small bakes buy a tighter PVS "
-                 "with seconds); 0 = off",
+                 "cells x objects x the budget stay within this many piece pairs (small bakes buy a tighter "
+                 "PVS with seconds); 0 = off",
                  0, 1e12},
       c.conservative.shaft_small_spend);
     v(OptionSpec{OptionGroup::kConservative, "--shaft-probe-rays", "conservative.shaft_probe_rays", "rays",

@@ -174,8 +174,7 @@ void grid_cells_and_pvs(Context& ctx, const BakeConfig& config, const World& wor
             if (runs && old_budget != double(budget)) {
                 throw bad_input(fmt::format(
                     "--reuse: the old bake's shaft pass gave each (cell, object) {} piece pairs and this one "
-                    "would "
-                    "give {} ({} cells x the objects, --shaft-small-spend {}); bake without --reuse",
+                    "would give {} ({} cells x the objects, --shaft-small-spend {}); bake without --reuse",
                     old_budget, budget, regions, config.conservative.shaft_small_spend));
             }
             ScopedTimer t(ctx, "reuse_plan");
