@@ -518,100 +518,6 @@ bool ShaftProver::plane_covers(const Aabb& region, const Aabb& target, int axis,
     return cover(region, target, axis, c, fusion_, miss, umbrae);
 }
 
-void ShaftProver::layers(int a, double c, int& l0, int& l1) const {
-    // The voxel layers holding the plane (both, on a voxel side), or none outside the grid.
-    l0 = -1, l1 = -2;
-    if (solid_.empty()) return;
-    const double rel = (c - double(solid_.origin[a])) / double(solid_.voxel_size_m);
-    const double fl = std::floor(rel);
-    l0 = l1 = int(fl);
-    if (rel - fl < kVoxelSlack) l0 = l1 - 1;
-    if (fl + 1.0 - rel < kVoxelSlack) l1 = l0 + 1;
-    if (l0 < 0 || l1 >= solid_.dims[a]) l0 = -1, l1 = -2;
-}
-
-void ShaftProver::near_panels(int a, float c, glm::dvec2 lo, glm::dvec2 hi, PlaneScratch& ps) const {
-    ps.near_rects.clear();
-    const std::vector<Plane>& planes = planes_[a];
-    const auto it = std::lower_bound(planes.begin(), planes.end(), c,
-                                     [](const Plane& p, float value) { return p.c < value; });
-    if (it == planes.end() || it->c != c) return;
-    for (uint32_t r = it->first; r < it->first + it->count; ++r) {
-        const Rect& rect = rects_[r];
-        if (!(rect.u0 > hi.x || rect.u1 < lo.x || rect.v0 > hi.y || rect.v1 < lo.y))
-            ps.near_rects.push_back(r);
-    }
-}
-
-size_t ShaftProver::subtract_panels(PlaneScratch& ps, size_t n_pieces) const {
-    for (size_t nr = 0; nr < ps.near_rects.size() && n_pieces > 0; ++nr) {
-        const Rect& rect = rects_[ps.near_rects[nr]];
-        size_t n_next = 0;
-        for (size_t i = 0; i < n_pieces; ++i) {
-            // The piece outside the rectangle, as up to four convex parts: left, right, below, above.
-            ps.rest = ps.pieces[i];
-            const std::array<std::pair<int, double>, 4> sides{
-                {{0, rect.u0}, {0, rect.u1}, {1, rect.v0}, {1, rect.v1}}};
-            for (size_t s = 0; s < 4 && !ps.rest.empty(); ++s) {
-                const bool low_side = s % 2 == 0;
-                clip(ps.rest, sides[s].first, sides[s].second, low_side, ps.part);
-                if (!degenerate(ps.part)) {
-                    if (ps.next.size() <= n_next) ps.next.resize(n_next + 1);
-                    ps.next[n_next++] = ps.part;
-                }
-                clip(ps.rest, sides[s].first, sides[s].second, !low_side, ps.part);
-                ps.rest.swap(ps.part);
-            }
-        }
-        ps.pieces.swap(ps.next);
-        n_pieces = n_next;
-        if (n_pieces > kMaxPieces) break;
-    }
-    return n_pieces;
-}
-
-bool ShaftProver::in_solid(int a, int l0, int l1, const Poly& piece, PlaneScratch& ps) const {
-    if (l0 > l1) return false;
-    const int u = (a + 1) % 3, v = (a + 2) % 3;
-    const double h = solid_.voxel_size_m;
-    const glm::dvec3 o(solid_.origin);
-    Poly& band = ps.band;
-    Poly& part = ps.part;
-    glm::dvec2 plo = piece[0], phi = piece[0];
-    for (const glm::dvec2& p : piece) {
-        plo = glm::min(plo, p);
-        phi = glm::max(phi, p);
-    }
-    const int64_t j0 = int64_t(std::floor((plo.y - o[v]) / h - kVoxelSlack));
-    const int64_t j1 = int64_t(std::floor((phi.y - o[v]) / h + kVoxelSlack));
-    if (j0 < 0 || j1 >= solid_.dims[v]) return false;
-    for (int64_t j = j0; j <= j1; ++j) {
-        clip(piece, 1, o[v] + double(j) * h - kVoxelSlack * h, false, part);
-        clip(part, 1, o[v] + double(j + 1) * h + kVoxelSlack * h, true, band);
-        if (band.empty()) continue;
-        double umin = band[0].x, umax = band[0].x;
-        for (const glm::dvec2& p : band) {
-            umin = std::min(umin, p.x);
-            umax = std::max(umax, p.x);
-        }
-        const int64_t i0 = int64_t(std::floor((umin - o[u]) / h - kVoxelSlack));
-        const int64_t i1 = int64_t(std::floor((umax - o[u]) / h + kVoxelSlack));
-        if (i0 < 0 || i1 >= solid_.dims[u]) return false;
-        for (int64_t i = i0; i <= i1; ++i)
-            for (int l = l0; l <= l1; ++l) {
-                glm::i64vec3 idx;
-                idx[a] = l;
-                idx[u] = i;
-                idx[v] = j;
-                if (!solid_.get(uint64_t(idx.x) +
-                                uint64_t(solid_.dims.x) *
-                                    (uint64_t(idx.y) + uint64_t(solid_.dims.y) * uint64_t(idx.z))))
-                    return false;
-            }
-    }
-    return true;
-}
-
 bool ShaftProver::cover(const Aabb& region, const Aabb& target, int axis, float c, bool fuse, PlaneMiss* miss,
                         uint64_t* umbrae, const Window* window) const {
     const int a = axis, u = (a + 1) % 3, v = (a + 2) % 3;
@@ -660,8 +566,16 @@ bool ShaftProver::cover(const Aabb& region, const Aabb& target, int axis, float 
         hi = glm::min(hi, window->hi);
         if (!(lo.x < hi.x && lo.y < hi.y)) return true;
     }
-    int l0, l1;
-    layers(a, cd, l0, l1);
+    // The voxel layers holding the plane (both, on a voxel side), or none outside the grid.
+    int l0 = -1, l1 = -2;
+    if (!solid_.empty()) {
+        const double rel = (cd - double(solid_.origin[a])) / double(solid_.voxel_size_m);
+        const double fl = std::floor(rel);
+        l0 = l1 = int(fl);
+        if (rel - fl < kVoxelSlack) l0 = l1 - 1;
+        if (fl + 1.0 - rel < kVoxelSlack) l1 = l0 + 1;
+        if (l0 < 0 || l1 >= solid_.dims[a]) l0 = -1, l1 = -2;
+    }
     // A crossing beyond the bounds of the plane's panels and of its layers' solid is not covered.
     const std::vector<Plane>& planes = planes_[a];
     const auto it = std::lower_bound(planes.begin(), planes.end(), c,
@@ -689,8 +603,14 @@ bool ShaftProver::cover(const Aabb& region, const Aabb& target, int axis, float 
     }
     // Every corner crossing is a point of the crossing: one left open settles it (cheaper than the cover).
     {
+        ps.near_rects.clear();
         ps.open.clear();
-        near_panels(a, c, lo, hi, ps);
+        if (has_panels)
+            for (uint32_t r = it->first; r < it->first + it->count; ++r) {
+                const Rect& rect = rects_[r];
+                if (!(rect.u0 > hi.x || rect.u1 < lo.x || rect.v0 > hi.y || rect.v1 < lo.y))
+                    ps.near_rects.push_back(r);
+            }
         const double h = solid_.voxel_size_m;
         const glm::dvec3 o(solid_.origin);
         glm::dvec2 open_lo(INFINITY), open_hi(-INFINITY);
@@ -771,7 +691,33 @@ bool ShaftProver::cover(const Aabb& region, const Aabb& target, int axis, float 
         }
         if (degenerate(ps.pieces[0])) return true;
     }
-    size_t n_pieces = subtract_panels(ps, 1);
+    size_t n_pieces = 1;
+    // Less the panels of the plane.
+    if (has_panels) {
+        for (size_t nr = 0; nr < ps.near_rects.size() && n_pieces > 0; ++nr) {
+            const Rect& rect = rects_[ps.near_rects[nr]];
+            size_t n_next = 0;
+            for (size_t i = 0; i < n_pieces; ++i) {
+                // The piece outside the rectangle, as up to four convex parts: left, right, below, above.
+                ps.rest = ps.pieces[i];
+                const std::array<std::pair<int, double>, 4> sides{
+                    {{0, rect.u0}, {0, rect.u1}, {1, rect.v0}, {1, rect.v1}}};
+                for (size_t s = 0; s < 4 && !ps.rest.empty(); ++s) {
+                    const bool low_side = s % 2 == 0;
+                    clip(ps.rest, sides[s].first, sides[s].second, low_side, ps.part);
+                    if (!degenerate(ps.part)) {
+                        if (ps.next.size() <= n_next) ps.next.resize(n_next + 1);
+                        ps.next[n_next++] = ps.part;
+                    }
+                    clip(ps.rest, sides[s].first, sides[s].second, !low_side, ps.part);
+                    ps.rest.swap(ps.part);
+                }
+            }
+            ps.pieces.swap(ps.next);
+            n_pieces = n_next;
+            if (n_pieces > kMaxPieces) break;
+        }
+    }
     // Less the umbrae of other planes' occluders: those found through the open corners, then those through
     // the middle of what is left.
     if (fuse && n_pieces > 0) {
@@ -820,8 +766,46 @@ bool ShaftProver::cover(const Aabb& region, const Aabb& target, int axis, float 
     if (n_pieces > kMaxPieces) return false;
     // The rest must lie in the interior of the proven solid: every voxel of the layer (both layers, on a
     // voxel side) whose closed square meets a piece is solid.
-    for (size_t pi = 0; pi < n_pieces; ++pi)
-        if (!in_solid(a, l0, l1, ps.pieces[pi], ps)) return false;
+    if (l0 > l1) return false;
+    const double h = solid_.voxel_size_m;
+    const glm::dvec3 o(solid_.origin);
+    Poly& band = ps.band;
+    Poly& part = ps.part;
+    for (size_t pi = 0; pi < n_pieces; ++pi) {
+        const Poly& piece = ps.pieces[pi];
+        glm::dvec2 plo = piece[0], phi = piece[0];
+        for (const glm::dvec2& p : piece) {
+            plo = glm::min(plo, p);
+            phi = glm::max(phi, p);
+        }
+        const int64_t j0 = int64_t(std::floor((plo.y - o[v]) / h - kVoxelSlack));
+        const int64_t j1 = int64_t(std::floor((phi.y - o[v]) / h + kVoxelSlack));
+        if (j0 < 0 || j1 >= solid_.dims[v]) return false;
+        for (int64_t j = j0; j <= j1; ++j) {
+            clip(piece, 1, o[v] + double(j) * h - kVoxelSlack * h, false, part);
+            clip(part, 1, o[v] + double(j + 1) * h + kVoxelSlack * h, true, band);
+            if (band.empty()) continue;
+            double umin = band[0].x, umax = band[0].x;
+            for (const glm::dvec2& p : band) {
+                umin = std::min(umin, p.x);
+                umax = std::max(umax, p.x);
+            }
+            const int64_t i0 = int64_t(std::floor((umin - o[u]) / h - kVoxelSlack));
+            const int64_t i1 = int64_t(std::floor((umax - o[u]) / h + kVoxelSlack));
+            if (i0 < 0 || i1 >= solid_.dims[u]) return false;
+            for (int64_t i = i0; i <= i1; ++i)
+                for (int l = l0; l <= l1; ++l) {
+                    glm::i64vec3 idx;
+                    idx[a] = l;
+                    idx[u] = i;
+                    idx[v] = j;
+                    if (!solid_.get(uint64_t(idx.x) +
+                                    uint64_t(solid_.dims.x) *
+                                        (uint64_t(idx.y) + uint64_t(solid_.dims.y) * uint64_t(idx.z))))
+                        return false;
+                }
+        }
+    }
     return true;
 }
 

@@ -192,16 +192,6 @@ private:
     struct Window {
         glm::dvec2 lo, hi;
     };
-    // The voxel layers across axis a holding the plane x[a] = c (both, on a voxel side); l0 > l1 when none.
-    void layers(int a, double c, int& l0, int& l1) const;
-    // The panels of the plane (a, c) meeting [lo, hi] in its coordinates, into ps.near_rects.
-    void near_panels(int a, float c, glm::dvec2 lo, glm::dvec2 hi, PlaneScratch& ps) const;
-    // The pieces ps.pieces[0 .. n_pieces) less the plane's panels ps.near_rects, as convex pieces of area
-    // (pieces without area are covered, docs/ALGORITHMS.md#shaft-pass); the count left.
-    size_t subtract_panels(PlaneScratch& ps, size_t n_pieces) const;
-    // Does every voxel of the layers l0 .. l1 across axis a whose closed square meets the convex piece (in
-    // the plane's coordinates) lie in the proven solid (so the piece lies in the interior of its slice)?
-    bool in_solid(int a, int l0, int l1, const std::vector<glm::dvec2>& piece, PlaneScratch& ps) const;
     // plane_covers() with or without the umbrae of other planes' occluders. With a window, only the
     // crossings inside it need a cover (true when none lies there), and the target may reach the plane from
     // its side while the region lies kCupMarginTolerances tolerances from it (docs/ALGORITHMS.md#cups).
