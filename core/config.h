@@ -183,9 +183,13 @@ struct ConservativeConfig {
                             // saw is tried once more against the whole eye region, cut into piece pairs
                             // each covered in one plane by panels and the proven solid, at most this many
                             // pairs per (cell, object) (pvs/shaft_hiding.h); 0 = off
-    uint64_t shaft_max_pairs = 4'000'000;  // [Limit: >= 0] the shaft pass runs over a grid's cells (an octree
-                                           // level's boxes) only when cells x leavable objects is at most
-                                           // this (docs/ALGORITHMS.md#shaft-cap); 0 = no limit
+    uint64_t shaft_max_pairs = 4'000'000;  // [Limit: >= 0] the shaft pass tries every leavable object over a
+                                           // grid's cells (an octree level's boxes) when cells x leavable
+                                           // objects is at most this, else the floor(this / cells) with the
+                                           // most triangles (docs/ALGORITHMS.md#shaft-cap); 0 = no limit
+    double shaft_min_share = 0.5;  // [Limit: 0..1] [Units: share] over the cap, the shaft pass runs only when
+                                   // the objects it may try hold at least this share of the triangles of
+                                   // those it may leave out (docs/ALGORITHMS.md#shaft-cap); 0 = always
     int shaft_block = 1;  // [Limit: 1..16] the shaft pass over a grid proves over blocks of this many cells
                           // along each axis and their halves down to single cells: what a node is proven
                           // hidden from, every cell of it leaves out (docs/ALGORITHMS.md#shaft-hierarchy);
@@ -518,12 +522,23 @@ void visit_options(Config& c, Visitor&& v) {
                  "this many pairs per (cell, object); 0 = off",
                  0, 4096},
       c.conservative.shaft_budget);
-    v(OptionSpec{OptionGroup::kConservative, "--shaft-max-pairs", "conservative.shaft_max_pairs", "pairs",
-                 "the shaft pass runs over a grid's cells (an octree level's boxes) only when their number "
-                 "times the objects is at most this, so that big levels keep their bake time (the pass costs "
-                 "about a thread-millisecond a pair it tries); 0 = no limit",
-                 0, 1e15},
-      c.conservative.shaft_max_pairs);
+    v(
+        OptionSpec{
+            OptionGroup::kConservative, "--shaft-max-pairs", "conservative.shaft_max_pairs", "pairs",
+            "the shaft pass tries every object over a grid's cells (an octree level's boxes) when their "
+            "number times the objects is at most this; over it, only the (this / cells) objects with the "
+            "most triangles, so that big levels keep their bake time where a frame pays most (the pass "
+            "costs about a thread-millisecond a pair it tries); 0 = no limit",
+            0, 1e15},
+        c.conservative.shaft_max_pairs);
+    v(
+        OptionSpec{
+            OptionGroup::kConservative, "--shaft-min-share", "conservative.shaft_min_share", "share",
+            "over --shaft-max-pairs, the shaft pass runs on the objects with the most triangles only when "
+            "they hold at least this share of the level's triangles (the pass costs about the same "
+            "whatever the share, and gains with it); 0 = always",
+            0, 1},
+        c.conservative.shaft_min_share);
     v(
         OptionSpec{
             OptionGroup::kConservative, "--shaft-block", "conservative.shaft_block", "cells",

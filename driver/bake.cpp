@@ -153,18 +153,32 @@ void grid_cells_and_pvs(Context& ctx, const BakeConfig& config, const World& wor
         if (reuse) {
             // The shaft pass's cap is decided by the cells and objects (docs/ALGORITHMS.md#shaft-cap): an old
             // bake that decided otherwise holds rows this bake would not compute, so it cannot be reused.
-            double skipped = 0.0;
-            for (const auto& [name, value] : reuse->figures)
+            // Which objects it tried too: all, or the heaviest the cap allows (a digest of their names).
+            double skipped = 0.0, old_objects = -1.0, old_digest = 0.0;
+            for (const auto& [name, value] : reuse->figures) {
                 if (name == "conservative_shaft_skipped_candidates") skipped = value;
-            const bool ran = config.conservative.shaft_budget > 0 && skipped == 0.0;
+                if (name == "conservative_shaft_objects") old_objects = value;
+                if (name == "conservative_shaft_objects_digest") old_digest = value;
+            }
+            // (a bake file without the objects' figure ran the pass on all of them or on none)
+            const bool ran = config.conservative.shaft_budget > 0 &&
+                             (old_objects >= 0.0 ? old_objects > 0.0 : skipped == 0.0);
             const uint64_t regions = grid_shaft_regions(config.conservative, bake.cells);
-            const bool runs = shaft_pass_runs(config.conservative, world, regions);
+            const std::vector<uint32_t> chosen = shaft_objects(config.conservative, world, regions);
+            const bool runs = !chosen.empty();
             if (ran != runs) {
-                throw bad_input(
-                    fmt::format("--reuse: the old bake {} the shaft pass and this one would {}: {} cells "
-                                "x the objects {} --shaft-max-pairs {} now; bake without --reuse",
-                                ran ? "ran" : "did not run", runs ? "run it" : "not", regions,
-                                runs ? "are within" : "are over", config.conservative.shaft_max_pairs));
+                throw bad_input(fmt::format(
+                    "--reuse: the old bake {} the shaft pass and this one would {}: {} cells "
+                    "x the objects {} --shaft-max-pairs {} now; bake without --reuse",
+                    ran ? "ran" : "did not run", runs ? "run it" : "not", regions,
+                    runs ? "allow it within" : "are over it at", config.conservative.shaft_max_pairs));
+            }
+            if (runs && old_digest != shaft_objects_digest(world, chosen)) {
+                throw bad_input(fmt::format(
+                    "--reuse: the old bake's shaft pass tried other objects than this one would ({} of {} "
+                    "now: the cap --shaft-max-pairs {} over {} cells takes those with the most triangles); "
+                    "bake without --reuse",
+                    chosen.size(), leavable_count(world), config.conservative.shaft_max_pairs, regions));
             }
             // A small bake's pair budget follows its cells and objects too (docs/ALGORITHMS.md#shaft-small).
             double old_budget = runs ? double(config.conservative.shaft_budget) : 0.0;
@@ -223,13 +237,19 @@ void octree_cells_and_pvs(Context& ctx, const BakeConfig& config, const World& w
             ConservativeConfig level = config.conservative;
             const uint64_t reach = octree_shaft_regions(boxes, config.cells.min_cell_size_m);
             level.shaft_budget = shaft_pair_budget(level, world, reach);  // docs/ALGORITHMS.md#shaft-small
-            if (level.shaft_budget > 0 && !shaft_pass_runs(level, world, reach)) {
+            const size_t chosen = shaft_objects(level, world, reach).size();
+            if (level.shaft_budget > 0 && chosen == 0) {
                 level.shaft_budget = 0;
                 const uint64_t candidates = shaft_candidates(world, reach);
                 figures.conservative.shaft.skipped_candidates += candidates;
                 ctx.info(fmt::format("shaft pass: not run on {} octree boxes: the {} cells they can split into "
                                      "x the objects = {} candidate pairs, over --shaft-max-pairs {}",
                                      boxes.size(), reach, candidates, level.shaft_max_pairs));
+            } else if (level.shaft_budget > 0 && chosen < leavable_count(world) &&
+                       level.shaft_max_pairs > 0) {
+                // The heaviest objects the cap allows over those cells: the boxes' own rule then chooses
+                // the same ones (floor(chosen x boxes / boxes) of them).
+                level.shaft_max_pairs = uint64_t(chosen) * uint64_t(std::max<size_t>(boxes.size(), 1));
             }
             if (!provers && level.shaft_budget > 0)
                 provers.emplace(ctx, shrunk, level.shaft_fusion, level.shaft_caps, level.shaft_cups,

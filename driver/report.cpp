@@ -88,6 +88,11 @@ NamedValues bake_figures(const BakeConfig& config, const World& world, const Vie
         {"conservative_shaft_skipped_candidates", double(stages.conservative.shaft.skipped_candidates)},
         // A small bake's pair budget (docs/ALGORITHMS.md#shaft-small): the largest a pass gave a pair.
         {"conservative_shaft_pair_budget", double(stages.conservative.shaft_pair_budget)},
+        // The objects the pass tried (docs/ALGORITHMS.md#shaft-cap): the fewest a pass was given, the share
+        // of the leavable objects' triangles they hold, and a digest of which (0: all of them).
+        {"conservative_shaft_objects", double(stages.conservative.shaft_objects)},
+        {"conservative_shaft_objects_triangle_share", stages.conservative.shaft_objects_triangle_share},
+        {"conservative_shaft_objects_digest", stages.conservative.shaft_objects_digest},
         {"pvs_objects_mean", double(listed) / n_cells},
         {"pvs_objects_max", double(listed_max)},
         {"pvs_share_of_objects_mean",

@@ -649,20 +649,57 @@ std::vector<uint32_t> leavable_objects(const World& world) {
 
 }  // namespace
 
+size_t leavable_count(const World& world) {
+    return leavable_objects(world).size();
+}
+
 uint64_t shaft_candidates(const World& world, uint64_t regions) {
     return regions * uint64_t(leavable_objects(world).size());
 }
 
+std::vector<uint32_t> shaft_objects(const ConservativeConfig& config, const World& world, uint64_t regions) {
+    if (config.shaft_budget <= 0) return {};
+    std::vector<uint32_t> leavable = leavable_objects(world);
+    if (config.shaft_max_pairs == 0 || regions * uint64_t(leavable.size()) <= config.shaft_max_pairs)
+        return leavable;
+    const uint64_t keep = regions > 0 ? config.shaft_max_pairs / regions : uint64_t(leavable.size());
+    // The heaviest first (a stable order: ties by index), then back in index order.
+    std::stable_sort(leavable.begin(), leavable.end(), [&](uint32_t a, uint32_t b) {
+        return world.objects[a].triangle_count > world.objects[b].triangle_count;
+    });
+    double all = 0.0, kept = 0.0;
+    for (size_t i = 0; i < leavable.size(); ++i) {
+        all += double(world.objects[leavable[i]].triangle_count);
+        if (i < keep) kept += double(world.objects[leavable[i]].triangle_count);
+    }
+    if (keep == 0 || !(kept >= config.shaft_min_share * all)) return {};
+    leavable.resize(size_t(std::min<uint64_t>(keep, leavable.size())));
+    std::sort(leavable.begin(), leavable.end());
+    return leavable;
+}
+
+double shaft_objects_digest(const World& world, const std::vector<uint32_t>& chosen) {
+    if (chosen.size() == leavable_objects(world).size()) return 0.0;
+    std::vector<const std::string*> names;
+    for (uint32_t o : chosen) names.push_back(&world.objects[o].name);
+    std::sort(names.begin(), names.end(), [](const std::string* a, const std::string* b) { return *a < *b; });
+    uint64_t h = 1469598103934665603ull;  // FNV-1a, 64 bits; each name ends with a 0 byte
+    for (const std::string* n : names) {
+        for (const char ch : *n) h = (h ^ uint8_t(ch)) * 1099511628211ull;
+        h *= 1099511628211ull;
+    }
+    return double((h >> 12) | 1u);  // 52 bits, exact in a double, never 0
+}
+
 bool shaft_pass_runs(const ConservativeConfig& config, const World& world, uint64_t regions) {
-    if (config.shaft_budget <= 0) return false;
-    return config.shaft_max_pairs == 0 || shaft_candidates(world, regions) <= config.shaft_max_pairs;
+    return !shaft_objects(config, world, regions).empty();
 }
 
 int shaft_pair_budget(const ConservativeConfig& config, const World& world, uint64_t regions) {
     constexpr int kShaftMostBudget = 4096;  // --shaft-budget's own limit
     if (!shaft_pass_runs(config, world, regions) || config.shaft_small_spend <= 0.0)
         return config.shaft_budget;
-    const double candidates = double(shaft_candidates(world, regions));
+    const double candidates = double(regions) * double(shaft_objects(config, world, regions).size());
     if (candidates <= 0.0) return config.shaft_budget;
     // Doubled while the whole pass's piece pairs stay within the spend, at most six times: powers of two, so
     // that a re-bake after a small edit mostly keeps the budget its old rows were made with.
@@ -723,15 +760,42 @@ std::vector<std::vector<uint32_t>> grid_shaft_blocks(const CellSet& cells, int k
 
 namespace {
 
-// The pass cap's note: what was skipped, and how to run it.
-void note_shaft_skipped(Context& ctx, const ConservativeConfig& config, uint64_t regions, uint64_t leavable,
-                        ShaftFigures& shaft) {
-    shaft.skipped_candidates += regions * leavable;
+// The pass cap's note (docs/ALGORITHMS.md#shaft-cap): the objects the pass tries over `regions` (`chosen`)
+// and what the cap leaves untried; and the figures of the choice.
+void note_shaft_objects(Context& ctx, const ConservativeConfig& config, const World& world, uint64_t regions,
+                        const std::vector<uint32_t>& leavable, const std::vector<uint32_t>& chosen,
+                        ConservativeFigures& figures, ShaftFigures& shaft) {
+    if (config.shaft_budget <= 0 || chosen.size() == leavable.size()) {
+        if (!chosen.empty() && figures.shaft_objects == 0) {
+            figures.shaft_objects = chosen.size();
+            figures.shaft_objects_triangle_share = 1.0;
+        }
+        return;
+    }
+    shaft.skipped_candidates += regions * uint64_t(leavable.size() - chosen.size());
+    double all = 0.0, kept = 0.0;
+    for (uint32_t o : leavable) all += double(world.objects[o].triangle_count);
+    for (uint32_t o : chosen) kept += double(world.objects[o].triangle_count);
+    const double share = all > 0.0 ? kept / all : 0.0;
+    if (chosen.empty()) {
+        ctx.info(
+            fmt::format("shaft pass: not run: {} regions x {} objects = {} candidate pairs, over "
+                        "--shaft-max-pairs {} even for one object (raise it to run the pass, at about a "
+                        "thread-millisecond a pair it tries)",
+                        regions, leavable.size(), regions * leavable.size(), config.shaft_max_pairs));
+        return;
+    }
     ctx.info(
-        fmt::format("shaft pass: not run: {} regions x {} objects = {} candidate pairs, over "
-                    "--shaft-max-pairs {} (raise it to run the pass, at about a thread-millisecond a pair "
-                    "it tries)",
-                    regions, leavable, regions * leavable, config.shaft_max_pairs));
+        fmt::format("shaft pass: on the {} of {} objects with the most triangles ({:.1f}% of their "
+                    "triangles): {} regions x {} objects = {} candidate pairs, over --shaft-max-pairs {} "
+                    "(raise it to try more, at about a thread-millisecond a pair the pass tries)",
+                    chosen.size(), leavable.size(), 100.0 * share, regions, leavable.size(),
+                    regions * leavable.size(), config.shaft_max_pairs));
+    if (figures.shaft_objects == 0 || chosen.size() < figures.shaft_objects) {
+        figures.shaft_objects = chosen.size();
+        figures.shaft_objects_triangle_share = share;
+        figures.shaft_objects_digest = shaft_objects_digest(world, chosen);
+    }
 }
 
 double seconds_since(std::chrono::steady_clock::time_point start) {
@@ -1018,7 +1082,11 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
     std::optional<RegionHiders> own_hiders;
     if (config.single_occluder_pass && !hiders) hiders = &own_hiders.emplace(ctx, occluders);
     if (!config.single_occluder_pass) hiders = nullptr;
-    const bool shaft_runs = shaft_pass_runs(config, world, boxes.size());
+    // The objects the shaft pass tries (docs/ALGORITHMS.md#shaft-cap), as a row.
+    const std::vector<uint32_t> chosen = shaft_objects(config, world, boxes.size());
+    const bool shaft_runs = !chosen.empty();
+    std::vector<uint64_t> chosen_row(pvs.words_per_row, 0);
+    for (uint32_t o : chosen) chosen_row[o >> 6] |= uint64_t(1) << (o & 63);
     if (shaft_runs) figures.shaft_pair_budget = std::max(figures.shaft_pair_budget, config.shaft_budget);
     std::optional<ShaftProvers> own_provers;
     if (shaft_runs && !provers)
@@ -1028,7 +1096,7 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
     const std::vector<double> cum_area = shaft_runs ? cumulative_areas(world) : std::vector<double>();
     Counts total;
     ShaftFigures shaft;
-    if (config.shaft_budget > 0 && !shaft_runs) note_shaft_skipped(ctx, config, boxes.size(), leavable.size(), shaft);
+    note_shaft_objects(ctx, config, world, boxes.size(), leavable, chosen, figures, shaft);
     uint64_t region_hidden = 0, skipped = 0;
     WorkShare alone;
     WorkShare& share = shared_work ? *shared_work : alone;
@@ -1036,7 +1104,7 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
 #pragma omp parallel reduction(+ : region_hidden, skipped)
     {
         PatchSolver solver(shared);
-        std::vector<uint32_t> open, candidates;
+        std::vector<uint32_t> open, candidates, shaft_tried;
         std::vector<uint64_t> hidden(pvs.words_per_row), seen(pvs.words_per_row);
         ShaftFigures local_shaft;
         ShaftProbe probe;
@@ -1077,10 +1145,13 @@ void conservative_box_rows(Context& ctx, const ConservativeConfig& config, const
                                       side ? nullptr : seen.data(), side ? seen.data() : nullptr));
                 if (provers) {
                     const auto shaft_start = std::chrono::steady_clock::now();
+                    shaft_tried.clear();
+                    for (uint32_t o : candidates)
+                        if (row_lists(chosen_row.data(), o)) shaft_tried.push_back(o);
                     // The probe (docs/ALGORITHMS.md#shaft-probe).
-                    probe_region(scene, world, cum_area, eyes, box, candidates, row, config.shaft_probe_rays, probe,
-                                 seen.data(), local_shaft);
-                    shaft_row(provers->of(set), world, eyes, box, candidates, config.shaft_budget, row,
+                    probe_region(scene, world, cum_area, eyes, box, shaft_tried, row, config.shaft_probe_rays,
+                                 probe, seen.data(), local_shaft);
+                    shaft_row(provers->of(set), world, eyes, box, shaft_tried, config.shaft_budget, row,
                               seen.data(), local_shaft);
                     local_shaft.seconds +=
                         std::chrono::duration<double>(std::chrono::steady_clock::now() - shaft_start).count();
@@ -1179,7 +1250,9 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
     const std::vector<std::vector<uint32_t>> blocks = config.shaft_budget > 0
                                                           ? grid_shaft_blocks(cells, config.shaft_block)
                                                           : std::vector<std::vector<uint32_t>>{};
-    const bool shaft_runs = shaft_pass_runs(config, world, grid_shaft_regions(config, cells));
+    // The objects the shaft pass tries (docs/ALGORITHMS.md#shaft-cap).
+    const std::vector<uint32_t> chosen = shaft_objects(config, world, grid_shaft_regions(config, cells));
+    const bool shaft_runs = !chosen.empty();
     if (shaft_runs) figures.shaft_pair_budget = std::max(figures.shaft_pair_budget, config.shaft_budget);
     // The blocks' proofs before the faces (docs/ALGORITHMS.md#shaft-early).
     const bool early = shaft_runs && config.shaft_early && config.shaft_block > 1;
@@ -1262,7 +1335,7 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
                     // The objects a cell of the block would still test (not hidden there, not settled by
                     // a reuse: a plan settles a block's cells alike) and whose bounds miss the root's box.
                     targets.clear();
-                    for (uint32_t o : leavable) {
+                    for (uint32_t o : chosen) {
                         if (world.objects[o].bounds.overlaps(root.box)) continue;
                         bool open = false;
                         for (uint32_t i = 0; i < root.count && !open; ++i) {
@@ -1445,11 +1518,13 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
     ctx.progress_end();
     // The shaft pass (docs/ALGORITHMS.md#shaft-pass), on the cells' finished rows, when the cap allows it
     // (docs/ALGORITHMS.md#shaft-cap), over blocks of cells (docs/ALGORITHMS.md#shaft-hierarchy).
-    if (config.shaft_budget > 0 && !shaft_runs) {
+    {
         ShaftFigures shaft;
-        note_shaft_skipped(ctx, config, grid_shaft_regions(config, cells), leavable.size(), shaft);
+        note_shaft_objects(ctx, config, world, grid_shaft_regions(config, cells), leavable, chosen, figures,
+                           shaft);
         figures.shaft += shaft;
-    } else if (shaft_runs) {
+    }
+    if (shaft_runs) {
         const auto pass_start = std::chrono::steady_clock::now();
         ShaftFigures shaft;
         ctx.progress_begin("shaft pass", blocks.size(), "blocks");
@@ -1490,10 +1565,10 @@ static void conservative_grid_rows(Context& ctx, const ConservativeConfig& confi
                 tree.build(cells, regions, block);
                 // The objects no cell of the block has settled by a reuse (docs/ALGORITHMS.md#reuse: a
                 // plan settles a block's cells alike).
-                const std::vector<uint32_t>* tried = &leavable;
+                const std::vector<uint32_t>* tried = &chosen;
                 if (reuse) {
                     candidates.clear();
-                    for (uint32_t o : leavable) {
+                    for (uint32_t o : chosen) {
                         bool open = true;
                         for (uint32_t c : block) open = open && !reuse->settled.test(c, o);
                         if (open) candidates.push_back(o);

@@ -66,6 +66,12 @@ struct ConservativeFigures {
     uint64_t parent_hidden = 0;     // (octree box, object) pairs left out untested: its parent left them out
     ShaftFigures shaft;             // the shaft pass (pvs/shaft_hiding.h)
     int shaft_pair_budget = 0;      // the largest piece-pair budget a (region, object) of it was given
+    // The fewest objects a pass that ran was given (docs/ALGORITHMS.md#shaft-cap), the share of the
+    // leavable objects' triangles they hold, and shaft_objects_digest() of them (0: every object); 0, 0, 0
+    // when no pass ran.
+    uint64_t shaft_objects = 0;
+    double shaft_objects_triangle_share = 0.0;
+    double shaft_objects_digest = 0.0;
     std::vector<uint64_t> samples_per_level;  // samples at each epsilon of the ladder
     double seconds = 0.0;
 };
@@ -98,10 +104,18 @@ std::vector<std::vector<uint32_t>> grid_shaft_blocks(const CellSet& cells, int k
 // without blocks (a block's proofs save tries, but what the pass costs still grows with its cells).
 uint64_t grid_shaft_regions(const ConservativeConfig& config, const CellSet& cells);
 
-// Whether the shaft pass runs over `regions` cells or boxes of `world` (docs/ALGORITHMS.md#shaft-cap): its
-// budget is on and regions x the objects a pass may leave out is at most config.shaft_max_pairs (0: no
-// limit). A function of the config, the world and the count alone, so a bake decides it alike on every
-// process and in every run.
+// The objects the shaft pass tries over `regions` cells or boxes of `world` (docs/ALGORITHMS.md#shaft-cap),
+// in index order: every object a pass may leave out (all but always-visible ones) when regions x their count
+// is at most config.shaft_max_pairs (0: no limit); else the floor(shaft_max_pairs / regions) of them with the
+// most triangles (ties: the lower index), where a listed object costs a frame the most, when they hold at
+// least config.shaft_min_share of the leavable objects' triangles. None otherwise, and when the budget is
+// off. A function of the config, the world and the count alone, so a bake chooses alike on every process
+// and in every run.
+std::vector<uint32_t> shaft_objects(const ConservativeConfig& config, const World& world, uint64_t regions);
+// What shaft_objects() chose, for a re-bake to compare: 0 when every object a pass may leave out, else a
+// 52-bit hash (FNV-1a) of the chosen objects' names in order of the names.
+double shaft_objects_digest(const World& world, const std::vector<uint32_t>& chosen);
+// Whether the shaft pass runs over `regions` cells or boxes of `world`: shaft_objects() chooses some.
 bool shaft_pass_runs(const ConservativeConfig& config, const World& world, uint64_t regions);
 // The piece pairs the shaft pass gives each (region, object) over `regions` cells or boxes
 // (docs/ALGORITHMS.md#shaft-small): config.shaft_budget, doubled (at most six times, and to 4096 at most)
@@ -110,6 +124,8 @@ bool shaft_pass_runs(const ConservativeConfig& config, const World& world, uint6
 int shaft_pair_budget(const ConservativeConfig& config, const World& world, uint64_t regions);
 // The count that rule compares: regions x the objects a pass may leave out (all but always-visible ones).
 uint64_t shaft_candidates(const World& world, uint64_t regions);
+// The objects a pass may leave out: all but always-visible ones.
+size_t leavable_count(const World& world);
 // The regions an octree level's `boxes` stand for in that rule: the cells of `min_cell_m` each box can still
 // be split into ((edge / min_cell_m)^3, the edge rounded up to min_cell_m times a power of two), so that a
 // level of few big boxes is not cheaper than the leaves it decides.

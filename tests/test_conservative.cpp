@@ -557,6 +557,91 @@ void expect_rows_within(const BakeData& fewer, const BakeData& more, const std::
                 << "cell " << cell << ", object " << o << ": " << why;
 }
 
+// OVER THE CAP, THE HEAVIEST FIRST (docs/ALGORITHMS.md#shaft-cap): a pass whose cells x objects are over
+// --shaft-max-pairs tries the floor(cap / cells) objects with the most triangles (ties: the lower index),
+// never an always-visible one, in index order; none when not even one fits, when they hold less than
+// --shaft-min-share of the triangles, or when the budget is off. The digest tells a re-bake which: 0 for
+// all, else a hash of the names that ignores their order.
+TEST(Conservative, OverItsCapTheShaftPassTriesTheObjectsWithTheMostTriangles) {
+    World w;
+    w.objects.resize(6);
+    const uint32_t tris[6] = {4, 30, 12, 30, 2, 50};
+    for (uint32_t o = 0; o < 6; ++o) {
+        w.objects[o].triangle_count = tris[o];
+        w.objects[o].name = "object" + std::to_string(o);
+    }
+    w.objects[5].flags |= kObjectAlwaysVisible;  // the heaviest, but always listed: never tried
+    ConservativeConfig c;
+    c.shaft_max_pairs = 50;  // 10 cells: all 5 leavable; 20 or 25 cells: 2; 40: 1; 60: none
+    EXPECT_EQ(shaft_objects(c, w, 10), (std::vector<uint32_t>{0, 1, 2, 3, 4})) << "within the cap: all";
+    EXPECT_EQ(shaft_objects_digest(w, shaft_objects(c, w, 10)), 0.0);
+    EXPECT_EQ(shaft_objects(c, w, 20), (std::vector<uint32_t>{1, 3})) << "the two of 30 triangles: 60 of 78";
+    EXPECT_EQ(shaft_objects(c, w, 25), (std::vector<uint32_t>{1, 3}));
+    EXPECT_TRUE(shaft_objects(c, w, 40).empty()) << "30 of 78 triangles: under the default share, a half";
+    c.shaft_min_share = 0.0;
+    EXPECT_EQ(shaft_objects(c, w, 40), (std::vector<uint32_t>{1})) << "a tie: the lower index";
+    EXPECT_TRUE(shaft_objects(c, w, 60).empty());
+    EXPECT_TRUE(shaft_pass_runs(c, w, 40));
+    EXPECT_FALSE(shaft_pass_runs(c, w, 60));
+    c.shaft_max_pairs = 0;
+    EXPECT_EQ(shaft_objects(c, w, 1000000).size(), 5u) << "no limit";
+    c.shaft_budget = 0;
+    EXPECT_TRUE(shaft_objects(c, w, 1).empty()) << "the pass off";
+    // The digest: of the names, whatever their order; another choice, another digest.
+    const double d13 = shaft_objects_digest(w, {1, 3}), d1 = shaft_objects_digest(w, {1});
+    EXPECT_NE(d13, 0.0);
+    EXPECT_NE(d13, d1);
+    std::swap(w.objects[1].name, w.objects[3].name);
+    EXPECT_EQ(shaft_objects_digest(w, {1, 3}), d13);
+}
+
+// The scene of the two walls with a second target behind them both (a shelf above the first), lighter than
+// it (12 triangles against 24); over the cap with room for one object a cell (and no least share), the pass
+// proves the heavier and leaves the lighter listed, the report says what it tried, and every row lies
+// between the full pass's and no pass's. With the default least share (a half) one object is too few: the
+// pass does not run.
+TEST(Conservative, OverItsCapTheShaftPassProvesTheHeaviestAndListsTheRest) {
+    uint32_t heavy = 0;
+    World w = two_walls_at_different_depths(heavy);
+    {  // the target's triangles twice: an object of 24 (its triangles are the world's last)
+        const uint32_t copy = test::add_box(w, "copy", w.objects[heavy].bounds);
+        ASSERT_EQ(copy, heavy + 1);
+        w.objects[heavy].triangle_count += w.objects[copy].triangle_count;
+        w.objects.pop_back();
+    }
+    const uint32_t light = test::add_box(w, "light", Aabb::of({11, 2.6f, 3}, {11.5f, 2.9f, 5}));
+    const glm::vec3 eye(2.5f, 1.5f, 3.5f);
+    BakeConfig c = conservative_config();
+    c.conservative.shaft_budget = 1024;
+    const BakeData all = bake_without_misses(c, w);
+    const uint32_t cell = uint32_t(all.cells.find(eye));
+    ASSERT_FALSE(all.pvs.test(cell, heavy)) << "the full pass no longer proves the scene";
+    ASSERT_FALSE(all.pvs.test(cell, light)) << "the full pass no longer proves the scene";
+    EXPECT_EQ(figure(all, "conservative_shaft_objects"), double(w.objects.size()));
+    EXPECT_EQ(figure(all, "conservative_shaft_objects_digest"), 0.0);
+    c.conservative.shaft_budget = 0;
+    const BakeData off = bake_without_misses(c, w);
+    ASSERT_TRUE(off.pvs.test(cell, light))
+        << "the cubes alone prove the light target: the scene tests nothing";
+    c.conservative.shaft_budget = 1024;
+    c.conservative.shaft_max_pairs = all.cells.size();  // one object a cell
+    const BakeData too_few = bake_without_misses(c, w);
+    EXPECT_EQ(figure(too_few, "conservative_shaft_objects"), 0.0);
+    EXPECT_EQ(too_few.pvs.words, off.pvs.words) << "under the least share the pass does not run";
+    c.conservative.shaft_min_share = 0.0;
+    const BakeData one = bake_without_misses(c, w);
+    EXPECT_FALSE(one.pvs.test(cell, heavy)) << "the heaviest object is tried and proven";
+    EXPECT_TRUE(one.pvs.test(cell, light)) << "the lighter one is not tried";
+    EXPECT_EQ(figure(one, "conservative_shaft_objects"), 1.0);
+    EXPECT_NEAR(figure(one, "conservative_shaft_objects_triangle_share"), 24.0 / double(w.triangles.size()),
+                1e-12);
+    EXPECT_NE(figure(one, "conservative_shaft_objects_digest"), 0.0);
+    EXPECT_EQ(figure(one, "conservative_shaft_skipped_candidates"),
+              double(all.cells.size() * (w.objects.size() - 1)));
+    expect_rows_within(all, one, "the full pass lists what the heaviest-first pass does not");
+    expect_rows_within(one, off, "the heaviest-first pass lists what no pass does not");
+}
+
 // THE SHAFT PASS'S HIERARCHY (docs/ALGORITHMS.md#shaft-hierarchy): the scene above on 1 m cells, the pass
 // over blocks of 4 x 4 x 4 cells halved down to cells. A node's proof holds for every cell of it, and a
 // node that cannot prove an object hands it to its halves, down to the cells, which try it exactly as the

@@ -103,6 +103,11 @@ std::vector<WorldEdit> no_edit(const World&) {
     return {};
 }
 
+// A crate moved within its room: no object's triangles change.
+std::vector<WorldEdit> moved_crate(const World&) {
+    return {WorldEdit{WorldEdit::Kind::kMove, "crate_1_1_0", {}, glm::vec3(1.0f, 0.0f, 0.5f)}};
+}
+
 // Area and facing of a scene's triangles.
 double scene_area(const SceneDesc& scene, glm::dvec3* normal_sum = nullptr) {
     double area = 0.0;
@@ -251,7 +256,15 @@ INSTANTIATE_TEST_SUITE_P(Edits, ReuseEdit,
                                            // proofs before the faces and nodes giving up: a pair is kept only
                                            // when the edit misses the block's box and the object.
                                            EditCase{"DoorCutAndCrateAddedShaftBlocks", door_and_new_crate,
-                                                    " --shaft-block 2 --shaft-early --shaft-give-up 1"}),
+                                                    " --shaft-block 2 --shaft-early --shaft-give-up 1"},
+                                           // Over the shaft pass's cap, 20 objects a cell (of the
+                                           // sample world's 512 cells): the pass tries the heaviest only,
+                                           // the same ones before and after an edit that keeps every
+                                           // object's triangles.
+                                           EditCase{"NoEditHeaviestFirst", no_edit,
+                                                    " --shaft-max-pairs 10496 --shaft-min-share 0"},
+                                           EditCase{"MovedCrateHeaviestFirst", moved_crate,
+                                                    " --shaft-max-pairs 10496 --shaft-min-share 0"}),
                          [](const auto& info) { return std::string(info.param.name); });
 
 // The ranking runs in full after the PVS and reads nothing of the old bake, so a re-bake may rank otherwise
@@ -320,9 +333,9 @@ nlohmann::json expect_refused_after_an_edit(const std::function<std::string(uint
 }
 
 // The shaft pass's cap is decided by cells x objects (docs/ALGORITHMS.md#shaft-cap): an old bake whose pass
-// ran, at a cap its world just meets, is refused for an edited world of more objects, whose bake would not
-// run it (the old rows hold what only the pass proved).
-TEST(Reuse, AnOldBakeWhosePassTheShaftCapNowSkipsIsRefused) {
+// tried every object, at a cap its world just meets, is refused for an edited world of more objects, whose
+// pass would try only the heaviest (the old rows hold what only the pass proved of the others).
+TEST(Reuse, AnOldBakeWhosePassTheShaftCapNowNarrowsIsRefused) {
     expect_refused_after_an_edit(
         [](uint64_t cells, uint64_t objects) {
             return " --shaft-max-pairs " + std::to_string(cells * objects);
