@@ -242,9 +242,12 @@ void octree_cells_and_pvs(Context& ctx, const BakeConfig& config, const World& w
                 level.shaft_budget = 0;
                 const uint64_t candidates = shaft_candidates(world, reach);
                 figures.conservative.shaft.skipped_candidates += candidates;
-                ctx.info(fmt::format("shaft pass: not run on {} octree boxes: the {} cells they can split into "
-                                     "x the objects = {} candidate pairs, over --shaft-max-pairs {}",
-                                     boxes.size(), reach, candidates, level.shaft_max_pairs));
+                ctx.info(fmt::format(
+                    "shaft pass: not run on {} octree boxes: the {} cells they can split into "
+                    "x the objects = {} candidate pairs, over --shaft-max-pairs {}, and the "
+                    "objects with the most triangles that fit hold less than "
+                    "--shaft-min-share {} of them",
+                    boxes.size(), reach, candidates, level.shaft_max_pairs, level.shaft_min_share));
             } else if (level.shaft_budget > 0 && chosen < leavable_count(world) &&
                        level.shaft_max_pairs > 0) {
                 // The heaviest objects the cap allows over those cells: the boxes' own rule then chooses

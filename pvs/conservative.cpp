@@ -647,6 +647,15 @@ std::vector<uint32_t> leavable_objects(const World& world) {
     return out;
 }
 
+// The share of the triangles of `all` objects that `some` of them hold (0 when they have none).
+double triangle_share(const World& world, const std::vector<uint32_t>& all,
+                      const std::vector<uint32_t>& some) {
+    double total = 0.0, part = 0.0;
+    for (uint32_t o : all) total += double(world.objects[o].triangle_count);
+    for (uint32_t o : some) part += double(world.objects[o].triangle_count);
+    return total > 0.0 ? part / total : 0.0;
+}
+
 }  // namespace
 
 size_t leavable_count(const World& world) {
@@ -659,23 +668,19 @@ uint64_t shaft_candidates(const World& world, uint64_t regions) {
 
 std::vector<uint32_t> shaft_objects(const ConservativeConfig& config, const World& world, uint64_t regions) {
     if (config.shaft_budget <= 0) return {};
-    std::vector<uint32_t> leavable = leavable_objects(world);
+    const std::vector<uint32_t> leavable = leavable_objects(world);
     if (config.shaft_max_pairs == 0 || regions * uint64_t(leavable.size()) <= config.shaft_max_pairs)
         return leavable;
     const uint64_t keep = regions > 0 ? config.shaft_max_pairs / regions : uint64_t(leavable.size());
     // The heaviest first (a stable order: ties by index), then back in index order.
-    std::stable_sort(leavable.begin(), leavable.end(), [&](uint32_t a, uint32_t b) {
+    std::vector<uint32_t> chosen = leavable;
+    std::stable_sort(chosen.begin(), chosen.end(), [&](uint32_t a, uint32_t b) {
         return world.objects[a].triangle_count > world.objects[b].triangle_count;
     });
-    double all = 0.0, kept = 0.0;
-    for (size_t i = 0; i < leavable.size(); ++i) {
-        all += double(world.objects[leavable[i]].triangle_count);
-        if (i < keep) kept += double(world.objects[leavable[i]].triangle_count);
-    }
-    if (keep == 0 || !(kept >= config.shaft_min_share * all)) return {};
-    leavable.resize(size_t(std::min<uint64_t>(keep, leavable.size())));
-    std::sort(leavable.begin(), leavable.end());
-    return leavable;
+    chosen.resize(size_t(std::min<uint64_t>(keep, chosen.size())));
+    std::sort(chosen.begin(), chosen.end());
+    if (chosen.empty() || !(triangle_share(world, leavable, chosen) >= config.shaft_min_share)) return {};
+    return chosen;
 }
 
 double shaft_objects_digest(const World& world, const std::vector<uint32_t>& chosen) {
@@ -697,9 +702,9 @@ bool shaft_pass_runs(const ConservativeConfig& config, const World& world, uint6
 
 int shaft_pair_budget(const ConservativeConfig& config, const World& world, uint64_t regions) {
     constexpr int kShaftMostBudget = 4096;  // --shaft-budget's own limit
-    if (!shaft_pass_runs(config, world, regions) || config.shaft_small_spend <= 0.0)
-        return config.shaft_budget;
-    const double candidates = double(regions) * double(shaft_objects(config, world, regions).size());
+    const size_t tried = shaft_objects(config, world, regions).size();
+    if (tried == 0 || config.shaft_small_spend <= 0.0) return config.shaft_budget;
+    const double candidates = double(regions) * double(tried);
     if (candidates <= 0.0) return config.shaft_budget;
     // Doubled while the whole pass's piece pairs stay within the spend, at most six times: powers of two, so
     // that a re-bake after a small edit mostly keeps the budget its old rows were made with.
@@ -773,18 +778,16 @@ void note_shaft_objects(Context& ctx, const ConservativeConfig& config, const Wo
         return;
     }
     shaft.skipped_candidates += regions * uint64_t(leavable.size() - chosen.size());
-    double all = 0.0, kept = 0.0;
-    for (uint32_t o : leavable) all += double(world.objects[o].triangle_count);
-    for (uint32_t o : chosen) kept += double(world.objects[o].triangle_count);
-    const double share = all > 0.0 ? kept / all : 0.0;
     if (chosen.empty()) {
-        ctx.info(
-            fmt::format("shaft pass: not run: {} regions x {} objects = {} candidate pairs, over "
-                        "--shaft-max-pairs {} even for one object (raise it to run the pass, at about a "
-                        "thread-millisecond a pair it tries)",
-                        regions, leavable.size(), regions * leavable.size(), config.shaft_max_pairs));
+        ctx.info(fmt::format(
+            "shaft pass: not run: {} regions x {} objects = {} candidate pairs, over --shaft-max-pairs {}, "
+            "and the objects with the most triangles that fit hold less than --shaft-min-share {} of them "
+            "(raise either to run the pass, at about a thread-millisecond a pair it tries)",
+            regions, leavable.size(), regions * leavable.size(), config.shaft_max_pairs,
+            config.shaft_min_share));
         return;
     }
+    const double share = triangle_share(world, leavable, chosen);
     ctx.info(
         fmt::format("shaft pass: on the {} of {} objects with the most triangles ({:.1f}% of their "
                     "triangles): {} regions x {} objects = {} candidate pairs, over --shaft-max-pairs {} "

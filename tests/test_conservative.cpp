@@ -640,6 +640,16 @@ TEST(Conservative, OverItsCapTheShaftPassProvesTheHeaviestAndListsTheRest) {
               double(all.cells.size() * (w.objects.size() - 1)));
     expect_rows_within(all, one, "the full pass lists what the heaviest-first pass does not");
     expect_rows_within(one, off, "the heaviest-first pass lists what no pass does not");
+    // The octree decides per level over the cells its boxes can split into; its boxes then choose alike
+    // (driver/bake.cpp): a level over the cap runs a partial pass, with no miss.
+    c.cells.kind = CellKind::kOctree;
+    c.conservative.shaft_max_pairs = 3 * all.cells.size();
+    const BakeData octree = bake_without_misses(c, w);
+    EXPECT_GE(figure(octree, "conservative_shaft_objects"), 1.0);
+    EXPECT_LT(figure(octree, "conservative_shaft_objects"), double(w.objects.size()))
+        << "no level over the cap";
+    EXPECT_NE(figure(octree, "conservative_shaft_objects_digest"), 0.0);
+    EXPECT_GT(figure(octree, "conservative_shaft_skipped_candidates"), 0.0);
 }
 
 // THE SHAFT PASS'S HIERARCHY (docs/ALGORITHMS.md#shaft-hierarchy): the scene above on 1 m cells, the pass
