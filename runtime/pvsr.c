@@ -3371,14 +3371,28 @@ static double hz_exit(double w0, double w1, double lo, double hi) {
     return HUGE_VAL;
 }
 
+/* 1 when every point of the box part (its least depth, ranges across and up, part[0 .. 4], and greatest
+ * depth part[5], less the eye) lies beyond the plane of a piece's depth (1 / depth = g[0] + g[1] u + g[2] v,
+ * so a point x lies beyond it when g[0] d + g[1] x_h + g[2] x_y > 1): then along each direction of the piece
+ * its occluder is met before any point of the box, however the two extend in depth
+ * (docs/ALGORITHMS.md#runtime-horizon). The least of that linear function over the box, by 10^-9 of its
+ * terms' size more than 1. */
+static int hz_beyond(const double g[3], const double part[6]) {
+    const double t0 = g[0] > 0.0 ? g[0] * part[0] : g[0] < 0.0 ? g[0] * part[5] : 0.0;
+    const double t1 = g[1] > 0.0 ? g[1] * part[1] : g[1] < 0.0 ? g[1] * part[2] : 0.0;
+    const double t2 = g[2] > 0.0 ? g[2] * part[3] : g[2] < 0.0 ? g[2] * part[4] : 0.0;
+    return t0 + t1 + t2 - 1.0 > HZ_DEPTH * (1.0 + fabs(t0) + fabs(t1) + fabs(t2));
+}
+
 /* Is [a, b] x [v_min, v_max] covered by the pieces of refs[0 .. n) (a node's and its ancestors', whose
- * columns hold [a, b]) that lie wholly before the box in the directions they serve? part: the box's part in
- * the frame, its least depth d_lo and its ranges across (h) and up (v), less the eye; the box's least depth
- * over a rectangle of directions is max(d_lo, hz_entry across, hz_entry up). Each piece's chords are taken at
+ * columns hold [a, b]) that lie wholly before the box in the directions they serve, or that it lies wholly
+ * beyond (hz_beyond)? part: the box's part in the frame, its least depth d_lo, its ranges across (h) and up
+ * (v), less the eye, and its greatest depth; the box's least depth over a rectangle of directions is
+ * max(d_lo, hz_entry across, hz_entry up). Each piece's chords are taken at
  * a and b; the candidates, sorted by their bottom on [a, b], are chained from v_min as
  * docs/ALGORITHMS.md#runtime-horizon says: a chain that holds at a and at b holds between them, every chord
  * being linear. */
-static int hz_covered(const hz_ref* refs, int n, double a, double b, const double part[5], double v_min,
+static int hz_covered(const hz_ref* refs, int n, double a, double b, const double part[6], double v_min,
                       double v_max, hz_uses* uses) {
     const double d_lo = part[0], d_u = hz_max(d_lo, hz_entry(a, b, part[1], part[2]));
     const double goal = v_max + HZ_ROUND * (1.0 + fabs(v_max));
@@ -3399,7 +3413,7 @@ static int hz_covered(const hz_ref* refs, int n, double a, double b, const doubl
         if (qa < v_min && qb < v_min) continue;         /* below the box here */
         pa = pc->lo[0] + (pc->lo[1] - pc->lo[0]) * ta;
         pb = pc->lo[0] + (pc->lo[1] - pc->lo[0]) * tb;
-        if (!(d_u > pc->depth)) {
+        if (!(d_u > pc->depth) && !hz_beyond(pc->plane, part)) {
             /* Deeper than the box somewhere in its node: over the part that can serve the box alone? That
              * part lies in [a, b] x [vlo, vhi], the piece's range over [a, b] within the box's, where the
              * box's points lie at depth d_here or more. */
@@ -3492,7 +3506,7 @@ static int hz_range_covered(const hz_ref* refs, int n, double ua, double ub, con
     const double d_out = hz_max(d_in, hz_min(part[1], hz_exit(ua, ub, part[2], part[3])));
     const double lo_v = hz_min(part[4] / d_in, part[4] / d_out),
                  hi_v = hz_max(part[5] / d_in, part[5] / d_out);
-    const double range_part[5] = {d_in, part[2], part[3], part[4], part[5]};
+    const double range_part[6] = {d_in, part[2], part[3], part[4], part[5], d_out};
     return hz_covered(refs, n, ua, ub, range_part, hz_max(v_min, lo_v - HZ_ROUND * (1.0 + fabs(lo_v))),
                       hz_min(v_max, hi_v + HZ_ROUND * (1.0 + fabs(hi_v))), uses);
 }

@@ -1142,6 +1142,24 @@ TEST(RuntimeHorizon, ALowFarWallHidesTheFarEndOfATallLongBox) {
     }
 }
 
+// A floor upstairs, seen from below through the ceiling slab it stands on: in the columns ahead its
+// directions span from steep to shallow, and the slab's underside is deeper at the shallow end than the
+// floor is at the steep one, so no bound of depths over the directions separates them; but the whole
+// floor lies beyond the plane of the underside, so every sight line meets the slab first. What reaches
+// below the underside or past the slab's edge stays drawn.
+TEST(RuntimeHorizon, ACeilingHidesTheWholeFloorAboveItsPlane) {
+    const Box slab = box(-10, 3.0f, 1, 10, 3.4f, 30);
+    const Box floor = box(-1, 3.45f, 2, 1, 3.45f, 25);
+    for (const int columns : {16, 256, 1024}) {
+        Horizon h(columns);
+        h.frame(kEye, {slab});
+        EXPECT_TRUE(h.hidden(floor)) << columns << " columns";
+        EXPECT_TRUE(h.hidden(box(-1, 3.45f, 2, 1, 5, 25))) << columns << " columns, a room over it";
+        EXPECT_FALSE(h.hidden(box(-1, 2.9f, 2, 1, 3.45f, 25))) << columns << " columns, below the underside";
+        EXPECT_FALSE(h.hidden(box(-1, 3.45f, 2, 1, 3.45f, 50))) << columns << " columns, seen past the edge";
+    }
+}
+
 // Two walls side by side meeting along a vertical seam whose direction falls inside a column (at any
 // column count tried): each gives the seam's column a piece over its own part, so together they hide the
 // box behind the seam; with a 2 cm gap at the seam the box stays visible through it, and neither wall
