@@ -39,8 +39,8 @@
 // world's panels, occluders/panels.h, among them; the culler takes them as panels; --eye-select first-hit:
 // ranked instead by how many of 32 segments from the eye to random points of each listed object they are
 // the first of them to meet, an oracle of what blocks this eye's sight); --parts 1: an object
-// is also culled when the culler hides each of its M (--split, default 8) part boxes (its triangles split at
-// the median of their centres on the longest axis, recursively): a finer test of the object. Both make the
+// is also culled when the culler hides each of its M (--split, default 8) part boxes (cut as the bake cuts
+// them, core/object_parts.h): a finer test of the object. Both make the
 // bench walk the PVS itself (the timing is then not the runtime's). --horizon N (with --bake): after the
 // culler, the runtime's occlusion horizon (pvsr_horizon) of N columns a side frame around the eye, built from
 // every proven box of the bake and every panel and slanted panel of the world, culls what it hides of the
@@ -71,6 +71,7 @@
 #include "bench/bench_util.h"
 #include "core/context.h"
 #include "core/error.h"
+#include "core/object_parts.h"
 #include "core/random.h"
 #include "io/bake_file.h"
 #include "io/gltf_loader.h"
@@ -249,44 +250,9 @@ private:
     RTCScene scene_ = nullptr;
 };
 
-// The boxes of up to `parts` groups of the object's triangles: split at the median of their centres on the
-// longest axis of the centres, recursively.
+// The boxes of up to `parts` parts of the object, as the bake cuts them (core/object_parts.h).
 std::vector<pvs::Aabb> part_boxes(const pvs::World& world, uint32_t object, uint32_t parts) {
-    const pvs::WorldObject& obj = world.objects[object];
-    std::vector<uint32_t> tris(obj.triangle_count);
-    for (uint32_t k = 0; k < obj.triangle_count; ++k) tris[k] = obj.first_triangle + k;
-    auto centre = [&](uint32_t t) {
-        const pvs::Triangle& tri = world.triangles[t];
-        return (world.positions[tri.v[0]] + world.positions[tri.v[1]] + world.positions[tri.v[2]]) / 3.0f;
-    };
-    std::vector<pvs::Aabb> out;
-    struct Range {
-        size_t a, b;
-        uint32_t parts;
-    };
-    std::vector<Range> todo{{0, tris.size(), std::max(1u, parts)}};
-    while (!todo.empty()) {
-        const Range r = todo.back();
-        todo.pop_back();
-        if (r.b <= r.a) continue;
-        if (r.parts <= 1 || r.b - r.a == 1) {
-            pvs::Aabb box;
-            for (size_t k = r.a; k < r.b; ++k)
-                for (int c = 0; c < 3; ++c) box.extend(world.positions[world.triangles[tris[k]].v[c]]);
-            out.push_back(box);
-            continue;
-        }
-        pvs::Aabb cb;
-        for (size_t k = r.a; k < r.b; ++k) cb.extend(centre(tris[k]));
-        const glm::vec3 e = cb.max - cb.min;
-        const int axis = e.x >= e.y && e.x >= e.z ? 0 : e.y >= e.z ? 1 : 2;
-        const size_t mid = (r.a + r.b) / 2;
-        std::nth_element(tris.begin() + long(r.a), tris.begin() + long(mid), tris.begin() + long(r.b),
-                         [&](uint32_t x, uint32_t y) { return centre(x)[axis] < centre(y)[axis]; });
-        todo.push_back({r.a, mid, r.parts / 2});
-        todo.push_back({mid, r.b, r.parts - r.parts / 2});
-    }
-    return out;
+    return pvs::object_part_boxes(world, object, std::max(1u, parts));
 }
 
 struct Frame {
@@ -368,7 +334,7 @@ int main(int argc, char** argv) {
             else if (k == "--resolution")
                 resolution = int(parse_count("--resolution", v, 0, PVSR_CULLER_MAX_RESOLUTION));
             else if (k == "--split")
-                n_split = uint32_t(parse_count("--split", v, 1, 4096));
+                n_split = uint32_t(parse_count("--split", v, 1, pvs::kMaxObjectParts));
             else if (k == "--bake")
                 bake_path = v;
             else if (k == "--horizon-record")

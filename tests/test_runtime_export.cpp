@@ -87,13 +87,13 @@ TEST(RuntimeExport, TheSampleWorldAnswersAsTheHdf5Loader) {
 // What a game draws, against rays: random worlds baked with their ranked occluders (proven boxes of the
 // solid, panels, and the turned walls' sides as polygon occluders) and their horizon lists, exported; the
 // walk culled by the cell's culler and its horizon (pvsr_visit_drawn_horizon) is the PVS less exactly the
-// objects whose bounds either hides; from random eyes in random
+// objects whose bounds either hides or each of whose parts one of them hides; from random eyes in random
 // cells' eye space, every object the culled walk leaves out of the cell's PVS is checked with segments from
 // the eye to points of its triangles (vertices pulled in a hair, centroids and random points): none may reach
 // one (a wrong cull). Not vacuous: some are culled.
 TEST(RuntimeExport, TheDrawnWalkCullsNothingARayReaches) {
     uint64_t culled = 0, segments = 0, wrong = 0, frames = 0, polygons = 0, horizon_given = 0,
-             horizon_culled = 0;
+             horizon_culled = 0, parts_with_culls = 0;
     for (const uint64_t seed : {3u, 5u}) {
         SCOPED_TRACE("world seed " + std::to_string(seed));
         const RandomWorld random = make_random_world(seed, 0);
@@ -135,12 +135,18 @@ TEST(RuntimeExport, TheDrawnWalkCullsNothingARayReaches) {
             std::vector<uint32_t> listed, drawn, culler_drawn, expected;
             level.for_each_visible(cell, [&](uint32_t o) { listed.push_back(o); });
             level.for_each_drawn(cell, culler, [&](uint32_t o) { culler_drawn.push_back(o); });
-            // Culled by both: the PVS less exactly the objects whose bounds the culler or the horizon hides.
+            // Culled by both: the PVS less exactly the objects whose bounds the culler or the horizon hides,
+            // or each of whose parts one of them hides.
             level.for_each_drawn(cell, &culler, horizon, [&](uint32_t o) { drawn.push_back(o); });
+            const auto hidden = [&](const float* b) { return culler.is_hidden(b) || horizon.is_hidden(b); };
             for (const uint32_t o : listed) {
                 float b[6];
                 const bool always = (level.object_flags(o) & PVSR_OBJECT_ALWAYS_VISIBLE) != 0;
-                if (always || !level.object_bounds(o, b) || (!culler.is_hidden(b) && !horizon.is_hidden(b)))
+                bool parts_hidden = level.object_part_count(o) > 0;
+                for (uint32_t k = 0; k < level.object_part_count(o) && parts_hidden; ++k)
+                    parts_hidden = level.object_part(o, k, b) && hidden(b);
+                parts_with_culls += parts_hidden;
+                if (always || !level.object_bounds(o, b) || (!hidden(b) && !parts_hidden))
                     expected.push_back(o);
             }
             ASSERT_EQ(drawn, expected);
@@ -187,10 +193,10 @@ TEST(RuntimeExport, TheDrawnWalkCullsNothingARayReaches) {
     std::printf(
         "drawn walks: %llu frames (%llu polygons, %llu horizon occluders given), %llu objects culled (%llu "
         "by the "
-        "horizon alone), %llu segments, %llu wrong\n",
+        "horizon alone; %llu with every part hidden), %llu segments, %llu wrong\n",
         (unsigned long long)frames, (unsigned long long)polygons, (unsigned long long)horizon_given,
-        (unsigned long long)culled, (unsigned long long)horizon_culled, (unsigned long long)segments,
-        (unsigned long long)wrong);
+        (unsigned long long)culled, (unsigned long long)horizon_culled, (unsigned long long)parts_with_culls,
+        (unsigned long long)segments, (unsigned long long)wrong);
     EXPECT_GT(horizon_culled, 0u) << "the cells' horizons should cull some object the culler draws";
     EXPECT_GT(frames, 0u);
     EXPECT_GT(polygons, 0u) << "the frames should use some polygon occluder";
