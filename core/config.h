@@ -155,7 +155,7 @@ struct RankingConfig {
     uint32_t horizon_columns = 256;  // [Limit: 4..8192] columns a side of those horizons (runtime/pvsr.h)
     uint32_t horizon_min_uses = 1;   // [Limit: 1..1e9] a list keeps the occluders that served in this many of
                                      // its eyes' proofs
-    uint32_t object_parts = 8;       // [Limit: 0..64] each object's triangles split into up to this many part
+    uint32_t object_parts = 8;       // [Limit: 0..64] each object's surface cut into up to this many part
                                      // boxes, stored for the run-time tests: an object whose bounds are not
                                      // hidden is culled when every part is (docs/ALGORITHMS.md#object-parts);
                                      // 0 or 1 = none
@@ -479,12 +479,14 @@ void visit_options(Config& c, Visitor&& v) {
                  "a block's list keeps the occluders that served in at least this many of its eyes' proofs",
                  1, 1e9},
       c.ranking.horizon_min_uses);
-    v(OptionSpec{OptionGroup::kRanking, "--object-parts", "ranking.object_parts", "parts",
-                 "each object's triangles are split into up to this many part boxes for the run-time tests: "
-                 "an object whose bounds the culler or horizon does not hide is culled when they hide every "
-                 "part (kept where the parts hold less than 0.9 of the bounds' volume); 0 = none",
-                 0, 64},
-      c.ranking.object_parts);
+    v(
+        OptionSpec{
+            OptionGroup::kRanking, "--object-parts", "ranking.object_parts", "parts",
+            "each object's surface is cut into up to this many part boxes for the run-time tests: an "
+            "object whose bounds the culler or horizon does not hide is culled when they hide every part "
+            "(kept where the parts hold less than 0.9 of the bounds' volume); 0 = none",
+            0, 64},
+        c.ranking.object_parts);
     v(OptionSpec{OptionGroup::kRanking, "--horizon-list-max", "ranking.horizon_list_max", "occluders",
                  "a block's list keeps at most this many occluders, the most used first (fewer: a cheaper "
                  "frame, less culled); 0 = no limit",
