@@ -68,7 +68,8 @@ struct Leaf {
     double at = 0.0;
 };
 
-// The cut of the leaf that saves the most cost: each axis at the seven eighths of its box.
+// The cut of the leaf that saves the most cost, among the planes at each 1 / kPartCutsPerAxis of its box on
+// each axis.
 void search_cut(Leaf& leaf, const Aabb& bounds, std::vector<Polygon>& below, std::vector<Polygon>& above) {
     leaf.searched = true;
     leaf.gain = 0.0;
