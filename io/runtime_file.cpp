@@ -708,10 +708,21 @@ std::string assemble(const std::string& path, Bake& b, const RuntimeFileOptions&
         sections.push_back(std::move(hlist));
     }
 
-    // 2.2: the objects' part boxes ('OPOF' offsets, objects + 1, into 'OPBX'), when some object has parts.
+    // The objects' part boxes, when some object has parts: 5.1, 'OPOQ' offsets (objects + 1, 2 or 4 bytes)
+    // into 'OPBQ', six 16-bit steps a part on the grid of the object's bounds (pvsr_part_encode; 2.2's 'OPOF'
+    // and 'OPBX' held floats). A bake's parts lie on that grid already (core/object_parts.h), so the runtime
+    // decodes the bake file's floats; an older bake's are rounded outward to it.
     if (!b.objects.part_offsets.empty() && b.objects.part_offsets.back() > 0) {
-        sections.push_back(array_section(PVSR_TAG('O', 'P', 'O', 'F'), 4, b.objects.part_offsets));
-        sections.push_back(array_section(PVSR_TAG('O', 'P', 'B', 'X'), 24, b.objects.part_boxes));
+        std::vector<uint16_t> steps(b.objects.part_boxes.size());
+        float box[6];
+        for (size_t o = 0; o + 1 < b.objects.part_offsets.size(); ++o)
+            for (uint32_t e = b.objects.part_offsets[o]; e < b.objects.part_offsets[o + 1]; ++e)
+                if (!pvsr_part_encode(&b.objects.bounds[6 * o], &b.objects.part_boxes[6 * size_t(e)],
+                                      &steps[6 * size_t(e)], box))
+                    throw bad_input(fmt::format("{}: object {}'s part box {} is not inside its bounds", path,
+                                                o, e - b.objects.part_offsets[o]));
+        sections.push_back(index_section(PVSR_TAG('O', 'P', 'O', 'Q'), b.objects.part_offsets));
+        sections.push_back(array_section(PVSR_TAG('O', 'P', 'B', 'Q'), 12, steps));
     }
 
     // The header, the table, the sections at multiples of 64.

@@ -1059,34 +1059,137 @@ static const char* check_horizon(pvsr_level* l) {
     return NULL;
 }
 
-/* File version 2.2: the objects' part boxes ('OPOF' offsets, objects + 1, into 'OPBX' boxes): both or none.
- * Offsets from 0, never decreasing, ending at the boxes' count; each box finite with min <= max, inside its
- * object's bounds. */
+/* ---- Part boxes on their object's grid (file 5.1, 'OPBQ'; docs/FORMAT.md, docs/ALGORITHMS.md#object-parts).
+ * A part's coordinate on an axis is (B + q) 2^k met with the object's bounds: q a 16-bit step, B = floor(min
+ * / 2^k) of the bounds, k the least integer from -100 at which, on every axis, the bounds span at most 65,535
+ * steps and floor(min / 2^k), ceil(max / 2^k) are at most 2^24 in size. A valid q keeps B + q within those,
+ * so B + q and its product with 2^k are exact floats: every reader decodes the same floats, whatever its
+ * rounding, contraction or excess precision. */
+typedef struct part_grid {
+    float scale, inverse;    /* 2^k, 2^-k */
+    float base[3], steps[3]; /* B; ceil(max / 2^k) - B */
+} part_grid;
+
+static int part_grid_of(const float bounds[6], part_grid* g) {
+    float m = 0.0f, s = 0.0f;
+    int k, e, a;
+    for (a = 0; a < 3; ++a) {
+        if (!isfinite(bounds[a]) || !isfinite(bounds[a + 3]) || !(bounds[a] <= bounds[a + 3])) return 0;
+        m = fabsf(bounds[a]) > m ? fabsf(bounds[a]) : m;
+        m = fabsf(bounds[a + 3]) > m ? fabsf(bounds[a + 3]) : m;
+        s = bounds[a + 3] - bounds[a] > s ? bounds[a + 3] - bounds[a] : s;
+    }
+    (void)frexpf(m, &e); /* m < 2^e: k = e - 24 keeps the ends within 2^24 steps */
+    k = e - 24;
+    if (isfinite(s)) {
+        (void)frexpf(s, &e); /* s < 2^e: 2^(e - 16) steps of it span at most 2^16 */
+        if (e - 16 > k) k = e - 16;
+    }
+    if (k < -100) k = -100;
+    for (; k <= 127; ++k) {
+        int ok = 1;
+        g->scale = ldexpf(1.0f, k);
+        g->inverse = ldexpf(1.0f, -k);
+        for (a = 0; a < 3 && ok; ++a) {
+            const float lo = floorf(bounds[a] * g->inverse), hi = ceilf(bounds[a + 3] * g->inverse);
+            ok = fabsf(lo) <= 16777216.0f && fabsf(hi) <= 16777216.0f && hi - lo <= 65535.0f;
+            g->base[a] = lo;
+            g->steps[a] = hi - lo;
+        }
+        if (ok) return 1;
+    }
+    return 0;
+}
+
+/* The part whose steps are q[6] (min x .. max z), as every reader decodes it. */
+static void part_decode(const part_grid* g, const float bounds[6], const float q[6], float box[6]) {
+    int a;
+    for (a = 0; a < 3; ++a) {
+        const float lo = (g->base[a] + q[a]) * g->scale, hi = (g->base[a] + q[a + 3]) * g->scale;
+        box[a] = lo > bounds[a] ? lo : bounds[a];
+        box[a + 3] = hi < bounds[a + 3] ? hi : bounds[a + 3];
+    }
+}
+
+int pvsr_part_encode(const float bounds[6], const float part[6], uint16_t steps[6], float box[6]) {
+    part_grid g;
+    float q[6];
+    int a;
+    if (bounds == NULL || part == NULL || steps == NULL || box == NULL || !part_grid_of(bounds, &g)) return 0;
+    for (a = 0; a < 3; ++a)
+        if (!(part[a] >= bounds[a] && part[a] <= part[a + 3] && part[a + 3] <= bounds[a + 3])) return 0;
+    for (a = 0; a < 3; ++a) {
+        q[a] = floorf(part[a] * g.inverse) - g.base[a];
+        q[a + 3] = ceilf(part[a + 3] * g.inverse) - g.base[a];
+    }
+    for (a = 0; a < 6; ++a) steps[a] = (uint16_t)q[a]; /* within [0, steps of the axis]: the part is inside */
+    part_decode(&g, bounds, q, box);
+    return 1;
+}
+
+/* Object o's part e of a 5.1 file's 'OPBQ' on the grid g of its bounds; 0 when its steps pass the bounds'
+ * or its box is empty. */
+static int quantized_part(const pvsr_level* l, const part_grid* g, const float bounds[6], uint64_t e,
+                          float box[6]) {
+    const uint8_t* p = l->object_parts.at + 12 * e;
+    float q[6];
+    int a;
+    for (a = 0; a < 6; ++a) q[a] = (float)rd16(p + 2 * a);
+    for (a = 0; a < 3; ++a)
+        if (q[a] > q[a + 3] || q[a + 3] > g->steps[a]) return 0;
+    part_decode(g, bounds, q, box);
+    for (a = 0; a < 3; ++a)
+        if (!(box[a] <= box[a + 3])) return 0;
+    return 1;
+}
+
+/* File version 2.2: the objects' part boxes ('OPOF' u32 offsets, objects + 1, into 'OPBX' boxes of floats);
+ * 5.1: 'OPOQ' offsets (2 or 4 bytes) into 'OPBQ' steps on the grid of each object's bounds (above), so that
+ * a 5.0 runtime, which knows neither, reads the file without parts. One of the two pairs or none. Offsets
+ * from 0, never decreasing, ending at the boxes' count; each box finite with min <= max, inside its object's
+ * bounds. */
 static const char* check_object_parts(pvsr_level* l) {
     uint64_t o, e;
     const char* bad;
-    if (!section(l, PVSR_TAG('O', 'P', 'O', 'F'), &l->object_part_offsets)) /* none */
-        return section(l, PVSR_TAG('O', 'P', 'B', 'X'), &l->object_parts) ? "object part boxes without their offsets"
-                                                                            : NULL;
-    bad = need(l, PVSR_TAG('O', 'P', 'O', 'F'), 4, (uint64_t)l->object_count + 1, 1, &l->object_part_offsets);
-    if (!bad) bad = need(l, PVSR_TAG('O', 'P', 'B', 'X'), 24, UINT64_MAX, 1, &l->object_parts);
+    pvsr_array a;
+    const int floats = section(l, PVSR_TAG('O', 'P', 'O', 'F'), &a) ||
+                       section(l, PVSR_TAG('O', 'P', 'B', 'X'), &a),
+              steps = section(l, PVSR_TAG('O', 'P', 'O', 'Q'), &a) ||
+                      section(l, PVSR_TAG('O', 'P', 'B', 'Q'), &a);
+    if (floats && steps) return "two kinds of object part boxes";
+    if (!floats && !steps) return NULL;
+    if (!section(l, steps ? PVSR_TAG('O', 'P', 'O', 'Q') : PVSR_TAG('O', 'P', 'O', 'F'), &a))
+        return "object part boxes without their offsets";
+    bad = need(l, steps ? PVSR_TAG('O', 'P', 'O', 'Q') : PVSR_TAG('O', 'P', 'O', 'F'), steps ? 0 : 4,
+               (uint64_t)l->object_count + 1, 1, &l->object_part_offsets);
+    if (!bad)
+        bad = steps ? need(l, PVSR_TAG('O', 'P', 'B', 'Q'), 12, UINT64_MAX, 1, &l->object_parts)
+                    : need(l, PVSR_TAG('O', 'P', 'B', 'X'), 24, UINT64_MAX, 1, &l->object_parts);
     if (bad) return bad;
-    if (rd32(l->object_part_offsets.at) != 0 ||
-        rd32(l->object_part_offsets.at + 4 * (uint64_t)l->object_count) != l->object_parts.count)
+    if (index_at(&l->object_part_offsets, 0) != 0 ||
+        index_at(&l->object_part_offsets, l->object_count) != l->object_parts.count)
         return "the object parts' offsets do not start at 0 and end at their boxes";
     for (o = 0; o < l->object_count; ++o) {
-        const uint32_t a = rd32(l->object_part_offsets.at + 4 * o),
-                       b = rd32(l->object_part_offsets.at + 4 * o + 4);
-        const uint8_t* bounds = l->object_boxes.at + 24 * o;
-        if (b < a || b > l->object_parts.count)
+        const uint32_t first = index_at(&l->object_part_offsets, o),
+                       end = index_at(&l->object_part_offsets, o + 1);
+        float bounds[6], box[6];
+        part_grid g;
+        if (end < first || end > l->object_parts.count)
             return "the object parts' offsets decrease or pass their boxes";
-        for (e = a; e < b; ++e) {
-            const uint8_t* p = l->object_parts.at + 24 * e;
+        if (first == end) continue;
+        pvsr_object_bounds(l, (uint32_t)o, bounds);
+        if (steps && !part_grid_of(bounds, &g)) return "an object with part boxes has no finite bounds";
+        for (e = first; e < end; ++e) {
             int k;
-            if (!finite_box(p)) return "an object part box is not finite";
+            if (steps) {
+                if (!quantized_part(l, &g, bounds, e, box))
+                    return "an object part box is empty or passes its object's bounds";
+                continue;
+            }
+            if (!finite_box(l->object_parts.at + 24 * e)) return "an object part box is not finite";
+            for (k = 0; k < 6; ++k) box[k] = rdf(l->object_parts.at + 24 * e + 4 * k);
             for (k = 0; k < 3; ++k)
-                if (rdf(p + 4 * k) > rdf(p + 12 + 4 * k) || !(rdf(p + 4 * k) >= rdf(bounds + 4 * k)) ||
-                    !(rdf(p + 12 + 4 * k) <= rdf(bounds + 12 + 4 * k)))
+                if (box[k] > box[k + 3] || !(box[k] >= bounds[k]) || !(box[k + 3] <= bounds[k + 3]))
                     return "an object part box is not inside its object's bounds";
         }
     }
@@ -1350,15 +1453,27 @@ static int hidden_box(const sink* s, const float box[6]) {
 /* 1 when the walk with a culler or horizon gives the object on: an object the bake marks always visible, one
  * without bounds, or one neither proves hidden by its bounds nor, where it has parts, by every part. */
 static int drawn(const pvsr_level* l, const sink* s, uint32_t object) {
-    float box[6];
+    float bounds[6], box[6];
     uint32_t k, parts;
+    uint64_t first;
+    part_grid g;
+    int a;
     if ((pvsr_object_flags(l, object) & PVSR_OBJECT_ALWAYS_VISIBLE) != 0) return 1;
-    if (!pvsr_object_bounds(l, object, box)) return 1;
-    if (hidden_box(s, box)) return 0;
+    if (!pvsr_object_bounds(l, object, bounds)) return 1;
+    if (hidden_box(s, bounds)) return 0;
     parts = pvsr_object_part_count(l, object);
-    for (k = 0; k < parts; ++k)
-        if (!pvsr_object_part(l, object, k, box) || !hidden_box(s, box)) return 1;
-    return parts == 0;
+    if (parts == 0) return 1;
+    first = index_at(&l->object_part_offsets, object);
+    if (l->object_parts.item_bytes == 12 && !part_grid_of(bounds, &g)) return 1;
+    for (k = 0; k < parts; ++k) {
+        if (l->object_parts.item_bytes == 12) {
+            if (!quantized_part(l, &g, bounds, first + k, box)) return 1;
+        } else {
+            for (a = 0; a < 6; ++a) box[a] = rdf(l->object_parts.at + 24 * (first + k) + 4 * a);
+        }
+        if (!hidden_box(s, box)) return 1;
+    }
+    return 0;
 }
 
 /* Walks the cell's row: gives each visible object to the sink in increasing order; returns how many. */
@@ -1503,16 +1618,21 @@ int pvsr_object_bounds(const pvsr_level* l, uint32_t object, float box[6]) {
 
 uint32_t pvsr_object_part_count(const pvsr_level* l, uint32_t object) {
     if (l == NULL || object >= l->object_count || l->object_part_offsets.at == NULL) return 0;
-    return rd32(l->object_part_offsets.at + 4 * (uint64_t)object + 4) -
-           rd32(l->object_part_offsets.at + 4 * (uint64_t)object);
+    return index_at(&l->object_part_offsets, (uint64_t)object + 1) -
+           index_at(&l->object_part_offsets, object);
 }
 
 int pvsr_object_part(const pvsr_level* l, uint32_t object, uint32_t part, float box[6]) {
+    float bounds[6];
+    part_grid g;
+    uint64_t e;
     int a;
     if (box == NULL || part >= pvsr_object_part_count(l, object)) return 0;
-    for (a = 0; a < 6; ++a)
-        box[a] = rdf(l->object_parts.at +
-                     24 * ((uint64_t)rd32(l->object_part_offsets.at + 4 * (uint64_t)object) + part) + 4 * a);
+    e = (uint64_t)index_at(&l->object_part_offsets, object) + part;
+    if (l->object_parts.item_bytes == 12) /* 5.1: steps on the bounds' grid, checked at open */
+        return pvsr_object_bounds(l, object, bounds) && part_grid_of(bounds, &g) &&
+               quantized_part(l, &g, bounds, e, box);
+    for (a = 0; a < 6; ++a) box[a] = rdf(l->object_parts.at + 24 * e + 4 * a);
     return 1;
 }
 

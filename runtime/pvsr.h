@@ -59,7 +59,7 @@ extern "C" {
 
 #define PVSR_VERSION_MAJOR \
     5 /* the newest file version this runtime reads: 1.x to 3.x and 5.x (4.x: refused) */
-#define PVSR_VERSION_MINOR 0
+#define PVSR_VERSION_MINOR 1
 
 typedef enum pvsr_status {
     PVSR_OK = 0,
@@ -176,12 +176,17 @@ int pvsr_object_bounds(const pvsr_level* level, uint32_t object, float box[6]);
 uint32_t pvsr_object_triangles(const pvsr_level* level, uint32_t object);
 uint32_t pvsr_object_flags(const pvsr_level* level, uint32_t object);
 uint64_t pvsr_total_triangles(const pvsr_level* level);
-/* File 2.2: an object's part boxes (docs/ALGORITHMS.md#object-parts): its triangles split into a few groups,
+/* File 2.2: an object's part boxes (docs/ALGORITHMS.md#object-parts): its surface cut into a few pieces,
  * each inside one part box, every part inside the object's bounds. The walks with a culler or horizon cull an
  * object whose bounds they do not hide when they hide every part. Count 0 when it has none (or an older
  * file); pvsr_object_part writes part `part` (float[6]), 0 when out of range. */
 uint32_t pvsr_object_part_count(const pvsr_level* level, uint32_t object);
 int pvsr_object_part(const pvsr_level* level, uint32_t object, uint32_t part, float box[6]);
+/* For tools that write runtime files. File 5.1 stores a part as six 16-bit steps on a grid of its object's
+ * bounds (docs/FORMAT.md, 'OPBQ'): this writes the steps of the part rounded outward, and the box every
+ * reader decodes from them (bit for bit on every platform: it holds `part` and lies inside `bounds`). 0 when
+ * bounds or part is not finite, or part is not a box inside bounds. */
+int pvsr_part_encode(const float bounds[6], const float part[6], uint16_t steps[6], float box[6]);
 
 /* ---- Ranked occluders of a cell, best first (docs/FORMAT.md, "Ranked occluders"): boxes inside the
  * opaque solid worth testing at run time to cull moving objects. box is float[6]; score higher is better;

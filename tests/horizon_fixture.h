@@ -5,6 +5,7 @@
 
 #include "core/occluder.h"
 #include "io/bake_file.h"
+#include "runtime/pvsr.h"
 
 namespace pvs::test {
 
@@ -28,7 +29,17 @@ inline void add_horizon_lists(BakeData& bake) {
 }
 
 // Object parts (bake file 1.9, runtime file 2.2) on any bake: every object with a box for bounds gets the
-// two halves of it along x, and each third object the four quarters along x and z.
+// two halves of it along x, and each third object the four quarters along x and z, each rounded outward to
+// the grid the runtime file stores parts on (5.1, pvsr_part_encode), as the bake's are.
+inline Aabb on_part_grid(const Aabb& bounds, const Aabb& part) {
+    const float b[6] = {bounds.min.x, bounds.min.y, bounds.min.z, bounds.max.x, bounds.max.y, bounds.max.z};
+    const float p[6] = {part.min.x, part.min.y, part.min.z, part.max.x, part.max.y, part.max.z};
+    uint16_t steps[6];
+    float box[6];
+    if (!pvsr_part_encode(b, p, steps, box)) return bounds;
+    return Aabb::of({box[0], box[1], box[2]}, {box[3], box[4], box[5]});
+}
+
 inline void add_object_parts(BakeData& bake) {
     ObjectParts& p = bake.object_parts;
     p = ObjectParts{};
@@ -42,11 +53,11 @@ inline void add_object_parts(BakeData& bake) {
                     Aabb q = b;
                     ((i & 1) ? q.min.x : q.max.x) = mx;
                     ((i & 2) ? q.min.z : q.max.z) = mz;
-                    p.boxes.push_back(q);
+                    p.boxes.push_back(on_part_grid(b, q));
                 }
             } else {
-                p.boxes.push_back(Aabb::of(b.min, {mx, b.max.y, b.max.z}));
-                p.boxes.push_back(Aabb::of({mx, b.min.y, b.min.z}, b.max));
+                p.boxes.push_back(on_part_grid(b, Aabb::of(b.min, {mx, b.max.y, b.max.z})));
+                p.boxes.push_back(on_part_grid(b, Aabb::of({mx, b.min.y, b.min.z}, b.max)));
             }
         }
         p.offsets.push_back(uint32_t(p.boxes.size()));

@@ -3,10 +3,15 @@
 // object's bounds, and the cuts follow the surface where its bounds hold empty space.
 #include "core/object_parts.h"
 #include "core/random.h"
+#include "runtime/pvsr.h"
 #include "world_builder.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -77,6 +82,64 @@ void expect_covering(const World& world, uint32_t o, uint32_t max_parts, Rng& rn
                                                       << " point " << p.x << " " << p.y << " " << p.z;
         }
     }
+}
+
+// The runtime file's grid of parts (5.1, pvsr_part_encode): over bounds of every scale, from a millimetre to
+// ten kilometres across and from the origin to a million metres away, a part's box holds the part, lies in
+// the bounds, is within about 2^-15 of the bounds' span of the part on each side, and encodes to itself (so
+// a bake's parts, already on the grid, are stored as they are); what is not a box inside finite bounds is
+// refused.
+TEST(ObjectParts, PartsOnTheRuntimeGridHoldThePartAndEncodeToThemselves) {
+    Rng rng(11, 1);
+    int tested = 0;
+    for (int t = 0; t < 20000; ++t) {
+        const float scale = std::pow(10.0f, -3.0f + 7.0f * rng.uniform());
+        const float away =
+            t % 4 == 0 ? 0.0f : std::pow(10.0f, 6.0f * rng.uniform()) * (rng.uniform() < 0.5f ? -1 : 1);
+        float bounds[6], part[6];
+        for (int a = 0; a < 3; ++a) {
+            const float x = away + scale * (rng.uniform() - 0.5f), y = away + scale * (rng.uniform() - 0.5f);
+            bounds[a] = std::min(x, y);
+            bounds[a + 3] = t % 7 == 0 && a == 1 ? bounds[a] : std::max(x, y);  // some flat
+            const float u = rng.uniform(), v = rng.uniform();
+            part[a] = bounds[a] + std::min(u, v) * (bounds[a + 3] - bounds[a]);
+            part[a + 3] = bounds[a] + std::max(u, v) * (bounds[a + 3] - bounds[a]);
+            part[a] = std::clamp(part[a], bounds[a], bounds[a + 3]);
+            part[a + 3] = std::clamp(part[a + 3], part[a], bounds[a + 3]);
+        }
+        uint16_t steps[6], again[6];
+        float box[6], box2[6];
+        ASSERT_TRUE(pvsr_part_encode(bounds, part, steps, box)) << t;
+        double span = 0.0, far = 0.0;
+        for (int a = 0; a < 3; ++a) {
+            span = std::max(span, double(bounds[a + 3]) - double(bounds[a]));
+            far = std::max({far, std::fabs(double(bounds[a])), std::fabs(double(bounds[a + 3]))});
+        }
+        const double slack = std::max(span * std::ldexp(1.0, -15), far * std::ldexp(1.0, -23));
+        for (int a = 0; a < 3; ++a) {
+            EXPECT_TRUE(bounds[a] <= box[a] && box[a] <= part[a] && part[a + 3] <= box[a + 3] &&
+                        box[a + 3] <= bounds[a + 3])
+                << t << " axis " << a;
+            EXPECT_LE(double(part[a]) - double(box[a]), slack) << t;
+            EXPECT_LE(double(box[a + 3]) - double(part[a + 3]), slack) << t;
+        }
+        ASSERT_TRUE(pvsr_part_encode(bounds, box, again, box2));
+        EXPECT_EQ(std::memcmp(box, box2, sizeof box), 0) << t;
+        EXPECT_EQ(std::memcmp(steps, again, sizeof steps), 0) << t;
+        ++tested;
+    }
+    EXPECT_EQ(tested, 20000);
+    const float bounds[6] = {0, 0, 0, 1, 1, 1}, inf = std::numeric_limits<float>::infinity();
+    uint16_t steps[6];
+    float box[6];
+    const float outside[6] = {0, 0, 0, 1, 2, 1}, upside[6] = {0.5f, 0, 0, 0.25f, 1, 1};
+    const float open[6] = {0, 0, 0, inf, 1, 1}, nan[6] = {0, std::nanf(""), 0, 1, 1, 1};
+    EXPECT_FALSE(pvsr_part_encode(bounds, outside, steps, box));
+    EXPECT_FALSE(pvsr_part_encode(bounds, upside, steps, box));
+    EXPECT_FALSE(pvsr_part_encode(open, bounds, steps, box));
+    EXPECT_FALSE(pvsr_part_encode(bounds, nan, steps, box));
+    EXPECT_TRUE(pvsr_part_encode(bounds, bounds, steps, box));
+    EXPECT_EQ(std::memcmp(box, bounds, sizeof box), 0);
 }
 
 TEST(ObjectParts, EveryPointOfEveryTriangleLiesInAPart) {

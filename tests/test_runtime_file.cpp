@@ -20,6 +20,7 @@
 #include <random>
 #include <set>
 #include <string>
+#include <tuple>
 
 namespace pvs {
 namespace {
@@ -414,34 +415,131 @@ TEST_F(RuntimeFileDamage, HorizonListsReadAndRefuseDamage) {
     EXPECT_EQ(list0_count_with({0x80, 0x80}, 3), 0u) << "a varint past the bytes";
 }
 
-// The object parts' sections: each object of the bake has its halves (or quarters); a damaged offset or box
-// is refused with its reason.
+// The file as 5.0 wrote it, its parts in 'OPOF' u32 offsets and 'OPBX' floats: the decoded boxes and the
+// offsets appended after the last section and named in the table in place of 'OPOQ' and 'OPBQ' (whose
+// bytes stay, unread); or, with keep_steps, in two new entries of the table beside them (the first section
+// moved to the end, for room).
+Bytes with_float_parts(const std::string& file, bool keep_steps = false) {
+    Bytes in(file);
+    pvsr_level l;
+    EXPECT_EQ(pvsr_open(&l, in.data(), in.size, nullptr, 0), PVSR_OK);
+    std::string out = file, floats, offsets;
+    uint32_t parts = 0;
+    for (uint32_t o = 0; o <= pvsr_object_count(&l); ++o) {
+        offsets.append(reinterpret_cast<const char*>(&parts), 4);
+        for (uint32_t k = 0; o < pvsr_object_count(&l) && k < pvsr_object_part_count(&l, o); ++k, ++parts) {
+            float box[6];
+            EXPECT_TRUE(pvsr_object_part(&l, o, k, box));
+            floats.append(reinterpret_cast<const char*>(box), sizeof box);
+        }
+    }
+    const auto align = [&] { out.resize((out.size() + PVSR_ALIGN - 1) / PVSR_ALIGN * PVSR_ALIGN, '\0'); };
+    const auto entry = [&](uint32_t i) {
+        return out.data() + PVSR_HEADER_BYTES + size_t(i) * PVSR_ENTRY_BYTES;
+    };
+    uint32_t sections;
+    std::memcpy(&sections, out.data() + 32, 4);
+    if (keep_steps) {
+        uint32_t first = 0;
+        uint64_t first_at = UINT64_MAX, first_bytes, moved_to = out.size();
+        for (uint32_t i = 0; i < sections; ++i) {
+            uint64_t offset;
+            std::memcpy(&offset, entry(i) + 8, 8);
+            if (offset < first_at) first_at = offset, first = i;
+        }
+        std::memcpy(&first_bytes, entry(first) + 24, 8);
+        out += out.substr(first_at, first_bytes);
+        align();
+        std::memcpy(entry(first) + 8, &moved_to, 8);
+        EXPECT_LE(PVSR_HEADER_BYTES + (sections + 2) * PVSR_ENTRY_BYTES, first_at + first_bytes);
+        std::memcpy(entry(sections), "OPOQ", 4);
+        std::memcpy(entry(sections + 1), "OPBQ", 4);
+        sections += 2;
+        std::memcpy(out.data() + 32, &sections, 4);
+    }
+    for (const auto& [from, to, bytes, item] :
+         {std::tuple{"OPOQ", "OPOF", &offsets, 4u}, std::tuple{"OPBQ", "OPBX", &floats, 24u}}) {
+        const uint64_t at = out.size(), count = bytes->size() / item;
+        out += *bytes;
+        align();
+        const uint64_t size = out.size() - at;
+        for (uint32_t i = keep_steps ? sections - 2 : 0; i < sections; ++i) {
+            char* e = entry(i);
+            if (std::memcmp(e, from, 4) != 0) continue;
+            std::memcpy(e, to, 4);
+            std::memcpy(e + 4, &item, 4);
+            std::memcpy(e + 8, &at, 8);
+            std::memcpy(e + 16, &count, 8);
+            std::memcpy(e + 24, &size, 8);
+            break;
+        }
+    }
+    const uint16_t minor = 0;
+    const uint64_t size = out.size();
+    std::memcpy(out.data() + 10, &minor, 2);
+    std::memcpy(out.data() + 16, &size, 8);
+    Bytes result(out);
+    rechecksum(result);
+    return result;
+}
+
+// The object parts' sections: each object of the bake has its halves (or quarters), read as the bake holds
+// them from the steps of file 5.1 and from the floats of 5.0; a damaged offset or box is refused with its
+// reason.
 TEST_F(RuntimeFileDamage, ObjectPartsReadAndRefuseDamage) {
     Bytes good(file_);
     pvsr_level l;
     ASSERT_EQ(pvsr_open(&l, good.data(), good.size, nullptr, 0), PVSR_OK);
     ASSERT_GT(l.object_parts.count, 0u);
+    ASSERT_EQ(l.object_parts.item_bytes, 12u);
     EXPECT_EQ(pvsr_object_part_count(&l, pvsr_object_count(&l)), 0u);
     const auto offset_of = [&](const pvsr_array& a) {
         return size_t(a.at - static_cast<const uint8_t*>(good.data()));
     };
     pvsr_status s;
     {
-        Bytes b(file_);
+        // A 5.0 file's floats: the same boxes.
+        Bytes old = with_float_parts(file_);
+        pvsr_level f;
+        ASSERT_EQ(pvsr_open(&f, old.data(), old.size, nullptr, 0), PVSR_OK);
+        ASSERT_EQ(f.object_parts.item_bytes, 24u);
+        for (uint32_t o = 0; o < pvsr_object_count(&l); ++o) {
+            ASSERT_EQ(pvsr_object_part_count(&f, o), pvsr_object_part_count(&l, o));
+            for (uint32_t k = 0; k < pvsr_object_part_count(&l, o); ++k) {
+                float a[6], b[6];
+                ASSERT_TRUE(pvsr_object_part(&l, o, k, a));
+                ASSERT_TRUE(pvsr_object_part(&f, o, k, b));
+                EXPECT_EQ(std::memcmp(a, b, sizeof a), 0) << "object " << o << " part " << k;
+            }
+        }
+        const auto floats_at = size_t(f.object_parts.at - static_cast<const uint8_t*>(old.data()));
+        Bytes nan_box = old;
         const float nan = std::nanf("");
-        std::memcpy(b.bytes() + offset_of(l.object_parts) + 8, &nan, 4);
-        rechecksum(b);
-        EXPECT_NE(opened_message(b, &s).find("an object part box is not finite"), std::string::npos);
-    }
-    {
-        Bytes b(file_);
+        std::memcpy(nan_box.bytes() + floats_at + 8, &nan, 4);
+        rechecksum(nan_box);
+        EXPECT_NE(opened_message(nan_box, &s).find("an object part box is not finite"), std::string::npos);
+        Bytes outside = old;
         float x;
-        std::memcpy(&x, b.bytes() + offset_of(l.object_parts) + 12, 4);
+        std::memcpy(&x, outside.bytes() + floats_at + 12, 4);
         x += 100.0f;  // past its object's bounds
-        std::memcpy(b.bytes() + offset_of(l.object_parts) + 12, &x, 4);
-        rechecksum(b);
-        EXPECT_NE(opened_message(b, &s).find("not inside its object's bounds"), std::string::npos);
+        std::memcpy(outside.bytes() + floats_at + 12, &x, 4);
+        rechecksum(outside);
+        EXPECT_NE(opened_message(outside, &s).find("not inside its object's bounds"), std::string::npos);
     }
+    const auto with_steps = [&](uint16_t lo, uint16_t hi) {
+        Bytes b(file_);
+        for (int a = 0; a < 3; ++a) {
+            std::memcpy(b.bytes() + offset_of(l.object_parts) + 2 * a, &lo, 2);
+            std::memcpy(b.bytes() + offset_of(l.object_parts) + 6 + 2 * a, &hi, 2);
+        }
+        rechecksum(b);
+        return b;
+    };
+    EXPECT_NE(opened_message(with_steps(2, 1), &s).find("an object part box is empty or passes"),
+              std::string::npos);
+    // Steps past the bounds' (at most 65,535 on each axis, fewer on some).
+    EXPECT_NE(opened_message(with_steps(65535, 65535), &s).find("an object part box is empty or passes"),
+              std::string::npos);
     {
         Bytes b(file_);
         const uint32_t past = uint32_t(l.object_parts.count + 1);
@@ -459,11 +557,15 @@ TEST_F(RuntimeFileDamage, ObjectPartsReadAndRefuseDamage) {
     {
         // The offsets' section renamed in the table (an unknown tag is skipped): boxes without offsets.
         Bytes b(file_);
-        const size_t at = file_.find("OPOF");
+        const size_t at = file_.find("OPOQ");
         ASSERT_LT(at, size_t(l.object_part_offsets.at - static_cast<const uint8_t*>(good.data())));
         b.bytes()[at] = 'X';
         rechecksum(b);
         EXPECT_NE(opened_message(b, &s).find("object part boxes without their offsets"), std::string::npos);
+    }
+    {
+        Bytes b = with_float_parts(file_, true);  // 'OPBX' beside 'OPBQ'
+        EXPECT_NE(opened_message(b, &s).find("two kinds of object part boxes"), std::string::npos);
     }
 }
 

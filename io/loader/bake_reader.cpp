@@ -235,7 +235,7 @@ FileObjects read_objects(const Reader& r, hid_t root) {
                 for (int c = 0; c < 3; ++c)
                     ok = ok && std::isfinite(p[c]) && std::isfinite(p[c + 3]) && p[c] <= p[c + 3] &&
                          p[c] >= bounds[c] && p[c + 3] <= bounds[c + 3];
-                if (!ok)
+                if (!ok || !part_on_runtime_grid(bounds, &o.part_boxes[6 * size_t(k)]))
                     r.fail(cat("/objects/part_boxes[", k, "] (object ", i,
                                ") is not a finite box inside the object's bounds"));
             }

@@ -33,6 +33,12 @@ inline std::vector<std::pair<std::string, std::string>> read_parameters(const Re
     return read_string_pairs(r, root, "/parameters");
 }
 
+// The part box rounded outward to the grid of its object's bounds on which the runtime file stores it
+// (pvsr_part_encode, runtime/pvsr.h; a bake's parts lie on it already), so that the loader and the runtime
+// test the same boxes; false when it is not a finite box inside the bounds. Defined beside the runtime
+// compiled into the loader (occlusion.cpp).
+bool part_on_runtime_grid(const float bounds[6], float part[6]);
+
 struct FileObjects {
     std::vector<std::string> names;
     std::vector<float> bounds;  // 6 per object: min xyz, max xyz

@@ -7,6 +7,8 @@
 // arguments: docs/ALGORITHMS.md#runtime-culler and #horizon-lists.
 #include <pvsbake/occlusion.h>
 
+#include "bake_reader.h"
+
 // The runtime's headers first, outside the namespace (their include guards keep them out of it below).
 #include <float.h>
 #include <math.h>
@@ -26,6 +28,14 @@ namespace pvsbake::detail::runtime {
 namespace pvsbake {
 
 namespace rt = detail::runtime;
+
+bool detail::part_on_runtime_grid(const float bounds[6], float part[6]) {
+    uint16_t steps[6];
+    float box[6];
+    if (!rt::pvsr_part_encode(bounds, part, steps, box)) return false;
+    std::copy(box, box + 6, part);
+    return true;
+}
 
 static_assert(OcclusionCuller::kMaxOccluders == PVSR_CULLER_MAX_OCCLUDERS);
 static_assert(OcclusionCuller::kMaxPolygons == PVSR_CULLER_MAX_POLYGONS);

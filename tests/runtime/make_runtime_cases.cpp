@@ -65,6 +65,11 @@ void write_case(std::FILE* out, const std::filesystem::path& dir, const std::str
         std::fprintf(out, "object %u %u %u %x %x %x %x %x %x %s\n", o, b.object_triangles(o), b.object_flags(o),
                      bits(box.min[0]), bits(box.min[1]), bits(box.min[2]), bits(box.max[0]), bits(box.max[1]),
                      bits(box.max[2]), hex.empty() ? "-" : hex.c_str());
+        for (uint32_t k = 0; k < b.object_part_count(o); ++k) {  // bit for bit on every platform (file 5.1)
+            const pvsbake::Box p = b.object_part(o, k);
+            std::fprintf(out, "part %u %u %x %x %x %x %x %x\n", o, k, bits(p.min[0]), bits(p.min[1]),
+                         bits(p.min[2]), bits(p.max[0]), bits(p.max[1]), bits(p.max[2]));
+        }
     }
     // Points in and around the cells, a third of them on a 1/8 m lattice (on cell and voxel faces).
     float lo[3] = {1e30f, 1e30f, 1e30f}, hi[3] = {-1e30f, -1e30f, -1e30f};

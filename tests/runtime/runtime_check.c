@@ -179,6 +179,16 @@ static int run_case(FILE* in, const char* folder) {
             got_hex[1] = '\0';
             for (; got[at] != '\0' && 2 * at + 2 < sizeof got_hex; ++at) snprintf(got_hex + 2 * at, 3, "%02x", (unsigned)(uint8_t)got[at]);
             CHECK(strcmp(got_hex, hex) == 0, "%s: object %lu name differs", name, o);
+        } else if (strcmp(word, "part") == 0) {
+            unsigned long o, k, b[6];
+            float box[6];
+            if (fscanf(in, "%lu %lu %lx %lx %lx %lx %lx %lx", &o, &k, &b[0], &b[1], &b[2], &b[3], &b[4],
+                       &b[5]) != 8)
+                return 0;
+            CHECK(pvsr_object_part(&level, (uint32_t)o, (uint32_t)k, box), "%s: object %lu has no part %lu",
+                  name, o, k);
+            for (i = 0; i < 6; ++i)
+                CHECK(bits_of(box[i]) == (uint32_t)b[i], "%s: object %lu part %lu differs", name, o, k);
         } else if (strcmp(word, "cull") == 0) {
             unsigned long e[3], v;
             float eye[3], *boxes;
