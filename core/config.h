@@ -161,6 +161,11 @@ struct RankingConfig {
                                      // 0 or 1 = none
     uint32_t horizon_list_max = 0;   // [Limit: 0..1e6] and at most this many of them, the most used first;
                                      // 0 = no limit
+    uint32_t horizon_cell_eyes = 16;  // [Limit: 0..4096] seeded eyes per cell whose horizons, built from the
+                                      // cell's block's list, choose the cell's own list, a subset of it
+                                      // (docs/ALGORITHMS.md#horizon-lists); 0 = lists per block only
+    double horizon_cell_lists_max = 2e6;  // [Limit: >= 0] [Units: entries] lists per cell only when the cells
+                                          // times their blocks' mean list length are at most this
 };
 
 // The conservative solver (pvs/conservative.h).
@@ -492,6 +497,18 @@ void visit_options(Config& c, Visitor&& v) {
                  "frame, less culled); 0 = no limit",
                  0, 1e6},
       c.ranking.horizon_list_max);
+    v(OptionSpec{OptionGroup::kRanking, "--horizon-cell-eyes", "ranking.horizon_cell_eyes", "eyes",
+                 "seeded eyes per cell whose horizons, from the block's list, choose the cell's own list (a "
+                 "subset: a cheaper frame, as much culled); 0 = lists per block only",
+                 0, 4096},
+      c.ranking.horizon_cell_eyes);
+    v(OptionSpec{OptionGroup::kRanking, "--horizon-cell-lists-max", "ranking.horizon_cell_lists_max",
+                 "entries",
+                 "lists per cell only when the cells times their blocks' mean list length are at most this "
+                 "(larger levels keep lists per block: per-cell lists would cost the bake an eye's horizon "
+                 "for every cell and the runtime file a few bits an entry)",
+                 0, 1e12},
+      c.ranking.horizon_cell_lists_max);
     v(OptionSpec{OptionGroup::kConservative, "--epsilon", "conservative.epsilon_m", "m",
                  "occluders shrink by this and cell faces are sampled within it", 0.01, 100},
       c.conservative.epsilon_m);

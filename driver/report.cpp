@@ -77,6 +77,7 @@ NamedValues bake_figures(const BakeConfig& config, const World& world, const Vie
         {"horizon_candidates", double(stages.horizon.candidates)},
         {"horizon_occluders", double(stages.horizon.kept)},
         {"horizon_lists", double(stages.horizon.lists)},
+        {"horizon_lists_per_cell", stages.horizon.per_cell ? 1.0 : 0.0},
         {"horizon_list_entries_mean",
          stages.horizon.lists ? double(stages.horizon.entries) / double(stages.horizon.lists) : 0.0},
         {"horizon_list_entries_max", double(stages.horizon.largest_list)},

@@ -701,6 +701,39 @@ std::string assemble(const std::string& path, Bake& b, const RuntimeFileOptions&
         }
         hlist.count = hlist.bytes.size();
         hlist.bytes.append(size_t(PVSR_HORIZON_LIST_PADDING(hboxes.count + htiles.count)), '\0');
+        // 5.2: where some cell's list is not its block's whole list (lists per cell), each cell's list as its
+        // positions in its block's list ('HCOF' byte offsets, cells + 1, into 'HCLS'; the same code), which a
+        // 5.1 runtime skips, taking the block's.
+        bool per_cell = false;
+        for (uint32_t c = 0; c < cells && !per_cell; ++c) {
+            const uint32_t l = h.cell_list[c];
+            per_cell = h.list_offsets[size_t(l) + 1] - h.list_offsets[l] < lists[cb.of[c]].size();
+        }
+        if (per_cell) {
+            std::vector<uint32_t> cell_offsets = {0}, picks;
+            Section cell_lists{PVSR_TAG('H', 'C', 'L', 'S'), 1, 0, {}};
+            for (uint32_t c = 0; c < cells; ++c) {
+                const uint32_t l = h.cell_list[c];
+                const std::vector<uint32_t>& list = lists[cb.of[c]];
+                picks.clear();
+                for (uint32_t e = h.list_offsets[l]; e < h.list_offsets[size_t(l) + 1]; ++e)
+                    picks.push_back(
+                        uint32_t(std::lower_bound(list.begin(), list.end(), renumber[h.list_entries[e]]) -
+                                 list.begin()));
+                std::sort(picks.begin(), picks.end());
+                picks.erase(std::unique(picks.begin(), picks.end()), picks.end());
+                code.clear();
+                if (!picks.empty()) pvsbake::detail::put_rice_indices(code, picks);
+                cell_lists.bytes.append(reinterpret_cast<const char*>(code.data()), code.size());
+                if (cell_lists.bytes.size() > UINT32_MAX)
+                    throw bad_input(fmt::format("{}: the cells' horizon lists pass 4 GiB", path));
+                cell_offsets.push_back(uint32_t(cell_lists.bytes.size()));
+            }
+            cell_lists.count = cell_lists.bytes.size();
+            cell_lists.bytes.append(size_t(PVSR_HORIZON_LIST_PADDING(hboxes.count + htiles.count)), '\0');
+            sections.push_back(array_section(PVSR_TAG('H', 'C', 'O', 'F'), 4, cell_offsets));
+            sections.push_back(std::move(cell_lists));
+        }
         sections.push_back(std::move(hboxes));
         sections.push_back(std::move(htiles));
         sections.push_back(std::move(hcorners));

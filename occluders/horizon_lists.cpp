@@ -25,6 +25,7 @@ namespace {
 // unsafe; counted in the figures).
 constexpr size_t kMaxPieces = size_t(1) << 17;  // about 21 MB a thread
 constexpr uint64_t kEyeSeedMix = 0x686f72697a6f6eULL;  // the horizon's eyes differ from the ranking's
+constexpr uint64_t kCellEyeSeedMix = 0x63656c6c6c697374ULL;  // and the cells' own lists' from the blocks'
 
 // The candidates as the runtime takes them.
 struct Candidates {
@@ -65,10 +66,49 @@ void build(pvsr_horizon* h, const Candidates& c, const glm::vec3& eye) {
     pvsr_horizon_end(h);
 }
 
+// The horizon of the candidates whose bits are set (a block's list), each tagged with its index.
+void build_some(pvsr_horizon* h, const Candidates& c, const uint64_t* bits, size_t words,
+                const glm::vec3& eye) {
+    const float e[3] = {eye.x, eye.y, eye.z};
+    pvsr_horizon_begin(h, e);
+    const uint32_t nb = c.box_count();
+    for (size_t w = 0; w < words; ++w)
+        for (uint64_t u = bits[w]; u != 0; u &= u - 1) {
+            const uint32_t i = uint32_t(64 * w) + uint32_t(__builtin_ctzll(u));
+            pvsr_horizon_set_tag(h, i);
+            if (i < nb) {
+                pvsr_horizon_add_box(h, &c.boxes[6 * size_t(i)]);
+            } else {
+                const uint32_t t = i - nb;
+                pvsr_horizon_add_tile(h, &c.planes[5 * size_t(t)], &c.corners[3 * size_t(c.first[t])],
+                                      c.count[t]);
+            }
+        }
+    pvsr_horizon_end(h);
+}
+
 // Per candidate, the proofs of the block's eyes it served in (saturating).
 void count_use(void* user, uint32_t tag) {
     uint32_t& n = (*static_cast<std::vector<uint32_t>*>(user))[tag];
     n += n < UINT32_MAX ? 1u : 0u;
+}
+
+// The list of a block or a cell: the candidates used in at least horizon_min_uses proofs, the most used
+// first, at most horizon_list_max of them (0: no limit), set in `bits`.
+void keep_used(const RankingConfig& config, const std::vector<uint32_t>& uses,
+               std::vector<std::pair<uint32_t, uint32_t>>& ranked, uint64_t* bits) {
+    ranked.clear();
+    for (uint32_t i = 0; i < uint32_t(uses.size()); ++i)
+        if (uses[i] >= std::max<uint32_t>(config.horizon_min_uses, 1)) ranked.push_back({uses[i], i});
+    size_t keep = ranked.size();
+    if (config.horizon_list_max > 0 && keep > config.horizon_list_max) {
+        keep = config.horizon_list_max;
+        std::partial_sort(ranked.begin(), ranked.begin() + long(keep), ranked.end(),
+                          [](const auto& x, const auto& y) {
+                              return x.first != y.first ? x.first > y.first : x.second < y.second;
+                          });
+    }
+    for (size_t r = 0; r < keep; ++r) bits[ranked[r].second >> 6] |= uint64_t(1) << (ranked[r].second & 63);
 }
 
 // The tags of a proof, kept until every part of the object is known hidden.
@@ -135,6 +175,30 @@ HorizonLists choose_horizon_lists(Context& ctx, const RankingConfig& config, con
         testable[o] = (world.objects[o].flags & kObjectAlwaysVisible) == 0 && !b.is_empty();
     }
 
+    // The proofs of the eye's horizon h over cell c's PVS, counted per candidate in `uses`: an object hidden
+    // by its bounds, or by every one of its parts (core/object_parts.h), as the runtime's walk culls it.
+    const auto tally = [&](const pvsr_horizon& h, uint32_t c, std::vector<uint32_t>& uses,
+                           std::vector<uint32_t>& part_tags) {
+        const uint64_t* row = pvs.row(c);
+        for (uint32_t w = 0; w < pvs.words_per_row; ++w)
+            for (uint64_t bits = row[w]; bits != 0; bits &= bits - 1) {
+                const uint32_t o = 64 * w + uint32_t(__builtin_ctzll(bits));
+                if (o >= testable.size() || !testable[o] ||
+                    pvsr_horizon_hidden_by(&h, &bounds[6 * size_t(o)], count_use, &uses))
+                    continue;
+                const uint32_t n_parts = parts ? parts->count(o) : 0;
+                part_tags.clear();
+                bool all = n_parts > 0;
+                for (uint32_t k = 0; k < n_parts && all; ++k) {
+                    const Aabb& p = parts->boxes[parts->offsets[o] + k];
+                    const float pb[6] = {p.min.x, p.min.y, p.min.z, p.max.x, p.max.y, p.max.z};
+                    all = pvsr_horizon_hidden_by(&h, pb, keep_tag, &part_tags) != 0;
+                }
+                if (all)
+                    for (const uint32_t t : part_tags) count_use(&uses, t);
+            }
+    };
+
     WorkShare alone;
     WorkShare& deal = share ? *share : alone;
     ctx.progress_begin("horizon lists", blocks, "blocks");
@@ -164,48 +228,14 @@ HorizonLists choose_horizon_lists(Context& ctx, const RankingConfig& config, con
                 const uint32_t c = mine[k];
                 eyes.clear();
                 sample_eye_points(cells, c, share_of, config.seed ^ kEyeSeedMix, eyes);
-                const uint64_t* row = pvs.row(c);
                 for (const glm::vec3& eye : eyes) {
                     build(&h, cand, eye);
                     ++eyes_done;
                     dropped += h.dropped;
-                    for (uint32_t w = 0; w < pvs.words_per_row; ++w)
-                        for (uint64_t bits = row[w]; bits != 0; bits &= bits - 1) {
-                            const uint32_t o = 64 * w + uint32_t(__builtin_ctzll(bits));
-                            if (o >= testable.size() || !testable[o] ||
-                                pvsr_horizon_hidden_by(&h, &bounds[6 * size_t(o)], count_use, &uses))
-                                continue;
-                            // Bounds not hidden: its parts (core/object_parts.h), whose proofs count when
-                            // they hide every part, as the runtime's walk then culls the object.
-                            const uint32_t n_parts = parts ? parts->count(o) : 0;
-                            part_tags.clear();
-                            bool all = n_parts > 0;
-                            for (uint32_t k = 0; k < n_parts && all; ++k) {
-                                const Aabb& p = parts->boxes[parts->offsets[o] + k];
-                                const float pb[6] = {p.min.x, p.min.y, p.min.z, p.max.x, p.max.y, p.max.z};
-                                all = pvsr_horizon_hidden_by(&h, pb, keep_tag, &part_tags) != 0;
-                            }
-                            if (all)
-                                for (const uint32_t t : part_tags) count_use(&uses, t);
-                        }
+                    tally(h, c, uses, part_tags);
                 }
             }
-            // The list: the candidates used in at least horizon_min_uses proofs, the most used first, at most
-            // horizon_list_max of them (0: no limit).
-            ranked.clear();
-            for (uint32_t i = 0; i < cand.size(); ++i)
-                if (uses[i] >= std::max<uint32_t>(config.horizon_min_uses, 1)) ranked.push_back({uses[i], i});
-            size_t keep = ranked.size();
-            if (config.horizon_list_max > 0 && keep > config.horizon_list_max) {
-                keep = config.horizon_list_max;
-                std::partial_sort(ranked.begin(), ranked.begin() + long(keep), ranked.end(),
-                                  [](const auto& x, const auto& y) {
-                                      return x.first != y.first ? x.first > y.first : x.second < y.second;
-                                  });
-            }
-            uint64_t* bits = used.data() + size_t(b) * words;
-            for (size_t r = 0; r < keep; ++r)
-                bits[ranked[r].second >> 6] |= uint64_t(1) << (ranked[r].second & 63);
+            keep_used(config, uses, ranked, used.data() + size_t(b) * words);
         });
 #pragma omp critical(horizon_lists_counts)
         {
@@ -219,10 +249,68 @@ HorizonLists choose_horizon_lists(Context& ctx, const RankingConfig& config, con
     deal.add(counts.data(), counts.size());
     ctx.progress_end();
 
+    // Lists per cell: each cell's own, the occluders of its block's list that the proofs of
+    // horizon_cell_eyes eyes of the cell used, each eye's horizon built from that list alone; where the cells
+    // times their blocks' lists are at most horizon_cell_lists_max (entries). A subset of proven occluders,
+    // as any list.
+    uint64_t cell_pairs = 0;
+    for (uint32_t c = 0; c < cells.size(); ++c)
+        for (size_t w = 0; w < words; ++w)
+            cell_pairs += uint64_t(__builtin_popcountll(used[size_t(block_of[c]) * words + w]));
+    const bool per_cell = config.horizon_cell_eyes > 0 && double(cell_pairs) <= config.horizon_cell_lists_max;
+    std::vector<uint64_t> cell_used;
+    if (per_cell) {
+        cell_used.assign(size_t(cells.size()) * words, 0);
+        ctx.progress_begin("horizon cell lists", blocks, "blocks");
+        deal.begin(blocks);
+        std::vector<uint64_t> cell_counts(2, 0);
+#pragma omp parallel
+        {
+            std::vector<uint64_t> memory(memory_bytes / 8 + 1);
+            pvsr_horizon h;
+            const bool ok = pvsr_horizon_init(&h, columns, kMaxPieces, memory.data(), memory.size() * 8) != 0;
+            uint64_t eyes_done = 0, dropped = 0;
+            std::vector<glm::vec3> eyes;
+            std::vector<uint32_t> uses(cand.size(), 0), part_tags;
+            std::vector<std::pair<uint32_t, uint32_t>> ranked;
+            for_each_dealt(deal, ctx, 1, [&](uint64_t b) {
+                if (!ok) return;
+                const uint64_t* pool = used.data() + size_t(b) * words;
+                for (const uint32_t c : block_cells[size_t(b)]) {
+                    std::fill(uses.begin(), uses.end(), 0u);
+                    eyes.clear();
+                    sample_eye_points(cells, c, config.horizon_cell_eyes, config.seed ^ kCellEyeSeedMix,
+                                      eyes);
+                    for (const glm::vec3& eye : eyes) {
+                        build_some(&h, cand, pool, words, eye);
+                        ++eyes_done;
+                        dropped += h.dropped;
+                        tally(h, c, uses, part_tags);
+                    }
+                    keep_used(config, uses, ranked, cell_used.data() + size_t(c) * words);
+                }
+            });
+#pragma omp critical(horizon_lists_counts)
+            {
+                cell_counts[0] += eyes_done;
+                cell_counts[1] += dropped;
+                memory_failed |= !ok;
+            }
+        }
+        if (memory_failed) throw internal_error("horizon lists: a horizon did not take its memory");
+        deal.unite(cell_used.data(), cell_used.size());
+        deal.add(cell_counts.data(), cell_counts.size());
+        counts[0] += cell_counts[0];
+        counts[1] += cell_counts[1];
+        ctx.progress_end();
+    }
+    const std::vector<uint64_t>& chosen = per_cell ? cell_used : used;
+    const uint32_t n_lists = per_cell ? uint32_t(cells.size()) : blocks;
+
     // Keep the candidates some list names, in their order; the lists in the kept indices.
     std::vector<uint64_t> any(words, 0);
-    for (uint32_t b = 0; b < blocks; ++b)
-        for (size_t w = 0; w < words; ++w) any[w] |= used[size_t(b) * words + w];
+    for (uint32_t b = 0; b < n_lists; ++b)
+        for (size_t w = 0; w < words; ++w) any[w] |= chosen[size_t(b) * words + w];
     std::vector<uint32_t> index(cand.size(), UINT32_MAX);
     for (uint32_t i = 0; i < cand.size(); ++i) {
         if (((any[i >> 6] >> (i & 63)) & 1u) == 0) continue;
@@ -236,28 +324,35 @@ HorizonLists choose_horizon_lists(Context& ctx, const RankingConfig& config, con
         index[i] = uint32_t(out.boxes.size() + out.tiles.size());
         out.tiles.push_back(tiles[i - cand.box_count()]);
     }
-    out.offsets.reserve(size_t(blocks) + 1);
+    out.offsets.reserve(size_t(n_lists) + 1);
     out.offsets.push_back(0);
-    for (uint32_t b = 0; b < blocks; ++b) {
-        const uint64_t* u = used.data() + size_t(b) * words;
+    for (uint32_t b = 0; b < n_lists; ++b) {
+        const uint64_t* u = chosen.data() + size_t(b) * words;
         for (size_t w = 0; w < words; ++w)
             for (uint64_t bits = u[w]; bits != 0; bits &= bits - 1)
                 out.entries.push_back(index[64 * w + size_t(__builtin_ctzll(bits))]);
         out.offsets.push_back(uint32_t(out.entries.size()));
         figures.largest_list = std::max(figures.largest_list, out.offsets[b + 1] - out.offsets[b]);
     }
-    out.cell_list = block_of;
+    if (per_cell) {
+        out.cell_list.resize(cells.size());
+        for (uint32_t c = 0; c < cells.size(); ++c) out.cell_list[c] = c;
+    } else {
+        out.cell_list = block_of;
+    }
     figures.kept = uint32_t(out.occluders());
-    figures.lists = blocks;
+    figures.lists = n_lists;
+    figures.per_cell = per_cell;
     figures.entries = out.entries.size();
     figures.eyes = counts[0];
     figures.pieces_dropped = counts[1];
     figures.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     ctx.info(fmt::format(
-        "horizon lists: {} of {} candidate occluders kept, {} lists of {:.1f} on average "
+        "horizon lists: {} of {} candidate occluders kept, {} lists (per {}) of {:.1f} on average "
         "(the longest {}), from {} eyes, {:.2f} s",
-        figures.kept, figures.candidates, blocks, blocks > 0 ? double(figures.entries) / double(blocks) : 0.0,
-        figures.largest_list, figures.eyes, figures.seconds));
+        figures.kept, figures.candidates, n_lists, per_cell ? "cell" : "block of cells",
+        n_lists > 0 ? double(figures.entries) / double(n_lists) : 0.0, figures.largest_list, figures.eyes,
+        figures.seconds));
     if (figures.pieces_dropped > 0)
         ctx.info(
             fmt::format("horizon lists: {} pieces found no room in an eye's horizon (fewer occluders "

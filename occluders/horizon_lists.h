@@ -31,7 +31,8 @@ namespace pvs {
 struct HorizonListFigures {
     uint32_t candidates = 0;      // occluders offered to the eyes' horizons
     uint32_t kept = 0;            // occluders some list names (the file's)
-    uint32_t lists = 0;           // blocks
+    uint32_t lists = 0;           // blocks, or cells with per_cell
+    bool per_cell = false;  // a list per cell (a subset of its block's: RankingConfig::horizon_cell_eyes)
     uint64_t entries = 0;         // over every list
     uint32_t largest_list = 0;    // entries of the longest list
     uint64_t eyes = 0;            // eyes whose horizons chose
@@ -46,7 +47,10 @@ uint32_t horizon_block_count(const CellSet& cells);
 // Per cell, its block.
 std::vector<uint32_t> horizon_blocks(const CellSet& cells);
 
-// The candidates: `boxes` (proven boxes and panels, solid or flat along one axis) and `tiles`. With
+// The candidates: `boxes` (proven boxes and panels, solid or flat along one axis) and `tiles`. Each block's
+// list as above; then, with config.horizon_cell_eyes > 0 and the cells times their blocks' list lengths at
+// most config.horizon_cell_lists_max, a list per cell (cell_list[c] = c): the occluders of its block's list
+// that horizon_cell_eyes seeded eyes of the cell used, each eye's horizon built from the block's list. With
 // config.horizon_eyes == 0, or no candidate, an empty result. With `share`, the blocks are dealt over its
 // processes (collective: every process calls it, and every one gets the whole result). With `parts`, an
 // object whose bounds an eye's horizon does not hide counts the proofs of its parts when they hide every

@@ -988,6 +988,41 @@ static uint32_t hz_limit(const pvsr_level* l) {
     return (uint32_t)(l->horizon_boxes.count + l->horizon_tiles.count);
 }
 
+/* File version 5.2: lists per cell ('HCOF' byte offsets, cells + 1, into 'HCLS'): each cell's list as the
+ * ascending positions of its occluders in its block's list, a key row of the PVS code less its reference
+ * (as 'HLST'); both or neither, read only with the horizon's lists, from 5.0. Offsets from 0, never
+ * decreasing, within the bytes; each head as a row's; the padding after them. A position past the block's
+ * list ends the cell's list where it is read (hz_list_next). */
+static const char* check_horizon_cells(pvsr_level* l) {
+    uint64_t e;
+    const char* bad;
+    if (!section(l, PVSR_TAG('H', 'C', 'O', 'F'), &l->horizon_cell_offsets))
+        return section(l, PVSR_TAG('H', 'C', 'L', 'S'), &l->horizon_cell_lists)
+                   ? "the cells' horizon lists without their offsets"
+                   : NULL;
+    bad = need(l, PVSR_TAG('H', 'C', 'O', 'F'), 4, (uint64_t)l->cell_count + 1, 1, &l->horizon_cell_offsets);
+    if (!bad) bad = need(l, PVSR_TAG('H', 'C', 'L', 'S'), 1, UINT64_MAX, 1, &l->horizon_cell_lists);
+    if (!bad && l->version_major < 5) bad = "the cells' horizon lists in a file before 5.0";
+    if (bad) return bad;
+    if (l->horizon_cell_lists.bytes - l->horizon_cell_lists.count < PVSR_HORIZON_LIST_PADDING(hz_limit(l)))
+        return "the cells' horizon lists are not followed by their padding";
+    if (rd32(l->horizon_cell_offsets.at) != 0) return "the cells' horizon lists do not start at 0";
+    for (e = 0; e + 1 < l->horizon_cell_offsets.count; ++e) {
+        const uint32_t a = rd32(l->horizon_cell_offsets.at + 4 * e),
+                       b = rd32(l->horizon_cell_offsets.at + 4 * e + 4);
+        const uint8_t* p = l->horizon_cell_lists.at + a;
+        uint64_t head;
+        if (b < a || b > l->horizon_cell_lists.count)
+            return "the cells' horizon lists' offsets decrease or pass their bytes";
+        if (b == a) continue;
+        if (!checked_varint(&p, l->horizon_cell_lists.at + b, &head))
+            return "a cell's horizon list's head is damaged";
+        if (rice_head_fault(head, hz_limit(l), (uint64_t)(l->horizon_cell_lists.at + b - p) * 8) != 0)
+            return "a cell's horizon list's code is damaged";
+    }
+    return NULL;
+}
+
 /* File version 2.1: the horizon's occluders ('HBOX' boxes, 'HTIL' tiles in the 'OPLN' layout, 'HTCO' their
  * corners) and a list per block of cells ('HLOF' byte offsets, blocks + 1, into 'HLST': per list the gaps
  * between its ascending occluder indices, less one, as LEB128 varints; from 5.0 a key row of the PVS code
@@ -1000,7 +1035,12 @@ static uint32_t hz_limit(const pvsr_level* l) {
 static const char* check_horizon(pvsr_level* l) {
     uint64_t e;
     const char* bad;
-    if (!section(l, PVSR_TAG('H', 'L', 'O', 'F'), &l->horizon_list_offsets)) return NULL; /* none */
+    pvsr_array cells;
+    if (!section(l, PVSR_TAG('H', 'L', 'O', 'F'), &l->horizon_list_offsets)) /* none */
+        return section(l, PVSR_TAG('H', 'C', 'O', 'F'), &cells) ||
+                       section(l, PVSR_TAG('H', 'C', 'L', 'S'), &cells)
+                   ? "the cells' horizon lists without the horizon's"
+                   : NULL;
     bad = need(l, PVSR_TAG('H', 'L', 'O', 'F'), 4, (uint64_t)palette_block_count(l) + 1, 1,
                &l->horizon_list_offsets);
     if (!bad) bad = need(l, PVSR_TAG('H', 'L', 'S', 'T'), 1, UINT64_MAX, 1, &l->horizon_lists);
@@ -1056,7 +1096,7 @@ static const char* check_horizon(pvsr_level* l) {
             }
         }
     }
-    return NULL;
+    return check_horizon_cells(l);
 }
 
 /* ---- Part boxes on their object's grid (file 5.1, 'OPBQ'; docs/FORMAT.md, docs/ALGORITHMS.md#object-parts).
@@ -3762,10 +3802,20 @@ typedef struct hz_list {
     uint64_t next;          /* LEB128: the least index the next entry may have */
     gap_reader rice;        /* 5.0 */
     int is_rice;
+    gap_reader pick; /* 5.2, lists per cell: the positions in the block's list the cell keeps */
+    int picking;
+    uint32_t at; /* the position of the block's next entry */
 } hz_list;
 
+/* A key row (checked at open) at [p, end) read by g, its entries below limit. */
+static void hz_code_open(gap_reader* g, const uint8_t* p, const uint8_t* end, uint32_t limit) {
+    uint64_t head = 0;
+    if (p < end) checked_varint(&p, end, &head);
+    gap_init(g, p, (uint32_t)(head >> 5), (uint32_t)(head & 31), limit);
+}
 
-/* Opens the cell's list; 0 when the file has no lists (or the cell none). */
+/* Opens the cell's list: its block's, and from 5.2, where the file has lists per cell, the positions in it
+ * that the cell keeps; 0 when the file has no lists (or the cell none). */
 static int hz_list_open(const pvsr_level* l, uint32_t cell, hz_list* r) {
     uint32_t b;
     memset(r, 0, sizeof *r);
@@ -3774,18 +3824,32 @@ static int hz_list_open(const pvsr_level* l, uint32_t cell, hz_list* r) {
     r->p = l->horizon_lists.at + rd32(l->horizon_list_offsets.at + 4 * (uint64_t)b);
     r->end = l->horizon_lists.at + rd32(l->horizon_list_offsets.at + 4 * (uint64_t)b + 4);
     if (l->version_major >= 5) {
-        uint64_t head = 0;
         r->is_rice = 1;
-        if (r->p < r->end) checked_varint(&r->p, r->end, &head); /* whole: checked at open */
-        gap_init(&r->rice, r->p, (uint32_t)(head >> 5), (uint32_t)(head & 31), hz_limit(l));
+        hz_code_open(&r->rice, r->p, r->end, hz_limit(l));
+        if (l->horizon_cell_offsets.at != NULL) {
+            r->picking = 1;
+            hz_code_open(&r->pick,
+                         l->horizon_cell_lists.at + rd32(l->horizon_cell_offsets.at + 4 * (uint64_t)cell),
+                         l->horizon_cell_lists.at + rd32(l->horizon_cell_offsets.at + 4 * (uint64_t)cell + 4),
+                         hz_limit(l));
+        }
     }
     return 1;
 }
 
 /* The next occluder of a list, or UINT32_MAX at its end (or where a damaged list leaves its bytes or the
- * occluders). */
+ * occluders, or a cell's position passes its block's list). */
 static uint32_t hz_list_next(const pvsr_level* l, hz_list* r) {
     uint64_t gap;
+    if (r->picking) {
+        const uint32_t want = gap_next(&r->pick);
+        if (want == UINT32_MAX) return UINT32_MAX;
+        for (;;) { /* positions ascend: the block's list is read once */
+            const uint32_t o = gap_next(&r->rice);
+            if (o == UINT32_MAX) return UINT32_MAX;
+            if (r->at++ == want) return o;
+        }
+    }
     if (r->is_rice) return gap_next(&r->rice); /* PVSR_END is UINT32_MAX */
     if (!checked_varint(&r->p, r->end, &gap)) return UINT32_MAX;
     r->next += gap;

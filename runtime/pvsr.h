@@ -59,7 +59,7 @@ extern "C" {
 
 #define PVSR_VERSION_MAJOR \
     5 /* the newest file version this runtime reads: 1.x to 3.x and 5.x (4.x: refused) */
-#define PVSR_VERSION_MINOR 1
+#define PVSR_VERSION_MINOR 2
 
 typedef enum pvsr_status {
     PVSR_OK = 0,
@@ -98,7 +98,8 @@ typedef struct pvsr_level {
         occluder_boxes, ranked_offsets, ranked_boxes, ranked_measures, strings, occluder_polygons,
         polygon_corners, ranked_polygon_offsets, ranked_polygons, palette_blocks, palette, occupancy,
         occupancy_ranks, horizon_boxes, horizon_tiles, horizon_corners, horizon_list_offsets, horizon_lists,
-        object_part_offsets, object_parts, row_offset_bases, ranked_counts, ranked_count_bases;
+        object_part_offsets, object_parts, row_offset_bases, ranked_counts, ranked_count_bases,
+        horizon_cell_offsets, horizon_cell_lists;
     uint64_t code_bytes; /* the code without its padding */
     uint64_t total_triangles;
 } pvsr_level;
@@ -441,7 +442,8 @@ int pvsr_horizon_hidden_by(const pvsr_horizon* h, const float box[6], pvsr_horiz
  *
  * Every listed occluder is proven, so any frame's answers are safe; the lists only decide which occluders
  * are worth the frame's time. */
-/* Occluders of the cell's list (0 when the file has no lists or the cell is out of range). */
+/* Occluders of the cell's list (0 when the file has no lists or the cell is out of range): its block's list,
+ * or from file 5.2, where the bake chose lists per cell, the cell's own part of it. */
 uint32_t pvsr_horizon_list_count(const pvsr_level* level, uint32_t cell);
 /* Occluders in the file's horizon set (boxes, then tiles); a list's entries index them. */
 uint32_t pvsr_horizon_occluder_count(const pvsr_level* level);

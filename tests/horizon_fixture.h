@@ -10,8 +10,9 @@
 namespace pvs::test {
 
 // Horizon lists (bake file 1.8, runtime file 2.1) on any bake: two boxes (a solid one and a panel) and a
-// tile, one list of the three for every cell.
-inline void add_horizon_lists(BakeData& bake) {
+// tile, one list of the three for every cell; with per_cell, a list per cell (runtime file 5.2): cell c
+// keeps all three when c % 4 == 0, else all but occluder c % 4 - 1 (none but the box for c % 7 == 6).
+inline void add_horizon_lists(BakeData& bake, bool per_cell = false) {
     HorizonLists& h = bake.horizon;
     h = HorizonLists{};
     h.boxes = {Aabb::of({1, 0, 1}, {2, 3, 1.5f}), Aabb::of({0, 0, 3}, {4, 0, 4})};
@@ -26,6 +27,15 @@ inline void add_horizon_lists(BakeData& bake) {
     h.cell_list.assign(bake.cells.size(), 0);
     h.offsets = {0, 3};
     h.entries = {0, 1, 2};
+    if (!per_cell) return;
+    h.offsets = {0};
+    h.entries.clear();
+    for (uint32_t c = 0; c < bake.cells.size(); ++c) {
+        h.cell_list[c] = c;
+        for (uint32_t o = 0; o < 3; ++o)
+            if (c % 7 == 6 ? o == 0 : (c % 4 == 0 || o != c % 4 - 1)) h.entries.push_back(o);
+        h.offsets.push_back(uint32_t(h.entries.size()));
+    }
 }
 
 // Object parts (bake file 1.9, runtime file 2.2) on any bake: every object with a box for bounds gets the

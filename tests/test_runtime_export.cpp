@@ -68,6 +68,60 @@ TEST(RuntimeExport, ARealBakeAnswersAsTheHdf5Loader) {
     }
 }
 
+// Lists per cell (ALGORITHMS 10.7): on a small world each cell gets its own horizon list, a subset of the
+// list its block gets without them (the blocks' eyes are the same), shorter on the whole, and the exported
+// runtime reads each cell's own; past --horizon-cell-lists-max, or with no cell eyes, the lists are per
+// block.
+TEST(RuntimeExport, ACellsHorizonListIsPartOfItsBlocksList) {
+    const RandomWorld random = make_random_world(2, 0);
+    BakeConfig config;
+    config.verify.enabled = false;
+    config.run.threads = 2;
+    Context ctx = quiet_context();
+    const BakeData cell = bake_world(ctx, config, random.world, "random.glb", "");
+    config.ranking.horizon_cell_eyes = 0;
+    const BakeData block = bake_world(ctx, config, random.world, "random.glb", "");
+    config.ranking.horizon_cell_eyes = 16;
+    config.ranking.horizon_cell_lists_max = 0;
+    const BakeData capped = bake_world(ctx, config, random.world, "random.glb", "");
+    ASSERT_EQ(cell.horizon.lists(), cell.cells.size());
+    ASSERT_LT(block.horizon.lists(), block.cells.size());
+    EXPECT_EQ(capped.horizon.entries, block.horizon.entries);
+    EXPECT_EQ(capped.horizon.cell_list, block.horizon.cell_list);
+    // The occluders by their boxes (the two bakes keep different sets, numbered apart).
+    const auto named = [](const HorizonLists& h, uint32_t c) {
+        std::vector<std::vector<float>> out;
+        const uint32_t l = h.cell_list[c];
+        for (uint32_t e = h.offsets[l]; e < h.offsets[l + 1]; ++e) {
+            const uint32_t o = h.entries[e];
+            if (o < h.boxes.size()) {
+                const Aabb& b = h.boxes[o];
+                out.push_back({b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z});
+            } else {
+                std::vector<float> t;
+                for (const glm::vec3& p : h.tiles[o - h.boxes.size()].corners)
+                    t.insert(t.end(), {p.x, p.y, p.z});
+                out.push_back(t);
+            }
+        }
+        std::sort(out.begin(), out.end());
+        return out;
+    };
+    size_t cell_entries = 0, block_entries = 0, shorter = 0;
+    for (uint32_t c = 0; c < cell.cells.size(); ++c) {
+        const auto mine = named(cell.horizon, c), theirs = named(block.horizon, c);
+        EXPECT_TRUE(std::includes(theirs.begin(), theirs.end(), mine.begin(), mine.end())) << "cell " << c;
+        cell_entries += mine.size();
+        block_entries += theirs.size();
+        shorter += mine.size() < theirs.size();
+    }
+    EXPECT_LT(cell_entries, block_entries);
+    EXPECT_GT(shorter, 0u);
+    uint64_t horizon_culled = 0;
+    round_trip(cell, 13, nullptr, &horizon_culled);
+    EXPECT_GT(horizon_culled, 0u);
+}
+
 // The bundled sample world, a grid and an octree (quick sampled bakes): every query the same.
 TEST(RuntimeExport, TheSampleWorldAnswersAsTheHdf5Loader) {
     test::TempDir dir;

@@ -50,6 +50,61 @@ TEST(RuntimeFile, HorizonListsAnswerAsTheHdf5Loader) {
     }
 }
 
+// Lists per cell (runtime file 5.2: each cell's positions in its block's list): the C99 runtime's horizons
+// are built from each cell's own list, as the HDF5 loader's, and draw the same objects.
+TEST(RuntimeFile, HorizonListsPerCellAnswerAsTheHdf5Loader) {
+    for (const bool octree : {false, true}) {
+        SCOPED_TRACE(octree ? "octree" : "grid");
+        BakeData bake = test::coherent_bake(133, {7, 3, 6}, octree, true, 5, true);
+        test::add_horizon_lists(bake, true);
+        uint64_t horizon_culled = 0;
+        round_trip(bake, 7, nullptr, &horizon_culled);
+        test::TempDir dir;
+        const std::string h5 = dir.file("c.h5");
+        write_bake_file(h5, bake);
+        const std::string file = runtime_file_bytes(h5);
+        Bytes b(file);
+        pvsr_level l;
+        ASSERT_EQ(pvsr_open(&l, b.data(), b.size, nullptr, 0), PVSR_OK);
+        ASSERT_NE(l.horizon_cell_offsets.at, nullptr);
+        for (uint32_t c = 0; c < pvsr_cell_count(&l); ++c)
+            EXPECT_EQ(pvsr_horizon_list_count(&l, c), bake.horizon.offsets[c + 1] - bake.horizon.offsets[c])
+                << c;
+    }
+}
+
+// The cells' lists' sections (5.2): damaged offsets or codes are refused with their reason.
+TEST(RuntimeFile, HorizonListsPerCellRefuseDamage) {
+    BakeData bake = test::coherent_bake(70, {4, 2, 3}, false, true, 8);
+    test::add_horizon_lists(bake, true);
+    test::TempDir dir;
+    const std::string h5 = dir.file("c.h5");
+    write_bake_file(h5, bake);
+    const std::string file = runtime_file_bytes(h5);
+    Bytes good(file);
+    pvsr_level l;
+    ASSERT_EQ(pvsr_open(&l, good.data(), good.size, nullptr, 0), PVSR_OK);
+    const size_t offsets = size_t(l.horizon_cell_offsets.at - static_cast<const uint8_t*>(good.data())),
+                 codes = size_t(l.horizon_cell_lists.at - static_cast<const uint8_t*>(good.data()));
+    pvsr_status s;
+    const auto damaged = [&](size_t at, const void* value, size_t n) {
+        Bytes b(file);
+        std::memcpy(b.bytes() + at, value, n);
+        rechecksum(b);
+        return opened_message(b, &s);
+    };
+    const uint32_t one = 1, past = uint32_t(l.horizon_cell_lists.count + 1);
+    const uint8_t bad_head = 0xff;
+    EXPECT_NE(damaged(offsets, &one, 4).find("the cells' horizon lists do not start at 0"),
+              std::string::npos);
+    EXPECT_NE(damaged(offsets + 4, &past, 4).find("offsets decrease or pass their bytes"), std::string::npos);
+    EXPECT_NE(damaged(codes, &bad_head, 1).find("a cell's horizon list's"), std::string::npos);
+    EXPECT_NE(damaged(file.find("HCOF"), "XCOF", 4).find("the cells' horizon lists without their offsets"),
+              std::string::npos);
+    EXPECT_NE(damaged(file.find("HLOF"), "XLOF", 4).find("the cells' horizon lists without the horizon's"),
+              std::string::npos);
+}
+
 // Object parts (bake file 1.9, runtime file 2.2): the runtime and the loader hold the same part boxes, and
 // their walks (culler, horizon, both) cull an object whose bounds are not hidden when every part is, alike.
 TEST(RuntimeFile, ObjectPartsAnswerAsTheHdf5Loader) {
