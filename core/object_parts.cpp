@@ -3,7 +3,6 @@
 #include "core/object_parts.h"
 
 #include "core/convex_clip.h"
-#include "runtime/pvsr.h"
 
 #include <algorithm>
 
@@ -128,19 +127,9 @@ std::vector<Aabb> object_part_boxes(const World& world, uint32_t object, uint32_
         leaves[best] = std::move(lo);
         if (!hi.polygons.empty()) leaves.push_back(std::move(hi));
     }
-    // Each part rounded outward to the grid of the object's bounds on which the runtime file stores it, so
-    // that every reader, of either file, tests the same boxes.
-    const float bounds[6] = {obj.bounds.min.x, obj.bounds.min.y, obj.bounds.min.z,
-                             obj.bounds.max.x, obj.bounds.max.y, obj.bounds.max.z};
     std::vector<Aabb> boxes;
-    for (const Leaf& l : leaves) {
-        if (l.box.is_empty()) continue;
-        const float part[6] = {l.box.min.x, l.box.min.y, l.box.min.z, l.box.max.x, l.box.max.y, l.box.max.z};
-        uint16_t steps[6];
-        float box[6];
-        if (!pvsr_part_encode(bounds, part, steps, box)) return {};
-        boxes.push_back(Aabb::of({box[0], box[1], box[2]}, {box[3], box[4], box[5]}));
-    }
+    for (const Leaf& l : leaves)
+        if (!l.box.is_empty()) boxes.push_back(l.box);
     return boxes;
 }
 

@@ -11,6 +11,7 @@
 #include "driver/memory_plan.h"
 #include "driver/report.h"
 #include "driver/verify_boxes.h"
+#include "io/runtime_file.h"
 #include "occluders/cell_ranking.h"
 #include "occluders/slanted_panels.h"
 #include "occluders/synthesis.h"
@@ -368,6 +369,7 @@ BakeData bake_world(Context& ctx, const BakeConfig& config, const World& world, 
     }
     // 5b. The objects' part boxes for the run-time tests (docs/ALGORITHMS.md#object-parts).
     bake.object_parts = object_parts(world, config.ranking.object_parts);
+    round_parts_to_runtime_grid(world, bake.object_parts);
     // 5c. The run-time horizon's list of proven occluders per block of cells, chosen by the runtime's own
     //     horizon from seeded eyes (docs/ALGORITHMS.md#horizon-lists): the proven boxes, every panel, and the
     //     slanted panels as tiles are the candidates.

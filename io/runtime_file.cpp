@@ -799,6 +799,31 @@ std::string assemble(const std::string& path, Bake& b, const RuntimeFileOptions&
 
 }  // namespace
 
+void round_parts_to_runtime_grid(const World& world, ObjectParts& parts) {
+    if (parts.offsets.empty()) return;
+    std::vector<Aabb> kept;
+    std::vector<uint32_t> offsets = {0};
+    for (size_t o = 0; o + 1 < parts.offsets.size() && o < world.objects.size(); ++o) {
+        const Aabb& b = world.objects[o].bounds;
+        const float bounds[6] = {b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z};
+        const size_t first = kept.size();
+        for (uint32_t e = parts.offsets[o]; e < parts.offsets[o + 1]; ++e) {
+            const Aabb& p = parts.boxes[e];
+            const float part[6] = {p.min.x, p.min.y, p.min.z, p.max.x, p.max.y, p.max.z};
+            uint16_t steps[6];
+            float box[6];
+            if (!pvsr_part_encode(bounds, part, steps, box)) {
+                kept.resize(first);
+                break;
+            }
+            kept.push_back(Aabb::of({box[0], box[1], box[2]}, {box[3], box[4], box[5]}));
+        }
+        offsets.push_back(uint32_t(kept.size()));
+    }
+    parts.boxes = std::move(kept);
+    parts.offsets = std::move(offsets);
+}
+
 std::string runtime_file_bytes(const std::string& bake_path, const RuntimeFileOptions& options,
                                RuntimeFileFigures* figures) {
     static_assert(sizeof(float) == 4);

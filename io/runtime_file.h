@@ -5,6 +5,9 @@
 // product of `pvsbake bake` and the input of every tool; this is exported from it.
 #pragma once
 
+#include "core/object_parts.h"
+#include "core/world.h"
+
 #include <cstdint>
 #include <string>
 #include <utility>
@@ -29,6 +32,12 @@ struct RuntimeFileOptions {
     // coded: fewer key rows. False: the bake's order (measurement).
     bool block_order = true;
 };
+
+// Each part box rounded outward to the grid of its object's bounds on which the runtime file stores it
+// (file 5.1, pvsr_part_encode; docs/FORMAT.md, "The grid of an object's parts"): the bake holds these, so
+// that the bake file and the runtime file give every reader the same boxes. A part that is not a finite box
+// inside its object's bounds drops the object's parts (they keep their promise only whole).
+void round_parts_to_runtime_grid(const World& world, ObjectParts& parts);
 
 // The runtime file of the bake file at bake_path, as bytes. Throws pvs::Error (bad input) naming the file
 // and what is wrong when the bake cannot be read or does not fit the runtime format (over 2^27 objects).

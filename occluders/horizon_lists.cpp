@@ -165,7 +165,6 @@ HorizonLists choose_horizon_lists(Context& ctx, const RankingConfig& config, con
     for (uint32_t c = 0; c < cells.size(); ++c) block_cells[block_of[c]].push_back(c);
     const size_t words = (size_t(cand.size()) + 63) / 64;
     std::vector<uint64_t> used(size_t(blocks) * words, 0);  // per block, the candidates its eyes used
-    std::vector<uint64_t> counts(2, 0);                     // eyes, pieces dropped (this process's)
     std::vector<float> bounds(6 * world.objects.size());
     std::vector<uint8_t> testable(world.objects.size(), 0);
     for (size_t o = 0; o < world.objects.size(); ++o) {
@@ -201,53 +200,68 @@ HorizonLists choose_horizon_lists(Context& ctx, const RankingConfig& config, con
 
     WorkShare alone;
     WorkShare& deal = share ? *share : alone;
-    ctx.progress_begin("horizon lists", blocks, "blocks");
-    deal.begin(blocks);
     const int columns = int(config.horizon_columns);
     const size_t memory_bytes = pvsr_horizon_memory_bytes(columns, kMaxPieces);
-    bool memory_failed = false;
-#pragma omp parallel
-    {
-        std::vector<uint64_t> memory(memory_bytes / 8 + 1);
+    // One pass over the blocks, dealt to threads and processes: work(b, thread) for each; its bit sets
+    // (`bits`) united over the processes and its eyes counted in `counts` (eyes, pieces dropped).
+    struct Thread {
         pvsr_horizon h;
-        const bool ok = pvsr_horizon_init(&h, columns, kMaxPieces, memory.data(), memory.size() * 8) != 0;
-        uint64_t eyes_done = 0, dropped = 0;
         std::vector<glm::vec3> eyes;
-        std::vector<uint32_t> uses(cand.size(), 0), part_tags;
+        std::vector<uint32_t> uses, part_tags;
         std::vector<std::pair<uint32_t, uint32_t>> ranked;  // (uses, candidate)
-        for_each_dealt(deal, ctx, 1, [&](uint64_t b) {
-            if (!ok) return;
-            const std::vector<uint32_t>& mine = block_cells[size_t(b)];
-            std::fill(uses.begin(), uses.end(), 0u);
-            const uint32_t n = uint32_t(mine.size());
-            for (uint32_t k = 0; k < n; ++k) {
-                // horizon_eyes spread evenly over the block's cells (in cell order).
-                const uint32_t share_of = uint32_t((uint64_t(k + 1) * config.horizon_eyes) / n -
-                                                   (uint64_t(k) * config.horizon_eyes) / n);
-                if (share_of == 0) continue;
-                const uint32_t c = mine[k];
-                eyes.clear();
-                sample_eye_points(cells, c, share_of, config.seed ^ kEyeSeedMix, eyes);
-                for (const glm::vec3& eye : eyes) {
-                    build(&h, cand, eye);
-                    ++eyes_done;
-                    dropped += h.dropped;
-                    tally(h, c, uses, part_tags);
-                }
-            }
-            keep_used(config, uses, ranked, used.data() + size_t(b) * words);
-        });
-#pragma omp critical(horizon_lists_counts)
+        uint64_t eyes_done = 0, dropped = 0;
+    };
+    // One eye e of cell c: the horizon `fill` builds, its proofs over c's PVS counted in t.uses.
+    const auto look = [&](Thread& t, const glm::vec3& e, uint32_t c, const auto& fill) {
+        fill(&t.h, e);
+        ++t.eyes_done;
+        t.dropped += t.h.dropped;
+        tally(t.h, c, t.uses, t.part_tags);
+    };
+    std::vector<uint64_t> counts(2, 0);
+    const auto pass = [&](const char* what, std::vector<uint64_t>& bits, const auto& work) {
+        ctx.progress_begin(what, blocks, "blocks");
+        deal.begin(blocks);
+        bool failed = false;
+#pragma omp parallel
         {
-            counts[0] += eyes_done;
-            counts[1] += dropped;
-            memory_failed |= !ok;
+            std::vector<uint64_t> memory(memory_bytes / 8 + 1);
+            Thread t;
+            const bool ok =
+                pvsr_horizon_init(&t.h, columns, kMaxPieces, memory.data(), memory.size() * 8) != 0;
+            t.uses.assign(cand.size(), 0);
+            for_each_dealt(deal, ctx, 1, [&](uint64_t b) {
+                if (ok) work(uint32_t(b), t);
+            });
+#pragma omp critical(horizon_lists_counts)
+            {
+                counts[0] += t.eyes_done;
+                counts[1] += t.dropped;
+                failed |= !ok;
+            }
         }
-    }
-    if (memory_failed) throw internal_error("horizon lists: a horizon did not take its memory");
-    deal.unite(used.data(), used.size());
-    deal.add(counts.data(), counts.size());
-    ctx.progress_end();
+        if (failed) throw internal_error("horizon lists: a horizon did not take its memory");
+        deal.unite(bits.data(), bits.size());
+        ctx.progress_end();
+    };
+
+    // Each block's list: horizon_eyes spread evenly over the block's cells (in cell order), each eye's
+    // horizon built from every candidate.
+    pass("horizon lists", used, [&](uint32_t b, Thread& t) {
+        const std::vector<uint32_t>& mine = block_cells[b];
+        std::fill(t.uses.begin(), t.uses.end(), 0u);
+        const uint32_t n = uint32_t(mine.size());
+        for (uint32_t k = 0; k < n; ++k) {
+            const uint32_t share_of = uint32_t((uint64_t(k + 1) * config.horizon_eyes) / n -
+                                               (uint64_t(k) * config.horizon_eyes) / n);
+            if (share_of == 0) continue;
+            t.eyes.clear();
+            sample_eye_points(cells, mine[k], share_of, config.seed ^ kEyeSeedMix, t.eyes);
+            for (const glm::vec3& e : t.eyes)
+                look(t, e, mine[k], [&](pvsr_horizon* h, const glm::vec3& at) { build(h, cand, at); });
+        }
+        keep_used(config, t.uses, t.ranked, used.data() + size_t(b) * words);
+    });
 
     // Lists per cell: each cell's own, the occluders of its block's list that the proofs of
     // horizon_cell_eyes eyes of the cell used, each eye's horizon built from that list alone; where the cells
@@ -261,49 +275,20 @@ HorizonLists choose_horizon_lists(Context& ctx, const RankingConfig& config, con
     std::vector<uint64_t> cell_used;
     if (per_cell) {
         cell_used.assign(size_t(cells.size()) * words, 0);
-        ctx.progress_begin("horizon cell lists", blocks, "blocks");
-        deal.begin(blocks);
-        std::vector<uint64_t> cell_counts(2, 0);
-#pragma omp parallel
-        {
-            std::vector<uint64_t> memory(memory_bytes / 8 + 1);
-            pvsr_horizon h;
-            const bool ok = pvsr_horizon_init(&h, columns, kMaxPieces, memory.data(), memory.size() * 8) != 0;
-            uint64_t eyes_done = 0, dropped = 0;
-            std::vector<glm::vec3> eyes;
-            std::vector<uint32_t> uses(cand.size(), 0), part_tags;
-            std::vector<std::pair<uint32_t, uint32_t>> ranked;
-            for_each_dealt(deal, ctx, 1, [&](uint64_t b) {
-                if (!ok) return;
-                const uint64_t* pool = used.data() + size_t(b) * words;
-                for (const uint32_t c : block_cells[size_t(b)]) {
-                    std::fill(uses.begin(), uses.end(), 0u);
-                    eyes.clear();
-                    sample_eye_points(cells, c, config.horizon_cell_eyes, config.seed ^ kCellEyeSeedMix,
-                                      eyes);
-                    for (const glm::vec3& eye : eyes) {
-                        build_some(&h, cand, pool, words, eye);
-                        ++eyes_done;
-                        dropped += h.dropped;
-                        tally(h, c, uses, part_tags);
-                    }
-                    keep_used(config, uses, ranked, cell_used.data() + size_t(c) * words);
-                }
-            });
-#pragma omp critical(horizon_lists_counts)
-            {
-                cell_counts[0] += eyes_done;
-                cell_counts[1] += dropped;
-                memory_failed |= !ok;
+        pass("horizon cell lists", cell_used, [&](uint32_t b, Thread& t) {
+            const uint64_t* pool = used.data() + size_t(b) * words;
+            for (const uint32_t c : block_cells[b]) {
+                std::fill(t.uses.begin(), t.uses.end(), 0u);
+                t.eyes.clear();
+                sample_eye_points(cells, c, config.horizon_cell_eyes, config.seed ^ kCellEyeSeedMix, t.eyes);
+                for (const glm::vec3& e : t.eyes)
+                    look(t, e, c,
+                         [&](pvsr_horizon* h, const glm::vec3& at) { build_some(h, cand, pool, words, at); });
+                keep_used(config, t.uses, t.ranked, cell_used.data() + size_t(c) * words);
             }
-        }
-        if (memory_failed) throw internal_error("horizon lists: a horizon did not take its memory");
-        deal.unite(cell_used.data(), cell_used.size());
-        deal.add(cell_counts.data(), cell_counts.size());
-        counts[0] += cell_counts[0];
-        counts[1] += cell_counts[1];
-        ctx.progress_end();
+        });
     }
+    deal.add(counts.data(), counts.size());
     const std::vector<uint64_t>& chosen = per_cell ? cell_used : used;
     const uint32_t n_lists = per_cell ? uint32_t(cells.size()) : blocks;
 
