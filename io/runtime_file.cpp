@@ -743,8 +743,8 @@ std::string assemble(const std::string& path, Bake& b, const RuntimeFileOptions&
 
     // The objects' part boxes, when some object has parts: 5.1, 'OPOQ' offsets (objects + 1, 2 or 4 bytes)
     // into 'OPBQ', six 16-bit steps a part on the grid of the object's bounds (pvsr_part_encode; 2.2's 'OPOF'
-    // and 'OPBX' held floats). A bake's parts lie on that grid already (core/object_parts.h), so the runtime
-    // decodes the bake file's floats; an older bake's are rounded outward to it.
+    // and 'OPBX' held floats). A bake's parts lie on that grid already (round_parts_to_runtime_grid), so
+    // the runtime decodes the bake file's floats; an older bake's are rounded outward to it.
     if (!b.objects.part_offsets.empty() && b.objects.part_offsets.back() > 0) {
         std::vector<uint16_t> steps(b.objects.part_boxes.size());
         float box[6];
