@@ -687,20 +687,27 @@ std::string assemble(const std::string& path, Bake& b, const RuntimeFileOptions&
                 ++hcorners.count;
             }
         }
-        std::vector<uint32_t> offsets = {0};
-        Section hlist{PVSR_TAG('H', 'L', 'S', 'T'), 1, 0, {}};
+        // Each list in the rows' code, its end in `offsets`; then the padding its reader may read into.
         std::vector<uint8_t> code;
-        for (std::vector<uint32_t>& list : lists) {
-            for (uint32_t& o : list) o = renumber[o];  // renumbering keeps the order: still ascending
+        const auto put_list = [&](Section& into, std::vector<uint32_t>& offsets,
+                                  const std::vector<uint32_t>& list, const char* what) {
             code.clear();
             if (!list.empty()) pvsbake::detail::put_rice_indices(code, list);
-            hlist.bytes.append(reinterpret_cast<const char*>(code.data()), code.size());
-            if (hlist.bytes.size() > UINT32_MAX)
-                throw bad_input(fmt::format("{}: the horizon lists pass 4 GiB", path));
-            offsets.push_back(uint32_t(hlist.bytes.size()));
+            into.bytes.append(reinterpret_cast<const char*>(code.data()), code.size());
+            if (into.bytes.size() > UINT32_MAX) throw bad_input(fmt::format("{}: {} pass 4 GiB", path, what));
+            offsets.push_back(uint32_t(into.bytes.size()));
+        };
+        const auto pad = [&](Section& lists_section) {
+            lists_section.count = lists_section.bytes.size();
+            lists_section.bytes.append(size_t(PVSR_HORIZON_LIST_PADDING(hboxes.count + htiles.count)), '\0');
+        };
+        std::vector<uint32_t> offsets = {0};
+        Section hlist{PVSR_TAG('H', 'L', 'S', 'T'), 1, 0, {}};
+        for (std::vector<uint32_t>& list : lists) {
+            for (uint32_t& o : list) o = renumber[o];  // renumbering keeps the order: still ascending
+            put_list(hlist, offsets, list, "the horizon lists");
         }
-        hlist.count = hlist.bytes.size();
-        hlist.bytes.append(size_t(PVSR_HORIZON_LIST_PADDING(hboxes.count + htiles.count)), '\0');
+        pad(hlist);
         // 5.2: where some cell's list is not its block's whole list (lists per cell), each cell's list as its
         // positions in its block's list ('HCOF' byte offsets, cells + 1, into 'HCLS'; the same code), which a
         // 5.1 runtime skips, taking the block's.
@@ -722,15 +729,9 @@ std::string assemble(const std::string& path, Bake& b, const RuntimeFileOptions&
                                  list.begin()));
                 std::sort(picks.begin(), picks.end());
                 picks.erase(std::unique(picks.begin(), picks.end()), picks.end());
-                code.clear();
-                if (!picks.empty()) pvsbake::detail::put_rice_indices(code, picks);
-                cell_lists.bytes.append(reinterpret_cast<const char*>(code.data()), code.size());
-                if (cell_lists.bytes.size() > UINT32_MAX)
-                    throw bad_input(fmt::format("{}: the cells' horizon lists pass 4 GiB", path));
-                cell_offsets.push_back(uint32_t(cell_lists.bytes.size()));
+                put_list(cell_lists, cell_offsets, picks, "the cells' horizon lists");
             }
-            cell_lists.count = cell_lists.bytes.size();
-            cell_lists.bytes.append(size_t(PVSR_HORIZON_LIST_PADDING(hboxes.count + htiles.count)), '\0');
+            pad(cell_lists);
             sections.push_back(array_section(PVSR_TAG('H', 'C', 'O', 'F'), 4, cell_offsets));
             sections.push_back(std::move(cell_lists));
         }

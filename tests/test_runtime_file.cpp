@@ -38,49 +38,43 @@ TEST(RuntimeFile, GridsAndOctreesAnswerAsTheHdf5Loader) {
         }
 }
 
-// Horizon lists (bake file 1.8, runtime file 2.1): the C99 runtime's and the HDF5 loader's horizons are
-// built from the same lists and draw the same objects, and a cell out of range has no list in either.
-TEST(RuntimeFile, HorizonListsAnswerAsTheHdf5Loader) {
-    for (const bool octree : {false, true}) {
-        SCOPED_TRACE(octree ? "octree" : "grid");
-        BakeData bake = test::coherent_bake(133, {7, 3, 6}, octree, true, 5, true);
-        test::add_horizon_lists(bake);
-        uint64_t horizon_culled = 0;
-        round_trip(bake, 7, nullptr, &horizon_culled);
-    }
+// The runtime file of a bake, written through a bake file.
+std::string exported(const BakeData& bake) {
+    test::TempDir dir;
+    const std::string h5 = dir.file("x.h5");
+    write_bake_file(h5, bake);
+    return runtime_file_bytes(h5);
 }
 
-// Lists per cell (runtime file 5.2: each cell's positions in its block's list): the C99 runtime's horizons
-// are built from each cell's own list, as the HDF5 loader's, and draw the same objects.
-TEST(RuntimeFile, HorizonListsPerCellAnswerAsTheHdf5Loader) {
-    for (const bool octree : {false, true}) {
-        SCOPED_TRACE(octree ? "octree" : "grid");
-        BakeData bake = test::coherent_bake(133, {7, 3, 6}, octree, true, 5, true);
-        test::add_horizon_lists(bake, true);
-        uint64_t horizon_culled = 0;
-        round_trip(bake, 7, nullptr, &horizon_culled);
-        test::TempDir dir;
-        const std::string h5 = dir.file("c.h5");
-        write_bake_file(h5, bake);
-        const std::string file = runtime_file_bytes(h5);
-        Bytes b(file);
-        pvsr_level l;
-        ASSERT_EQ(pvsr_open(&l, b.data(), b.size, nullptr, 0), PVSR_OK);
-        ASSERT_NE(l.horizon_cell_offsets.at, nullptr);
-        for (uint32_t c = 0; c < pvsr_cell_count(&l); ++c)
-            EXPECT_EQ(pvsr_horizon_list_count(&l, c), bake.horizon.offsets[c + 1] - bake.horizon.offsets[c])
-                << c;
-    }
+// Horizon lists (bake file 1.8, runtime file 2.1), per block and per cell (5.2: each cell's positions in
+// its block's list): the C99 runtime's and the HDF5 loader's horizons are built from the same lists and draw
+// the same objects, and a cell out of range has no list in either.
+TEST(RuntimeFile, HorizonListsAnswerAsTheHdf5Loader) {
+    for (const bool per_cell : {false, true})
+        for (const bool octree : {false, true}) {
+            SCOPED_TRACE(std::string(octree ? "octree" : "grid") + (per_cell ? ", per cell" : ""));
+            BakeData bake = test::coherent_bake(133, {7, 3, 6}, octree, true, 5, true);
+            test::add_horizon_lists(bake, per_cell);
+            uint64_t horizon_culled = 0;
+            round_trip(bake, 7, nullptr, &horizon_culled);
+            Bytes b(exported(bake));
+            pvsr_level l;
+            ASSERT_EQ(pvsr_open(&l, b.data(), b.size, nullptr, 0), PVSR_OK);
+            EXPECT_EQ(l.horizon_cell_offsets.at != nullptr, per_cell);
+            for (uint32_t c = 0; c < pvsr_cell_count(&l); ++c) {
+                const uint32_t list = bake.horizon.cell_list[c];
+                EXPECT_EQ(pvsr_horizon_list_count(&l, c),
+                          bake.horizon.offsets[list + 1] - bake.horizon.offsets[list])
+                    << c;
+            }
+        }
 }
 
 // The cells' lists' sections (5.2): damaged offsets or codes are refused with their reason.
 TEST(RuntimeFile, HorizonListsPerCellRefuseDamage) {
     BakeData bake = test::coherent_bake(70, {4, 2, 3}, false, true, 8);
     test::add_horizon_lists(bake, true);
-    test::TempDir dir;
-    const std::string h5 = dir.file("c.h5");
-    write_bake_file(h5, bake);
-    const std::string file = runtime_file_bytes(h5);
+    const std::string file = exported(bake);
     Bytes good(file);
     pvsr_level l;
     ASSERT_EQ(pvsr_open(&l, good.data(), good.size, nullptr, 0), PVSR_OK);
