@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
-// pvsbake occluders: the run-time horizon's occluders and the list of them that each block of cells gives the
-// runtime (runtime/pvsr.h, pvsr_horizon; docs/ALGORITHMS.md#horizon-lists).
+// pvsbake occluders: the run-time horizon's occluders and the list of them that each block of cells, or where
+// it is cheap each cell, gives the runtime (runtime/pvsr.h, pvsr_horizon; docs/ALGORITHMS.md#horizon-lists).
 //
 // The candidates are every proven occluder the bake knows: its proven boxes, the world's panels (exact
 // rectangles of opaque surface, as flat boxes) and its slanted panels as tiles (occluders/slanted_panels.h,

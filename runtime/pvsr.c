@@ -1183,6 +1183,21 @@ static int quantized_part(const pvsr_level* l, const part_grid* g, const float b
     return 1;
 }
 
+/* The grid of an object's parts in a 5.1 file (g, from its bounds); 1 for the floats of older files, 0 when
+ * bounds have no grid. */
+static int parts_grid(const pvsr_level* l, const float bounds[6], part_grid* g) {
+    return l->object_parts.item_bytes != 12 || part_grid_of(bounds, g);
+}
+
+/* Part e of the file's part boxes (g and bounds: parts_grid's, of its object); 0 where parts_grid() or
+ * quantized_part() refuse it. */
+static int part_at(const pvsr_level* l, const part_grid* g, const float bounds[6], uint64_t e, float box[6]) {
+    int a;
+    if (l->object_parts.item_bytes == 12) return quantized_part(l, g, bounds, e, box);
+    for (a = 0; a < 6; ++a) box[a] = rdf(l->object_parts.at + 24 * e + 4 * a);
+    return 1;
+}
+
 /* File version 2.2: the objects' part boxes ('OPOF' u32 offsets, objects + 1, into 'OPBX' boxes of floats);
  * 5.1: 'OPOQ' offsets (2 or 4 bytes) into 'OPBQ' steps on the grid of each object's bounds (above), so that
  * a 5.0 runtime, which knows neither, reads the file without parts. One of the two pairs or none. Offsets
@@ -1218,16 +1233,13 @@ static const char* check_object_parts(pvsr_level* l) {
             return "the object parts' offsets decrease or pass their boxes";
         if (first == end) continue;
         pvsr_object_bounds(l, (uint32_t)o, bounds);
-        if (steps && !part_grid_of(bounds, &g)) return "an object with part boxes has no finite bounds";
+        if (!parts_grid(l, bounds, &g)) return "an object with part boxes has no finite bounds";
         for (e = first; e < end; ++e) {
             int k;
-            if (steps) {
-                if (!quantized_part(l, &g, bounds, e, box))
-                    return "an object part box is empty or passes its object's bounds";
-                continue;
-            }
+            if (!part_at(l, &g, bounds, e, box))
+                return "an object part box is empty or passes its object's bounds";
+            if (steps) continue; /* inside the bounds by its decoding */
             if (!finite_box(l->object_parts.at + 24 * e)) return "an object part box is not finite";
-            for (k = 0; k < 6; ++k) box[k] = rdf(l->object_parts.at + 24 * e + 4 * k);
             for (k = 0; k < 3; ++k)
                 if (box[k] > box[k + 3] || !(box[k] >= bounds[k]) || !(box[k + 3] <= bounds[k + 3]))
                     return "an object part box is not inside its object's bounds";
@@ -1497,22 +1509,14 @@ static int drawn(const pvsr_level* l, const sink* s, uint32_t object) {
     uint32_t k, parts;
     uint64_t first;
     part_grid g;
-    int a;
     if ((pvsr_object_flags(l, object) & PVSR_OBJECT_ALWAYS_VISIBLE) != 0) return 1;
     if (!pvsr_object_bounds(l, object, bounds)) return 1;
     if (hidden_box(s, bounds)) return 0;
     parts = pvsr_object_part_count(l, object);
-    if (parts == 0) return 1;
+    if (parts == 0 || !parts_grid(l, bounds, &g)) return 1;
     first = index_at(&l->object_part_offsets, object);
-    if (l->object_parts.item_bytes == 12 && !part_grid_of(bounds, &g)) return 1;
-    for (k = 0; k < parts; ++k) {
-        if (l->object_parts.item_bytes == 12) {
-            if (!quantized_part(l, &g, bounds, first + k, box)) return 1;
-        } else {
-            for (a = 0; a < 6; ++a) box[a] = rdf(l->object_parts.at + 24 * (first + k) + 4 * a);
-        }
-        if (!hidden_box(s, box)) return 1;
-    }
+    for (k = 0; k < parts; ++k)
+        if (!part_at(l, &g, bounds, first + k, box) || !hidden_box(s, box)) return 1;
     return 0;
 }
 
@@ -1665,15 +1669,9 @@ uint32_t pvsr_object_part_count(const pvsr_level* l, uint32_t object) {
 int pvsr_object_part(const pvsr_level* l, uint32_t object, uint32_t part, float box[6]) {
     float bounds[6];
     part_grid g;
-    uint64_t e;
-    int a;
     if (box == NULL || part >= pvsr_object_part_count(l, object)) return 0;
-    e = (uint64_t)index_at(&l->object_part_offsets, object) + part;
-    if (l->object_parts.item_bytes == 12) /* 5.1: steps on the bounds' grid, checked at open */
-        return pvsr_object_bounds(l, object, bounds) && part_grid_of(bounds, &g) &&
-               quantized_part(l, &g, bounds, e, box);
-    for (a = 0; a < 6; ++a) box[a] = rdf(l->object_parts.at + 24 * e + 4 * a);
-    return 1;
+    return pvsr_object_bounds(l, object, bounds) && parts_grid(l, bounds, &g) &&
+           part_at(l, &g, bounds, (uint64_t)index_at(&l->object_part_offsets, object) + part, box);
 }
 
 uint32_t pvsr_object_triangles(const pvsr_level* l, uint32_t object) {
