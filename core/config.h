@@ -166,6 +166,9 @@ struct RankingConfig {
                                       // (docs/ALGORITHMS.md#horizon-lists); 0 = lists per block only
     double horizon_cell_lists_max = 2e6;  // [Limit: >= 0] [Units: entries] lists per cell only when the cells
                                           // times their blocks' mean list length are at most this
+    bool horizon_cell_tests = true;  // with lists per cell, each cell also keeps the objects of its PVS that
+                                     // its eyes' horizons culled, and a frame's horizon tests only those
+                                     // (docs/ALGORITHMS.md#horizon-tests)
 };
 
 // The conservative solver (pvs/conservative.h).
@@ -509,6 +512,11 @@ void visit_options(Config& c, Visitor&& v) {
                  "for every cell and the runtime file a few bits an entry)",
                  0, 1e12},
       c.ranking.horizon_cell_lists_max);
+    v(OptionSpec{OptionGroup::kRanking, "--horizon-cell-tests", "ranking.horizon_cell_tests", "",
+                 "with lists per cell, each cell also keeps the objects of its PVS that its eyes' horizons "
+                 "culled; a frame's horizon tests only those, the culler every object (a cheaper frame, a "
+                 "little more drawn)"},
+      c.ranking.horizon_cell_tests);
     v(OptionSpec{OptionGroup::kConservative, "--epsilon", "conservative.epsilon_m", "m",
                  "occluders shrink by this and cell faces are sampled within it", 0.01, 100},
       c.conservative.epsilon_m);

@@ -87,6 +87,11 @@ struct HorizonLists {
     std::vector<uint32_t> cell_list;     // per cell
     std::vector<uint32_t> offsets;       // lists + 1, from 0, never decreasing
     std::vector<uint32_t> entries;
+    // With lists per cell, optionally: cell c's frames give the horizon only the objects
+    // tests[test_offsets[c] .. test_offsets[c + 1]) (ascending; the culler tests every object:
+    // docs/ALGORITHMS.md#horizon-tests); both empty: the horizon tests every object.
+    std::vector<uint32_t> test_offsets;  // cells + 1, from 0, never decreasing
+    std::vector<uint32_t> tests;
 
     bool empty() const { return offsets.empty(); }
     size_t lists() const { return offsets.empty() ? 0 : offsets.size() - 1; }

@@ -81,6 +81,10 @@ NamedValues bake_figures(const BakeConfig& config, const World& world, const Vie
         {"horizon_list_entries_mean",
          stages.horizon.lists ? double(stages.horizon.entries) / double(stages.horizon.lists) : 0.0},
         {"horizon_list_entries_max", double(stages.horizon.largest_list)},
+        // The objects a cell's frames give the horizon, on average (0: every object;
+        // docs/ALGORITHMS.md#horizon-tests).
+        {"horizon_tests_mean",
+         bake.cells.size() ? double(stages.horizon.tests) / double(bake.cells.size()) : 0.0},
         {"horizon_eyes", double(stages.horizon.eyes)},
         {"horizon_pieces_dropped", double(stages.horizon.pieces_dropped)},
         {"conservative_shrunk_occluders", double(stages.shrunk_boxes)},

@@ -213,6 +213,16 @@ void check_writable(const std::string& path, const BakeData& bake) {
                 if (hz.offsets[l + 1] < hz.offsets[l] || hz.entries[k] >= hz.occluders() ||
                     (k > hz.offsets[l] && hz.entries[k] <= hz.entries[k - 1]))
                     bad(fmt::format("horizon list {} is not ascending occluders in range", l));
+        if (!hz.test_offsets.empty()) {
+            if (hz.test_offsets.size() != size_t(cells) + 1 || hz.test_offsets[0] != 0 ||
+                hz.test_offsets.back() != hz.tests.size())
+                bad("the horizon's tests' offsets do not match the cells and tests");
+            for (size_t c = 0; c < cells; ++c)
+                for (uint32_t k = hz.test_offsets[c]; k < hz.test_offsets[c + 1]; ++k)
+                    if (hz.test_offsets[c + 1] < hz.test_offsets[c] || hz.tests[k] >= bake.objects.size() ||
+                        (k > hz.test_offsets[c] && hz.tests[k] <= hz.tests[k - 1]))
+                        bad(fmt::format("cell {}'s horizon tests are not ascending objects in range", c));
+        }
         for (const Aabb& b : hz.boxes)
             if (!is_finite(b.min) || !is_finite(b.max) || b.is_empty())
                 bad("a horizon box is not a finite box");
@@ -699,6 +709,12 @@ void write_horizon(Writer& w, hid_t root, const HorizonLists& h) {
               h.offsets.data(), true);
     w.dataset(g.get(), "/horizon", "list_entries", H5T_STD_U32LE, H5T_NATIVE_UINT32, {h.entries.size()},
               h.entries.data(), true);
+    if (!h.test_offsets.empty()) {  // 1.10: the objects each cell's frames test
+        w.dataset(g.get(), "/horizon", "test_offsets", H5T_STD_U32LE, H5T_NATIVE_UINT32,
+                  {h.test_offsets.size()}, h.test_offsets.data(), true);
+        w.dataset(g.get(), "/horizon", "tests", H5T_STD_U32LE, H5T_NATIVE_UINT32, {h.tests.size()},
+                  h.tests.data(), true);
+    }
 }
 
 void write_verification(Writer& w, hid_t root, const VerificationRecord& v) {
@@ -888,7 +904,7 @@ void read_occluders(const Reader& r, hid_t root, BakeData& bake) {
 
 void read_horizon(const Reader& r, hid_t root, BakeData& bake) {
     const pvsbake::detail::FileHorizon f =
-        pvsbake::detail::read_horizon(r, root, uint32_t(bake.cells.size()));
+        pvsbake::detail::read_horizon(r, root, uint32_t(bake.cells.size()), uint32_t(bake.objects.size()));
     if (!f.present) return;
     HorizonLists& h = bake.horizon;
     for (size_t i = 0; i < f.box_count(); ++i) h.boxes.push_back(box_at(f.boxes, i));
@@ -896,6 +912,8 @@ void read_horizon(const Reader& r, hid_t root, BakeData& bake) {
     h.cell_list = f.cell_list;
     h.offsets = f.list_offsets;
     h.entries = f.list_entries;
+    h.test_offsets = f.test_offsets;
+    h.tests = f.tests;
 }
 
 void read_verification(const Reader& r, hid_t root, BakeData& bake) {

@@ -25,12 +25,13 @@
 namespace pvs {
 
 constexpr int kBakeFormatMajor = 1;
-constexpr int kBakeFormatMinor = 9;  // 1.1 added the PVS code (/pvs/code), 1.2 ranked occluders per cell,
-                                     // 1.3 the opening width of each verification miss, 1.4 the voxel
-                                     // masks as bricks, 1.5 the run's own record (/run), 1.6 the geometry
-                                     // print (/reuse), 1.7 polygon occluders ranked per cell,
-                                     // 1.8 the run-time horizon's occluders and lists (/horizon),
-                                     // 1.9 the objects' part boxes (/objects/part_*)
+constexpr int kBakeFormatMinor = 10;  // 1.1 added the PVS code (/pvs/code), 1.2 ranked occluders per cell,
+                                      // 1.3 the opening width of each verification miss, 1.4 the voxel
+                                      // masks as bricks, 1.5 the run's own record (/run), 1.6 the geometry
+                                      // print (/reuse), 1.7 polygon occluders ranked per cell,
+                                      // 1.8 the run-time horizon's occluders and lists (/horizon),
+                                      // 1.9 the objects' part boxes (/objects/part_*), 1.10 the objects
+                                      // each cell's frames test (/horizon/test_*)
 
 struct ObjectRecord {
     std::string name;

@@ -735,6 +735,22 @@ std::string assemble(const std::string& path, Bake& b, const RuntimeFileOptions&
             sections.push_back(array_section(PVSR_TAG('H', 'C', 'O', 'F'), 4, cell_offsets));
             sections.push_back(std::move(cell_lists));
         }
+        // 5.3: where the bake kept them, the objects each cell's frames test ('HTOF' byte offsets, cells + 1,
+        // into 'HTST': each cell's ascending object indices in the rows' code, then the padding its reader
+        // may read into), which a 5.2 runtime skips, testing every object.
+        if (!h.test_offsets.empty()) {
+            std::vector<uint32_t> test_offsets = {0}, tests;
+            Section test_code{PVSR_TAG('H', 'T', 'S', 'T'), 1, 0, {}};
+            for (uint32_t c = 0; c < cells; ++c) {
+                tests.assign(h.tests.begin() + h.test_offsets[c],
+                             h.tests.begin() + h.test_offsets[size_t(c) + 1]);
+                put_list(test_code, test_offsets, tests, "the cells' tests");
+            }
+            test_code.count = test_code.bytes.size();
+            test_code.bytes.append(size_t(PVSR_HORIZON_LIST_PADDING(objects)), '\0');
+            sections.push_back(array_section(PVSR_TAG('H', 'T', 'O', 'F'), 4, test_offsets));
+            sections.push_back(std::move(test_code));
+        }
         sections.push_back(std::move(hboxes));
         sections.push_back(std::move(htiles));
         sections.push_back(std::move(hcorners));
@@ -839,7 +855,7 @@ std::string runtime_file_bytes(const std::string& bake_path, const RuntimeFileOp
         const uint32_t objects = uint32_t(bake.objects.names.size());
         bake.pvs = pvsbake::detail::read_pvs(r, root, objects, bake.cells.count, /*want_rows=*/true);
         bake.occluders = pvsbake::detail::read_occluders(r, root, objects, bake.cells.count, /*want_boxes=*/false);
-        bake.horizon = pvsbake::detail::read_horizon(r, root, bake.cells.count);
+        bake.horizon = pvsbake::detail::read_horizon(r, root, bake.cells.count, objects);
         return bake;
     });
     std::string bytes = assemble(bake_path, b, options);

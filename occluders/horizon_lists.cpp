@@ -176,25 +176,28 @@ HorizonLists choose_horizon_lists(Context& ctx, const RankingConfig& config, con
 
     // The proofs of the eye's horizon h over cell c's PVS, counted per candidate in `uses`: an object hidden
     // by its bounds, or by every one of its parts (core/object_parts.h), as the runtime's walk culls it.
+    // With `culled`, the objects hidden are set there (a row of the PVS's width).
     const auto tally = [&](const pvsr_horizon& h, uint32_t c, std::vector<uint32_t>& uses,
-                           std::vector<uint32_t>& part_tags) {
+                           std::vector<uint32_t>& part_tags, uint64_t* culled) {
         const uint64_t* row = pvs.row(c);
         for (uint32_t w = 0; w < pvs.words_per_row; ++w)
             for (uint64_t bits = row[w]; bits != 0; bits &= bits - 1) {
                 const uint32_t o = 64 * w + uint32_t(__builtin_ctzll(bits));
-                if (o >= testable.size() || !testable[o] ||
-                    pvsr_horizon_hidden_by(&h, &bounds[6 * size_t(o)], count_use, &uses))
-                    continue;
+                if (o >= testable.size() || !testable[o]) continue;
+                bool hidden = pvsr_horizon_hidden_by(&h, &bounds[6 * size_t(o)], count_use, &uses) != 0;
                 const uint32_t n_parts = parts ? parts->count(o) : 0;
-                part_tags.clear();
-                bool all = n_parts > 0;
-                for (uint32_t k = 0; k < n_parts && all; ++k) {
-                    const Aabb& p = parts->boxes[parts->offsets[o] + k];
-                    const float pb[6] = {p.min.x, p.min.y, p.min.z, p.max.x, p.max.y, p.max.z};
-                    all = pvsr_horizon_hidden_by(&h, pb, keep_tag, &part_tags) != 0;
+                if (!hidden && n_parts > 0) {
+                    part_tags.clear();
+                    hidden = true;
+                    for (uint32_t k = 0; k < n_parts && hidden; ++k) {
+                        const Aabb& p = parts->boxes[parts->offsets[o] + k];
+                        const float pb[6] = {p.min.x, p.min.y, p.min.z, p.max.x, p.max.y, p.max.z};
+                        hidden = pvsr_horizon_hidden_by(&h, pb, keep_tag, &part_tags) != 0;
+                    }
+                    if (hidden)
+                        for (const uint32_t t : part_tags) count_use(&uses, t);
                 }
-                if (all)
-                    for (const uint32_t t : part_tags) count_use(&uses, t);
+                if (hidden && culled != nullptr) culled[w] |= uint64_t(1) << (o & 63);
             }
     };
 
@@ -212,11 +215,11 @@ HorizonLists choose_horizon_lists(Context& ctx, const RankingConfig& config, con
         uint64_t eyes_done = 0, dropped = 0;
     };
     // One eye e of cell c: the horizon `fill` builds, its proofs over c's PVS counted in t.uses.
-    const auto look = [&](Thread& t, const glm::vec3& e, uint32_t c, const auto& fill) {
+    const auto look = [&](Thread& t, const glm::vec3& e, uint32_t c, const auto& fill, uint64_t* culled) {
         fill(&t.h, e);
         ++t.eyes_done;
         t.dropped += t.h.dropped;
-        tally(t.h, c, t.uses, t.part_tags);
+        tally(t.h, c, t.uses, t.part_tags, culled);
     };
     std::vector<uint64_t> counts(2, 0);
     const auto pass = [&](const char* what, std::vector<uint64_t>& bits, const auto& work) {
@@ -258,7 +261,9 @@ HorizonLists choose_horizon_lists(Context& ctx, const RankingConfig& config, con
             t.eyes.clear();
             sample_eye_points(cells, mine[k], share_of, config.seed ^ kEyeSeedMix, t.eyes);
             for (const glm::vec3& e : t.eyes)
-                look(t, e, mine[k], [&](pvsr_horizon* h, const glm::vec3& at) { build(h, cand, at); });
+                look(
+                    t, e, mine[k], [&](pvsr_horizon* h, const glm::vec3& at) { build(h, cand, at); },
+                    nullptr);
         }
         keep_used(config, t.uses, t.ranked, used.data() + size_t(b) * words);
     });
@@ -272,21 +277,29 @@ HorizonLists choose_horizon_lists(Context& ctx, const RankingConfig& config, con
         for (size_t w = 0; w < words; ++w)
             cell_pairs += uint64_t(__builtin_popcountll(used[size_t(block_of[c]) * words + w]));
     const bool per_cell = config.horizon_cell_eyes > 0 && double(cell_pairs) <= config.horizon_cell_lists_max;
-    std::vector<uint64_t> cell_used;
+    // With horizon_cell_tests, each cell also keeps the objects of its PVS those eyes' horizons hid (by
+    // bounds or by every part): its frames test only those (docs/ALGORITHMS.md#horizon-tests).
+    std::vector<uint64_t> cell_used, cell_culled;
+    const bool tests = per_cell && config.horizon_cell_tests;
     if (per_cell) {
         cell_used.assign(size_t(cells.size()) * words, 0);
+        if (tests) cell_culled.assign(size_t(cells.size()) * pvs.words_per_row, 0);
         pass("horizon cell lists", cell_used, [&](uint32_t b, Thread& t) {
             const uint64_t* pool = used.data() + size_t(b) * words;
             for (const uint32_t c : block_cells[b]) {
                 std::fill(t.uses.begin(), t.uses.end(), 0u);
                 t.eyes.clear();
                 sample_eye_points(cells, c, config.horizon_cell_eyes, config.seed ^ kCellEyeSeedMix, t.eyes);
+                uint64_t* culled = tests ? cell_culled.data() + size_t(c) * pvs.words_per_row : nullptr;
                 for (const glm::vec3& e : t.eyes)
-                    look(t, e, c,
-                         [&](pvsr_horizon* h, const glm::vec3& at) { build_some(h, cand, pool, words, at); });
+                    look(
+                        t, e, c,
+                        [&](pvsr_horizon* h, const glm::vec3& at) { build_some(h, cand, pool, words, at); },
+                        culled);
                 keep_used(config, t.uses, t.ranked, cell_used.data() + size_t(c) * words);
             }
         });
+        if (tests) deal.unite(cell_culled.data(), cell_culled.size());
     }
     deal.add(counts.data(), counts.size());
     const std::vector<uint64_t>& chosen = per_cell ? cell_used : used;
@@ -322,6 +335,18 @@ HorizonLists choose_horizon_lists(Context& ctx, const RankingConfig& config, con
     if (per_cell) {
         out.cell_list.resize(cells.size());
         for (uint32_t c = 0; c < cells.size(); ++c) out.cell_list[c] = c;
+        if (tests) {
+            out.test_offsets.reserve(size_t(cells.size()) + 1);
+            out.test_offsets.push_back(0);
+            for (uint32_t c = 0; c < cells.size(); ++c) {
+                const uint64_t* culled = cell_culled.data() + size_t(c) * pvs.words_per_row;
+                for (uint32_t w = 0; w < pvs.words_per_row; ++w)
+                    for (uint64_t bits = culled[w]; bits != 0; bits &= bits - 1)
+                        out.tests.push_back(64 * w + uint32_t(__builtin_ctzll(bits)));
+                out.test_offsets.push_back(uint32_t(out.tests.size()));
+            }
+            figures.tests = out.tests.size();
+        }
     } else {
         out.cell_list = block_of;
     }
@@ -338,6 +363,9 @@ HorizonLists choose_horizon_lists(Context& ctx, const RankingConfig& config, con
         figures.kept, figures.candidates, n_lists, per_cell ? "cell" : "block of cells",
         n_lists > 0 ? double(figures.entries) / double(n_lists) : 0.0, figures.largest_list, figures.eyes,
         figures.seconds));
+    if (tests)
+        ctx.info(fmt::format("horizon lists: a cell's frames test {:.1f} objects of its PVS on average",
+                             cells.size() > 0 ? double(figures.tests) / double(cells.size()) : 0.0));
     if (figures.pieces_dropped > 0)
         ctx.info(
             fmt::format("horizon lists: {} pieces found no room in an eye's horizon (fewer occluders "

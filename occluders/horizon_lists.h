@@ -34,6 +34,7 @@ struct HorizonListFigures {
     uint32_t lists = 0;           // blocks, or cells with per_cell
     bool per_cell = false;  // a list per cell (a subset of its block's: RankingConfig::horizon_cell_eyes)
     uint64_t entries = 0;         // over every list
+    uint64_t tests = 0;           // objects the cells' frames test, over every cell (lists per cell)
     uint32_t largest_list = 0;    // entries of the longest list
     uint64_t eyes = 0;            // eyes whose horizons chose
     uint64_t pieces_dropped = 0;  // pieces an eye's horizon had no room for (fewer chosen, never unsafe)
@@ -54,7 +55,9 @@ std::vector<uint32_t> horizon_blocks(const CellSet& cells);
 // config.horizon_eyes == 0, or no candidate, an empty result. With `share`, the blocks are dealt over its
 // processes (collective: every process calls it, and every one gets the whole result). With `parts`, an
 // object whose bounds an eye's horizon does not hide counts the proofs of its parts when they hide every
-// part, as the runtime's walk then culls it (docs/ALGORITHMS.md#object-parts).
+// part, as the runtime's walk then culls it (docs/ALGORITHMS.md#object-parts). With lists per cell and
+// config.horizon_cell_tests, each cell's tests are the objects of its PVS those eyes' horizons hid, as the
+// walk culls them (docs/ALGORITHMS.md#horizon-tests).
 HorizonLists choose_horizon_lists(Context& ctx, const RankingConfig& config, const World& world,
                                   const CellSet& cells, const PvsSet& pvs, const std::vector<Aabb>& boxes,
                                   const std::vector<OccluderPolygon>& tiles, HorizonListFigures& figures,

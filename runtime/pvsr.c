@@ -1023,6 +1023,40 @@ static const char* check_horizon_cells(pvsr_level* l) {
     return NULL;
 }
 
+/* File version 5.3: the objects each cell's frames test with the horizon ('HTOF' byte offsets, cells + 1,
+ * into 'HTST'): each cell's as a key row of the PVS code (its ascending object indices), read only with the
+ * horizon's lists; both or neither. Offsets from 0, never decreasing, within the bytes; each head as a
+ * row's; the padding after them. A damaged code ends the cell's tests where it is read (the walk then
+ * draws the rest untested). */
+static const char* check_horizon_tests(pvsr_level* l) {
+    uint64_t e;
+    const char* bad;
+    if (!section(l, PVSR_TAG('H', 'T', 'O', 'F'), &l->horizon_test_offsets))
+        return section(l, PVSR_TAG('H', 'T', 'S', 'T'), &l->horizon_tests)
+                   ? "the cells' tests without their offsets"
+                   : NULL;
+    bad = need(l, PVSR_TAG('H', 'T', 'O', 'F'), 4, (uint64_t)l->cell_count + 1, 1, &l->horizon_test_offsets);
+    if (!bad) bad = need(l, PVSR_TAG('H', 'T', 'S', 'T'), 1, UINT64_MAX, 1, &l->horizon_tests);
+    if (!bad && l->version_major < 5) bad = "the cells' tests in a file before 5.0";
+    if (bad) return bad;
+    if (l->horizon_tests.bytes - l->horizon_tests.count < PVSR_HORIZON_LIST_PADDING(l->object_count))
+        return "the cells' tests are not followed by their padding";
+    if (rd32(l->horizon_test_offsets.at) != 0) return "the cells' tests do not start at 0";
+    for (e = 0; e + 1 < l->horizon_test_offsets.count; ++e) {
+        const uint32_t a = rd32(l->horizon_test_offsets.at + 4 * e),
+                       b = rd32(l->horizon_test_offsets.at + 4 * e + 4);
+        const uint8_t* p = l->horizon_tests.at + a;
+        uint64_t head;
+        if (b < a || b > l->horizon_tests.count)
+            return "the cells' tests' offsets decrease or pass their bytes";
+        if (b == a) continue;
+        if (!checked_varint(&p, l->horizon_tests.at + b, &head)) return "a cell's tests' head is damaged";
+        if (rice_head_fault(head, l->object_count, (uint64_t)(l->horizon_tests.at + b - p) * 8) != 0)
+            return "a cell's tests' code is damaged";
+    }
+    return NULL;
+}
+
 /* File version 2.1: the horizon's occluders ('HBOX' boxes, 'HTIL' tiles in the 'OPLN' layout, 'HTCO' their
  * corners) and a list per block of cells ('HLOF' byte offsets, blocks + 1, into 'HLST': per list the gaps
  * between its ascending occluder indices, less one, as LEB128 varints; from 5.0 a key row of the PVS code
@@ -1096,7 +1130,8 @@ static const char* check_horizon(pvsr_level* l) {
             }
         }
     }
-    return check_horizon_cells(l);
+    bad = check_horizon_cells(l);
+    return bad ? bad : check_horizon_tests(l);
 }
 
 /* ---- Part boxes on their object's grid (file 5.1, 'OPBQ'; docs/FORMAT.md, docs/ALGORITHMS.md#object-parts).
@@ -1495,48 +1530,79 @@ typedef struct sink {
     int cull; /* culler or horizon given */
 } sink;
 
-/* 1 when the walk with a culler or horizon gives the object on: an object the bake marks always visible, one
- * without bounds, or bounds neither proves hidden. */
-static int hidden_box(const sink* s, const float box[6]) {
+/* Whether the culler, or with `horizon` the horizon, proves the box hidden. */
+static int hidden_box(const sink* s, int horizon, const float box[6]) {
     return (s->culler != NULL && pvsr_culler_is_hidden(s->culler, box)) ||
-           (s->horizon != NULL && pvsr_horizon_is_hidden(s->horizon, box));
+           (horizon && s->horizon != NULL && pvsr_horizon_is_hidden(s->horizon, box));
 }
 
 /* 1 when the walk with a culler or horizon gives the object on: an object the bake marks always visible, one
- * without bounds, or one neither proves hidden by its bounds nor, where it has parts, by every part. */
-static int drawn(const pvsr_level* l, const sink* s, uint32_t object) {
+ * without bounds, or one neither proves hidden by its bounds nor, where it has parts, by every part (the
+ * horizon only with `horizon`). */
+static int drawn(const pvsr_level* l, const sink* s, int horizon, uint32_t object) {
     float bounds[6], box[6];
     uint32_t k, parts;
     uint64_t first;
     part_grid g;
     if ((pvsr_object_flags(l, object) & PVSR_OBJECT_ALWAYS_VISIBLE) != 0) return 1;
     if (!pvsr_object_bounds(l, object, bounds)) return 1;
-    if (hidden_box(s, bounds)) return 0;
+    if (hidden_box(s, horizon, bounds)) return 0;
     parts = pvsr_object_part_count(l, object);
     if (parts == 0 || !parts_grid(l, bounds, &g)) return 1;
     first = index_at(&l->object_part_offsets, object);
     for (k = 0; k < parts; ++k)
-        if (!part_at(l, &g, bounds, first + k, box) || !hidden_box(s, box)) return 1;
+        if (!part_at(l, &g, bounds, first + k, box) || !hidden_box(s, horizon, box)) return 1;
     return 0;
 }
 
-/* Walks the cell's row: gives each visible object to the sink in increasing order; returns how many. */
+static void hz_code_open(gap_reader* g, const uint8_t* p, const uint8_t* end, uint32_t limit);
+
+/* The objects a cell's frames test with the horizon (file 5.3): whether the next one is `object`, the
+ * reader advanced past what comes before it (objects come in increasing order). */
+typedef struct tests_reader {
+    gap_reader code;
+    uint32_t next;
+    int on; /* the walk has a horizon and the file the cell's tests: only they meet the horizon */
+} tests_reader;
+
+static void tests_open(const pvsr_level* l, uint32_t cell, const sink* s, tests_reader* t) {
+    t->on = s->horizon != NULL && l->horizon_test_offsets.at != NULL;
+    t->next = 0;
+    if (t->on) {
+        const uint8_t* tests = l->horizon_tests.at;
+        hz_code_open(&t->code, tests + rd32(l->horizon_test_offsets.at + 4 * (uint64_t)cell),
+                     tests + rd32(l->horizon_test_offsets.at + 4 * (uint64_t)cell + 4), l->object_count);
+        t->next = gap_next(&t->code);
+    }
+}
+
+static int tested(tests_reader* t, uint32_t object) {
+    if (!t->on) return 1;
+    while (t->next < object) t->next = gap_next(&t->code); /* PVSR_END ends it */
+    return t->next == object;
+}
+
+/* Walks the cell's row: gives each visible object to the sink in increasing order; returns how many. With a
+ * horizon and the cell's tests (file 5.3), the horizon tests only those objects; the culler tests every one
+ * (docs/ALGORITHMS.md#horizon-tests). */
 static uint32_t walk(const pvsr_level* l, uint32_t cell, const sink* s) {
     gap_reader chain[PVSR_MAX_CHAIN];
+    tests_reader t;
     uint32_t count = 0, i, a, b;
     int n;
     if (l == NULL || cell >= l->cell_count) return 0;
     n = row_chain(l, cell_row(l, cell), chain);
-#define PVSR_GIVE(object)                                 \
-    do {                                                  \
-        const uint32_t o_ = (object);                     \
-        if (s->cull && !drawn(l, s, o_)) break;           \
-        if (s->list != NULL) {                            \
-            if (count < s->capacity) s->list[count] = o_; \
-        } else if (s->visit != NULL) {                    \
-            s->visit(s->user, o_);                        \
-        }                                                 \
-        ++count;                                          \
+    tests_open(l, cell, s, &t);
+#define PVSR_GIVE(object)                                       \
+    do {                                                        \
+        const uint32_t o_ = (object);                           \
+        if (s->cull && !drawn(l, s, tested(&t, o_), o_)) break; \
+        if (s->list != NULL) {                                  \
+            if (count < s->capacity) s->list[count] = o_;       \
+        } else if (s->visit != NULL) {                          \
+            s->visit(s->user, o_);                              \
+        }                                                       \
+        ++count;                                                \
     } while (0)
     if (n == 1) {
         for (i = gap_next(&chain[0]); i != PVSR_END; i = gap_next(&chain[0])) PVSR_GIVE(i);

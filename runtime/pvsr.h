@@ -59,7 +59,7 @@ extern "C" {
 
 #define PVSR_VERSION_MAJOR \
     5 /* the newest file version this runtime reads: 1.x to 3.x and 5.x (4.x: refused) */
-#define PVSR_VERSION_MINOR 2
+#define PVSR_VERSION_MINOR 3
 
 typedef enum pvsr_status {
     PVSR_OK = 0,
@@ -99,7 +99,7 @@ typedef struct pvsr_level {
         polygon_corners, ranked_polygon_offsets, ranked_polygons, palette_blocks, palette, occupancy,
         occupancy_ranks, horizon_boxes, horizon_tiles, horizon_corners, horizon_list_offsets, horizon_lists,
         object_part_offsets, object_parts, row_offset_bases, ranked_counts, ranked_count_bases,
-        horizon_cell_offsets, horizon_cell_lists;
+        horizon_cell_offsets, horizon_cell_lists, horizon_test_offsets, horizon_tests;
     uint64_t code_bytes; /* the code without its padding */
     uint64_t total_triangles;
 } pvsr_level;

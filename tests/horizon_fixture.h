@@ -11,8 +11,10 @@ namespace pvs::test {
 
 // Horizon lists (bake file 1.8, runtime file 2.1) on any bake: two boxes (a solid one and a panel) and a
 // tile, one list of the three for every cell; with per_cell, a list per cell (runtime file 5.2): cell c
-// keeps all three when c % 4 == 0, else all but occluder c % 4 - 1 (none but the box for c % 7 == 6).
-inline void add_horizon_lists(BakeData& bake, bool per_cell = false) {
+// keeps all three when c % 4 == 0, else all but occluder c % 4 - 1 (none but the box for c % 7 == 6). With
+// tests (bake file 1.10, runtime file 5.3), cell c's frames test the objects o of its row with
+// (o + c) % 3 != 0, and none when c % 5 == 4.
+inline void add_horizon_lists(BakeData& bake, bool per_cell = false, bool tests = false) {
     HorizonLists& h = bake.horizon;
     h = HorizonLists{};
     h.boxes = {Aabb::of({1, 0, 1}, {2, 3, 1.5f}), Aabb::of({0, 0, 3}, {4, 0, 4})};
@@ -35,6 +37,14 @@ inline void add_horizon_lists(BakeData& bake, bool per_cell = false) {
         for (uint32_t o = 0; o < 3; ++o)
             if (c % 7 == 6 ? o == 0 : (c % 4 == 0 || o != c % 4 - 1)) h.entries.push_back(o);
         h.offsets.push_back(uint32_t(h.entries.size()));
+    }
+    if (!tests) return;
+    h.test_offsets = {0};
+    for (uint32_t c = 0; c < bake.cells.size(); ++c) {
+        if (c % 5 != 4)
+            for (uint32_t o = 0; o < bake.objects.size(); ++o)
+                if ((o + c) % 3 != 0 && bake.pvs.test(c, o)) h.tests.push_back(o);
+        h.test_offsets.push_back(uint32_t(h.tests.size()));
     }
 }
 

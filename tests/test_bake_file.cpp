@@ -1065,13 +1065,22 @@ TEST(BakeFileBad, PolygonOccludersOutOfRangeOrDamaged) {
 }
 
 // The ranked bake with horizon lists (format 1.8): two boxes (a solid one and a panel) and a tile, two lists
-// over its cells. They come back as written, and a damaged list, tile or cell entry is refused by name.
-BakeData horizon_bake() {
+// over its cells, and the cells' tests (1.10). They come back as written, and a damaged list, tile, cell
+// entry or test is refused by name.
+BakeData horizon_bake(bool tests = true) {
     BakeData bake = ranked_bake();
     test::add_horizon_lists(bake);
     bake.horizon.cell_list.back() = 1;
     bake.horizon.offsets = {0, 2, 3};
     bake.horizon.entries = {0, 2, 1};
+    if (tests) {
+        bake.horizon.test_offsets = {0};
+        for (uint32_t c = 0; c < bake.cells.size(); ++c) {
+            for (uint32_t o = 0; o < bake.objects.size(); ++o)
+                if ((o + c) % 2 == 0 && bake.pvs.test(c, o)) bake.horizon.tests.push_back(o);
+            bake.horizon.test_offsets.push_back(uint32_t(bake.horizon.tests.size()));
+        }
+    }
     return bake;
 }
 
@@ -1091,8 +1100,16 @@ TEST(BakeFile, HorizonListsRoundTrip) {
     EXPECT_EQ(back.horizon.cell_list, bake.horizon.cell_list);
     EXPECT_EQ(back.horizon.offsets, bake.horizon.offsets);
     EXPECT_EQ(back.horizon.entries, bake.horizon.entries);
+    ASSERT_GE(bake.horizon.tests.size(), 2u);
+    EXPECT_EQ(back.horizon.test_offsets, bake.horizon.test_offsets);
+    EXPECT_EQ(back.horizon.tests, bake.horizon.tests);
     write_bake_file(dir.file("again.h5"), back);
     EXPECT_EQ(test::read_file(dir.file("again.h5")), test::read_file(path));
+    // Without tests (or in a file before 1.10), none come back: every object is tested.
+    write_bake_file(dir.file("untested.h5"), horizon_bake(false));
+    const BakeData untested = read_bake_file(dir.file("untested.h5"));
+    EXPECT_TRUE(untested.horizon.test_offsets.empty() && untested.horizon.tests.empty());
+    EXPECT_EQ(untested.horizon.entries, bake.horizon.entries);
     // Without lists, no /horizon group, and nothing comes back.
     BakeData none = bake;
     none.horizon = HorizonLists{};
@@ -1119,6 +1136,8 @@ TEST(BakeFileBad, HorizonListsOutOfRangeOrDamaged) {
     patched("/horizon/tile_planes", 4, H5T_NATIVE_FLOAT, &negative, {"/horizon/tile_planes[0]"});
     patched("/horizon/tile_corners", 2, H5T_NATIVE_FLOAT, &nan, {"/horizon/tile_corners[0]"});
     patched("/horizon/tile_offsets", 1, H5T_NATIVE_UINT32, &zero, {"/horizon/tile_offsets"});
+    patched("/horizon/tests", 0, H5T_NATIVE_UINT32, &big, {"/horizon/tests[0]"});
+    patched("/horizon/test_offsets", 1, H5T_NATIVE_UINT32, &big, {"/horizon/test_offsets"});
 }
 
 // Format 1.9: the objects' part boxes come back as written; without parts no datasets and none come back;

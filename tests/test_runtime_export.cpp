@@ -71,7 +71,9 @@ TEST(RuntimeExport, ARealBakeAnswersAsTheHdf5Loader) {
 // Lists per cell (ALGORITHMS 10.7): on a small world each cell gets its own horizon list, a subset of the
 // list its block gets without them (the blocks' eyes are the same), shorter on the whole, and the exported
 // runtime reads each cell's own; past --horizon-cell-lists-max, or with no cell eyes, the lists are per
-// block.
+// block. Each cell also keeps its tests (ALGORITHMS 10.7, "A frame's tests"): ascending objects of its PVS,
+// fewer than the PVS over the cells and some; none with --horizon-cell-tests false (the same lists) or with
+// lists per block; the runtime draws what the loader draws (round_trip).
 TEST(RuntimeExport, ACellsHorizonListIsPartOfItsBlocksList) {
     const RandomWorld random = make_random_world(2, 0);
     BakeConfig config;
@@ -84,6 +86,25 @@ TEST(RuntimeExport, ACellsHorizonListIsPartOfItsBlocksList) {
     config.ranking.horizon_cell_eyes = 16;
     config.ranking.horizon_cell_lists_max = 0;
     const BakeData capped = bake_world(ctx, config, random.world, "random.glb", "");
+    config.ranking.horizon_cell_lists_max = 2e6;
+    config.ranking.horizon_cell_tests = false;
+    const BakeData untested = bake_world(ctx, config, random.world, "random.glb", "");
+    EXPECT_EQ(untested.horizon.entries, cell.horizon.entries);
+    EXPECT_EQ(untested.horizon.cell_list, cell.horizon.cell_list);
+    EXPECT_TRUE(untested.horizon.test_offsets.empty() && block.horizon.test_offsets.empty() &&
+                capped.horizon.test_offsets.empty());
+    ASSERT_EQ(cell.horizon.test_offsets.size(), cell.cells.size() + 1);
+    uint64_t tests = 0, listed = 0;
+    for (uint32_t c = 0; c < cell.cells.size(); ++c) {
+        for (uint32_t k = cell.horizon.test_offsets[c]; k < cell.horizon.test_offsets[c + 1]; ++k) {
+            EXPECT_TRUE(cell.pvs.test(c, cell.horizon.tests[k])) << "cell " << c;
+            if (k > cell.horizon.test_offsets[c]) EXPECT_GT(cell.horizon.tests[k], cell.horizon.tests[k - 1]);
+        }
+        tests += cell.horizon.test_offsets[c + 1] - cell.horizon.test_offsets[c];
+        listed += cell.pvs.count(c);
+    }
+    EXPECT_GT(tests, 0u);
+    EXPECT_LT(tests, listed);
     ASSERT_EQ(cell.horizon.lists(), cell.cells.size());
     ASSERT_LT(block.horizon.lists(), block.cells.size());
     EXPECT_EQ(capped.horizon.entries, block.horizon.entries);

@@ -47,20 +47,24 @@ std::string exported(const BakeData& bake) {
 }
 
 // Horizon lists (bake file 1.8, runtime file 2.1), per block and per cell (5.2: each cell's positions in
-// its block's list): the C99 runtime's and the HDF5 loader's horizons are built from the same lists and draw
-// the same objects, and a cell out of range has no list in either.
+// its block's list), with and without the cells' tests (5.3, bake file 1.10): the C99 runtime's and the
+// HDF5 loader's horizons are built from the same lists and draw the same objects (round_trip: the PVS less
+// what they hide of the cell's tests, the rest untested), and a cell out of range has no list in either.
 TEST(RuntimeFile, HorizonListsAnswerAsTheHdf5Loader) {
-    for (const bool per_cell : {false, true})
+    for (const int kind : {0, 1, 2})  // per block, per cell, per cell with tests
         for (const bool octree : {false, true}) {
-            SCOPED_TRACE(std::string(octree ? "octree" : "grid") + (per_cell ? ", per cell" : ""));
+            const bool per_cell = kind > 0, tests = kind == 2;
+            SCOPED_TRACE(std::string(octree ? "octree" : "grid") + (per_cell ? ", per cell" : "") +
+                         (tests ? ", tests" : ""));
             BakeData bake = test::coherent_bake(133, {7, 3, 6}, octree, true, 5, true);
-            test::add_horizon_lists(bake, per_cell);
+            test::add_horizon_lists(bake, per_cell, tests);
             uint64_t horizon_culled = 0;
             round_trip(bake, 7, nullptr, &horizon_culled);
             Bytes b(exported(bake));
             pvsr_level l;
             ASSERT_EQ(pvsr_open(&l, b.data(), b.size, nullptr, 0), PVSR_OK);
             EXPECT_EQ(l.horizon_cell_offsets.at != nullptr, per_cell);
+            EXPECT_EQ(l.horizon_test_offsets.at != nullptr, tests);
             for (uint32_t c = 0; c < pvsr_cell_count(&l); ++c) {
                 const uint32_t list = bake.horizon.cell_list[c];
                 EXPECT_EQ(pvsr_horizon_list_count(&l, c),
@@ -94,6 +98,72 @@ TEST(RuntimeFile, HorizonListsPerCellRefuseDamage) {
     EXPECT_NE(damaged(offsets + 4, &past, 4).find("offsets decrease or pass their bytes"), std::string::npos);
     EXPECT_NE(damaged(codes, &bad_head, 1).find("a cell's horizon list's"), std::string::npos);
     EXPECT_NE(damaged(file.find("HCOF"), "XCOF", 4).find("the cells' horizon lists without their offsets"),
+              std::string::npos);
+    EXPECT_NE(damaged(file.find("HLOF"), "XLOF", 4).find("the cells' horizon lists without the horizon's"),
+              std::string::npos);
+}
+
+// The cells' tests (5.3): a walk gives the horizon only a cell's tests (an object the horizon hides is drawn
+// where the cell does not test it); damaged offsets or codes are refused with their reason; a file without
+// the horizon's lists has none.
+TEST(RuntimeFile, CellsTestsLeaveTheRestUntestedAndRefuseDamage) {
+    BakeData bake = test::coherent_bake(70, {4, 2, 3}, false, true, 8);
+    test::add_horizon_lists(bake, true, true);
+    const std::string file = exported(bake);
+    BakeData all = bake;  // the same lists, every object tested
+    all.horizon.test_offsets.clear();
+    all.horizon.tests.clear();
+    const std::string file_all = exported(all);
+    Bytes good(file), good_all(file_all);
+    pvsr_level l, l_all;
+    ASSERT_EQ(pvsr_open(&l, good.data(), good.size, nullptr, 0), PVSR_OK);
+    ASSERT_EQ(pvsr_open(&l_all, good_all.data(), good_all.size, nullptr, 0), PVSR_OK);
+    EXPECT_EQ(l_all.horizon_test_offsets.at, nullptr);
+    std::vector<uint64_t> memory(pvsr_horizon_memory_bytes(64, 1 << 14) / 8 + 1);
+    pvsr_horizon h;
+    ASSERT_TRUE(pvsr_horizon_init(&h, 64, 1 << 14, memory.data(), memory.size() * 8));
+    std::mt19937 rng(5);
+    uint64_t untested_hidden = 0;
+    for (uint32_t c = 0; c < bake.cells.size(); ++c) {
+        float box[6];
+        ASSERT_TRUE(pvsr_cell_bounds(&l, c, box));
+        std::uniform_real_distribution<float> u(0.0f, 1.0f);
+        const float eye[3] = {box[0] + u(rng) * (box[3] - box[0]), box[1] + u(rng) * (box[4] - box[1]),
+                              box[2] + u(rng) * (box[5] - box[2])};
+        std::vector<uint32_t> with(256), without(256), pvs(256);
+        pvsr_horizon_begin_cell(&h, &l, c, eye);
+        with.resize(pvsr_drawn_objects_horizon(&l, c, nullptr, &h, with.data(), with.size()));
+        without.resize(pvsr_drawn_objects_horizon(&l_all, c, nullptr, &h, without.data(), without.size()));
+        pvs.resize(pvsr_visible_objects(&l, c, pvs.data(), pvs.size()));
+        const uint32_t *t0 = bake.horizon.tests.data() + bake.horizon.test_offsets[c],
+                       *t1 = bake.horizon.tests.data() + bake.horizon.test_offsets[c + 1];
+        std::vector<uint32_t> expected;
+        for (const uint32_t o : pvs)
+            if (!std::binary_search(t0, t1, o) || std::binary_search(without.begin(), without.end(), o))
+                expected.push_back(o);
+        EXPECT_EQ(with, expected) << "cell " << c;
+        for (const uint32_t o : pvs)
+            untested_hidden +=
+                !std::binary_search(t0, t1, o) && !std::binary_search(without.begin(), without.end(), o);
+    }
+    EXPECT_GT(untested_hidden, 0u);  // the scene has objects the horizon hides that a cell does not test
+
+    const size_t offsets = size_t(l.horizon_test_offsets.at - static_cast<const uint8_t*>(good.data())),
+                 codes = size_t(l.horizon_tests.at - static_cast<const uint8_t*>(good.data()));
+    pvsr_status s;
+    const auto damaged = [&](size_t at, const void* value, size_t n) {
+        Bytes b(file);
+        std::memcpy(b.bytes() + at, value, n);
+        rechecksum(b);
+        return opened_message(b, &s);
+    };
+    const uint32_t one = 1, past = uint32_t(l.horizon_tests.count + 1);
+    const uint8_t bad_head = 0xff;
+    EXPECT_NE(damaged(offsets, &one, 4).find("the cells' tests do not start at 0"), std::string::npos);
+    EXPECT_NE(damaged(offsets + 4, &past, 4).find("the cells' tests' offsets decrease or pass their bytes"),
+              std::string::npos);
+    EXPECT_NE(damaged(codes, &bad_head, 1).find("a cell's tests'"), std::string::npos);
+    EXPECT_NE(damaged(file.find("HTOF"), "XTOF", 4).find("the cells' tests without their offsets"),
               std::string::npos);
     EXPECT_NE(damaged(file.find("HLOF"), "XLOF", 4).find("the cells' horizon lists without the horizon's"),
               std::string::npos);

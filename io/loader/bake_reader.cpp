@@ -433,7 +433,7 @@ void read_polygons(const Reader& r, hid_t g, uint32_t cells, FileOccluders& o) {
 
 }  // namespace
 
-FileHorizon read_horizon(const Reader& r, hid_t root, uint32_t cells) {
+FileHorizon read_horizon(const Reader& r, hid_t root, uint32_t cells, uint32_t objects) {
     FileHorizon h;
     if (!r.has_link(root, "horizon")) return h;  // older than 1.8, or a bake without lists
     h.present = true;
@@ -496,6 +496,24 @@ FileHorizon read_horizon(const Reader& r, hid_t root, uint32_t cells) {
         if (int64_t(h.cell_list[c]) >= lists)
             r.fail(
                 cat("/horizon/cell_list[", c, "] = ", h.cell_list[c], " is not below the ", lists, " lists"));
+    if (r.has_link(g.get(), "test_offsets")) {  // 1.10
+        h.test_offsets = r.numeric_dataset<uint32_t>(g.get(), where, "test_offsets", H5T_NATIVE_UINT32,
+                                                     {int64_t(cells) + 1}, H5T_INTEGER);
+        h.tests = r.numeric_dataset<uint32_t>(g.get(), where, "tests", H5T_NATIVE_UINT32, shape = {-1},
+                                              H5T_INTEGER);
+        if (h.test_offsets[0] != 0 || h.test_offsets.back() != h.tests.size())
+            r.fail(cat("/horizon/test_offsets does not start at 0 and end at the ", h.tests.size(),
+                       " entries of /horizon/tests"));
+        for (uint32_t c = 0; c < cells; ++c) {
+            const uint32_t a = h.test_offsets[c], b = h.test_offsets[size_t(c) + 1];
+            if (b < a || b > h.tests.size())
+                r.fail(cat("/horizon/test_offsets[", c + 1, "] decreases or passes the tests"));
+            for (uint32_t k = a; k < b; ++k)
+                if (h.tests[k] >= objects || (k > a && h.tests[k] <= h.tests[k - 1]))
+                    r.fail(cat("/horizon/tests[", k, "] is not an object below ", objects,
+                               " after the one before it in its cell's tests"));
+        }
+    }
     return h;
 }
 

@@ -19,7 +19,7 @@ namespace pvsbake::detail {
 
 constexpr const char* kFormatName = "pvsbake";
 constexpr int kFormatMajor = 1;
-constexpr int kFormatMinor = 9;
+constexpr int kFormatMinor = 10;
 constexpr uint32_t kHorizonTileMaxCorners = 32;  // runtime/pvsr.h PVSR_HORIZON_MAX_CORNERS
 
 // The root attributes. Throws kNotBakeFile without format = "pvsbake", kVersionTooNew for a newer major.
@@ -132,7 +132,8 @@ FileOccluders read_occluders(const Reader& r, hid_t root, uint32_t objects, uint
 // gives it; `present` is false in older files and bakes without lists. Validated: boxes finite with
 // min <= max; tiles of 3 to 32 finite corners on a finite plane with thickness >= 0; cell_list has one entry
 // per cell, each below the lists; list_offsets from 0, never decreasing, ending at the entries; each list's
-// entries ascending and below boxes + tiles.
+// entries ascending and below boxes + tiles. 1.10, optionally: test_offsets (cells + 1) from 0, never
+// decreasing, ending at the tests; each cell's tests ascending and below the objects (both empty: none).
 struct FileHorizon {
     bool present = false;
     std::vector<float> boxes;            // 6 floats a box
@@ -142,10 +143,12 @@ struct FileHorizon {
     std::vector<uint32_t> cell_list;     // per cell
     std::vector<uint32_t> list_offsets;  // lists + 1
     std::vector<uint32_t> list_entries;
+    std::vector<uint32_t> test_offsets;  // cells + 1, or empty: every object is tested
+    std::vector<uint32_t> tests;         // per cell, the objects its frames test (ascending)
     uint64_t box_count() const { return boxes.size() / 6; }
     uint64_t tile_count() const { return tile_offsets.empty() ? 0 : tile_offsets.size() - 1; }
 };
-FileHorizon read_horizon(const Reader& r, hid_t root, uint32_t cells);
+FileHorizon read_horizon(const Reader& r, hid_t root, uint32_t cells, uint32_t objects);
 
 // Opens path for reading: kFileMissing, kIoError, kNotBakeFile (not HDF5, a folder) or kCorrupt (HDF5
 // cannot open it). The returned handle is the file; `file_bytes` receives its size.

@@ -73,7 +73,7 @@ public:
         cells(std::move(file_cells), b);
         pvs(detail::read_pvs(r, root.get(), b.object_count_, cell_count, /*want_rows=*/false), b);
         ranked(detail::read_occluders(r, root.get(), b.object_count_, cell_count, /*want_boxes=*/false), b);
-        horizon(detail::read_horizon(r, root.get(), cell_count), b);
+        horizon(detail::read_horizon(r, root.get(), cell_count, b.object_count_), b);
         b.figures_ = r.named_values(root.get(), "/figures");
         detail::Handle v = r.open_group(root.get(), "/verification");
         const int64_t ran = r.int_attr(v.get(), "/verification", "ran");
@@ -228,6 +228,8 @@ private:
         b.horizon_cell_list_ = std::move(f.cell_list);
         b.horizon_list_offset_ = std::move(f.list_offsets);
         b.horizon_list_entry_ = std::move(f.list_entries);
+        b.horizon_test_offset_ = std::move(f.test_offsets);
+        b.horizon_test_ = std::move(f.tests);
     }
 
     template <class T>
@@ -252,7 +254,7 @@ private:
                bytes(b.polygon_corners_) + bytes(b.polygon_planes_) + bytes(b.ranked_polygon_score_) +
                bytes(b.horizon_boxes_) + bytes(b.horizon_tile_planes_) + bytes(b.horizon_tile_corners_) +
                bytes(b.horizon_tile_offset_) + bytes(b.horizon_cell_list_) + bytes(b.horizon_list_offset_) +
-               bytes(b.horizon_list_entry_);
+               bytes(b.horizon_list_entry_) + bytes(b.horizon_test_offset_) + bytes(b.horizon_test_);
     }
 };
 

@@ -40,11 +40,11 @@ int main(int argc, char** argv) {
                 std::ofstream((out / ("seed_" + std::to_string(n++) + ".pvsr")).string(), std::ios::binary) << bytes;
                 std::filesystem::remove(h5);
             }
-    for (const bool per_cell : {false, true}) {  // ranked boxes through palettes (2.0), horizon lists (2.1;
-                                                 // per cell: 5.2) and object parts (2.2)
+    for (const int kind : {0, 1, 2}) {  // ranked boxes through palettes (2.0), horizon lists (2.1; per cell:
+                                        // 5.2; with the cells' tests: 5.3) and object parts (2.2)
         pvs::BakeData bake = pvs::test::coherent_bake(12, {13, 2, 13}, false, false, 29);
         pvs::test::rank_many_boxes(bake, 600, 24, 3);
-        pvs::test::add_horizon_lists(bake, per_cell);
+        pvs::test::add_horizon_lists(bake, kind > 0, kind == 2);
         pvs::test::add_object_parts(bake);
         const std::string h5 = (out / ("seed.h5")).string();
         pvs::write_bake_file(h5, bake);

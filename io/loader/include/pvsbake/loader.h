@@ -391,6 +391,15 @@ public:
         return l + 1 < horizon_list_offset_.size() ? horizon_list_offset_[l + 1] - horizon_list_offset_[l]
                                                    : 0;
     }
+    // Format 1.10: the objects of cell c's PVS that its frames test with the horizon, ascending, in
+    // [first, last) (for_each_drawn gives the horizon only those; docs/ALGORITHMS.md#horizon-tests). False,
+    // and nothing set, when the bake kept none (the horizon tests every object) or c is out of range.
+    bool horizon_tests(uint32_t c, const uint32_t*& first, const uint32_t*& last) const noexcept {
+        if (size_t(c) + 1 >= horizon_test_offset_.size()) return false;
+        first = horizon_test_.data() + horizon_test_offset_[c];  // validated: within the tests
+        last = horizon_test_.data() + horizon_test_offset_[size_t(c) + 1];
+        return true;
+    }
 
     // ---- What the bake is
     const BakeInfo& info() const { return info_; }
@@ -488,6 +497,7 @@ private:
     friend class Horizon;
     std::vector<float> horizon_boxes_, horizon_tile_planes_, horizon_tile_corners_;
     std::vector<uint32_t> horizon_tile_offset_, horizon_cell_list_, horizon_list_offset_, horizon_list_entry_;
+    std::vector<uint32_t> horizon_test_offset_, horizon_test_;  // 1.10: cells + 1 and the tests, or empty
     friend class OccluderList;
     RankedOccluder ranked_entry(uint32_t k) const noexcept {
         return RankedOccluder{ranked_boxes_[ranked_box_[k]], ranked_score_[k], ranked_solid_angle_sr_[k],

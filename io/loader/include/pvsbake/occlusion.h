@@ -229,14 +229,22 @@ private:
 
 // What a game draws of cell c, culled by the culler (when given) and the horizon: its PVS less the objects
 // whose bounds, or every one of whose parts, either proves hidden (objects flagged always visible, and those
-// without bounds, never).
+// without bounds, never). Where the bake kept the cell's tests (format 1.10, Bake::horizon_tests), the
+// horizon tests only those objects; the culler tests every one (docs/ALGORITHMS.md#horizon-tests).
 template <class F>
 uint32_t for_each_drawn(const Bake& bake, uint32_t c, const OcclusionCuller* culler, const Horizon& horizon,
                         F&& visit) {
     uint32_t drawn = 0;
+    const uint32_t *test = nullptr, *tests_end = nullptr;
+    const bool testing = bake.horizon_tests(c, test, tests_end);
     bake.for_each_visible(c, [&](uint32_t o) {
+        bool tested = true;
+        if (testing) {  // the PVS and the tests ascend: one pass over each
+            while (test != tests_end && *test < o) ++test;
+            tested = test != tests_end && *test == o;
+        }
         const bool culled = culled_by(bake, o, [&](const Box& b) {
-            return (culler != nullptr && culler->is_hidden(b)) || horizon.is_hidden(b);
+            return (culler != nullptr && culler->is_hidden(b)) || (tested && horizon.is_hidden(b));
         });
         if (!culled) {
             visit(o);
