@@ -988,73 +988,66 @@ static uint32_t hz_limit(const pvsr_level* l) {
     return (uint32_t)(l->horizon_boxes.count + l->horizon_tiles.count);
 }
 
-/* File version 5.2: lists per cell ('HCOF' byte offsets, cells + 1, into 'HCLS'): each cell's list as the
- * ascending positions of its occluders in its block's list, a key row of the PVS code less its reference
- * (as 'HLST'); both or neither, read only with the horizon's lists, from 5.0. Offsets from 0, never
- * decreasing, within the bytes; each head as a row's; the padding after them. A position past the block's
- * list ends the cell's list where it is read (hz_list_next). */
-static const char* check_horizon_cells(pvsr_level* l) {
+/* What a damaged section of per-cell codes is refused with (check_cell_codes). */
+typedef struct cell_code_faults {
+    const char *no_offsets, *too_old, *no_padding, *not_at_0, *offsets, *head, *code;
+} cell_code_faults;
+
+/* Per-cell codes ('offsets_tag' byte offsets, cells + 1, into 'codes_tag'): each cell's a key row of the PVS
+ * code less its reference, its entries below limit; both sections or neither, from 5.0. Offsets from 0,
+ * never decreasing, within the bytes; each head as a row's; the padding after them. */
+static const char* check_cell_codes(pvsr_level* l, uint32_t offsets_tag, uint32_t codes_tag,
+                                    pvsr_array* offsets, pvsr_array* codes, uint32_t limit,
+                                    const cell_code_faults* f) {
     uint64_t e;
     const char* bad;
-    if (!section(l, PVSR_TAG('H', 'C', 'O', 'F'), &l->horizon_cell_offsets))
-        return section(l, PVSR_TAG('H', 'C', 'L', 'S'), &l->horizon_cell_lists)
-                   ? "the cells' horizon lists without their offsets"
-                   : NULL;
-    bad = need(l, PVSR_TAG('H', 'C', 'O', 'F'), 4, (uint64_t)l->cell_count + 1, 1, &l->horizon_cell_offsets);
-    if (!bad) bad = need(l, PVSR_TAG('H', 'C', 'L', 'S'), 1, UINT64_MAX, 1, &l->horizon_cell_lists);
-    if (!bad && l->version_major < 5) bad = "the cells' horizon lists in a file before 5.0";
+    if (!section(l, offsets_tag, offsets)) return section(l, codes_tag, codes) ? f->no_offsets : NULL;
+    bad = need(l, offsets_tag, 4, (uint64_t)l->cell_count + 1, 1, offsets);
+    if (!bad) bad = need(l, codes_tag, 1, UINT64_MAX, 1, codes);
+    if (!bad && l->version_major < 5) bad = f->too_old;
     if (bad) return bad;
-    if (l->horizon_cell_lists.bytes - l->horizon_cell_lists.count < PVSR_HORIZON_LIST_PADDING(hz_limit(l)))
-        return "the cells' horizon lists are not followed by their padding";
-    if (rd32(l->horizon_cell_offsets.at) != 0) return "the cells' horizon lists do not start at 0";
-    for (e = 0; e + 1 < l->horizon_cell_offsets.count; ++e) {
-        const uint32_t a = rd32(l->horizon_cell_offsets.at + 4 * e),
-                       b = rd32(l->horizon_cell_offsets.at + 4 * e + 4);
-        const uint8_t* p = l->horizon_cell_lists.at + a;
+    if (codes->bytes - codes->count < PVSR_HORIZON_LIST_PADDING(limit)) return f->no_padding;
+    if (rd32(offsets->at) != 0) return f->not_at_0;
+    for (e = 0; e + 1 < offsets->count; ++e) {
+        const uint32_t a = rd32(offsets->at + 4 * e), b = rd32(offsets->at + 4 * e + 4);
+        const uint8_t* p = codes->at + a;
         uint64_t head;
-        if (b < a || b > l->horizon_cell_lists.count)
-            return "the cells' horizon lists' offsets decrease or pass their bytes";
+        if (b < a || b > codes->count) return f->offsets;
         if (b == a) continue;
-        if (!checked_varint(&p, l->horizon_cell_lists.at + b, &head))
-            return "a cell's horizon list's head is damaged";
-        if (rice_head_fault(head, hz_limit(l), (uint64_t)(l->horizon_cell_lists.at + b - p) * 8) != 0)
-            return "a cell's horizon list's code is damaged";
+        if (!checked_varint(&p, codes->at + b, &head)) return f->head;
+        if (rice_head_fault(head, limit, (uint64_t)(codes->at + b - p) * 8) != 0) return f->code;
     }
     return NULL;
 }
 
-/* File version 5.3: the objects each cell's frames test with the horizon ('HTOF' byte offsets, cells + 1,
- * into 'HTST'): each cell's as a key row of the PVS code (its ascending object indices), read only with the
- * horizon's lists; both or neither. Offsets from 0, never decreasing, within the bytes; each head as a
- * row's; the padding after them. A damaged code ends the cell's tests where it is read (the walk then
- * draws the rest untested). */
+/* File version 5.2: lists per cell ('HCOF' into 'HCLS'): each cell's list as the ascending positions of its
+ * occluders in its block's list (limit: the occluders), read only with the horizon's lists. A position past
+ * the block's list ends the cell's list where it is read (hz_list_next). */
+static const char* check_horizon_cells(pvsr_level* l) {
+    static const cell_code_faults faults = {"the cells' horizon lists without their offsets",
+                                            "the cells' horizon lists in a file before 5.0",
+                                            "the cells' horizon lists are not followed by their padding",
+                                            "the cells' horizon lists do not start at 0",
+                                            "the cells' horizon lists' offsets decrease or pass their bytes",
+                                            "a cell's horizon list's head is damaged",
+                                            "a cell's horizon list's code is damaged"};
+    return check_cell_codes(l, PVSR_TAG('H', 'C', 'O', 'F'), PVSR_TAG('H', 'C', 'L', 'S'),
+                            &l->horizon_cell_offsets, &l->horizon_cell_lists, hz_limit(l), &faults);
+}
+
+/* File version 5.3: the objects each cell's frames give the horizon ('HTOF' into 'HTST'): each cell's
+ * ascending object indices (limit: the objects), read only with the horizon's lists. A damaged code ends the
+ * cell's tests where it is read (the horizon then tests none of the rest). */
 static const char* check_horizon_tests(pvsr_level* l) {
-    uint64_t e;
-    const char* bad;
-    if (!section(l, PVSR_TAG('H', 'T', 'O', 'F'), &l->horizon_test_offsets))
-        return section(l, PVSR_TAG('H', 'T', 'S', 'T'), &l->horizon_tests)
-                   ? "the cells' tests without their offsets"
-                   : NULL;
-    bad = need(l, PVSR_TAG('H', 'T', 'O', 'F'), 4, (uint64_t)l->cell_count + 1, 1, &l->horizon_test_offsets);
-    if (!bad) bad = need(l, PVSR_TAG('H', 'T', 'S', 'T'), 1, UINT64_MAX, 1, &l->horizon_tests);
-    if (!bad && l->version_major < 5) bad = "the cells' tests in a file before 5.0";
-    if (bad) return bad;
-    if (l->horizon_tests.bytes - l->horizon_tests.count < PVSR_HORIZON_LIST_PADDING(l->object_count))
-        return "the cells' tests are not followed by their padding";
-    if (rd32(l->horizon_test_offsets.at) != 0) return "the cells' tests do not start at 0";
-    for (e = 0; e + 1 < l->horizon_test_offsets.count; ++e) {
-        const uint32_t a = rd32(l->horizon_test_offsets.at + 4 * e),
-                       b = rd32(l->horizon_test_offsets.at + 4 * e + 4);
-        const uint8_t* p = l->horizon_tests.at + a;
-        uint64_t head;
-        if (b < a || b > l->horizon_tests.count)
-            return "the cells' tests' offsets decrease or pass their bytes";
-        if (b == a) continue;
-        if (!checked_varint(&p, l->horizon_tests.at + b, &head)) return "a cell's tests' head is damaged";
-        if (rice_head_fault(head, l->object_count, (uint64_t)(l->horizon_tests.at + b - p) * 8) != 0)
-            return "a cell's tests' code is damaged";
-    }
-    return NULL;
+    static const cell_code_faults faults = {"the cells' tests without their offsets",
+                                            "the cells' tests in a file before 5.0",
+                                            "the cells' tests are not followed by their padding",
+                                            "the cells' tests do not start at 0",
+                                            "the cells' tests' offsets decrease or pass their bytes",
+                                            "a cell's tests' head is damaged",
+                                            "a cell's tests' code is damaged"};
+    return check_cell_codes(l, PVSR_TAG('H', 'T', 'O', 'F'), PVSR_TAG('H', 'T', 'S', 'T'),
+                            &l->horizon_test_offsets, &l->horizon_tests, l->object_count, &faults);
 }
 
 /* File version 2.1: the horizon's occluders ('HBOX' boxes, 'HTIL' tiles in the 'OPLN' layout, 'HTCO' their

@@ -74,6 +74,16 @@ TEST(RuntimeFile, HorizonListsAnswerAsTheHdf5Loader) {
         }
 }
 
+// The reason a copy of `file` is refused with, its n bytes at `at` set to `value` and its checksum made
+// right.
+std::string damaged_message(const std::string& file, size_t at, const void* value, size_t n) {
+    Bytes b(file);
+    std::memcpy(b.bytes() + at, value, n);
+    rechecksum(b);
+    pvsr_status s;
+    return opened_message(b, &s);
+}
+
 // The cells' lists' sections (5.2): damaged offsets or codes are refused with their reason.
 TEST(RuntimeFile, HorizonListsPerCellRefuseDamage) {
     BakeData bake = test::coherent_bake(70, {4, 2, 3}, false, true, 8);
@@ -84,12 +94,8 @@ TEST(RuntimeFile, HorizonListsPerCellRefuseDamage) {
     ASSERT_EQ(pvsr_open(&l, good.data(), good.size, nullptr, 0), PVSR_OK);
     const size_t offsets = size_t(l.horizon_cell_offsets.at - static_cast<const uint8_t*>(good.data())),
                  codes = size_t(l.horizon_cell_lists.at - static_cast<const uint8_t*>(good.data()));
-    pvsr_status s;
     const auto damaged = [&](size_t at, const void* value, size_t n) {
-        Bytes b(file);
-        std::memcpy(b.bytes() + at, value, n);
-        rechecksum(b);
-        return opened_message(b, &s);
+        return damaged_message(file, at, value, n);
     };
     const uint32_t one = 1, past = uint32_t(l.horizon_cell_lists.count + 1);
     const uint8_t bad_head = 0xff;
@@ -150,12 +156,8 @@ TEST(RuntimeFile, CellsTestsLeaveTheRestUntestedAndRefuseDamage) {
 
     const size_t offsets = size_t(l.horizon_test_offsets.at - static_cast<const uint8_t*>(good.data())),
                  codes = size_t(l.horizon_tests.at - static_cast<const uint8_t*>(good.data()));
-    pvsr_status s;
     const auto damaged = [&](size_t at, const void* value, size_t n) {
-        Bytes b(file);
-        std::memcpy(b.bytes() + at, value, n);
-        rechecksum(b);
-        return opened_message(b, &s);
+        return damaged_message(file, at, value, n);
     };
     const uint32_t one = 1, past = uint32_t(l.horizon_tests.count + 1);
     const uint8_t bad_head = 0xff;
