@@ -55,7 +55,9 @@
 // runtime_tiles); 0: in the culler's polygon form. --horizon-lists file: the horizon takes the cell's list of
 // the runtime file (pvsr_horizon_begin_cell, as a game does; no --bake needed), `horizon_used_mean` occluders
 // a frame, and the frame is the game's: the cell's culler and horizon set up and the walk culled by both
-// (pvsr_drawn_objects_horizon, with the file's object parts), all of it in `horizon_us_median`; bench (the
+// (pvsr_drawn_objects_horizon, with the file's object parts), all of it in `horizon_us_median`, and its parts
+// in `horizon_build_us_median` (pvsr_horizon_begin_cell), `culler_setup_us_median` (pvsr_culler_begin_cell)
+// and `drawn_walk_us_median` (the culled walk); bench (the
 // default): the occluders above. --horizon-record FILE: each frame's eye, the occluders
 // given to the horizon and the bounds it tests, written for bench_horizon to replay (format there).
 // Where the drawn but invisible triangles go (the "waste" object, of the full frames' drawn objects no ray
@@ -261,6 +263,8 @@ struct Frame {
     std::vector<uint32_t> listed, drawn;
     std::vector<float> boxes;  // the occluder boxes the frame began with
     double frame_us = 0.0, walk_us = 0.0, horizon_us = 0.0;
+    double build_us = 0.0, setup_us = 0.0,
+           drawn_walk_us = 0.0;  // the game's frame in parts (--horizon-lists file)
     uint32_t horizon_culled = 0, horizon_used = 0, horizon_pieces = 0;
     uint32_t occluders = 0;  // boxes and polygons given
     uint32_t polygons = 0;   // of them polygons (the cell's, pvsr_culler_begin_cell)
@@ -748,12 +752,18 @@ int main(int argc, char** argv) {
                     // culled by both (bounds, then the file's object parts)
                     const size_t before = f.drawn.size();
                     f.horizon_used = pvsr_horizon_begin_cell(&runtime_horizon, &level, f.cell, eye);
+                    const auto h1 = std::chrono::steady_clock::now();
                     if (max_occluders > 0)
                         pvsr_culler_begin_cell(&culler, &level, f.cell, eye, max_occluders);
+                    const auto h2 = std::chrono::steady_clock::now();
                     const uint32_t drawn =
                         pvsr_drawn_objects_horizon(&level, f.cell, max_occluders > 0 ? &culler : nullptr,
                                                    &runtime_horizon, scratch.data(), scratch.size());
-                    f.horizon_us = micros(h0, std::chrono::steady_clock::now());
+                    const auto h3 = std::chrono::steady_clock::now();
+                    f.horizon_us = micros(h0, h3);
+                    f.build_us = micros(h0, h1);
+                    f.setup_us = micros(h1, h2);
+                    f.drawn_walk_us = micros(h2, h3);
                     f.horizon_pieces = uint32_t(runtime_horizon.count);
                     f.drawn.assign(scratch.begin(), scratch.begin() + drawn);
                     f.horizon_culled = uint32_t(before - std::min(before, f.drawn.size()));
@@ -954,7 +964,7 @@ int main(int argc, char** argv) {
         uint64_t listed_objects = 0, drawn_objects = 0, visible_objects = 0, wrong_culls = 0,
                  culled_objects = 0, float_artifacts = 0;
         uint64_t occluders_given = 0, polygons_given = 0;
-        std::vector<double> frame_us, walk_us, horizon_us;
+        std::vector<double> frame_us, walk_us, horizon_us, build_us, setup_us, drawn_walk_us;
         double horizon_culled = 0.0, horizon_used_sum = 0.0, horizon_pieces_sum = 0.0;
         nlohmann::ordered_json wrong = nlohmann::ordered_json::array();
         for (size_t p = 0; p < pairs.size(); ++p) {
@@ -1008,6 +1018,9 @@ int main(int argc, char** argv) {
             frame_us.push_back(f.frame_us);
             walk_us.push_back(f.walk_us);
             horizon_us.push_back(f.horizon_us);
+            build_us.push_back(f.build_us);
+            setup_us.push_back(f.setup_us);
+            drawn_walk_us.push_back(f.drawn_walk_us);
             horizon_culled += f.horizon_culled;
             horizon_used_sum += f.horizon_used;
             horizon_pieces_sum += f.horizon_pieces;
@@ -1057,6 +1070,11 @@ int main(int argc, char** argv) {
             out["horizon_cell_eyes"] = horizon_cell_eyes;
             out["horizon_lists"] = horizon_file_lists ? "file" : "bench";
             out["horizon_us_median"] = median(horizon_us);
+            if (horizon_file_lists && eye_occluders == 0 && !parts_drawn) {  // the game's frame, in parts
+                out["horizon_build_us_median"] = median(build_us);
+                out["culler_setup_us_median"] = median(setup_us);
+                out["drawn_walk_us_median"] = median(drawn_walk_us);
+            }
             out["horizon_culled_objects_mean"] = horizon_culled / double(frame_us.size());
             out["horizon_used_mean"] = horizon_used_sum / double(frame_us.size());
             out["horizon_pieces_mean"] = horizon_pieces_sum / double(frame_us.size());
