@@ -217,11 +217,14 @@ void check_writable(const std::string& path, const BakeData& bake) {
             if (hz.test_offsets.size() != size_t(cells) + 1 || hz.test_offsets[0] != 0 ||
                 hz.test_offsets.back() != hz.tests.size())
                 bad("the horizon's tests' offsets do not match the cells and tests");
-            for (size_t c = 0; c < cells; ++c)
+            for (size_t c = 0; c < cells; ++c) {
+                if (hz.test_offsets[c + 1] < hz.test_offsets[c] || hz.test_offsets[c + 1] > hz.tests.size())
+                    bad(fmt::format("cell {}'s horizon tests' offsets decrease or pass the tests", c));
                 for (uint32_t k = hz.test_offsets[c]; k < hz.test_offsets[c + 1]; ++k)
-                    if (hz.test_offsets[c + 1] < hz.test_offsets[c] || hz.tests[k] >= bake.objects.size() ||
+                    if (hz.tests[k] >= bake.objects.size() ||
                         (k > hz.test_offsets[c] && hz.tests[k] <= hz.tests[k - 1]))
                         bad(fmt::format("cell {}'s horizon tests are not ascending objects in range", c));
+            }
         }
         for (const Aabb& b : hz.boxes)
             if (!is_finite(b.min) || !is_finite(b.max) || b.is_empty())

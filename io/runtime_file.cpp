@@ -697,17 +697,19 @@ std::string assemble(const std::string& path, Bake& b, const RuntimeFileOptions&
             if (into.bytes.size() > UINT32_MAX) throw bad_input(fmt::format("{}: {} pass 4 GiB", path, what));
             offsets.push_back(uint32_t(into.bytes.size()));
         };
-        const auto pad = [&](Section& lists_section) {
+        // The padding after a section of codes whose entries lie below `limit`.
+        const auto pad = [&](Section& lists_section, uint64_t limit) {
             lists_section.count = lists_section.bytes.size();
-            lists_section.bytes.append(size_t(PVSR_HORIZON_LIST_PADDING(hboxes.count + htiles.count)), '\0');
+            lists_section.bytes.append(size_t(PVSR_HORIZON_LIST_PADDING(limit)), '\0');
         };
+        const uint64_t occluder_limit = hboxes.count + htiles.count;
         std::vector<uint32_t> offsets = {0};
         Section hlist{PVSR_TAG('H', 'L', 'S', 'T'), 1, 0, {}};
         for (std::vector<uint32_t>& list : lists) {
             for (uint32_t& o : list) o = renumber[o];  // renumbering keeps the order: still ascending
             put_list(hlist, offsets, list, "the horizon lists");
         }
-        pad(hlist);
+        pad(hlist, occluder_limit);
         // 5.2: where some cell's list is not its block's whole list (lists per cell), each cell's list as its
         // positions in its block's list ('HCOF' byte offsets, cells + 1, into 'HCLS'; the same code), which a
         // 5.1 runtime skips, taking the block's.
@@ -731,7 +733,7 @@ std::string assemble(const std::string& path, Bake& b, const RuntimeFileOptions&
                 picks.erase(std::unique(picks.begin(), picks.end()), picks.end());
                 put_list(cell_lists, cell_offsets, picks, "the cells' horizon lists");
             }
-            pad(cell_lists);
+            pad(cell_lists, occluder_limit);
             sections.push_back(array_section(PVSR_TAG('H', 'C', 'O', 'F'), 4, cell_offsets));
             sections.push_back(std::move(cell_lists));
         }
@@ -746,8 +748,7 @@ std::string assemble(const std::string& path, Bake& b, const RuntimeFileOptions&
                              h.tests.begin() + h.test_offsets[size_t(c) + 1]);
                 put_list(test_code, test_offsets, tests, "the cells' tests");
             }
-            test_code.count = test_code.bytes.size();
-            test_code.bytes.append(size_t(PVSR_HORIZON_LIST_PADDING(objects)), '\0');
+            pad(test_code, objects);
             sections.push_back(array_section(PVSR_TAG('H', 'T', 'O', 'F'), 4, test_offsets));
             sections.push_back(std::move(test_code));
         }

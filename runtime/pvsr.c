@@ -1538,6 +1538,7 @@ static int drawn(const pvsr_level* l, const sink* s, int horizon, uint32_t objec
     uint64_t first;
     part_grid g;
     if ((pvsr_object_flags(l, object) & PVSR_OBJECT_ALWAYS_VISIBLE) != 0) return 1;
+    if (s->culler == NULL && !(horizon && s->horizon != NULL)) return 1; /* nothing tests it */
     if (!pvsr_object_bounds(l, object, bounds)) return 1;
     if (hidden_box(s, horizon, bounds)) return 0;
     parts = pvsr_object_part_count(l, object);

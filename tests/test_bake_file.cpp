@@ -1268,7 +1268,7 @@ TEST(BakeFileBad, RankedOccludersOutOfRangeOrDamaged) {
     expect_bad_input(path, {"/occluders/ranked_offsets"});
 }
 
-TEST(BakeFileWrite, RankedOccludersTheReaderWouldRefuseAreNotWritten) {
+TEST(BakeFileWrite, OccludersTheReaderWouldRefuseAreNotWritten) {
     test::TempDir dir;
     const std::string path = dir.file("bad.h5");
     auto refused = [&](const BakeData& bake, const std::string& needle) {
@@ -1290,6 +1290,24 @@ TEST(BakeFileWrite, RankedOccludersTheReaderWouldRefuseAreNotWritten) {
     bake = ranked_bake();
     bake.ranked.entries[1].score = 0.75f;
     refused(bake, "not best first");
+    // The cells' horizon tests (1.10): offsets that decrease, an object out of range, or out of order.
+    bake = horizon_bake();
+    ASSERT_GE(bake.horizon.test_offsets[1], 1u);
+    std::swap(bake.horizon.test_offsets[1], bake.horizon.test_offsets[2]);
+    if (bake.horizon.test_offsets[1] == bake.horizon.test_offsets[2]) bake.horizon.test_offsets[2] = 0;
+    refused(bake, "horizon tests' offsets decrease");
+    bake = horizon_bake();
+    bake.horizon.tests[0] = uint32_t(bake.objects.size());
+    refused(bake, "horizon tests are not ascending objects in range");
+    bake = horizon_bake();
+    size_t c = 0;  // a cell of two tests or more
+    while (c + 1 < bake.horizon.test_offsets.size() &&
+           bake.horizon.test_offsets[c + 1] - bake.horizon.test_offsets[c] < 2)
+        ++c;
+    ASSERT_LT(c + 1, bake.horizon.test_offsets.size());
+    const uint32_t k = bake.horizon.test_offsets[c];
+    std::swap(bake.horizon.tests[k], bake.horizon.tests[k + 1]);
+    refused(bake, "horizon tests are not ascending objects in range");
 }
 
 }  // namespace
