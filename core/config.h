@@ -184,6 +184,10 @@ struct ConservativeConfig {
     int panel_refine_levels = 0;   // [Limit: 0..4] halvings of the floor patches, for what only the panels
                                    // may still prove (their inset is the patch's half-size; the boxes keep
                                    // epsilon); 0 = none
+    bool corner_pairs = false;     // two panels meeting along a line (a wall on a floor, two walls at a
+                                   // corner) are drawn on the depth cubes as one occluder too
+                                   // (docs/ALGORITHMS.md#corner-pairs): exact, tighter on open levels,
+                                   // slower
     bool slanted_cubes = false;    // slanted panels are drawn on the depth cubes too, inset per ray
                                    // (docs/ALGORITHMS.md#slanted-inset): exact, a little tighter on levels of
                                    // slopes and roofs, slower
@@ -529,6 +533,13 @@ void visit_options(Config& c, Visitor&& v) {
                  "cube this fine (only over those objects' pixels); 0 = off",
                  0, 4096},
       c.conservative.fine_cube_resolution);
+    v(
+        OptionSpec{
+            OptionGroup::kConservative, "--corner-pairs", "conservative.corner_pairs", "",
+            "two panels meeting along a line (a wall on a floor's edge, two walls at a corner) are drawn "
+            "on the depth cubes as one occluder too: exact, about 5% fewer objects on an open level for "
+            "about 1.8x the PVS stage there"},
+        c.conservative.corner_pairs);
     v(
         OptionSpec{
             OptionGroup::kExperimental, "--single-occluder-pass", "conservative.single_occluder_pass", "",

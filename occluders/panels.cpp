@@ -241,6 +241,38 @@ int panel_axis(const Aabb& panel) {
     return axis;
 }
 
+std::vector<std::array<uint32_t, 2>> panel_corners(const std::vector<Aabb>& panels) {
+    // Per axis, the panels flat along it sorted by their plane: a panel's partners along axis n are those
+    // whose plane lies in its extent along n, a range found by binary search.
+    std::array<std::vector<std::pair<float, uint32_t>>, 3> by_plane;
+    for (uint32_t i = 0; i < panels.size(); ++i) {
+        const int a = panel_axis(panels[i]);
+        if (a >= 0 && is_finite(panels[i].min) && is_finite(panels[i].max))
+            by_plane[size_t(a)].push_back({panels[i].min[a], i});
+    }
+    for (auto& list : by_plane) std::sort(list.begin(), list.end());
+    std::vector<std::array<uint32_t, 2>> out;
+    for (uint32_t i = 0; i < panels.size(); ++i) {
+        const Aabb& a = panels[i];
+        const int na = panel_axis(a);
+        if (na < 0 || !is_finite(a.min) || !is_finite(a.max)) continue;
+        for (int nb = 0; nb < 3; ++nb) {
+            if (nb == na) continue;
+            const int k = 3 - na - nb;
+            const auto& list = by_plane[size_t(nb)];
+            auto it = std::lower_bound(list.begin(), list.end(), std::pair<float, uint32_t>{a.min[nb], 0});
+            for (; it != list.end() && it->first <= a.max[nb]; ++it) {
+                const uint32_t j = it->second;
+                const Aabb& b = panels[j];
+                if (j <= i || !(b.min[na] <= a.min[na] && a.min[na] <= b.max[na])) continue;
+                if (std::max(a.min[k], b.min[k]) < std::min(a.max[k], b.max[k])) out.push_back({i, j});
+            }
+        }
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
 std::vector<Aabb> find_panels(const World& world, PanelFigures* figures) {
     PanelFigures fig;
     // The opaque triangles of each axis plane (all three vertices on it, compared exactly), in 2D.

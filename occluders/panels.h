@@ -17,6 +17,8 @@
 #include "core/math.h"
 #include "core/world.h"
 
+#include <array>
+#include <cstdint>
 #include <vector>
 
 namespace pvs {
@@ -42,6 +44,14 @@ std::vector<Aabb> find_panels(const World& world, PanelFigures* figures = nullpt
 // Axis along which a panel is flat (min == max), or -1 when it is not a panel (flat along no axis, or along
 // more than one).
 int panel_axis(const Aabb& panel);
+
+// The CORNER PAIRS of a set of panels (pvs/depth_cube.h, add_corner(); docs/ALGORITHMS.md#corner-pairs):
+// index pairs {i, j}, i < j, of panels flat along different axes n_i and n_j that meet along a line: panel
+// i's extent along n_j holds panel j's plane, panel j's extent along n_i holds panel i's plane (both closed,
+// compared exactly), and their extents along the third axis overlap by more than nothing. An L (a wall
+// ending on a floor, two walls at a corner), a T (a wall standing on a floor) and a cross all qualify.
+// In index order; deterministic.
+std::vector<std::array<uint32_t, 2>> panel_corners(const std::vector<Aabb>& panels);
 
 // Each panel with its rectangle shrunk by `inset_m` on all four sides; panels that vanish are dropped.
 std::vector<Aabb> inset_panels(const std::vector<Aabb>& panels, double inset_m);

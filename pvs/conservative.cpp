@@ -140,6 +140,9 @@ struct OccluderTrees {
     BoxTree panels;
     std::vector<int8_t> panel_axis;  // per panel: panel_axis(), -1 when not flat along one axis
     BoxTree slanted;
+    std::vector<std::array<uint32_t, 2>> corners;  // panel_corners() of its panels
+    std::vector<Aabb> corner_boxes;                // each pair's line (a box flat along two axes)
+    BoxTree corner_tree;                           // over them
 };
 
 OccluderTrees occluder_trees(const ShrunkOccluders& set) {
@@ -150,6 +153,11 @@ OccluderTrees occluder_trees(const ShrunkOccluders& set) {
     std::vector<Aabb> slanted(set.slanted.size());
     for (size_t i = 0; i < slanted.size(); ++i) slanted[i] = set.slanted[i].bounds;
     trees.slanted = BoxTree::build(slanted);
+    trees.corners = panel_corners(set.panels);
+    for (const auto& [i, j] : trees.corners)
+        trees.corner_boxes.push_back(Aabb::of(glm::max(set.panels[i].min, set.panels[j].min),
+                                              glm::min(set.panels[i].max, set.panels[j].max)));
+    trees.corner_tree = BoxTree::build(trees.corner_boxes);
     return trees;
 }
 
@@ -167,6 +175,7 @@ struct Shared {
     int fine_cube_resolution;  // 0: no second look at the floor
     int panel_refine_levels;   // halvings below the floor for what panels may still prove
     bool slanted_cubes;        // slanted panels are drawn on the cubes too
+    bool corner_pairs;         // and corner pairs
 };
 
 // Per thread: the depth cube and scratch. solve_patch() refines one patch.
@@ -349,6 +358,27 @@ public:
                     if (meets_open_hulls(p)) cube_.add_panel_sides(p, panel_spread_);
                 for (int side = 0; side < 2; ++side)
                     sides.open[size_t(side)] = unproven_each(cube_, sides.open[size_t(side)]);
+            }
+            // Corner pairs (docs/ALGORITHMS.md#corner-pairs) over what is still unproven: those whose line,
+            // grown by the patch box's reach, meets the box around s and an open object's union (the pixels a
+            // pair writes are rays that pass near its line; drawing fewer is always safe).
+            if (sh_.corner_pairs && !sides.empty() && !trees_->corners.empty()) {
+                open_hulls(s, sides);
+                const float grow = float(2.0 * (panel_spread_.x + panel_spread_.y + panel_spread_.z));
+                const Aabb grown_reach = Aabb::of(reach.min - grow, reach.max + grow);
+                size_t drawn = 0;
+                trees_->corner_tree.walk(
+                    [&grown_reach](const Aabb& b) { return b.overlaps(grown_reach); },
+                    [&](uint32_t c) {
+                        const Aabb& line = trees_->corner_boxes[c];
+                        if (!meets_open_hulls(Aabb::of(line.min - grow, line.max + grow))) return;
+                        const auto& [i, j] = trees_->corners[c];
+                        cube_.add_corner(occ_->panels[i], occ_->panels[j], panel_spread_);
+                        ++drawn;
+                    });
+                if (drawn > 0)
+                    for (int side = 0; side < 2; ++side)
+                        sides.open[size_t(side)] = unproven_each(cube_, sides.open[size_t(side)]);
             }
             // Slanted panels (docs/ALGORITHMS.md#slanted-inset), on every face, over what is still unproven
             // (the same pixels' depths fuse with the boxes' and panels'): those meeting the box around s and
@@ -1060,7 +1090,8 @@ Shared make_shared(const ConservativeConfig& config, const World& world, const S
                   config.cube_resolution,
                   config.fine_cube_resolution,
                   config.panel_refine_levels,
-                  config.slanted_cubes};
+                  config.slanted_cubes,
+                  config.corner_pairs};
 }
 
 // One face of a box: the side at box.min[axis] (side 0) or box.max[axis] (side 1), flat along `axis`.

@@ -9,6 +9,7 @@
 #include "pvs/depth_cube.h"
 
 #include "core/error.h"
+#include "occluders/panels.h"
 
 #include <algorithm>
 #include <bit>
@@ -500,6 +501,226 @@ inline void panel_side_minor_span(const PanelSide& ps, double g_m, double& lo, d
     hi = g_m > 0.0 ? b : a;
 }
 
+// A panel's rule on one face, read along a chosen MAJOR face coordinate (u or v): a grid vertex passes when
+// its major value passes and its minor value lies in that major's minor interval, and its crossing depth is
+// a function of the major alone. add_panel()'s rule on the face along the panel's normal that looks at it
+// (either coordinate may be the major; the depth is t), add_panel_sides()'s on a side face whose major
+// coordinate is the panel's normal's (the depth is h / g_m). Made from the panel's tangent ranges
+// (PanelTangents): on the face along the normal a face coordinate is the tangent times the sign of h, so
+// that rule's ranges are the tangent ranges, negated and swapped when h < 0 (the same inequalities as
+// add_panel()'s).
+struct PanelLines {
+    bool front = false;
+    double t = 0.0;                         // front: the plane's depth
+    TangentRange major_range, minor_range;  // front
+    PanelSide side;                         // side
+};
+
+// False when the panel has no such rule on the face (it looks away from the panel, or lies along its plane
+// with another major) or no ray of it passes.
+bool panel_lines(const PanelTangents& pt, int face, bool major_is_u, PanelLines& out) {
+    const int f = face / 2;
+    out.front = f == pt.axis;
+    if (out.front) {
+        if (face != 2 * f + (pt.h > 0.0 ? 0 : 1)) return false;
+        out.t = std::abs(pt.h);
+        const auto facing = [&](const TangentRange& p) {
+            return pt.h > 0.0 ? p : TangentRange{-p.hi, -p.lo};
+        };
+        out.major_range = facing(pt.range[major_is_u ? (f + 1) % 3 : (f + 2) % 3]);
+        out.minor_range = facing(pt.range[major_is_u ? (f + 2) % 3 : (f + 1) % 3]);
+        return out.major_range.lo <= out.major_range.hi && out.minor_range.lo <= out.minor_range.hi;
+    }
+    return panel_side(pt, face, out.side) && out.side.major_is_u == major_is_u;
+}
+
+inline bool lines_major(const PanelLines& pl, double g) {
+    return pl.front ? pl.major_range.contains(g) : panel_side_major(pl.side, g);
+}
+
+inline void lines_minor(const PanelLines& pl, double g, double& lo, double& hi) {
+    if (pl.front) {
+        lo = pl.minor_range.lo;
+        hi = pl.minor_range.hi;
+    } else {
+        panel_side_minor_span(pl.side, g, lo, hi);
+    }
+}
+
+inline double lines_depth(const PanelLines& pl, double g) {
+    return pl.front ? pl.t : pl.side.h / g;
+}
+
+// The major values a panel's rule passes, as an interval of g (the front rule's range; on a side face the
+// g of the same sign as h whose face_sign / g lies in the range along the face axis, 1 / g being monotone
+// there). Ends may be infinite.
+TangentRange lines_major_interval(const PanelLines& pl) {
+    if (pl.front) return pl.major_range;
+    const TangentRange& p = pl.side.along_face_axis;
+    const double want = pl.side.h > 0.0 ? pl.side.face_sign : -pl.side.face_sign;  // the sign p must have
+    double p0 = p.lo, p1 = p.hi;
+    if (want > 0.0) {
+        p0 = std::max(p0, 0.0);
+    } else {
+        p1 = std::min(p1, 0.0);
+    }
+    if (!(p0 <= p1)) return TangentRange{};
+    const double g0 = p0 == 0.0 ? want * pl.side.face_sign * kInf : pl.side.face_sign / p0;
+    const double g1 = p1 == 0.0 ? want * pl.side.face_sign * kInf : pl.side.face_sign / p1;
+    return TangentRange{std::min(g0, g1), std::max(g0, g1)};
+}
+
+// A corner pair prepared for one eye box (depth_cube.h, add_corner()): each panel's tangent ranges as it is
+// and cut and extended across the line. Extended without end: its range along the other normal loses its
+// end on that side, for the other inequality alone holds there for every tangent beyond it (its left side
+// is monotone; docs/ALGORITHMS.md#corner-pairs).
+struct CornerRule {
+    std::array<PanelTangents, 2> own, extended;
+    // Per panel p, on the face along its normal that looks at it (face[p]): the line's major value there
+    // (g_line), the band of rows drawn, |g - g_line| <= band, and the face coordinates of the panel's
+    // extent along the line (minor_lo, minor_hi; every pixel drawn lies within them).
+    std::array<int, 2> face{};
+    std::array<double, 2> g_line{}, band{}, minor_lo{}, minor_hi{};
+};
+
+// Is the row of pixels between the major values g0 < g1 in the band of panel p's face?
+inline bool corner_in_band(const CornerRule& rule, size_t p, double g0, double g1) {
+    return g1 >= rule.g_line[p] - rule.band[p] && g0 <= rule.g_line[p] + rule.band[p];
+}
+
+// THE rule of a corner pair, shared by the kernel and the reference; false when the panels do not meet so,
+// the eye box reaches a plane, neither corner applies, or a panel's own rule passes no ray
+// (docs/ALGORITHMS.md#corner-pairs).
+bool corner_rule(const Aabb& a, const Aabb& b, glm::vec3 eye, glm::dvec3 spread, int r, CornerRule& out,
+                 const std::array<std::array<int, 4>, 6>* region = nullptr) {
+    if (!box_usable(a) || !box_usable(b)) return false;
+    const int na = panel_axis(a), nb = panel_axis(b);
+    if (na < 0 || nb < 0 || na == nb) return false;
+    const int k = 3 - na - nb;
+    const float ca = a.min[na], cb = b.min[nb];
+    if (!(a.min[nb] <= cb && cb <= a.max[nb] && b.min[na] <= ca && ca <= b.max[na])) return false;
+    if (!(std::max(a.min[k], b.min[k]) < std::min(a.max[k], b.max[k]))) return false;
+    const double ha = double(ca) - double(eye[na]), hb = double(cb) - double(eye[nb]);
+    // The eye lies above a's plane when ha < 0. Concave: a's part on the eye's side of b's plane and b's
+    // part on the eye's side of a's; convex: both parts beyond. Each part must have some extent.
+    const bool above_a = ha < 0.0, above_b = hb < 0.0;
+    const auto has_part = [](const Aabb& p, int axis, float c, bool up) {
+        return up ? p.max[axis] > c : p.min[axis] < c;
+    };
+    bool a_up = above_b, b_up = above_a;  // the concave corner's parts: a at x[nb] >= cb when a_up
+    if (!has_part(a, nb, cb, a_up) || !has_part(b, na, ca, b_up)) {
+        a_up = !above_b;
+        b_up = !above_a;
+        if (!has_part(a, nb, cb, a_up) || !has_part(b, na, ca, b_up)) return false;
+    }
+    // The faces along the normals, the line's major value there, the band of rows about it: the parts'
+    // insets for the eye box there are about (b_other + b_normal |g|) / depth, a few times that, and two
+    // pixels. With the cube's drawn region: false when neither face's band and extent meet it.
+    bool any = region == nullptr;
+    for (size_t p = 0; p < 2; ++p) {
+        const Aabb& panel = p == 0 ? a : b;
+        const int n = p == 0 ? na : nb, other = p == 0 ? nb : na;
+        const double h = p == 0 ? ha : hb, h_other = p == 0 ? hb : ha;
+        out.face[p] = 2 * n + (h > 0.0 ? 0 : 1);
+        out.g_line[p] = h_other / std::abs(h);
+        out.band[p] =
+            3.0 * (spread[na] + spread[nb]) * (1.0 + std::abs(out.g_line[p])) / std::abs(h) + 4.0 / r;
+        out.minor_lo[p] = (double(panel.min[k]) - double(eye[k])) / std::abs(h);
+        out.minor_hi[p] = (double(panel.max[k]) - double(eye[k])) / std::abs(h);
+        if (!any) {
+            const bool major_is_u = (n + 1) % 3 == other;
+            const auto& reg = (*region)[size_t(out.face[p])];
+            const double g_lo = out.g_line[p] - out.band[p], g_hi = out.g_line[p] + out.band[p];
+            const int rm0 = major_is_u ? reg[0] : reg[2], rm1 = major_is_u ? reg[1] : reg[3];
+            const int rn0 = major_is_u ? reg[2] : reg[0], rn1 = major_is_u ? reg[3] : reg[1];
+            any = rm0 <= rm1 && rn0 <= rn1 && grid(rm1 + 1, r) >= g_lo && grid(rm0, r) <= g_hi &&
+                  grid(rn1 + 1, r) >= out.minor_lo[p] && grid(rn0, r) <= out.minor_hi[p];
+        }
+    }
+    if (!any) return false;
+    Aabb part_a = a, part_b = b;  // the parts kept
+    (a_up ? part_a.min[nb] : part_a.max[nb]) = cb;
+    (b_up ? part_b.min[na] : part_b.max[na]) = ca;
+    if (!panel_tangents(part_a, eye, spread, out.own[0]) || !panel_tangents(part_b, eye, spread, out.own[1]))
+        return false;
+    for (size_t p = 0; p < 2; ++p) {
+        const PanelTangents& own = out.own[p];
+        for (int axis = 0; axis < 3; ++axis)
+            if (axis != own.axis && !(own.range[axis].lo <= own.range[axis].hi)) return false;
+        // The extension runs to lower coordinates along the other normal when the part is up; a tangent
+        // there is that offset over h.
+        const int other = p == 0 ? nb : na;
+        const bool down = p == 0 ? a_up : b_up;
+        out.extended[p] = own;
+        if (down == (own.h > 0.0)) {
+            out.extended[p].range[other].lo = -kInf;
+        } else {
+            out.extended[p].range[other].hi = kInf;
+        }
+    }
+    return true;
+}
+
+// The corner on one face along either panel's normal, read along the other panel's normal's coordinate
+// (there the line projects to a line of constant major value): the four rules.
+struct CornerFace {
+    bool major_is_u = true;
+    std::array<PanelLines, 2> extended, own;
+};
+
+// False on the faces along the line, or when a rule is missing on the face.
+bool corner_face(const CornerRule& rule, int face, CornerFace& out) {
+    const int f = face / 2, a0 = rule.own[0].axis, a1 = rule.own[1].axis;
+    if (face != rule.face[0] && face != rule.face[1]) return false;
+    out.major_is_u = (f + 1) % 3 == (f == a0 ? a1 : a0);
+    for (size_t p = 0; p < 2; ++p)
+        if (!panel_lines(rule.extended[p], face, out.major_is_u, out.extended[p]) ||
+            !panel_lines(rule.own[p], face, out.major_is_u, out.own[p]))
+            return false;
+    return true;
+}
+
+// A row of pixels between the major values g0 and g1: drawn when both pass both extended panels and, for
+// each panel, one fails its own rule (where both pass it, that part alone covers the row's pixels, the
+// minors being the same, at no greater depth). Then a pixel is written when its two minors lie in
+// [lo, hi], with `depth` (the largest crossing depth of its four vertices).
+inline bool corner_row(const CornerFace& cf, double g0, double g1, double& lo, double& hi, double& depth) {
+    lo = -kInf;
+    hi = kInf;
+    depth = 0.0;
+    for (size_t p = 0; p < 2; ++p) {
+        const PanelLines& ext = cf.extended[p];
+        if (!lines_major(ext, g0) || !lines_major(ext, g1)) return false;
+        if (lines_major(cf.own[p], g0) && lines_major(cf.own[p], g1)) return false;
+        for (const double g : {g0, g1}) {
+            double l = 0.0, h = 0.0;
+            lines_minor(ext, g, l, h);
+            lo = std::max(lo, l);
+            hi = std::min(hi, h);
+            depth = std::max(depth, lines_depth(ext, g));
+        }
+    }
+    return lo <= hi;
+}
+
+// The rows corner_row() can draw lie between the two parts' own ends on their extensions' sides: a row needs
+// a vertex beyond each. [g_lo, g_hi], or the whole face when the extensions run the same way.
+void corner_window(const CornerFace& cf, double& g_lo, double& g_hi) {
+    g_lo = -kInf;
+    g_hi = kInf;
+    double end[2];
+    int dir[2];
+    for (size_t p = 0; p < 2; ++p) {
+        const TangentRange own = lines_major_interval(cf.own[p]), ext = lines_major_interval(cf.extended[p]);
+        dir[p] = ext.lo < own.lo ? -1 : (ext.hi > own.hi ? 1 : 0);
+        end[p] = dir[p] < 0 ? own.lo : own.hi;
+        if (dir[p] == 0 || !std::isfinite(end[p])) return;
+    }
+    if (dir[0] == dir[1]) return;
+    g_lo = std::min(end[0], end[1]);
+    g_hi = std::max(end[0], end[1]);
+}
+
 }  // namespace
 
 // Per major grid value: does it pass, and which minor vertices pass (g_n in an interval, and g_n grows with
@@ -745,6 +966,43 @@ void DepthCube::add_slanted_panels(const std::vector<SlantedPanel>& panels,
     }
 }
 
+void DepthCube::add_corner(const Aabb& a, const Aabb& b, glm::dvec3 spread) {
+    CornerRule rule;
+    const int r = resolution_;
+    if (!corner_rule(a, b, eye_, spread, r, rule, &region_)) return;
+    const double* const g = grid_.data();
+    for (size_t fp = 0; fp < 2; ++fp) {
+        const int face = rule.face[fp];
+        CornerFace cf;
+        if (!corner_face(rule, face, cf)) continue;
+        const auto& reg = region_[size_t(face)];
+        int m0 = cf.major_is_u ? reg[0] : reg[2], m1 = cf.major_is_u ? reg[1] : reg[3];
+        const int n0 = cf.major_is_u ? reg[2] : reg[0], n1 = cf.major_is_u ? reg[3] : reg[1];
+        // Only the rows about the window (a row outside it cannot pass; two rows of slack for rounding).
+        double g_lo, g_hi;
+        corner_window(cf, g_lo, g_hi);
+        if (std::isfinite(g_lo) && std::isfinite(g_hi)) {
+            if (g_lo > 1.0 || g_hi < -1.0) continue;
+            m0 = std::max(m0, int(std::floor((std::max(g_lo, -1.0) + 1.0) * 0.5 * r)) - 2);
+            m1 = std::min(m1, int(std::ceil((std::min(g_hi, 1.0) + 1.0) * 0.5 * r)) + 1);
+        }
+        float* const face_depth = depth_.data() + size_t(face) * r * r;
+        const size_t step_major = cf.major_is_u ? 1 : size_t(r), step_minor = cf.major_is_u ? size_t(r) : 1;
+        m0 = std::max(m0, int(std::floor((rule.g_line[fp] - rule.band[fp] + 1.0) * 0.5 * r)) - 1);
+        m1 = std::min(m1, int(std::ceil((rule.g_line[fp] + rule.band[fp] + 1.0) * 0.5 * r)) + 1);
+        for (int m = m0; m <= m1; ++m) {
+            double lo, hi, depth;
+            if (!corner_in_band(rule, fp, g[m], g[m + 1]) || !corner_row(cf, g[m], g[m + 1], lo, hi, depth))
+                continue;
+            int first, last;
+            vertex_run(g, lo, hi, n0, n1 + 1, r, first, last);
+            const float d = float_up(depth * (1.0 + kCubeDepthSlack));
+            float* p = face_depth + size_t(m) * step_major + size_t(first) * step_minor;
+            for (int n = first; n < last; ++n, p += step_minor) *p = std::min(*p, d);
+        }
+    }
+}
+
 void DepthCube::add_panel(const Aabb& panel, glm::dvec3 spread) {
     int face = 0;
     double t = 0.0;
@@ -855,7 +1113,8 @@ bool is_hidden_reference(const std::vector<Aabb>& occluders, glm::vec3 eye, cons
 
 bool is_hidden_reference(const std::vector<Aabb>& occluders, const std::vector<Aabb>& panels,
                          glm::dvec3 panel_spread, glm::vec3 eye, const Aabb& box, int resolution,
-                         bool panel_sides, const std::vector<SlantedPanel>& slanted) {
+                         bool panel_sides, const std::vector<SlantedPanel>& slanted,
+                         const std::vector<std::array<Aabb, 2>>& corners) {
     const int r = resolution;
     if (!box_usable(box)) return false;
     // Visible when the box meets the closed near cube around the eye.
@@ -890,6 +1149,14 @@ bool is_hidden_reference(const std::vector<Aabb>& occluders, const std::vector<A
         const double v0 = pad_low(*std::min_element(vs, vs + 4)),
                      v1 = pad_high(*std::max_element(vs, vs + 4));
         const double limit = lower * (1.0 - kCubeDepthSlack);
+        // The corner pairs with a rule on this face.
+        std::vector<std::pair<CornerRule, CornerFace>> face_corners;
+        for (const std::array<Aabb, 2>& pair : corners) {
+            CornerRule rule;
+            CornerFace cf;
+            if (corner_rule(pair[0], pair[1], eye, panel_spread, r, rule) && corner_face(rule, face, cf))
+                face_corners.push_back({rule, cf});
+        }
 
         for (int j = 0; j < r; ++j) {
             for (int i = 0; i < r; ++i) {
@@ -954,6 +1221,15 @@ bool is_hidden_reference(const std::vector<Aabb>& occluders, const std::vector<A
                             d = std::max(d, slanted_vertex_depth(
                                                 rule, face_direction(face, grid(ci, r), grid(cj, r))));
                     if (d < kInf) pixel = std::min(pixel, float_up(d * (1.0 + kCubeDepthSlack)));
+                }
+                for (const auto& [rule, cf] : face_corners) {
+                    const int m = cf.major_is_u ? i : j, n = cf.major_is_u ? j : i;
+                    const size_t fp = face == rule.face[0] ? 0 : 1;
+                    double lo, hi, d;
+                    if (corner_in_band(rule, fp, grid(m, r), grid(m + 1, r)) &&
+                        corner_row(cf, grid(m, r), grid(m + 1, r), lo, hi, d) && lo <= grid(n, r) &&
+                        grid(n + 1, r) <= hi)
+                        pixel = std::min(pixel, float_up(d * (1.0 + kCubeDepthSlack)));
                 }
                 if (!(double(pixel) < limit)) return false;
             }

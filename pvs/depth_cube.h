@@ -121,6 +121,21 @@ public:
     // (docs/ALGORITHMS.md#panel-inset); separable: per major value a contiguous range of minors.
     void add_panel_sides(const Aabb& panel, glm::dvec3 spread);
     void add_panels_sides(const std::vector<Aabb>& panels, glm::dvec3 spread);
+    // Rasterizes one CORNER PAIR: two panels `a` and `b` (flat along different axes n_a and n_b, planes at
+    // c_a and c_b) that meet along the line x[n_a] = c_a, x[n_b] = c_b: a's extent along n_b holds c_b, b's
+    // extent along n_a holds c_a, and their extents along the third axis overlap. With the EYE BOX strictly
+    // on one side of each plane (as add_panel()), each panel is cut at the line to its part on the eye box's
+    // side of the other's plane (the CONCAVE corner; failing that, to its part beyond it, the CONVEX corner)
+    // and extended across the line far beyond it; a ray from the box that crosses both extended rectangles
+    // crosses one of the cut panels (docs/ALGORITHMS.md#corner-pairs). Drawn on the two faces along the
+    // panels' normals, where each extended panel has add_panel()'s rule on one and add_panel_sides()'s on the
+    // other, read per line of constant value of the other normal's face coordinate (the MAJOR): a row of
+    // pixels between two majors is drawn when both majors pass both extended panels and, for each panel, one
+    // fails the panel's own rule (where both pass it, that panel alone covers the row's pixels at no greater
+    // depth); a pixel of it whose two minors pass both panels at both majors gets the larger crossing depth
+    // of its four vertices, times (1 + slack), rounded up. Ignored when the panels do not meet so, or
+    // neither corner applies.
+    void add_corner(const Aabb& a, const Aabb& b, glm::dvec3 spread);
     // Rasterizes one SLANTED PANEL (core/occluder.h: a convex polygon tiled by opaque triangles within a slab
     // |n.x - offset| <= thickness) for every eye in the EYE BOX around s (as add_panel()), on every face. Let
     // N be the unit normal towards s, and h_near < h_far the heights of s above the slab's two faces, the
@@ -175,10 +190,12 @@ private:
 // for touched pixels the minimum over all occluders of the four-corner slab tests. Slow (O(6 R^2 * N)); for
 // the differential test and the benchmark ratio only.
 bool is_hidden_reference(const std::vector<Aabb>& occluders, glm::vec3 eye, const Aabb& box, int resolution);
-// The same with panels (add_panel(panel, panel_spread), and add_panel_sides() too when panel_sides) and
-// slanted panels (add_slanted_panel(panel, panel_spread), all of them) besides the boxes.
+// The same with panels (add_panel(panel, panel_spread), and add_panel_sides() too when panel_sides),
+// slanted panels (add_slanted_panel(panel, panel_spread), all of them) and corner pairs
+// (add_corner(pair[0], pair[1], panel_spread)) besides the boxes.
 bool is_hidden_reference(const std::vector<Aabb>& occluders, const std::vector<Aabb>& panels,
                          glm::dvec3 panel_spread, glm::vec3 eye, const Aabb& box, int resolution,
-                         bool panel_sides = false, const std::vector<SlantedPanel>& slanted = {});
+                         bool panel_sides = false, const std::vector<SlantedPanel>& slanted = {},
+                         const std::vector<std::array<Aabb, 2>>& corners = {});
 
 }  // namespace pvs

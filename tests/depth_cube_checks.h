@@ -14,6 +14,23 @@
 
 namespace pvs::test {
 
+// Does the segment from eye to x meet the box strictly before x? (double slab test over t in [0, 1))
+inline bool segment_blocked(glm::dvec3 eye, glm::dvec3 x, const Aabb& b) {
+    double t0 = 0.0, t1 = 1.0;
+    const glm::dvec3 d = x - eye;
+    for (int k = 0; k < 3; ++k) {
+        const double lo = double(b.min[k]) - eye[k], hi = double(b.max[k]) - eye[k];
+        if (d[k] == 0.0) {
+            if (lo > 0.0 || hi < 0.0) return false;
+            continue;
+        }
+        const double a = lo / d[k], c = hi / d[k];
+        t0 = std::max(t0, std::min(a, c));
+        t1 = std::min(t1, std::max(a, c));
+    }
+    return t0 <= t1 && t0 < 1.0;
+}
+
 // Point k of a box for the segment checks: its 8 corners first, then random points inside it, every fourth
 // one moved onto a random face.
 inline glm::dvec3 box_target(const Aabb& b, int k, Rng& rng) {

@@ -17,6 +17,8 @@
 namespace pvs {
 namespace {
 
+using test::segment_blocked;
+
 Aabb box(glm::vec3 lo, glm::vec3 hi) {
     return Aabb::of(lo, hi);
 }
@@ -207,23 +209,6 @@ TEST(DepthCube, MatchesTheReferenceOnRandomScenes) {
     EXPECT_EQ(check.failures, 0);
     EXPECT_GT(check.hidden, check.tested / 10) << check.hidden << " of " << check.tested << " hidden";
     EXPECT_LT(check.hidden, check.tested * 9 / 10);
-}
-
-// Does the segment from eye to x meet the box strictly before x? (double slab test over t in [0, 1))
-bool segment_blocked(glm::dvec3 eye, glm::dvec3 x, const Aabb& b) {
-    double t0 = 0.0, t1 = 1.0;
-    const glm::dvec3 d = x - eye;
-    for (int k = 0; k < 3; ++k) {
-        const double lo = double(b.min[k]) - eye[k], hi = double(b.max[k]) - eye[k];
-        if (d[k] == 0.0) {
-            if (lo > 0.0 || hi < 0.0) return false;
-            continue;
-        }
-        const double a = lo / d[k], c = hi / d[k];
-        t0 = std::max(t0, std::min(a, c));
-        t1 = std::min(t1, std::max(a, c));
-    }
-    return t0 <= t1 && t0 < 1.0;
 }
 
 TEST(DepthCube, HiddenMeansEveryRayIsBlocked) {
