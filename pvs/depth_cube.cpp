@@ -601,6 +601,11 @@ bool corner_rule(const Aabb& a, const Aabb& b, glm::vec3 eye, glm::dvec3 spread,
     if (!(a.min[nb] <= cb && cb <= a.max[nb] && b.min[na] <= ca && ca <= b.max[na])) return false;
     if (!(std::max(a.min[k], b.min[k]) < std::min(a.max[k], b.max[k]))) return false;
     const double ha = double(ca) - double(eye[na]), hb = double(cb) - double(eye[nb]);
+    // The eye box strictly off both planes (as panel_face() asks).
+    const auto beyond_box = [&](double h, int axis) {
+        return std::abs(h) > std::max(kCubeNearPlane_m, spread[axis] * (1.0 + 1e-6));
+    };
+    if (!beyond_box(ha, na) || !beyond_box(hb, nb)) return false;
     // The eye lies above a's plane when ha < 0. Concave: a's part on the eye's side of b's plane and b's
     // part on the eye's side of a's; convex: both parts beyond. Each part must have some extent.
     const bool above_a = ha < 0.0, above_b = hb < 0.0;
