@@ -145,7 +145,8 @@ struct OccluderTrees {
     BoxTree corner_tree;                           // over them
 };
 
-OccluderTrees occluder_trees(const ShrunkOccluders& set) {
+// With `corners`, also its panels' corner pairs and their tree (drawn only with --corner-pairs).
+OccluderTrees occluder_trees(const ShrunkOccluders& set, bool corners) {
     OccluderTrees trees;
     for (const std::vector<Aabb>& level : set.boxes) trees.boxes.push_back(BoxTree::build(level));
     trees.panels = BoxTree::build(set.panels);
@@ -153,6 +154,7 @@ OccluderTrees occluder_trees(const ShrunkOccluders& set) {
     std::vector<Aabb> slanted(set.slanted.size());
     for (size_t i = 0; i < slanted.size(); ++i) slanted[i] = set.slanted[i].bounds;
     trees.slanted = BoxTree::build(slanted);
+    if (!corners) return trees;
     trees.corners = panel_corners(set.panels);
     for (const auto& [i, j] : trees.corners)
         trees.corner_boxes.push_back(Aabb::of(glm::max(set.panels[i].min, set.panels[j].min),
@@ -1078,8 +1080,9 @@ void add_counts(ConservativeFigures& figures, const Counts& n, std::chrono::stea
 Shared make_shared(const ConservativeConfig& config, const World& world, const ShrunkOccluders& occluders,
                    const RayScene& scene) {
     std::vector<OccluderTrees> trees;
-    trees.push_back(occluder_trees(occluders));
-    for (const ShrunkOccluders& block : occluders.block_sets) trees.push_back(occluder_trees(block));
+    trees.push_back(occluder_trees(occluders, config.corner_pairs));
+    for (const ShrunkOccluders& block : occluders.block_sets)
+        trees.push_back(occluder_trees(block, config.corner_pairs));
     return Shared{world,
                   occluders,
                   scene,

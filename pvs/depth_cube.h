@@ -126,7 +126,7 @@ public:
     // extent along n_a holds c_a, and their extents along the third axis overlap. With the EYE BOX strictly
     // on one side of each plane (as add_panel()), each panel is cut at the line to its part on the eye box's
     // side of the other's plane (the CONCAVE corner; failing that, to its part beyond it, the CONVEX corner)
-    // and extended across the line far beyond it; a ray from the box that crosses both extended rectangles
+    // and extended across the line without end; a ray from the box that crosses both extended rectangles
     // crosses one of the cut panels (docs/ALGORITHMS.md#corner-pairs). Drawn on the two faces along the
     // panels' normals, where each extended panel has add_panel()'s rule on one and add_panel_sides()'s on the
     // other, read per line of constant value of the other normal's face coordinate (the MAJOR): a row of
