@@ -188,6 +188,8 @@ struct ConservativeConfig {
                                    // corner) are drawn on the depth cubes as one occluder too
                                    // (docs/ALGORITHMS.md#corner-pairs): exact, tighter on open levels,
                                    // slower
+    bool panel_bands = true;       // a pixel a panel's inset leaves out still hides points near the panel's
+                                   // plane (docs/ALGORITHMS.md#depth-bands); false for measurement only
     bool slanted_cubes = false;    // slanted panels are drawn on the depth cubes too, inset per ray
                                    // (docs/ALGORITHMS.md#slanted-inset): exact, a little tighter on levels of
                                    // slopes and roofs, slower
@@ -620,6 +622,11 @@ void visit_options(Config& c, Visitor&& v) {
             "umbrae of occluders in other planes), to measure what cross-plane fusion gives: the same "
             "safety, a looser PVS"},
         c.conservative.shaft_fusion);
+    v(OptionSpec{OptionGroup::kExperimental, "--panel-bands", "conservative.panel_bands", "",
+                 "FOR MEASUREMENT ONLY: false leaves out the panels' depth bands on the depth cubes (a pixel "
+                 "a panel's inset leaves out still hides what lies near the panel's plane), to measure what "
+                 "they give: the same safety, a looser PVS"},
+      c.conservative.panel_bands);
     v(OptionSpec{OptionGroup::kExperimental, "--shaft-caps", "conservative.shaft_caps", "",
                  "FOR MEASUREMENT ONLY: false leaves out the shaft pass's convex caps (the hull of a panel and "
                  "its neighbours across edges that bend away, a ridge or an outer corner), to measure what "

@@ -178,6 +178,7 @@ struct Shared {
     int panel_refine_levels;   // halvings below the floor for what panels may still prove
     bool slanted_cubes;        // slanted panels are drawn on the cubes too
     bool corner_pairs;         // and corner pairs
+    bool panel_bands;          // the panels' depth bands
 };
 
 // Per thread: the depth cube and scratch. solve_patch() refines one patch.
@@ -191,6 +192,8 @@ public:
           last_seen_part_(shared.world.objects.size(), 0),
           open_under_(shared.tree.nodes.size(), 0) {
         counts_.per_level.assign(shared.occ.epsilon_m.size(), 0);
+        cube_.set_panel_bands(shared.panel_bands);
+        fine_.set_panel_bands(shared.panel_bands);
     }
 
     // The occluders of the next faces: those serving the eyes of the region whose face it is
@@ -1094,7 +1097,8 @@ Shared make_shared(const ConservativeConfig& config, const World& world, const S
                   config.fine_cube_resolution,
                   config.panel_refine_levels,
                   config.slanted_cubes,
-                  config.corner_pairs};
+                  config.corner_pairs,
+                  config.panel_bands};
 }
 
 // One face of a box: the side at box.min[axis] (side 0) or box.max[axis] (side 1), flat along `axis`.

@@ -179,6 +179,7 @@ inline bool meets_near_cube(const Aabb& box, glm::vec3 eye) {
 struct OccludeeFace {
     bool touched = false;
     double limit = 0.0;  // stored depth must be < limit
+    double far = 0.0;    // or a band must hold the depths from limit to far (depth bands)
     int i0 = 0, i1 = -1, j0 = 0, j1 = -1;
 };
 
@@ -224,6 +225,7 @@ OccludeeFace occludee_face(const EyeBox& e, int face, int r, const double* g) {
     of.j1 = last_pixel_reaching(pad_high(v1), r, g);
     of.touched = of.i0 <= of.i1 && of.j0 <= of.j1;
     of.limit = lower * (1.0 - kCubeDepthSlack);
+    of.far = fb.d_max * (1.0 + kCubeDepthSlack);
     return of;
 }
 
@@ -243,11 +245,26 @@ DepthCube::DepthCube(int resolution) : resolution_(resolution) {
     grid_.resize(size_t(resolution_) + 1);
     for (int k = 0; k <= resolution_; ++k) grid_[size_t(k)] = grid(k, resolution_);
     side_last_.resize(size_t(resolution_) + 1);
+    band_major_share_.resize(size_t(resolution_) + 1);
+    band_first_.resize(size_t(resolution_) + 1);
+    band_last_.resize(size_t(resolution_) + 1);
+}
+
+void DepthCube::set_panel_bands(bool on) {
+    panel_bands_ = on;
+    if (on && band_near_.size() != depth_.size()) {
+        band_near_.assign(depth_.size(), kInfF);
+        band_far_.assign(depth_.size(), 0.0f);
+    }
 }
 
 void DepthCube::clear(glm::vec3 eye) {
     eye_ = eye;
     std::fill(depth_.begin(), depth_.end(), kInfF);
+    if (panel_bands_) {
+        std::fill(band_near_.begin(), band_near_.end(), kInfF);
+        std::fill(band_far_.begin(), band_far_.end(), 0.0f);
+    }
     for (auto& r : region_) r = {0, resolution_ - 1, 0, resolution_ - 1};
 }
 
@@ -258,8 +275,12 @@ void DepthCube::clear_for(glm::vec3 eye, const std::vector<Aabb>& boxes) {
     for (int face = 0; face < 6; ++face) {
         const auto& reg = region_[size_t(face)];
         for (int j = reg[2]; j <= reg[3]; ++j) {
-            float* const row = depth_.data() + (size_t(face) * r + size_t(j)) * r;
-            std::fill(row + reg[0], row + reg[1] + 1, kInfF);
+            const size_t row = (size_t(face) * r + size_t(j)) * r;
+            std::fill(depth_.data() + row + reg[0], depth_.data() + row + reg[1] + 1, kInfF);
+            if (panel_bands_) {
+                std::fill(band_near_.data() + row + reg[0], band_near_.data() + row + reg[1] + 1, kInfF);
+                std::fill(band_far_.data() + row + reg[0], band_far_.data() + row + reg[1] + 1, 0.0f);
+            }
         }
     }
 }
@@ -417,6 +438,43 @@ TangentRange panel_tangent_range(double h, double lo, double hi, double spread_k
     return t;
 }
 
+// Depth bands (depth_cube.h, set_panel_bands(); docs/ALGORITHMS.md#depth-bands). THE share of a corner ray
+// of tangent p along one in-plane axis k that fails the panel's rule there, shared by kernel and reference:
+// the largest f with lo + f w + m <= h p <= hi - f w - m (w and m as in the header), below kBandMaxShare.
+constexpr double kBandMaxShare = 1.0 - 1e-6;
+
+inline double inset_share(double h, double p, double lo, double hi, double spread_k, double spread_n) {
+    const double dist = std::min(h * p - lo, hi - h * p) - 4e-9 * std::abs(h) * (1.0 + std::abs(p));
+    if (!(dist > 0.0)) return 0.0;
+    const double w = (spread_k + spread_n * std::abs(p)) * (1.0 + 1e-9);
+    if (!(w > 0.0)) return kBandMaxShare;
+    return std::min(dist / w * (1.0 - 1e-9), kBandMaxShare);
+}
+
+// The far end of a band of share f in (0, 1): the depth, on a face where the largest |tangent along the
+// normal| of the pixel's vertices is g, up to which a point is at most (|h| - b_n) f / (1 - f) beyond the
+// plane, with margins, rounded down to float (a smaller far end is the safe side).
+inline float band_far(double big_h, double spread_n, double f, double g) {
+    const double beyond = f * (big_h - spread_n * (1.0 + 1e-9)) / (1.0 - f);
+    const double far = (big_h + beyond) / g * (1.0 - 1e-6);
+    const float x = float(far);
+    return double(x) > far ? std::nextafter(x, 0.0f) : x;
+}
+
+// A pixel's band (kept_near, kept_far] after band (near, far] is drawn on it: their union when they overlap
+// or touch (near <= kept_far and kept_near <= far), else the one of larger far end (then of smaller near
+// end). Either way every depth of the result lies in one of the two.
+inline void merge_band(float near, float far, float& kept_near, float& kept_far) {
+    if (!(far > near)) return;
+    if (near <= kept_far && kept_near <= far) {
+        kept_near = std::min(kept_near, near);
+        kept_far = std::max(kept_far, far);
+    } else if (far > kept_far || (far == kept_far && near < kept_near)) {
+        kept_near = near;
+        kept_far = far;
+    }
+}
+
 // The run of grid vertices k in [k0, k1] with lo <= g[k] <= hi, g growing with k: [first, last], empty when
 // first > last. Found from an estimate and walked to its exact ends with that very test.
 inline void vertex_run(const double* g, double lo, double hi, int k0, int k1, int r, int& first, int& last) {
@@ -499,6 +557,41 @@ inline void panel_side_minor_span(const PanelSide& ps, double g_m, double& lo, d
     const double a = ps.along_minor.lo * g_m, b = ps.along_minor.hi * g_m;
     lo = g_m > 0.0 ? a : b;
     hi = g_m > 0.0 ? b : a;
+}
+
+// The share of a side face's grid vertex (major g_m, minor g_n) for the depth bands: 1 where it passes the
+// panel's rule on that axis, else inset_share() of its tangent there (face_sign / g_m along the face axis,
+// g_n / g_m along the minor), the least of the two; 0 when its ray does not reach the plane ahead. `ends`
+// holds the panel's extent relative to the eye along the face axis and the minor axis, `spread_f`,
+// `spread_c`, `spread_n` the eye box's half-extents along them and the normal.
+struct SideShareInputs {
+    double f_lo, f_hi, c_lo, c_hi;
+    double spread_f, spread_c, spread_n;
+};
+
+inline double side_major_share(const PanelSide& ps, const SideShareInputs& in, double g_m) {
+    if (!(ps.h * g_m > 0.0)) return 0.0;
+    if (panel_side_major(ps, g_m)) return 1.0;
+    return inset_share(ps.h, ps.face_sign / g_m, in.f_lo, in.f_hi, in.spread_f, in.spread_n);
+}
+
+inline double side_minor_share(const PanelSide& ps, const SideShareInputs& in, double g_m, double g_n) {
+    double lo, hi;
+    panel_side_minor_span(ps, g_m, lo, hi);
+    if (lo <= g_n && g_n <= hi) return 1.0;
+    return inset_share(ps.h, g_n / g_m, in.c_lo, in.c_hi, in.spread_c, in.spread_n);
+}
+
+inline SideShareInputs side_share_inputs(const Aabb& panel, glm::vec3 eye, glm::dvec3 spread, int axis,
+                                         int face) {
+    const int f = face / 2, c = 3 - axis - f;
+    return {double(panel.min[f]) - double(eye[f]),
+            double(panel.max[f]) - double(eye[f]),
+            double(panel.min[c]) - double(eye[c]),
+            double(panel.max[c]) - double(eye[c]),
+            spread[f],
+            spread[c],
+            spread[axis]};
 }
 
 // A panel's rule on one face, read along a chosen MAJOR face coordinate (u or v): a grid vertex passes when
@@ -751,7 +844,8 @@ void DepthCube::add_panel_sides(const Aabb& panel, glm::dvec3 spread) {
             have_tangents = true;
         }
         PanelSide ps;
-        if (!panel_side(pt, face, ps)) continue;
+        // With no ray passing the rule (an empty range), nothing is written but the bands may be.
+        if (!panel_side(pt, face, ps) && !panel_bands_) continue;
         const int mv0 = ps.major_is_u ? iv0 : jv0, mv1 = ps.major_is_u ? iv1 : jv1;
         const int nv0 = ps.major_is_u ? jv0 : iv0, nv1 = ps.major_is_u ? jv1 : iv1;
         const double* const g = grid_.data();
@@ -775,6 +869,54 @@ void DepthCube::add_panel_sides(const Aabb& panel, glm::dvec3 spread) {
                                          (1.0 + kCubeDepthSlack));
             float* p = face_depth + size_t(m) * step_major + size_t(first) * step_minor;
             for (int n = first; n < last; ++n, p += step_minor) *p = std::min(*p, depth);
+        }
+        if (!panel_bands_) continue;
+        // Depth bands (depth_cube.h, set_panel_bands()). A vertex has a share > 0 only where its ray crosses
+        // the panel's own (uninset) rectangle by a margin, so per major only the minors in that span (a run
+        // found as above, for a zero eye box) are visited, and of those only the pixels not written above.
+        PanelTangents bare;
+        PanelSide bare_side;
+        if (!panel_tangents(panel, eye_, glm::dvec3(0.0), bare) || !panel_side(bare, face, bare_side))
+            continue;
+        const SideShareInputs in = side_share_inputs(panel, eye_, spread, pt.axis, face);
+        for (int m = mv0; m <= mv1; ++m) {
+            const size_t k = size_t(m);
+            band_major_share_[k] = side_major_share(ps, in, g[m]);
+            band_first_[k] = 1;
+            band_last_[k] = 0;
+            if (!(band_major_share_[k] > 0.0)) continue;
+            double lo, hi;
+            panel_side_minor_span(bare_side, g[m], lo, hi);
+            vertex_run(g, lo, hi, nv0, nv1, r, band_first_[k], band_last_[k]);
+        }
+        const double big_h = std::abs(ps.h);
+        for (int m = mv0; m < mv1; ++m) {
+            const double major_share =
+                std::min(band_major_share_[size_t(m)], band_major_share_[size_t(m) + 1]);
+            if (!(major_share > 0.0)) continue;
+            const int first = std::max(band_first_[size_t(m)], band_first_[size_t(m) + 1]);
+            const int last = std::min(band_last_[size_t(m)], band_last_[size_t(m) + 1]);
+            // The pixels add_panel_sides() wrote in this row (none when a major fails its rule).
+            int written_first = 1, written_last = 0;
+            if (major_share >= 1.0) {
+                written_first = std::max(side_first_[size_t(m)], side_first_[size_t(m) + 1]);
+                written_last = std::min(side_last_[size_t(m)], side_last_[size_t(m) + 1]);
+            }
+            const float near = float_up(std::max(ps.h / g[m], ps.h / g[m + 1]) * (1.0 + kCubeDepthSlack));
+            const double g_big = std::max(std::abs(g[m]), std::abs(g[m + 1]));
+            for (int n = first; n < last; ++n) {
+                if (n >= written_first && n < written_last) continue;
+                const double f = std::min({major_share, side_minor_share(ps, in, g[m], g[n]),
+                                           side_minor_share(ps, in, g[m], g[n + 1]),
+                                           side_minor_share(ps, in, g[m + 1], g[n]),
+                                           side_minor_share(ps, in, g[m + 1], g[n + 1])});
+                if (!(f > 0.0 && f < 1.0)) continue;
+                const float far = band_far(big_h, spread[pt.axis], f, g_big);
+                if (ps.major_is_u)
+                    keep_band(face, m, n, near, far);
+                else
+                    keep_band(face, n, m, near, far);
+            }
         }
     }
 }
@@ -967,7 +1109,7 @@ void DepthCube::add_slanted_panels(const std::vector<SlantedPanel>& panels,
             FaceCandidates fc;
             wide = slanted_face_candidates(reach, eye_, face, region_[size_t(face)], resolution_, fc);
         }
-        if (wide && !is_hidden(reach)) add_slanted_panel(panels[p], spread);
+        if (wide && !is_hidden_by_depths(reach)) add_slanted_panel(panels[p], spread);
     }
 }
 
@@ -1037,6 +1179,37 @@ void DepthCube::add_panel(const Aabb& panel, glm::dvec3 spread) {
         float* __restrict const row = face_depth + size_t(j) * r;
         for (int i = i_first; i < i_last; ++i) row[i] = std::min(row[i], depth);
     }
+    if (!panel_bands_) return;
+    // Depth bands: the shares are separable (per column on u, per row on v), 1 inside the runs above, so a
+    // pixel's share is the least of its two columns' and its two rows'; only pixels outside the written
+    // rectangle are visited.
+    const double spread_n = spread[a];
+    const auto shares = [&](std::vector<double>& out, int k0, int k1, const TangentRange& range, double lo,
+                            double hi, double spread_k) {
+        out.resize(size_t(k1 - k0 + 1));
+        for (int k = k0; k <= k1; ++k) {
+            const double g = grid_[size_t(k)];
+            out[size_t(k - k0)] = range.contains(g) ? 1.0 : inset_share(t, g, lo, hi, spread_k, spread_n);
+        }
+    };
+    shares(share_u_, iv0, iv1, range_u, u_lo, u_hi, spread[ua]);
+    shares(share_v_, jv0, jv1, range_v, v_lo, v_hi, spread[va]);
+    for (int j = jv0; j < jv1; ++j) {
+        const double row_share = std::min(share_v_[size_t(j - jv0)], share_v_[size_t(j + 1 - jv0)]);
+        if (!(row_share > 0.0)) continue;
+        const bool row_written = j >= j_first && j < j_last;
+        for (int i = iv0; i < iv1; ++i) {
+            if (row_written && i == i_first && i_first < i_last) i = i_last;  // skip the written pixels
+            if (i >= iv1) break;
+            const double f = std::min({row_share, share_u_[size_t(i - iv0)], share_u_[size_t(i + 1 - iv0)]});
+            if (f > 0.0 && f < 1.0) keep_band(face, i, j, depth, band_far(t, spread_n, f, 1.0));
+        }
+    }
+}
+
+void DepthCube::keep_band(int face, int i, int j, float near, float far) {
+    const size_t k = (size_t(face) * resolution_ + size_t(j)) * resolution_ + size_t(i);
+    merge_band(near, far, band_near_[k], band_far_[k]);
 }
 
 void DepthCube::add_panels(const std::vector<Aabb>& panels, glm::dvec3 spread) {
@@ -1056,11 +1229,35 @@ void DepthCube::add_occluders(const std::vector<Aabb>& boxes) {
     }
     std::sort(order_.begin(), order_.end());
     for (const auto& [dist2, b] : order_) {
-        if (!is_hidden(boxes[b])) add_occluder(boxes[b]);
+        if (!is_hidden_by_depths(boxes[b])) add_occluder(boxes[b]);
     }
 }
 
-PVS_AVX2_CLONES bool DepthCube::is_hidden(const Aabb& box) const {
+bool DepthCube::is_hidden(const Aabb& box) const {
+    if (is_hidden_by_depths(box)) return true;
+    if (!panel_bands_ || !box_usable(box) || meets_near_cube(box, eye_)) return false;
+    // Some touched pixel failed on its depth alone: the same pixels again, each also passing by its band.
+    const int r = resolution_;
+    const EyeBox rel = eye_box(box, eye_);
+    for (int face = 0; face < 6; ++face) {
+        const OccludeeFace of = occludee_face(rel, face, r, grid_.data());
+        if (!of.touched) continue;
+        const auto& reg = region_[size_t(face)];
+        if (of.i0 < reg[0] || of.i1 > reg[1] || of.j0 < reg[2] || of.j1 > reg[3]) return false;
+        for (int j = of.j0; j <= of.j1; ++j) {
+            const size_t row = (size_t(face) * r + size_t(j)) * r;
+            for (int i = of.i0; i <= of.i1; ++i) {
+                const double d = depth_[row + size_t(i)];
+                if (d < of.limit) continue;
+                const double near = band_near_[row + size_t(i)], far = band_far_[row + size_t(i)];
+                if (!(near < of.limit && (of.far <= far || d <= far))) return false;
+            }
+        }
+    }
+    return true;
+}
+
+PVS_AVX2_CLONES bool DepthCube::is_hidden_by_depths(const Aabb& box) const {
     if (!box_usable(box) || meets_near_cube(box, eye_)) return false;
     const int r = resolution_;
     const EyeBox rel = eye_box(box, eye_);
@@ -1119,7 +1316,7 @@ bool is_hidden_reference(const std::vector<Aabb>& occluders, glm::vec3 eye, cons
 bool is_hidden_reference(const std::vector<Aabb>& occluders, const std::vector<Aabb>& panels,
                          glm::dvec3 panel_spread, glm::vec3 eye, const Aabb& box, int resolution,
                          bool panel_sides, const std::vector<SlantedPanel>& slanted,
-                         const std::vector<std::array<Aabb, 2>>& corners) {
+                         const std::vector<std::array<Aabb, 2>>& corners, bool panel_bands) {
     const int r = resolution;
     if (!box_usable(box)) return false;
     // Visible when the box meets the closed near cube around the eye.
@@ -1169,6 +1366,8 @@ bool is_hidden_reference(const std::vector<Aabb>& occluders, const std::vector<A
                     grid(i, r) <= u1 && grid(i + 1, r) >= u0 && grid(j, r) <= v1 && grid(j + 1, r) >= v0;
                 if (!touched) continue;
                 float pixel = kInfF;
+                float band_near = kInfF, band_far_end = 0.0f;  // the band kept (depth bands)
+                const auto keep = [&](float n, float f) { merge_band(n, f, band_near, band_far_end); };
                 for (const Aabb& occ : occluders) {
                     if (!box_usable(occ) || occ.contains(eye)) continue;
                     double d = 0.0;
@@ -1180,43 +1379,81 @@ bool is_hidden_reference(const std::vector<Aabb>& occluders, const std::vector<A
                     }
                     if (d < kInf) pixel = std::min(pixel, float_up(d));
                 }
-                for (const Aabb& panel : panels) {
-                    int panel_f = 0;
-                    double t = 0.0;
-                    if (!panel_face(panel, eye, panel_spread, panel_f, t)) continue;
-                    PanelTangents pt;
-                    PanelSide ps;
-                    if (panel_sides && panel_tangents(panel, eye, panel_spread, pt) &&
-                        panel_side(pt, face, ps)) {
-                        // A side face: every corner's major passes and its minor is in that major's span.
-                        bool all = true;
-                        double d = 0.0;
-                        for (int cj = j; cj <= j + 1; ++cj) {
-                            for (int ci = i; ci <= i + 1; ++ci) {
-                                const double g_m = grid(ps.major_is_u ? ci : cj, r);
-                                const double g_n = grid(ps.major_is_u ? cj : ci, r);
-                                double lo = 0.0, hi = 0.0;
-                                panel_side_minor_span(ps, g_m, lo, hi);
-                                all = all && panel_side_major(ps, g_m) && lo <= g_n && g_n <= hi;
-                                if (all) d = std::max(d, ps.h / g_m);
+                // Every panel on the face along its normal first, then on the side faces, in the order of the
+                // list: the order in which the kernel's callers draw them (which a pixel's band depends on).
+                for (int pass = 0; pass < 2; ++pass)
+                    for (const Aabb& panel : panels) {
+                        int panel_f = 0;
+                        double t = 0.0;
+                        if (!panel_face(panel, eye, panel_spread, panel_f, t)) continue;
+                        if ((pass == 0) != (face / 2 == panel_f / 2)) continue;
+                        PanelTangents pt;
+                        PanelSide ps;
+                        if (panel_sides && panel_tangents(panel, eye, panel_spread, pt) &&
+                            face / 2 != pt.axis && (panel_side(pt, face, ps) || panel_bands)) {
+                            // A side face: every corner's major passes and its minor is in that major's span.
+                            bool all = true;
+                            double d = 0.0;
+                            for (int cj = j; cj <= j + 1; ++cj) {
+                                for (int ci = i; ci <= i + 1; ++ci) {
+                                    const double g_m = grid(ps.major_is_u ? ci : cj, r);
+                                    const double g_n = grid(ps.major_is_u ? cj : ci, r);
+                                    double lo = 0.0, hi = 0.0;
+                                    panel_side_minor_span(ps, g_m, lo, hi);
+                                    all = all && panel_side_major(ps, g_m) && lo <= g_n && g_n <= hi;
+                                    if (all) d = std::max(d, ps.h / g_m);
+                                }
                             }
+                            if (all) pixel = std::min(pixel, float_up(d * (1.0 + kCubeDepthSlack)));
+                            if (all || !panel_bands) continue;
+                            // Its band: the least share of the four corners (each the least of its two
+                            // axes').
+                            const SideShareInputs in =
+                                side_share_inputs(panel, eye, panel_spread, pt.axis, face);
+                            double f = 1.0, near_d = 0.0, g_big = 0.0;
+                            for (int cj = j; cj <= j + 1; ++cj) {
+                                for (int ci = i; ci <= i + 1; ++ci) {
+                                    const double g_m = grid(ps.major_is_u ? ci : cj, r);
+                                    const double g_n = grid(ps.major_is_u ? cj : ci, r);
+                                    f = std::min({f, side_major_share(ps, in, g_m),
+                                                  side_minor_share(ps, in, g_m, g_n)});
+                                    if (ps.h * g_m > 0.0) near_d = std::max(near_d, ps.h / g_m);
+                                    g_big = std::max(g_big, std::abs(g_m));
+                                }
+                            }
+                            if (f > 0.0 && f < 1.0)
+                                keep(float_up(near_d * (1.0 + kCubeDepthSlack)),
+                                     band_far(std::abs(ps.h), panel_spread[pt.axis], f, g_big));
+                            continue;
                         }
-                        if (all) pixel = std::min(pixel, float_up(d * (1.0 + kCubeDepthSlack)));
-                        continue;
+                        if (panel_f != face) continue;
+                        // The four corner rays cross the plane, at depth t, inside the rectangle inset per
+                        // ray: their face coordinates in the tangent ranges?
+                        const TangentRange range_u = panel_tangent_range(
+                            t, double(panel.min[ua]) - double(eye[ua]),
+                            double(panel.max[ua]) - double(eye[ua]), panel_spread[ua], panel_spread[a]);
+                        const TangentRange range_v = panel_tangent_range(
+                            t, double(panel.min[va]) - double(eye[va]),
+                            double(panel.max[va]) - double(eye[va]), panel_spread[va], panel_spread[a]);
+                        const bool hits = range_u.contains(grid(i, r)) && range_u.contains(grid(i + 1, r)) &&
+                                          range_v.contains(grid(j, r)) && range_v.contains(grid(j + 1, r));
+                        if (hits) pixel = std::min(pixel, float_up(t * (1.0 + kCubeDepthSlack)));
+                        if (hits || !panel_bands) continue;
+                        double f = 1.0;
+                        for (int c = 0; c <= 1; ++c) {
+                            const double gu = grid(i + c, r), gv = grid(j + c, r);
+                            if (!range_u.contains(gu))
+                                f = std::min(f, inset_share(t, gu, double(panel.min[ua]) - double(eye[ua]),
+                                                            double(panel.max[ua]) - double(eye[ua]),
+                                                            panel_spread[ua], panel_spread[a]));
+                            if (!range_v.contains(gv))
+                                f = std::min(f, inset_share(t, gv, double(panel.min[va]) - double(eye[va]),
+                                                            double(panel.max[va]) - double(eye[va]),
+                                                            panel_spread[va], panel_spread[a]));
+                        }
+                        if (f > 0.0 && f < 1.0)
+                            keep(float_up(t * (1.0 + kCubeDepthSlack)), band_far(t, panel_spread[a], f, 1.0));
                     }
-                    if (panel_f != face) continue;
-                    // The four corner rays cross the plane, at depth t, inside the rectangle inset per ray:
-                    // their face coordinates in the tangent ranges?
-                    const TangentRange range_u = panel_tangent_range(
-                        t, double(panel.min[ua]) - double(eye[ua]), double(panel.max[ua]) - double(eye[ua]),
-                        panel_spread[ua], panel_spread[a]);
-                    const TangentRange range_v = panel_tangent_range(
-                        t, double(panel.min[va]) - double(eye[va]), double(panel.max[va]) - double(eye[va]),
-                        panel_spread[va], panel_spread[a]);
-                    const bool hits = range_u.contains(grid(i, r)) && range_u.contains(grid(i + 1, r)) &&
-                                      range_v.contains(grid(j, r)) && range_v.contains(grid(j + 1, r));
-                    if (hits) pixel = std::min(pixel, float_up(t * (1.0 + kCubeDepthSlack)));
-                }
                 for (const SlantedPanel& sp : slanted) {
                     SlantedRule rule;
                     if (!slanted_rule(sp, eye, panel_spread, rule)) continue;
@@ -1236,7 +1473,12 @@ bool is_hidden_reference(const std::vector<Aabb>& occluders, const std::vector<A
                         grid(n + 1, r) <= hi)
                         pixel = std::min(pixel, float_up(d * (1.0 + kCubeDepthSlack)));
                 }
-                if (!(double(pixel) < limit)) return false;
+                if (double(pixel) < limit) continue;
+                const double box_far = d_max * (1.0 + kCubeDepthSlack);
+                if (panel_bands && double(band_near) < limit &&
+                    (box_far <= double(band_far_end) || pixel <= band_far_end))
+                    continue;
+                return false;
             }
         }
     }

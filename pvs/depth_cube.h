@@ -48,6 +48,10 @@
 //   box meets some single occluder (box, or panel as drawn) at a depth strictly smaller than x's depth, i.e.
 //   before x (proof: docs/ALGORITHMS.md#depth-cube). Fusion of occluders happens on the depth buffer:
 //   different occluders may cover different pixels of the same occludee.
+// - Depth bands (set_panel_bands(true); docs/ALGORITHMS.md#depth-bands): besides its depth D, a pixel may
+//   keep one band (N, F], depths where every point is hidden too (a panel whose inset only points near its
+//   plane need). Then a pixel passes the comparison also when N < L_f * (1 - kCubeDepthSlack) and either
+//   d_max * (1 + kCubeDepthSlack) <= F or D <= F (the band and the depth together hide all beyond N).
 #pragma once
 
 #include "core/math.h"
@@ -120,6 +124,21 @@ public:
     // larger crossing depth of its two majors times (1 + slack), rounded up. The vertices decide
     // (docs/ALGORITHMS.md#panel-inset); separable: per major value a contiguous range of minors.
     void add_panel_sides(const Aabb& panel, glm::dvec3 spread);
+    // DEPTH BANDS of add_panel() and add_panel_sides() (off until set; docs/ALGORITHMS.md#depth-bands): for
+    // a point x beyond the plane at height h_x past it, what a segment from the eye box to x may stray from
+    // the eye's own crossing is the inset times the SHARE h_x / (h_x + |h| - b_n) < 1 (|h| the plane's height
+    // above the eye, b_n the box's half-extent along the normal). A vertex whose corner ray fails a panel's
+    // rule has, per in-plane axis k with tangent p, the share (dist - m) / w (1 - 1e-9), where dist is how
+    // far inside [lo, hi] the ray crosses, w = (spread_k + spread_n |p|) (1 + 1e-9) and m = 4e-9 |h| (1 +
+    // |p|); 0 when dist <= m; 1 on an axis whose rule it passes; its share is the least over both axes, held
+    // below 1 - 1e-6. A pixel that the panel does not write and whose four vertices have shares f > 0 (f the
+    // least) keeps the band (N, F] with N its depth as the rule would write it and
+    // F = (|h| + f (|h| - b_n) / (1 - f)) / g (1 - 1e-6), rounded down to float, g the largest |tangent along
+    // the normal| of its vertices (1 on the face along the normal), when F > N; a pixel keeps one band: the
+    // union of the two when a new band overlaps or touches it, else the one of larger F (then of smaller N),
+    // so what it keeps depends on the order panels are drawn in. Guarantee: if x lies in the direction of
+    // such a pixel at a depth in (N, F], every segment from the eye box to x crosses the panel.
+    void set_panel_bands(bool on);
     void add_panels_sides(const std::vector<Aabb>& panels, glm::dvec3 spread);
     // Rasterizes one CORNER PAIR: two panels `a` and `b` (flat along different axes n_a and n_b, planes at
     // c_a and c_b) that meet along the line x[n_a] = c_a, x[n_b] = c_b: a's extent along n_b holds c_b, b's
@@ -160,7 +179,8 @@ public:
     // Rasterizes all the boxes, nearest first, skipping each box the ones before already hide (it could not
     // lower any pixel). Same depths as add_occluder() on every box, in far less time behind walls.
     void add_occluders(const std::vector<Aabb>& boxes);
-    // True only if the box is certainly hidden from the eye by the occluders added so far.
+    // True only if the box is certainly hidden from the eye by the occluders added so far (with the bands,
+    // when they are on).
     bool is_hidden(const Aabb& box) const;
 
     int resolution() const { return resolution_; }
@@ -176,6 +196,16 @@ private:
     int resolution_;
     glm::vec3 eye_{0.0f};
     std::vector<float> depth_;                    // 6 * R * R, index face * R * R + j * R + i
+    bool panel_bands_ = false;
+    std::vector<float> band_near_,
+        band_far_;                           // per pixel as depth_: the band (near, far], empty when far = 0
+    std::vector<double> share_u_, share_v_;  // scratch of add_panel(): per vertex, its share on u / on v
+    // is_hidden() by the depths alone: the test of the occluders skipped as already hidden (a box hidden
+    // only through a band could still lower a depth).
+    bool is_hidden_by_depths(const Aabb& box) const;
+    void keep_band(int face, int i, int j, float near, float far);
+    std::vector<double> band_major_share_;     // scratch of add_panel_sides()'s bands: per major, its share
+    std::vector<int> band_first_, band_last_;  // and its run of minors inside the panel's own span
     std::array<std::array<int, 4>, 6> region_{};  // per face: pixels i0, i1, j0, j1 occluders are drawn on
     // Scratch of add_occluder(), reused: per grid vertex of a column / row, the slab interval of the ray
     // parameter (depth) on the u / v axis; and the corner depths of two vertex rows.
@@ -196,6 +226,6 @@ bool is_hidden_reference(const std::vector<Aabb>& occluders, glm::vec3 eye, cons
 bool is_hidden_reference(const std::vector<Aabb>& occluders, const std::vector<Aabb>& panels,
                          glm::dvec3 panel_spread, glm::vec3 eye, const Aabb& box, int resolution,
                          bool panel_sides = false, const std::vector<SlantedPanel>& slanted = {},
-                         const std::vector<std::array<Aabb, 2>>& corners = {});
+                         const std::vector<std::array<Aabb, 2>>& corners = {}, bool panel_bands = false);
 
 }  // namespace pvs
