@@ -21,9 +21,10 @@
 //   skips what the row already lists (docs/ALGORITHMS.md#refinement); objects are tested through a
 //   hierarchy and by parts (docs/ALGORITHMS.md#object-bvh); what a sight ray from s reaches is listed at
 //   once (docs/ALGORITHMS.md#sight-rays);
-// - panels (occluders/panels.h) are drawn inset per ray for the patch's box (docs/ALGORITHMS.md#panel-inset);
-//   with --corner-pairs, two panels meeting along a line are drawn as one occluder too
-//   (docs/ALGORITHMS.md#corner-pairs);
+// - panels (occluders/panels.h) are drawn inset per ray for the patch's box (docs/ALGORITHMS.md#panel-inset),
+//   with --panel-bands also where the inset leaves a pixel out, for the depths near the plane that need only
+//   a share of it (docs/ALGORITHMS.md#depth-bands); with --corner-pairs, two panels meeting along a line are
+//   drawn as one occluder too (docs/ALGORITHMS.md#corner-pairs);
 // - with --single-occluder-pass, what one panel or one box hides from the whole region (or patch) is left
 //   out first, proven exactly (pvs/region_hiding.h, docs/ALGORITHMS.md#single-occluder);
 // - with --shaft-budget, what the faces listed and no sight ray saw is tried once more against the whole

@@ -872,12 +872,9 @@ void DepthCube::add_panel_sides(const Aabb& panel, glm::dvec3 spread) {
         }
         if (!panel_bands_) continue;
         // Depth bands (depth_cube.h, set_panel_bands()). A vertex has a share > 0 only where its ray crosses
-        // the panel's own (uninset) rectangle by a margin, so per major only the minors in that span (a run
-        // found as above, for a zero eye box) are visited, and of those only the pixels not written above.
-        PanelTangents bare;
-        PanelSide bare_side;
-        if (!panel_tangents(panel, eye_, glm::dvec3(0.0), bare) || !panel_side(bare, face, bare_side))
-            continue;
+        // the panel's own rectangle by a margin (of 4e-9 |h| (1 + |p|), far above the rounding of the
+        // tangent), so per major only the minors in that span, widened by 1e-9, are visited (a run found as
+        // above), and of those only the pixels not written above.
         const SideShareInputs in = side_share_inputs(panel, eye_, spread, pt.axis, face);
         for (int m = mv0; m <= mv1; ++m) {
             const size_t k = size_t(m);
@@ -885,9 +882,10 @@ void DepthCube::add_panel_sides(const Aabb& panel, glm::dvec3 spread) {
             band_first_[k] = 1;
             band_last_[k] = 0;
             if (!(band_major_share_[k] > 0.0)) continue;
-            double lo, hi;
-            panel_side_minor_span(bare_side, g[m], lo, hi);
-            vertex_run(g, lo, hi, nv0, nv1, r, band_first_[k], band_last_[k]);
+            const double a = g[m] * in.c_lo / ps.h, b = g[m] * in.c_hi / ps.h;
+            const double pad = 1e-9 * std::max({1.0, std::abs(a), std::abs(b)});
+            vertex_run(g, std::min(a, b) - pad, std::max(a, b) + pad, nv0, nv1, r, band_first_[k],
+                       band_last_[k]);
         }
         const double big_h = std::abs(ps.h);
         for (int m = mv0; m < mv1; ++m) {
@@ -904,18 +902,30 @@ void DepthCube::add_panel_sides(const Aabb& panel, glm::dvec3 spread) {
             }
             const float near = float_up(std::max(ps.h / g[m], ps.h / g[m + 1]) * (1.0 + kCubeDepthSlack));
             const double g_big = std::max(std::abs(g[m]), std::abs(g[m + 1]));
-            for (int n = first; n < last; ++n) {
-                if (n >= written_first && n < written_last) continue;
-                const double f = std::min({major_share, side_minor_share(ps, in, g[m], g[n]),
-                                           side_minor_share(ps, in, g[m], g[n + 1]),
-                                           side_minor_share(ps, in, g[m + 1], g[n]),
-                                           side_minor_share(ps, in, g[m + 1], g[n + 1])});
-                if (!(f > 0.0 && f < 1.0)) continue;
-                const float far = band_far(big_h, spread[pt.axis], f, g_big);
-                if (ps.major_is_u)
-                    keep_band(face, m, n, near, far);
-                else
-                    keep_band(face, n, m, near, far);
+            // The pixels before the written ones, then those after them; a vertex's minor share is carried
+            // from one pixel to the next.
+            const int stops[2][2] = {
+                {first, std::min(last, written_first < written_last ? written_first : last)},
+                {std::max(first, written_first < written_last ? written_last : last), last}};
+            for (const auto& [from, to] : stops) {
+                double left = 0.0;  // the least share of vertex column n at both majors, once known
+                bool have_left = false;
+                for (int n = from; n < to; ++n) {
+                    if (!have_left)
+                        left = std::min(side_minor_share(ps, in, g[m], g[n]),
+                                        side_minor_share(ps, in, g[m + 1], g[n]));
+                    const double right = std::min(side_minor_share(ps, in, g[m], g[n + 1]),
+                                                  side_minor_share(ps, in, g[m + 1], g[n + 1]));
+                    const double f = std::min({major_share, left, right});
+                    left = right;
+                    have_left = true;
+                    if (!(f > 0.0 && f < 1.0)) continue;
+                    const float far = band_far(big_h, spread[pt.axis], f, g_big);
+                    if (ps.major_is_u)
+                        keep_band(face, m, n, near, far);
+                    else
+                        keep_band(face, n, m, near, far);
+                }
             }
         }
     }
@@ -1234,30 +1244,15 @@ void DepthCube::add_occluders(const std::vector<Aabb>& boxes) {
 }
 
 bool DepthCube::is_hidden(const Aabb& box) const {
-    if (is_hidden_by_depths(box)) return true;
-    if (!panel_bands_ || !box_usable(box) || meets_near_cube(box, eye_)) return false;
-    // Some touched pixel failed on its depth alone: the same pixels again, each also passing by its band.
-    const int r = resolution_;
-    const EyeBox rel = eye_box(box, eye_);
-    for (int face = 0; face < 6; ++face) {
-        const OccludeeFace of = occludee_face(rel, face, r, grid_.data());
-        if (!of.touched) continue;
-        const auto& reg = region_[size_t(face)];
-        if (of.i0 < reg[0] || of.i1 > reg[1] || of.j0 < reg[2] || of.j1 > reg[3]) return false;
-        for (int j = of.j0; j <= of.j1; ++j) {
-            const size_t row = (size_t(face) * r + size_t(j)) * r;
-            for (int i = of.i0; i <= of.i1; ++i) {
-                const double d = depth_[row + size_t(i)];
-                if (d < of.limit) continue;
-                const double near = band_near_[row + size_t(i)], far = band_far_[row + size_t(i)];
-                if (!(near < of.limit && (of.far <= far || d <= far))) return false;
-            }
-        }
-    }
-    return true;
+    return panel_bands_ ? hidden_test<true>(box) : hidden_test<false>(box);
 }
 
-PVS_AVX2_CLONES bool DepthCube::is_hidden_by_depths(const Aabb& box) const {
+bool DepthCube::is_hidden_by_depths(const Aabb& box) const {
+    return hidden_test<false>(box);
+}
+
+template <bool kBands>
+PVS_AVX2_CLONES bool DepthCube::hidden_test(const Aabb& box) const {
     if (!box_usable(box) || meets_near_cube(box, eye_)) return false;
     const int r = resolution_;
     const EyeBox rel = eye_box(box, eye_);
@@ -1271,13 +1266,26 @@ PVS_AVX2_CLONES bool DepthCube::is_hidden_by_depths(const Aabb& box) const {
         // positive or +infinity, which order as their bit patterns. So the test is, a row at a time, an
         // unsigned max that vectorizes.
         const uint32_t limit = std::bit_cast<uint32_t>(float_up(of.limit));
-        const float* const face_depth = depth_.data() + size_t(face) * r * r;
+        const size_t face_base = size_t(face) * r * r;
+        const float* const face_depth = depth_.data() + face_base;
         for (int j = of.j0; j <= of.j1; ++j) {
             const float* __restrict const row = face_depth + size_t(j) * r;
             uint32_t farthest = 0;
             for (int i = of.i0; i <= of.i1; ++i)
                 farthest = std::max(farthest, std::bit_cast<uint32_t>(row[i]));
-            if (!(farthest < limit)) return false;
+            if (farthest < limit) continue;
+            if constexpr (!kBands) {
+                return false;
+            } else {
+                // The row fails on its depths alone: each pixel may still pass by its band.
+                const float* const near = band_near_.data() + face_base + size_t(j) * r;
+                const float* const far = band_far_.data() + face_base + size_t(j) * r;
+                for (int i = of.i0; i <= of.i1; ++i) {
+                    const double d = row[i];
+                    if (d < of.limit) continue;
+                    if (!(near[i] < of.limit && (of.far <= far[i] || d <= far[i]))) return false;
+                }
+            }
         }
     }
     return true;

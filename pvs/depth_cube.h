@@ -203,6 +203,8 @@ private:
     // is_hidden() by the depths alone: the test of the occluders skipped as already hidden (a box hidden
     // only through a band could still lower a depth).
     bool is_hidden_by_depths(const Aabb& box) const;
+    template <bool kBands>
+    bool hidden_test(const Aabb& box) const;
     void keep_band(int face, int i, int j, float near, float far);
     std::vector<double> band_major_share_;     // scratch of add_panel_sides()'s bands: per major, its share
     std::vector<int> band_first_, band_last_;  // and its run of minors inside the panel's own span

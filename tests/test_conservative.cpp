@@ -1020,11 +1020,12 @@ BakeConfig property_config(uint64_t seed) {
     // The second world halves its floor patches once more for the panels (--panel-refine-levels; about
     // 4x the PVS time too).
     if (seed == 2) c.conservative.panel_refine_levels = 1;
-    // The third draws the slanted panels and the corner pairs on the depth cubes (--slanted-cubes,
-    // --corner-pairs).
+    // The third draws the slanted panels, the corner pairs and the panels' depth bands on the depth cubes
+    // (--slanted-cubes, --corner-pairs, --panel-bands).
     if (seed == 3) {
         c.conservative.slanted_cubes = true;
         c.conservative.corner_pairs = true;
+        c.conservative.panel_bands = true;
     }
     // The fourth to sixth take the shaft pass on what the faces listed (--shaft-budget), the sixth over the
     // hierarchy of blocks of 2 x 2 x 2 cells (--shaft-block), with the blocks' proofs before the faces
