@@ -561,9 +561,9 @@ inline void panel_side_minor_span(const PanelSide& ps, double g_m, double& lo, d
 
 // The share of a side face's grid vertex (major g_m, minor g_n) for the depth bands: 1 where it passes the
 // panel's rule on that axis, else inset_share() of its tangent there (face_sign / g_m along the face axis,
-// g_n / g_m along the minor), the least of the two; 0 when its ray does not reach the plane ahead. `ends`
-// holds the panel's extent relative to the eye along the face axis and the minor axis, `spread_f`,
-// `spread_c`, `spread_n` the eye box's half-extents along them and the normal.
+// g_n / g_m along the minor), the least of the two; 0 when its ray does not reach the plane ahead.
+// SideShareInputs holds the panel's extent relative to the eye along the face axis (f_lo, f_hi) and the
+// minor axis (c_lo, c_hi), and the eye box's half-extents along them and along the normal.
 struct SideShareInputs {
     double f_lo, f_hi, c_lo, c_hi;
     double spread_f, spread_c, spread_n;

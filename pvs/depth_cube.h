@@ -49,8 +49,8 @@
 //   before x (proof: docs/ALGORITHMS.md#depth-cube). Fusion of occluders happens on the depth buffer:
 //   different occluders may cover different pixels of the same occludee.
 // - Depth bands (set_panel_bands(true); docs/ALGORITHMS.md#depth-bands): besides its depth D, a pixel may
-//   keep one band (N, F], depths where every point is hidden too (a panel whose inset only points near its
-//   plane need). Then a pixel passes the comparison also when N < L_f * (1 - kCubeDepthSlack) and either
+//   keep one band (N, F], depths where every point is hidden too (near a panel's plane, where only a share
+//   of its inset is needed). Then a pixel passes the comparison also when N < L_f * (1 - kCubeDepthSlack) and either
 //   d_max * (1 + kCubeDepthSlack) <= F or D <= F (the band and the depth together hide all beyond N).
 #pragma once
 
@@ -124,6 +124,7 @@ public:
     // larger crossing depth of its two majors times (1 + slack), rounded up. The vertices decide
     // (docs/ALGORITHMS.md#panel-inset); separable: per major value a contiguous range of minors.
     void add_panel_sides(const Aabb& panel, glm::dvec3 spread);
+    void add_panels_sides(const std::vector<Aabb>& panels, glm::dvec3 spread);
     // DEPTH BANDS of add_panel() and add_panel_sides() (off until set; docs/ALGORITHMS.md#depth-bands): for
     // a point x beyond the plane at height h_x past it, what a segment from the eye box to x may stray from
     // the eye's own crossing is the inset times the SHARE h_x / (h_x + |h| - b_n) < 1 (|h| the plane's height
@@ -139,7 +140,6 @@ public:
     // so what it keeps depends on the order panels are drawn in. Guarantee: if x lies in the direction of
     // such a pixel at a depth in (N, F], every segment from the eye box to x crosses the panel.
     void set_panel_bands(bool on);
-    void add_panels_sides(const std::vector<Aabb>& panels, glm::dvec3 spread);
     // Rasterizes one CORNER PAIR: two panels `a` and `b` (flat along different axes n_a and n_b, planes at
     // c_a and c_b) that meet along the line x[n_a] = c_a, x[n_b] = c_b: a's extent along n_b holds c_b, b's
     // extent along n_a holds c_a, and their extents along the third axis overlap. With the EYE BOX strictly
@@ -197,8 +197,8 @@ private:
     glm::vec3 eye_{0.0f};
     std::vector<float> depth_;                    // 6 * R * R, index face * R * R + j * R + i
     bool panel_bands_ = false;
-    std::vector<float> band_near_,
-        band_far_;                           // per pixel as depth_: the band (near, far], empty when far = 0
+    // Per pixel as depth_: the band (near, far] of depth bands, empty when far = 0.
+    std::vector<float> band_near_, band_far_;
     std::vector<double> share_u_, share_v_;  // scratch of add_panel(): per vertex, its share on u / on v
     // is_hidden() by the depths alone: the test of the occluders skipped as already hidden (a box hidden
     // only through a band could still lower a depth).
